@@ -1,0 +1,222 @@
+"""The ``hillshade-rt`` command line.
+
+Small click commands in the manner of rasterio's ``rio``; option names follow GDAL where GDAL has
+one (``-b/--band``, ``-z/--z-factor``, ``--overwrite``). Every error is one line on stderr and a
+non-zero exit status: 1 for bad input, 2 for a bad command line, 130 when interrupted.
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import sys
+
+import click
+
+from . import __version__
+from .errors import HillshadeError
+
+
+class _OneLineErrors(click.Group):
+    """A group whose errors (usage errors included) print as a single line, never a traceback."""
+
+    def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
+        try:
+            rv = super().main(args=args, prog_name=prog_name, complete_var=complete_var,
+                              standalone_mode=False, **extra)
+        except click.exceptions.NoArgsIsHelpError as exc:  # click >= 8.2: bare group prints help
+            click.echo(exc.ctx.get_help(), err=True)
+            sys.exit(2)
+        except click.ClickException as exc:
+            msg = exc.format_message()
+            if isinstance(exc, click.UsageError) and exc.ctx is not None:
+                msg += f" (see '{exc.ctx.command_path} --help')"
+            click.echo(f"hillshade-rt: error: {msg}", err=True)
+            sys.exit(exc.exit_code)
+        except click.exceptions.Abort:
+            click.echo("hillshade-rt: aborted", err=True)
+            sys.exit(130)
+        except KeyboardInterrupt:
+            click.echo("hillshade-rt: interrupted; no output written", err=True)
+            sys.exit(130)
+        except BrokenPipeError:
+            sys.exit(1)
+        if not standalone_mode:
+            return rv
+        sys.exit(rv if isinstance(rv, int) else 0)
+
+
+def _fail(exc: HillshadeError) -> click.ClickException:
+    return click.ClickException(str(exc))
+
+
+def dem_options(f):
+    """Options that say how to read a DEM (shared by every command that reads one)."""
+    opts = [
+        click.option("-b", "--band", type=int, default=1, show_default=True,
+                     help="Band of a multi-band raster."),
+        click.option("--nodata", type=float, default=None,
+                     help="Nodata value (overrides the file's). NaN is always nodata."),
+        click.option("-z", "--z-factor", type=float, default=1.0, show_default=True,
+                     help="Multiply heights by this (like gdaldem -z), e.g. 0.3048 for feet."),
+        click.option("--pixel-size", metavar="DX[,DY]", default=None,
+                     help="Ground spacing in metres; overrides the geotransform. "
+                          "Required for input without georeferencing."),
+        click.option("--raw-shape", metavar="ROWSxCOLS", default=None,
+                     help="Read a raw binary grid of this shape."),
+        click.option("--raw-dtype", type=click.Choice(
+            ["int16", "uint16", "int32", "float32", "float64"]), default=None,
+            help="Value type of a raw grid (.hgt: int16)."),
+        click.option("--raw-byteorder", type=click.Choice(["little", "big"]), default=None,
+                     help="Byte order of a raw grid (default little; .hgt: big)."),
+    ]
+    for opt in reversed(opts):
+        f = opt(f)
+    return f
+
+
+def _read(dem_path, band, nodata, z_factor, pixel_size, raw_shape, raw_dtype, raw_byteorder):
+    from .io import parse_pixel_size, parse_raw_shape, read_dem
+
+    return read_dem(dem_path, band=band, nodata=nodata, z_factor=z_factor,
+                    pixel_size=parse_pixel_size(pixel_size), raw_shape=parse_raw_shape(raw_shape),
+                    raw_dtype=raw_dtype, raw_byteorder=raw_byteorder)
+
+
+def _errors_to_click(f):
+    @functools.wraps(f)
+    def wrapper(*args, **kwargs):
+        try:
+            return f(*args, **kwargs)
+        except HillshadeError as exc:
+            raise _fail(exc) from None
+        except MemoryError:
+            raise click.ClickException("out of memory (the DEM is too large for this machine)") from None
+    return wrapper
+
+
+@click.group(cls=_OneLineErrors, context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(__version__, prog_name="hillshade-rt")
+def cli():
+    """Terrain cast-shadow masks from digital elevation models."""
+
+
+@cli.command()
+@click.argument("dem", type=click.Path(dir_okay=False))
+@click.argument("output", type=click.Path(dir_okay=False))
+@click.option("--azimuth", type=float, required=True,
+              help="Sun azimuth, degrees clockwise from north (any value wraps).")
+@click.option("--elevation", "--altitude", "elevation", type=float, required=True,
+              help="Sun elevation above the horizon, degrees, > 0 and <= 90.")
+@click.option("--algorithm", type=click.Choice(["brute"]), default="brute", show_default=True,
+              help="Shadow algorithm.")
+@click.option("--threads", type=click.IntRange(min=1), default=None,
+              help="CPU threads (default: all cores).")
+@click.option("--report", "report_path", type=click.Path(dir_okay=False), default=None,
+              help="Write a JSON timing report here.")
+@click.option("--overwrite", is_flag=True, help="Replace OUTPUT (and the report) if they exist.")
+@click.option("-q", "--quiet", is_flag=True, help="No summary line on stderr.")
+@dem_options
+@_errors_to_click
+def shadow(dem, output, azimuth, elevation, algorithm, threads, report_path, overwrite, quiet,
+           **read_opts):
+    """Write the cast-shadow mask of DEM to OUTPUT (GeoTIFF: 1 shadow, 0 lit, 255 nodata)."""
+    import numba
+    import numpy as np
+
+    from .geometry import check_elevation, normalize_azimuth, sun_rays
+    from .io import check_output_path, write_json, write_raster
+    from .report import Timer, build_report, mask_stats, summary_line
+    from .algorithms import ALGORITHMS
+
+    timer = Timer()
+    # validate everything cheap before reading or computing anything
+    az = normalize_azimuth(azimuth)
+    el = check_elevation(elevation)
+    check_output_path(output, overwrite)
+    if report_path is not None:
+        check_output_path(report_path, overwrite)
+    if threads is not None:
+        numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+
+    with timer("read"):
+        d = _read(dem, **read_opts)
+    with timer("prepare"):
+        rays = sun_rays(d.grid, az, el)
+        zmax = float(np.nanmax(d.heights))
+    with timer("compute"):
+        mask = ALGORITHMS[algorithm](d.heights, rays, zmax)
+    tags = {"HILLSHADE_RT_VERSION": __version__, "SUN_AZIMUTH": az, "SUN_ELEVATION": el,
+            "ALGORITHM": algorithm, "VALUES": "1=shadow 0=lit 255=nodata"}
+    with timer("write"):
+        write_raster(output, mask, d, nodata=255, description="cast shadow", tags=tags)
+    stats = mask_stats(mask)
+    seconds = dict(timer.seconds, total=timer.total())
+    rep = build_report(dem=d, output=output, azimuth=az, elevation=el, algorithm=algorithm,
+                       backend="cpu", threads=numba.get_num_threads(), seconds=seconds,
+                       stats=stats)
+    if report_path is not None:
+        write_json(report_path, rep)
+    if not quiet:
+        click.echo(summary_line(rep), err=True)
+
+
+@cli.command()
+@click.argument("dem", type=click.Path(dir_okay=False))
+@click.option("--json", "as_json", is_flag=True, help="Print JSON instead of text.")
+@dem_options
+@_errors_to_click
+def info(dem, as_json, **read_opts):
+    """Print what hillshade-rt understood of DEM: size, spacing, CRS, nodata, heights."""
+    d = _read(dem, **read_opts)
+    rows, cols = d.shape
+    dx, dy = d.grid.centre_spacing()
+    zmin, zmax = d.height_range()
+    valid = d.valid_count()
+    doc = {
+        "path": d.path,
+        "reader": d.kind,
+        "driver": d.driver,
+        "band": d.band,
+        "dtype": d.source_dtype,
+        "shape": [rows, cols],
+        "crs": d.crs_string(),
+        "crs_name": d.crs_name(),
+        "transform": list(d.transform)[:6] if d.transform is not None else None,
+        "orientation": ("north-up" if d.grid.row_sign < 0 else "south-up")
+                       + ("" if d.grid.col_sign > 0 else ", columns run west"),
+        "spacing_m": {"centre": [dx, dy],
+                      "first_row": [float(d.grid.dx[0]), float(d.grid.dy[0])],
+                      "last_row": [float(d.grid.dx[-1]), float(d.grid.dy[-1])],
+                      "method": d.grid.method},
+        "nodata": d.nodata,
+        "valid_cells": valid,
+        "nodata_fraction": 1.0 - valid / (rows * cols),
+        "height_range_m": [zmin, zmax],
+    }
+    if as_json:
+        click.echo(json.dumps(doc, indent=2))
+        return
+    click.echo(f"{d.path}")
+    click.echo(f"  reader        {d.kind} ({d.driver}), band {d.band}, {d.source_dtype}")
+    click.echo(f"  size          {cols} x {rows} (cols x rows), {d.heights.size:,} cells")
+    click.echo(f"  crs           {doc['crs_name'] or 'none'}"
+               + (f" ({doc['crs']})" if doc['crs'] and doc['crs'].startswith('EPSG') else ""))
+    click.echo(f"  orientation   {doc['orientation']}")
+    click.echo(f"  spacing (m)   dx {dx:.4f}  dy {dy:.4f} at the centre row")
+    if d.grid.dx[0] != d.grid.dx[-1] or d.grid.dy[0] != d.grid.dy[-1]:
+        click.echo(f"                dx {d.grid.dx[0]:.4f} .. {d.grid.dx[-1]:.4f}, "
+                   f"dy {d.grid.dy[0]:.4f} .. {d.grid.dy[-1]:.4f} from first to last row")
+    click.echo(f"                ({d.grid.method})")
+    click.echo(f"  nodata        {d.nodata if d.nodata is not None else 'none'}"
+               f"; {100 * doc['nodata_fraction']:.2f}% of cells are nodata")
+    click.echo(f"  heights (m)   {zmin:.2f} .. {zmax:.2f}")
+
+
+def main():
+    """Console-script entry point."""
+    cli(prog_name="hillshade-rt")
+
+
+if __name__ == "__main__":
+    main()

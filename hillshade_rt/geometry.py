@@ -1,0 +1,214 @@
+"""Ground spacing of a raster and the sun direction in pixel units.
+
+Conventions (see docs/model.md):
+
+* Azimuth: degrees clockwise from north, measured from the raster's own north (the direction of
+  decreasing row in a north-up raster), like ``gdaldem hillshade``. Any real value wraps.
+* Elevation: degrees above the horizon, 0 < E <= 90.
+* Spacing: ground metres per column (``dx``) and per row (``dy``), one value per row, because in a
+  geographic CRS (and in projections whose scale varies with latitude) it changes from row to row.
+  The rays of the cells of row ``r`` use the spacing of row ``r``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import HillshadeError
+
+
+@dataclass(frozen=True)
+class Grid:
+    """Ground geometry of a raster: spacing per row and which way the indices run.
+
+    dx, dy: float64 arrays of length ``rows``, ground metres between neighbouring cell centres along
+    a row (dx) and along a column (dy), evaluated at each row.
+    col_sign: +1 when the column index grows eastward, -1 when it grows westward.
+    row_sign: +1 when the row index grows northward (south-up raster), -1 when it grows southward
+    (the usual north-up raster).
+    method: how the spacing was obtained (for ``info`` and reports).
+    """
+
+    rows: int
+    cols: int
+    dx: np.ndarray
+    dy: np.ndarray
+    col_sign: int = 1
+    row_sign: int = -1
+    method: str = "pixel size"
+
+    @classmethod
+    def uniform(cls, rows: int, cols: int, dx: float, dy: float | None = None,
+                col_sign: int = 1, row_sign: int = -1, method: str = "pixel size") -> "Grid":
+        """A grid with one spacing for every row (projected CRS, raw input, tests)."""
+        dy = dx if dy is None else dy
+        if not (dx > 0 and dy > 0 and math.isfinite(dx) and math.isfinite(dy)):
+            raise HillshadeError(f"pixel size must be positive and finite, got {dx}, {dy}")
+        return cls(rows, cols, np.full(rows, float(dx)), np.full(rows, float(dy)),
+                   col_sign, row_sign, method)
+
+    def centre_spacing(self) -> tuple[float, float]:
+        """(dx, dy) in metres at the centre row."""
+        r = self.rows // 2
+        return float(self.dx[r]), float(self.dy[r])
+
+
+def normalize_azimuth(azimuth: float) -> float:
+    """Wrap any real azimuth into [0, 360)."""
+    if not math.isfinite(azimuth):
+        raise HillshadeError(f"azimuth must be a finite number of degrees, got {azimuth}")
+    a = math.fmod(azimuth, 360.0)
+    if a < 0:
+        a += 360.0
+    return 0.0 if a == 360.0 else a
+
+
+def check_elevation(elevation: float) -> float:
+    """Sun elevation in degrees: must be > 0 and <= 90."""
+    if not (math.isfinite(elevation) and 0.0 < elevation <= 90.0):
+        raise HillshadeError(
+            f"sun elevation must be > 0 and <= 90 degrees, got {elevation} "
+            "(a sun at or below the horizon lights nothing)")
+    return float(elevation)
+
+
+def sincos_deg(angle: float) -> tuple[float, float]:
+    """(sin, cos) of an angle in degrees, exact at multiples of 45 degrees.
+
+    Exactness matters: at azimuth 180 a rounding residue of 1e-16 in sin would make the ray
+    interpolate towards a column that does not exist; at 45 degrees on a square grid sin and cos
+    must be equal so that the ray passes exactly through the diagonal cell centres.
+    """
+    a = normalize_azimuth(angle)
+    q, rem = divmod(a, 90.0)
+    if rem == 0.0:
+        s, c = 0.0, 1.0
+    elif rem == 45.0:
+        s = c = math.sqrt(0.5)
+    else:
+        s, c = math.sin(math.radians(rem)), math.cos(math.radians(rem))
+    for _ in range(int(q)):  # rotate by 90 degrees: (s, c) -> (c, -s)
+        s, c = c, -s
+    return s, c
+
+
+@dataclass(frozen=True)
+class SunRays:
+    """The ray toward the sun from the cells of each row, in pixel units.
+
+    For row r the ray advances one grid line of its dominant axis per step:
+    ``dom_col[r]`` is 1 when that axis is the column index (the ray crosses columns), 0 when it is
+    the row index; ``step_dom[r]`` is +1 or -1 (direction along the dominant index);
+    ``step_other[r]`` is the change of the other index per step (|.| <= 1); ``rise[r]`` is the
+    height gained per step in metres (tan(elevation) times the ground length of one step).
+    """
+
+    azimuth: float
+    elevation: float
+    dom_col: np.ndarray    # int8
+    step_dom: np.ndarray   # int8
+    step_other: np.ndarray  # float64
+    rise: np.ndarray       # float64
+    step_m: np.ndarray     # float64, ground metres per step
+
+
+def sun_rays(grid: Grid, azimuth: float, elevation: float) -> SunRays:
+    """Sun direction in pixel units for every row of ``grid``."""
+    az = normalize_azimuth(azimuth)
+    el = check_elevation(elevation)
+    east, north = sincos_deg(az)
+    # pixels travelled per ground metre toward the sun, along columns and along rows
+    pc = east * grid.col_sign / grid.dx
+    pr = north * grid.row_sign / grid.dy
+    dom_col = np.abs(pc) >= np.abs(pr)
+    a_dom = np.where(dom_col, np.abs(pc), np.abs(pr))
+    step_dom = np.where(dom_col, np.sign(pc), np.sign(pr)).astype(np.int8)
+    step_other = np.where(dom_col, pr, pc) / a_dom
+    step_m = 1.0 / a_dom
+    tan_el = math.inf if el == 90.0 else math.tan(math.radians(el))
+    rise = tan_el * step_m
+    return SunRays(az, el, dom_col.astype(np.int8), step_dom, step_other.astype(np.float64),
+                   rise.astype(np.float64), step_m.astype(np.float64))
+
+
+# --------------------------------------------------------------------------------------------
+# spacing from a geotransform and a CRS
+
+def _ellipsoid_spacing(lat_deg: np.ndarray, a: float, b: float,
+                       dlon_rad: float, dlat_rad: float) -> tuple[np.ndarray, np.ndarray]:
+    """Ground metres spanned by dlon/dlat (radians) at each latitude, on ellipsoid (a, b)."""
+    e2 = 1.0 - (b * b) / (a * a)
+    phi = np.radians(lat_deg)
+    w = np.sqrt(1.0 - e2 * np.sin(phi) ** 2)
+    n = a / w                      # prime-vertical radius of curvature
+    m = a * (1.0 - e2) / w ** 3    # meridional radius of curvature
+    return n * np.cos(phi) * dlon_rad, m * dlat_rad
+
+
+def grid_from_transform(transform, crs, shape: tuple[int, int]) -> Grid:
+    """Ground spacing per row from a north-up (or south-up) geotransform and its CRS.
+
+    * geographic CRS: metres per degree from the CRS's own ellipsoid at each row's latitude;
+    * projected CRS: transform units times the CRS's linear unit, divided by the projection's
+      scale factors (pyproj ``Proj.get_factors``) at the centre column of each row;
+    * no CRS but a real geotransform: the transform's units are taken as metres.
+    """
+    rows, cols = shape
+    a, b, c, d, e, f = (transform.a, transform.b, transform.c,
+                        transform.d, transform.e, transform.f)
+    if b != 0.0 or d != 0.0:
+        raise HillshadeError(
+            "rotated or sheared geotransform is not supported; "
+            "warp the DEM to a north-up grid first (gdalwarp)")
+    if a == 0.0 or e == 0.0:
+        raise HillshadeError("degenerate geotransform: pixel width or height is zero")
+    col_sign = 1 if a > 0 else -1
+    row_sign = 1 if e > 0 else -1
+    r_idx = np.arange(rows, dtype=np.float64) + 0.5
+    y = f + e * r_idx                       # centre of each row, CRS units
+    x_mid = c + a * (cols / 2.0)            # centre column
+    if crs is None:
+        return Grid(rows, cols, np.full(rows, abs(a)), np.full(rows, abs(e)),
+                    col_sign, row_sign, "geotransform units taken as metres (no CRS)")
+
+    from pyproj import CRS as PCRS, Proj, Transformer
+
+    pcrs = PCRS.from_user_input(crs.to_wkt() if hasattr(crs, "to_wkt") else crs)
+    ell = pcrs.ellipsoid
+    if pcrs.is_geographic:
+        unit = pcrs.axis_info[0].unit_conversion_factor  # radians per CRS unit
+        if ell is None:
+            raise HillshadeError("geographic CRS without an ellipsoid: cannot convert degrees to metres")
+        if np.any(np.abs(y) > 90.0 * (math.pi / 180.0) / unit + 1e-9):
+            raise HillshadeError("geographic DEM has rows beyond the poles: check its geotransform")
+        lat = np.clip(y * unit * 180.0 / math.pi, -90.0, 90.0)
+        dx, dy = _ellipsoid_spacing(lat, ell.semi_major_metre, ell.semi_minor_metre,
+                                    abs(a) * unit, abs(e) * unit)
+        dx = np.maximum(dx, 1e-3)  # a row exactly at a pole spans no width
+        return Grid(rows, cols, dx, dy, col_sign, row_sign,
+                    f"ellipsoid {ell.name} (a={ell.semi_major_metre:.1f} m) at each row's latitude")
+    if not pcrs.is_projected:
+        # engineering / local CRS: units only
+        unit = pcrs.axis_info[0].unit_conversion_factor if pcrs.axis_info else 1.0
+        return Grid(rows, cols, np.full(rows, abs(a) * unit), np.full(rows, abs(e) * unit),
+                    col_sign, row_sign, "local CRS: transform units times the CRS's unit")
+    unit = pcrs.axis_info[0].unit_conversion_factor  # metres per CRS unit
+    kx = np.ones(rows)
+    ky = np.ones(rows)
+    method = "projected: transform units x CRS unit"
+    try:
+        to_geo = Transformer.from_crs(pcrs, pcrs.geodetic_crs, always_xy=True)
+        lon, lat = to_geo.transform(np.full(rows, x_mid), y)
+        fac = Proj(pcrs).get_factors(lon, lat)
+        kx_ = np.asarray(fac.parallel_scale, dtype=np.float64)
+        ky_ = np.asarray(fac.meridional_scale, dtype=np.float64)
+        ok = np.isfinite(kx_) & np.isfinite(ky_) & (kx_ > 0) & (ky_ > 0)
+        kx[ok], ky[ok] = kx_[ok], ky_[ok]
+        if ok.any():
+            method += " / projection scale factors at each row"
+    except Exception:  # noqa: BLE001 -- a projection proj cannot invert: no scale correction
+        pass
+    return Grid(rows, cols, abs(a) * unit / kx, abs(e) * unit / ky, col_sign, row_sign, method)

@@ -1,0 +1,376 @@
+"""Reading DEMs (GDAL rasters, plain TIFF, raw grids) and writing results atomically.
+
+Every DEM becomes a :class:`Dem`: float32 heights with NaN for nodata (the z-factor applied), the
+geotransform and CRS of the source, and its :class:`~hillshade_rt.geometry.Grid` (ground spacing
+per row). Outputs are written to a temporary file in the destination folder and renamed into
+place only when complete.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import math
+import os
+import re
+import tempfile
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .errors import HillshadeError
+from .geometry import Grid, grid_from_transform
+
+RAW_DTYPES = ("int16", "uint16", "int32", "float32", "float64")
+TIFF_EXTS = (".tif", ".tiff")
+RAW_EXTS = (".raw", ".bin", ".dem", ".r32", ".r16", ".f32")
+
+_HGT_NAME = re.compile(r"^([NS])(\d{2})([EW])(\d{3})", re.IGNORECASE)
+
+
+@dataclass
+class Dem:
+    """A DEM in memory, ready for the shadow algorithms."""
+
+    heights: np.ndarray          # float32, NaN = nodata, z-factor applied
+    grid: Grid
+    path: str
+    kind: str                    # "gdal", "tiff" or "raw"
+    transform: object = None     # affine.Affine or None (not georeferenced)
+    crs: object = None           # rasterio CRS or None
+    nodata: float | None = None  # the source's nodata value (before conversion to NaN)
+    band: int = 1
+    driver: str = ""
+    source_dtype: str = ""
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return self.heights.shape  # type: ignore[return-value]
+
+    def valid_count(self) -> int:
+        return int(np.count_nonzero(~np.isnan(self.heights)))
+
+    def height_range(self) -> tuple[float, float]:
+        return float(np.nanmin(self.heights)), float(np.nanmax(self.heights))
+
+    def crs_string(self) -> str | None:
+        if self.crs is None:
+            return None
+        epsg = self.crs.to_epsg()
+        return f"EPSG:{epsg}" if epsg else self.crs.to_wkt()
+
+    def crs_name(self) -> str | None:
+        if self.crs is None:
+            return None
+        from pyproj import CRS as PCRS
+        try:
+            return PCRS.from_user_input(self.crs.to_wkt()).name
+        except Exception:  # noqa: BLE001 -- a name is only for display
+            return self.crs.to_string()
+
+
+def parse_pixel_size(text: str | None) -> tuple[float, float] | None:
+    """'DX' or 'DX,DY' (metres) -> (dx, dy)."""
+    if text is None:
+        return None
+    parts = [p.strip() for p in str(text).split(",")]
+    try:
+        vals = [float(p) for p in parts]
+    except ValueError:
+        raise HillshadeError(f"--pixel-size must be DX or DX,DY in metres, got {text!r}") from None
+    if len(vals) not in (1, 2) or not all(math.isfinite(v) and v > 0 for v in vals):
+        raise HillshadeError(f"--pixel-size must be one or two positive numbers, got {text!r}")
+    return (vals[0], vals[-1])
+
+
+def parse_raw_shape(text: str | None) -> tuple[int, int] | None:
+    """'ROWSxCOLS' -> (rows, cols)."""
+    if text is None:
+        return None
+    m = re.fullmatch(r"\s*(\d+)\s*[xX,]\s*(\d+)\s*", str(text))
+    if not m:
+        raise HillshadeError(f"--raw-shape must be ROWSxCOLS (e.g. 1201x1201), got {text!r}")
+    rows, cols = int(m.group(1)), int(m.group(2))
+    if rows == 0 or cols == 0:
+        raise HillshadeError(f"--raw-shape {text!r} describes an empty raster")
+    return rows, cols
+
+
+# --------------------------------------------------------------------------------------------
+# reading
+
+def read_dem(path: str, *, band: int = 1, nodata: float | None = None,
+             pixel_size: tuple[float, float] | None = None, z_factor: float = 1.0,
+             raw_shape: tuple[int, int] | None = None, raw_dtype: str | None = None,
+             raw_byteorder: str | None = None) -> Dem:
+    """Read a DEM from ``path``.
+
+    Dispatch: raw binary when any ``raw_*`` option is given, or for .hgt files GDAL cannot
+    georeference, or for the raw extensions (.raw .bin .dem .r16 .r32 .f32); TIFF files without
+    georeferencing through tifffile; everything else through rasterio (GDAL).
+    ``pixel_size`` (metres) overrides the spacing from the geotransform; it is required when the
+    input has no georeferencing.
+    """
+    path = os.fspath(path)
+    if not os.path.exists(path):
+        raise HillshadeError(f"{path}: no such file")
+    if os.path.isdir(path) and not path.lower().endswith((".gdb", ".zarr")):
+        raise HillshadeError(f"{path}: is a folder, not a raster file")
+    if not (math.isfinite(z_factor) and z_factor != 0):
+        raise HillshadeError(f"--z-factor must be a finite non-zero number, got {z_factor}")
+    if band < 1:
+        raise HillshadeError(f"--band must be 1 or more, got {band}")
+    ext = os.path.splitext(path)[1].lower()
+    raw_requested = raw_shape is not None or raw_dtype is not None or raw_byteorder is not None
+    if raw_requested or ext in RAW_EXTS:
+        dem = _read_raw(path, raw_shape, raw_dtype, raw_byteorder, nodata, pixel_size)
+    elif ext == ".hgt":
+        try:
+            dem = _read_gdal(path, band, nodata, pixel_size)
+        except HillshadeError:
+            dem = _read_raw(path, None, "int16", "big", nodata, pixel_size)
+    else:
+        dem = _read_gdal(path, band, nodata, pixel_size, tiff_fallback=ext in TIFF_EXTS)
+    if z_factor != 1.0:
+        dem.heights *= np.float32(z_factor)
+    if dem.heights.size == 0:
+        raise HillshadeError(f"{path}: the raster is empty")
+    if dem.valid_count() == 0:
+        raise HillshadeError(f"{path}: every cell is nodata, nothing to shade")
+    return dem
+
+
+def _to_heights(data: np.ndarray, nodata: float | None) -> np.ndarray:
+    """float32 copy of ``data`` with nodata (and NaN, and +-inf) as NaN."""
+    z = np.asarray(data, dtype=np.float32)
+    if z is data:  # never alias the caller's array (and make it writable)
+        z = z.copy()
+    if nodata is not None and not math.isnan(nodata):
+        # compare in the source type: a float32 cast of e.g. -3.4028235e38 must still match
+        z[np.asarray(data) == np.asarray(nodata).astype(data.dtype)] = np.nan
+    z[~np.isfinite(z)] = np.nan
+    return z
+
+
+def _read_gdal(path: str, band: int, nodata: float | None,
+               pixel_size: tuple[float, float] | None, tiff_fallback: bool = False) -> Dem:
+    import rasterio
+    from rasterio.errors import NotGeoreferencedWarning, RasterioError
+
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", NotGeoreferencedWarning)
+            with rasterio.open(path) as ds:
+                if ds.count < 1 or ds.width < 1 or ds.height < 1:
+                    raise HillshadeError(f"{path}: the raster is empty")
+                if band > ds.count:
+                    raise HillshadeError(f"{path}: has {ds.count} band(s), --band {band} asked")
+                georef = ds.crs is not None or not ds.transform.is_identity
+                if not georef and tiff_fallback:
+                    return _read_tiff(path, band, nodata, pixel_size)
+                data = ds.read(band)
+                src_nodata = ds.nodatavals[band - 1]
+                dem = Dem(heights=_to_heights(data, src_nodata if nodata is None else nodata),
+                          grid=None, path=path, kind="gdal",  # type: ignore[arg-type]
+                          transform=ds.transform if georef else None, crs=ds.crs,
+                          nodata=src_nodata if nodata is None else nodata, band=band,
+                          driver=ds.driver, source_dtype=str(data.dtype))
+    except HillshadeError:
+        raise
+    except (RasterioError, OSError) as exc:
+        if tiff_fallback:
+            try:
+                return _read_tiff(path, band, nodata, pixel_size)
+            except HillshadeError:
+                pass
+        msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        if "not recognized as" in msg or "not recognised" in msg:
+            msg = "not a raster format GDAL can read"
+        raise HillshadeError(f"{path}: cannot read as a raster ({msg})") from None
+    dem.grid = _make_grid(dem, pixel_size)
+    return dem
+
+
+def _read_tiff(path: str, band: int, nodata: float | None,
+               pixel_size: tuple[float, float] | None) -> Dem:
+    """A TIFF without georeferencing, through tifffile."""
+    import tifffile
+
+    try:
+        with tifffile.TiffFile(path) as tif:
+            page = tif.pages[0]
+            data = page.asarray()
+            tag = page.tags.get("GDAL_NODATA") or page.tags.get(42113)
+            file_nodata = float(str(tag.value).strip("\x00 ")) if tag is not None else None
+    except Exception as exc:  # noqa: BLE001 -- tifffile raises many kinds for bad files
+        raise HillshadeError(f"{path}: cannot read as a TIFF ({str(exc).splitlines()[0]})") from None
+    if data.ndim == 3:
+        # planar (bands, rows, cols) or contiguous (rows, cols, samples)
+        if page.planarconfig == 2 or data.shape[0] < data.shape[-1]:
+            data = np.moveaxis(data, 0, -1)
+        if band > data.shape[-1]:
+            raise HillshadeError(f"{path}: has {data.shape[-1]} band(s), --band {band} asked")
+        data = data[..., band - 1]
+    elif data.ndim != 2 or band != 1:
+        raise HillshadeError(f"{path}: expected a single-band 2-D image, got shape {data.shape}")
+    if data.dtype.kind not in "iuf":
+        raise HillshadeError(f"{path}: pixel type {data.dtype} is not a height")
+    nd = file_nodata if nodata is None else nodata
+    dem = Dem(heights=_to_heights(data, nd), grid=None, path=path,  # type: ignore[arg-type]
+              kind="tiff", nodata=nd, band=band, driver="TIFF (tifffile)",
+              source_dtype=str(data.dtype))
+    dem.grid = _make_grid(dem, pixel_size)
+    return dem
+
+
+def _hgt_geometry(path: str, rows: int):
+    """Transform and CRS of an SRTM .hgt tile from its name (cell centres on whole degrees)."""
+    m = _HGT_NAME.match(os.path.basename(path))
+    if not m or rows < 2:
+        return None, None
+    from affine import Affine
+    from rasterio.crs import CRS
+
+    lat = int(m.group(2)) * (1 if m.group(1).upper() == "N" else -1)
+    lon = int(m.group(4)) * (1 if m.group(3).upper() == "E" else -1)
+    step = 1.0 / (rows - 1)
+    return (Affine(step, 0, lon - step / 2, 0, -step, lat + 1 + step / 2),
+            CRS.from_epsg(4326))
+
+
+def _read_raw(path: str, shape: tuple[int, int] | None, dtype: str | None,
+              byteorder: str | None, nodata: float | None,
+              pixel_size: tuple[float, float] | None) -> Dem:
+    is_hgt = path.lower().endswith(".hgt")
+    size = os.path.getsize(path)
+    if size == 0:
+        raise HillshadeError(f"{path}: the file is empty")
+    if is_hgt:
+        dtype = dtype or "int16"
+        byteorder = byteorder or "big"
+        if nodata is None:
+            nodata = -32768.0
+    if dtype is None:
+        raise HillshadeError(f"{path}: raw input needs --raw-dtype ({', '.join(RAW_DTYPES)})")
+    if dtype not in RAW_DTYPES:
+        raise HillshadeError(f"--raw-dtype must be one of {', '.join(RAW_DTYPES)}, got {dtype!r}")
+    byteorder = byteorder or "little"
+    if byteorder not in ("little", "big"):
+        raise HillshadeError(f"--raw-byteorder must be 'little' or 'big', got {byteorder!r}")
+    dt = np.dtype(dtype).newbyteorder("<" if byteorder == "little" else ">")
+    if size % dt.itemsize:
+        raise HillshadeError(
+            f"{path}: {size} bytes is not a whole number of {dtype} values ({dt.itemsize} bytes each)")
+    count = size // dt.itemsize
+    if shape is None:
+        side = math.isqrt(count)
+        if not is_hgt or side * side != count:
+            raise HillshadeError(f"{path}: raw input needs --raw-shape ROWSxCOLS")
+        shape = (side, side)
+    if shape[0] * shape[1] != count:
+        raise HillshadeError(
+            f"{path}: --raw-shape {shape[0]}x{shape[1]} needs {shape[0] * shape[1]} {dtype} values "
+            f"({shape[0] * shape[1] * dt.itemsize} bytes), the file holds {count} ({size} bytes)")
+    data = np.fromfile(path, dtype=dt).reshape(shape)
+    transform, crs = _hgt_geometry(path, shape[0]) if is_hgt else (None, None)
+    dem = Dem(heights=_to_heights(data, nodata), grid=None, path=path,  # type: ignore[arg-type]
+              kind="raw", transform=transform, crs=crs, nodata=nodata,
+              driver="raw" if not is_hgt else "SRTM .hgt (raw)", source_dtype=dt.str)
+    dem.grid = _make_grid(dem, pixel_size)
+    return dem
+
+
+def _make_grid(dem: Dem, pixel_size: tuple[float, float] | None) -> Grid:
+    rows, cols = dem.heights.shape
+    if pixel_size is not None:
+        col_sign = row_sign = None
+        if dem.transform is not None:
+            if dem.transform.b != 0 or dem.transform.d != 0:
+                raise HillshadeError(
+                    "rotated or sheared geotransform is not supported; "
+                    "warp the DEM to a north-up grid first (gdalwarp)")
+            col_sign = 1 if dem.transform.a > 0 else -1
+            row_sign = 1 if dem.transform.e > 0 else -1
+        return Grid.uniform(rows, cols, pixel_size[0], pixel_size[1],
+                            col_sign or 1, row_sign or -1, "--pixel-size")
+    if dem.transform is None:
+        raise HillshadeError(
+            f"{dem.path}: has no georeferencing; give the ground spacing with --pixel-size DX[,DY] (metres)")
+    return grid_from_transform(dem.transform, dem.crs, (rows, cols))
+
+
+# --------------------------------------------------------------------------------------------
+# writing
+
+def check_output_path(path: str, overwrite: bool) -> str:
+    """Fail early (before any computing) when ``path`` cannot be written."""
+    path = os.fspath(path)
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        raise HillshadeError(f"{path}: output folder {folder} does not exist")
+    if os.path.isdir(path):
+        raise HillshadeError(f"{path}: is a folder")
+    if os.path.exists(path) and not overwrite:
+        raise HillshadeError(f"{path}: already exists (use --overwrite to replace it)")
+    if not os.access(folder, os.W_OK):
+        raise HillshadeError(f"{path}: output folder {folder} is not writable")
+    return path
+
+
+@contextlib.contextmanager
+def atomic_path(path: str, suffix: str = ""):
+    """Yield a temporary path beside ``path``; rename it onto ``path`` only if the block succeeds."""
+    folder = os.path.dirname(os.path.abspath(path))
+    fd, tmp = tempfile.mkstemp(dir=folder, prefix="." + os.path.basename(path) + ".",
+                               suffix=".part" + suffix)
+    os.close(fd)
+    umask = os.umask(0)
+    os.umask(umask)
+    os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; give the file the usual permissions
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.remove(tmp)
+        raise
+
+
+def _profile(dem: Dem, dtype: str, nodata) -> dict:
+    rows, cols = dem.shape
+    prof = dict(driver="GTiff", width=cols, height=rows, count=1, dtype=dtype, nodata=nodata,
+                compress="deflate", tiled=True, blockxsize=256, blockysize=256)
+    if dem.crs is not None:
+        prof["crs"] = dem.crs
+    if dem.transform is not None:
+        prof["transform"] = dem.transform
+    return prof
+
+
+def write_raster(path: str, data: np.ndarray, dem: Dem, nodata, description: str = "",
+                 tags: dict | None = None) -> None:
+    """Write one band georeferenced like ``dem`` (temporary file, then rename)."""
+    import rasterio
+    from rasterio.errors import NotGeoreferencedWarning
+
+    prof = _profile(dem, str(data.dtype), nodata)
+    with atomic_path(path, ".tif") as tmp, warnings.catch_warnings():
+        warnings.simplefilter("ignore", NotGeoreferencedWarning)
+        try:
+            with rasterio.open(tmp, "w", **prof) as dst:
+                dst.write(data, 1)
+                if description:
+                    dst.set_band_description(1, description)
+                if tags:
+                    dst.update_tags(**{k: str(v) for k, v in tags.items()})
+        except rasterio.errors.RasterioError as exc:
+            raise HillshadeError(f"{path}: cannot write ({str(exc).splitlines()[0]})") from None
+
+
+def write_json(path: str, obj: dict) -> None:
+    """Write ``obj`` as JSON (temporary file, then rename)."""
+    with atomic_path(path) as tmp, open(tmp, "w", encoding="utf-8") as fh:
+        json.dump(obj, fh, indent=2)
+        fh.write("\n")
