@@ -1,0 +1,45 @@
+# hillshade-rt -- set-up, example run, tests, benchmarks. Needs only python3 (>= 3.10) and PyPI.
+PYTHON ?= python3
+VENV   ?= .venv
+BIN    := $(VENV)/bin
+OUTDIR ?= out
+
+EXAMPLE_DEM := examples/bigtujunga_srtm30m_utm11n_1197x643.tif
+EXAMPLE_OUT := $(OUTDIR)/bigtujunga_shadow.tif
+
+.PHONY: run test install install-test bench clean help
+
+help:
+	@echo "make run    - set up .venv, shade the bundled example DEM, print where the mask went"
+	@echo "make test   - set up .venv with test extras and run the test suite"
+	@echo "make bench  - run the benchmarks (writes docs/benchmarks.md figures to stdout)"
+	@echo "make clean  - remove .venv and outputs"
+
+$(BIN)/python:
+	$(PYTHON) -m venv $(VENV)
+
+$(VENV)/.installed: pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install -q -e .
+	@touch $@
+
+$(VENV)/.installed-test: pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install -q -e '.[test]'
+	@touch $@ $(VENV)/.installed
+
+install: $(VENV)/.installed
+install-test: $(VENV)/.installed-test
+
+run: $(VENV)/.installed
+	@mkdir -p $(OUTDIR)
+	$(BIN)/hillshade-rt shadow $(EXAMPLE_DEM) $(EXAMPLE_OUT) --azimuth 225 --elevation 20 \
+		--overwrite --report $(OUTDIR)/bigtujunga_shadow.json
+	@echo "shadow mask written to $(EXAMPLE_OUT) (report: $(OUTDIR)/bigtujunga_shadow.json)"
+
+test: $(VENV)/.installed-test
+	$(BIN)/python -m pytest -q
+
+bench: $(VENV)/.installed
+	$(BIN)/python benchmarks/bench_cpu.py
+
+clean:
+	rm -rf $(VENV) $(OUTDIR) .pytest_cache .hypothesis

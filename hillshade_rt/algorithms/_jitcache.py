@@ -1,0 +1,45 @@
+"""Keep numba's on-disk cache honest across modules.
+
+numba keys a cached function on its own source file only: when ``raymath.py`` changes but
+``brute.py`` does not, ``cache=True`` would keep loading the old compiled kernel (stale results
+after an upgrade or an edit). So the kernels are cached in a folder named after a digest of every
+source file of this package folder: any change to any of them starts a fresh cache.
+"""
+
+import contextlib
+import hashlib
+import os
+
+import numba
+
+_HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def source_digest() -> str:
+    h = hashlib.sha256(numba.__version__.encode())
+    for name in sorted(os.listdir(_HERE)):
+        if name.endswith(".py"):
+            h.update(name.encode())
+            with open(os.path.join(_HERE, name), "rb") as fh:
+                h.update(fh.read())
+    return h.hexdigest()[:16]
+
+
+def _cache_root() -> str:
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        return os.environ["NUMBA_CACHE_DIR"]
+    xdg = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return os.path.join(xdg, "hillshade-rt", "numba")
+
+
+@contextlib.contextmanager
+def kernel_cache():
+    """While kernel modules are imported (their decorators run), point numba's cache at
+    ``<root>/<digest>``; restore the user's setting afterwards (numba resolves the folder when
+    a decorator runs, so other libraries are unaffected)."""
+    old = numba.config.CACHE_DIR
+    numba.config.CACHE_DIR = os.path.join(_cache_root(), source_digest())
+    try:
+        yield
+    finally:
+        numba.config.CACHE_DIR = old
