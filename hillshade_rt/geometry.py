@@ -152,8 +152,11 @@ def grid_from_transform(transform, crs, shape: tuple[int, int]) -> Grid:
     """Ground spacing per row from a north-up (or south-up) geotransform and its CRS.
 
     * geographic CRS: metres per degree from the CRS's own ellipsoid at each row's latitude;
-    * projected CRS: transform units times the CRS's linear unit, divided by the projection's
-      scale factors (pyproj ``Proj.get_factors``) at the centre column of each row;
+    * projected CRS: the geodesic length, on the CRS's own ellipsoid, of one cell step at the
+      centre column of each row. For a conformal projection this equals the transform units times
+      the CRS's linear unit divided by the scale factor (``Proj.get_factors``); unlike that
+      quotient it stays right for projections defined on a sphere but used on an ellipsoid (Web
+      Mercator: 0.2 % at 47 N) and for non-conformal ones (orthographic, equirectangular);
     * no CRS but a real geotransform: the transform's units are taken as metres.
     """
     rows, cols = shape
@@ -174,7 +177,7 @@ def grid_from_transform(transform, crs, shape: tuple[int, int]) -> Grid:
         return Grid(rows, cols, np.full(rows, abs(a)), np.full(rows, abs(e)),
                     col_sign, row_sign, "geotransform units taken as metres (no CRS)")
 
-    from pyproj import CRS as PCRS, Proj, Transformer
+    from pyproj import CRS as PCRS, Transformer
 
     pcrs = PCRS.from_user_input(crs.to_wkt() if hasattr(crs, "to_wkt") else crs)
     ell = pcrs.ellipsoid
@@ -196,19 +199,24 @@ def grid_from_transform(transform, crs, shape: tuple[int, int]) -> Grid:
         return Grid(rows, cols, np.full(rows, abs(a) * unit), np.full(rows, abs(e) * unit),
                     col_sign, row_sign, "local CRS: transform units times the CRS's unit")
     unit = pcrs.axis_info[0].unit_conversion_factor  # metres per CRS unit
-    kx = np.ones(rows)
-    ky = np.ones(rows)
-    method = "projected: transform units x CRS unit"
+    dx = np.full(rows, abs(a) * unit)
+    dy = np.full(rows, abs(e) * unit)
+    method = "projected: transform units x CRS unit (no geodesic correction possible)"
     try:
+        geod = pcrs.get_geod()
         to_geo = Transformer.from_crs(pcrs, pcrs.geodetic_crs, always_xy=True)
-        lon, lat = to_geo.transform(np.full(rows, x_mid), y)
-        fac = Proj(pcrs).get_factors(lon, lat)
-        kx_ = np.asarray(fac.parallel_scale, dtype=np.float64)
-        ky_ = np.asarray(fac.meridional_scale, dtype=np.float64)
-        ok = np.isfinite(kx_) & np.isfinite(ky_) & (kx_ > 0) & (ky_ > 0)
-        kx[ok], ky[ok] = kx_[ok], ky_[ok]
+        xs = np.full(rows, x_mid)
+        lon_w, lat_w = to_geo.transform(xs - a / 2, y)
+        lon_e, lat_e = to_geo.transform(xs + a / 2, y)
+        lon_n, lat_n = to_geo.transform(xs, y - e / 2)
+        lon_s, lat_s = to_geo.transform(xs, y + e / 2)
+        gx = np.asarray(geod.inv(lon_w, lat_w, lon_e, lat_e)[2], dtype=np.float64)
+        gy = np.asarray(geod.inv(lon_n, lat_n, lon_s, lat_s)[2], dtype=np.float64)
+        ok = np.isfinite(gx) & np.isfinite(gy) & (gx > 0) & (gy > 0)
         if ok.any():
-            method += " / projection scale factors at each row"
-    except Exception:  # noqa: BLE001 -- a projection proj cannot invert: no scale correction
+            dx[ok], dy[ok] = gx[ok], gy[ok]
+            method = ("projected: geodesic length of one cell on the CRS's ellipsoid "
+                      "at the centre column of each row")
+    except Exception:  # noqa: BLE001 -- a projection proj cannot invert: units only
         pass
-    return Grid(rows, cols, abs(a) * unit / kx, abs(e) * unit / ky, col_sign, row_sign, method)
+    return Grid(rows, cols, dx, dy, col_sign, row_sign, method)
