@@ -1,0 +1,90 @@
+"""CPU benchmarks: every algorithm on real DEMs and fractal terrains at high, mid and low sun.
+
+Prints a markdown table (and writes it with --out). Each figure is the median of --repeat runs
+after one warm-up (compilation excluded). Ratios are measured within this one run:
+  * floor ratio: algorithm time / time of one elementwise pass (``z > mean``) over the same
+    array: how far the algorithm is from the memory-bound limit;
+  * thread speed-up: the same algorithm with 1 thread vs all threads.
+"""
+
+import argparse
+import os
+import platform
+import statistics
+import sys
+import time
+
+import numba
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, "..", "tests"))
+
+from hillshade_rt import read_dem  # noqa: E402
+from hillshade_rt.algorithms import ALGORITHMS  # noqa: E402
+from hillshade_rt.geometry import Grid, sun_rays  # noqa: E402
+from conftest import fractal_terrain  # noqa: E402
+
+REAL = [os.path.join(HERE, "..", "examples", "bigtujunga_srtm30m_utm11n_1197x643.tif"),
+        os.path.join(HERE, "..", "tests", "data", "everest_srtm3_voids_crop200.tif"),
+        os.path.join(HERE, "..", "tests", "data", "jacksboro_fault_srtm3_mpl_403x344.tif")]
+
+
+def timed(fn, repeat):
+    times = []
+    for _ in range(repeat):
+        t = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t)
+    return statistics.median(times)
+
+
+def cases(sizes):
+    for p in REAL:
+        d = read_dem(p)
+        yield os.path.basename(p), d.heights, d.grid
+    for n in sizes:
+        z = fractal_terrain(n, n, seed=n, relief=1500.0, octaves=6)  # 1.5 km relief, 30 m cells
+        yield f"fractal {n}²", z, Grid.uniform(n, n, 30.0)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--sizes", default="512,2048", help="fractal sizes, comma-separated")
+    ap.add_argument("--elevations", default="45,15,3")
+    ap.add_argument("--azimuth", type=float, default=203.7)
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--out", default=None, help="also write the table to this file")
+    a = ap.parse_args()
+    sizes = [int(s) for s in a.sizes.split(",") if s]
+    els = [float(e) for e in a.elevations.split(",")]
+    nthreads = numba.get_num_threads()
+    lines = [f"Machine: {platform.machine()}, {os.cpu_count()} cores, {platform.python_version()}, "
+             f"numba {numba.__version__}, {nthreads} threads; azimuth {a.azimuth}; median of "
+             f"{a.repeat}", "",
+             "| DEM | cells | elev | algorithm | compute s | Mpix/s | × floor | 1-thread / all |",
+             "|---|---|---|---|---|---|---|---|"]
+    print("\n".join(lines), flush=True)
+    for name, z, grid in cases(sizes):
+        zmax = float(np.nanmax(z))
+        thr = float(np.nanmean(z))
+        floor = timed(lambda: np.greater(z, thr), a.repeat)
+        for el in els:
+            rays = sun_rays(grid, a.azimuth, el)
+            for alg, fn in ALGORITHMS.items():
+                fn(z, rays, zmax)  # warm-up / compile
+                t = timed(lambda: fn(z, rays, zmax), a.repeat)
+                numba.set_num_threads(1)
+                t1 = timed(lambda: fn(z, rays, zmax), 1)
+                numba.set_num_threads(nthreads)
+                row = (f"| {name} | {z.size / 1e6:.2f} M | {el:g}° | {alg} | {t:.3f} | "
+                       f"{z.size / 1e6 / t:.1f} | {t / floor:.0f} | {t1 / t:.2f} |")
+                lines.append(row)
+                print(row, flush=True)
+    if a.out:
+        with open(a.out, "w") as fh:
+            fh.write("\n".join(lines) + "\n")
+
+
+if __name__ == "__main__":
+    main()
