@@ -128,6 +128,7 @@ def shadow(dem, output, azimuth, elevation, algorithm, threads, report_path, ove
     from .io import check_output_path, write_json, write_raster
     from .report import Timer, build_report, mask_stats, summary_line
     from .algorithms import ALGORITHMS
+    from .shadow import warm_up
 
     timer = Timer()
     # validate everything cheap before reading or computing anything
@@ -141,7 +142,8 @@ def shadow(dem, output, azimuth, elevation, algorithm, threads, report_path, ove
 
     with timer("read"):
         d = _read(dem, **read_opts)
-    with timer("prepare"):
+    with timer("prepare"):  # includes numba compilation on a first run
+        warm_up(algorithm)
         rays = sun_rays(d.grid, az, el)
         zmax = float(np.nanmax(d.heights))
     with timer("compute"):

@@ -9,6 +9,13 @@ from .errors import HillshadeError
 from .geometry import Grid, sun_rays
 
 
+def warm_up(algorithm: str) -> None:
+    """Compile (or load from numba's cache) the kernel of ``algorithm`` on a 2x2 grid, so that a
+    timed run measures computing, not compiling. Same argument types as a real run."""
+    z = np.zeros((2, 2), np.float32)
+    ALGORITHMS[algorithm](z, sun_rays(Grid.uniform(2, 2, 1.0), 203.7, 10.0), 0.0)
+
+
 def shadow_mask(heights: np.ndarray, azimuth: float, elevation: float,
                 spacing: float | tuple[float, float] | Grid = 1.0,
                 algorithm: str = "brute") -> np.ndarray:

@@ -170,3 +170,10 @@ def test_version_and_help(runner):
     assert r.exit_code == 0 and "hillshade-rt" in r.output
     r = runner.invoke(cli, ["shadow", "--help"])
     assert r.exit_code == 0 and "--azimuth" in r.output
+
+
+def test_cli_offers_every_registered_algorithm():
+    from hillshade_rt.algorithms import ALGORITHMS
+
+    opt = next(p for p in cli.commands["shadow"].params if p.name == "algorithm")
+    assert list(opt.type.choices) == list(ALGORITHMS)
