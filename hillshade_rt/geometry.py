@@ -148,6 +148,17 @@ def _ellipsoid_spacing(lat_deg: np.ndarray, a: float, b: float,
     return n * np.cos(phi) * dlon_rad, m * dlat_rad
 
 
+def orientation(transform) -> tuple[int, int]:
+    """(col_sign, row_sign) of a north-up or south-up geotransform; refuses rotation and shear."""
+    if transform.b != 0.0 or transform.d != 0.0:
+        raise HillshadeError(
+            "rotated or sheared geotransform is not supported; "
+            "warp the DEM to a north-up grid first (gdalwarp)")
+    if transform.a == 0.0 or transform.e == 0.0:
+        raise HillshadeError("degenerate geotransform: pixel width or height is zero")
+    return (1 if transform.a > 0 else -1), (1 if transform.e > 0 else -1)
+
+
 def grid_from_transform(transform, crs, shape: tuple[int, int]) -> Grid:
     """Ground spacing per row from a north-up (or south-up) geotransform and its CRS.
 
@@ -160,16 +171,8 @@ def grid_from_transform(transform, crs, shape: tuple[int, int]) -> Grid:
     * no CRS but a real geotransform: the transform's units are taken as metres.
     """
     rows, cols = shape
-    a, b, c, d, e, f = (transform.a, transform.b, transform.c,
-                        transform.d, transform.e, transform.f)
-    if b != 0.0 or d != 0.0:
-        raise HillshadeError(
-            "rotated or sheared geotransform is not supported; "
-            "warp the DEM to a north-up grid first (gdalwarp)")
-    if a == 0.0 or e == 0.0:
-        raise HillshadeError("degenerate geotransform: pixel width or height is zero")
-    col_sign = 1 if a > 0 else -1
-    row_sign = 1 if e > 0 else -1
+    a, c, e, f = transform.a, transform.c, transform.e, transform.f
+    col_sign, row_sign = orientation(transform)
     r_idx = np.arange(rows, dtype=np.float64) + 0.5
     y = f + e * r_idx                       # centre of each row, CRS units
     x_mid = c + a * (cols / 2.0)            # centre column

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import HillshadeError
-from .geometry import Grid, grid_from_transform
+from .geometry import Grid, grid_from_transform, orientation
 
 RAW_DTYPES = ("int16", "uint16", "int32", "float32", "float64")
 TIFF_EXTS = (".tif", ".tiff")
@@ -143,13 +143,21 @@ def read_dem(path: str, *, band: int = 1, nodata: float | None = None,
 
 
 def _to_heights(data: np.ndarray, nodata: float | None) -> np.ndarray:
-    """float32 copy of ``data`` with nodata (and NaN, and +-inf) as NaN."""
-    z = np.asarray(data, dtype=np.float32)
-    if z is data:  # never alias the caller's array (and make it writable)
-        z = z.copy()
+    """float32 heights with nodata (and NaN, and +-inf) as NaN.
+
+    ``data`` is an array this module has just read and owns: a float32 one is converted in place,
+    any other type is cast once.
+    """
+    bad = None
     if nodata is not None and not math.isnan(nodata):
-        # compare in the source type: a float32 cast of e.g. -3.4028235e38 must still match
-        z[np.asarray(data) == np.asarray(nodata).astype(data.dtype)] = np.nan
+        # compare in the source type: a float32 cast of e.g. -3.4028235e38 must still match;
+        # a value the type cannot hold (-1 for uint16) matches nothing instead of wrapping around
+        nd = np.asarray(nodata).astype(data.dtype)
+        if data.dtype.kind == "f" or float(nd) == float(nodata):
+            bad = data == nd
+    z = data.astype(np.float32, copy=False)
+    if bad is not None:
+        z[bad] = np.nan
     z[~np.isfinite(z)] = np.nan
     return z
 
@@ -285,16 +293,9 @@ def _read_raw(path: str, shape: tuple[int, int] | None, dtype: str | None,
 def _make_grid(dem: Dem, pixel_size: tuple[float, float] | None) -> Grid:
     rows, cols = dem.heights.shape
     if pixel_size is not None:
-        col_sign = row_sign = None
-        if dem.transform is not None:
-            if dem.transform.b != 0 or dem.transform.d != 0:
-                raise HillshadeError(
-                    "rotated or sheared geotransform is not supported; "
-                    "warp the DEM to a north-up grid first (gdalwarp)")
-            col_sign = 1 if dem.transform.a > 0 else -1
-            row_sign = 1 if dem.transform.e > 0 else -1
-        return Grid.uniform(rows, cols, pixel_size[0], pixel_size[1],
-                            col_sign or 1, row_sign or -1, "--pixel-size")
+        col_sign, row_sign = orientation(dem.transform) if dem.transform is not None else (1, -1)
+        return Grid.uniform(rows, cols, pixel_size[0], pixel_size[1], col_sign, row_sign,
+                            "--pixel-size")
     if dem.transform is None:
         raise HillshadeError(
             f"{dem.path}: has no georeferencing; give the ground spacing with --pixel-size DX[,DY] (metres)")

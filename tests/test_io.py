@@ -38,6 +38,14 @@ def test_nodata_override_and_nan(tmp_path):
     assert read_dem(p, nodata=-1.0).valid_count() == 398
 
 
+def test_nodata_the_type_cannot_hold_matches_nothing(tmp_path):
+    z = np.full((4, 4), 65535, np.uint16)
+    z[0, 0] = 7
+    p = write_geotiff(tmp_path / "u.tif", z, Affine(1, 0, 400000, 0, -1, 3800000), UTM)
+    assert read_dem(p, nodata=-1).valid_count() == 16      # -1 must not wrap to 65535
+    assert read_dem(p, nodata=65535).valid_count() == 1
+
+
 def test_band_selection(tmp_path):
     z = np.stack([np.zeros((10, 10), np.float32), box_terrain(10, 10, 5.0, 4, 6, 4, 6)])
     p = write_geotiff(tmp_path / "two.tif", z, Affine(1, 0, 400000, 0, -1, 3800000), UTM)
