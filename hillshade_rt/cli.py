@@ -122,7 +122,6 @@ def shadow(dem, output, azimuth, elevation, algorithm, threads, report_path, ove
            **read_opts):
     """Write the cast-shadow mask of DEM to OUTPUT (GeoTIFF: 1 shadow, 0 lit, 255 nodata)."""
     import numba
-    import numpy as np
 
     from .geometry import check_elevation, normalize_azimuth, sun_rays
     from .io import check_output_path, write_json, write_raster
@@ -145,7 +144,7 @@ def shadow(dem, output, azimuth, elevation, algorithm, threads, report_path, ove
     with timer("prepare"):  # includes numba compilation on a first run
         warm_up(algorithm)
         rays = sun_rays(d.grid, az, el)
-        zmax = float(np.nanmax(d.heights))
+        zmin, zmax = d.height_range()
     with timer("compute"):
         mask = ALGORITHMS[algorithm](d.heights, rays, zmax)
     tags = {"HILLSHADE_RT_VERSION": __version__, "SUN_AZIMUTH": az, "SUN_ELEVATION": el,
@@ -156,7 +155,7 @@ def shadow(dem, output, azimuth, elevation, algorithm, threads, report_path, ove
     seconds = dict(timer.seconds, total=timer.total())
     rep = build_report(dem=d, output=output, azimuth=az, elevation=el, algorithm=algorithm,
                        backend="cpu", threads=numba.get_num_threads(), seconds=seconds,
-                       stats=stats)
+                       stats=stats, height_range=(zmin, zmax))
     if report_path is not None:
         write_json(report_path, rep)
     if not quiet:

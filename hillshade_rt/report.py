@@ -41,12 +41,15 @@ def mask_stats(mask: np.ndarray) -> dict:
 
 
 def build_report(*, dem, output: str, azimuth: float, elevation: float, algorithm: str,
-                 backend: str, threads: int, seconds: dict, stats: dict) -> dict:
-    """The report of one ``shadow`` run. Keys documented in docs/usage.md stay stable."""
+                 backend: str, threads: int, seconds: dict, stats: dict,
+                 height_range: tuple[float, float]) -> dict:
+    """The report of one ``shadow`` run. Keys documented in docs/usage.md stay stable.
+
+    ``height_range`` is the (min, max) the run already computed: no second pass over the DEM."""
     rows, cols = dem.shape
     dx, dy = dem.grid.centre_spacing()
     compute = seconds.get("compute", 0.0)
-    zmin, zmax = dem.height_range()
+    zmin, zmax = height_range
     return {
         "input": os.path.abspath(dem.path),
         "output": os.path.abspath(output),
