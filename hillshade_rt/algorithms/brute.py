@@ -36,10 +36,12 @@ def _brute_cpu(z, dom_col, step_dom, step_other, rise, zmax, out):
                 out[r, c] = 0
 
 
-def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None) -> np.ndarray:
+def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None,
+                stats: dict | None = None) -> np.ndarray:
     """Shadow mask of float32 heights ``z`` (NaN = void) for the sun rays of each row.
 
-    Returns uint8: 1 shadow, 0 lit, 255 void.
+    Returns uint8: 1 shadow, 0 lit, 255 void. ``stats`` is accepted for a uniform interface (brute
+    has nothing to add).
     """
     if z.dtype != np.float32 or z.ndim != 2:
         raise TypeError("heights must be a 2-D float32 array")

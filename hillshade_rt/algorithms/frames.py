@@ -1,0 +1,61 @@
+"""Octant mapping: views of a DEM in which the sun lies toward increasing line index.
+
+The published algorithms fix the light's dominant axis and direction (Sakalauskas: ``L_v = 1``).
+Here every one of the eight octants is mapped onto that case with numpy *views* (a transpose and
+reversed strides), never copies:
+
+* canonical **lines** are the grid lines the rays cross one per step (rows or columns of the DEM),
+  numbered so that the sun lies toward increasing line index;
+* canonical **positions** run along a line, numbered so that a ray's position grows (``s >= 0``).
+
+A ray from canonical cell ``(v0, p0)`` crosses line ``v0 + k`` at position ``p0 + k*s`` and rises
+``k * rise``. ``Frame`` converts indices both ways; ``view(a)`` applies the same mapping to any
+array of the DEM's shape (the heights, an output mask), so a kernel can write its result straight
+into the caller's array.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..geometry import SunRays
+
+
+@dataclass(frozen=True)
+class Frame:
+    dom_col: bool      # lines are columns of the DEM (rays step one column per step)
+    flip_line: bool    # line index runs against the DEM index
+    flip_pos: bool     # position index runs against the DEM index
+    s: float           # position change per step, >= 0
+    so: float          # the same in the DEM's own index direction (signed)
+    sd: int            # dominant index change per step in the DEM (+1 / -1)
+    rise: float        # height gained per step
+    step_m: float      # ground metres per step
+
+    def view(self, a: np.ndarray) -> np.ndarray:
+        """``a`` (DEM-shaped) seen in canonical (line, position) order: a view, no copy."""
+        v = a.T if self.dom_col else a
+        if self.flip_line:
+            v = v[::-1, :]
+        if self.flip_pos:
+            v = v[:, ::-1]
+        return v
+
+
+def uniform_rays(rays: SunRays) -> bool:
+    """True when every row has the same ray (projected CRS, raw grids): the structures that the
+    fast algorithms share between cells need one sun direction in pixel units."""
+    return bool(np.all(rays.dom_col == rays.dom_col[0]) and np.all(rays.step_dom == rays.step_dom[0])
+                and np.all(rays.step_other == rays.step_other[0])
+                and np.all(rays.rise == rays.rise[0]))
+
+
+def frame_of(rays: SunRays, row: int = 0) -> Frame:
+    """The canonical frame of the rays of ``row`` (all rows when the rays are uniform)."""
+    dom_col = bool(rays.dom_col[row])
+    sd = int(rays.step_dom[row])
+    so = float(rays.step_other[row])
+    return Frame(dom_col=dom_col, flip_line=sd < 0, flip_pos=so < 0, s=abs(so), so=so, sd=sd,
+                 rise=float(rays.rise[row]), step_m=float(rays.step_m[row]))
