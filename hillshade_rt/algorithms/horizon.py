@@ -1,0 +1,248 @@
+"""``horizon``: single-azimuth horizon mapping (Aslandere, Flatken & Gerndt, seed 002).
+
+For every cell, the horizon angle β along the sun's azimuth only (their eq. 3-5),
+
+    β = atan( max_k (T_k - h0) / d_k ),
+
+over the model's samples ``T_k`` of the ray (grid-line crossings, interpolated as in ``brute``) at
+ground distance ``d_k = k * step``; the cell is lit iff β <= α, the sun elevation (eq. 6). β may be
+negative: a cell on a summit or a convex slope looks down on everything ahead. A cell with no
+terrain ahead inside the raster (its ray leaves at once) gets β = -90°.
+
+Two ways to get β:
+
+``scan`` (default, exact): the paper's per-cell march, with two exact early exits: the march stops
+when even the highest cell of the DEM could not raise the maximum further, and, for a mask, as soon
+as the maximum exceeds α or can no longer reach it. ``sample_spacing`` = sp > 1 takes every sp-th
+sample only (the paper's ``sp``): faster, approximate (figures in docs/algorithms.md).
+
+``hull`` (fast, O(N log N)): Dozier & Frew's idea as in topocalc: along one straight line in the sun
+direction the horizon of every point follows from the upper convex hull of the samples ahead of
+it, built incrementally from the sun's edge. The lines used are those through whole offsets
+``o = p - s*v`` of the canonical frame; their samples are exactly the model's. A cell lies on such
+a line only when ``s*v`` is whole (on the axes and diagonals: always, and there ``hull`` equals
+``scan``); otherwise its tangent of β is interpolated linearly between the two lines that bracket
+it, i.e. the horizon of rays shifted sideways by less than a cell. Its error against the exact
+model is measured in docs/algorithms.md. Needs one ray direction for the whole raster.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from ..geometry import SunRays
+from .frames import frame_of, uniform_rays
+from .raymath import line_position, terrain_on_line
+
+METHODS = ("scan", "hull")
+
+
+@njit(cache=True)
+def _scan_cell(z, r, c, dom_col, sd, so, sp, zmax, rise, decide):
+    """Max of (T_k - h0) / k over the samples k = sp, 2sp, ... (-inf if none).
+
+    decide: stop as soon as the result is known relative to ``rise`` (mask mode)."""
+    rows, cols = z.shape
+    r = np.int64(r)
+    c = np.int64(c)
+    h0 = float(z[r, c])
+    if dom_col:
+        line0, other0, n_dom, n_oth = c, r, cols, rows
+    else:
+        line0, other0, n_dom, n_oth = r, c, rows, cols
+    best = -np.inf
+    k = sp
+    while True:
+        if zmax - h0 <= best * k:           # no later sample can raise the maximum
+            break
+        if decide and zmax - h0 <= rise * k:  # nothing ahead can reach the sun's elevation
+            break
+        line = line0 + k * sd
+        if line < 0 or line >= n_dom:
+            break
+        pos = line_position(other0 + k * so, n_oth)
+        if pos < 0.0:
+            break
+        t = terrain_on_line(z, dom_col, line, pos)
+        if t - h0 > best * k:   # NaN (void) compares false: skipped
+            best = (t - h0) / k
+            if decide and best > rise:
+                break
+        k += sp
+    return best
+
+
+@njit(parallel=True, cache=True)
+def _scan_kernel(z, dom_col, step_dom, step_other, rise, step_m, sp, zmax, want_mask, mask,
+                 beta):
+    rows, cols = z.shape
+    for r in prange(rows):
+        dc = dom_col[r] != 0
+        sd = np.int64(step_dom[r])
+        so = step_other[r]
+        ri = rise[r]
+        for c in range(cols):
+            if math.isnan(z[r, c]):
+                if want_mask:
+                    mask[r, c] = 255
+                else:
+                    beta[r, c] = np.nan
+                continue
+            t = _scan_cell(z, r, c, dc, sd, so, sp, zmax, ri, want_mask)
+            if want_mask:
+                mask[r, c] = 1 if t > ri else 0
+            else:
+                beta[r, c] = -90.0 if t == -np.inf else math.degrees(math.atan(t / step_m[r]))
+
+
+@njit(cache=True)
+def _hull_best(hv, ht, top, v, h0):
+    """Max slope (T - h0) / (x - v) from (v, h0) to the hull points (unimodal: binary search)."""
+    if top == 0:
+        return -np.inf
+    lo = 0
+    hi = top - 1
+    while lo < hi:
+        m = (lo + hi) // 2
+        if (ht[m] - h0) / (hv[m] - v) < (ht[m + 1] - h0) / (hv[m + 1] - v):
+            lo = m + 1
+        else:
+            hi = m
+    return (ht[lo] - h0) / (hv[lo] - v)
+
+
+@njit(parallel=True, cache=True)
+def _hull_kernel(Z, s, left, right):
+    """Per whole-offset line o, from the sun's edge: answer the cells it brackets, then add its
+    sample on this line to the upper hull. left/right: tangent (per step) from the line below /
+    above each cell's offset."""
+    L, P = Z.shape
+    omin = int(math.floor(-s * (L - 1))) - 1
+    omax = P
+    for io in prange(omax - omin + 1):
+        o = omin + io
+        hv = np.empty(L, np.float64)
+        ht = np.empty(L, np.float64)
+        top = 0
+        for v in range(L - 1, -1, -1):
+            x = o + s * v
+            if x < -1.0 - 1e-9:   # and lower lines lie further left: done
+                break
+            if x > P:   # lines move to larger positions as v grows: beyond the raster here
+                continue
+            base = int(math.floor(x))
+            for c in (base, base + 1):
+                if c < 0 or c > P - 1:
+                    continue
+                h0 = float(Z[v, c])
+                if math.isnan(h0):
+                    continue
+                q = c - s * v
+                o1 = int(math.floor(q))
+                if o1 == o:
+                    left[v, c] = _hull_best(hv, ht, top, v, h0)
+                elif o1 + 1 == o:
+                    right[v, c] = _hull_best(hv, ht, top, v, h0)
+            xs = line_position(x, P)
+            if xs < 0.0:
+                continue
+            t = terrain_on_line(Z, False, v, xs)
+            if math.isnan(t):
+                continue
+            # add (v, t) at the near end; drop points no longer on the upper hull
+            while top >= 2:
+                b_v, b_t = hv[top - 1], ht[top - 1]
+                a_v, a_t = hv[top - 2], ht[top - 2]
+                if (b_t - t) * (a_v - v) <= (a_t - t) * (b_v - v):
+                    top -= 1
+                else:
+                    break
+            hv[top] = v
+            ht[top] = t
+            top += 1
+
+
+@njit(parallel=True, cache=True)
+def _hull_combine(Z, s, left, right, out):
+    """tan = (1-w)*left + w*right, w the cell's offset fraction (a missing side: the other)."""
+    L, P = Z.shape
+    for v in prange(L):
+        for c in range(P):
+            q = c - s * v
+            w = q - math.floor(q)
+            a = left[v, c]
+            b = right[v, c]
+            if w == 0.0 or b == -np.inf:
+                out[v, c] = a
+            elif a == -np.inf:
+                out[v, c] = b
+            else:
+                out[v, c] = (1.0 - w) * a + w * b
+
+
+def horizon_tangent(z: np.ndarray, rays: SunRays, method: str = "scan", sample_spacing: int = 1,
+                    zmax: float | None = None) -> np.ndarray | None:
+    """Hull path only: tangent of β per step (float64, DEM-shaped), -inf where nothing is ahead."""
+    f = frame_of(rays)
+    Z = f.view(z)
+    L, P = Z.shape
+    left = np.full(z.shape, -np.inf)
+    right = np.full(z.shape, -np.inf)
+    _hull_kernel(Z, f.s, f.view(left), f.view(right))
+    out = np.empty(z.shape)
+    _hull_combine(Z, f.s, f.view(left), f.view(right), f.view(out))
+    out[np.isnan(z)] = np.nan
+    return out
+
+
+def _check(method, sample_spacing, rays):
+    from ..errors import HillshadeError
+    if method not in METHODS:
+        raise HillshadeError(f"horizon method must be one of {', '.join(METHODS)}, got {method!r}")
+    if int(sample_spacing) != sample_spacing or sample_spacing < 1:
+        raise HillshadeError(f"sample spacing must be a whole number >= 1, got {sample_spacing}")
+    if method == "hull" and sample_spacing != 1:
+        raise HillshadeError("--sample-spacing applies to the scan method only")
+    return method == "hull" and uniform_rays(rays)
+
+
+def horizon_angles(z: np.ndarray, rays: SunRays, method: str = "scan", sample_spacing: int = 1,
+                   zmax: float | None = None, stats: dict | None = None) -> np.ndarray:
+    """β in degrees (float32, NaN on voids, -90 where no terrain lies ahead in the raster)."""
+    hull = _check(method, sample_spacing, rays)
+    if zmax is None:
+        zmax = float(np.nanmax(z))
+    if hull:
+        t = horizon_tangent(z, rays, "hull")
+        step_m = float(rays.step_m[0])
+        with np.errstate(invalid="ignore"):
+            beta = np.degrees(np.arctan(t / step_m)).astype(np.float32)
+        return beta
+    if method == "hull" and stats is not None:
+        stats["note"] = "ray direction varies per row (geographic CRS): hull replaced by scan"
+    beta = np.empty(z.shape, np.float32)
+    _scan_kernel(z, rays.dom_col, rays.step_dom, rays.step_other, rays.rise, rays.step_m,
+                 np.int64(sample_spacing), float(zmax), False, np.empty((1, 1), np.uint8), beta)
+    return beta
+
+
+def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None, stats: dict | None = None,
+                method: str = "scan", sample_spacing: int = 1) -> np.ndarray:
+    """Mask by eq. 6 (lit iff β <= α): uint8 1 shadow / 0 lit / 255 void. ``scan`` with sp = 1
+    equals ``brute`` cell for cell."""
+    hull = _check(method, sample_spacing, rays)
+    if zmax is None:
+        zmax = float(np.nanmax(z))
+    if hull:
+        t = horizon_tangent(z, rays, "hull")
+        out = np.where(np.isnan(z), 255, (t > rays.rise[0]).astype(np.uint8)).astype(np.uint8)
+        return out
+    if method == "hull" and stats is not None:
+        stats["note"] = "ray direction varies per row (geographic CRS): hull replaced by scan"
+    out = np.empty(z.shape, np.uint8)
+    _scan_kernel(z, rays.dom_col, rays.step_dom, rays.step_other, rays.rise, rays.step_m,
+                 np.int64(sample_spacing), float(zmax), True, out, np.empty((1, 1), np.float32))
+    return out
