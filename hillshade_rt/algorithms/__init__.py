@@ -8,10 +8,11 @@ highest valid height, ``stats`` an optional dict the algorithm fills with figure
 from ._jitcache import kernel_cache
 
 with kernel_cache():
-    from . import brute, horizon, raymath, smap  # noqa: F401
+    from . import brute, horizon, raymath, smap, sweep  # noqa: F401
 
 ALGORITHMS = {
     "brute": brute.shadow_mask,
     "smap": smap.shadow_mask,
     "horizon": horizon.shadow_mask,
+    "sweep": sweep.shadow_mask,
 }
