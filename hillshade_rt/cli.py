@@ -108,8 +108,21 @@ def cli():
               help="Sun azimuth, degrees clockwise from north (any value wraps).")
 @click.option("--elevation", "--altitude", "elevation", type=float, required=True,
               help="Sun elevation above the horizon, degrees, > 0 and <= 90.")
-@click.option("--algorithm", type=click.Choice(["brute"]), default="brute", show_default=True,
-              help="Shadow algorithm.")
+@click.option("--algorithm", type=click.Choice(["brute", "smap", "horizon", "sweep"]),
+              default="smap", show_default=True,
+              help="brute: exact reference; smap: exact, fastest at low sun; horizon: exact "
+                   "(horizon angles); sweep: approximate, fastest (see docs/algorithms.md).")
+@click.option("--nextv", type=click.Choice(["scan", "binary", "quad"]), default=None,
+              help="smap: how NextV is built (same result; default scan).")
+@click.option("--better-nextv", is_flag=True, default=None,
+              help="smap: skip silhouettes hidden by nearer ones (paper's section 9).")
+@click.option("--horizon-method", type=click.Choice(["scan", "hull"]), default=None,
+              help="horizon: exact per-cell scan (default) or the faster convex-hull "
+                   "approximation.")
+@click.option("--sample-spacing", type=click.IntRange(min=1), default=None,
+              help="horizon scan: use every N-th sample only (faster, approximate; default 1).")
+@click.option("--exact-steps", type=click.IntRange(min=1), default=None,
+              help="sweep: samples marched exactly before stored values are reused (default 8).")
 @click.option("--threads", type=click.IntRange(min=1), default=None,
               help="CPU threads (default: all cores).")
 @click.option("--report", "report_path", type=click.Path(dir_okay=False), default=None,
@@ -118,8 +131,8 @@ def cli():
 @click.option("-q", "--quiet", is_flag=True, help="No summary line on stderr.")
 @dem_options
 @_errors_to_click
-def shadow(dem, output, azimuth, elevation, algorithm, threads, report_path, overwrite, quiet,
-           **read_opts):
+def shadow(dem, output, azimuth, elevation, algorithm, nextv, better_nextv, horizon_method,
+           sample_spacing, exact_steps, threads, report_path, overwrite, quiet, **read_opts):
     """Write the cast-shadow mask of DEM to OUTPUT (GeoTIFF: 1 shadow, 0 lit, 255 nodata)."""
     import numba
 
@@ -131,6 +144,9 @@ def shadow(dem, output, azimuth, elevation, algorithm, threads, report_path, ove
 
     timer = Timer()
     # validate everything cheap before reading or computing anything
+    options = _algorithm_options(algorithm, nextv=nextv, better_nextv=better_nextv,
+                                 method=horizon_method, sample_spacing=sample_spacing,
+                                 exact_steps=exact_steps)
     az = normalize_azimuth(azimuth)
     el = check_elevation(elevation)
     check_output_path(output, overwrite)
@@ -142,11 +158,12 @@ def shadow(dem, output, azimuth, elevation, algorithm, threads, report_path, ove
     with timer("read"):
         d = _read(dem, **read_opts)
     with timer("prepare"):  # includes numba compilation on a first run
-        warm_up(algorithm)
+        warm_up(algorithm, d.grid, az, el, **options)
         rays = sun_rays(d.grid, az, el)
         zmin, zmax = d.height_range()
+    algo_stats: dict = {}
     with timer("compute"):
-        mask = ALGORITHMS[algorithm](d.heights, rays, zmax)
+        mask = ALGORITHMS[algorithm](d.heights, rays, zmax, algo_stats, **options)
     tags = {"HILLSHADE_RT_VERSION": __version__, "SUN_AZIMUTH": az, "SUN_ELEVATION": el,
             "ALGORITHM": algorithm, "VALUES": "1=shadow 0=lit 255=nodata"}
     with timer("write"):
@@ -155,11 +172,97 @@ def shadow(dem, output, azimuth, elevation, algorithm, threads, report_path, ove
     seconds = dict(timer.seconds, total=timer.total())
     rep = build_report(dem=d, output=output, azimuth=az, elevation=el, algorithm=algorithm,
                        backend="cpu", threads=numba.get_num_threads(), seconds=seconds,
-                       stats=stats, height_range=(zmin, zmax))
+                       stats=stats, height_range=(zmin, zmax), options=options,
+                       algorithm_stats=algo_stats)
     if report_path is not None:
         write_json(report_path, rep)
     if not quiet:
         click.echo(summary_line(rep), err=True)
+        if algo_stats.get("note"):
+            click.echo(f"hillshade-rt: note: {algo_stats['note']}", err=True)
+
+
+_OPTION_OWNERS = {"nextv": "smap", "better_nextv": "smap", "method": "horizon",
+                  "sample_spacing": "horizon", "exact_steps": "sweep"}
+_OPTION_FLAGS = {"nextv": "--nextv", "better_nextv": "--better-nextv", "method": "--horizon-method",
+                 "sample_spacing": "--sample-spacing", "exact_steps": "--exact-steps"}
+
+
+def _algorithm_options(algorithm: str, **given) -> dict:
+    """The options given for ``algorithm``; an option of another algorithm is a usage error
+    (``--sample-spacing 4 --algorithm brute`` would otherwise be silently ignored)."""
+    out = {}
+    for name, value in given.items():
+        if value is None:
+            continue
+        if _OPTION_OWNERS[name] != algorithm:
+            raise click.UsageError(f"{_OPTION_FLAGS[name]} applies to --algorithm "
+                                   f"{_OPTION_OWNERS[name]}, not {algorithm}")
+        out[name] = value
+    return out
+
+
+@cli.command()
+@click.argument("dem", type=click.Path(dir_okay=False))
+@click.argument("output", type=click.Path(dir_okay=False))
+@click.option("--azimuth", type=float, required=True,
+              help="Azimuth along which to look, degrees clockwise from north.")
+@click.option("--method", type=click.Choice(["scan", "hull"]), default="scan", show_default=True,
+              help="scan: exact per-cell march; hull: convex-hull approximation, much faster.")
+@click.option("--sample-spacing", type=click.IntRange(min=1), default=1, show_default=True,
+              help="scan: use every N-th sample only (the paper's sp; faster, approximate).")
+@click.option("--threads", type=click.IntRange(min=1), default=None,
+              help="CPU threads (default: all cores).")
+@click.option("--overwrite", is_flag=True, help="Replace OUTPUT if it exists.")
+@click.option("-q", "--quiet", is_flag=True, help="No summary line on stderr.")
+@dem_options
+@_errors_to_click
+def horizon(dem, output, azimuth, method, sample_spacing, threads, overwrite, quiet, **read_opts):
+    """Write the horizon angle toward AZIMUTH of every cell of DEM to OUTPUT.
+
+    Float32 degrees above the horizontal (negative: the cell looks down on everything ahead;
+    -90: no terrain ahead inside the raster); nodata -9999. A cell is lit by a sun at this
+    azimuth iff its angle <= the sun's elevation."""
+    import numba
+    import numpy as np
+
+    from .algorithms import horizon as hz
+    from .geometry import Grid, normalize_azimuth, sun_rays
+    from .shadow import warm_up
+    from .io import check_output_path, write_raster
+    from .report import Timer
+
+    timer = Timer()
+    az = normalize_azimuth(azimuth)
+    check_output_path(output, overwrite)
+    if method == "hull" and sample_spacing != 1:
+        raise click.UsageError("--sample-spacing applies to --method scan only")
+    if threads is not None:
+        numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+    with timer("read"):
+        d = _read(dem, **read_opts)
+    stats: dict = {}
+    with timer("prepare"):  # numba compilation on a first run
+        rays = sun_rays(d.grid, az, 45.0)   # the elevation does not enter the angles
+        warm_up("horizon", d.grid, az, 45.0, method=method, sample_spacing=sample_spacing)
+        hz.horizon_angles(np.zeros((4, 4), np.float32),
+                          sun_rays(Grid.uniform(4, 4, *d.grid.centre_spacing(), d.grid.col_sign,
+                                                d.grid.row_sign), az, 45.0),
+                          method=method, sample_spacing=sample_spacing)
+    with timer("compute"):
+        beta = hz.horizon_angles(d.heights, rays, method=method, sample_spacing=sample_spacing,
+                                 stats=stats)
+        beta[np.isnan(beta)] = -9999.0
+    tags = {"HILLSHADE_RT_VERSION": __version__, "AZIMUTH": az, "METHOD": method,
+            "SAMPLE_SPACING": sample_spacing, "UNITS": "degrees above the horizontal"}
+    with timer("write"):
+        write_raster(output, beta, d, nodata=-9999.0, description="horizon angle", tags=tags)
+    if not quiet:
+        rows, cols = d.shape
+        click.echo(f"hillshade-rt: {output}: {cols}x{rows}, horizon toward az {az:g} ({method}), "
+                   f"compute {timer.seconds['compute']:.3f} s", err=True)
+        if stats.get("note"):
+            click.echo(f"hillshade-rt: note: {stats['note']}", err=True)
 
 
 @cli.command()

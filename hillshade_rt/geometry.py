@@ -220,6 +220,27 @@ def grid_from_transform(transform, crs, shape: tuple[int, int]) -> Grid:
             dx[ok], dy[ok] = gx[ok], gy[ok]
             method = ("projected: geodesic length of one cell on the CRS's ellipsoid "
                       "at the centre column of each row")
+            dx, dy, snapped = snap_uniform(dx, dy)
+            if snapped:
+                method = ("projected: geodesic length of one cell on the CRS's ellipsoid at the "
+                          f"centre; uniform (varies < {UNIFORM_RTOL:g} across rows)")
     except Exception:  # noqa: BLE001 -- a projection proj cannot invert: units only
         pass
     return Grid(rows, cols, dx, dy, col_sign, row_sign, method)
+
+
+# Below this relative variation across rows, per-row spacing is projection noise (UTM: ~1e-7 over a
+# 30 km raster): the centre row's value is used for every row, which gives one sun direction in
+# pixel units for the whole raster (what smap, horizon's hull and sweep's fast path need).
+UNIFORM_RTOL = 1e-5
+
+
+def snap_uniform(dx: np.ndarray, dy: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:
+    """(dx, dy, snapped): the centre row's spacing everywhere when the variation is below
+    ``UNIFORM_RTOL``."""
+    def small(a):
+        return float(np.max(a) - np.min(a)) <= UNIFORM_RTOL * float(np.min(a))
+    if len(dx) and small(dx) and small(dy):
+        m = len(dx) // 2
+        return np.full(len(dx), dx[m]), np.full(len(dy), dy[m]), True
+    return dx, dy, False

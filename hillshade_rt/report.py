@@ -42,7 +42,8 @@ def mask_stats(mask: np.ndarray) -> dict:
 
 def build_report(*, dem, output: str, azimuth: float, elevation: float, algorithm: str,
                  backend: str, threads: int, seconds: dict, stats: dict,
-                 height_range: tuple[float, float]) -> dict:
+                 height_range: tuple[float, float], options: dict | None = None,
+                 algorithm_stats: dict | None = None) -> dict:
     """The report of one ``shadow`` run. Keys documented in docs/usage.md stay stable.
 
     ``height_range`` is the (min, max) the run already computed: no second pass over the DEM."""
@@ -59,6 +60,8 @@ def build_report(*, dem, output: str, azimuth: float, elevation: float, algorith
         "crs": dem.crs_string(),
         "sun": {"azimuth": azimuth, "elevation": elevation},
         "algorithm": algorithm,
+        "algorithm_options": dict(options or {}),
+        "algorithm_stats": dict(algorithm_stats or {}),
         "backend": backend,
         "threads": threads,
         "seconds": {k: seconds.get(k, 0.0) for k in ("read", "prepare", "compute", "write", "total")},

@@ -9,16 +9,23 @@ from .errors import HillshadeError
 from .geometry import Grid, sun_rays
 
 
-def warm_up(algorithm: str) -> None:
-    """Compile (or load from numba's cache) the kernel of ``algorithm`` on a 2x2 grid, so that a
-    timed run measures computing, not compiling. Same argument types as a real run."""
-    z = np.zeros((2, 2), np.float32)
-    ALGORITHMS[algorithm](z, sun_rays(Grid.uniform(2, 2, 1.0), 203.7, 10.0), 0.0)
+def warm_up(algorithm: str, grid: Grid | None = None, azimuth: float = 203.7,
+            elevation: float = 10.0, **options) -> None:
+    """Compile (or load from numba's cache) the kernels that a run of ``algorithm`` on ``grid``
+    with this sun will use, on a 4x4 grid with the same orientation and spacing pattern (same
+    array layouts and argument types), so that a timed run measures computing, not compiling."""
+    z = np.zeros((4, 4), np.float32)
+    if grid is None:
+        small = Grid.uniform(4, 4, 1.0)
+    else:
+        idx = np.linspace(0, grid.rows - 1, 4).astype(int)
+        small = Grid(4, 4, grid.dx[idx], grid.dy[idx], grid.col_sign, grid.row_sign, grid.method)
+    ALGORITHMS[algorithm](z, sun_rays(small, azimuth, elevation), 0.0, None, **options)
 
 
 def shadow_mask(heights: np.ndarray, azimuth: float, elevation: float,
                 spacing: float | tuple[float, float] | Grid = 1.0,
-                algorithm: str = "brute") -> np.ndarray:
+                algorithm: str = "smap", stats: dict | None = None, **options) -> np.ndarray:
     """Cast-shadow mask of a DEM: uint8, 1 = shadow, 0 = lit, 255 = nodata.
 
     heights: 2-D array, row 0 the northern edge (NaN = nodata). Converted to float32 once if it
@@ -26,7 +33,11 @@ def shadow_mask(heights: np.ndarray, azimuth: float, elevation: float,
     azimuth, elevation: degrees (clockwise from north; above the horizon, 0 < E <= 90).
     spacing: ground metres per cell, ``d``, ``(dx, dy)`` or a :class:`Grid` (per-row spacing,
     orientation) such as ``read_dem(...).grid``.
-    algorithm: one of ``ALGORITHMS`` (``brute`` is the exact reference).
+    algorithm: one of ``ALGORITHMS``: ``brute`` (exact reference), ``smap`` (exact, default),
+    ``horizon`` (exact with its default ``method="scan"``), ``sweep`` (approximate).
+    stats: optional dict that receives the algorithm's figures (e.g. smap's ``black_fraction``).
+    options: passed to the algorithm (smap: ``nextv``, ``better_nextv``; horizon: ``method``,
+    ``sample_spacing``; sweep: ``exact_steps``).
     """
     z = np.asarray(heights)
     if z.ndim != 2 or z.size == 0:
@@ -46,4 +57,41 @@ def shadow_mask(heights: np.ndarray, azimuth: float, elevation: float,
     zmax = float(np.nanmax(z)) if np.isfinite(z).any() else np.nan
     if np.isnan(zmax):
         return np.full(z.shape, 255, dtype=np.uint8)
-    return kernel(z, sun_rays(spacing, azimuth, elevation), zmax)
+    return kernel(z, sun_rays(spacing, azimuth, elevation), zmax, stats, **options)
+
+
+def _prepare(heights, spacing) -> tuple[np.ndarray, Grid]:
+    z = np.asarray(heights)
+    if z.ndim != 2 or z.size == 0:
+        raise HillshadeError(f"heights must be a non-empty 2-D array, got shape {z.shape}")
+    if z.dtype != np.float32:
+        z = z.astype(np.float32)
+    if not isinstance(spacing, Grid):
+        dx, dy = (spacing, spacing) if np.isscalar(spacing) else spacing
+        spacing = Grid.uniform(z.shape[0], z.shape[1], float(dx), float(dy))
+    elif (spacing.rows, spacing.cols) != z.shape:
+        raise HillshadeError(f"grid is {spacing.rows}x{spacing.cols} but heights are {z.shape}")
+    return z, spacing
+
+
+def horizon_angles(heights: np.ndarray, azimuth: float,
+                   spacing: float | tuple[float, float] | Grid = 1.0, method: str = "scan",
+                   sample_spacing: int = 1) -> np.ndarray:
+    """Horizon angle (degrees, float32) of every cell toward ``azimuth``: lit by a sun at that
+    azimuth iff angle <= its elevation. NaN on voids, -90 where no terrain lies ahead.
+    ``method="scan"`` is exact on the model; ``"hull"`` is the faster approximation."""
+    from .algorithms import horizon as hz
+    z, grid = _prepare(heights, spacing)
+    return hz.horizon_angles(z, sun_rays(grid, azimuth, 45.0), method=method,
+                             sample_spacing=sample_spacing)
+
+
+def is_shadowed(heights: np.ndarray, points, azimuth: float, elevation: float,
+                spacing: float | tuple[float, float] | Grid = 1.0) -> np.ndarray:
+    """For 3-D points ``(row, col, height)`` in array coordinates (cell centres at whole row/col,
+    heights in the DEM's units; above, on or off the terrain), whether the ray toward the sun
+    passes strictly below the terrain. Uses an SMap; build ``algorithms.smap.SMap`` yourself to
+    query one sun many times."""
+    from .algorithms.smap import SMap
+    z, grid = _prepare(heights, spacing)
+    return SMap(z, azimuth, elevation, grid).is_shadowed(points)

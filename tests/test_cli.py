@@ -27,7 +27,7 @@ def test_shadow_with_report(tmp_path, runner):
     assert REPORT_KEYS <= set(doc)
     assert doc["shape"] == [400, 400] and doc["crs"] == "EPSG:26915"
     assert doc["sun"] == {"azimuth": 163.0, "elevation": 5.0}
-    assert doc["algorithm"] == "brute" and doc["backend"] == "cpu" and doc["threads"] >= 1
+    assert doc["algorithm"] == "smap" and doc["backend"] == "cpu" and doc["threads"] >= 1
     assert set(doc["seconds"]) == {"read", "prepare", "compute", "write", "total"}
     assert doc["spacing_m"][0] == pytest.approx(1.0, rel=1e-3)
     m = read_band(out)
