@@ -18,7 +18,8 @@ two line buffers suffice, not a flag map of the whole DEM). A cell is shadowed i
 Fixes of the published code: no restart of the inner loop at a wrong index (the loops here run
 over canonical lines and positions, ``frames``); no ±0.5 epsilon around an interpolated "never
 hit" flag of -1 (``-inf`` is kept apart from real heights: when one of the two stored values is
-``-inf`` the nearer of the two is used); no square root per pixel (the k-th sample is one step on);
+``-inf``, i.e. that neighbour's ray left the raster, the cell marches on exactly instead); no square
+root per pixel (the k-th sample is ``k`` steps on);
 parallel over the cells of a line (independent), lines in order from the sun's edge.
 
 **Approximate.** On the axes and diagonals the first sample is a cell centre and ``sweep`` equals
@@ -46,14 +47,15 @@ ERROR_SUMMARY = (
 
 
 @njit(cache=True)
-def _stored(ring, row, x, f_i0, f):
-    """Interpolated stored S at position x of a ring-buffer row (-inf kept apart)."""
-    a = ring[row, f_i0]
+def _stored(ring, row, i0, f):
+    """Stored S interpolated at fraction f between cells i0 and i0+1 of a ring-buffer row; NaN
+    when one of them is -inf (its ray left the raster: not representative of this one)."""
+    a = ring[row, i0]
     if f == 0.0:
         return a
-    b = ring[row, f_i0 + 1]
+    b = ring[row, i0 + 1]
     if a == -np.inf or b == -np.inf:
-        return a if f <= 0.5 else b
+        return np.nan
     return a + f * (b - a)
 
 
@@ -72,7 +74,8 @@ def _sweep_kernel(Z, s_arr, rise_arr, per_line, K, out):
             rise = rise_arr[i]
             S = -np.inf
             k = 1
-            while k <= K and v + k < L:
+            march_on = False   # set when the stored values cannot be used: march to the end
+            while (k <= K or march_on) and v + k < L:
                 x = line_position(p + k * s, P)
                 if x < 0.0:
                     break
@@ -81,9 +84,11 @@ def _sweep_kernel(Z, s_arr, rise_arr, per_line, K, out):
                     S = t - k * rise
                 if k == K:
                     i0 = int(math.floor(x))
-                    sn = _stored(ring, (v + k) % (K + 1), x, i0, x - i0) - k * rise
-                    if sn > S:
-                        S = sn
+                    sn = _stored(ring, (v + k) % (K + 1), i0, x - i0)
+                    if math.isnan(sn):
+                        march_on = True
+                    elif sn - k * rise > S:
+                        S = sn - k * rise
                 k += 1
             ring[row, p] = S
             h = Z[v, p]

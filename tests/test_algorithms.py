@@ -1,0 +1,250 @@
+"""smap, horizon and sweep against brute (and the independent reference) on the same model."""
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+
+from conftest import box_terrain, data_path, fractal_terrain, reference_mask
+from hillshade_rt import horizon_angles, is_shadowed, shadow_mask
+from hillshade_rt.algorithms import brute, horizon, smap, sweep
+from hillshade_rt.geometry import Grid, sun_rays
+from hillshade_rt.io import read_dem
+
+settings.register_profile("ci", deadline=None, max_examples=60)
+settings.load_profile("ci")
+
+AZIMUTHS = [0.0, 45.0, 90.0, 135.0, 163.0, 203.7, 241.0, 298.9, 315.0, 17.5]
+ELEVATIONS = [0.5, 3.0, 15.0, 45.0, 89.0]
+EXACT = [("smap", {}), ("smap", {"nextv": "binary"}), ("smap", {"nextv": "quad"}),
+         ("smap", {"better_nextv": True}), ("horizon", {})]
+
+
+def masks(z, dx, dy, az, el, name, opts):
+    g = Grid.uniform(*z.shape, dx, dy)
+    return (shadow_mask(z, az, el, g, algorithm="brute"),
+            shadow_mask(z, az, el, g, algorithm=name, **opts))
+
+
+@pytest.mark.parametrize("name,opts", EXACT)
+def test_exact_equals_brute_on_fractal_with_voids(name, opts):
+    z = fractal_terrain(61, 47, seed=5, relief=250.0)
+    z[20:24, 10:30] = np.nan
+    z[40, 5] = np.nan
+    for az in AZIMUTHS:
+        for el in ELEVATIONS:
+            a, b = masks(z, 30.0, 22.0, az, el, name, opts)
+            assert np.array_equal(a, b), (name, opts, az, el, int((a != b).sum()))
+
+
+@settings(max_examples=40)
+@given(seed=st.integers(0, 10_000), rows=st.integers(2, 32), cols=st.integers(2, 32),
+       dx=st.floats(0.5, 100.0), dy=st.floats(0.5, 100.0),
+       az=st.one_of(st.sampled_from([0.0, 45.0, 90.0, 135.0, 180.0, 225.0, 270.0, 315.0]),
+                    st.floats(0.0, 360.0)),
+       el=st.floats(0.5, 89.0), relief=st.floats(1.0, 2000.0))
+def test_property_smap_and_horizon_equal_brute(seed, rows, cols, dx, dy, az, el, relief):
+    z = fractal_terrain(rows, cols, seed=seed, relief=relief)
+    ref = reference_mask(z, dx, dy, az, el) if rows * cols <= 400 else None
+    g = Grid.uniform(rows, cols, dx, dy)
+    b = shadow_mask(z, az, el, g, algorithm="brute")
+    if ref is not None:
+        assert np.array_equal(b, ref)
+    for name, opts in EXACT:
+        assert np.array_equal(b, shadow_mask(z, az, el, g, algorithm=name, **opts)), (name, opts)
+    # sweep: approximate. On real DEMs its error is small (test_real_dems, docs/algorithms.md);
+    # on these tiny random terrains (often steeper than 45 degrees) it is larger: a sharp peak
+    # between the two stored rays it interpolates can be missed. Bound the share of wrong cells.
+    sw = shadow_mask(z, az, el, g, algorithm="sweep")
+    assert np.mean(sw != b) < 0.15
+
+
+@pytest.mark.parametrize("az", [0.0, 45.0, 90.0, 135.0, 180.0, 225.0, 270.0, 315.0])
+def test_sweep_and_hull_exact_on_axes_and_diagonals(az):
+    z = fractal_terrain(70, 60, seed=2, relief=400.0)
+    z[30:33, 30:40] = np.nan
+    g = Grid.uniform(70, 60, 25.0)
+    for el in (2.0, 10.0, 30.0):
+        b = shadow_mask(z, az, el, g, algorithm="brute")
+        assert np.array_equal(b, shadow_mask(z, az, el, g, algorithm="sweep")), el
+        assert np.array_equal(b, shadow_mask(z, az, el, g, algorithm="horizon", method="hull")), el
+    scan = horizon_angles(z, az, g)
+    hull = horizon_angles(z, az, g, method="hull")
+    np.testing.assert_allclose(hull, scan, atol=1e-4, equal_nan=True)
+
+
+@pytest.mark.parametrize("name,opts", EXACT + [("sweep", {}), ("horizon", {"method": "hull"})])
+def test_box_shadow_length_at_non_special_azimuth(name, opts):
+    # 100 m tower on flat ground, sun from 253.7 deg (WSW) at 20 deg: the shadow runs
+    # h / tan(E) = 274.7 m toward 73.7 deg, i.e. 274.7 * sin(73.7) = 263.7 m = 26.4 cells east of
+    # the tower's east face (column 23).
+    z = box_terrain(60, 120, h=100.0, r0=28, r1=32, c0=20, c1=24)
+    a, b = masks(z, 10.0, 10.0, 253.7, 20.0, name, opts)
+    if name in ("smap", "horizon") and opts.get("method") != "hull":
+        assert np.array_equal(a, b)
+    else:
+        assert (a != b).sum() <= 0.15 * (a == 1).sum()   # approximate: shadow edges blur
+    exact = name in ("smap", "horizon") and opts.get("method") != "hull"
+    cols = np.nonzero((b == 1).any(axis=0))[0]
+    expected = 100.0 / math.tan(math.radians(20.0)) * math.sin(math.radians(73.7)) / 10.0
+    assert cols.min() >= 20 and cols.max() - 23 == pytest.approx(expected, abs=1.0 if exact else 2.0)
+    rows = np.nonzero((b == 1).any(axis=1))[0]
+    assert rows.min() < 28 and rows.max() <= (31 if exact else 32)   # drifts north (ENE)
+
+
+@pytest.mark.parametrize("name,opts", EXACT + [("sweep", {}), ("horizon", {"method": "hull"})])
+def test_raising_the_sun_never_adds_shadow(name, opts):
+    z = fractal_terrain(50, 50, seed=11, relief=500.0)
+    g = Grid.uniform(50, 50, 30.0)
+    for az in (163.0, 203.7, 290.0):
+        prev = None
+        for el in (1.0, 3.0, 7.0, 15.0, 30.0, 60.0):
+            m = shadow_mask(z, az, el, g, algorithm=name, **opts) == 1
+            if prev is not None:
+                assert not (m & ~prev).any(), (az, el)
+            prev = m
+
+
+def test_nextv_variants_build_the_same_table():
+    z = fractal_terrain(90, 70, seed=4, relief=800.0)
+    for az in (163.0, 203.7, 45.0, 300.0):
+        tabs = [smap.SMap(z, az, 4.0, 30.0, nextv=m).J for m in smap.NEXTV_METHODS]
+        assert np.array_equal(tabs[0], tabs[1]) and np.array_equal(tabs[0], tabs[2])
+
+
+def test_better_nextv_skips_hidden_silhouettes_but_not_shadow():
+    z = fractal_terrain(120, 120, seed=8, relief=1500.0)
+    plain = smap.SMap(z, 203.7, 3.0, 30.0)
+    better = smap.SMap(z, 203.7, 3.0, 30.0, better_nextv=True)
+    assert np.array_equal(plain.mask(), better.mask())
+    # Black elements of better NextV point at least as far ahead as plain ones (v + 1)
+    L = plain.J.shape[0]
+    v = np.arange(L)[:, None]
+    black = plain.J <= -2
+    assert np.array_equal(black, better.J <= -2)
+    assert ((-2 - better.J)[black] >= (v + 1).repeat(plain.J.shape[1], 1)[black]).all()
+    assert ((-2 - better.J)[black] > (v + 1).repeat(plain.J.shape[1], 1)[black]).any()
+
+
+def test_black_fraction_is_reported_and_small():
+    z = fractal_terrain(100, 100, seed=3, relief=600.0)
+    stats = {}
+    shadow_mask(z, 203.7, 5.0, 30.0, algorithm="smap", stats=stats)
+    assert 0.0 < stats["black_fraction"] < 0.2
+
+
+def _point_reference(z, dx, dy, az, el, pts):
+    """Plain march of a free point's ray (array coordinates), sampling every dominant grid line
+    strictly ahead of it."""
+    rows, cols = z.shape
+    a = math.radians(az)
+    vc, vr = math.sin(a) / dx, -math.cos(a) / dy     # pixels per metre (north-up)
+    dom_col = abs(vc) >= abs(vr)
+    dom = max(abs(vc), abs(vr))
+    tan_e = math.tan(math.radians(el))
+    out = []
+    for r0, c0, h in pts:
+        start = c0 if dom_col else r0
+        sgn = 1 if (vc if dom_col else vr) > 0 else -1
+        line = math.floor(start) + 1 if sgn > 0 else math.ceil(start) - 1
+        res = False
+        n_lines = cols if dom_col else rows
+        while (sgn > 0 and line < n_lines) or (sgn < 0 and line >= 0):
+            if not 0 <= line < n_lines:      # not yet over the raster: next line
+                line += sgn
+                continue
+            t = abs(line - start) / dom
+            r, c = r0 + vr * t, c0 + vc * t
+            other, n = (r, rows) if dom_col else (c, cols)
+            if 0 <= other <= n - 1:
+                i = min(int(math.floor(other)), n - 2) if n > 1 else 0
+                f = other - i
+                if dom_col:
+                    terr = (1 - f) * z[i, line] + (f * z[i + 1, line] if f else 0.0)
+                else:
+                    terr = (1 - f) * z[line, i] + (f * z[line, i + 1] if f else 0.0)
+                if terr > h + t * tan_e:
+                    res = True
+                    break
+            line += sgn
+        out.append(res)
+    return np.array(out)
+
+
+@pytest.mark.parametrize("az", [163.0, 203.7, 45.0, 290.0, 90.0])
+def test_is_shadowed_points(az):
+    z = fractal_terrain(50, 40, seed=9, relief=300.0)
+    # cell centres on the terrain: same as the mask
+    rr, cc = np.mgrid[0:50, 0:40]
+    centres = np.c_[rr.ravel(), cc.ravel(), z.ravel()]
+    got = is_shadowed(z, centres, az, 8.0, (30.0, 25.0)).reshape(z.shape)
+    assert np.array_equal(got, shadow_mask(z, az, 8.0, (30.0, 25.0)) == 1)
+    # free points above, below and off the raster
+    rng = np.random.default_rng(int(az * 10))
+    pts = np.c_[rng.uniform(-3, 53, 500), rng.uniform(-3, 43, 500), rng.uniform(-20, 320, 500)]
+    got = is_shadowed(z, pts, az, 8.0, (30.0, 25.0))
+    exp = _point_reference(z.astype(np.float64), 30.0, 25.0, az, 8.0, pts)
+    assert got.any() and not got.all()
+    assert np.array_equal(got, exp)
+
+
+def test_horizon_angle_of_a_wall_and_of_a_summit():
+    # wall of 50 m, 10 cells (100 m) west of a cell on flat ground: horizon toward 270 = atan(0.5)
+    z = np.zeros((20, 40), np.float32)
+    z[:, 5] = 50.0
+    beta = horizon_angles(z, 270.0, 10.0)
+    assert beta[10, 15] == pytest.approx(math.degrees(math.atan(50.0 / 100.0)), abs=1e-5)
+    assert beta[10, 0] == -90.0                  # nothing ahead inside the raster
+    # a cone: its summit looks down in every direction (negative horizon)
+    r, c = np.mgrid[0:41, 0:41]
+    cone = (400.0 - 10.0 * np.hypot(r - 20, c - 20)).astype(np.float32)
+    for az in (0.0, 163.0, 203.7):
+        b = horizon_angles(cone, az, 30.0)
+        assert b[20, 20] < 0.0
+        assert b[20, 20] == pytest.approx(-math.degrees(math.atan(10.0 / 30.0)), abs=0.5)
+
+
+def test_horizon_angles_match_mask_and_sample_spacing():
+    z = fractal_terrain(80, 80, seed=12, relief=700.0)
+    g = Grid.uniform(80, 80, 30.0)
+    beta = horizon_angles(z, 163.0, g)
+    for el in (2.0, 8.0, 20.0):
+        assert np.array_equal(beta > el, shadow_mask(z, 163.0, el, g, algorithm="brute") == 1)
+    sp2 = horizon_angles(z, 163.0, g, sample_spacing=2)
+    assert (sp2 <= beta + 1e-4).all()          # fewer samples: never a higher horizon
+    assert (sp2 < beta - 1e-3).any()
+    for el in (2.0, 8.0):                      # and mostly the same mask
+        assert np.mean((sp2 > el) != (beta > el)) < 0.05
+
+
+def test_geographic_grid_falls_back_with_a_note():
+    d = read_dem(data_path("jacksboro_fault_srtm3_mpl_403x344.tif"))
+    rays = sun_rays(d.grid, 203.7, 10.0)
+    ref = brute.shadow_mask(d.heights, rays)
+    stats = {}
+    assert np.array_equal(ref, smap.shadow_mask(d.heights, rays, None, stats))
+    assert "per row" in stats["note"]
+    sw = sweep.shadow_mask(d.heights, rays)
+    assert (sw != ref).mean() < 0.01
+    assert np.array_equal(ref, horizon.shadow_mask(d.heights, rays))
+
+
+@pytest.mark.parametrize("name", ["lidar_dem_1m_utm15n_400x400.tif",
+                                  "everest_srtm3_voids_crop200.tif"])
+def test_real_dems(name):
+    d = read_dem(data_path(name))
+    for az, el in ((203.7, 10.0), (77.7, 4.0)):
+        rays = sun_rays(d.grid, az, el)
+        ref = brute.shadow_mask(d.heights, rays)
+        assert np.array_equal(ref, smap.shadow_mask(d.heights, rays))
+        assert np.array_equal(ref, horizon.shadow_mask(d.heights, rays))
+        valid = (ref != 255).sum()
+        wrong = sweep.shadow_mask(d.heights, rays) != ref
+        # measured: <= 0.35 % (void-free) and 0.77 % (SRTM voids, this sun); target 0.5 % everywhere
+        assert wrong.sum() / valid < (0.005 if "voids" not in name else 0.01)
+        if wrong.any() and "voids" not in name:
+            # void-free DEM: the wrong cells are those whose horizon is within 1 degree of the sun
+            # (next to voids some are farther: docs/algorithms.md, an open item)
+            beta = horizon.horizon_angles(d.heights, rays)
+            assert np.abs(beta[wrong] - el).max() < 1.0
