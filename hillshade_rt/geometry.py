@@ -56,6 +56,22 @@ class Grid:
         return float(self.dx[r]), float(self.dy[r])
 
 
+def heights_and_grid(heights, spacing) -> tuple[np.ndarray, Grid]:
+    """2-D float32 heights (a float32 array is used in place, other types converted once) and a
+    Grid from ``d``, ``(dx, dy)`` or a Grid of the same shape."""
+    z = np.asarray(heights)
+    if z.ndim != 2 or z.size == 0:
+        raise HillshadeError(f"heights must be a non-empty 2-D array, got shape {z.shape}")
+    if z.dtype != np.float32:
+        z = z.astype(np.float32)
+    if not isinstance(spacing, Grid):
+        dx, dy = (spacing, spacing) if np.isscalar(spacing) else spacing
+        spacing = Grid.uniform(z.shape[0], z.shape[1], float(dx), float(dy))
+    elif (spacing.rows, spacing.cols) != z.shape:
+        raise HillshadeError(f"grid is {spacing.rows}x{spacing.cols} but heights are {z.shape}")
+    return z, spacing
+
+
 def normalize_azimuth(azimuth: float) -> float:
     """Wrap any real azimuth into [0, 360)."""
     if not math.isfinite(azimuth):

@@ -6,7 +6,7 @@ import numpy as np
 
 from .algorithms import ALGORITHMS
 from .errors import HillshadeError
-from .geometry import Grid, sun_rays
+from .geometry import Grid, heights_and_grid, sun_rays
 
 
 def warm_up(algorithm: str, grid: Grid | None = None, azimuth: float = 203.7,
@@ -39,16 +39,7 @@ def shadow_mask(heights: np.ndarray, azimuth: float, elevation: float,
     options: passed to the algorithm (smap: ``nextv``, ``better_nextv``; horizon: ``method``,
     ``sample_spacing``; sweep: ``exact_steps``).
     """
-    z = np.asarray(heights)
-    if z.ndim != 2 or z.size == 0:
-        raise HillshadeError(f"heights must be a non-empty 2-D array, got shape {z.shape}")
-    if z.dtype != np.float32:
-        z = z.astype(np.float32)
-    if not isinstance(spacing, Grid):
-        dx, dy = (spacing, spacing) if np.isscalar(spacing) else spacing
-        spacing = Grid.uniform(z.shape[0], z.shape[1], float(dx), float(dy))
-    elif (spacing.rows, spacing.cols) != z.shape:
-        raise HillshadeError(f"grid is {spacing.rows}x{spacing.cols} but heights are {z.shape}")
+    z, spacing = heights_and_grid(heights, spacing)
     try:
         kernel = ALGORITHMS[algorithm]
     except KeyError:
@@ -60,20 +51,6 @@ def shadow_mask(heights: np.ndarray, azimuth: float, elevation: float,
     return kernel(z, sun_rays(spacing, azimuth, elevation), zmax, stats, **options)
 
 
-def _prepare(heights, spacing) -> tuple[np.ndarray, Grid]:
-    z = np.asarray(heights)
-    if z.ndim != 2 or z.size == 0:
-        raise HillshadeError(f"heights must be a non-empty 2-D array, got shape {z.shape}")
-    if z.dtype != np.float32:
-        z = z.astype(np.float32)
-    if not isinstance(spacing, Grid):
-        dx, dy = (spacing, spacing) if np.isscalar(spacing) else spacing
-        spacing = Grid.uniform(z.shape[0], z.shape[1], float(dx), float(dy))
-    elif (spacing.rows, spacing.cols) != z.shape:
-        raise HillshadeError(f"grid is {spacing.rows}x{spacing.cols} but heights are {z.shape}")
-    return z, spacing
-
-
 def horizon_angles(heights: np.ndarray, azimuth: float,
                    spacing: float | tuple[float, float] | Grid = 1.0, method: str = "scan",
                    sample_spacing: int = 1) -> np.ndarray:
@@ -81,7 +58,7 @@ def horizon_angles(heights: np.ndarray, azimuth: float,
     azimuth iff angle <= its elevation. NaN on voids, -90 where no terrain lies ahead.
     ``method="scan"`` is exact on the model; ``"hull"`` is the faster approximation."""
     from .algorithms import horizon as hz
-    z, grid = _prepare(heights, spacing)
+    z, grid = heights_and_grid(heights, spacing)
     return hz.horizon_angles(z, sun_rays(grid, azimuth, 45.0), method=method,
                              sample_spacing=sample_spacing)
 
@@ -93,5 +70,5 @@ def is_shadowed(heights: np.ndarray, points, azimuth: float, elevation: float,
     passes strictly below the terrain. Uses an SMap; build ``algorithms.smap.SMap`` yourself to
     query one sun many times."""
     from .algorithms.smap import SMap
-    z, grid = _prepare(heights, spacing)
+    z, grid = heights_and_grid(heights, spacing)
     return SMap(z, azimuth, elevation, grid).is_shadowed(points)

@@ -183,12 +183,10 @@ def _hull_combine(Z, s, left, right, out):
                 out[v, c] = (1.0 - w) * a + w * b
 
 
-def horizon_tangent(z: np.ndarray, rays: SunRays, method: str = "scan", sample_spacing: int = 1,
-                    zmax: float | None = None) -> np.ndarray | None:
-    """Hull path only: tangent of β per step (float64, DEM-shaped), -inf where nothing is ahead."""
+def horizon_tangent(z: np.ndarray, rays: SunRays) -> np.ndarray:
+    """Hull path: tangent of β per step (float64, DEM-shaped), -inf where nothing is ahead."""
     f = frame_of(rays)
     Z = f.view(z)
-    L, P = Z.shape
     left = np.full(z.shape, -np.inf)
     right = np.full(z.shape, -np.inf)
     _hull_kernel(Z, f.s, f.view(left), f.view(right))
@@ -216,7 +214,7 @@ def horizon_angles(z: np.ndarray, rays: SunRays, method: str = "scan", sample_sp
     if zmax is None:
         zmax = float(np.nanmax(z))
     if hull:
-        t = horizon_tangent(z, rays, "hull")
+        t = horizon_tangent(z, rays)
         step_m = float(rays.step_m[0])
         with np.errstate(invalid="ignore"):
             beta = np.degrees(np.arctan(t / step_m)).astype(np.float32)
@@ -237,7 +235,7 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None, stats: 
     if zmax is None:
         zmax = float(np.nanmax(z))
     if hull:
-        t = horizon_tangent(z, rays, "hull")
+        t = horizon_tangent(z, rays)
         out = np.where(np.isnan(z), 255, (t > rays.rise[0]).astype(np.uint8)).astype(np.uint8)
         return out
     if method == "hull" and stats is not None:

@@ -51,7 +51,7 @@ import numpy as np
 from numba import njit, prange
 
 from ..errors import HillshadeError
-from ..geometry import Grid, SunRays, sun_rays
+from ..geometry import Grid, SunRays, heights_and_grid, sun_rays
 from .frames import Frame, frame_of, uniform_rays
 from .raymath import line_position, terrain_on_line
 
@@ -586,16 +586,11 @@ class SMap:
                  spacing: float | tuple[float, float] | Grid = 1.0,
                  nextv: str = "scan", better_nextv: bool = False, *, rays: SunRays | None = None,
                  zmax: float | None = None):
-        z = np.asarray(heights)
-        if z.ndim != 2 or z.size == 0:
-            raise HillshadeError(f"heights must be a non-empty 2-D array, got shape {z.shape}")
-        if z.dtype != np.float32:
-            z = z.astype(np.float32)
         if rays is None:
-            if not isinstance(spacing, Grid):
-                dx, dy = (spacing, spacing) if np.isscalar(spacing) else spacing
-                spacing = Grid.uniform(z.shape[0], z.shape[1], float(dx), float(dy))
-            rays = sun_rays(spacing, azimuth, elevation)
+            z, grid = heights_and_grid(heights, spacing)
+            rays = sun_rays(grid, azimuth, elevation)
+        else:
+            z = heights if heights.dtype == np.float32 else heights.astype(np.float32)
         if not uniform_rays(rays):
             raise HillshadeError(
                 "smap needs one sun direction in pixel units for the whole raster; this grid's "
