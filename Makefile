@@ -7,12 +7,13 @@ OUTDIR ?= out
 EXAMPLE_DEM := examples/bigtujunga_srtm30m_utm11n_1197x643.tif
 EXAMPLE_OUT := $(OUTDIR)/bigtujunga_shadow.tif
 
-.PHONY: run test install install-test bench clean help
+.PHONY: run test install install-test bench bench-peers clean help
 
 help:
 	@echo "make run    - set up .venv, shade the bundled example DEM, print where the mask went"
 	@echo "make test   - set up .venv with test extras and run the test suite"
 	@echo "make bench  - run the benchmarks (writes docs/benchmarks.md figures to stdout)"
+	@echo "make bench-peers - install other shadow tools into .venv and time them against ours"
 	@echo "make clean  - remove .venv and outputs"
 
 $(BIN)/python:
@@ -40,6 +41,18 @@ test: $(VENV)/.installed-test
 
 bench: $(VENV)/.installed
 	$(BIN)/python benchmarks/bench_cpu.py
+
+# Peers: insolation (doshade), whitebox-workflows, topocalc (needs numpy and cython at build time,
+# so it is built without isolation; if it does not build, the benchmark says it was skipped).
+# GRASS r.sunmask is a system package (Debian grass-core), not installed here.
+$(VENV)/.installed-peers: pyproject.toml | $(VENV)/.installed
+	$(BIN)/python -m pip install -q -e '.[peers]'
+	$(BIN)/python -m pip install -q wheel setuptools cython
+	-$(BIN)/python -m pip install -q --no-build-isolation topocalc
+	@touch $@
+
+bench-peers: $(VENV)/.installed-peers
+	$(BIN)/python benchmarks/bench_peers.py
 
 clean:
 	rm -rf $(VENV) $(OUTDIR) .pytest_cache .hypothesis

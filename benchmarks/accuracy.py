@@ -21,8 +21,8 @@ SUNS = [(203.7, 3.0), (163.0, 10.0), (291.3, 5.0), (77.7, 20.0), (17.5, 1.5), (1
 
 VARIANTS = {
     "sweep K=1": lambda z, r: sweep.shadow_mask(z, r, exact_steps=1),
+    "sweep K=4": lambda z, r: sweep.shadow_mask(z, r, exact_steps=4),
     "sweep K=8 (default)": lambda z, r: sweep.shadow_mask(z, r, exact_steps=8),
-    "sweep K=16": lambda z, r: sweep.shadow_mask(z, r, exact_steps=16),
     "horizon hull": lambda z, r: horizon.shadow_mask(z, r, method="hull"),
     "horizon sp=2": lambda z, r: horizon.shadow_mask(z, r, sample_spacing=2),
     "horizon sp=4": lambda z, r: horizon.shadow_mask(z, r, sample_spacing=4),

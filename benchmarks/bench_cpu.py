@@ -4,7 +4,9 @@ Prints a markdown table (and writes it with --out). Each figure is the median of
 after one warm-up (compilation excluded). Ratios are measured within this one run:
   * floor ratio: algorithm time / time of one elementwise pass (``z > mean``) over the same
     array: how far the algorithm is from the memory-bound limit;
-  * thread speed-up: the same algorithm with 1 thread vs all threads.
+  * thread speed-up: the same algorithm with 1 thread vs all threads;
+  * peak memory: the most resident memory the call added above what the process held before it
+    (Linux: the peak is reset through /proc/self/clear_refs, read from VmHWM), in bytes per cell.
 """
 
 import argparse
@@ -28,6 +30,26 @@ from conftest import fractal_terrain  # noqa: E402
 REAL = [os.path.join(HERE, "..", "examples", "bigtujunga_srtm30m_utm11n_1197x643.tif"),
         os.path.join(HERE, "..", "tests", "data", "everest_srtm3_voids_crop200.tif"),
         os.path.join(HERE, "..", "tests", "data", "jacksboro_fault_srtm3_mpl_403x344.tif")]
+
+
+def _status_kb(key):
+    with open("/proc/self/status") as fh:
+        for line in fh:
+            if line.startswith(key + ":"):
+                return int(line.split()[1])
+    raise KeyError(key)
+
+
+def peak_extra_bytes(fn):
+    """Peak resident memory added by one call of fn (None where Linux's counters are missing)."""
+    try:
+        with open("/proc/self/clear_refs", "w") as fh:
+            fh.write("5")     # reset VmHWM to the current RSS
+        before = _status_kb("VmRSS")
+        fn()
+        return 1024 * (_status_kb("VmHWM") - before)
+    except (OSError, KeyError):
+        return None
 
 
 def timed(fn, repeat):
@@ -62,8 +84,9 @@ def main():
     lines = [f"Machine: {platform.machine()}, {os.cpu_count()} cores, {platform.python_version()}, "
              f"numba {numba.__version__}, {nthreads} threads; azimuth {a.azimuth}; median of "
              f"{a.repeat}", "",
-             "| DEM | cells | elev | algorithm | compute s | Mpix/s | × brute (speed-up) | × floor | 1-thread / all |",
-             "|---|---|---|---|---|---|---|---|---|"]
+             "| DEM | cells | elev | algorithm | compute s | Mpix/s | × brute (speed-up) | × floor "
+             "| 1-thread / all | peak extra B/cell |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
     print("\n".join(lines), flush=True)
     for name, z, grid in cases(sizes):
         zmax = float(np.nanmax(z))
@@ -78,11 +101,13 @@ def main():
                 numba.set_num_threads(1)
                 t1 = timed(lambda: fn(z, rays, zmax), 1)
                 numba.set_num_threads(nthreads)
+                mem = peak_extra_bytes(lambda: fn(z, rays, zmax))
+                mem = "–" if mem is None else f"{mem / z.size:.2f}"
                 if alg == "brute":
                     t_brute = t
                 row = (f"| {name} | {z.size / 1e6:.2f} M | {el:g}° | {alg} | {t:.3f} | "
                        f"{z.size / 1e6 / t:.1f} | {t_brute / t:.1f} | {t / floor:.0f} | "
-                       f"{t1 / t:.2f} |")
+                       f"{t1 / t:.2f} | {mem} |")
                 lines.append(row)
                 print(row, flush=True)
     if a.out:

@@ -20,7 +20,8 @@ NODATA = np.uint8(255)
 
 
 @njit(parallel=True, cache=True)
-def _brute_cpu(z, dom_col, step_dom, step_other, rise, zmax, out):
+def _brute_cpu(z, dom_col, step_dom, step_other, rise, zmax, out, only):
+    """Every cell, or (only >= 0) just the cells whose code in ``out`` is ``only``."""
     rows, cols = z.shape
     for r in prange(rows):
         dc = dom_col[r] != 0
@@ -28,6 +29,8 @@ def _brute_cpu(z, dom_col, step_dom, step_other, rise, zmax, out):
         so = step_other[r]
         ri = rise[r]
         for c in range(cols):
+            if only >= 0 and out[r, c] != only:
+                continue
             if math.isnan(z[r, c]):
                 out[r, c] = 255
             elif ray_is_blocked(z, r, c, dc, sd, so, ri, zmax):
@@ -48,5 +51,16 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None,
     if zmax is None:
         zmax = float(np.nanmax(z))
     out = np.empty(z.shape, dtype=np.uint8)
-    _brute_cpu(z, rays.dom_col, rays.step_dom, rays.step_other, rays.rise, float(zmax), out)
+    _brute_cpu(z, rays.dom_col, rays.step_dom, rays.step_other, rays.rise, float(zmax), out,
+               np.int64(-1))
     return out
+
+
+def refine(z: np.ndarray, rays: SunRays, out: np.ndarray, code: int, zmax: float) -> int:
+    """Replace every ``code`` in ``out`` by brute's exact answer for that cell (for approximate
+    algorithms that flag the cells they are unsure of). Returns how many cells were refined."""
+    n = int(np.count_nonzero(out == code))
+    if n:
+        _brute_cpu(z, rays.dom_col, rays.step_dom, rays.step_other, rays.rise, float(zmax), out,
+                   np.int64(code))
+    return n

@@ -1,0 +1,182 @@
+"""Peers in the same harness: other tools' shadow masks against ours, same DEM, same sun, same run.
+
+Each peer runs where it is installed (``make bench-peers`` installs them into the venv) and is
+skipped with a note where it is not:
+
+* ``insolation``'s ``doshade`` (Corripio's scan lines from the sun-side edges, nearest neighbour,
+  numba-parallel);
+* ``whitebox-workflows``' ``horizon_angle`` (shadow = horizon angle > sun elevation; the DEM goes
+  through a GeoTIFF, only the tool call is timed);
+* ``topocalc``'s ``hor1d``-based horizon (shadow = horizon tangent > tan(elevation)).
+
+For every tool: compute time (median of --repeat after a warm-up), the ratio to ``doshade``
+measured in the same run, and the share of valid cells whose mask differs from ``brute``.
+
+    python benchmarks/bench_peers.py [--sizes 2048,4096] [--elevations 15,3] [--out FILE]
+"""
+
+import argparse
+import math
+import os
+import platform
+import statistics
+import sys
+import tempfile
+import time
+
+import numba
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, "..", "tests"))
+
+from hillshade_rt import read_dem  # noqa: E402
+from hillshade_rt.algorithms import brute, horizon, smap, sweep  # noqa: E402
+from hillshade_rt.geometry import Grid, sun_rays  # noqa: E402
+from conftest import fractal_terrain  # noqa: E402
+
+EXAMPLE = os.path.join(HERE, "..", "examples", "bigtujunga_srtm30m_utm11n_1197x643.tif")
+CELL = 30.0
+
+
+def timed(fn, repeat):
+    fn()
+    times = []
+    for _ in range(repeat):
+        t = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t)
+    return statistics.median(times)
+
+
+# --- peers: each returns (name, callable giving a 0/1 shadow mask) or (name, reason skipped) ----
+
+def peer_doshade(z, cell, az, el):
+    try:
+        from insolation import insolf
+    except ImportError as e:
+        return "insolation doshade", f"not installed ({e})"
+    # Corripio's sun vector in array axes (x east, y down the rows), from zenith angle and azimuth
+    sv = insolf.normalvector(90.0 - el, az)
+    zz = np.nan_to_num(z, nan=-1e30).astype(np.float64)   # doshade has no nodata
+    return "insolation doshade", lambda: 1 - insolf.doshade(zz, cell, sv)
+
+
+def peer_whitebox(z, cell, az, el):
+    try:
+        import rasterio
+        import whitebox_workflows as wbw
+    except ImportError as e:
+        return "whitebox-workflows horizon_angle", f"not installed ({e})"
+    tmp = tempfile.mkdtemp()
+    path = os.path.join(tmp, "dem.tif")
+    prof = dict(driver="GTiff", width=z.shape[1], height=z.shape[0], count=1, dtype="float32",
+                nodata=-9999.0, crs="EPSG:32611",
+                transform=rasterio.transform.from_origin(0, z.shape[0] * cell, cell, cell))
+    with rasterio.open(path, "w", **prof) as ds:
+        ds.write(np.where(np.isnan(z), -9999.0, z).astype(np.float32), 1)
+    wbe = wbw.WbEnvironment()
+    wbe.verbose = False
+    dem = wbe.read_raster(path)
+    maxd = float(math.hypot(*z.shape) * cell)
+
+    def run():
+        h = wbe.horizon_angle(dem, azimuth=az, max_dist=maxd).to_numpy()
+        return (h > el).astype(np.uint8)
+    return "whitebox-workflows horizon_angle", run
+
+
+def peer_topocalc(z, cell, az, el):
+    try:
+        from topocalc.horizon import horizon as tc_horizon
+    except ImportError as e:
+        return "topocalc horizon", f"not installed ({e})"
+    zz = np.nan_to_num(z, nan=0.0).astype(np.float64)
+    # topocalc: azimuth 0 = south, +90 = east (IPW convention); returns cos of the zenith angle of
+    # the horizon, i.e. sin(horizon angle)
+    tc_az = ((180.0 - az) + 180.0) % 360.0 - 180.0
+
+    def run():
+        hcos = tc_horizon(tc_az, zz, cell)
+        return (hcos > math.sin(math.radians(el))).astype(np.uint8)
+    return "topocalc horizon", run
+
+
+PEERS = [peer_doshade, peer_whitebox, peer_topocalc]
+
+OURS = {
+    "brute": lambda z, r, zmax: brute.shadow_mask(z, r, zmax),
+    "smap": lambda z, r, zmax: smap.shadow_mask(z, r, zmax),
+    "horizon (hull)": lambda z, r, zmax: horizon.shadow_mask(z, r, zmax, method="hull"),
+    "sweep": lambda z, r, zmax: sweep.shadow_mask(z, r, zmax),
+}
+
+
+def cases(sizes):
+    d = read_dem(EXAMPLE)
+    yield os.path.basename(EXAMPLE), d.heights, d.grid, float(d.grid.dx[0])
+    for n in sizes:
+        z = fractal_terrain(n, n, seed=n, relief=1500.0, octaves=6)
+        yield f"fractal {n}²", z, Grid.uniform(n, n, CELL), CELL
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--sizes", default="2048,4096")
+    ap.add_argument("--elevations", default="15,3")
+    ap.add_argument("--azimuth", type=float, default=203.7)
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--out", default=None)
+    a = ap.parse_args(argv)
+    sizes = [int(s) for s in a.sizes.split(",") if s]
+    lines = [f"Machine: {platform.machine()}, {os.cpu_count()} cores, Python "
+             f"{platform.python_version()}, numba {numba.__version__}; azimuth {a.azimuth}; "
+             f"median of {a.repeat}", "",
+             "| DEM | elev | tool | compute s | × doshade (speed-up) | cells ≠ brute % |",
+             "|---|---|---|---|---|---|"]
+    print("\n".join(lines), flush=True)
+    notes = []
+    for name, z, grid, cell in cases(sizes):
+        zmax = float(np.nanmax(z))
+        valid = ~np.isnan(z)
+        nvalid = max(1, int(valid.sum()))
+        for el in [float(e) for e in a.elevations.split(",")]:
+            rays = sun_rays(grid, a.azimuth, el)
+            ref = None
+            rows = []
+            for tool, fn in OURS.items():
+                reps = 1 if tool == "brute" else a.repeat
+                t = timed(lambda: fn(z, rays, zmax), reps)
+                m = fn(z, rays, zmax)
+                if ref is None:
+                    ref = m
+                rows.append((tool, t, 100.0 * np.count_nonzero((m != ref) & valid) / nvalid))
+            for peer in PEERS:
+                tool, run = peer(z, cell, a.azimuth, el)
+                if isinstance(run, str):
+                    notes.append(f"{tool}: {run}")
+                    continue
+                try:
+                    t = timed(run, a.repeat)
+                    m = run()
+                except Exception as e:  # a peer failing must not stop the others
+                    notes.append(f"{tool}: failed on {name} ({type(e).__name__}: {e})")
+                    continue
+                rows.append((tool, t, 100.0 * np.count_nonzero((m != ref) & valid) / nvalid))
+            t_dos = next((t for tool, t, _ in rows if tool.endswith("doshade")), None)
+            for tool, t, wrong in rows:
+                ratio = f"{t_dos / t:.2f}" if t_dos else "–"
+                row = f"| {name} | {el:g}° | {tool} | {t:.3f} | {ratio} | {wrong:.3f} |"
+                lines.append(row)
+                print(row, flush=True)
+    for n in dict.fromkeys(notes):
+        lines.append(f"\nNote: {n}")
+        print(f"Note: {n}", flush=True)
+    if a.out:
+        with open(a.out, "w") as fh:
+            fh.write("\n".join(lines) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
