@@ -102,7 +102,7 @@ def peer_topocalc(z, cell, az, el):
     return "topocalc horizon", run
 
 
-PEERS = [peer_doshade, peer_whitebox, peer_topocalc]
+PEERS = {"doshade": peer_doshade, "whitebox": peer_whitebox, "topocalc": peer_topocalc}
 
 OURS = {
     "brute": lambda z, r, zmax: brute.shadow_mask(z, r, zmax),
@@ -126,8 +126,11 @@ def main(argv=None):
     ap.add_argument("--elevations", default="15,3")
     ap.add_argument("--azimuth", type=float, default=203.7)
     ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--peers", default=",".join(PEERS),
+                    help="peers to run, comma-separated (whitebox takes ~70 s per 2048² call)")
     ap.add_argument("--out", default=None)
     a = ap.parse_args(argv)
+    peers = [PEERS[p] for p in a.peers.split(",") if p]
     sizes = [int(s) for s in a.sizes.split(",") if s]
     lines = [f"Machine: {platform.machine()}, {os.cpu_count()} cores, Python "
              f"{platform.python_version()}, numba {numba.__version__}; azimuth {a.azimuth}; "
@@ -151,7 +154,7 @@ def main(argv=None):
                 if ref is None:
                     ref = m
                 rows.append((tool, t, 100.0 * np.count_nonzero((m != ref) & valid) / nvalid))
-            for peer in PEERS:
+            for peer in peers:
                 tool, run = peer(z, cell, a.azimuth, el)
                 if isinstance(run, str):
                     notes.append(f"{tool}: {run}")
