@@ -40,7 +40,7 @@ test: $(VENV)/.installed-test
 	$(BIN)/python -m pytest -q
 
 bench: $(VENV)/.installed
-	$(BIN)/python benchmarks/bench_cpu.py
+	MALLOC_MMAP_THRESHOLD_=131072 $(BIN)/python benchmarks/bench_cpu.py
 
 # Peers: insolation (doshade), whitebox-workflows, topocalc (needs numpy and cython at build time,
 # so it is built without isolation; if it does not build, the benchmark says it was skipped).
