@@ -19,7 +19,6 @@ import argparse
 import math
 import os
 import platform
-import statistics
 import sys
 import tempfile
 import time
@@ -34,19 +33,16 @@ from hillshade_rt import read_dem  # noqa: E402
 from hillshade_rt.algorithms import brute, horizon, smap, sweep  # noqa: E402
 from hillshade_rt.geometry import Grid, sun_rays  # noqa: E402
 from conftest import fractal_terrain  # noqa: E402
+from bench_cpu import timed as _timed  # noqa: E402
 
 EXAMPLE = os.path.join(HERE, "..", "examples", "bigtujunga_srtm30m_utm11n_1197x643.tif")
 CELL = 30.0
 
 
 def timed(fn, repeat):
+    """bench_cpu's median timer, after one warm-up call (compilation, first-touch)."""
     fn()
-    times = []
-    for _ in range(repeat):
-        t = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t)
-    return statistics.median(times)
+    return _timed(fn, repeat)
 
 
 # --- peers: each returns (name, callable giving a 0/1 shadow mask) or (name, reason skipped) ----
