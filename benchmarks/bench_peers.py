@@ -21,7 +21,6 @@ import os
 import platform
 import sys
 import tempfile
-import time
 
 import numba
 import numpy as np
