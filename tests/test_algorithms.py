@@ -69,13 +69,10 @@ def test_sweep_line_passes_equal_per_cell_kernel(az):
     g = Grid.uniform(90, 110, 20.0)
     for el in (3.0, 12.0):
         rays = sun_rays(g, az, el)
-        f, s_rows, rise_rows = sweep._per_cell_rays(rays)
-        per_line = not f.dom_col
-        flip = f.flip_line if per_line else f.flip_pos
+        f, s, rise, per_line = sweep._per_cell_rays(rays)
         out = np.empty(z.shape, np.uint8)
-        sweep._sweep_kernel(f.view(z), s_rows[::-1].copy() if flip else s_rows,
-                            rise_rows[::-1].copy() if flip else rise_rows, per_line,
-                            np.int64(sweep.EXACT_STEPS), f.view(out))
+        sweep._sweep_kernel(f.view(z), s, rise, per_line, np.int64(sweep.EXACT_STEPS),
+                            f.view(out))
         stats = {}
         fast = sweep.shadow_mask(z, rays, stats=stats)
         ref = brute.shadow_mask(z, rays)

@@ -21,8 +21,10 @@ NODATA = np.uint8(255)
 
 @njit(parallel=True, cache=True)
 def _brute_cpu(z, dom_col, step_dom, step_other, rise, zmax, out, only):
-    """Every cell, or (only >= 0) just the cells whose code in ``out`` is ``only``."""
+    """Every cell, or (only >= 0) just the cells whose code in ``out`` is ``only``. Returns how
+    many cells it decided."""
     rows, cols = z.shape
+    n = 0
     for r in prange(rows):
         dc = dom_col[r] != 0
         sd = np.int64(step_dom[r])
@@ -31,12 +33,14 @@ def _brute_cpu(z, dom_col, step_dom, step_other, rise, zmax, out, only):
         for c in range(cols):
             if only >= 0 and out[r, c] != only:
                 continue
+            n += 1
             if math.isnan(z[r, c]):
                 out[r, c] = 255
             elif ray_is_blocked(z, r, c, dc, sd, so, ri, zmax):
                 out[r, c] = 1
             else:
                 out[r, c] = 0
+    return n
 
 
 def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None,
@@ -59,8 +63,5 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None,
 def refine(z: np.ndarray, rays: SunRays, out: np.ndarray, code: int, zmax: float) -> int:
     """Replace every ``code`` in ``out`` by brute's exact answer for that cell (for approximate
     algorithms that flag the cells they are unsure of). Returns how many cells were refined."""
-    n = int(np.count_nonzero(out == code))
-    if n:
-        _brute_cpu(z, rays.dom_col, rays.step_dom, rays.step_other, rays.rise, float(zmax), out,
-                   np.int64(code))
-    return n
+    return int(_brute_cpu(z, rays.dom_col, rays.step_dom, rays.step_other, rays.rise,
+                          float(zmax), out, np.int64(code)))

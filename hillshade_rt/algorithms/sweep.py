@@ -78,12 +78,11 @@ def _stored_pair(ring, row, x):
 @njit(cache=True)
 def _decide(S, lo, hi, h):
     """Mask code of a cell: 255 void, 1 / 0 when its two stored neighbours agree, UNSURE when the
-    decision would flip between them (the refinement pass then marches it exactly)."""
-    if math.isnan(h):
-        return 255
-    if lo <= h < hi:
-        return UNSURE
-    return 1 if S > h else 0
+    decision would flip between them (the refinement pass then marches it exactly). Written as
+    selects, without branches, so that the line pass that calls it stays vectorised."""
+    sh = np.uint8(1) if S > h else np.uint8(0)
+    c = np.uint8(UNSURE) if (lo <= h and h < hi) else sh
+    return np.uint8(255) if h != h else c
 
 
 @njit(cache=True)
@@ -116,18 +115,15 @@ def _march_cell(Z, ring, v, p, s, rise, K):
 
 
 @njit(cache=True)
-def _line_chunk(ZL, ring, E, LO, HI, ol, d, fr, v, K, rise, p0, p1, Z, s):
-    """Positions p0 <= p < p1 of line v (all inside the line: K samples and both stored
+def _line_pass(ZL, ring, E, LO, HI, ol, d, fr, v, K, rise, n, Z, s):
+    """Positions 0 <= p < n of line v (all inside the line: K samples and both stored
     neighbours): K exact sample passes, the stored-value pass, the decision pass."""
-    if p1 <= p0:
-        return
     R = K + 1
     row = v % R
-    n = p1 - p0
-    e = E[p0:p1]
+    e = E[:n]
     e[:] = -np.inf
     for k in range(1, R):
-        dk = d[k] + p0
+        dk = d[k]
         f = fr[k]
         kr = k * rise
         za = ZL[(v + k) % R, dk:dk + n]
@@ -140,34 +136,27 @@ def _line_chunk(ZL, ring, E, LO, HI, ol, d, fr, v, K, rise, p0, p1, Z, s):
             for p in range(n):
                 t = za[p] + f * (zb[p] - za[p]) - kr
                 e[p] = t if t > e[p] else e[p]
-    dK = d[K] + p0
+    dK = d[K]
     fK = fr[K]
     rK = K * rise
     sa = ring[(v + K) % R, dK:dK + n]
     sb = ring[(v + K) % R, dK + 1:dK + 1 + n] if fK > 0.0 else sa
-    srow = ring[row, p0:p1]
-    lo = LO[p0:p1]
-    hi = HI[p0:p1]
+    srow = ring[row]
     for p in range(n):
         a = sa[p]
         b = sb[p]
         t = a + fK * (b - a) - rK
         srow[p] = t if t > e[p] else e[p]
         t = min(a, b) - rK
-        lo[p] = t if t > e[p] else e[p]
+        LO[p] = t if t > e[p] else e[p]
         t = max(a, b) - rK
-        hi[p] = t if t > e[p] else e[p]
+        HI[p] = t if t > e[p] else e[p]
     for p in range(n):
         if sa[p] == -np.inf or sb[p] == -np.inf:   # rare: next to the far edge
-            S, lo[p], hi[p] = _march_cell(Z, ring, v, p0 + p, s, rise, K)
-            srow[p] = S
-    zl = ZL[row, p0:p1]
-    o = ol[p0:p1]
-    for p in range(n):   # _decide without branches
-        h = zl[p]
-        sh = np.uint8(1) if srow[p] > h else np.uint8(0)
-        c = np.uint8(UNSURE) if (lo[p] <= h and h < hi[p]) else sh
-        o[p] = np.uint8(255) if h != h else c
+            srow[p], LO[p], HI[p] = _march_cell(Z, ring, v, p, s, rise, K)
+    zl = ZL[row]
+    for p in range(n):
+        ol[p] = _decide(srow[p], LO[p], HI[p], zl[p])
 
 
 @njit(cache=True)
@@ -178,8 +167,8 @@ def _dem_index(i, n, flip):
 @njit(cache=True)
 def _block_io(z, blk, v, nb, dom_col, flip_line, flip_pos, load):
     """Copy canonical lines v, v-1, ..., v-nb+1 between the DEM-shaped array ``z`` (C order) and
-    the rows of ``blk`` (load: z -> blk, else blk -> z). Lines that are DEM columns go by tiles of
-    positions so that each DEM row is touched once per block, contiguously."""
+    the rows of ``blk`` (load: z -> blk, else blk -> z). Lines that are DEM columns go position by
+    position, so that each DEM row is touched once per block, contiguously."""
     if dom_col:
         P, L = z.shape
         for p in range(P):
@@ -236,7 +225,7 @@ def _sweep_uniform(z, Z, dom_col, flip_line, flip_pos, s, rise, K, out):
         for p in range(P):
             zl[p] = TB[j, p]
         first = n_in if v + K < L else 0
-        _line_chunk(ZL, ring, E, LO, HI, OB[j], d, fr, v, K, rise, 0, first, Z, s)
+        _line_pass(ZL, ring, E, LO, HI, OB[j], d, fr, v, K, rise, first, Z, s)
         for p in range(first, P):
             S, lo, hi = _march_cell(Z, ring, v, p, s, rise, K)
             ring[row, p] = S
@@ -262,16 +251,21 @@ def _sweep_kernel(Z, s_arr, rise_arr, per_line, K, out):
 
 
 def _per_cell_rays(rays: SunRays):
-    """Frame of the centre row, and s / rise of every row expressed in that frame.
+    """Frame of the centre row, and s / rise of every row expressed in that frame, indexed by the
+    canonical index that runs over the DEM's rows (lines when lines are rows, else positions;
+    ``per_line`` says which).
 
     With per-row spacing (geographic CRS) each row keeps its own direction; a row whose own
     dominant axis differs (sun near a diagonal) is re-expressed in the frame's axis (|s| > 1)."""
     f = frame_of(rays, len(rays.rise) // 2)
     same = rays.dom_col.astype(bool) == f.dom_col
     so = np.abs(rays.step_other)
-    s = np.where(same, so, 1.0 / np.maximum(so, 1e-300))
-    rise = np.where(same, rays.rise, rays.rise / np.maximum(so, 1e-300))
-    return f, s.astype(np.float64), rise.astype(np.float64)
+    s = np.where(same, so, 1.0 / np.maximum(so, 1e-300)).astype(np.float64)
+    rise = np.where(same, rays.rise, rays.rise / np.maximum(so, 1e-300)).astype(np.float64)
+    per_line = not f.dom_col
+    if f.flip_line if per_line else f.flip_pos:
+        s, rise = s[::-1].copy(), rise[::-1].copy()
+    return f, s, rise, per_line
 
 
 def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None,
@@ -286,12 +280,7 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None,
         f = frame_of(rays)
         _sweep_uniform(z, f.view(z), f.dom_col, f.flip_line, f.flip_pos, f.s, f.rise, K, out)
     else:
-        f, s_rows, rise_rows = _per_cell_rays(rays)
-        # canonical index that runs over the DEM's rows: lines when lines are rows, else positions
-        per_line = not f.dom_col
-        flip = f.flip_line if per_line else f.flip_pos
-        s = s_rows[::-1].copy() if flip else s_rows
-        rise = rise_rows[::-1].copy() if flip else rise_rows
+        f, s, rise, per_line = _per_cell_rays(rays)
         _sweep_kernel(f.view(z), s, rise, per_line, K, f.view(out))
     if zmax is None:
         zmax = float(np.nanmax(z))
