@@ -9,6 +9,7 @@ from hypothesis import given, settings, strategies as st
 from conftest import box_terrain, data_path, fractal_terrain, reference_mask
 from hillshade_rt import horizon_angles, is_shadowed, shadow_mask
 from hillshade_rt.algorithms import brute, horizon, smap, sweep
+from hillshade_rt.algorithms.frames import frame_of
 from hillshade_rt.geometry import Grid, sun_rays
 from hillshade_rt.io import read_dem
 
@@ -81,6 +82,25 @@ def test_sweep_line_passes_equal_per_cell_kernel(az):
         assert np.array_equal(fast[unsure], ref[unsure])
         assert stats["unsure_fraction"] == pytest.approx(unsure.mean())
     assert unsure.any()
+
+
+@pytest.mark.parametrize("az", [163.0, 203.7, 12.5, 77.0, 300.2])
+def test_sweep_wavefront_strips_equal_one_strip(az):
+    """The parallel wavefront (positions cut into strips, strip j one block of lines behind
+    strip j-1) gives the same codes as a single strip, whatever the number of strips."""
+    z = fractal_terrain(120, 150, seed=9, relief=600.0)
+    z[60:64, 70:77] = np.nan
+    z = z.astype(np.float32)
+    f = frame_of(sun_rays(Grid.uniform(120, 150, 20.0), az, 4.0))
+    outs = []
+    for strips in (1, 2, 5):
+        out = np.empty(z.shape, np.uint8)
+        sweep._sweep_uniform(z, f.view(z), f.dom_col, f.flip_line, f.flip_pos, f.s, f.rise,
+                             np.int64(4), np.int64(strips), out)
+        outs.append(out)
+    assert (outs[0] == 1).any() and (outs[0] == sweep.UNSURE).any()
+    for out in outs[1:]:
+        assert np.array_equal(out, outs[0])
 
 
 @pytest.mark.parametrize("az", [0.0, 45.0, 90.0, 135.0, 180.0, 225.0, 270.0, 315.0])

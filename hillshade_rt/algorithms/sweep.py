@@ -26,8 +26,10 @@ the ray between them. The report gives the flagged share (``unsure_fraction``: 0
 Speed. With one ray direction for the raster (projected CRS) every cell of a line has the same
 sample offsets and interpolation fractions, so each exact sample and the stored-value lookup is
 one SIMD pass along a contiguous line buffer; the DEM is read and the mask written a block of
-lines at a time (also when the lines are DEM columns). The lines depend on each other in order,
-so this pass is sequential; the refinement is parallel. Rays that differ per row (geographic CRS)
+lines at a time (also when the lines are DEM columns). A line depends on the K lines before it,
+but a cell only on cells at most K*s positions toward the sun: the positions are cut into one
+strip per thread and the strips run as a wavefront (strip j one block of lines behind strip
+j-1), in parallel. The refinement is parallel too. Rays that differ per row (geographic CRS)
 take a per-cell kernel, parallel over the cells of a line.
 
 Fixes of the published code: no restart of the inner loop at a wrong index (the loops run over
@@ -47,6 +49,7 @@ from __future__ import annotations
 
 import math
 
+import numba
 import numpy as np
 from numba import njit, prange
 
@@ -57,6 +60,7 @@ from .raymath import line_position, terrain_on_line
 
 EXACT_STEPS = 8   # samples marched exactly before the stored values are used
 UNSURE = 2        # mask code of a cell left to the exact refinement pass
+MIN_STRIP = 256   # fewest positions per strip of the parallel wavefront
 
 ERROR_SUMMARY = (
     "K=8 vs brute, 7 real DEMs x 8 suns (benchmarks/accuracy.py): mean 0.009-0.059 % of cells per "
@@ -103,7 +107,7 @@ def _march_cell(Z, ring, v, p, s, rise, K):
         if t - k * rise > S:   # NaN (void) compares false
             S = t - k * rise
         if k == K:
-            a, b, f = _stored_pair(ring, (v + k) % (K + 1), x)
+            a, b, f = _stored_pair(ring, (v + k) % ring.shape[0], x)
             if a == -np.inf or b == -np.inf:
                 march_on = True
             else:
@@ -115,15 +119,16 @@ def _march_cell(Z, ring, v, p, s, rise, K):
 
 
 @njit(cache=True)
-def _line_pass(ZL, ring, E, LO, HI, ol, d, fr, v, K, rise, n, Z, s):
-    """Positions 0 <= p < n of line v (all inside the line: K samples and both stored
-    neighbours): K exact sample passes, the stored-value pass, the decision pass."""
-    R = K + 1
+def _line_pass(ZL, ring, E, LO, HI, ol, d, fr, v, K, rise, p0, n, Z, s):
+    """Positions p0 <= p < p0 + n of line v (all inside the line: K samples and both stored
+    neighbours): K exact sample passes, the stored-value pass, the decision pass. ``ZL`` and
+    ``ring`` are ring buffers of heights and S, row ``v % R``; E, LO, HI, ol are indexed from p0."""
+    R = ring.shape[0]
     row = v % R
     e = E[:n]
     e[:] = -np.inf
-    for k in range(1, R):
-        dk = d[k]
+    for k in range(1, K + 1):
+        dk = p0 + d[k]
         f = fr[k]
         kr = k * rise
         za = ZL[(v + k) % R, dk:dk + n]
@@ -136,12 +141,12 @@ def _line_pass(ZL, ring, E, LO, HI, ol, d, fr, v, K, rise, n, Z, s):
             for p in range(n):
                 t = za[p] + f * (zb[p] - za[p]) - kr
                 e[p] = t if t > e[p] else e[p]
-    dK = d[K]
+    dK = p0 + d[K]
     fK = fr[K]
     rK = K * rise
     sa = ring[(v + K) % R, dK:dK + n]
     sb = ring[(v + K) % R, dK + 1:dK + 1 + n] if fK > 0.0 else sa
-    srow = ring[row]
+    srow = ring[row, p0:p0 + n]
     for p in range(n):
         a = sa[p]
         b = sb[p]
@@ -153,8 +158,8 @@ def _line_pass(ZL, ring, E, LO, HI, ol, d, fr, v, K, rise, n, Z, s):
         HI[p] = t if t > e[p] else e[p]
     for p in range(n):
         if sa[p] == -np.inf or sb[p] == -np.inf:   # rare: next to the far edge
-            srow[p], LO[p], HI[p] = _march_cell(Z, ring, v, p, s, rise, K)
-    zl = ZL[row]
+            srow[p], LO[p], HI[p] = _march_cell(Z, ring, v, p0 + p, s, rise, K)
+    zl = ZL[row, p0:p0 + n]
     for p in range(n):
         ol[p] = _decide(srow[p], LO[p], HI[p], zl[p])
 
@@ -165,73 +170,111 @@ def _dem_index(i, n, flip):
 
 
 @njit(cache=True)
-def _block_io(z, blk, v, nb, dom_col, flip_line, flip_pos, load):
-    """Copy canonical lines v, v-1, ..., v-nb+1 between the DEM-shaped array ``z`` (C order) and
-    the rows of ``blk`` (load: z -> blk, else blk -> z). Lines that are DEM columns go position by
+def _load_lines(z, ZL, v, nb, p0, p1, dom_col, flip_line, flip_pos):
+    """Heights of canonical lines v, v-1, ..., v-nb+1 at positions [p0, p1) from the DEM-shaped
+    array ``z`` into the ring rows of ``ZL`` (float64). Lines that are DEM columns go position by
     position, so that each DEM row is touched once per block, contiguously."""
+    R = ZL.shape[0]
     if dom_col:
         P, L = z.shape
-        for p in range(P):
+        for p in range(p0, p1):
             r = _dem_index(p, P, flip_pos)
             for i in range(nb):
-                c = _dem_index(v - i, L, flip_line)
-                if load:
-                    blk[i, p] = z[r, c]
-                else:
-                    z[r, c] = blk[i, p]
+                ZL[(v - i) % R, p] = z[r, _dem_index(v - i, L, flip_line)]
     else:
         L, P = z.shape
         for i in range(nb):
             r = _dem_index(v - i, L, flip_line)
-            for p in range(P):
-                c = _dem_index(p, P, flip_pos)
-                if load:
-                    blk[i, p] = z[r, c]
-                else:
-                    z[r, c] = blk[i, p]
+            zr = ZL[(v - i) % R]
+            for p in range(p0, p1):
+                zr[p] = z[r, _dem_index(p, P, flip_pos)]
 
 
 @njit(cache=True)
-def _sweep_uniform(z, Z, dom_col, flip_line, flip_pos, s, rise, K, out):
+def _store_lines(out, OB, v, nb, p0, p1, dom_col, flip_line, flip_pos):
+    """Mask codes of lines v, v-1, ..., v-nb+1 (rows of OB, positions from p0) into ``out``."""
+    if dom_col:
+        P, L = out.shape
+        for p in range(p0, p1):
+            r = _dem_index(p, P, flip_pos)
+            for i in range(nb):
+                out[r, _dem_index(v - i, L, flip_line)] = OB[i, p - p0]
+    else:
+        L, P = out.shape
+        for i in range(nb):
+            r = _dem_index(v - i, L, flip_line)
+            for p in range(p0, p1):
+                out[r, _dem_index(p, P, flip_pos)] = OB[i, p - p0]
+
+
+@njit(cache=True)
+def _strip_block(z, Z, ZL, ring, E, LO, HI, OB, d, fr, v_top, nb, p0, p1, n_in,
+                 dom_col, flip_line, flip_pos, s, rise, K, out):
+    """Lines v_top, ..., v_top-nb+1, positions [p0, p1): load, sweep, store."""
+    L = Z.shape[0]
+    R = ring.shape[0]
+    _load_lines(z, ZL, v_top, nb, p0, p1, dom_col, flip_line, flip_pos)
+    for i in range(nb):
+        v = v_top - i
+        ol = OB[i]
+        q = max(p0, min(p1, n_in)) if v + K < L else p0   # cells [p0, q) take the line passes
+        if q > p0:
+            _line_pass(ZL, ring, E, LO, HI, ol, d, fr, v, K, rise, p0, q - p0, Z, s)
+        row = v % R
+        for p in range(q, p1):
+            S, lo, hi = _march_cell(Z, ring, v, p, s, rise, K)
+            ring[row, p] = S
+            ol[p - p0] = _decide(S, lo, hi, ZL[row, p])
+    _store_lines(out, OB, v_top, nb, p0, p1, dom_col, flip_line, flip_pos)
+
+
+@njit(parallel=True, cache=True)
+def _sweep_uniform(z, Z, dom_col, flip_line, flip_pos, s, rise, K, nstrips, out):
     """One ray direction for the whole raster: every cell of a line has the same sample offsets,
     so each of the K exact samples and the stored-value lookup is one pass along the line with a
     constant interpolation fraction, over contiguous line buffers (SIMD). ``z`` and ``out`` are
-    the DEM-shaped arrays, read and written a block of lines at a time; ``Z`` is the canonical
-    view of ``z`` for the few cells that take ``_march_cell`` (samples running off the far end
-    of the line, and the K lines at the sun's edge)."""
+    the DEM-shaped arrays; ``Z`` is the canonical view of ``z`` for the few cells that take
+    ``_march_cell`` (samples running off the far end of the line, the K lines at the sun's edge).
+
+    Parallel as a wavefront: the positions are cut into ``nstrips`` strips, strip 0 at the far
+    end of the lines (positions grow toward the sun, so a cell depends only on its own strip and
+    the next one toward strip 0, as long as a strip is wider than the K-th sample's offset). The
+    lines are cut into blocks of B >= K lines; at step t strip j does block t - j, so the lines
+    it reads from strip j - 1 were finished a step earlier. Each strip reads its heights from and
+    writes its mask to the DEM-shaped arrays a block at a time."""
     L, P = Z.shape
-    R = K + 1
-    ring = np.full((R, P), -np.inf)   # S of lines v .. v+K
-    ZL = np.empty((R, P))             # heights of lines v .. v+K, float64, canonical order
-    E = np.empty(P)
-    LO = np.empty(P)
-    HI = np.empty(P)
-    d = np.empty(R, np.int64)
-    fr = np.empty(R)
-    for k in range(1, R):
+    B = max(32, K)                    # lines per block (>= K: the lag between strips suffices)
+    NS = nstrips
+    R = NS * B + K + 1                # ring rows: every line in flight plus K lines ahead
+    W = P + 17                        # padded rows: power-of-two rows filled column-wise
+    ring = np.full((R, W), -np.inf)   # would share cache sets
+    ZL = np.empty((R, W))             # heights, float64, canonical order
+    d = np.empty(K + 1, np.int64)
+    fr = np.empty(K + 1)
+    for k in range(1, K + 1):
         d[k] = int(math.floor(k * s))
         fr[k] = k * s - d[k]
     # positions whose K samples and both stored neighbours lie inside the line
     n_in = max(0, P - d[K] - (1 if fr[K] > 0.0 else 0))
-    B = 32                            # lines per block read from / written to the DEM
-    TB = np.empty((B, P + 17), np.float32)   # padded: rows of a power-of-two length would
-    OB = np.empty((B, P + 67), np.uint8)     # share cache sets when filled column-wise
-    for v in range(L - 1, -1, -1):
-        j = (L - 1 - v) % B
-        if j == 0:
-            _block_io(z, TB, v, min(B, v + 1), dom_col, flip_line, flip_pos, True)
-        row = v % R
-        zl = ZL[row]
-        for p in range(P):
-            zl[p] = TB[j, p]
-        first = n_in if v + K < L else 0
-        _line_pass(ZL, ring, E, LO, HI, OB[j], d, fr, v, K, rise, first, Z, s)
-        for p in range(first, P):
-            S, lo, hi = _march_cell(Z, ring, v, p, s, rise, K)
-            ring[row, p] = S
-            OB[j, p] = _decide(S, lo, hi, zl[p])
-        if j == B - 1 or v == 0:
-            _block_io(out, OB, v + j, j + 1, dom_col, flip_line, flip_pos, False)
+    bounds = np.empty(NS + 1, np.int64)   # strip j covers [bounds[j+1], bounds[j])
+    for j in range(NS + 1):
+        bounds[j] = P - (j * P) // NS
+    wmax = P // NS + 1
+    E = np.empty((NS, wmax))
+    LO = np.empty((NS, wmax))
+    HI = np.empty((NS, wmax))
+    OB = np.empty((NS, B, wmax + 67), np.uint8)
+    nblocks = (L + B - 1) // B
+    for t in range(nblocks + NS - 1):
+        for jj in prange(NS):
+            j = np.int64(jj)
+            b = t - j
+            if b >= 0 and b < nblocks:
+                v_top = L - 1 - b * B
+                nb = min(B, v_top + 1)
+                _strip_block(z, Z, ZL, ring, E[j], LO[j], HI[j], OB[j], d, fr, v_top, nb,
+                             bounds[j + 1], bounds[j], n_in, dom_col, flip_line, flip_pos,
+                             s, rise, K, out)
 
 
 @njit(parallel=True, cache=True)
@@ -268,6 +311,12 @@ def _per_cell_rays(rays: SunRays):
     return f, s, rise, per_line
 
 
+def _strips(P: int, s: float, K: int) -> int:
+    """How many strips the wavefront cuts a line of P positions into: one per thread, each at
+    least MIN_STRIP positions and wider than the K-th sample's reach."""
+    return max(1, min(numba.get_num_threads(), P // max(MIN_STRIP, int(math.ceil(K * s)) + 2)))
+
+
 def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None,
                 stats: dict | None = None, exact_steps: int = EXACT_STEPS) -> np.ndarray:
     """Shadow mask by the flag-map sweep: uint8 1 shadow / 0 lit / 255 void."""
@@ -278,7 +327,8 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None,
     K = np.int64(max(1, int(exact_steps)))
     if uniform_rays(rays):
         f = frame_of(rays)
-        _sweep_uniform(z, f.view(z), f.dom_col, f.flip_line, f.flip_pos, f.s, f.rise, K, out)
+        _sweep_uniform(z, f.view(z), f.dom_col, f.flip_line, f.flip_pos, f.s, f.rise, K,
+                       _strips(z.shape[0] if f.dom_col else z.shape[1], f.s, int(K)), out)
     else:
         f, s, rise, per_line = _per_cell_rays(rays)
         _sweep_kernel(f.view(z), s, rise, per_line, K, f.view(out))
