@@ -68,6 +68,10 @@ def cases(sizes):
     for n in sizes:
         z = fractal_terrain(n, n, seed=n, relief=1500.0, octaves=6)  # 1.5 km relief, 30 m cells
         yield f"fractal {n}²", z, Grid.uniform(n, n, 30.0)
+    n = sizes[0] if sizes else 512
+    z = fractal_terrain(n, n, seed=n + 1, relief=1500.0, octaves=6).astype(np.float32)
+    z[z < np.percentile(z, 50)] = np.nan   # islands in a nodata sea (half the cells are voids)
+    yield f"islands {n}² (half nodata)", z, Grid.uniform(n, n, 30.0)
 
 
 def main():

@@ -5,7 +5,7 @@ met, so that a later ray reaching an already visited cell reuses that instead of
 What each cell stores here is the **left-over height** of its ray, in absolute form: ``S``, the
 lowest height at the cell's position from which a ray toward the sun clears every sample ahead
 (``S - h`` is the most by which the cell's own ray passes under the terrain, negative when it
-clears, ``-inf`` when it never meets terrain). It obeys an exact recurrence along a ray:
+clears; ``zfloor``, a height below the lowest cell, when it never meets terrain). It obeys an exact recurrence along a ray:
 
     S(cell) = max( max_{k<=K} (T_k - k*rise) , S(K-th sample point) - K*rise )
 
@@ -23,6 +23,13 @@ interpolation can err: it is flagged and, after the sweep, decided by brute's ex
 the ray between them. The report gives the flagged share (``unsure_fraction``: 0 at high sun,
 0.35-0.56 % at 3° on a 2048² fractal terrain with K = 8).
 
+**Voids.** A void is a hole in the model: a ray through it meets no terrain there, while its
+neighbours may pass beside it, so next to voids both neighbours can agree and still be wrong.
+On a DEM with voids each cell also carries ``W``, the highest void-edge terrain its ray (and its
+neighbours' rays) met, less its drop; where ``W > h`` that terrain is within reach and the cell
+is unsure unless its K exact samples already shadow it. The cost is more refinement on
+void-heavy DEMs (4-29 % of the cells on SRTM Everest, 0.2-0.7 % on New Zealand's nodata sea).
+
 Speed. With one ray direction for the raster (projected CRS) every cell of a line has the same
 sample offsets and interpolation fractions, so each exact sample and the stored-value lookup is
 one SIMD pass along a contiguous line buffer; the DEM is read and the mask written a block of
@@ -34,13 +41,14 @@ take a per-cell kernel, parallel over the cells of a line.
 
 Fixes of the published code: no restart of the inner loop at a wrong index (the loops run over
 canonical lines and positions, ``frames``); no ±0.5 epsilon around an interpolated "never hit"
-flag of -1 (``-inf`` is kept apart from real heights: when one of the two stored values is
-``-inf``, i.e. that neighbour's ray left the raster, the cell marches on exactly instead); no
-square root per pixel (the k-th sample is ``k`` steps on).
+flag of -1 (``zfloor`` lies below every real height, so it interpolates without a special case,
+and when one of the two stored values is ``zfloor``, i.e. that neighbour's ray met no terrain,
+a valid cell marches on exactly instead, until its ray is above the highest cell); no square
+root per pixel (the k-th sample is ``k`` steps on).
 
 **Approximate.** On the axes and diagonals the K-th sample is a cell centre, nothing is
 interpolated and ``sweep`` equals ``brute`` (tests). Elsewhere a cell is wrong only when both
-neighbouring rays agree and the ray between them does not (a thin ridge or a void between them).
+neighbouring rays agree and the ray between them does not (a thin ridge between them).
 Measured against ``brute`` on the real DEMs of the project: ``ERROR_SUMMARY`` below and
 docs/algorithms.md.
 """
@@ -63,9 +71,9 @@ UNSURE = 2        # mask code of a cell left to the exact refinement pass
 MIN_STRIP = 256   # fewest positions per strip of the parallel wavefront
 
 ERROR_SUMMARY = (
-    "K=8 vs brute, 7 real DEMs x 8 suns (benchmarks/accuracy.py): mean 0.009-0.059 % of cells per "
-    "DEM, worst sun 0.30 %; wrong cells within 1 deg of the sun elevation on void-free DEMs, up "
-    "to 13 deg next to SRTM voids and 2.6 deg at a nodata coast (voids are holes in the model)")
+    "K=8 vs brute, 7 real DEMs x 8 suns (benchmarks/accuracy.py): mean 0.008-0.049 % of cells per "
+    "DEM, worst sun 0.29 %; wrong cells within 1 deg of the sun elevation (largest 0.93 deg) "
+    "except one cell at 1.04 deg on SRTM Everest")
 
 
 @njit(cache=True)
@@ -90,43 +98,89 @@ def _decide(S, lo, hi, h):
 
 
 @njit(cache=True)
-def _march_cell(Z, ring, v, p, s, rise, K):
-    """(S, lo, hi) of canonical cell (v, p): K samples marched exactly, then the stored S of the
-    K-th sample's neighbours, interpolated (S) and taken at either neighbour (lo, hi). When a
-    neighbour holds -inf (its ray left the raster without meeting terrain) the march goes on to
-    the edge instead and S is exact (lo = -inf, hi = S: never unsure)."""
+def _void_edge(line, i, P):
+    """Highest valid height among cells i-1 .. i+2 of a line when one of them is a void (the
+    terrain a ray beside this sample may see or miss because of the hole), else -inf."""
+    hole = False
+    m = -np.inf
+    for j in range(max(0, i - 1), min(P, i + 3)):
+        x = line[j]
+        if x != x:
+            hole = True
+        elif x > m:
+            m = x
+    return m if hole else -np.inf
+
+
+@njit(cache=True)
+def _march_cell(Z, ring, wring, void, zfloor, zmax, v, p, s, rise, K):
+    """(S, lo, hi, W) of canonical cell (v, p): K samples marched exactly, then the stored S of
+    the K-th sample's neighbours, interpolated (S) and taken at either neighbour (lo, hi). A ray
+    that leaves the raster within K samples is exact (lo = -inf, hi = S: never unsure).
+
+    S is kept at or above ``zfloor`` (below every valid height, so no decision changes): a ray
+    that met no terrain stores a finite value, which interpolates. When a stored neighbour holds
+    ``zfloor`` (its ray met no terrain: the raster's far edge, or open sea) a valid cell marches
+    on exactly instead, until its ray is above ``zmax`` (exact: never unsure); a void cell, whose
+    S only serves its successors, interpolates.
+
+    ``void`` (the DEM has voids): W is the highest void-edge terrain (``_void_edge``) met along
+    the ray, less its drop, carried from the stored neighbours (``wring``) like S. Where W > h a
+    hole within reach could make the ray between the neighbours differ from both, so unless the
+    K exact samples already shadow the cell it is left unsure (lo = E, hi = inf)."""
     L, P = Z.shape
-    S = -np.inf
+    R = ring.shape[0]
+    h = Z[v, p]
+    S = zfloor
+    W = -np.inf
     k = 1
     march_on = False
-    while (k <= K or march_on) and v + k < L:
+    while (k <= K or (march_on and zmax - k * rise > S)) and v + k < L:
         x = line_position(p + k * s, P)
         if x < 0.0:
             break
         t = terrain_on_line(Z, False, v + k, x)
         if t - k * rise > S:   # NaN (void) compares false
             S = t - k * rise
+        if void:
+            w = _void_edge(Z[v + k], int(math.floor(x)), P) - k * rise
+            W = w if w > W else W
         if k == K:
-            a, b, f = _stored_pair(ring, (v + k) % ring.shape[0], x)
-            if a == -np.inf or b == -np.inf:
+            a, b, f = _stored_pair(ring, (v + k) % R, x)
+            if (a == zfloor or b == zfloor) and h == h:
                 march_on = True
             else:
                 lo = max(S, min(a, b) - k * rise)
                 hi = max(S, max(a, b) - k * rise)
-                return max(S, a + f * (b - a) - k * rise), lo, hi
+                E = S
+                S = max(E, a + f * (b - a) - k * rise)
+                if void:
+                    wa, wb, _ = _stored_pair(wring, (v + k) % R, x)
+                    W = max(W, max(wa, wb) - k * rise)
+                    if W > h:
+                        lo = E
+                        hi = np.inf
+                return S, lo, hi, W
         k += 1
-    return S, -np.inf, S
+    return S, -np.inf, S, W
 
 
 @njit(cache=True)
-def _line_pass(ZL, ring, E, LO, HI, ol, d, fr, v, K, rise, p0, n, Z, s):
+def _line_pass(ZL, VE, ring, wring, void, zfloor, zmax, T, ol, d, fr, v, K, rise, p0, n, Z,
+               s):
     """Positions p0 <= p < p0 + n of line v (all inside the line: K samples and both stored
-    neighbours): K exact sample passes, the stored-value pass, the decision pass. ``ZL`` and
-    ``ring`` are ring buffers of heights and S, row ``v % R``; E, LO, HI, ol are indexed from p0."""
+    neighbours): K exact sample passes, the stored-value pass, the decision pass. ``ZL``, ``VE``
+    (void edges), ``ring`` (S) and ``wring`` (W) are ring buffers, row ``v % R``; the rows of
+    ``T`` (E, LO, HI, W work arrays) and ``ol`` are indexed from p0. Same codes as
+    ``_march_cell`` cell by cell."""
     R = ring.shape[0]
     row = v % R
-    e = E[:n]
-    e[:] = -np.inf
+    e = T[0, :n]
+    LO = T[1, :n]
+    HI = T[2, :n]
+    w = T[3, :n]
+    e[:] = zfloor
+    w[:] = -np.inf
     for k in range(1, K + 1):
         dk = p0 + d[k]
         f = fr[k]
@@ -141,6 +195,11 @@ def _line_pass(ZL, ring, E, LO, HI, ol, d, fr, v, K, rise, p0, n, Z, s):
             for p in range(n):
                 t = za[p] + f * (zb[p] - za[p]) - kr
                 e[p] = t if t > e[p] else e[p]
+        if void:
+            ve = VE[(v + k) % R, dk:dk + n]
+            for p in range(n):
+                t = ve[p] - kr
+                w[p] = t if t > w[p] else w[p]
     dK = p0 + d[K]
     fK = fr[K]
     rK = K * rise
@@ -156,10 +215,21 @@ def _line_pass(ZL, ring, E, LO, HI, ol, d, fr, v, K, rise, p0, n, Z, s):
         LO[p] = t if t > e[p] else e[p]
         t = max(a, b) - rK
         HI[p] = t if t > e[p] else e[p]
-    for p in range(n):
-        if sa[p] == -np.inf or sb[p] == -np.inf:   # rare: next to the far edge
-            srow[p], LO[p], HI[p] = _march_cell(Z, ring, v, p0 + p, s, rise, K)
     zl = ZL[row, p0:p0 + n]
+    wrow = wring[row, p0:p0 + n]
+    if void:
+        wa = wring[(v + K) % R, dK:dK + n]
+        wb = wring[(v + K) % R, dK + 1:dK + 1 + n] if fK > 0.0 else wa
+        for p in range(n):
+            t = max(wa[p], wb[p]) - rK
+            wrow[p] = t if t > w[p] else w[p]
+            hole = wrow[p] > zl[p]
+            LO[p] = e[p] if hole else LO[p]
+            HI[p] = np.inf if hole else HI[p]
+    for p in range(n):
+        if (sa[p] == zfloor or sb[p] == zfloor) and zl[p] == zl[p]:   # rare: see _march_cell
+            srow[p], LO[p], HI[p], wrow[p] = _march_cell(Z, ring, wring, void, zfloor, zmax, v,
+                                                         p0 + p, s, rise, K)
     for p in range(n):
         ol[p] = _decide(srow[p], LO[p], HI[p], zl[p])
 
@@ -208,33 +278,45 @@ def _store_lines(out, OB, v, nb, p0, p1, dom_col, flip_line, flip_pos):
 
 
 @njit(cache=True)
-def _strip_block(z, Z, ZL, ring, E, LO, HI, OB, d, fr, v_top, nb, p0, p1, n_in,
+def _strip_block(z, Z, RZ, RS, void, zfloor, zmax, T, OB, d, fr, v_top, nb, p0, p1, n_in,
                  dom_col, flip_line, flip_pos, s, rise, K, out):
-    """Lines v_top, ..., v_top-nb+1, positions [p0, p1): load, sweep, store."""
-    L = Z.shape[0]
+    """Lines v_top, ..., v_top-nb+1, positions [p0, p1): load, sweep, store. RZ holds the ring
+    buffers of heights and void edges, RS those of S and W."""
+    L, P = Z.shape
+    ZL, VE, ring, wring = RZ[0], RZ[1], RS[0], RS[1]
     R = ring.shape[0]
-    _load_lines(z, ZL, v_top, nb, p0, p1, dom_col, flip_line, flip_pos)
+    # one position more on the near side for the void edges (same values as the next strip's)
+    _load_lines(z, ZL, v_top, nb, max(0, p0 - 1), p1, dom_col, flip_line, flip_pos)
+    if void:
+        for i in range(nb):
+            row = (v_top - i) % R
+            for p in range(p0, p1):
+                VE[row, p] = _void_edge(ZL[row], p, P)
     for i in range(nb):
         v = v_top - i
         ol = OB[i]
         q = max(p0, min(p1, n_in)) if v + K < L else p0   # cells [p0, q) take the line passes
         if q > p0:
-            _line_pass(ZL, ring, E, LO, HI, ol, d, fr, v, K, rise, p0, q - p0, Z, s)
+            _line_pass(ZL, VE, ring, wring, void, zfloor, zmax, T, ol, d, fr, v, K, rise, p0,
+                       q - p0, Z, s)
         row = v % R
         for p in range(q, p1):
-            S, lo, hi = _march_cell(Z, ring, v, p, s, rise, K)
+            S, lo, hi, w = _march_cell(Z, ring, wring, void, zfloor, zmax, v, p, s, rise, K)
             ring[row, p] = S
+            wring[row, p] = w
             ol[p - p0] = _decide(S, lo, hi, ZL[row, p])
     _store_lines(out, OB, v_top, nb, p0, p1, dom_col, flip_line, flip_pos)
 
 
 @njit(parallel=True, cache=True)
-def _sweep_uniform(z, Z, dom_col, flip_line, flip_pos, s, rise, K, nstrips, out):
+def _sweep_uniform(z, Z, dom_col, flip_line, flip_pos, s, rise, K, nstrips, void, zfloor,
+                   zmax, out):
     """One ray direction for the whole raster: every cell of a line has the same sample offsets,
     so each of the K exact samples and the stored-value lookup is one pass along the line with a
     constant interpolation fraction, over contiguous line buffers (SIMD). ``z`` and ``out`` are
     the DEM-shaped arrays; ``Z`` is the canonical view of ``z`` for the few cells that take
     ``_march_cell`` (samples running off the far end of the line, the K lines at the sun's edge).
+    ``void``: the DEM has voids (track W, see ``_march_cell``).
 
     Parallel as a wavefront: the positions are cut into ``nstrips`` strips, strip 0 at the far
     end of the lines (positions grow toward the sun, so a cell depends only on its own strip and
@@ -247,8 +329,8 @@ def _sweep_uniform(z, Z, dom_col, flip_line, flip_pos, s, rise, K, nstrips, out)
     NS = nstrips
     R = NS * B + K + 1                # ring rows: every line in flight plus K lines ahead
     W = P + 17                        # padded rows: power-of-two rows filled column-wise
-    ring = np.full((R, W), -np.inf)   # would share cache sets
-    ZL = np.empty((R, W))             # heights, float64, canonical order
+    RS = np.full((2, R, W), -np.inf)  # would share cache sets. S and W
+    RZ = np.empty((2, R, W))          # heights (float64, canonical order) and void edges
     d = np.empty(K + 1, np.int64)
     fr = np.empty(K + 1)
     for k in range(1, K + 1):
@@ -260,9 +342,7 @@ def _sweep_uniform(z, Z, dom_col, flip_line, flip_pos, s, rise, K, nstrips, out)
     for j in range(NS + 1):
         bounds[j] = P - (j * P) // NS
     wmax = P // NS + 1
-    E = np.empty((NS, wmax))
-    LO = np.empty((NS, wmax))
-    HI = np.empty((NS, wmax))
+    T = np.empty((NS, 4, wmax))            # per strip: E, LO, HI, W of a line
     OB = np.empty((NS, B, wmax + 67), np.uint8)
     nblocks = (L + B - 1) // B
     for t in range(nblocks + NS - 1):
@@ -272,24 +352,27 @@ def _sweep_uniform(z, Z, dom_col, flip_line, flip_pos, s, rise, K, nstrips, out)
             if b >= 0 and b < nblocks:
                 v_top = L - 1 - b * B
                 nb = min(B, v_top + 1)
-                _strip_block(z, Z, ZL, ring, E[j], LO[j], HI[j], OB[j], d, fr, v_top, nb,
+                _strip_block(z, Z, RZ, RS, void, zfloor, zmax, T[j], OB[j], d, fr, v_top, nb,
                              bounds[j + 1], bounds[j], n_in, dom_col, flip_line, flip_pos,
                              s, rise, K, out)
 
 
 @njit(parallel=True, cache=True)
-def _sweep_kernel(Z, s_arr, rise_arr, per_line, K, out):
+def _sweep_kernel(Z, s_arr, rise_arr, per_line, K, void, zfloor, zmax, out):
     """Rays that differ from row to row (geographic CRS): lines from the sun's edge, the cells of
     a line in parallel, each through ``_march_cell`` with its own row's ray."""
     L, P = Z.shape
-    ring = np.full((K + 1, P), -np.inf)
+    RS = np.full((2, K + 1, P), -np.inf)
+    ring, wring = RS[0], RS[1]
     for v in range(L - 1, -1, -1):
         row = v % (K + 1)
         for pp in prange(P):
             p = np.int64(pp)   # prange indices may be unsigned; keep integer arithmetic integral
             i = np.int64(v) if per_line else p
-            S, lo, hi = _march_cell(Z, ring, v, p, s_arr[i], rise_arr[i], K)
+            S, lo, hi, w = _march_cell(Z, ring, wring, void, zfloor, zmax, v, p, s_arr[i],
+                                       rise_arr[i], K)
             ring[row, p] = S
+            wring[row, p] = w
             out[v, p] = _decide(S, lo, hi, Z[v, p])
 
 
@@ -311,6 +394,21 @@ def _per_cell_rays(rays: SunRays):
     return f, s, rise, per_line
 
 
+@njit(cache=True)
+def _z_range(z):
+    """(lowest, highest valid height, whether there are voids) in one pass, no temporaries."""
+    lo = np.inf
+    hi = -np.inf
+    void = False
+    for h in z.ravel():
+        if h != h:
+            void = True
+        else:
+            lo = min(lo, h)
+            hi = max(hi, h)
+    return lo, hi, void
+
+
 def _strips(P: int, s: float, K: int) -> int:
     """How many strips the wavefront cuts a line of P positions into: one per thread, each at
     least MIN_STRIP positions and wider than the K-th sample's reach."""
@@ -325,15 +423,20 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None,
         out[...] = np.where(np.isnan(z), 255, 0)
         return out
     K = np.int64(max(1, int(exact_steps)))
+    zmin, zhi, void = _z_range(z)
+    if not math.isfinite(zmin):   # nothing but voids
+        out[...] = 255
+        return out
+    zfloor = float(zmin) - 1.0    # below every valid height
+    zmax = float(zhi) if zmax is None else float(zmax)
     if uniform_rays(rays):
         f = frame_of(rays)
         _sweep_uniform(z, f.view(z), f.dom_col, f.flip_line, f.flip_pos, f.s, f.rise, K,
-                       _strips(z.shape[0] if f.dom_col else z.shape[1], f.s, int(K)), out)
+                       _strips(z.shape[0] if f.dom_col else z.shape[1], f.s, int(K)), void, zfloor,
+                       zmax, out)
     else:
         f, s, rise, per_line = _per_cell_rays(rays)
-        _sweep_kernel(f.view(z), s, rise, per_line, K, f.view(out))
-    if zmax is None:
-        zmax = float(np.nanmax(z))
+        _sweep_kernel(f.view(z), s, rise, per_line, K, void, zfloor, zmax, f.view(out))
     unsure = brute.refine(z, rays, out, UNSURE, zmax)
     if stats is not None:
         stats["unsure_fraction"] = unsure / max(1, out.size)
