@@ -66,7 +66,8 @@ def cases(sizes):
         d = read_dem(p)
         yield os.path.basename(p), d.heights, d.grid
     for n in sizes:
-        z = fractal_terrain(n, n, seed=n, relief=1500.0, octaves=6)  # 1.5 km relief, 30 m cells
+        # 1.5 km relief on 30 m cells, float32 like every DEM the tool reads
+        z = fractal_terrain(n, n, seed=n, relief=1500.0, octaves=6).astype(np.float32)
         yield f"fractal {n}²", z, Grid.uniform(n, n, 30.0)
     n = sizes[0] if sizes else 512
     z = fractal_terrain(n, n, seed=n + 1, relief=1500.0, octaves=6).astype(np.float32)

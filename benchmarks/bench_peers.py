@@ -111,7 +111,7 @@ def cases(sizes):
     d = read_dem(EXAMPLE)
     yield os.path.basename(EXAMPLE), d.heights, d.grid, float(d.grid.dx[0])
     for n in sizes:
-        z = fractal_terrain(n, n, seed=n, relief=1500.0, octaves=6)
+        z = fractal_terrain(n, n, seed=n, relief=1500.0, octaves=6).astype(np.float32)
         yield f"fractal {n}²", z, Grid.uniform(n, n, CELL), CELL
 
 
