@@ -400,12 +400,13 @@ def _z_range(z):
     lo = np.inf
     hi = -np.inf
     void = False
-    for h in z.ravel():
-        if h != h:
-            void = True
-        else:
-            lo = min(lo, h)
-            hi = max(hi, h)
+    for r in range(z.shape[0]):   # 2-D loops: ravel() would copy a non-contiguous view
+        for h in z[r]:
+            if h != h:
+                void = True
+            else:
+                lo = min(lo, h)
+                hi = max(hi, h)
     return lo, hi, void
 
 
