@@ -240,53 +240,44 @@ def _dem_index(i, n, flip):
 
 
 @njit(cache=True)
-def _load_lines(z, ZL, v, nb, p0, p1, dom_col, flip_line, flip_pos):
-    """Heights of canonical lines v, v-1, ..., v-nb+1 at positions [p0, p1) from the DEM-shaped
-    array ``z`` into the ring rows of ``ZL`` (float64). Lines that are DEM columns go position by
-    position, so that each DEM row is touched once per block, contiguously."""
-    R = ZL.shape[0]
+def _copy_lines(z, ring, v, nb, p0, p1, dom_col, flip_line, flip_pos, load):
+    """Copy canonical lines v, v-1, ..., v-nb+1 at positions [p0, p1) between the DEM-shaped
+    array ``z`` and the ring rows ``(v - i) % R`` of ``ring`` (load: z -> ring, else ring -> z).
+    Lines that are DEM columns go position by position, so that each DEM row is touched once per
+    block, contiguously."""
+    R = ring.shape[0]
     if dom_col:
         P, L = z.shape
         for p in range(p0, p1):
             r = _dem_index(p, P, flip_pos)
             for i in range(nb):
-                ZL[(v - i) % R, p] = z[r, _dem_index(v - i, L, flip_line)]
+                c = _dem_index(v - i, L, flip_line)
+                if load:
+                    ring[(v - i) % R, p] = z[r, c]
+                else:
+                    z[r, c] = ring[(v - i) % R, p]
     else:
         L, P = z.shape
         for i in range(nb):
             r = _dem_index(v - i, L, flip_line)
-            zr = ZL[(v - i) % R]
             for p in range(p0, p1):
-                zr[p] = z[r, _dem_index(p, P, flip_pos)]
+                c = _dem_index(p, P, flip_pos)
+                if load:
+                    ring[(v - i) % R, p] = z[r, c]
+                else:
+                    z[r, c] = ring[(v - i) % R, p]
 
 
 @njit(cache=True)
-def _store_lines(out, OB, v, nb, p0, p1, dom_col, flip_line, flip_pos):
-    """Mask codes of lines v, v-1, ..., v-nb+1 (rows of OB, positions from p0) into ``out``."""
-    if dom_col:
-        P, L = out.shape
-        for p in range(p0, p1):
-            r = _dem_index(p, P, flip_pos)
-            for i in range(nb):
-                out[r, _dem_index(v - i, L, flip_line)] = OB[i, p - p0]
-    else:
-        L, P = out.shape
-        for i in range(nb):
-            r = _dem_index(v - i, L, flip_line)
-            for p in range(p0, p1):
-                out[r, _dem_index(p, P, flip_pos)] = OB[i, p - p0]
-
-
-@njit(cache=True)
-def _strip_block(z, Z, RZ, RS, void, zfloor, zmax, T, OB, d, fr, v_top, nb, p0, p1, n_in,
+def _strip_block(z, Z, RZ, RS, RO, void, zfloor, zmax, T, d, fr, v_top, nb, p0, p1, n_in,
                  dom_col, flip_line, flip_pos, s, rise, K, out):
     """Lines v_top, ..., v_top-nb+1, positions [p0, p1): load, sweep, store. RZ holds the ring
-    buffers of heights and void edges, RS those of S and W."""
+    buffers of heights and void edges, RS those of S and W, RO that of the mask codes."""
     L, P = Z.shape
     ZL, VE, ring, wring = RZ[0], RZ[1], RS[0], RS[1]
     R = ring.shape[0]
     # one position more on the near side for the void edges (same values as the next strip's)
-    _load_lines(z, ZL, v_top, nb, max(0, p0 - 1), p1, dom_col, flip_line, flip_pos)
+    _copy_lines(z, ZL, v_top, nb, max(0, p0 - 1), p1, dom_col, flip_line, flip_pos, True)
     if void:
         for i in range(nb):
             row = (v_top - i) % R
@@ -294,18 +285,17 @@ def _strip_block(z, Z, RZ, RS, void, zfloor, zmax, T, OB, d, fr, v_top, nb, p0, 
                 VE[row, p] = _void_edge(ZL[row], p, P)
     for i in range(nb):
         v = v_top - i
-        ol = OB[i]
+        row = v % R
         q = max(p0, min(p1, n_in)) if v + K < L else p0   # cells [p0, q) take the line passes
         if q > p0:
-            _line_pass(ZL, VE, ring, wring, void, zfloor, zmax, T, ol, d, fr, v, K, rise, p0,
-                       q - p0, Z, s)
-        row = v % R
+            _line_pass(ZL, VE, ring, wring, void, zfloor, zmax, T, RO[row, p0:q], d, fr, v, K,
+                       rise, p0, q - p0, Z, s)
         for p in range(q, p1):
             S, lo, hi, w = _march_cell(Z, ring, wring, void, zfloor, zmax, v, p, s, rise, K)
             ring[row, p] = S
             wring[row, p] = w
-            ol[p - p0] = _decide(S, lo, hi, ZL[row, p])
-    _store_lines(out, OB, v_top, nb, p0, p1, dom_col, flip_line, flip_pos)
+            RO[row, p] = _decide(S, lo, hi, ZL[row, p])
+    _copy_lines(out, RO, v_top, nb, p0, p1, dom_col, flip_line, flip_pos, False)
 
 
 @njit(parallel=True, cache=True)
@@ -331,6 +321,7 @@ def _sweep_uniform(z, Z, dom_col, flip_line, flip_pos, s, rise, K, nstrips, void
     W = P + 17                        # padded rows: power-of-two rows filled column-wise
     RS = np.full((2, R, W), -np.inf)  # would share cache sets. S and W
     RZ = np.empty((2, R, W))          # heights (float64, canonical order) and void edges
+    RO = np.empty((R, W), np.uint8)   # mask codes
     d = np.empty(K + 1, np.int64)
     fr = np.empty(K + 1)
     for k in range(1, K + 1):
@@ -343,7 +334,6 @@ def _sweep_uniform(z, Z, dom_col, flip_line, flip_pos, s, rise, K, nstrips, void
         bounds[j] = P - (j * P) // NS
     wmax = P // NS + 1
     T = np.empty((NS, 4, wmax))            # per strip: E, LO, HI, W of a line
-    OB = np.empty((NS, B, wmax + 67), np.uint8)
     nblocks = (L + B - 1) // B
     for t in range(nblocks + NS - 1):
         for jj in prange(NS):
@@ -352,7 +342,7 @@ def _sweep_uniform(z, Z, dom_col, flip_line, flip_pos, s, rise, K, nstrips, void
             if b >= 0 and b < nblocks:
                 v_top = L - 1 - b * B
                 nb = min(B, v_top + 1)
-                _strip_block(z, Z, RZ, RS, void, zfloor, zmax, T[j], OB[j], d, fr, v_top, nb,
+                _strip_block(z, Z, RZ, RS, RO, void, zfloor, zmax, T[j], d, fr, v_top, nb,
                              bounds[j + 1], bounds[j], n_in, dom_col, flip_line, flip_pos,
                              s, rise, K, out)
 
