@@ -75,6 +75,13 @@ def dem_options(f):
     return f
 
 
+def backend_option(f):
+    return click.option(
+        "--backend", type=click.Choice(["auto", "cpu", "gpu"]), default="auto", show_default=True,
+        help="cpu: numba on all cores; gpu: CUDA through numba-cuda (pip install "
+             "'hillshade-rt[gpu]'); auto: the GPU when numba finds one, else the CPU.")(f)
+
+
 def _read(dem_path, band, nodata, z_factor, pixel_size, raw_shape, raw_dtype, raw_byteorder):
     from .io import parse_pixel_size, parse_raw_shape, read_dem
 
@@ -123,6 +130,7 @@ def cli():
               help="horizon scan: use every N-th sample only (faster, approximate; default 1).")
 @click.option("--exact-steps", type=click.IntRange(min=1), default=None,
               help="sweep: samples marched exactly before stored values are reused (default 8).")
+@backend_option
 @click.option("--threads", type=click.IntRange(min=1), default=None,
               help="CPU threads (default: all cores).")
 @click.option("--report", "report_path", type=click.Path(dir_okay=False), default=None,
@@ -132,7 +140,8 @@ def cli():
 @dem_options
 @_errors_to_click
 def shadow(dem, output, azimuth, elevation, algorithm, nextv, better_nextv, horizon_method,
-           sample_spacing, exact_steps, threads, report_path, overwrite, quiet, **read_opts):
+           sample_spacing, exact_steps, backend, threads, report_path, overwrite, quiet,
+           **read_opts):
     """Write the cast-shadow mask of DEM to OUTPUT (GeoTIFF: 1 shadow, 0 lit, 255 nodata)."""
     import numba
 
@@ -140,7 +149,7 @@ def shadow(dem, output, azimuth, elevation, algorithm, nextv, better_nextv, hori
     from .io import check_output_path, write_json, write_raster
     from .report import Timer, build_report, mask_stats, summary_line
     from .algorithms import ALGORITHMS
-    from .shadow import warm_up
+    from .shadow import choose_backend, warm_up
 
     timer = Timer()
     # validate everything cheap before reading or computing anything
@@ -154,16 +163,24 @@ def shadow(dem, output, azimuth, elevation, algorithm, nextv, better_nextv, hori
         check_output_path(report_path, overwrite)
     if threads is not None:
         numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+    ran_on = choose_backend(backend, algorithm, options)
 
     with timer("read"):
         d = _read(dem, **read_opts)
-    with timer("prepare"):  # includes numba compilation on a first run
-        warm_up(algorithm, d.grid, az, el, **options)
+    algo_stats: dict = {}
+    gpu_dem = None
+    with timer("prepare"):  # numba compilation on a first run; the DEM's upload to the GPU
+        warm_up(algorithm, d.grid, az, el, backend=ran_on, **options)
         rays = sun_rays(d.grid, az, el)
         zmin, zmax = d.height_range()
-    algo_stats: dict = {}
+        if ran_on == "gpu":
+            from .gpu import GpuDem
+            gpu_dem = GpuDem(d.heights, (zmin, zmax, d.valid_count() < d.heights.size))
     with timer("compute"):
-        mask = ALGORITHMS[algorithm](d.heights, rays, zmax, algo_stats, **options)
+        if gpu_dem is not None:
+            mask = gpu_dem.shadow_mask(rays, algorithm, zmax, algo_stats, **options)
+        else:
+            mask = ALGORITHMS[algorithm](d.heights, rays, zmax, algo_stats, **options)
     tags = {"HILLSHADE_RT_VERSION": __version__, "SUN_AZIMUTH": az, "SUN_ELEVATION": el,
             "ALGORITHM": algorithm, "VALUES": "1=shadow 0=lit 255=nodata"}
     with timer("write"):
@@ -171,9 +188,11 @@ def shadow(dem, output, azimuth, elevation, algorithm, nextv, better_nextv, hori
     stats = mask_stats(mask)
     seconds = dict(timer.seconds, total=timer.total())
     rep = build_report(dem=d, output=output, azimuth=az, elevation=el, algorithm=algorithm,
-                       backend="cpu", threads=numba.get_num_threads(), seconds=seconds,
+                       backend=ran_on, backend_requested=backend,
+                       threads=numba.get_num_threads(), seconds=seconds,
                        stats=stats, height_range=(zmin, zmax), options=options,
-                       algorithm_stats=algo_stats)
+                       algorithm_stats=algo_stats,
+                       gpu=gpu_dem.report() if gpu_dem is not None else None)
     if report_path is not None:
         write_json(report_path, rep)
     if not quiet:
@@ -211,13 +230,15 @@ def _algorithm_options(algorithm: str, **given) -> dict:
               help="scan: exact per-cell march; hull: convex-hull approximation, much faster.")
 @click.option("--sample-spacing", type=click.IntRange(min=1), default=1, show_default=True,
               help="scan: use every N-th sample only (the paper's sp; faster, approximate).")
+@backend_option
 @click.option("--threads", type=click.IntRange(min=1), default=None,
               help="CPU threads (default: all cores).")
 @click.option("--overwrite", is_flag=True, help="Replace OUTPUT if it exists.")
 @click.option("-q", "--quiet", is_flag=True, help="No summary line on stderr.")
 @dem_options
 @_errors_to_click
-def horizon(dem, output, azimuth, method, sample_spacing, threads, overwrite, quiet, **read_opts):
+def horizon(dem, output, azimuth, method, sample_spacing, backend, threads, overwrite, quiet,
+            **read_opts):
     """Write the horizon angle toward AZIMUTH of every cell of DEM to OUTPUT.
 
     Float32 degrees above the horizontal (negative: the cell looks down on everything ahead;
@@ -228,7 +249,7 @@ def horizon(dem, output, azimuth, method, sample_spacing, threads, overwrite, qu
 
     from .algorithms import horizon as hz
     from .geometry import Grid, normalize_azimuth, sun_rays
-    from .shadow import warm_up
+    from .shadow import choose_backend, warm_up
     from .io import check_output_path, write_raster
     from .report import Timer
 
@@ -239,19 +260,29 @@ def horizon(dem, output, azimuth, method, sample_spacing, threads, overwrite, qu
         raise click.UsageError("--sample-spacing applies to --method scan only")
     if threads is not None:
         numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+    ran_on = choose_backend(backend, "horizon", {"method": method})
     with timer("read"):
         d = _read(dem, **read_opts)
     stats: dict = {}
     with timer("prepare"):  # numba compilation on a first run
         rays = sun_rays(d.grid, az, 45.0)   # the elevation does not enter the angles
-        warm_up("horizon", d.grid, az, 45.0, method=method, sample_spacing=sample_spacing)
-        hz.horizon_angles(np.zeros((4, 4), np.float32),
-                          sun_rays(Grid.uniform(4, 4, *d.grid.centre_spacing(), d.grid.col_sign,
-                                                d.grid.row_sign), az, 45.0),
-                          method=method, sample_spacing=sample_spacing)
+        small = sun_rays(Grid.uniform(4, 4, *d.grid.centre_spacing(), d.grid.col_sign,
+                                      d.grid.row_sign), az, 45.0)
+        if ran_on == "gpu":
+            from .gpu import GpuDem
+            hz.horizon_angles_gpu(GpuDem(np.eye(4, dtype=np.float32)), small, method,
+                                  sample_spacing)
+            gpu_dem = GpuDem(d.heights)
+        else:
+            warm_up("horizon", d.grid, az, 45.0, method=method, sample_spacing=sample_spacing)
+            hz.horizon_angles(np.zeros((4, 4), np.float32), small, method=method,
+                              sample_spacing=sample_spacing)
     with timer("compute"):
-        beta = hz.horizon_angles(d.heights, rays, method=method, sample_spacing=sample_spacing,
-                                 stats=stats)
+        if ran_on == "gpu":
+            beta = hz.horizon_angles_gpu(gpu_dem, rays, method, sample_spacing)
+        else:
+            beta = hz.horizon_angles(d.heights, rays, method=method,
+                                     sample_spacing=sample_spacing, stats=stats)
         beta[np.isnan(beta)] = -9999.0
     tags = {"HILLSHADE_RT_VERSION": __version__, "AZIMUTH": az, "METHOD": method,
             "SAMPLE_SPACING": sample_spacing, "UNITS": "degrees above the horizontal"}
@@ -259,8 +290,8 @@ def horizon(dem, output, azimuth, method, sample_spacing, threads, overwrite, qu
         write_raster(output, beta, d, nodata=-9999.0, description="horizon angle", tags=tags)
     if not quiet:
         rows, cols = d.shape
-        click.echo(f"hillshade-rt: {output}: {cols}x{rows}, horizon toward az {az:g} ({method}), "
-                   f"compute {timer.seconds['compute']:.3f} s", err=True)
+        click.echo(f"hillshade-rt: {output}: {cols}x{rows}, horizon toward az {az:g} ({method}, "
+                   f"{ran_on}), compute {timer.seconds['compute']:.3f} s", err=True)
         if stats.get("note"):
             click.echo(f"hillshade-rt: note: {stats['note']}", err=True)
 

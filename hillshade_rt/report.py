@@ -43,10 +43,13 @@ def mask_stats(mask: np.ndarray) -> dict:
 def build_report(*, dem, output: str, azimuth: float, elevation: float, algorithm: str,
                  backend: str, threads: int, seconds: dict, stats: dict,
                  height_range: tuple[float, float], options: dict | None = None,
-                 algorithm_stats: dict | None = None) -> dict:
+                 algorithm_stats: dict | None = None, backend_requested: str | None = None,
+                 gpu: dict | None = None) -> dict:
     """The report of one ``shadow`` run. Keys documented in docs/usage.md stay stable.
 
-    ``height_range`` is the (min, max) the run already computed: no second pass over the DEM."""
+    ``height_range`` is the (min, max) the run already computed: no second pass over the DEM.
+    ``gpu`` (GPU runs): device name, kernel milliseconds (CUDA events; None on the simulator),
+    transfer milliseconds, host->device and device->host bytes."""
     rows, cols = dem.shape
     dx, dy = dem.grid.centre_spacing()
     compute = seconds.get("compute", 0.0)
@@ -63,6 +66,8 @@ def build_report(*, dem, output: str, azimuth: float, elevation: float, algorith
         "algorithm_options": dict(options or {}),
         "algorithm_stats": dict(algorithm_stats or {}),
         "backend": backend,
+        "backend_requested": backend_requested or backend,
+        "gpu": dict(gpu) if gpu else None,
         "threads": threads,
         "seconds": {k: seconds.get(k, 0.0) for k in ("read", "prepare", "compute", "write", "total")},
         "mpix_per_s": (rows * cols / 1e6 / compute) if compute > 0 else None,
@@ -80,9 +85,16 @@ def summary_line(report: dict) -> str:
     rows, cols = report["shape"]
     frac = report["shadow_fraction"]
     mpx = report["mpix_per_s"]
+    gpu = report.get("gpu")
+    if gpu:
+        kms = gpu.get("kernel_ms")
+        where = (f"{report['algorithm']}/gpu ({gpu['device']}"
+                 + (f", kernels {kms:.2f} ms" if kms is not None else "") + ")")
+    else:
+        where = f"{report['algorithm']}/{report['backend']} x{report['threads']}"
     return (f"hillshade-rt: {report['output']}: {cols}x{rows}, sun az {report['sun']['azimuth']:g} "
-            f"el {report['sun']['elevation']:g}, {report['algorithm']}/{report['backend']} "
-            f"x{report['threads']}: {100 * frac:.2f}% of valid cells in shadow; "
+            f"el {report['sun']['elevation']:g}, {where}: "
+            f"{100 * frac:.2f}% of valid cells in shadow; "
             f"compute {report['seconds']['compute']:.3f} s"
             + (f" ({mpx:.1f} Mpix/s)" if mpx else "")
             + f", total {report['seconds']['total']:.2f} s")

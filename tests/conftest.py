@@ -2,6 +2,11 @@ import math
 import os
 import warnings
 
+# GPU kernels run through numba's CUDA simulator unless the caller says otherwise: on a machine
+# with a GPU, `NUMBA_ENABLE_CUDASIM=0 make test` runs the same tests on the device. Set before
+# anything imports numba (it reads the variable once).
+os.environ.setdefault("NUMBA_ENABLE_CUDASIM", "1")
+
 import numpy as np
 import pytest
 

@@ -14,9 +14,26 @@ import numpy as np
 from numba import njit, prange
 
 from ..geometry import SunRays
+from ..gpu import cuda, kernel
 from .raymath import ray_is_blocked
 
 NODATA = np.uint8(255)
+
+
+@njit(cache=True)
+def _brute_cell(z, r, c, dom_col, step_dom, step_other, rise, zmax, out, only):
+    """Decide cell (r, c) (or, with only >= 0, leave it unless its code in ``out`` is ``only``).
+    Returns 1 when it decided the cell. The per-cell body of both backends."""
+    if only >= 0 and out[r, c] != only:
+        return 0
+    if math.isnan(z[r, c]):
+        out[r, c] = 255
+    elif ray_is_blocked(z, r, c, dom_col[r] != 0, np.int64(step_dom[r]), step_other[r], rise[r],
+                        zmax):
+        out[r, c] = 1
+    else:
+        out[r, c] = 0
+    return 1
 
 
 @njit(parallel=True, cache=True)
@@ -26,21 +43,19 @@ def _brute_cpu(z, dom_col, step_dom, step_other, rise, zmax, out, only):
     rows, cols = z.shape
     n = 0
     for r in prange(rows):
-        dc = dom_col[r] != 0
-        sd = np.int64(step_dom[r])
-        so = step_other[r]
-        ri = rise[r]
         for c in range(cols):
-            if only >= 0 and out[r, c] != only:
-                continue
-            n += 1
-            if math.isnan(z[r, c]):
-                out[r, c] = 255
-            elif ray_is_blocked(z, r, c, dc, sd, so, ri, zmax):
-                out[r, c] = 1
-            else:
-                out[r, c] = 0
+            n += _brute_cell(z, r, c, dom_col, step_dom, step_other, rise, zmax, out, only)
     return n
+
+
+@kernel
+def _brute_gpu(z, dom_col, step_dom, step_other, rise, zmax, out, only, count):
+    """CUDA twin of ``_brute_cpu``: one thread per cell; ``count[0]`` += cells decided when
+    ``only`` >= 0 (refinement)."""
+    c, r = cuda.grid(2)
+    if r < z.shape[0] and c < z.shape[1]:
+        if _brute_cell(z, r, c, dom_col, step_dom, step_other, rise, zmax, out, only) and only >= 0:
+            cuda.atomic.add(count, 0, 1)
 
 
 def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None,
@@ -65,3 +80,26 @@ def refine(z: np.ndarray, rays: SunRays, out: np.ndarray, code: int, zmax: float
     algorithms that flag the cells they are unsure of). Returns how many cells were refined."""
     return int(_brute_cpu(z, rays.dom_col, rays.step_dom, rays.step_other, rays.rise,
                           float(zmax), out, np.int64(code)))
+
+
+def shadow_mask_gpu(g, rays: SunRays, zmax: float, stats: dict | None = None) -> np.ndarray:
+    """``shadow_mask`` on the GPU: ``g`` is a ``gpu.GpuDem`` (heights already on the device)."""
+    dz = g.z
+    rows, cols = g.shape
+    dom_col, step_dom, step_other, rise, _ = g.rays(rays)
+    out = g.empty((rows, cols), np.uint8)
+    with g.timed():
+        g.launch(_brute_gpu, rows, cols, dz, dom_col, step_dom, step_other, rise, float(zmax), out,
+                 np.int64(-1), g.empty(1, np.int64))
+    return g.download(out)
+
+
+def refine_gpu(g, rays_d, out, code: int, zmax: float) -> int:
+    """``refine`` on the GPU (inside the caller's ``g.timed()``): ``rays_d`` from ``g.rays``,
+    ``out`` a device mask. Returns how many cells were refined."""
+    rows, cols = g.shape
+    count = g.upload(np.zeros(1, np.int64))
+    dom_col, step_dom, step_other, rise, _ = rays_d
+    g.launch(_brute_gpu, rows, cols, g.z, dom_col, step_dom, step_other, rise, float(zmax), out,
+             np.int64(code), count)
+    return int(g.download(count)[0])

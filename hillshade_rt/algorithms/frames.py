@@ -19,8 +19,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from ..geometry import SunRays
+from ..gpu import cuda, kernel
 
 
 @dataclass(frozen=True)
@@ -59,3 +61,33 @@ def frame_of(rays: SunRays, row: int = 0) -> Frame:
     so = float(rays.step_other[row])
     return Frame(dom_col=dom_col, flip_line=sd < 0, flip_pos=so < 0, s=abs(so), so=so, sd=sd,
                  rise=float(rays.rise[row]), step_m=float(rays.step_m[row]))
+
+
+@njit(cache=True)
+def dem_index(v, p, L, P, dom_col, flip_line, flip_pos):
+    """(row, col) of the DEM cell at canonical (line v, position p) of an L x P canonical grid."""
+    line = L - 1 - v if flip_line else v
+    pos = P - 1 - p if flip_pos else p
+    if dom_col:
+        return pos, line
+    return line, pos
+
+
+@kernel
+def to_canonical_gpu(z, dom_col, flip_line, flip_pos, Zc):
+    """Zc (L x P, contiguous) = ``Frame.view(z)``: the GPU's copy in canonical order."""
+    p, v = cuda.grid(2)
+    L, P = Zc.shape
+    if v < L and p < P:
+        r, c = dem_index(v, p, L, P, dom_col, flip_line, flip_pos)
+        Zc[v, p] = z[r, c]
+
+
+@kernel
+def from_canonical_gpu(Oc, dom_col, flip_line, flip_pos, out):
+    """The inverse: out (DEM-shaped) from Oc in canonical order."""
+    p, v = cuda.grid(2)
+    L, P = Oc.shape
+    if v < L and p < P:
+        r, c = dem_index(v, p, L, P, dom_col, flip_line, flip_pos)
+        out[r, c] = Oc[v, p]

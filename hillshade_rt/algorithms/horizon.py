@@ -35,7 +35,8 @@ from numba import njit, prange
 
 from ..geometry import SunRays
 from .frames import frame_of, uniform_rays
-from .raymath import line_position, terrain_on_line
+from ..gpu import cuda, kernel
+from .raymath import line_position, ray_origin, ray_sample, terrain_on_line
 
 METHODS = ("scan", "hull")
 
@@ -45,14 +46,8 @@ def _scan_cell(z, r, c, dom_col, sd, so, sp, zmax, rise, decide):
     """Max of (T_k - h0) / k over the samples k = sp, 2sp, ... (-inf if none).
 
     decide: stop as soon as the result is known relative to ``rise`` (mask mode)."""
-    rows, cols = z.shape
-    r = np.int64(r)
-    c = np.int64(c)
-    h0 = float(z[r, c])
-    if dom_col:
-        line0, other0, n_dom, n_oth = c, r, cols, rows
-    else:
-        line0, other0, n_dom, n_oth = r, c, rows, cols
+    line0, other0, n_dom, n_oth = ray_origin(z, r, c, dom_col)
+    h0 = float(z[np.int64(r), np.int64(c)])
     best = -np.inf
     k = sp
     while True:
@@ -60,13 +55,9 @@ def _scan_cell(z, r, c, dom_col, sd, so, sp, zmax, rise, decide):
             break
         if decide and zmax - h0 <= rise * k:  # nothing ahead can reach the sun's elevation
             break
-        line = line0 + k * sd
-        if line < 0 or line >= n_dom:
+        inside, t = ray_sample(z, dom_col, line0, other0, n_dom, n_oth, k, sd, so)
+        if not inside:
             break
-        pos = line_position(other0 + k * so, n_oth)
-        if pos < 0.0:
-            break
-        t = terrain_on_line(z, dom_col, line, pos)
         if t - h0 > best * k:   # NaN (void) compares false: skipped
             best = (t - h0) / k
             if decide and best > rise:
@@ -75,27 +66,43 @@ def _scan_cell(z, r, c, dom_col, sd, so, sp, zmax, rise, decide):
     return best
 
 
+@njit(cache=True)
+def _scan_write(z, r, c, dom_col, step_dom, step_other, rise, step_m, sp, zmax, want_mask, mask,
+                beta):
+    """Cell (r, c) of the scan: its mask code (want_mask) or its angle β in degrees. The per-cell
+    body of both backends."""
+    if math.isnan(z[r, c]):
+        if want_mask:
+            mask[r, c] = 255
+        else:
+            beta[r, c] = np.nan
+        return
+    ri = rise[r]
+    t = _scan_cell(z, r, c, dom_col[r] != 0, np.int64(step_dom[r]), step_other[r], sp, zmax, ri,
+                   want_mask)
+    if want_mask:
+        mask[r, c] = 1 if t > ri else 0
+    else:
+        beta[r, c] = -90.0 if t == -np.inf else math.degrees(math.atan(t / step_m[r]))
+
+
 @njit(parallel=True, cache=True)
 def _scan_kernel(z, dom_col, step_dom, step_other, rise, step_m, sp, zmax, want_mask, mask,
                  beta):
     rows, cols = z.shape
     for r in prange(rows):
-        dc = dom_col[r] != 0
-        sd = np.int64(step_dom[r])
-        so = step_other[r]
-        ri = rise[r]
         for c in range(cols):
-            if math.isnan(z[r, c]):
-                if want_mask:
-                    mask[r, c] = 255
-                else:
-                    beta[r, c] = np.nan
-                continue
-            t = _scan_cell(z, r, c, dc, sd, so, sp, zmax, ri, want_mask)
-            if want_mask:
-                mask[r, c] = 1 if t > ri else 0
-            else:
-                beta[r, c] = -90.0 if t == -np.inf else math.degrees(math.atan(t / step_m[r]))
+            _scan_write(z, r, c, dom_col, step_dom, step_other, rise, step_m, sp, zmax, want_mask,
+                        mask, beta)
+
+
+@kernel
+def _scan_gpu(z, dom_col, step_dom, step_other, rise, step_m, sp, zmax, want_mask, mask, beta):
+    """CUDA twin of ``_scan_kernel``: one thread per cell."""
+    c, r = cuda.grid(2)
+    if r < z.shape[0] and c < z.shape[1]:
+        _scan_write(z, r, c, dom_col, step_dom, step_other, rise, step_m, sp, zmax, want_mask,
+                    mask, beta)
 
 
 @njit(cache=True)
@@ -244,3 +251,37 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None, stats: 
     _scan_kernel(z, rays.dom_col, rays.step_dom, rays.step_other, rays.rise, rays.step_m,
                  np.int64(sample_spacing), float(zmax), True, out, np.empty((1, 1), np.float32))
     return out
+
+
+def _scan_gpu_run(g, rays, sample_spacing, zmax, want_mask):
+    rows, cols = g.shape
+    dom_col, step_dom, step_other, rise, step_m = g.rays(rays)
+    dummy = g.empty((1, 1), np.float32 if want_mask else np.uint8)
+    out = g.empty((rows, cols), np.uint8 if want_mask else np.float32)
+    args = (out, dummy) if want_mask else (dummy, out)
+    with g.timed():
+        g.launch(_scan_gpu, rows, cols, g.z, dom_col, step_dom, step_other, rise, step_m,
+                 np.int64(sample_spacing), float(zmax), want_mask, *args)
+    return g.download(out)
+
+
+def _gpu_method(method, sample_spacing, rays):
+    from ..errors import HillshadeError
+    _check(method, sample_spacing, rays)
+    if method == "hull":
+        raise HillshadeError("the hull method has no GPU kernel (its per-line hulls are as long "
+                             "as a line): use the scan, or the CPU backend")
+
+
+def shadow_mask_gpu(g, rays: SunRays, zmax: float, stats: dict | None = None, method: str = "scan",
+                    sample_spacing: int = 1) -> np.ndarray:
+    """``shadow_mask`` on the GPU (``g``: a ``gpu.GpuDem``); the scan only."""
+    _gpu_method(method, sample_spacing, rays)
+    return _scan_gpu_run(g, rays, sample_spacing, zmax, True)
+
+
+def horizon_angles_gpu(g, rays: SunRays, method: str = "scan", sample_spacing: int = 1,
+                       stats: dict | None = None) -> np.ndarray:
+    """``horizon_angles`` on the GPU (float32 degrees, NaN on voids, -90 nothing ahead)."""
+    _gpu_method(method, sample_spacing, rays)
+    return _scan_gpu_run(g, rays, sample_spacing, g.zmax, False)

@@ -1,9 +1,14 @@
 """Per-ray arithmetic of the terrain model, written once as plain Python functions.
 
 Every algorithm and backend uses these. They are ``njit`` functions, so CPU kernels call them
-directly; their plain source stays available as ``.py_func`` for a GPU backend to compile with
-``numba.cuda.jit(device=True)`` (numba-cuda also calls ``njit`` functions from kernels). Keep them
-free of anything a CUDA device function cannot do (no allocation, no exceptions, no Python objects).
+directly; ``hillshade_rt.gpu`` compiles the same source (``.py_func``) with
+``numba.cuda.jit(device=True)`` for the CUDA kernels. Keep them free of anything a CUDA device
+function cannot do (no allocation, no exceptions, no Python objects).
+
+A multiply followed by an add is written ``madd(a, b, c)``: CUDA compilers fuse ``a + b * c`` into
+one fused multiply-add (one rounding instead of two), which would make GPU samples differ from the
+CPU's in the last bit and, on a tie, flip a cell. The GPU build swaps ``madd`` for libdevice's
+``dadd_rn(a, dmul_rn(b, c))``, which is never fused, so both backends round alike.
 
 The model (docs/model.md): a ray leaves the centre of a cell toward the sun and is sampled where it
 crosses the grid lines of its dominant axis; on such a line the terrain height is linearly
@@ -18,6 +23,12 @@ from numba import njit
 # A position within EDGE_EPS of the first or last cell centre of a line counts as on it: this
 # absorbs the rounding of ``start + k * step`` without changing the model.
 EDGE_EPS = 1e-9
+
+
+@njit(cache=True)
+def madd(a, b, c):
+    """``a + b * c`` with the product rounded before the sum (never fused; see above)."""
+    return a + b * c
 
 
 @njit(cache=True)
@@ -59,7 +70,33 @@ def terrain_on_line(z, dom_col, line, pos):
             return a
         b = float(z[line, i0 + 1])
     # a + f*(b-a) is exact when a == b (flat tops stay flat)
-    return a + f * (b - a)
+    return madd(a, f, b - a)
+
+
+@njit(cache=True)
+def ray_origin(z, r, c, dom_col):
+    """(line0, other0, n_dom, n_oth) of the ray from cell (r, c): its grid line and its position
+    on that line, and how many lines and positions the raster has along the ray's axes."""
+    rows, cols = z.shape
+    r = np.int64(r)  # prange / grid indices may be unsigned; mixing them with int64 gives floats
+    c = np.int64(c)
+    if dom_col:
+        return c, r, np.int64(cols), np.int64(rows)
+    return r, c, np.int64(rows), np.int64(cols)
+
+
+@njit(cache=True)
+def ray_sample(z, dom_col, line0, other0, n_dom, n_oth, k, step_dom, step_other):
+    """(inside, T): the model's k-th sample of the ray from ``ray_origin``; inside is False when
+    that sample lies outside the raster (the ray has left it; T is then meaningless). T is NaN on
+    a void."""
+    line = line0 + k * step_dom
+    if line < 0 or line >= n_dom:
+        return False, 0.0
+    pos = line_position(madd(float(other0), float(k), step_other), n_oth)
+    if pos < 0.0:
+        return False, 0.0
+    return True, terrain_on_line(z, dom_col, line, pos)
 
 
 @njit(cache=True)
@@ -70,26 +107,16 @@ def ray_is_blocked(z, r, c, dom_col, step_dom, step_other, rise, zmax):
     to ``zmax`` (the highest cell), above which nothing can block it. Heights in float64, the k-th
     sample computed as ``h0 + k * rise`` (no accumulated drift).
     """
-    rows, cols = z.shape
-    r = np.int64(r)  # prange indices may be unsigned; mixing them with int64 would give floats
-    c = np.int64(c)
-    h0 = float(z[r, c])
-    if dom_col:
-        line0, other0, n_dom, n_oth = c, r, cols, rows
-    else:
-        line0, other0, n_dom, n_oth = r, c, rows, cols
+    line0, other0, n_dom, n_oth = ray_origin(z, r, c, dom_col)
+    h0 = float(z[np.int64(r), np.int64(c)])
     k = 1
     while True:
-        hr = h0 + k * rise
+        hr = madd(h0, float(k), rise)
         if hr >= zmax:
             return False
-        line = line0 + k * step_dom
-        if line < 0 or line >= n_dom:
+        inside, t = ray_sample(z, dom_col, line0, other0, n_dom, n_oth, k, step_dom, step_other)
+        if not inside:
             return False
-        pos = line_position(other0 + k * step_other, n_oth)
-        if pos < 0.0:
-            return False
-        if terrain_on_line(z, dom_col, line, pos) > hr:
+        if t > hr:
             return True
         k += 1
-

@@ -53,7 +53,8 @@ from numba import njit, prange
 from ..errors import HillshadeError
 from ..geometry import Grid, SunRays, heights_and_grid, sun_rays
 from .frames import Frame, frame_of, uniform_rays
-from .raymath import line_position, terrain_on_line
+from ..gpu import cuda, kernel
+from .raymath import line_position, madd, ray_origin, terrain_on_line
 
 WIDEN = 1e-6        # beams are widened by this much (cells) on both sides
 _BLOCK = 256        # elements per parallel work item in the Black pass
@@ -303,33 +304,56 @@ def _is_black_fast(Z, v, e, rise, tol, npc, oc, op, on, fr, has_prev, has_next):
 
 
 @njit(parallel=True, cache=True)
-def _colour_pass(Z, s, rise, tol, frac, J):
-    """J[v, e] = -2 - (v + 1) for Black elements (next line to examine: v + 1), -1 for White."""
+def _pieces_table(s, frac):
+    """``_line_pieces`` of every line: (npc[L], oc, op, on [L, 7], fr [L, 7, 6]). Small (L x 43
+    numbers); shared by every element of a line, on either backend."""
+    L = frac.shape[0]
+    npc = np.zeros(L, np.int64)
+    oc = np.zeros((L, 7), np.int64)
+    op = np.zeros((L, 7), np.int64)
+    on = np.zeros((L, 7), np.int64)
+    fr = np.zeros((L, 7, 6))
+    for v in prange(L):
+        npc[v] = _line_pieces(s, frac[v], oc[v], op[v], on[v], fr[v])
+    return npc, oc, op, on, fr
+
+
+@njit(cache=True)
+def _colour(Z, v, e, s, rise, tol, frac, npc, oc, op, on, fr, bp, J):
+    """J[v, e] = -2 - (v + 1) for a Black element (next line to examine: v + 1), -1 for White.
+    The per-element body of both backends; ``bp`` is scratch for 8 break points."""
+    L = Z.shape[0]
+    if v == 0:          # no ray samples the line farthest from the sun
+        J[v, e] = -1
+        return
+    has_next = v < L - 1
+    c = _is_black_fast(Z, v, e, rise, tol, npc[v], oc[v], op[v], on[v], fr[v], True, has_next)
+    if c < 0:
+        c = 1 if _is_black(Z, v, e, s, frac[v], rise, tol, bp) else 0
+    J[v, e] = -2 - (v + 1) if c == 1 else -1
+
+
+@njit(parallel=True, cache=True)
+def _colour_pass(Z, s, rise, tol, frac, pieces, J):
     L, P = Z.shape
     E = P + 2
+    npc, oc, op, on, fr = pieces
     nblk = (E + _BLOCK - 1) // _BLOCK
     for item in prange(L * nblk):
         v = item // nblk
         blk = item % nblk
-        e0 = blk * _BLOCK
-        e1 = min(E, (blk + 1) * _BLOCK)
-        if v == 0:          # no ray samples the line farthest from the sun
-            for e in range(e0, e1):
-                J[v, e] = -1
-            continue
         bp = np.empty(8)
-        oc = np.empty(7, np.int64)
-        op = np.empty(7, np.int64)
-        on = np.empty(7, np.int64)
-        fr = np.empty((7, 6))
-        fv = frac[v]
-        npc = _line_pieces(s, fv, oc, op, on, fr)
-        has_next = v < L - 1
-        for e in range(e0, e1):
-            c = _is_black_fast(Z, v, e, rise, tol, npc, oc, op, on, fr, True, has_next)
-            if c < 0:
-                c = 1 if _is_black(Z, v, e, s, fv, rise, tol, bp) else 0
-            J[v, e] = -2 - (v + 1) if c == 1 else -1
+        for e in range(blk * _BLOCK, min(E, (blk + 1) * _BLOCK)):
+            _colour(Z, v, e, s, rise, tol, frac, npc, oc, op, on, fr, bp, J)
+
+
+@kernel
+def _colour_gpu(Z, s, rise, tol, frac, npc, oc, op, on, fr, J):
+    """CUDA twin of ``_colour_pass``: one thread per SMap element."""
+    e, v = cuda.grid(2)
+    if v < J.shape[0] and e < J.shape[1]:
+        bp = cuda.local.array(8, np.float64)
+        _colour(Z, v, e, s, rise, tol, frac, npc, oc, op, on, fr, bp, J)
 
 
 # ------------------------------------------------------------------------------------------
@@ -405,6 +429,26 @@ def _nextv_doubling(J, shift, quad):
                 J[lines[t], elems[t]] = lines[nx[t]] if nx[t] >= 0 else -1
 
 
+@kernel
+def _nextv_pass_gpu(J, shift, dist):
+    """One pass of the paper's log-step NextV search on the GPU (DIST = 1, 2, 4, ...), over all
+    elements at once. Blocks are aligned on t = L-1-v for every beam (a beam's elements are a run
+    of consecutive lines, so a block start outside the beam only means nothing lies beyond).
+    A White element of an odd DIST-block whose NextV is unknown (-1) looks at the last element
+    of the block before it: that element's line if it is Black, else its NextV. Writes go to odd
+    blocks, reads to even ones: no races. Same table as ``_nextv_scan`` (tests)."""
+    e, v = cuda.grid(2)
+    L, E = J.shape
+    if v < L and e < E and J[v, e] == -1:
+        t = L - 1 - v
+        if (t // dist) % 2 == 1:
+            vk = L - 1 - (t - t % dist - 1)
+            ek = e + shift[vk] - shift[v]
+            if ek >= 0 and ek < E:
+                j = J[vk, ek]
+                J[v, e] = vk if j <= -2 else j
+
+
 @njit(cache=True)
 def _bounds(Z, v, e, fv, rise):
     """(min, max) of the cells under the widened cross-section, minus the ray rise to line v.
@@ -467,24 +511,18 @@ def _nextv_better(Z, J, frac, shift, rise, tol):
 
 @njit(cache=True)
 def _cell_blocked(z, J, frac, r, c, dom_col, sd, so, rise, flip_line, flip_pos, zmax):
-    rows, cols = z.shape
-    r = np.int64(r)
-    c = np.int64(c)
-    if dom_col:
-        line0, other0, n_dom, n_oth = c, r, cols, rows
-    else:
-        line0, other0, n_dom, n_oth = r, c, rows, cols
-    h0 = float(z[r, c])
+    line0, other0, n_dom, n_oth = ray_origin(z, r, c, dom_col)
+    h0 = float(z[np.int64(r), np.int64(c)])
     v0 = n_dom - 1 - line0 if flip_line else line0
     k = 1
     while True:
         v = v0 + k
         if v >= n_dom:
             return False
-        hr = h0 + k * rise
+        hr = madd(h0, float(k), rise)
         if hr >= zmax:
             return False
-        pos = line_position(other0 + k * so, n_oth)
+        pos = line_position(madd(float(other0), float(k), so), n_oth)
         if pos < 0.0:
             return False
         p = (n_oth - 1) - pos if flip_pos else pos
@@ -499,17 +537,30 @@ def _cell_blocked(z, J, frac, r, c, dom_col, sd, so, rise, flip_line, flip_pos, 
         k += (-2 - j) - v      # Black, not blocked here: go on after it
 
 
+@njit(cache=True)
+def _mask_cell(z, J, frac, r, c, dom_col, sd, so, rise, flip_line, flip_pos, zmax, out):
+    if math.isnan(z[r, c]):
+        out[r, c] = 255
+    elif _cell_blocked(z, J, frac, r, c, dom_col, sd, so, rise, flip_line, flip_pos, zmax):
+        out[r, c] = 1
+    else:
+        out[r, c] = 0
+
+
 @njit(parallel=True, cache=True)
 def _mask_kernel(z, J, frac, dom_col, sd, so, rise, flip_line, flip_pos, zmax, out):
     rows, cols = z.shape
     for r in prange(rows):
         for c in range(cols):
-            if math.isnan(z[r, c]):
-                out[r, c] = 255
-            elif _cell_blocked(z, J, frac, r, c, dom_col, sd, so, rise, flip_line, flip_pos, zmax):
-                out[r, c] = 1
-            else:
-                out[r, c] = 0
+            _mask_cell(z, J, frac, r, c, dom_col, sd, so, rise, flip_line, flip_pos, zmax, out)
+
+
+@kernel
+def _mask_gpu(z, J, frac, dom_col, sd, so, rise, flip_line, flip_pos, zmax, out):
+    """CUDA twin of ``_mask_kernel``: one thread per cell."""
+    c, r = cuda.grid(2)
+    if r < z.shape[0] and c < z.shape[1]:
+        _mask_cell(z, J, frac, r, c, dom_col, sd, so, rise, flip_line, flip_pos, zmax, out)
 
 
 @njit(parallel=True, cache=True)
@@ -615,7 +666,7 @@ class SMap:
             return
         zabs = float(np.nanmax(np.abs(z)))
         self.tol = 1e-7 * (1.0 + zabs + f.rise)
-        _colour_pass(self.Z, f.s, f.rise, self.tol, self.frac, self.J)
+        _colour_pass(self.Z, f.s, f.rise, self.tol, self.frac, _pieces_table(f.s, self.frac), self.J)
         self.black_fraction = float(np.count_nonzero(self.J <= -2)) / (L * P)
         if better_nextv:
             _nextv_better(self.Z, self.J, self.frac, self.shift, f.rise, self.tol)
@@ -685,3 +736,47 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None, stats: 
         stats["black_fraction"] = sm.black_fraction
         stats["smap_bytes"] = int(sm.J.nbytes)
     return sm.mask()
+
+
+def shadow_mask_gpu(g, rays: SunRays, zmax: float, stats: dict | None = None, nextv: str = "scan",
+                    better_nextv: bool = False) -> np.ndarray:
+    """``shadow_mask`` on the GPU (``g``: a ``gpu.GpuDem``): the Black pass, the NextV doubling
+    passes and the per-cell jump loop, each one kernel over all elements or cells. NextV is
+    always built by doubling here (the same table as every ``nextv`` method; ``better_nextv``
+    has no GPU kernel and is refused by the caller)."""
+    if nextv not in NEXTV_METHODS:
+        raise HillshadeError(f"nextv must be one of {', '.join(NEXTV_METHODS)}, got {nextv!r}")
+    if better_nextv:
+        raise HillshadeError("--better-nextv runs on the CPU only (use --backend cpu)")
+    from . import brute
+    if not uniform_rays(rays):
+        if stats is not None:
+            stats["note"] = ("ray direction varies per row (geographic CRS): smap marched every "
+                             "cell's ray like brute (same result, brute's speed)")
+        return brute.shadow_mask_gpu(g, rays, zmax)
+    f = frame_of(rays)
+    rows, cols = g.shape
+    L, P = (cols, rows) if f.dom_col else (rows, cols)
+    if not (math.isfinite(zmax) and math.isfinite(f.rise)):   # sun at the zenith: no shadow
+        return brute.shadow_mask_gpu(g, rays, zmax)
+    sv = f.s * np.arange(L, dtype=np.float64)
+    shift = np.floor(sv).astype(np.int64)
+    frac = sv - shift
+    zabs = max(abs(g.zmin), abs(g.zmax))
+    tol = 1e-7 * (1.0 + zabs + f.rise)
+    tables = [g.upload(a) for a in (frac, shift) + _pieces_table(f.s, frac)]
+    d_frac, d_shift, npc, oc, op, on, fr = tables
+    J = g.empty((L, P + 2), np.int32)
+    out = g.empty((rows, cols), np.uint8)
+    with g.timed():
+        Zc = g.canonical(f)
+        g.launch(_colour_gpu, L, P + 2, Zc, f.s, f.rise, tol, d_frac, npc, oc, op, on, fr, J)
+        dist = 1
+        while dist < L:
+            g.launch(_nextv_pass_gpu, L, P + 2, J, d_shift, np.int64(dist))
+            dist *= 2
+        g.launch(_mask_gpu, rows, cols, g.z, J, d_frac, f.dom_col, np.int64(f.sd), f.so, f.rise,
+                 f.flip_line, f.flip_pos, float(zmax), out)
+    if stats is not None:
+        stats["smap_bytes"] = int(L * (P + 2) * 4)
+    return g.download(out)

@@ -64,6 +64,7 @@ from numba import njit, prange
 from ..geometry import SunRays
 from . import brute
 from .frames import frame_of, uniform_rays
+from ..gpu import cuda, kernel
 from .raymath import line_position, terrain_on_line
 
 EXACT_STEPS = 8   # samples marched exactly before the stored values are used
@@ -347,6 +348,21 @@ def _sweep_uniform(z, Z, dom_col, flip_line, flip_pos, s, rise, K, nstrips, void
                              s, rise, K, out)
 
 
+@njit(cache=True)
+def _sweep_cell(Z, ring, wring, void, zfloor, zmax, v, p, s_arr, rise_arr, per_line, K, out):
+    """Canonical cell (v, p) with its own row's ray (``s_arr``/``rise_arr`` indexed by line or
+    by position): S and W into the rings, the code into ``out``. The per-cell body of both
+    backends."""
+    v = np.int64(v)   # prange / grid indices may be unsigned; keep integer arithmetic integral
+    p = np.int64(p)
+    i = v if per_line else p
+    S, lo, hi, w = _march_cell(Z, ring, wring, void, zfloor, zmax, v, p, s_arr[i], rise_arr[i], K)
+    row = v % ring.shape[0]
+    ring[row, p] = S
+    wring[row, p] = w
+    out[v, p] = _decide(S, lo, hi, Z[v, p])
+
+
 @njit(parallel=True, cache=True)
 def _sweep_kernel(Z, s_arr, rise_arr, per_line, K, void, zfloor, zmax, out):
     """Rays that differ from row to row (geographic CRS): lines from the sun's edge, the cells of
@@ -355,15 +371,20 @@ def _sweep_kernel(Z, s_arr, rise_arr, per_line, K, void, zfloor, zmax, out):
     RS = np.full((2, K + 1, P), -np.inf)
     ring, wring = RS[0], RS[1]
     for v in range(L - 1, -1, -1):
-        row = v % (K + 1)
-        for pp in prange(P):
-            p = np.int64(pp)   # prange indices may be unsigned; keep integer arithmetic integral
-            i = np.int64(v) if per_line else p
-            S, lo, hi, w = _march_cell(Z, ring, wring, void, zfloor, zmax, v, p, s_arr[i],
-                                       rise_arr[i], K)
-            ring[row, p] = S
-            wring[row, p] = w
-            out[v, p] = _decide(S, lo, hi, Z[v, p])
+        for p in prange(P):
+            _sweep_cell(Z, ring, wring, void, zfloor, zmax, v, p, s_arr, rise_arr, per_line, K, out)
+
+
+@kernel
+def _sweep_gpu(Z, ring, wring, void, zfloor, zmax, v_top, nlines, s_arr, rise_arr, per_line, K,
+               out):
+    """CUDA: lines v_top, ..., v_top - nlines + 1 (nlines <= K) at once, one thread per cell. A
+    line reads the stored S of the line K before it only, so K consecutive lines are independent;
+    the rings hold 2K lines (those written, those read)."""
+    p, i = cuda.grid(2)
+    if i < nlines and p < Z.shape[1]:
+        _sweep_cell(Z, ring, wring, void, zfloor, zmax, v_top - i, p, s_arr, rise_arr, per_line, K,
+                    out)
 
 
 def _per_cell_rays(rays: SunRays):
@@ -432,3 +453,44 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None,
     if stats is not None:
         stats["unsure_fraction"] = unsure / max(1, out.size)
     return out
+
+
+def shadow_mask_gpu(g, rays: SunRays, zmax: float, stats: dict | None = None,
+                    exact_steps: int = EXACT_STEPS) -> np.ndarray:
+    """``shadow_mask`` on the GPU (``g``: a ``gpu.GpuDem``): the per-cell form of the sweep, K
+    lines per launch from the sun's edge, then brute's exact kernel on the unsure cells. Same
+    codes as the CPU's line passes (the line pass equals ``_march_cell`` cell by cell)."""
+    from ..gpu import grid_2d
+    rows, cols = g.shape
+    if not math.isfinite(float(rays.rise[0])) or not math.isfinite(g.zmin):
+        return brute.shadow_mask_gpu(g, rays, zmax)   # sun at the zenith, or nothing but voids
+    K = max(1, int(exact_steps))
+    if uniform_rays(rays):
+        f = frame_of(rays)
+        s, rise, per_line = np.array([f.s]), np.array([f.rise]), True
+        L = cols if f.dom_col else rows
+        s, rise = np.repeat(s, L), np.repeat(rise, L)
+    else:
+        f, s, rise, per_line = _per_cell_rays(rays)
+    L, P = (cols, rows) if f.dom_col else (rows, cols)
+    d_s, d_rise = g.upload(s), g.upload(rise)
+    rays_d = g.rays(rays)
+    R = 2 * K
+    rings = g.upload(np.full((2, R, P), -np.inf))
+    outc = g.empty((L, P), np.uint8)
+    out = g.empty((rows, cols), np.uint8)
+    zfloor = g.zmin - 1.0
+    with g.timed():
+        Zc = g.canonical(f)
+        for v_top in range(L - 1, -1, -K):
+            n = min(K, v_top + 1)
+            blocks, threads = grid_2d(n, P, (128, 1))
+            _sweep_gpu[blocks, threads, g.stream](Zc, rings[0], rings[1], g.void, zfloor,
+                                                  float(zmax), np.int64(v_top), np.int64(n),
+                                                  d_s, d_rise, per_line, np.int64(K), outc)
+        from . import frames
+        g.launch(frames.from_canonical_gpu, L, P, outc, f.dom_col, f.flip_line, f.flip_pos, out)
+        unsure = brute.refine_gpu(g, rays_d, out, UNSURE, zmax)
+    if stats is not None:
+        stats["unsure_fraction"] = unsure / max(1, rows * cols)
+    return g.download(out)
