@@ -66,6 +66,12 @@ def _numba_cuda():
     return nc
 
 
+def _runtime():
+    """The module whose arrays, streams and events ``GpuDem`` uses (numba.cuda; a test that
+    compiles the kernels without a GPU puts a stand-in here)."""
+    return _numba_cuda()
+
+
 def _first_line(exc: BaseException) -> str:
     text = " ".join(str(exc).split())
     if text.startswith("Error at driver init"):
@@ -210,7 +216,7 @@ class GpuDem:
         ok, what = status()
         if not ok:
             raise HillshadeError(what)
-        self.cuda = nc = _numba_cuda()
+        self.cuda = _runtime()
         if z.dtype != np.float32 or z.ndim != 2:
             raise TypeError("heights must be a 2-D float32 array")
         if zrange is None:
@@ -221,7 +227,7 @@ class GpuDem:
         self.simulator = simulator_enabled()
         self.stats = {"device": what, "simulator": self.simulator, "kernel_ms": 0.0,
                       "transfer_ms": 0.0, "h2d_bytes": 0, "d2h_bytes": 0}
-        self.stream = nc.stream()
+        self.stream = self.cuda.stream()
         self._canon_key = None
         self._canon = None
         self._staging: dict = {}

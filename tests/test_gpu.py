@@ -260,3 +260,21 @@ def test_missing_numba_cuda_is_named(monkeypatch):
     monkeypatch.setattr(gpu, "_STATUS", [])
     ok, what = gpu.status()
     assert not ok and "numba-cuda is not installed" in what and "hillshade-rt[gpu]" in what
+
+
+def test_kernels_compile_for_a_real_gpu():
+    """The simulator does not type-check: compile every kernel, through the real drivers and with
+    the launches' own argument types, to PTX for an H100 (numba-cuda + NVVM, no GPU needed).
+    The exact decisions must contain no fused multiply-add (``raymath.madd``): with them the
+    GPU would round samples differently from the CPU. (The horizon kernel's FMAs are libdevice's
+    atan, on the angle output only; smap's Black pass compares with a tolerance.)"""
+    env = dict(os.environ, NUMBA_ENABLE_CUDASIM="0")
+    p = subprocess.run([sys.executable, os.path.join(os.path.dirname(__file__), "ptx_check.py")],
+                       capture_output=True, text=True, env=env)
+    assert p.returncode == 0, p.stderr[-3000:]
+    kernels = json.loads(p.stdout.strip().splitlines()[-1])
+    assert set(kernels) == {"_brute_gpu", "_mask_gpu", "_colour_gpu", "_nextv_pass_gpu",
+                            "_scan_gpu", "_sweep_gpu", "to_canonical_gpu", "from_canonical_gpu"}
+    assert all(k["ptx_bytes"] > 1000 for k in kernels.values())
+    for name in ("_brute_gpu", "_mask_gpu", "_sweep_gpu", "_nextv_pass_gpu"):
+        assert kernels[name]["fma"] == 0, name

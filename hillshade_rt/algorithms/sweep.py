@@ -65,7 +65,7 @@ from ..geometry import SunRays
 from . import brute
 from .frames import frame_of, uniform_rays
 from ..gpu import cuda, kernel
-from .raymath import line_position, terrain_on_line
+from .raymath import line_position, madd, terrain_on_line
 
 EXACT_STEPS = 8   # samples marched exactly before the stored values are used
 UNSURE = 2        # mask code of a cell left to the exact refinement pass
@@ -136,28 +136,29 @@ def _march_cell(Z, ring, wring, void, zfloor, zmax, v, p, s, rise, K):
     W = -np.inf
     k = 1
     march_on = False
-    while (k <= K or (march_on and zmax - k * rise > S)) and v + k < L:
-        x = line_position(p + k * s, P)
+    while (k <= K or (march_on and madd(zmax, -float(k), rise) > S)) and v + k < L:
+        x = line_position(madd(float(p), float(k), s), P)
         if x < 0.0:
             break
-        t = terrain_on_line(Z, False, v + k, x)
-        if t - k * rise > S:   # NaN (void) compares false
-            S = t - k * rise
+        # x - k*rise is written madd(x, -k, rise): the same number, never fused on a GPU
+        t = madd(terrain_on_line(Z, False, v + k, x), -float(k), rise)
+        if t > S:   # NaN (void) compares false
+            S = t
         if void:
-            w = _void_edge(Z[v + k], int(math.floor(x)), P) - k * rise
+            w = madd(_void_edge(Z[v + k], int(math.floor(x)), P), -float(k), rise)
             W = w if w > W else W
         if k == K:
             a, b, f = _stored_pair(ring, (v + k) % R, x)
             if (a == zfloor or b == zfloor) and h == h:
                 march_on = True
             else:
-                lo = max(S, min(a, b) - k * rise)
-                hi = max(S, max(a, b) - k * rise)
+                lo = max(S, madd(min(a, b), -float(k), rise))
+                hi = max(S, madd(max(a, b), -float(k), rise))
                 E = S
-                S = max(E, a + f * (b - a) - k * rise)
+                S = max(E, madd(madd(a, f, b - a), -float(k), rise))
                 if void:
                     wa, wb, _ = _stored_pair(wring, (v + k) % R, x)
-                    W = max(W, max(wa, wb) - k * rise)
+                    W = max(W, madd(max(wa, wb), -float(k), rise))
                     if W > h:
                         lo = E
                         hi = np.inf
