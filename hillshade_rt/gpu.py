@@ -339,8 +339,8 @@ class GpuDem:
             L, P = (cols, rows) if frame.dom_col else (rows, cols)
             self._canon = None
             zc = self.empty((L, P), np.float32)
-            self.launch(frames.to_canonical_gpu, L, P, self.z, frame.dom_col, frame.flip_line,
-                        frame.flip_pos, zc)
+            self.launch(frames.canonical_copy_gpu, L, P, self.z, zc, frame.dom_col,
+                        frame.flip_line, frame.flip_pos, True)
             self._canon, self._canon_key = zc, key
         return self._canon
 

@@ -274,7 +274,7 @@ def test_kernels_compile_for_a_real_gpu():
     assert p.returncode == 0, p.stderr[-3000:]
     kernels = json.loads(p.stdout.strip().splitlines()[-1])
     assert set(kernels) == {"_brute_gpu", "_mask_gpu", "_colour_gpu", "_nextv_pass_gpu",
-                            "_scan_gpu", "_sweep_gpu", "to_canonical_gpu", "from_canonical_gpu"}
+                            "_scan_gpu", "_sweep_gpu", "canonical_copy_gpu"}
     assert all(k["ptx_bytes"] > 1000 for k in kernels.values())
     for name in ("_brute_gpu", "_mask_gpu", "_sweep_gpu", "_nextv_pass_gpu"):
         assert kernels[name]["fma"] == 0, name

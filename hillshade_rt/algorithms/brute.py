@@ -20,16 +20,16 @@ from .raymath import ray_is_blocked
 NODATA = np.uint8(255)
 
 
-@njit(cache=True)
-def _brute_cell(z, r, c, dom_col, step_dom, step_other, rise, zmax, out, only):
-    """Decide cell (r, c) (or, with only >= 0, leave it unless its code in ``out`` is ``only``).
-    Returns 1 when it decided the cell. The per-cell body of both backends."""
+@njit(cache=True, inline="always")
+def _brute_cell(z, r, c, dc, sd, so, ri, zmax, out, only):
+    """Decide cell (r, c) whose row's ray is (dc, sd, so, ri) (or, with only >= 0, leave it
+    unless its code in ``out`` is ``only``). Returns 1 when it decided the cell. The per-cell
+    body of both backends."""
     if only >= 0 and out[r, c] != only:
         return 0
     if math.isnan(z[r, c]):
         out[r, c] = 255
-    elif ray_is_blocked(z, r, c, dom_col[r] != 0, np.int64(step_dom[r]), step_other[r], rise[r],
-                        zmax):
+    elif ray_is_blocked(z, r, c, dc, sd, so, ri, zmax):
         out[r, c] = 1
     else:
         out[r, c] = 0
@@ -43,8 +43,14 @@ def _brute_cpu(z, dom_col, step_dom, step_other, rise, zmax, out, only):
     rows, cols = z.shape
     n = 0
     for r in prange(rows):
+        dc = dom_col[r] != 0
+        sd = np.int64(step_dom[r])
+        so = step_other[r]
+        ri = rise[r]
         for c in range(cols):
-            n += _brute_cell(z, r, c, dom_col, step_dom, step_other, rise, zmax, out, only)
+            if only >= 0 and out[r, c] != only:   # (also in _brute_cell) a vectorised skip
+                continue
+            n += _brute_cell(z, r, c, dc, sd, so, ri, zmax, out, only)
     return n
 
 
@@ -54,7 +60,8 @@ def _brute_gpu(z, dom_col, step_dom, step_other, rise, zmax, out, only, count):
     ``only`` >= 0 (refinement)."""
     c, r = cuda.grid(2)
     if r < z.shape[0] and c < z.shape[1]:
-        if _brute_cell(z, r, c, dom_col, step_dom, step_other, rise, zmax, out, only) and only >= 0:
+        if _brute_cell(z, r, c, dom_col[r] != 0, np.int64(step_dom[r]), step_other[r], rise[r],
+                       zmax, out, only) and only >= 0:
             cuda.atomic.add(count, 0, 1)
 
 

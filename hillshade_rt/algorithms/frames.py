@@ -74,20 +74,14 @@ def dem_index(v, p, L, P, dom_col, flip_line, flip_pos):
 
 
 @kernel
-def to_canonical_gpu(z, dom_col, flip_line, flip_pos, Zc):
-    """Zc (L x P, contiguous) = ``Frame.view(z)``: the GPU's copy in canonical order."""
+def canonical_copy_gpu(dem, can, dom_col, flip_line, flip_pos, to_canonical):
+    """Copy between a DEM-shaped device array and its canonical-order twin ``can`` (L x P,
+    contiguous): to_canonical ``can = Frame.view(dem)``, else the inverse."""
     p, v = cuda.grid(2)
-    L, P = Zc.shape
+    L, P = can.shape
     if v < L and p < P:
         r, c = dem_index(v, p, L, P, dom_col, flip_line, flip_pos)
-        Zc[v, p] = z[r, c]
-
-
-@kernel
-def from_canonical_gpu(Oc, dom_col, flip_line, flip_pos, out):
-    """The inverse: out (DEM-shaped) from Oc in canonical order."""
-    p, v = cuda.grid(2)
-    L, P = Oc.shape
-    if v < L and p < P:
-        r, c = dem_index(v, p, L, P, dom_col, flip_line, flip_pos)
-        out[r, c] = Oc[v, p]
+        if to_canonical:
+            can[v, p] = dem[r, c]
+        else:
+            dem[r, c] = can[v, p]

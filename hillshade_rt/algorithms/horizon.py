@@ -66,7 +66,7 @@ def _scan_cell(z, r, c, dom_col, sd, so, sp, zmax, rise, decide):
     return best
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _scan_write(z, r, c, dom_col, step_dom, step_other, rise, step_m, sp, zmax, want_mask, mask,
                 beta):
     """Cell (r, c) of the scan: its mask code (want_mask) or its angle β in degrees. The per-cell

@@ -25,7 +25,7 @@ from numba import njit
 EDGE_EPS = 1e-9
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def madd(a, b, c):
     """``a + b * c`` with the product rounded before the sum (never fused; see above)."""
     return a + b * c

@@ -318,18 +318,19 @@ def _pieces_table(s, frac):
     return npc, oc, op, on, fr
 
 
-@njit(cache=True)
-def _colour(Z, v, e, s, rise, tol, frac, npc, oc, op, on, fr, bp, J):
+@njit(cache=True, inline="always")
+def _colour(Z, v, e, s, rise, tol, fv, npc, oc, op, on, fr, bp, J):
     """J[v, e] = -2 - (v + 1) for a Black element (next line to examine: v + 1), -1 for White.
-    The per-element body of both backends; ``bp`` is scratch for 8 break points."""
+    The per-element body of both backends: ``fv`` and the pieces are line v's (rows of
+    ``_pieces_table``); ``bp`` is scratch for 8 break points."""
     L = Z.shape[0]
     if v == 0:          # no ray samples the line farthest from the sun
         J[v, e] = -1
         return
     has_next = v < L - 1
-    c = _is_black_fast(Z, v, e, rise, tol, npc[v], oc[v], op[v], on[v], fr[v], True, has_next)
+    c = _is_black_fast(Z, v, e, rise, tol, npc, oc, op, on, fr, True, has_next)
     if c < 0:
-        c = 1 if _is_black(Z, v, e, s, frac[v], rise, tol, bp) else 0
+        c = 1 if _is_black(Z, v, e, s, fv, rise, tol, bp) else 0
     J[v, e] = -2 - (v + 1) if c == 1 else -1
 
 
@@ -343,8 +344,9 @@ def _colour_pass(Z, s, rise, tol, frac, pieces, J):
         v = item // nblk
         blk = item % nblk
         bp = np.empty(8)
+        fv, n, ocv, opv, onv, frv = frac[v], npc[v], oc[v], op[v], on[v], fr[v]
         for e in range(blk * _BLOCK, min(E, (blk + 1) * _BLOCK)):
-            _colour(Z, v, e, s, rise, tol, frac, npc, oc, op, on, fr, bp, J)
+            _colour(Z, v, e, s, rise, tol, fv, n, ocv, opv, onv, frv, bp, J)
 
 
 @kernel
@@ -353,7 +355,7 @@ def _colour_gpu(Z, s, rise, tol, frac, npc, oc, op, on, fr, J):
     e, v = cuda.grid(2)
     if v < J.shape[0] and e < J.shape[1]:
         bp = cuda.local.array(8, np.float64)
-        _colour(Z, v, e, s, rise, tol, frac, npc, oc, op, on, fr, bp, J)
+        _colour(Z, v, e, s, rise, tol, frac[v], npc[v], oc[v], op[v], on[v], fr[v], bp, J)
 
 
 # ------------------------------------------------------------------------------------------
@@ -537,7 +539,7 @@ def _cell_blocked(z, J, frac, r, c, dom_col, sd, so, rise, flip_line, flip_pos, 
         k += (-2 - j) - v      # Black, not blocked here: go on after it
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _mask_cell(z, J, frac, r, c, dom_col, sd, so, rise, flip_line, flip_pos, zmax, out):
     if math.isnan(z[r, c]):
         out[r, c] = 255

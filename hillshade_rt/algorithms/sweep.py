@@ -349,7 +349,7 @@ def _sweep_uniform(z, Z, dom_col, flip_line, flip_pos, s, rise, K, nstrips, void
                              s, rise, K, out)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _sweep_cell(Z, ring, wring, void, zfloor, zmax, v, p, s_arr, rise_arr, per_line, K, out):
     """Canonical cell (v, p) with its own row's ray (``s_arr``/``rise_arr`` indexed by line or
     by position): S and W into the rings, the code into ``out``. The per-cell body of both
@@ -490,7 +490,8 @@ def shadow_mask_gpu(g, rays: SunRays, zmax: float, stats: dict | None = None,
                                                   float(zmax), np.int64(v_top), np.int64(n),
                                                   d_s, d_rise, per_line, np.int64(K), outc)
         from . import frames
-        g.launch(frames.from_canonical_gpu, L, P, outc, f.dom_col, f.flip_line, f.flip_pos, out)
+        g.launch(frames.canonical_copy_gpu, L, P, out, outc, f.dom_col, f.flip_line, f.flip_pos,
+                 False)
         unsure = brute.refine_gpu(g, rays_d, out, UNSURE, zmax)
     if stats is not None:
         stats["unsure_fraction"] = unsure / max(1, rows * cols)
