@@ -233,7 +233,7 @@ class GpuDem:
         self._staging: dict = {}
         self.check_memory(13 * z.size)
         with self._oom_errors():
-            self.z = self.upload(np.ascontiguousarray(z))
+            self.z = self.upload(z)
 
     # -- memory -------------------------------------------------------------------------------
     def check_memory(self, nbytes: int) -> None:

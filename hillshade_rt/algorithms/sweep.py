@@ -468,9 +468,8 @@ def shadow_mask_gpu(g, rays: SunRays, zmax: float, stats: dict | None = None,
     K = max(1, int(exact_steps))
     if uniform_rays(rays):
         f = frame_of(rays)
-        s, rise, per_line = np.array([f.s]), np.array([f.rise]), True
         L = cols if f.dom_col else rows
-        s, rise = np.repeat(s, L), np.repeat(rise, L)
+        s, rise, per_line = np.full(L, f.s), np.full(L, f.rise), True
     else:
         f, s, rise, per_line = _per_cell_rays(rays)
     L, P = (cols, rows) if f.dom_col else (rows, cols)
