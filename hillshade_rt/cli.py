@@ -7,8 +7,11 @@ non-zero exit status: 1 for bad input, 2 for a bad command line, 130 when interr
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import json
+import math
+import os
 import sys
 
 import click
@@ -108,17 +111,104 @@ def cli():
     """Terrain cast-shadow masks from digital elevation models."""
 
 
+def sun_options(f):
+    """Where the sun is: given, or from times at the DEM's place (shared by the lighting commands)."""
+    opts = [
+        click.option("--azimuth", type=float, default=None,
+                     help="Sun azimuth, degrees clockwise from the raster's north (any value wraps)."),
+        click.option("--elevation", "--altitude", "elevation", type=float, default=None,
+                     help="Sun elevation above the horizon, degrees, > 0 and <= 90."),
+        click.option("--time", "time", multiple=True, metavar="ISO8601",
+                     help="Sun from this instant (e.g. 2026-06-21T14:30:00+02:00) at the DEM's "
+                          "centre; repeat for a series (one band per time)."),
+        click.option("--start", default=None, metavar="ISO8601", help="Series: first time."),
+        click.option("--end", default=None, metavar="ISO8601",
+                     help="Series: last time (included when a step lands on it)."),
+        click.option("--step", default=None, metavar="DURATION",
+                     help="Series: interval, e.g. 30min, 1h, 1h30min, PT10M."),
+        click.option("--tz", default=None, metavar="ZONE",
+                     help="IANA zone for times written without an offset (handles daylight "
+                          "saving), e.g. Europe/Zurich; also the zone outputs are labelled in."),
+        click.option("--lat", type=float, default=None,
+                     help="Latitude of the sun's observer, degrees (default: the DEM's centre; "
+                          "required for input without a CRS)."),
+        click.option("--lon", type=float, default=None, help="Longitude, degrees east (with --lat)."),
+        click.option("--pressure", type=float, default=None,
+                     help="Air pressure for refraction, hPa (default: standard atmosphere at "
+                          "the DEM's centre height)."),
+        click.option("--temperature", type=float, default=None,
+                     help="Air temperature for refraction, degrees C (default 12)."),
+        click.option("--no-refraction", is_flag=True,
+                     help="True (geometric) sun elevation instead of the apparent one."),
+        click.option("--sun-tolerance", type=float, default=0.05, show_default=True,
+                     help="Degrees the sun's direction may vary across the raster before it is "
+                          "computed per tile."),
+    ]
+    for opt in reversed(opts):
+        f = opt(f)
+    return f
+
+
+def physics_options(f):
+    opts = [
+        click.option("--earth-curvature/--no-earth-curvature", "curvature", default=None,
+                     help="Let the terrain fall away by d^2(1-k)/2R along each ray (default: on "
+                          "when rays can be longer than 1 km)."),
+        click.option("--refraction-coefficient", "refraction_k", type=float, default=None,
+                     help="Terrestrial refraction k for --earth-curvature (default 0.13 on the "
+                          "Earth, 0 on other bodies)."),
+        click.option("--soft", is_flag=True,
+                     help="The sun as a disk of 0.533 deg: the visible fraction of the disk "
+                          "(0..1, from the exact horizon angle) instead of hard shadows."),
+    ]
+    for opt in reversed(opts):
+        f = opt(f)
+    return f
+
+
+def algorithm_option(f):
+    return click.option(
+        "--algorithm", type=click.Choice(["brute", "smap", "horizon", "sweep"]), default="smap",
+        show_default=True,
+        help="brute: exact reference; smap: exact, fastest at low sun; horizon: exact (horizon "
+             "angles); sweep: approximate, fastest (see docs/algorithms.md).")(f)
+
+
+def run_options(f):
+    opts = [
+        click.option("--output-pattern", default=None, metavar="PATTERN",
+                     help="One file per time instead of one multi-band OUTPUT, e.g. "
+                          "'out_{time:%Y%m%dT%H%M}.tif' (fields: time, index, azimuth, elevation)."),
+        click.option("--preview", type=click.Path(dir_okay=False), default=None,
+                     help="Also write a quick-look PNG (shaded relief, shadows tinted)."),
+        backend_option,
+        click.option("--threads", type=click.IntRange(min=1), default=None,
+                     help="CPU threads (default: all cores)."),
+        click.option("--report", "report_path", type=click.Path(dir_okay=False), default=None,
+                     help="Write a JSON timing report here."),
+        click.option("--overwrite", is_flag=True,
+                     help="Replace outputs (and the report, the preview) if they exist."),
+        click.option("-q", "--quiet", is_flag=True, help="No progress bar or summary on stderr."),
+    ]
+    for opt in reversed(opts):
+        f = opt(f)
+    return f
+
+
+_SUN_KEYS = ("azimuth", "elevation", "time", "start", "end", "step", "tz", "lat", "lon",
+             "pressure", "temperature", "no_refraction", "sun_tolerance")
+
+
+def _pop_sun(kw: dict, default_sun=None):
+    from .runner import SunRequest
+    return SunRequest.from_options(**{k: kw.pop(k) for k in _SUN_KEYS}, default_sun=default_sun)
+
+
 @cli.command()
 @click.argument("dem", type=click.Path(dir_okay=False))
-@click.argument("output", type=click.Path(dir_okay=False))
-@click.option("--azimuth", type=float, required=True,
-              help="Sun azimuth, degrees clockwise from north (any value wraps).")
-@click.option("--elevation", "--altitude", "elevation", type=float, required=True,
-              help="Sun elevation above the horizon, degrees, > 0 and <= 90.")
-@click.option("--algorithm", type=click.Choice(["brute", "smap", "horizon", "sweep"]),
-              default="smap", show_default=True,
-              help="brute: exact reference; smap: exact, fastest at low sun; horizon: exact "
-                   "(horizon angles); sweep: approximate, fastest (see docs/algorithms.md).")
+@click.argument("output", type=click.Path(dir_okay=False), required=False)
+@sun_options
+@algorithm_option
 @click.option("--nextv", type=click.Choice(["scan", "binary", "quad"]), default=None,
               help="smap: how NextV is built (same result; default scan).")
 @click.option("--better-nextv", is_flag=True, default=None,
@@ -130,75 +220,218 @@ def cli():
               help="horizon scan: use every N-th sample only (faster, approximate; default 1).")
 @click.option("--exact-steps", type=click.IntRange(min=1), default=None,
               help="sweep: samples marched exactly before stored values are reused (default 8).")
-@backend_option
-@click.option("--threads", type=click.IntRange(min=1), default=None,
-              help="CPU threads (default: all cores).")
-@click.option("--report", "report_path", type=click.Path(dir_okay=False), default=None,
-              help="Write a JSON timing report here.")
-@click.option("--overwrite", is_flag=True, help="Replace OUTPUT (and the report) if they exist.")
-@click.option("-q", "--quiet", is_flag=True, help="No summary line on stderr.")
+@physics_options
+@click.option("--self-shadow", is_flag=True,
+              help="Also shadow cells whose surface faces away from the sun (Horn normals).")
+@click.option("--classes", is_flag=True,
+              help="Write classes: 0 lit, 1 self-shadow, 2 cast shadow, 255 nodata.")
+@run_options
 @dem_options
 @_errors_to_click
-def shadow(dem, output, azimuth, elevation, algorithm, nextv, better_nextv, horizon_method,
-           sample_spacing, exact_steps, backend, threads, report_path, overwrite, quiet,
-           **read_opts):
-    """Write the cast-shadow mask of DEM to OUTPUT (GeoTIFF: 1 shadow, 0 lit, 255 nodata)."""
-    import numba
+def shadow(dem, output, algorithm, nextv, better_nextv, horizon_method, sample_spacing,
+           exact_steps, curvature, refraction_k, soft, self_shadow, classes, **kw):
+    """Write the cast-shadow mask of DEM to OUTPUT (GeoTIFF: 1 shadow, 0 lit, 255 nodata).
 
-    from .geometry import check_elevation, normalize_azimuth, sun_rays
-    from .io import check_output_path, write_json, write_raster
-    from .report import Timer, build_report, mask_stats, summary_line
-    from .algorithms import ALGORITHMS
-    from .shadow import choose_backend, warm_up
-
-    timer = Timer()
-    # validate everything cheap before reading or computing anything
+    The sun: --azimuth/--elevation, or --time (repeatable) or --start/--end/--step at the DEM's
+    place (one band per time). --soft writes the visible fraction of the sun's disk (float32,
+    1 = fully lit, -9999 nodata); --classes writes 0 lit / 1 self-shadow / 2 cast / 255."""
     options = _algorithm_options(algorithm, nextv=nextv, better_nextv=better_nextv,
                                  method=horizon_method, sample_spacing=sample_spacing,
                                  exact_steps=exact_steps)
-    az = normalize_azimuth(azimuth)
-    el = check_elevation(elevation)
-    check_output_path(output, overwrite)
-    if report_path is not None:
-        check_output_path(report_path, overwrite)
+    if classes and soft:
+        raise click.UsageError("--classes and --soft do not go together (classes are hard)")
+    kind = "classes" if classes else "shadow"
+    _light(dem, output, kind, algorithm, options, curvature, refraction_k, soft,
+           self_shadow or classes, 0.2, None, kw)
+
+
+@cli.command()
+@click.argument("dem", type=click.Path(dir_okay=False))
+@click.argument("output", type=click.Path(dir_okay=False), required=False)
+@sun_options
+@click.option("--ambient", type=click.FloatRange(0.0, 1.0), default=0.2, show_default=True,
+              help="Light in shadow and on faces turned away, 0..1.")
+@click.option("-s", "--scale", type=float, default=None,
+              help="Ratio of vertical units to horizontal (gdaldem -s), e.g. 111120 for a DEM "
+                   "in degrees with heights in metres; default: ground metres from the CRS.")
+@algorithm_option
+@physics_options
+@run_options
+@dem_options
+@_errors_to_click
+def hillshade(dem, output, ambient, scale, algorithm, curvature, refraction_k, soft, **kw):
+    """Write 8-bit shaded relief with cast shadows of DEM to OUTPUT.
+
+    Illumination = ambient + (1 - ambient) * max(0, L.N) in lit cells and ambient in shadow
+    (normals by Horn's method, like gdaldem); written as 1..255, 0 nodata. Sun as for `shadow`
+    (default --azimuth 315 --elevation 45, like gdaldem)."""
+    if scale is not None:
+        if not (math.isfinite(scale) and scale > 0):
+            raise click.UsageError(f"--scale must be a positive number, got {scale}")
+        if kw.get("pixel_size") is not None:
+            raise click.UsageError("--scale and --pixel-size do not go together")
+    _light(dem, output, "hillshade", algorithm, {}, curvature, refraction_k, soft, True, ambient,
+           scale, kw, default_sun=(315.0, 45.0))
+
+
+def _light(dem, output, kind, algorithm, options, curvature, refraction_k, soft, self_shadow,
+           ambient, scale, kw, default_sun=None):
+    """The body of ``shadow`` and ``hillshade``: one DEM, one or more suns, one output per sun
+    (bands of OUTPUT, or files of --output-pattern)."""
+    import numba
+    import numpy as np
+
+    from .engine import Shader, dem_body, render
+    from .io import BandWriter, check_output_path, write_json, write_png, write_raster
+    from .preview import relief_rgb
+    from .report import Timer, build_report, product_stats, summary_line
+    from .runner import OutputPattern, label, progress, sun_tags
+    from .shadow import choose_backend
+
+    timer = Timer()
+    pattern, preview, backend, threads = (kw.pop("output_pattern"), kw.pop("preview"),
+                                          kw.pop("backend"), kw.pop("threads"))
+    report_path, overwrite, quiet = kw.pop("report_path"), kw.pop("overwrite"), kw.pop("quiet")
+    req = _pop_sun(kw, default_sun)
+    if (output is None) == (pattern is None):
+        raise click.UsageError("give OUTPUT or --output-pattern (one of them)")
+    if output is not None:
+        check_output_path(output, overwrite)
+    for extra in (report_path, preview):
+        if extra is not None:
+            check_output_path(extra, overwrite)
+    if pattern is not None:
+        pattern = OutputPattern(pattern)
     if threads is not None:
         numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
     ran_on = choose_backend(backend, algorithm, options)
 
     with timer("read"):
-        d = _read(dem, **read_opts)
-    algo_stats: dict = {}
-    gpu_dem = None
-    with timer("prepare"):  # numba compilation on a first run; the DEM's upload to the GPU
-        warm_up(algorithm, d.grid, az, el, backend=ran_on, **options)
-        rays = sun_rays(d.grid, az, el)
+        d = _read(dem, **kw)
+        if scale is not None:
+            _apply_scale(d, scale)
+    with timer("prepare"):   # solar positions; numba compilation on a first run; GPU upload
+        suns, sun_info = req.suns(d)
+        paths = pattern.paths(suns) if pattern is not None else None
+        for p in paths or ():
+            check_output_path(p, overwrite)
         zmin, zmax = d.height_range()
-        if ran_on == "gpu":
-            from .gpu import GpuDem
-            gpu_dem = GpuDem(d.heights, (zmin, zmax, d.valid_count() < d.heights.size))
-    with timer("compute"):
-        if gpu_dem is not None:
-            mask = gpu_dem.shadow_mask(rays, algorithm, zmax, algo_stats, **options)
-        else:
-            mask = ALGORITHMS[algorithm](d.heights, rays, zmax, algo_stats, **options)
-    tags = {"HILLSHADE_RT_VERSION": __version__, "SUN_AZIMUTH": az, "SUN_ELEVATION": el,
-            "ALGORITHM": algorithm, "VALUES": "1=shadow 0=lit 255=nodata"}
-    with timer("write"):
-        write_raster(output, mask, d, nodata=255, description="cast shadow", tags=tags)
-    stats = mask_stats(mask)
+        shader = Shader(d.heights, d.grid, algorithm, options, ran_on,
+                        "auto" if curvature is None else curvature, refraction_k,
+                        dem_body(d, req.lat), (zmin, zmax))
+        day = [s for s in suns if not s.night]
+        if day:
+            shader.warm_up(day[0].azimuth, day[0].elevation, soft=soft,
+                           incidence=self_shadow or kind != "shadow")
+    dtype, nodata = {"shadow": ("float32", -9999.0) if soft else ("uint8", 255),
+                     "classes": ("uint8", 255), "hillshade": ("uint8", 0)}[kind]
+    base_tags = {"HILLSHADE_RT_VERSION": __version__, "ALGORITHM": algorithm,
+                 "VALUES": _VALUES[kind, soft]}
+    description = {"shadow": "visible fraction of the sun" if soft else "cast shadow",
+                   "classes": "shadow classes", "hillshade": "shaded relief"}[kind]
+    records, algo_stats = [], {}
+    share = None
+    writer = BandWriter(output, d, len(suns), dtype, nodata, base_tags) if output else None
+    with (writer if writer is not None else contextlib.nullcontext()):
+        for i, sun in enumerate(progress(suns, quiet, "hillshade-rt")):
+            t0 = timer.seconds.get("compute", 0.0)
+            with timer("compute"):
+                arr = render(shader, sun, kind, soft=soft, self_shadow=self_shadow,
+                             ambient=ambient, stats=algo_stats)
+            seconds = timer.seconds["compute"] - t0
+            st = product_stats(kind, soft, arr)
+            if preview is not None:
+                sh = _shade_of(kind, soft, arr, ambient)
+                share = sh / len(suns) if share is None else share + sh / len(suns)
+            if soft:
+                arr = np.where(np.isnan(arr), np.float32(nodata), arr).astype(np.float32)
+            tags = sun_tags(sun)
+            with timer("write"):
+                if writer is not None:
+                    writer.write(i + 1, arr, description=(label(sun) if sun.time is not None
+                                                         else description), tags=tags)
+                else:
+                    write_raster(paths[i], arr, d, nodata=nodata,
+                                 description=label(sun) if sun.time is not None else description,
+                                 tags={**base_tags, **tags})
+            rec = dict(sun.as_dict(), shadow_fraction=st["shadow_fraction"], compute_s=seconds)
+            if paths:
+                rec["output"] = os.path.abspath(paths[i])
+            records.append(rec)
+    if preview is not None:
+        with timer("write"):
+            s0 = day[0] if day else suns[0]
+            write_png(preview, relief_rgb(d.heights, d.grid, s0.azimuth, s0.elevation,
+                                          shade=share))
     seconds = dict(timer.seconds, total=timer.total())
-    rep = build_report(dem=d, output=output, azimuth=az, elevation=el, algorithm=algorithm,
-                       backend=ran_on, backend_requested=backend,
-                       threads=numba.get_num_threads(), seconds=seconds,
-                       stats=stats, height_range=(zmin, zmax), options=options,
-                       algorithm_stats=algo_stats,
-                       gpu=gpu_dem.report() if gpu_dem is not None else None)
+    first = suns[0]
+    rep = build_report(dem=d, output=output or pattern.pattern, azimuth=first.azimuth,
+                       elevation=first.elevation, algorithm=algorithm, backend=ran_on,
+                       backend_requested=backend, threads=numba.get_num_threads(),
+                       seconds=seconds, stats=_mean_stats(records, product_stats(kind, soft, arr)),
+                       height_range=(zmin, zmax), options=options, algorithm_stats=algo_stats,
+                       gpu=shader._gpu.report() if shader._gpu is not None else None)
+    rep["sun"] = records[0] if len(records) == 1 else None
+    rep["sun_source"] = "time" if req.from_time else "given"
+    if sun_info is not None:
+        rep.update(sun_info)
+    if len(records) > 1 or req.from_time:
+        rep["times"] = records
+    rep["night_count"] = sum(1 for s in suns if s.night)
+    rep["product"] = {"kind": kind, "soft": soft, "self_shadow": self_shadow,
+                      "dtype": dtype, "nodata": nodata, "bands": len(suns) if output else 1}
+    if kind == "hillshade":
+        rep["product"].update(ambient=ambient, scale=scale)
+    rep["curvature"] = shader.report()
+    if preview is not None:
+        rep["preview"] = os.path.abspath(preview)
     if report_path is not None:
         write_json(report_path, rep)
     if not quiet:
         click.echo(summary_line(rep), err=True)
         if algo_stats.get("note"):
             click.echo(f"hillshade-rt: note: {algo_stats['note']}", err=True)
+        if rep["night_count"]:
+            click.echo(f"hillshade-rt: note: the sun is below the horizon at "
+                       f"{rep['night_count']} of {len(suns)} time(s): all shadow there", err=True)
+
+
+_VALUES = {("shadow", False): "1=shadow 0=lit 255=nodata",
+           ("shadow", True): "visible fraction of the solar disk 0..1, -9999=nodata",
+           ("classes", False): "0=lit 1=self-shadow 2=cast shadow 255=nodata",
+           ("hillshade", False): "1..255 shaded relief with cast shadows, 0=nodata",
+           ("hillshade", True): "1..255 shaded relief with soft shadows, 0=nodata"}
+
+
+def _shade_of(kind, soft, arr, ambient):
+    """0..1 'in shadow' per cell of one product, for the preview."""
+    import numpy as np
+    if kind == "hillshade":
+        base = 1.0 + np.rint(254.0 * ambient)
+        return ((arr > 0) & (arr <= base)).astype(np.float32)
+    if soft:
+        return np.nan_to_num(1.0 - arr, nan=0.0).astype(np.float32)
+    if kind == "classes":
+        return ((arr == 1) | (arr == 2)).astype(np.float32)
+    return (arr == 1).astype(np.float32)
+
+
+def _mean_stats(records, last):
+    fr = [r["shadow_fraction"] for r in records if r["shadow_fraction"] is not None]
+    out = dict(last)
+    out["shadow_fraction"] = (sum(fr) / len(fr)) if fr else None
+    return out
+
+
+def _apply_scale(d, scale):
+    """gdaldem's -s: ground spacing = the transform's pixel size times ``scale``."""
+    from .geometry import Grid, orientation
+    if d.transform is None:
+        raise click.UsageError("--scale needs a georeferenced DEM; use --pixel-size")
+    cs, rs = orientation(d.transform)
+    rows, cols = d.shape
+    d.grid = Grid.uniform(rows, cols, abs(d.transform.a) * scale, abs(d.transform.e) * scale,
+                          cs, rs, f"--scale {scale:g} x transform units")
 
 
 _OPTION_OWNERS = {"nextv": "smap", "better_nextv": "smap", "method": "horizon",

@@ -119,7 +119,9 @@ class SunRays:
     ``dom_col[r]`` is 1 when that axis is the column index (the ray crosses columns), 0 when it is
     the row index; ``step_dom[r]`` is +1 or -1 (direction along the dominant index);
     ``step_other[r]`` is the change of the other index per step (|.| <= 1); ``rise[r]`` is the
-    height gained per step in metres (tan(elevation) times the ground length of one step).
+    height gained per step in metres (tan(elevation) times the ground length of one step);
+    ``curv[r]`` is the Earth-curvature gain: at step k the ray stands ``k*rise + k*k*curv`` above
+    its start relative to the terrain (0 without curvature; see :func:`curvature_per_m2`).
     """
 
     azimuth: float
@@ -129,10 +131,17 @@ class SunRays:
     step_other: np.ndarray  # float64
     rise: np.ndarray       # float64
     step_m: np.ndarray     # float64, ground metres per step
+    curv: np.ndarray       # float64, metres per step**2 (Earth curvature), zeros when off
+
+    @property
+    def curved(self) -> bool:
+        return bool(np.any(self.curv != 0.0))
 
 
-def sun_rays(grid: Grid, azimuth: float, elevation: float) -> SunRays:
-    """Sun direction in pixel units for every row of ``grid``."""
+def sun_rays(grid: Grid, azimuth: float, elevation: float, curvature: float = 0.0) -> SunRays:
+    """Sun direction in pixel units for every row of ``grid``.
+
+    curvature: (1 - k) / (2 R) in 1/m (:func:`curvature_per_m2`), 0 for a flat Earth."""
     az = normalize_azimuth(azimuth)
     el = check_elevation(elevation)
     east, north = sincos_deg(az)
@@ -146,8 +155,43 @@ def sun_rays(grid: Grid, azimuth: float, elevation: float) -> SunRays:
     step_m = 1.0 / a_dom
     tan_el = math.inf if el == 90.0 else math.tan(math.radians(el))
     rise = tan_el * step_m
+    if not (math.isfinite(curvature) and curvature >= 0.0):
+        raise HillshadeError(f"curvature coefficient must be >= 0, got {curvature}")
+    curv = float(curvature) * step_m * step_m
     return SunRays(az, el, dom_col.astype(np.int8), step_dom, step_other.astype(np.float64),
-                   rise.astype(np.float64), step_m.astype(np.float64))
+                   rise.astype(np.float64), step_m.astype(np.float64), curv.astype(np.float64))
+
+
+# --------------------------------------------------------------------------------------------
+# Earth curvature
+
+WGS84_A = 6378137.0
+WGS84_B = 6356752.314245179
+REFRACTION_K = 0.13   # terrestrial refraction coefficient (light bends with radius R / k)
+
+
+def radius_in_azimuth(lat_deg: float, azimuth: float, a: float = WGS84_A,
+                      b: float = WGS84_B) -> float:
+    """Radius of curvature (m) of ellipsoid (a, b) at ``lat_deg`` along ``azimuth`` (Euler:
+    1/R = cos^2(az)/M + sin^2(az)/N)."""
+    e2 = 1.0 - (b * b) / (a * a)
+    s = math.sin(math.radians(lat_deg))
+    w = math.sqrt(1.0 - e2 * s * s)
+    n = a / w
+    m = a * (1.0 - e2) / w ** 3
+    az = math.radians(azimuth)
+    return 1.0 / (math.cos(az) ** 2 / m + math.sin(az) ** 2 / n)
+
+
+def curvature_per_m2(radius_m: float, k: float = REFRACTION_K) -> float:
+    """(1 - k) / (2 R): a ray ``d`` metres from its start stands ``d**2 (1 - k) / (2 R)`` higher
+    above the curved terrain than above a flat one (the terrain falls away below the observer's
+    horizontal plane by d^2/2R; terrestrial refraction bends the ray back down by k of that)."""
+    if not (math.isfinite(k) and 0.0 <= k < 1.0):
+        raise HillshadeError(f"refraction coefficient must be >= 0 and < 1, got {k}")
+    if not (math.isfinite(radius_m) and radius_m > 0):
+        raise HillshadeError(f"Earth radius must be positive, got {radius_m}")
+    return (1.0 - k) / (2.0 * radius_m)
 
 
 # --------------------------------------------------------------------------------------------

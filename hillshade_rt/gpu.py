@@ -305,7 +305,8 @@ class GpuDem:
     def rays(self, rays):
         """The per-row ray arrays of a ``SunRays`` on the device (small)."""
         return tuple(self.upload(np.ascontiguousarray(a)) for a in
-                     (rays.dom_col, rays.step_dom, rays.step_other, rays.rise, rays.step_m))
+                     (rays.dom_col, rays.step_dom, rays.step_other, rays.rise, rays.step_m,
+                      rays.curv))
 
     # -- kernels ------------------------------------------------------------------------------
     @contextlib.contextmanager

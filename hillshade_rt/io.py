@@ -353,21 +353,8 @@ def _profile(dem: Dem, dtype: str, nodata) -> dict:
 def write_raster(path: str, data: np.ndarray, dem: Dem, nodata, description: str = "",
                  tags: dict | None = None) -> None:
     """Write one band georeferenced like ``dem`` (temporary file, then rename)."""
-    import rasterio
-    from rasterio.errors import NotGeoreferencedWarning
-
-    prof = _profile(dem, str(data.dtype), nodata)
-    with atomic_path(path, ".tif") as tmp, warnings.catch_warnings():
-        warnings.simplefilter("ignore", NotGeoreferencedWarning)
-        try:
-            with rasterio.open(tmp, "w", **prof) as dst:
-                dst.write(data, 1)
-                if description:
-                    dst.set_band_description(1, description)
-                if tags:
-                    dst.update_tags(**{k: str(v) for k, v in tags.items()})
-        except rasterio.errors.RasterioError as exc:
-            raise HillshadeError(f"{path}: cannot write ({str(exc).splitlines()[0]})") from None
+    with BandWriter(path, dem, 1, str(data.dtype), nodata, tags) as w:
+        w.write(1, data, description)
 
 
 def write_json(path: str, obj: dict) -> None:
@@ -375,3 +362,76 @@ def write_json(path: str, obj: dict) -> None:
     with atomic_path(path) as tmp, open(tmp, "w", encoding="utf-8") as fh:
         json.dump(obj, fh, indent=2)
         fh.write("\n")
+
+
+class BandWriter:
+    """A GeoTIFF georeferenced like ``dem`` written one band at a time (a series of times), into
+    a temporary file renamed into place only when every band is written::
+
+        with BandWriter(path, dem, count, "uint8", 255) as w:
+            w.write(1, mask, description="2026-06-21T14:30+02:00", tags={...})
+    """
+
+    def __init__(self, path: str, dem: Dem, count: int, dtype: str, nodata, tags: dict | None = None):
+        self.path, self.dem, self.count, self.dtype, self.nodata = path, dem, count, dtype, nodata
+        self.tags = tags or {}
+        self._stack = contextlib.ExitStack()
+        self._dst = None
+
+    def __enter__(self):
+        import rasterio
+        from rasterio.errors import NotGeoreferencedWarning
+
+        prof = _profile(self.dem, self.dtype, self.nodata)
+        prof["count"] = self.count
+        if self.count > 1:
+            prof["interleave"] = "band"   # bands are written one after another
+        if self.dtype == "float32":
+            prof["predictor"] = 3
+        try:
+            tmp = self._stack.enter_context(atomic_path(self.path, ".tif"))
+            self._stack.enter_context(warnings.catch_warnings())
+            warnings.simplefilter("ignore", NotGeoreferencedWarning)
+            self._dst = self._stack.enter_context(rasterio.open(tmp, "w", **prof))
+            if self.tags:
+                self._dst.update_tags(**{k: str(v) for k, v in self.tags.items()})
+        except rasterio.errors.RasterioError as exc:
+            self._stack.close()
+            raise HillshadeError(f"{self.path}: cannot write ({str(exc).splitlines()[0]})") from None
+        except BaseException:
+            self._stack.close()
+            raise
+        return self
+
+    def write(self, band: int, data: np.ndarray, description: str = "", tags: dict | None = None):
+        import rasterio
+        try:
+            self._dst.write(data, band)
+            if description:
+                self._dst.set_band_description(band, description)
+            if tags:
+                self._dst.update_tags(band, **{k: str(v) for k, v in tags.items()})
+        except rasterio.errors.RasterioError as exc:
+            raise HillshadeError(f"{self.path}: cannot write ({str(exc).splitlines()[0]})") from None
+
+    def __exit__(self, *exc):
+        return self._stack.__exit__(*exc)
+
+
+def write_png(path: str, rgb: np.ndarray) -> None:
+    """Write an (rows, cols, 3) uint8 picture as PNG (temporary file, then rename)."""
+    import rasterio
+    from rasterio.errors import NotGeoreferencedWarning
+
+    rows, cols, _ = rgb.shape
+    with atomic_path(path, ".png") as tmp, warnings.catch_warnings():
+        warnings.simplefilter("ignore", NotGeoreferencedWarning)
+        try:
+            with rasterio.open(tmp, "w", driver="PNG", width=cols, height=rows, count=3,
+                               dtype="uint8") as dst:
+                dst.write(np.moveaxis(rgb, -1, 0))
+        except rasterio.errors.RasterioError as exc:
+            raise HillshadeError(f"{path}: cannot write ({str(exc).splitlines()[0]})") from None
+        finally:
+            with contextlib.suppress(OSError):
+                os.remove(tmp + ".aux.xml")   # GDAL's side-car of a PNG: nothing worth keeping

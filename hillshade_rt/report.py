@@ -40,6 +40,28 @@ def mask_stats(mask: np.ndarray) -> dict:
             "shadow_fraction": (shadow / valid) if valid else None}
 
 
+def product_stats(kind: str, soft: bool, arr: np.ndarray) -> dict:
+    """Cell counts of one product: shadow (cast or self) / lit / nodata, as ``mask_stats``."""
+    if kind == "shadow" and not soft:
+        return mask_stats(arr)
+    if kind == "classes":
+        counts = np.bincount(arr.ravel(), minlength=256)
+        shadow, lit, nodata = int(counts[1] + counts[2]), int(counts[0]), int(counts[255])
+        valid = shadow + lit
+        return {"shadow_cells": shadow, "lit_cells": lit, "nodata_cells": nodata,
+                "shadow_fraction": (shadow / valid) if valid else None,
+                "self_shadow_cells": int(counts[1]), "cast_shadow_cells": int(counts[2])}
+    if kind == "hillshade":
+        nodata = int(np.count_nonzero(arr == 0))
+        return {"shadow_cells": 0, "lit_cells": int(arr.size - nodata), "nodata_cells": nodata,
+                "shadow_fraction": None}
+    valid = ~np.isnan(arr)
+    n = int(np.count_nonzero(valid))
+    mean = float(np.mean(arr[valid], dtype=np.float64)) if n else None
+    return {"shadow_cells": None, "lit_cells": None, "nodata_cells": int(arr.size - n),
+            "valid_cells": n, "shadow_fraction": (1.0 - mean) if mean is not None else None}
+
+
 def build_report(*, dem, output: str, azimuth: float, elevation: float, algorithm: str,
                  backend: str, threads: int, seconds: dict, stats: dict,
                  height_range: tuple[float, float], options: dict | None = None,
@@ -72,7 +94,8 @@ def build_report(*, dem, output: str, azimuth: float, elevation: float, algorith
         "seconds": {k: seconds.get(k, 0.0) for k in ("read", "prepare", "compute", "write", "total")},
         "mpix_per_s": (rows * cols / 1e6 / compute) if compute > 0 else None,
         "shadow_fraction": stats["shadow_fraction"],
-        "cells": {"valid": stats["shadow_cells"] + stats["lit_cells"],
+        "cells": {"valid": stats.get("valid_cells", (stats["shadow_cells"] or 0)
+                                     + (stats["lit_cells"] or 0)),
                   "shadow": stats["shadow_cells"], "nodata": stats["nodata_cells"]},
         "height_range_m": [zmin, zmax],
         "version": __version__,
@@ -92,9 +115,19 @@ def summary_line(report: dict) -> str:
                  + (f", kernels {kms:.2f} ms" if kms is not None else "") + ")")
     else:
         where = f"{report['algorithm']}/{report['backend']} x{report['threads']}"
-    return (f"hillshade-rt: {report['output']}: {cols}x{rows}, sun az {report['sun']['azimuth']:g} "
-            f"el {report['sun']['elevation']:g}, {where}: "
-            f"{100 * frac:.2f}% of valid cells in shadow; "
+    times = report.get("times") or []
+    sun = report.get("sun")
+    if len(times) > 1:
+        what = f"{len(times)} suns ({times[0].get('time', '')} .. {times[-1].get('time', '')})"
+    elif sun and sun.get("time"):
+        what = (f"sun at {sun['time']}: az {sun['azimuth']:.2f} el {sun['elevation']:.2f}"
+                + (" (night)" if sun.get("night") else ""))
+    else:
+        what = f"sun az {report['sun']['azimuth']:g} el {report['sun']['elevation']:g}"
+    share = ("" if frac is None else
+             f"{100 * frac:.2f}% of valid cells in shadow" + (" (mean)" if len(times) > 1 else "")
+             + "; ")
+    return (f"hillshade-rt: {report['output']}: {cols}x{rows}, {what}, {where}: {share}"
             f"compute {report['seconds']['compute']:.3f} s"
-            + (f" ({mpx:.1f} Mpix/s)" if mpx else "")
+            + (f" ({mpx * max(1, len(times)):.1f} Mpix/s)" if mpx else "")
             + f", total {report['seconds']['total']:.2f} s")

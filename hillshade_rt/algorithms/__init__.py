@@ -11,7 +11,7 @@ backend, where ``g`` is a ``gpu.GpuDem`` holding the heights on the device (``GP
 from ._jitcache import kernel_cache
 
 with kernel_cache():
-    from . import brute, horizon, raymath, smap, sweep  # noqa: F401
+    from . import brute, horizon, raymath, relief, smap, sweep  # noqa: F401
 
 ALGORITHMS = {
     "brute": brute.shadow_mask,

@@ -21,15 +21,15 @@ NODATA = np.uint8(255)
 
 
 @njit(cache=True, inline="always")
-def _brute_cell(z, r, c, dc, sd, so, ri, zmax, out, only):
-    """Decide cell (r, c) whose row's ray is (dc, sd, so, ri) (or, with only >= 0, leave it
+def _brute_cell(z, r, c, dc, sd, so, ri, cv, zmax, out, only):
+    """Decide cell (r, c) whose row's ray is (dc, sd, so, ri, cv) (or, with only >= 0, leave it
     unless its code in ``out`` is ``only``). Returns 1 when it decided the cell. The per-cell
     body of both backends."""
     if only >= 0 and out[r, c] != only:
         return 0
     if math.isnan(z[r, c]):
         out[r, c] = 255
-    elif ray_is_blocked(z, r, c, dc, sd, so, ri, zmax):
+    elif ray_is_blocked(z, r, c, dc, sd, so, ri, cv, zmax):
         out[r, c] = 1
     else:
         out[r, c] = 0
@@ -37,7 +37,7 @@ def _brute_cell(z, r, c, dc, sd, so, ri, zmax, out, only):
 
 
 @njit(parallel=True, cache=True)
-def _brute_cpu(z, dom_col, step_dom, step_other, rise, zmax, out, only):
+def _brute_cpu(z, dom_col, step_dom, step_other, rise, curv, zmax, out, only):
     """Every cell, or (only >= 0) just the cells whose code in ``out`` is ``only``. Returns how
     many cells it decided."""
     rows, cols = z.shape
@@ -47,21 +47,22 @@ def _brute_cpu(z, dom_col, step_dom, step_other, rise, zmax, out, only):
         sd = np.int64(step_dom[r])
         so = step_other[r]
         ri = rise[r]
+        cv = curv[r]
         for c in range(cols):
             if only >= 0 and out[r, c] != only:   # (also in _brute_cell) a vectorised skip
                 continue
-            n += _brute_cell(z, r, c, dc, sd, so, ri, zmax, out, only)
+            n += _brute_cell(z, r, c, dc, sd, so, ri, cv, zmax, out, only)
     return n
 
 
 @kernel
-def _brute_gpu(z, dom_col, step_dom, step_other, rise, zmax, out, only, count):
+def _brute_gpu(z, dom_col, step_dom, step_other, rise, curv, zmax, out, only, count):
     """CUDA twin of ``_brute_cpu``: one thread per cell; ``count[0]`` += cells decided when
     ``only`` >= 0 (refinement)."""
     c, r = cuda.grid(2)
     if r < z.shape[0] and c < z.shape[1]:
         if _brute_cell(z, r, c, dom_col[r] != 0, np.int64(step_dom[r]), step_other[r], rise[r],
-                       zmax, out, only) and only >= 0:
+                       curv[r], zmax, out, only) and only >= 0:
             cuda.atomic.add(count, 0, 1)
 
 
@@ -77,7 +78,7 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None,
     if zmax is None:
         zmax = float(np.nanmax(z))
     out = np.empty(z.shape, dtype=np.uint8)
-    _brute_cpu(z, rays.dom_col, rays.step_dom, rays.step_other, rays.rise, float(zmax), out,
+    _brute_cpu(z, rays.dom_col, rays.step_dom, rays.step_other, rays.rise, rays.curv, float(zmax), out,
                np.int64(-1))
     return out
 
@@ -86,18 +87,18 @@ def refine(z: np.ndarray, rays: SunRays, out: np.ndarray, code: int, zmax: float
     """Replace every ``code`` in ``out`` by brute's exact answer for that cell (for approximate
     algorithms that flag the cells they are unsure of). Returns how many cells were refined."""
     return int(_brute_cpu(z, rays.dom_col, rays.step_dom, rays.step_other, rays.rise,
-                          float(zmax), out, np.int64(code)))
+                          rays.curv, float(zmax), out, np.int64(code)))
 
 
 def shadow_mask_gpu(g, rays: SunRays, zmax: float, stats: dict | None = None) -> np.ndarray:
     """``shadow_mask`` on the GPU: ``g`` is a ``gpu.GpuDem`` (heights already on the device)."""
     dz = g.z
     rows, cols = g.shape
-    dom_col, step_dom, step_other, rise, _ = g.rays(rays)
+    dom_col, step_dom, step_other, rise, _, curv = g.rays(rays)
     out = g.empty((rows, cols), np.uint8)
     with g.timed():
-        g.launch(_brute_gpu, rows, cols, dz, dom_col, step_dom, step_other, rise, float(zmax), out,
-                 np.int64(-1), g.empty(1, np.int64))
+        g.launch(_brute_gpu, rows, cols, dz, dom_col, step_dom, step_other, rise, curv, float(zmax),
+                 out, np.int64(-1), g.empty(1, np.int64))
     return g.download(out)
 
 
@@ -106,7 +107,7 @@ def refine_gpu(g, rays_d, out, code: int, zmax: float) -> int:
     ``out`` a device mask. Returns how many cells were refined."""
     rows, cols = g.shape
     count = g.upload(np.zeros(1, np.int64))
-    dom_col, step_dom, step_other, rise, _ = rays_d
-    g.launch(_brute_gpu, rows, cols, g.z, dom_col, step_dom, step_other, rise, float(zmax), out,
-             np.int64(code), count)
+    dom_col, step_dom, step_other, rise, _, curv = rays_d
+    g.launch(_brute_gpu, rows, cols, g.z, dom_col, step_dom, step_other, rise, curv, float(zmax),
+             out, np.int64(code), count)
     return int(g.download(count)[0])

@@ -36,14 +36,15 @@ from numba import njit, prange
 from ..geometry import SunRays
 from .frames import frame_of, uniform_rays
 from ..gpu import cuda, kernel
-from .raymath import line_position, ray_origin, ray_sample, terrain_on_line
+from .raymath import line_position, madd, ray_origin, ray_sample, terrain_on_line
 
 METHODS = ("scan", "hull")
 
 
 @njit(cache=True)
-def _scan_cell(z, r, c, dom_col, sd, so, sp, zmax, rise, decide):
-    """Max of (T_k - h0) / k over the samples k = sp, 2sp, ... (-inf if none).
+def _scan_cell(z, r, c, dom_col, sd, so, sp, zmax, rise, cv, decide):
+    """Max of (T_k - h0 - k*k*cv) / k over the samples k = sp, 2sp, ... (-inf if none); ``cv``
+    is the Earth-curvature term (the terrain k steps away sits k*k*cv lower; 0 when flat).
 
     decide: stop as soon as the result is known relative to ``rise`` (mask mode)."""
     line0, other0, n_dom, n_oth = ray_origin(z, r, c, dom_col)
@@ -58,8 +59,9 @@ def _scan_cell(z, r, c, dom_col, sd, so, sp, zmax, rise, decide):
         inside, t = ray_sample(z, dom_col, line0, other0, n_dom, n_oth, k, sd, so)
         if not inside:
             break
-        if t - h0 > best * k:   # NaN (void) compares false: skipped
-            best = (t - h0) / k
+        lift = madd(t - h0, -float(k * k), cv)   # t - h0 - k*k*cv, never fused on the GPU
+        if lift > best * k:   # NaN (void) compares false: skipped
+            best = lift / k
             if decide and best > rise:
                 break
         k += sp
@@ -67,8 +69,8 @@ def _scan_cell(z, r, c, dom_col, sd, so, sp, zmax, rise, decide):
 
 
 @njit(cache=True, inline="always")
-def _scan_write(z, r, c, dom_col, step_dom, step_other, rise, step_m, sp, zmax, want_mask, mask,
-                beta):
+def _scan_write(z, r, c, dom_col, step_dom, step_other, rise, step_m, curv, sp, zmax, want_mask,
+                mask, beta):
     """Cell (r, c) of the scan: its mask code (want_mask) or its angle β in degrees. The per-cell
     body of both backends."""
     if math.isnan(z[r, c]):
@@ -79,7 +81,7 @@ def _scan_write(z, r, c, dom_col, step_dom, step_other, rise, step_m, sp, zmax, 
         return
     ri = rise[r]
     t = _scan_cell(z, r, c, dom_col[r] != 0, np.int64(step_dom[r]), step_other[r], sp, zmax, ri,
-                   want_mask)
+                   curv[r], want_mask)
     if want_mask:
         mask[r, c] = 1 if t > ri else 0
     else:
@@ -87,22 +89,23 @@ def _scan_write(z, r, c, dom_col, step_dom, step_other, rise, step_m, sp, zmax, 
 
 
 @njit(parallel=True, cache=True)
-def _scan_kernel(z, dom_col, step_dom, step_other, rise, step_m, sp, zmax, want_mask, mask,
+def _scan_kernel(z, dom_col, step_dom, step_other, rise, step_m, curv, sp, zmax, want_mask, mask,
                  beta):
     rows, cols = z.shape
     for r in prange(rows):
         for c in range(cols):
-            _scan_write(z, r, c, dom_col, step_dom, step_other, rise, step_m, sp, zmax, want_mask,
-                        mask, beta)
+            _scan_write(z, r, c, dom_col, step_dom, step_other, rise, step_m, curv, sp, zmax,
+                        want_mask, mask, beta)
 
 
 @kernel
-def _scan_gpu(z, dom_col, step_dom, step_other, rise, step_m, sp, zmax, want_mask, mask, beta):
+def _scan_gpu(z, dom_col, step_dom, step_other, rise, step_m, curv, sp, zmax, want_mask, mask,
+              beta):
     """CUDA twin of ``_scan_kernel``: one thread per cell."""
     c, r = cuda.grid(2)
     if r < z.shape[0] and c < z.shape[1]:
-        _scan_write(z, r, c, dom_col, step_dom, step_other, rise, step_m, sp, zmax, want_mask,
-                    mask, beta)
+        _scan_write(z, r, c, dom_col, step_dom, step_other, rise, step_m, curv, sp, zmax,
+                    want_mask, mask, beta)
 
 
 @njit(cache=True)
@@ -211,7 +214,7 @@ def _check(method, sample_spacing, rays):
         raise HillshadeError(f"sample spacing must be a whole number >= 1, got {sample_spacing}")
     if method == "hull" and sample_spacing != 1:
         raise HillshadeError("--sample-spacing applies to the scan method only")
-    return method == "hull" and uniform_rays(rays)
+    return method == "hull" and uniform_rays(rays) and not rays.curved
 
 
 def horizon_angles(z: np.ndarray, rays: SunRays, method: str = "scan", sample_spacing: int = 1,
@@ -227,10 +230,11 @@ def horizon_angles(z: np.ndarray, rays: SunRays, method: str = "scan", sample_sp
             beta = np.degrees(np.arctan(t / step_m)).astype(np.float32)
         return beta
     if method == "hull" and stats is not None:
-        stats["note"] = "ray direction varies per row (geographic CRS): hull replaced by scan"
+        stats["note"] = ("Earth curvature on: hull replaced by scan" if rays.curved else
+                         "ray direction varies per row (geographic CRS): hull replaced by scan")
     beta = np.empty(z.shape, np.float32)
     _scan_kernel(z, rays.dom_col, rays.step_dom, rays.step_other, rays.rise, rays.step_m,
-                 np.int64(sample_spacing), float(zmax), False, np.empty((1, 1), np.uint8), beta)
+                 rays.curv, np.int64(sample_spacing), float(zmax), False, np.empty((1, 1), np.uint8), beta)
     return beta
 
 
@@ -246,21 +250,22 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None, stats: 
         out = np.where(np.isnan(z), 255, (t > rays.rise[0]).astype(np.uint8)).astype(np.uint8)
         return out
     if method == "hull" and stats is not None:
-        stats["note"] = "ray direction varies per row (geographic CRS): hull replaced by scan"
+        stats["note"] = ("Earth curvature on: hull replaced by scan" if rays.curved else
+                         "ray direction varies per row (geographic CRS): hull replaced by scan")
     out = np.empty(z.shape, np.uint8)
     _scan_kernel(z, rays.dom_col, rays.step_dom, rays.step_other, rays.rise, rays.step_m,
-                 np.int64(sample_spacing), float(zmax), True, out, np.empty((1, 1), np.float32))
+                 rays.curv, np.int64(sample_spacing), float(zmax), True, out, np.empty((1, 1), np.float32))
     return out
 
 
 def _scan_gpu_run(g, rays, sample_spacing, zmax, want_mask):
     rows, cols = g.shape
-    dom_col, step_dom, step_other, rise, step_m = g.rays(rays)
+    dom_col, step_dom, step_other, rise, step_m, curv = g.rays(rays)
     dummy = g.empty((1, 1), np.float32 if want_mask else np.uint8)
     out = g.empty((rows, cols), np.uint8 if want_mask else np.float32)
     args = (out, dummy) if want_mask else (dummy, out)
     with g.timed():
-        g.launch(_scan_gpu, rows, cols, g.z, dom_col, step_dom, step_other, rise, step_m,
+        g.launch(_scan_gpu, rows, cols, g.z, dom_col, step_dom, step_other, rise, step_m, curv,
                  np.int64(sample_spacing), float(zmax), want_mask, *args)
     return g.download(out)
 

@@ -100,18 +100,19 @@ def ray_sample(z, dom_col, line0, other0, n_dom, n_oth, k, step_dom, step_other)
 
 
 @njit(cache=True)
-def ray_is_blocked(z, r, c, dom_col, step_dom, step_other, rise, zmax):
+def ray_is_blocked(z, r, c, dom_col, step_dom, step_other, rise, curv, zmax):
     """True when the ray from the centre of cell (r, c) passes strictly below the terrain.
 
     Marches grid line by grid line toward the sun; stops when the ray leaves the raster or climbs
     to ``zmax`` (the highest cell), above which nothing can block it. Heights in float64, the k-th
-    sample computed as ``h0 + k * rise`` (no accumulated drift).
+    sample computed as ``h0 + k * rise + k * k * curv`` (no accumulated drift; ``curv`` is the
+    Earth-curvature term, 0 for a flat Earth, and then adds exactly nothing).
     """
     line0, other0, n_dom, n_oth = ray_origin(z, r, c, dom_col)
     h0 = float(z[np.int64(r), np.int64(c)])
     k = 1
     while True:
-        hr = madd(h0, float(k), rise)
+        hr = madd(madd(h0, float(k), rise), float(k * k), curv)
         if hr >= zmax:
             return False
         inside, t = ray_sample(z, dom_col, line0, other0, n_dom, n_oth, k, step_dom, step_other)

@@ -1,0 +1,345 @@
+"""One DEM prepared once, lit by any number of suns: cast shadows, soft shadows, self-shadow,
+shaded relief and sun hours on top of the algorithms.
+
+A :class:`Shader` holds the heights, their ground geometry and everything that does not depend on
+the sun (height range, numba kernels compiled, the heights uploaded to the GPU, the Earth's radius
+for curvature). Each sun is a :class:`~hillshade_rt.sun.SunOver`: one vector for the raster, or
+one per tile when the sun's direction varies across a large raster; a tile is computed on its own
+window plus the halo toward the sun that can shadow it (the rays of its cells rise above the
+highest cell within that distance), so a tile's cells get exactly what a run of the whole raster
+with that tile's sun gives them.
+
+Night: a sun at or below the (apparent) horizon lights nothing; every valid cell is in shadow.
+
+Earth curvature (docs/model.md): at ground distance d from its cell the ray stands
+d^2 (1 - k) / (2 R) higher above the terrain than on a flat Earth. ``brute`` and the horizon scan
+march the curved ray directly; the other algorithms compute the flat answer and their shadowed
+cells are re-marched by brute with curvature (curvature can only light a cell, never shadow one),
+so the result is exactly brute's.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import HillshadeError
+from .geometry import (REFRACTION_K, WGS84_A, WGS84_B, Grid, SunRays, curvature_per_m2,
+                       radius_in_azimuth, sun_rays)
+from .sun import SUN_RADIUS_DEG, Region, SunOver, disk_fraction
+
+CURVATURE_AUTO_M = 1000.0   # curvature "auto" turns on when rays can be longer than this
+SOFT_NODATA = -9999.0
+
+# output codes of --classes
+LIT, SELF_SHADOW, CAST_SHADOW, NODATA = 0, 1, 2, 255
+
+
+@dataclass
+class Body:
+    """The surface the DEM lies on, for curvature: ellipsoid axes, latitude of the DEM, whether it
+    is the Earth (terrestrial refraction applies) and where the figures came from."""
+
+    a: float = WGS84_A
+    b: float = WGS84_B
+    lat: float = 45.0
+    earth: bool = True
+    source: str = "WGS84"
+
+    def radius(self, azimuth: float) -> float:
+        return radius_in_azimuth(self.lat, azimuth, self.a, self.b)
+
+
+def dem_body(dem, lat: float | None = None) -> Body:
+    """The :class:`Body` of a DEM: its CRS's ellipsoid when that is not the Earth's (the Moon,
+    Mars), WGS84 otherwise, at the DEM's centre latitude (or ``lat``)."""
+    from .sun import EARTH_A_RANGE
+    if dem.crs is None or dem.transform is None:
+        if lat is not None:
+            return Body(lat=lat, source="WGS84 at --lat")
+        r = 6371008.8
+        return Body(r, r, 0.0, True, "no CRS: the Earth's mean radius")
+    from pyproj import CRS as PCRS, Transformer
+    pcrs = PCRS.from_user_input(dem.crs.to_wkt())
+    ell = pcrs.ellipsoid
+    rows, cols = dem.shape
+    tr = dem.transform
+    try:
+        _, la = Transformer.from_crs(pcrs, pcrs.geodetic_crs, always_xy=True).transform(
+            tr.c + tr.a * cols / 2.0, tr.f + tr.e * rows / 2.0)
+        la = float(la) if math.isfinite(la) else 45.0
+    except Exception:  # noqa: BLE001 -- a CRS pyproj cannot invert: mid-latitude
+        la = 45.0
+    if lat is not None:
+        la = lat
+    if ell is not None and not (EARTH_A_RANGE[0] <= ell.semi_major_metre <= EARTH_A_RANGE[1]):
+        return Body(ell.semi_major_metre, ell.semi_minor_metre, la, False, ell.name)
+    return Body(lat=la, source="WGS84")
+
+
+class Shader:
+    """A DEM ready to be lit: ``z`` float32 heights (NaN voids, used in place), ``grid`` its
+    geometry. ``backend`` 'cpu' or 'gpu' (already resolved: ``shadow.choose_backend``).
+
+    curvature: True, False or "auto" (on when a ray can run longer than 1 km before it rises above
+    the highest cell or leaves the raster). refraction_k: terrestrial refraction coefficient
+    (default 0.13 on the Earth, 0 elsewhere)."""
+
+    def __init__(self, z: np.ndarray, grid: Grid, algorithm: str = "smap",
+                 options: dict | None = None, backend: str = "cpu", curvature="auto",
+                 refraction_k: float | None = None, body: Body | None = None,
+                 zrange: tuple[float, float] | None = None):
+        from .algorithms import ALGORITHMS
+        if algorithm not in ALGORITHMS:
+            raise HillshadeError(f"unknown algorithm {algorithm!r}; choose one of "
+                                 f"{', '.join(ALGORITHMS)}")
+        self.z, self.grid = z, grid
+        self.algorithm, self.options, self.backend = algorithm, dict(options or {}), backend
+        if zrange is None:
+            zrange = (float(np.nanmin(z)), float(np.nanmax(z)))
+        self.zmin, self.zmax = zrange
+        self.body = body or Body()
+        self.k = (REFRACTION_K if self.body.earth else 0.0) if refraction_k is None \
+            else float(refraction_k)
+        curvature_per_m2(1.0, self.k)   # validates k
+        if curvature not in (True, False, "auto"):
+            raise HillshadeError(f"curvature must be True, False or 'auto', got {curvature!r}")
+        self.curvature = curvature
+        rows, cols = z.shape
+        dx, dy = grid.centre_spacing()
+        self.extent_m = math.hypot(cols * dx, rows * dy)
+        self._gpu = None
+        self.stats: dict = {}
+        self.curvature_used: set[bool] = set()
+
+    def warm_up(self, azimuth: float, elevation: float, soft: bool = False,
+                incidence: bool = False) -> None:
+        """Compile (or load from numba's cache) what the suns to come will run, on 4 x 4 grids,
+        so that timings measure computing."""
+        from .shadow import warm_up
+        warm_up(self.algorithm, self.grid, azimuth, max(elevation, 1.0), backend=self.backend,
+                **self.options)
+        small = Grid.uniform(4, 4, *self.grid.centre_spacing(), self.grid.col_sign,
+                             self.grid.row_sign)
+        z = np.zeros((4, 4), np.float32)
+        if self.curvature is not False or soft:
+            from .algorithms import brute, horizon
+            rays = sun_rays(small, azimuth, max(elevation, 1.0), 1e-7)
+            brute.refine(z, rays, np.ones((4, 4), np.uint8), 1, 0.0)
+            if soft:
+                horizon.horizon_angles(z, rays)
+        if incidence:
+            from .algorithms.relief import incidence as inc
+            inc(z, small, azimuth, elevation)
+
+    # -- per sun -------------------------------------------------------------------------------
+    def curvature_for(self, azimuth: float, elevation: float) -> float:
+        """(1 - k) / 2R for this sun, or 0 when curvature is off."""
+        if self.curvature is False:
+            return 0.0
+        if self.curvature == "auto":
+            reach = self.extent_m if elevation <= 0 or elevation >= 90 else min(
+                self.extent_m, (self.zmax - self.zmin) / math.tan(math.radians(elevation)))
+            if reach <= CURVATURE_AUTO_M:
+                return 0.0
+        return curvature_per_m2(self.body.radius(azimuth), self.k)
+
+    def rays(self, grid: Grid, azimuth: float, elevation: float) -> SunRays:
+        c = self.curvature_for(azimuth, elevation)
+        self.curvature_used.add(c > 0)
+        return sun_rays(grid, azimuth, elevation, c)
+
+    def window(self, region: Region, elevation: float) -> tuple[slice, slice]:
+        """Rows and columns to read for ``region``: the region plus the halo toward the sun
+        within which terrain can still rise above a ray leaving the region at ``elevation``."""
+        rows, cols = self.z.shape
+        r0, r1, _ = region.rows.indices(rows)
+        c0, c1, _ = region.cols.indices(cols)
+        if (r0, r1, c0, c1) == (0, rows, 0, cols):
+            return region.rows, region.cols
+        sub = self.z[r0:r1, c0:c1]
+        low = float(np.nanmin(sub)) if np.isfinite(sub).any() else self.zmax
+        if elevation <= 0:
+            reach = math.inf
+        elif elevation >= 90:
+            reach = 0.0
+        else:
+            reach = max(0.0, self.zmax - low) / math.tan(math.radians(elevation))
+        east = math.sin(math.radians(region.azimuth)) * self.grid.col_sign
+        north = math.cos(math.radians(region.azimuth)) * self.grid.row_sign
+        dxm = float(np.min(self.grid.dx[r0:r1]))
+        dym = float(np.min(self.grid.dy[r0:r1]))
+
+        def extra(comp, spacing, n):
+            if abs(comp) < 1e-12:
+                return 2
+            return n if not math.isfinite(reach) else min(n, int(math.ceil(reach * abs(comp) / spacing)) + 2)
+        ec = extra(east, dxm, cols)
+        er = extra(north, dym, rows)
+        if east > 1e-12:
+            c1 = min(cols, c1 + ec)
+        elif east < -1e-12:
+            c0 = max(0, c0 - ec)
+        else:
+            c0, c1 = max(0, c0 - ec), min(cols, c1 + ec)
+        if north > 1e-12:
+            r1 = min(rows, r1 + er)
+        elif north < -1e-12:
+            r0 = max(0, r0 - er)
+        else:
+            r0, r1 = max(0, r0 - er), min(rows, r1 + er)
+        return slice(r0, r1), slice(c0, c1)
+
+    def _piece(self, region: Region, elevation_for_halo: float):
+        """(z, grid, inner) of the window of ``region``: heights (a view for the whole raster, a
+        contiguous copy for a tile), its grid, and the region's place inside the window."""
+        wr, wc = self.window(region, elevation_for_halo)
+        rows, cols = self.z.shape
+        if (wr.indices(rows)[:2], wc.indices(cols)[:2]) == ((0, rows), (0, cols)):
+            return self.z, self.grid, (region.rows, region.cols), True
+        z = np.ascontiguousarray(self.z[wr, wc])
+        g = Grid(z.shape[0], z.shape[1], self.grid.dx[wr], self.grid.dy[wr], self.grid.col_sign,
+                 self.grid.row_sign, self.grid.method)
+        r0 = region.rows.indices(rows)[0] - wr.start
+        c0 = region.cols.indices(cols)[0] - wc.start
+        inner = (slice(r0, r0 + len(range(*region.rows.indices(rows)))),
+                 slice(c0, c0 + len(range(*region.cols.indices(cols)))))
+        return z, g, inner, False
+
+    def _gpu_dem(self, z, whole):
+        from .gpu import GpuDem
+        if whole:
+            if self._gpu is None:
+                self._gpu = GpuDem(z, (self.zmin, self.zmax, bool(np.isnan(z).any())))
+            return self._gpu
+        return GpuDem(z)
+
+    def cast(self, region: Region, stats: dict | None = None) -> np.ndarray:
+        """uint8 cast-shadow mask of ``region`` (1 shadow, 0 lit, 255 void)."""
+        from .algorithms import ALGORITHMS, brute
+        sub = self.z[region.rows, region.cols]
+        if region.elevation <= 0:     # night
+            return np.where(np.isnan(sub), np.uint8(255), np.uint8(1)).astype(np.uint8)
+        el = min(region.elevation, 90.0)
+        z, g, inner, whole = self._piece(region, el)
+        rays = self.rays(g, region.azimuth, el)
+        zmax = self.zmax if whole else float(np.nanmax(z))
+        if self.backend == "gpu":
+            out = self._gpu_dem(z, whole).shadow_mask(rays, self.algorithm, zmax, stats,
+                                                      **self.options)
+        else:
+            out = ALGORITHMS[self.algorithm](z, rays, zmax, stats, **self.options)
+        curved_natively = self.algorithm == "brute" or (
+            self.algorithm == "horizon" and self.options.get("method", "scan") == "scan")
+        if rays.curved and not curved_natively:
+            n = brute.refine(z, rays, out, 1, zmax)
+            if stats is not None:
+                stats["curvature_refined_fraction"] = n / max(1, out.size)
+        return out if whole else np.ascontiguousarray(out[inner])
+
+    def visible_fraction(self, region: Region) -> np.ndarray:
+        """float32 visible fraction (0..1) of the solar disk over ``region`` (NaN on voids),
+        from the exact horizon angle toward the sun against its elevation +- its radius."""
+        from .algorithms import horizon as hz
+        sub = self.z[region.rows, region.cols]
+        if region.elevation + SUN_RADIUS_DEG <= 0:
+            return np.where(np.isnan(sub), np.float32(np.nan), np.float32(0.0)).astype(np.float32)
+        z, g, inner, whole = self._piece(region, region.elevation - SUN_RADIUS_DEG)
+        rays = self.rays(g, region.azimuth, max(min(region.elevation, 90.0), 1e-6))
+        if self.backend == "gpu":
+            beta = hz.horizon_angles_gpu(self._gpu_dem(z, whole), rays)
+        else:
+            beta = hz.horizon_angles(z, rays)
+        if not whole:
+            beta = beta[inner]
+        frac = disk_fraction(beta, region.elevation).astype(np.float32)
+        frac[np.isnan(sub)] = np.nan
+        return frac
+
+    def incidence(self, region: Region) -> np.ndarray:
+        """cos of the incidence angle of the sun of ``region`` on its cells (float32, NaN voids)."""
+        from .algorithms.relief import incidence
+        return incidence(self.z, self.grid, region.azimuth, region.elevation, region.rows,
+                         region.cols)
+
+    def report(self) -> dict:
+        used = self.curvature_used
+        return {"setting": self.curvature, "applied": (True in used),
+                "radius_m": self.body.radius(0.0) if True in used else None,
+                "refraction_k": self.k, "body": self.body.source}
+
+
+KINDS = ("shadow", "classes", "hillshade", "sun")
+
+
+def render(shader: Shader, sun: SunOver, kind: str = "shadow", *, soft: bool = False,
+           self_shadow: bool = False, ambient: float = 0.2, stats: dict | None = None) -> np.ndarray:
+    """What one sun makes of the DEM, over the whole raster (tile by tile when the sun is per
+    tile):
+
+    * ``shadow``: uint8 1 shadow / 0 lit / 255 void (``self_shadow``: surfaces facing away count
+      as shadow); with ``soft`` float32 visible fraction of the solar disk (0..1, NaN on voids;
+      ``self_shadow`` zeroes faces turned away);
+    * ``classes``: uint8 0 lit, 1 self-shadow (facing away), 2 cast shadow, 255 void;
+    * ``hillshade``: uint8 shaded relief 1..255 (0 void): 1 + 254 * (ambient + (1 - ambient) *
+      max(0, cos i) * lit), lit 1/0 (or the visible fraction with ``soft``);
+    * ``sun``: float32 direct sun 0..1 (lit, or the visible fraction with ``soft``; ``self_shadow``
+      zeroes faces turned away), NaN on voids: what sun hours add up.
+    """
+    if kind not in KINDS:
+        raise HillshadeError(f"unknown product {kind!r}")
+    if kind == "classes" and soft:
+        raise HillshadeError("classes are for hard shadows: --classes and --soft do not go together")
+    shape = shader.z.shape
+    regions = sun.regions(shape)
+    parts = [_render_region(shader, r, kind, soft, self_shadow, ambient, stats) for r in regions]
+    if len(regions) == 1:
+        return parts[0]
+    out = np.empty(shape, parts[0].dtype)
+    for r, part in zip(regions, parts):
+        out[r.rows, r.cols] = part
+    return out
+
+
+def _render_region(shader, region, kind, soft, self_shadow, ambient, stats):
+    sub = shader.z[region.rows, region.cols]
+    void = np.isnan(sub)
+    need_cos = kind in ("classes", "hillshade") or self_shadow
+    cosi = shader.incidence(region) if need_cos and region.elevation > -SUN_RADIUS_DEG else None
+    if soft:
+        lit = shader.visible_fraction(region)          # float32, NaN voids
+    else:
+        cast = shader.cast(region, stats)              # uint8 1/0/255
+    if kind == "classes":
+        out = np.where(cast == 1, np.uint8(CAST_SHADOW), np.uint8(LIT)).astype(np.uint8)
+        if cosi is not None:
+            out[cosi <= 0] = SELF_SHADOW
+        else:
+            out[...] = SELF_SHADOW
+        out[void] = NODATA
+        return out
+    if kind == "hillshade":
+        light = (lit if soft else (cast == 0).astype(np.float32))
+        direct = np.maximum(cosi, 0.0) * light if cosi is not None else np.zeros_like(light)
+        illum = ambient + (1.0 - ambient) * np.nan_to_num(direct)
+        out = (1.0 + np.rint(254.0 * illum)).astype(np.uint8)
+        out[void] = 0
+        return out
+    if kind == "shadow" and not soft:
+        if self_shadow:
+            if cosi is None:
+                cast[~void] = 1
+            else:
+                cast[(cosi <= 0) & ~void] = 1
+        return cast
+    # float products: soft shadow, or direct sun for sun hours
+    light = lit if soft else np.where(void, np.float32(np.nan),
+                                      (cast == 0).astype(np.float32)).astype(np.float32)
+    if self_shadow:
+        if cosi is None:
+            light[~void] = 0.0
+        else:
+            light[(cosi <= 0) & ~void] = 0.0
+    return light

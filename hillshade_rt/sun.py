@@ -1,0 +1,397 @@
+"""The sun's position from a time and a place: NREL's SPA (through pvlib), times, zones, series.
+
+* Times are ISO 8601 instants. A time without a UTC offset is refused unless an IANA zone is
+  named (``tz``), which then also decides daylight saving; ambiguous and non-existent local times
+  (the hour that repeats or is skipped when clocks change) are refused with a hint.
+* The solar position is NREL's Solar Position Algorithm (Reda & Andreas 2004) as implemented by
+  ``pvlib.spa`` (its numpy version): topocentric azimuth (clockwise from true north) and
+  elevation, apparent (with the SPA's refraction) unless refraction is turned off.
+* A DEM's sun is computed at its centre, converted from true north to the raster's grid north
+  (meridian convergence of its projection), and, where the direction differs across the raster by
+  more than a tolerance, per tile (:func:`sun_over`).
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import math
+import re
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .errors import HillshadeError
+
+UTC = _dt.timezone.utc
+STANDARD_PRESSURE_HPA = 1013.25
+STANDARD_TEMPERATURE_C = 12.0      # the SPA's (and pvlib's) default
+ATMOS_REFRACT = 0.5667             # the SPA's refraction at sunrise/sunset, degrees
+SUN_RADIUS_DEG = 0.533 / 2         # the solar disk: 0.533 degrees across
+DEFAULT_TOLERANCE = 0.05           # degrees: above this the sun is computed per tile
+MAX_TILES = 4096
+
+
+# --------------------------------------------------------------------------------------------
+# times
+
+def zone(name: str | None):
+    """An IANA time zone (``zoneinfo``), or None."""
+    if name is None:
+        return None
+    from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
+    try:
+        return ZoneInfo(name)
+    except (ZoneInfoNotFoundError, ValueError, TypeError):
+        raise HillshadeError(f"--tz {name!r}: not an IANA time zone name "
+                             "(e.g. Europe/Zurich, America/Denver, UTC)") from None
+
+
+def localize(naive: _dt.datetime, tz, what: str) -> _dt.datetime:
+    """Attach zone ``tz`` to a naive local time; refuse times that the zone skips or repeats."""
+    a = naive.replace(tzinfo=tz, fold=0)
+    b = naive.replace(tzinfo=tz, fold=1)
+    if a.utcoffset() != b.utcoffset():
+        back = a.astimezone(UTC).astimezone(tz).replace(tzinfo=None)
+        if back != naive:
+            raise HillshadeError(f"{what} does not exist in {tz.key} (clocks skip it); "
+                                 "give a UTC offset instead")
+        raise HillshadeError(f"{what} happens twice in {tz.key} (clocks go back); give a UTC "
+                             f"offset ({a.isoformat()} or {b.isoformat()})")
+    return a
+
+
+def parse_time(text: str, tz=None) -> _dt.datetime:
+    """An ISO 8601 time (``2026-06-21T14:30:00+02:00``, ``...Z``, or local time with ``tz``) as
+    an aware datetime. A time with an offset keeps its instant; ``tz`` then only names the zone
+    outputs are labelled in."""
+    s = str(text).strip()
+    try:
+        t = _dt.datetime.fromisoformat(s.replace("z", "Z"))
+    except ValueError:
+        raise HillshadeError(f"--time {text!r}: not an ISO 8601 time "
+                             "(e.g. 2026-06-21T14:30:00+02:00)") from None
+    if t.tzinfo is None:
+        if tz is None:
+            raise HillshadeError(f"time {text!r} has no UTC offset: add one (e.g. +02:00 or Z) or "
+                                 "name the zone with --tz (e.g. --tz Europe/Zurich)")
+        return localize(t, tz, f"time {text!r}")
+    return t.astimezone(tz) if tz is not None else t
+
+
+_STEP_UNITS = {"s": 1, "sec": 1, "second": 1, "seconds": 1, "m": 60, "min": 60, "mins": 60,
+               "minute": 60, "minutes": 60, "h": 3600, "hr": 3600, "hour": 3600, "hours": 3600,
+               "d": 86400, "day": 86400, "days": 86400}
+
+
+def parse_step(text: str) -> _dt.timedelta:
+    """A step such as ``30min``, ``1h``, ``1h30min``, ``90s``, ``1d`` or ISO 8601 ``PT30M``."""
+    s = str(text).strip().lower()
+    iso = re.fullmatch(r"p(?:(\d+(?:\.\d+)?)d)?(?:t(?:(\d+(?:\.\d+)?)h)?(?:(\d+(?:\.\d+)?)m)?"
+                       r"(?:(\d+(?:\.\d+)?)s)?)?", s)
+    seconds = None
+    if iso and s not in ("p", "pt"):
+        d, h, m, sec = (float(g) if g else 0.0 for g in iso.groups())
+        seconds = d * 86400 + h * 3600 + m * 60 + sec
+    else:
+        parts = re.findall(r"(\d+(?:\.\d+)?)\s*([a-z]+)", s)
+        if parts and re.fullmatch(r"(?:\s*\d+(?:\.\d+)?\s*[a-z]+)+\s*", s) and \
+                all(u in _STEP_UNITS for _, u in parts):
+            seconds = sum(float(v) * _STEP_UNITS[u] for v, u in parts)
+    if seconds is None:
+        raise HillshadeError(f"--step {text!r}: not a duration (e.g. 30min, 1h, 10min, PT30M)")
+    if seconds < 1:
+        raise HillshadeError(f"--step {text!r}: must be at least one second")
+    return _dt.timedelta(seconds=seconds)
+
+
+def time_range(start: _dt.datetime, end: _dt.datetime, step: _dt.timedelta,
+               limit: int = 1_000_000) -> list[_dt.datetime]:
+    """start, start + step, ... up to and including ``end``, stepping in absolute time (a series
+    across a daylight-saving change keeps equal intervals; labels keep each instant's offset)."""
+    if end < start:
+        raise HillshadeError(f"--end {end.isoformat()} is before --start {start.isoformat()}")
+    n = int((end - start) / step) + 1
+    if n > limit:
+        raise HillshadeError(f"{n} times from --start to --end at this --step: more than {limit}")
+    tz = start.tzinfo
+    t0 = start.astimezone(UTC)
+    return [(t0 + i * step).astimezone(tz) for i in range(n)]
+
+
+def iso(t: _dt.datetime) -> str:
+    """ISO 8601 with the offset, seconds only when needed."""
+    return t.isoformat(timespec="seconds" if t.second or t.microsecond else "minutes")
+
+
+# --------------------------------------------------------------------------------------------
+# solar position
+
+@dataclass(frozen=True)
+class Atmosphere:
+    """Refraction settings: apparent positions with the SPA's refraction at this pressure and
+    temperature, or true positions (``refraction=False``)."""
+
+    refraction: bool = True
+    pressure_hpa: float | None = None      # None: standard atmosphere at the observer's height
+    temperature_c: float = STANDARD_TEMPERATURE_C
+
+    def pressure_at(self, height_m: float) -> float:
+        if self.pressure_hpa is not None:
+            return float(self.pressure_hpa)
+        return standard_pressure(height_m)
+
+
+def standard_pressure(height_m: float) -> float:
+    """hPa of the ICAO standard atmosphere at ``height_m`` (1013.25 at sea level)."""
+    h = min(max(float(height_m), -500.0), 11000.0)
+    return STANDARD_PRESSURE_HPA * (1.0 - 2.25577e-5 * h) ** 5.25588
+
+
+def solar_position(times, lat, lon, height_m=0.0, atmosphere: Atmosphere = Atmosphere(),
+                   delta_t: float | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(azimuth, elevation, zenith) in degrees of the sun at ``times`` (aware datetimes, or unix
+    seconds) seen from (lat, lon, height_m); arrays broadcast together. Azimuth clockwise from
+    true north; elevation and zenith apparent (SPA refraction) unless ``atmosphere.refraction`` is
+    False. ``delta_t``: TT - UT1 in seconds (default: pvlib's estimate for the year)."""
+    from pvlib import spa
+
+    if not isinstance(times, np.ndarray) or times.dtype == object:
+        times = np.array([t.timestamp() if isinstance(t, _dt.datetime) else float(t)
+                          for t in np.ravel(np.asarray(times, dtype=object))], dtype=np.float64)
+    unix, lat, lon, h = np.broadcast_arrays(np.asarray(times, np.float64),
+                                            np.asarray(lat, np.float64),
+                                            np.asarray(lon, np.float64),
+                                            np.asarray(height_m, np.float64))
+    shape = unix.shape
+    unix, lat, lon, h = (np.ravel(a) for a in (unix, lat, lon, h))
+    if delta_t is None:
+        dt64 = np.floor(unix).astype("datetime64[s]")
+        years = dt64.astype("datetime64[Y]").astype(np.int64) + 1970
+        months = dt64.astype("datetime64[M]").astype(np.int64) % 12 + 1
+        delta_t = spa.calculate_deltat(years, months)
+    pressure = np.array([atmosphere.pressure_at(x) for x in h]) if atmosphere.pressure_hpa is None \
+        else np.full(h.shape, float(atmosphere.pressure_hpa))
+    zen_app, zen, el_app, el, az, _ = spa.solar_position_numpy(
+        unix, lat, lon, h, pressure, float(atmosphere.temperature_c), delta_t, ATMOS_REFRACT, 1)
+    if atmosphere.refraction:
+        el_out, zen_out = el_app, zen_app
+    else:
+        el_out, zen_out = el, zen
+    return (np.asarray(az, np.float64).reshape(shape), np.asarray(el_out, np.float64).reshape(shape),
+            np.asarray(zen_out, np.float64).reshape(shape))
+
+
+# --------------------------------------------------------------------------------------------
+# where a DEM is
+
+EARTH_A_RANGE = (6.35e6, 6.40e6)   # semi-major axes of Earth ellipsoids (metres)
+
+
+@dataclass
+class Site:
+    """Where a DEM's sun is computed: its centre (or the user's --lat/--lon) and the ground
+    height there; ``to_lonlat`` maps pixel coordinates to longitude/latitude when the DEM has a
+    CRS (None otherwise: one sun for the whole raster)."""
+
+    lat: float
+    lon: float
+    height: float
+    source: str
+    to_lonlat: object = None     # callable(rows, cols) -> (lon, lat) arrays, or None
+    convergence: object = None   # callable(rows, cols) -> grid azimuth of true north, degrees
+    notes: list[str] = field(default_factory=list)
+
+    def as_dict(self) -> dict:
+        return {"latitude": self.lat, "longitude": self.lon, "height_m": self.height,
+                "source": self.source}
+
+
+def _centre_height(z: np.ndarray) -> tuple[float, str]:
+    rows, cols = z.shape
+    r, c = rows // 2, cols // 2
+    v = float(z[r, c])
+    if math.isfinite(v):
+        return v, "the DEM's centre cell"
+    for half in (2, 8, 32, 128):
+        win = z[max(0, r - half):r + half + 1, max(0, c - half):c + half + 1]
+        if np.isfinite(win).any():
+            return float(np.nanmedian(win)), f"median of valid cells within {half} of the centre"
+    return float(np.nanmedian(z)), "median of the DEM (its centre is a void)"
+
+
+def dem_site(dem, lat: float | None = None, lon: float | None = None) -> Site:
+    """The :class:`Site` of a :class:`~hillshade_rt.io.Dem`."""
+    height, hnote = _centre_height(dem.heights)
+    if (lat is None) != (lon is None):
+        raise HillshadeError("--lat and --lon go together")
+    if lat is not None:
+        if not (-90.0 <= lat <= 90.0) or not math.isfinite(lon):
+            raise HillshadeError(f"--lat must be within [-90, 90] and --lon finite, got {lat}, {lon}")
+        lon = (lon + 180.0) % 360.0 - 180.0
+        return Site(lat, lon, height, "--lat/--lon", notes=[f"observer height: {hnote}"])
+    if dem.crs is None or dem.transform is None:
+        raise HillshadeError(f"{dem.path}: has no CRS, so its place on Earth is unknown; "
+                             "give --lat and --lon (degrees) for a sun from --time")
+    from pyproj import CRS as PCRS, Transformer
+
+    pcrs = PCRS.from_user_input(dem.crs.to_wkt())
+    ell = pcrs.ellipsoid
+    if ell is not None and not (EARTH_A_RANGE[0] <= ell.semi_major_metre <= EARTH_A_RANGE[1]):
+        raise HillshadeError(
+            f"{dem.path}: its CRS is on {ell.name} (a = {ell.semi_major_metre / 1000:.1f} km), not "
+            "the Earth; the solar position from --time is for the Earth: give --azimuth/--elevation")
+    geo = pcrs.geodetic_crs
+    fwd = Transformer.from_crs(pcrs, geo, always_xy=True)
+    back = Transformer.from_crs(geo, pcrs, always_xy=True)
+    tr = dem.transform
+
+    def to_lonlat(rows, cols):
+        rows = np.asarray(rows, np.float64)
+        cols = np.asarray(cols, np.float64)
+        x = tr.c + tr.a * (cols + 0.5)
+        y = tr.f + tr.e * (rows + 0.5)
+        lo, la = fwd.transform(x, y)
+        return np.asarray(lo, np.float64), np.asarray(la, np.float64)
+
+    def convergence(rows, cols):
+        """Grid azimuth (degrees clockwise from the raster's north) of true north."""
+        if pcrs.is_geographic:
+            return np.zeros(np.broadcast(np.asarray(rows), np.asarray(cols)).shape)
+        lo, la = to_lonlat(rows, cols)
+        dlat = 1e-4 * np.where(la > 89.0, -1.0, 1.0)
+        x0, y0 = back.transform(lo, la)
+        x1, y1 = back.transform(lo, la + dlat)
+        dx = (np.asarray(x1) - np.asarray(x0)) * np.sign(dlat)
+        dy = (np.asarray(y1) - np.asarray(y0)) * np.sign(dlat)
+        return np.degrees(np.arctan2(dx, dy))
+
+    rows, cols = dem.shape
+    lo, la = to_lonlat(np.array([(rows - 1) / 2.0]), np.array([(cols - 1) / 2.0]))
+    if not (np.isfinite(lo[0]) and np.isfinite(la[0])):
+        raise HillshadeError(f"{dem.path}: its centre does not map to a longitude/latitude")
+    return Site(float(la[0]), float((lo[0] + 180.0) % 360.0 - 180.0), height,
+                "the DEM's centre", to_lonlat, convergence, notes=[f"observer height: {hnote}"])
+
+
+# --------------------------------------------------------------------------------------------
+# the sun over a raster
+
+@dataclass
+class Region:
+    """Part of a raster (row and column slices) and the sun there (grid azimuth, elevation)."""
+
+    rows: slice
+    cols: slice
+    azimuth: float
+    elevation: float
+
+
+@dataclass
+class SunOver:
+    """The sun over a raster at one time: one vector (``tiles`` None) or one per tile."""
+
+    time: _dt.datetime | None
+    azimuth: float            # grid azimuth at the centre, degrees
+    elevation: float          # at the centre
+    true_azimuth: float | None = None
+    zenith: float | None = None
+    deviation_deg: float = 0.0      # largest angle between the centre's sun and any other place's
+    tiles: list[Region] | None = None
+    tile_deviation_deg: float = 0.0  # estimated largest deviation inside one tile
+
+    def regions(self, shape) -> list[Region]:
+        if self.tiles is not None:
+            return self.tiles
+        return [Region(slice(0, shape[0]), slice(0, shape[1]), self.azimuth, self.elevation)]
+
+    @property
+    def night(self) -> bool:
+        return all(r.elevation <= 0 for r in self.tiles) if self.tiles else self.elevation <= 0
+
+    def as_dict(self) -> dict:
+        d = {"azimuth": self.azimuth, "elevation": self.elevation}
+        if self.time is not None:
+            d.update(time=iso(self.time), true_azimuth=self.true_azimuth, zenith=self.zenith)
+        d["night"] = self.night
+        d["mode"] = "per tile" if self.tiles else "one vector"
+        d["deviation_deg"] = self.deviation_deg
+        if self.tiles:
+            d["tiles"] = len(self.tiles)
+            d["tile_deviation_deg"] = self.tile_deviation_deg
+        return d
+
+
+def _vectors(az, el):
+    a, e = np.radians(az), np.radians(el)
+    return np.stack([np.cos(e) * np.sin(a), np.cos(e) * np.cos(a), np.sin(e)], axis=-1)
+
+
+def _angle(u, v):
+    return np.degrees(np.arccos(np.clip(np.sum(u * v, axis=-1), -1.0, 1.0)))
+
+
+def sun_over(site: Site, shape, times, atmosphere: Atmosphere = Atmosphere(),
+             tolerance: float = DEFAULT_TOLERANCE, delta_t: float | None = None) -> list[SunOver]:
+    """The sun over a raster of ``shape`` at each of ``times`` (aware datetimes).
+
+    The SPA runs at the centre and on a 9 x 9 lattice of places; where the sun's direction (grid
+    azimuth and apparent elevation as a unit vector) differs from the centre's by more than
+    ``tolerance`` degrees, the raster is cut into tiles small enough that the direction inside one
+    varies by about the tolerance, and the SPA runs again at each tile's centre."""
+    rows, cols = shape
+    times = list(times)
+    ts = np.array([t.timestamp() for t in times])
+    if site.to_lonlat is None:
+        az, el, zen = solar_position(ts, site.lat, site.lon, site.height, atmosphere, delta_t)
+        return [SunOver(t, float(a), float(e), float(a), float(z))
+                for t, a, e, z in zip(times, az, el, zen)]
+    n = 9
+    lr = np.linspace(0.0, rows - 1.0, n)
+    lc = np.linspace(0.0, cols - 1.0, n)
+    gr, gc = np.meshgrid(lr, lc, indexing="ij")
+    lo, la = site.to_lonlat(gr.ravel(), gc.ravel())
+    conv = site.convergence(gr.ravel(), gc.ravel())
+    az, el, zen = solar_position(ts[:, None], la[None, :], lo[None, :], site.height, atmosphere,
+                                 delta_t)
+    gaz = az + conv[None, :]
+    vec = _vectors(gaz, el).reshape(len(times), n, n, 3)
+    mid = n // 2
+    out = []
+    for i, t in enumerate(times):
+        centre = vec[i, mid, mid]
+        dev = float(_angle(vec[i], centre).max())
+        s = SunOver(t, float(gaz[i, mid * n + mid] % 360.0), float(el[i, mid * n + mid]),
+                    float(az[i, mid * n + mid]), float(zen[i, mid * n + mid]), dev)
+        if dev > tolerance and not (el[i] <= -2.0).all():
+            # angular change per pixel along rows and columns (largest between lattice neighbours)
+            per_c = float(_angle(vec[i, :, 1:], vec[i, :, :-1]).max()) / max(lc[1] - lc[0], 1e-9)
+            per_r = float(_angle(vec[i, 1:, :], vec[i, :-1, :]).max()) / max(lr[1] - lr[0], 1e-9)
+            nc = max(1, math.ceil(cols * per_c / tolerance))
+            nr = max(1, math.ceil(rows * per_r / tolerance))
+            while nr * nc > MAX_TILES:
+                nr, nc = max(1, (nr + 1) // 2), max(1, (nc + 1) // 2)
+            re_ = np.linspace(0, rows, nr + 1).round().astype(int)
+            ce = np.linspace(0, cols, nc + 1).round().astype(int)
+            tr_, tc_ = np.meshgrid((re_[:-1] + re_[1:] - 1) / 2.0, (ce[:-1] + ce[1:] - 1) / 2.0,
+                                   indexing="ij")
+            tlo, tla = site.to_lonlat(tr_.ravel(), tc_.ravel())
+            tconv = site.convergence(tr_.ravel(), tc_.ravel())
+            taz, tel, _ = solar_position(np.full(tlo.shape, ts[i]), tla, tlo, site.height,
+                                         atmosphere, delta_t)
+            taz = (taz + tconv) % 360.0
+            s.tiles = [Region(slice(int(re_[a]), int(re_[a + 1])), slice(int(ce[b]), int(ce[b + 1])),
+                              float(taz[a * nc + b]), float(tel[a * nc + b]))
+                       for a in range(nr) for b in range(nc)]
+            s.tile_deviation_deg = 0.5 * (per_c * cols / nc + per_r * rows / nr)
+        out.append(s)
+    return out
+
+
+def disk_fraction(horizon_deg, elevation_deg, radius_deg: float = SUN_RADIUS_DEG):
+    """Visible fraction (0..1) of the solar disk of angular radius ``radius_deg`` centred at
+    ``elevation_deg`` above a horizon at ``horizon_deg`` (flat horizon across the disk; the
+    astronomical horizon, 0 degrees, hides what is below it): the area of the disk above the line,
+    (acos(d) - d sqrt(1 - d^2)) / pi with d = (horizon - elevation) / radius."""
+    h = np.maximum(np.asarray(horizon_deg, np.float64), 0.0)
+    d = np.clip((h - elevation_deg) / radius_deg, -1.0, 1.0)
+    return (np.arccos(d) - d * np.sqrt(1.0 - d * d)) / math.pi
