@@ -396,6 +396,131 @@ def _light(dem, output, kind, algorithm, options, curvature, refraction_k, soft,
                        f"{rep['night_count']} of {len(suns)} time(s): all shadow there", err=True)
 
 
+@cli.command("sun-hours")
+@click.argument("dem", type=click.Path(dir_okay=False))
+@click.argument("output", type=click.Path(dir_okay=False))
+@click.option("--date", "date_", required=True, metavar="YYYY-MM-DD", help="The day (or first day).")
+@click.option("--end-date", default=None, metavar="YYYY-MM-DD",
+              help="Last day of a range (included); the hours are the total over the range.")
+@click.option("--step", default="10min", show_default=True, metavar="DURATION",
+              help="Sampling interval; each sample stands for the interval around it.")
+@click.option("--tz", default=None, metavar="ZONE",
+              help="Days run midnight to midnight in this IANA zone (default: local mean solar "
+                   "time at the DEM's longitude).")
+@click.option("--lat", type=float, default=None, help="Observer latitude (default: DEM centre).")
+@click.option("--lon", type=float, default=None, help="Observer longitude (with --lat).")
+@click.option("--pressure", type=float, default=None, help="Air pressure for refraction, hPa.")
+@click.option("--temperature", type=float, default=None, help="Air temperature, degrees C.")
+@click.option("--no-refraction", is_flag=True, help="True sun elevation, not apparent.")
+@click.option("--sun-tolerance", type=float, default=0.05, show_default=True,
+              help="Degrees the sun may vary across the raster before it is computed per tile.")
+@algorithm_option
+@physics_options
+@click.option("--self-shadow/--no-self-shadow", default=True, show_default=True,
+              help="Count no direct sun on surfaces facing away from the sun.")
+@click.option("--preview", type=click.Path(dir_okay=False), default=None,
+              help="Also write a quick-look PNG (relief tinted by sun hours).")
+@backend_option
+@click.option("--threads", type=click.IntRange(min=1), default=None,
+              help="CPU threads (default: all cores).")
+@click.option("--report", "report_path", type=click.Path(dir_okay=False), default=None,
+              help="Write a JSON report here.")
+@click.option("--overwrite", is_flag=True, help="Replace outputs if they exist.")
+@click.option("-q", "--quiet", is_flag=True, help="No progress bar or summary on stderr.")
+@dem_options
+@_errors_to_click
+def sun_hours(dem, output, date_, end_date, step, tz, lat, lon, pressure, temperature,
+              no_refraction, sun_tolerance, algorithm, curvature, refraction_k, soft, self_shadow,
+              preview, backend, threads, report_path, overwrite, quiet, **read_opts):
+    """Write the hours of direct sun per cell of DEM over a day (or a range of days) to OUTPUT
+    (float32 hours, -9999 nodata), like WhiteboxTools' TimeInDaylight or GRASS r.sun's insolation
+    time: the sun every --step, each lit sample counting for its interval."""
+    import numba
+    import numpy as np
+
+    from .engine import Shader, dem_body, render
+    from .io import check_output_path, write_json, write_png, write_raster
+    from .preview import relief_rgb
+    from .report import Timer
+    from .runner import SunRequest, progress
+    from .shadow import choose_backend
+    from .sun import SUN_RADIUS_DEG, day_samples, parse_date
+
+    timer = Timer()
+    for path in (output, report_path, preview):
+        if path is not None:
+            check_output_path(path, overwrite)
+    first = parse_date(date_, "--date")
+    last = parse_date(end_date, "--end-date") if end_date is not None else first
+    if last < first:
+        raise click.UsageError("--end-date is before --date")
+    req = SunRequest.from_options(time=("2000-01-01T00:00Z",), tz=tz, lat=lat, lon=lon,
+                                  pressure=pressure, temperature=temperature,
+                                  no_refraction=no_refraction, sun_tolerance=sun_tolerance)
+    if threads is not None:
+        numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+    ran_on = choose_backend(backend, algorithm, {})
+    with timer("read"):
+        d = _read(dem, **read_opts)
+    with timer("prepare"):
+        from .sun import dem_site
+        site = dem_site(d, lat, lon)
+        times, weights = day_samples(first, last, step, req.tz, site.lon)
+        req.times = times
+        suns, sun_info = req.suns(d)
+        zmin, zmax = d.height_range()
+        shader = Shader(d.heights, d.grid, algorithm, {}, ran_on,
+                        "auto" if curvature is None else curvature, refraction_k,
+                        dem_body(d, lat), (zmin, zmax))
+
+        def dark(s):
+            top = max([r.elevation for r in s.tiles] if s.tiles else [s.elevation])
+            return top + (SUN_RADIUS_DEG if soft else 0.0) <= 0.0
+        work = [(s, w) for s, w in zip(suns, weights) if not dark(s)]
+        if work:
+            shader.warm_up(work[0][0].azimuth, max(work[0][0].elevation, 1.0), soft=soft,
+                           incidence=self_shadow)
+        hours = np.where(np.isnan(d.heights), np.float32(np.nan), np.float32(0.0))
+    algo_stats: dict = {}
+    with timer("compute"):
+        for s, w in progress(work, quiet, "hillshade-rt sun-hours", unit="sun"):
+            hours += np.float32(w) * render(shader, s, "sun", soft=soft, self_shadow=self_shadow,
+                                            stats=algo_stats)
+    days = (last - first).days + 1
+    tags = {"HILLSHADE_RT_VERSION": __version__, "UNITS": "hours of direct sun",
+            "DATE_FIRST": first.isoformat(), "DATE_LAST": last.isoformat(), "DAYS": days,
+            "STEP": step, "ALGORITHM": algorithm, "SOFT": soft, "SELF_SHADOW": self_shadow,
+            "DAY": f"midnight to midnight, {req.tz.key}" if req.tz is not None
+            else f"local mean solar time at longitude {site.lon:.4f}"}
+    with timer("write"):
+        write_raster(output, np.where(np.isnan(hours), np.float32(-9999.0), hours), d,
+                     nodata=-9999.0, description="hours of direct sun", tags=tags)
+        if preview is not None:
+            top = float(np.nanmax(hours)) if np.isfinite(hours).any() else 0.0
+            write_png(preview, relief_rgb(d.heights, d.grid,
+                                          warm=hours / top if top > 0 else np.zeros_like(hours)))
+    valid = hours[~np.isnan(hours)]
+    rep = {"input": os.path.abspath(d.path), "output": os.path.abspath(output),
+           "shape": list(d.shape), "algorithm": algorithm, "backend": ran_on,
+           "dates": [first.isoformat(), last.isoformat()], "days": days, "step": step,
+           "samples": len(suns), "samples_with_sun": len(work), "day_definition": tags["DAY"],
+           "soft": soft, "self_shadow": self_shadow,
+           "hours": {"min": float(valid.min()) if valid.size else None,
+                     "mean": float(valid.mean()) if valid.size else None,
+                     "max": float(valid.max()) if valid.size else None},
+           "curvature": shader.report(), "algorithm_stats": algo_stats,
+           "seconds": dict(timer.seconds, total=timer.total()), "version": __version__}
+    rep.update(sun_info or {})
+    if report_path is not None:
+        write_json(report_path, rep)
+    if not quiet:
+        h = rep["hours"]
+        click.echo(f"hillshade-rt: {output}: {d.shape[1]}x{d.shape[0]}, {days} day(s) from "
+                   f"{first.isoformat()}, {len(work)} of {len(suns)} samples with the sun up; "
+                   f"sun hours {h['min']:.2f} .. {h['max']:.2f} (mean {h['mean']:.2f}); "
+                   f"compute {timer.seconds['compute']:.2f} s", err=True)
+
+
 _VALUES = {("shadow", False): "1=shadow 0=lit 255=nodata",
            ("shadow", True): "visible fraction of the solar disk 0..1, -9999=nodata",
            ("classes", False): "0=lit 1=self-shadow 2=cast shadow 255=nodata",

@@ -30,7 +30,11 @@ from .geometry import (REFRACTION_K, WGS84_A, WGS84_B, Grid, SunRays, curvature_
                        radius_in_azimuth, sun_rays)
 from .sun import SUN_RADIUS_DEG, Region, SunOver, disk_fraction
 
-CURVATURE_AUTO_M = 1000.0   # curvature "auto" turns on when rays can be longer than this
+CURVATURE_AUTO_M = 1000.0
+# a tile whose window (tile + halo) holds more than this many times its own cells is marched by
+# brute over its own cells only (exact), instead of running the algorithm over the whole window
+TILE_BRUTE_RATIO = 3.0
+_TILE = 7   # scratch code: a cell of the tile, still to decide   # curvature "auto" turns on when rays can be longer than this
 SOFT_NODATA = -9999.0
 
 # output codes of --classes
@@ -226,18 +230,27 @@ class Shader:
         z, g, inner, whole = self._piece(region, el)
         rays = self.rays(g, region.azimuth, el)
         zmax = self.zmax if whole else float(np.nanmax(z))
-        if self.backend == "gpu":
+        by_brute = self.backend == "cpu" and z.size > TILE_BRUTE_RATIO * sub.size
+        if by_brute:
+            # a tile whose halo is much larger than itself: march only the tile's own cells
+            # (brute, exact) rather than run the algorithm over the whole window
+            out = np.zeros(z.shape, np.uint8)
+            out[inner] = _TILE
+            brute.refine(z, rays, out, _TILE, zmax)
+            if stats is not None:
+                stats["tiles_marched_by_brute"] = stats.get("tiles_marched_by_brute", 0) + 1
+        elif self.backend == "gpu":
             out = self._gpu_dem(z, whole).shadow_mask(rays, self.algorithm, zmax, stats,
                                                       **self.options)
         else:
             out = ALGORITHMS[self.algorithm](z, rays, zmax, stats, **self.options)
-        curved_natively = self.algorithm == "brute" or (
+        curved_natively = by_brute or self.algorithm == "brute" or (
             self.algorithm == "horizon" and self.options.get("method", "scan") == "scan")
         if rays.curved and not curved_natively:
             n = brute.refine(z, rays, out, 1, zmax)
             if stats is not None:
                 stats["curvature_refined_fraction"] = n / max(1, out.size)
-        return out if whole else np.ascontiguousarray(out[inner])
+        return out if out.shape == sub.shape else np.ascontiguousarray(out[inner])
 
     def visible_fraction(self, region: Region) -> np.ndarray:
         """float32 visible fraction (0..1) of the solar disk over ``region`` (NaN on voids),
@@ -252,7 +265,7 @@ class Shader:
             beta = hz.horizon_angles_gpu(self._gpu_dem(z, whole), rays)
         else:
             beta = hz.horizon_angles(z, rays)
-        if not whole:
+        if beta.shape != sub.shape:
             beta = beta[inner]
         frac = disk_fraction(beta, region.elevation).astype(np.float32)
         frac[np.isnan(sub)] = np.nan

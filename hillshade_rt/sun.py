@@ -118,6 +118,43 @@ def time_range(start: _dt.datetime, end: _dt.datetime, step: _dt.timedelta,
     return [(t0 + i * step).astimezone(tz) for i in range(n)]
 
 
+def parse_date(text: str, what: str = "--date") -> _dt.date:
+    try:
+        return _dt.date.fromisoformat(str(text).strip())
+    except ValueError:
+        raise HillshadeError(f"{what} {text!r}: not a date (YYYY-MM-DD)") from None
+
+
+def day_samples(first: _dt.date, last: _dt.date, step: str, tz, lon: float,
+                limit: int = 2_000_000) -> tuple[list[_dt.datetime], list[float]]:
+    """Sample times and their weights in hours for the days ``first``..``last``: each day cut
+    into intervals of ``step`` (the last one shorter if the step does not divide the day), a
+    sample at the middle of each. Days run midnight to midnight in zone ``tz`` (23 or 25 hours on
+    a daylight-saving change), or in local mean solar time at ``lon`` when ``tz`` is None."""
+    dt = parse_step(step)
+    times, weights = [], []
+    day = first
+    one = _dt.timedelta(days=1)
+    while day <= last:
+        if tz is not None:
+            t0 = _dt.datetime.combine(day, _dt.time(0), tz).astimezone(UTC)
+            t1 = _dt.datetime.combine(day + one, _dt.time(0), tz).astimezone(UTC)
+        else:
+            t0 = _dt.datetime.combine(day, _dt.time(0), UTC) - _dt.timedelta(hours=lon / 15.0)
+            t1 = t0 + one
+        t = t0
+        while t < t1:
+            e = min(t + dt, t1)
+            mid = t + (e - t) / 2
+            times.append(mid.astimezone(tz) if tz is not None else mid)
+            weights.append((e - t).total_seconds() / 3600.0)
+            t = e
+        if len(times) > limit:
+            raise HillshadeError(f"more than {limit} samples: use a longer --step")
+        day += one
+    return times, weights
+
+
 def iso(t: _dt.datetime) -> str:
     """ISO 8601 with the offset, seconds only when needed."""
     return t.isoformat(timespec="seconds" if t.second or t.microsecond else "minutes")

@@ -26,7 +26,8 @@ def test_shadow_with_report(tmp_path, runner):
     doc = json.loads(rep.read_text())
     assert REPORT_KEYS <= set(doc)
     assert doc["shape"] == [400, 400] and doc["crs"] == "EPSG:26915"
-    assert doc["sun"] == {"azimuth": 163.0, "elevation": 5.0}
+    assert doc["sun"]["azimuth"] == 163.0 and doc["sun"]["elevation"] == 5.0
+    assert doc["sun"]["night"] is False and doc["sun_source"] == "given"
     assert doc["algorithm"] == "smap" and doc["backend"] == "cpu" and doc["threads"] >= 1
     assert set(doc["seconds"]) == {"read", "prepare", "compute", "write", "total"}
     assert doc["spacing_m"][0] == pytest.approx(1.0, rel=1e-3)

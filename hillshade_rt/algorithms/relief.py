@@ -5,9 +5,10 @@
 with the row's own ground spacing. cos(i) <= 0: the surface faces away from the sun (self-shadow).
 
 Edges and voids: a neighbour outside the raster or on a void is extrapolated linearly from the
-centre and the opposite neighbour (2e - opposite), or takes the centre's height when that is
-missing too, so every valid cell gets a normal (gdaldem's ``-compute_edges`` does the same kind of
-thing). A void cell gets NaN.
+centre and the opposite neighbour (2e - opposite); a corner with its opposite missing too comes
+from the plane through the centre and its two edge neighbours; an edge neighbour with nothing
+opposite takes the centre's height. So every valid cell gets a normal, exact on a plane up to the
+raster's corners (gdaldem's ``-compute_edges`` extrapolates likewise). A void cell gets NaN.
 """
 
 import math
@@ -51,14 +52,16 @@ def _incidence(z, dx, dy, csign, rsign, r0, c0, lx, ly, lz, out):
             g0 = _at(z, r + 1, c - 1)
             h0 = _at(z, r + 1, c)
             i0 = _at(z, r + 1, c + 1)
-            a = _fill(a0, e, i0)
             b = _fill(b0, e, h0)
-            cc = _fill(c_0, e, g0)
             d = _fill(d0, e, f0)
             f = _fill(f0, e, d0)
-            g = _fill(g0, e, c_0)
             h = _fill(h0, e, b0)
-            ii = _fill(i0, e, a0)
+            # a corner: its own height, else reflected through the centre, else on the plane
+            # through the centre and the two edge neighbours beside it
+            a = _fill(a0, e, i0) if not (math.isnan(a0) and math.isnan(i0)) else b + d - e
+            cc = _fill(c_0, e, g0) if not (math.isnan(c_0) and math.isnan(g0)) else b + f - e
+            g = _fill(g0, e, c_0) if not (math.isnan(g0) and math.isnan(c_0)) else h + d - e
+            ii = _fill(i0, e, a0) if not (math.isnan(i0) and math.isnan(a0)) else h + f - e
             dz_dcol = ((cc + 2.0 * f + ii) - (a + 2.0 * d + g)) / (8.0 * dx[r])
             dz_drow = ((g + 2.0 * h + ii) - (a + 2.0 * b + cc)) / (8.0 * dy[r])
             ge = dz_dcol * csign     # dz / d(east)
