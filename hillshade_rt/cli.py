@@ -588,6 +588,13 @@ def _algorithm_options(algorithm: str, **given) -> dict:
               help="scan: exact per-cell march; hull: convex-hull approximation, much faster.")
 @click.option("--sample-spacing", type=click.IntRange(min=1), default=1, show_default=True,
               help="scan: use every N-th sample only (the paper's sp; faster, approximate).")
+@click.option("--earth-curvature/--no-earth-curvature", "curvature", default=None,
+              help="Let the terrain fall away by d^2(1-k)/2R along each ray (default: on when "
+                   "the raster is more than 1 km across).")
+@click.option("--refraction-coefficient", "refraction_k", type=float, default=None,
+              help="Terrestrial refraction k (default 0.13 on the Earth, 0 on other bodies).")
+@click.option("--preview", type=click.Path(dir_okay=False), default=None,
+              help="Also write a quick-look PNG (relief, high horizons tinted).")
 @backend_option
 @click.option("--threads", type=click.IntRange(min=1), default=None,
               help="CPU threads (default: all cores).")
@@ -595,8 +602,8 @@ def _algorithm_options(algorithm: str, **given) -> dict:
 @click.option("-q", "--quiet", is_flag=True, help="No summary line on stderr.")
 @dem_options
 @_errors_to_click
-def horizon(dem, output, azimuth, method, sample_spacing, backend, threads, overwrite, quiet,
-            **read_opts):
+def horizon(dem, output, azimuth, method, sample_spacing, curvature, refraction_k, preview,
+            backend, threads, overwrite, quiet, **read_opts):
     """Write the horizon angle toward AZIMUTH of every cell of DEM to OUTPUT.
 
     Float32 degrees above the horizontal (negative: the cell looks down on everything ahead;
@@ -606,14 +613,18 @@ def horizon(dem, output, azimuth, method, sample_spacing, backend, threads, over
     import numpy as np
 
     from .algorithms import horizon as hz
+    from .engine import Shader, dem_body
     from .geometry import Grid, normalize_azimuth, sun_rays
     from .shadow import choose_backend, warm_up
-    from .io import check_output_path, write_raster
+    from .io import check_output_path, write_png, write_raster
+    from .preview import relief_rgb
     from .report import Timer
 
     timer = Timer()
     az = normalize_azimuth(azimuth)
     check_output_path(output, overwrite)
+    if preview is not None:
+        check_output_path(preview, overwrite)
     if method == "hull" and sample_spacing != 1:
         raise click.UsageError("--sample-spacing applies to --method scan only")
     if threads is not None:
@@ -623,7 +634,12 @@ def horizon(dem, output, azimuth, method, sample_spacing, backend, threads, over
         d = _read(dem, **read_opts)
     stats: dict = {}
     with timer("prepare"):  # numba compilation on a first run
-        rays = sun_rays(d.grid, az, 45.0)   # the elevation does not enter the angles
+        # the elevation does not enter the angles; curvature "auto" looks at the raster's size
+        shader = Shader(d.heights, d.grid, "horizon", {}, ran_on,
+                        "auto" if curvature is None else curvature, refraction_k, dem_body(d))
+        if shader.curvature == "auto":   # the hull has no curvature: off unless asked for
+            shader.curvature = shader.extent_m > 1000.0 and method == "scan"
+        rays = shader.rays(d.grid, az, 45.0)
         small = sun_rays(Grid.uniform(4, 4, *d.grid.centre_spacing(), d.grid.col_sign,
                                       d.grid.row_sign), az, 45.0)
         if ran_on == "gpu":
@@ -641,11 +657,16 @@ def horizon(dem, output, azimuth, method, sample_spacing, backend, threads, over
         else:
             beta = hz.horizon_angles(d.heights, rays, method=method,
                                      sample_spacing=sample_spacing, stats=stats)
+        shade = np.clip(np.nan_to_num(beta, nan=0.0) / 30.0, 0.0, 1.0) if preview else None
         beta[np.isnan(beta)] = -9999.0
     tags = {"HILLSHADE_RT_VERSION": __version__, "AZIMUTH": az, "METHOD": method,
-            "SAMPLE_SPACING": sample_spacing, "UNITS": "degrees above the horizontal"}
+            "SAMPLE_SPACING": sample_spacing, "UNITS": "degrees above the horizontal",
+            "EARTH_CURVATURE": (f"on, R {shader.body.radius(az):.0f} m, k {shader.k:g}"
+                                if rays.curved else "off")}
     with timer("write"):
         write_raster(output, beta, d, nodata=-9999.0, description="horizon angle", tags=tags)
+        if preview is not None:
+            write_png(preview, relief_rgb(d.heights, d.grid, az, 45.0, shade=shade))
     if not quiet:
         rows, cols = d.shape
         click.echo(f"hillshade-rt: {output}: {cols}x{rows}, horizon toward az {az:g} ({method}, "
@@ -657,11 +678,21 @@ def horizon(dem, output, azimuth, method, sample_spacing, backend, threads, over
 @cli.command()
 @click.argument("dem", type=click.Path(dir_okay=False))
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of text.")
+@click.option("--preview", type=click.Path(dir_okay=False), default=None,
+              help="Also write a quick-look PNG of the DEM (shaded relief, lit from the NW).")
+@click.option("--overwrite", is_flag=True, help="Replace the preview if it exists.")
 @dem_options
 @_errors_to_click
-def info(dem, as_json, **read_opts):
+def info(dem, as_json, preview, overwrite, **read_opts):
     """Print what hillshade-rt understood of DEM: size, spacing, CRS, nodata, heights."""
+    if preview is not None:
+        from .io import check_output_path
+        check_output_path(preview, overwrite)
     d = _read(dem, **read_opts)
+    if preview is not None:
+        from .io import write_png
+        from .preview import relief_rgb
+        write_png(preview, relief_rgb(d.heights, d.grid))
     rows, cols = d.shape
     dx, dy = d.grid.centre_spacing()
     zmin, zmax = d.height_range()

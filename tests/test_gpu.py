@@ -278,3 +278,30 @@ def test_kernels_compile_for_a_real_gpu():
     assert all(k["ptx_bytes"] > 1000 for k in kernels.values())
     for name in ("_brute_gpu", "_mask_gpu", "_sweep_gpu", "_nextv_pass_gpu"):
         assert kernels[name]["fma"] == 0, name
+
+
+def test_gpu_curvature_soft_and_tiles_equal_cpu():
+    """Earth curvature (brute and the horizon scan march the curved ray on the device), soft
+    shadows (horizon angles on the device) and a per-tile sun, through the Shader, GPU vs CPU."""
+    from hillshade_rt.engine import Shader, render
+    from hillshade_rt.sun import Region, SunOver
+
+    z = fractal_terrain(16, 18, 7, relief=2000.0)
+    z[4, 5] = np.nan
+    grid = Grid.uniform(16, 18, 900.0)
+    tiles = SunOver(None, 203.7, 4.0, tiles=[
+        Region(slice(0, 8), slice(0, 18), 203.7, 4.0),
+        Region(slice(8, 16), slice(0, 18), 201.9, 3.5)])
+    for algorithm in ("brute", "smap", "horizon"):
+        for sun in (SunOver(None, 163.0, 3.0), tiles):
+            cpu = Shader(z, grid, algorithm, backend="cpu", curvature=True)
+            dev = Shader(z, grid, algorithm, backend="gpu", curvature=True)
+            want = render(cpu, sun, "shadow")
+            np.testing.assert_array_equal(render(dev, sun, "shadow"), want)
+            assert (want == 1).any() and (want == 0).any()
+            assert cpu.report()["applied"] and dev.report()["applied"]
+    sun = SunOver(None, 163.0, 3.0)
+    np.testing.assert_allclose(render(Shader(z, grid, backend="gpu", curvature=True), sun,
+                                      "shadow", soft=True),
+                               render(Shader(z, grid, curvature=True), sun, "shadow", soft=True),
+                               atol=1e-6)

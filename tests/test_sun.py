@@ -435,3 +435,23 @@ def test_sun_option_errors(tmp_path, runner):
                             "8x8", "--pixel-size", "1", "--time", "2026-06-21T12:00Z", "--lat",
                             "47", "--lon", "8", "-q"])
     assert r.exit_code == 0, r.output
+
+
+def test_horizon_command_curvature_and_previews(tmp_path, runner):
+    """The horizon angles of a DEM more than 1 km across include curvature by default: every
+    angle that looks across terrain is lower than on a flat Earth, never higher; previews of
+    horizon and info are written."""
+    dem = _dem(tmp_path, fractal_terrain(60, 80, 6, relief=600.0))   # 2.4 km across
+    a, b, png, png2 = (tmp_path / n for n in ("a.tif", "b.tif", "a.png", "i.png"))
+    r = runner.invoke(cli, ["horizon", dem, str(a), "--azimuth", "203.7", "--preview", str(png),
+                            "-q"])
+    assert r.exit_code == 0, r.output
+    r = runner.invoke(cli, ["horizon", dem, str(b), "--azimuth", "203.7", "--no-earth-curvature",
+                            "-q"])
+    assert r.exit_code == 0
+    ca, fb = read_band(a), read_band(b)
+    looks = fb > -90
+    assert (ca[looks] <= fb[looks]).all() and (ca[looks] < fb[looks]).mean() > 0.5
+    assert png.stat().st_size > 0
+    assert runner.invoke(cli, ["info", dem, "--preview", str(png2)]).exit_code == 0
+    assert png2.stat().st_size > 0
