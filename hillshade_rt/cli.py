@@ -200,8 +200,13 @@ _SUN_KEYS = ("azimuth", "elevation", "time", "start", "end", "step", "tz", "lat"
 
 
 def _pop_sun(kw: dict, default_sun=None):
+    """The sun options as a checked SunRequest; a bad one is a usage error (exit status 2)."""
     from .runner import SunRequest
-    return SunRequest.from_options(**{k: kw.pop(k) for k in _SUN_KEYS}, default_sun=default_sun)
+    try:
+        return SunRequest.from_options(**{k: kw.pop(k) for k in _SUN_KEYS},
+                                       default_sun=default_sun)
+    except HillshadeError as exc:
+        raise click.UsageError(str(exc)) from None
 
 
 @cli.command()

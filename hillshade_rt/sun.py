@@ -236,6 +236,7 @@ class Site:
     source: str
     to_lonlat: object = None     # callable(rows, cols) -> (lon, lat) arrays, or None
     convergence: object = None   # callable(rows, cols) -> grid azimuth of true north, degrees
+    north_offset: float = 0.0    # without to_lonlat: grid azimuth of true north (DEM centre)
     notes: list[str] = field(default_factory=list)
 
     def as_dict(self) -> dict:
@@ -265,7 +266,14 @@ def dem_site(dem, lat: float | None = None, lon: float | None = None) -> Site:
         if not (-90.0 <= lat <= 90.0) or not math.isfinite(lon):
             raise HillshadeError(f"--lat must be within [-90, 90] and --lon finite, got {lat}, {lon}")
         lon = (lon + 180.0) % 360.0 - 180.0
-        return Site(lat, lon, height, "--lat/--lon", notes=[f"observer height: {hnote}"])
+        site = Site(lat, lon, height, "--lat/--lon", notes=[f"observer height: {hnote}"])
+        if dem.crs is not None and dem.transform is not None:
+            # the sun at the given place, one vector; still turned to the DEM's grid north
+            centre = dem_site(dem)
+            rows, cols = dem.shape
+            site.north_offset = float(centre.convergence(np.array([(rows - 1) / 2.0]),
+                                                         np.array([(cols - 1) / 2.0]))[0])
+        return site
     if dem.crs is None or dem.transform is None:
         raise HillshadeError(f"{dem.path}: has no CRS, so its place on Earth is unknown; "
                              "give --lat and --lon (degrees) for a sun from --time")
@@ -380,7 +388,7 @@ def sun_over(site: Site, shape, times, atmosphere: Atmosphere = Atmosphere(),
     ts = np.array([t.timestamp() for t in times])
     if site.to_lonlat is None:
         az, el, zen = solar_position(ts, site.lat, site.lon, site.height, atmosphere, delta_t)
-        return [SunOver(t, float(a), float(e), float(a), float(z))
+        return [SunOver(t, float((a + site.north_offset) % 360.0), float(e), float(a), float(z))
                 for t, a, e, z in zip(times, az, el, zen)]
     n = 9
     lr = np.linspace(0.0, rows - 1.0, n)

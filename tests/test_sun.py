@@ -382,13 +382,17 @@ def test_hillshade_values(tmp_path, runner):
 
 
 def test_preview_png(tmp_path, runner):
+    import warnings
+
     import rasterio
+    from rasterio.errors import NotGeoreferencedWarning
     dem = _dem(tmp_path, fractal_terrain(40, 60, 9, relief=300.0))
     png = tmp_path / "p.png"
     r = runner.invoke(cli, ["shadow", dem, str(tmp_path / "m.tif"), "--azimuth", "203.7",
                             "--elevation", "15", "--preview", str(png), "-q"])
     assert r.exit_code == 0, r.output
-    with rasterio.open(png) as ds:
+    with warnings.catch_warnings(), rasterio.open(png) as ds:
+        warnings.simplefilter("ignore", NotGeoreferencedWarning)
         assert ds.driver == "PNG" and ds.count == 3 and ds.shape == (40, 60)
         rgb = ds.read()
     m = read_band(tmp_path / "m.tif")
