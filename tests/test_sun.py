@@ -459,3 +459,37 @@ def test_horizon_command_curvature_and_previews(tmp_path, runner):
     assert png.stat().st_size > 0
     assert runner.invoke(cli, ["info", dem, "--preview", str(png2)]).exit_code == 0
     assert png2.stat().st_size > 0
+
+
+def test_tiles_with_small_halos_run_the_algorithm_on_their_window():
+    """High suns: a tile's window (tile + halo) is less than 3x the tile, so the algorithm runs
+    on the window; each tile still equals a whole-raster run with its sun."""
+    z = fractal_terrain(64, 72, 13, relief=40.0)
+    for r, c in ((14, 14), (14, 50), (46, 14), (46, 50)):
+        z[r:r + 4, c:c + 4] += 30.0           # a tower in each tile
+    z[10, 60] = np.nan
+    grid = Grid.uniform(64, 72, 5.0)
+    tiles = [Region(slice(a, a + 32), slice(b, b + 36), az, el)
+             for (a, b), az, el in zip(((0, 0), (0, 36), (32, 0), (32, 36)),
+                                       (163.0, 203.7, 291.0, 20.0), (45.0, 50.0, 40.0, 55.0))]
+    for algorithm in ("smap", "horizon", "sweep"):
+        stats = {}
+        sh = Shader(z, grid, algorithm, curvature=False)
+        m = render(sh, SunOver(None, 0.0, 30.0, tiles=tiles), "shadow", stats=stats)
+        assert "tiles_marched_by_brute" not in stats
+        for t in tiles:
+            ref = render(Shader(z, grid, algorithm, curvature=False),
+                         SunOver(None, t.azimuth, t.elevation), "shadow")
+            assert (m[t.rows, t.cols] == ref[t.rows, t.cols]).all(), (algorithm, t)
+        assert (m == 1).any() and (m == 0).any()
+
+
+def test_lat_lon_on_a_projected_dem_still_turns_to_grid_north(tmp_path, runner):
+    dem = _dem(tmp_path, fractal_terrain(30, 30, 8, relief=300.0))
+    rep = tmp_path / "r.json"
+    r = runner.invoke(cli, ["shadow", dem, str(tmp_path / "m.tif"), "--time", "2026-03-02T16:20Z",
+                            "--lat", "39.74", "--lon", "-105.28", "--report", str(rep), "-q"])
+    assert r.exit_code == 0, r.output
+    sun = json.loads(rep.read_text())["sun"]
+    assert sun["mode"] == "one vector"
+    assert sun["azimuth"] - sun["true_azimuth"] == pytest.approx(0.176, abs=0.01)

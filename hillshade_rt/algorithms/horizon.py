@@ -59,7 +59,9 @@ def _scan_cell(z, r, c, dom_col, sd, so, sp, zmax, rise, cv, decide):
         inside, t = ray_sample(z, dom_col, line0, other0, n_dom, n_oth, k, sd, so)
         if not inside:
             break
-        lift = madd(t - h0, -float(k * k), cv)   # t - h0 - k*k*cv, never fused on the GPU
+        lift = t - h0
+        if cv != 0.0:   # t - h0 - k*k*cv, never fused on the GPU
+            lift = madd(lift, -float(k * k), cv)
         if lift > best * k:   # NaN (void) compares false: skipped
             best = lift / k
             if decide and best > rise:

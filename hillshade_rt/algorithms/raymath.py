@@ -112,7 +112,9 @@ def ray_is_blocked(z, r, c, dom_col, step_dom, step_other, rise, curv, zmax):
     h0 = float(z[np.int64(r), np.int64(c)])
     k = 1
     while True:
-        hr = madd(madd(h0, float(k), rise), float(k * k), curv)
+        hr = madd(h0, float(k), rise)
+        if curv != 0.0:   # a flat Earth pays nothing for the curvature term
+            hr = madd(hr, float(k * k), curv)
         if hr >= zmax:
             return False
         inside, t = ray_sample(z, dom_col, line0, other0, n_dom, n_oth, k, step_dom, step_other)
