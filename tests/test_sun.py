@@ -391,10 +391,11 @@ def test_preview_png(tmp_path, runner):
     r = runner.invoke(cli, ["shadow", dem, str(tmp_path / "m.tif"), "--azimuth", "203.7",
                             "--elevation", "15", "--preview", str(png), "-q"])
     assert r.exit_code == 0, r.output
-    with warnings.catch_warnings(), rasterio.open(png) as ds:
+    with warnings.catch_warnings():
         warnings.simplefilter("ignore", NotGeoreferencedWarning)
-        assert ds.driver == "PNG" and ds.count == 3 and ds.shape == (40, 60)
-        rgb = ds.read()
+        with rasterio.open(png) as ds:
+            assert ds.driver == "PNG" and ds.count == 3 and ds.shape == (40, 60)
+            rgb = ds.read()
     m = read_band(tmp_path / "m.tif")
     # shadowed cells are tinted blue: blue above red there
     assert (rgb[2][m == 1] > rgb[0][m == 1]).all()
