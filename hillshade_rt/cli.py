@@ -53,9 +53,16 @@ def _fail(exc: HillshadeError) -> click.ClickException:
     return click.ClickException(str(exc))
 
 
+def _stack(f, opts):
+    """Apply click options in the order they are listed (the first shows first in --help)."""
+    for opt in reversed(opts):
+        f = opt(f)
+    return f
+
+
 def dem_options(f):
     """Options that say how to read a DEM (shared by every command that reads one)."""
-    opts = [
+    return _stack(f, [
         click.option("-b", "--band", type=int, default=1, show_default=True,
                      help="Band of a multi-band raster."),
         click.option("--nodata", type=float, default=None,
@@ -72,10 +79,7 @@ def dem_options(f):
             help="Value type of a raw grid (.hgt: int16)."),
         click.option("--raw-byteorder", type=click.Choice(["little", "big"]), default=None,
                      help="Byte order of a raw grid (default little; .hgt: big)."),
-    ]
-    for opt in reversed(opts):
-        f = opt(f)
-    return f
+    ])
 
 
 def backend_option(f):
@@ -111,24 +115,14 @@ def cli():
     """Terrain cast-shadow masks from digital elevation models."""
 
 
-def sun_options(f):
-    """Where the sun is: given, or from times at the DEM's place (shared by the lighting commands)."""
-    opts = [
-        click.option("--azimuth", type=float, default=None,
-                     help="Sun azimuth, degrees clockwise from the raster's north (any value wraps)."),
-        click.option("--elevation", "--altitude", "elevation", type=float, default=None,
-                     help="Sun elevation above the horizon, degrees, > 0 and <= 90."),
-        click.option("--time", "time", multiple=True, metavar="ISO8601",
-                     help="Sun from this instant (e.g. 2026-06-21T14:30:00+02:00) at the DEM's "
-                          "centre; repeat for a series (one band per time)."),
-        click.option("--start", default=None, metavar="ISO8601", help="Series: first time."),
-        click.option("--end", default=None, metavar="ISO8601",
-                     help="Series: last time (included when a step lands on it)."),
-        click.option("--step", default=None, metavar="DURATION",
-                     help="Series: interval, e.g. 30min, 1h, 1h30min, PT10M."),
+def place_options(f):
+    """How the sun is computed from a time: zone, place, atmosphere, tolerance."""
+    return _stack(f, [
         click.option("--tz", default=None, metavar="ZONE",
-                     help="IANA zone for times written without an offset (handles daylight "
-                          "saving), e.g. Europe/Zurich; also the zone outputs are labelled in."),
+                     help="IANA zone, e.g. Europe/Zurich: times written without an offset are "
+                          "local times there (daylight saving included) and outputs are labelled "
+                          "in it; sun-hours: days run midnight to midnight there (default: local "
+                          "mean solar time)."),
         click.option("--lat", type=float, default=None,
                      help="Latitude of the sun's observer, degrees (default: the DEM's centre; "
                           "required for input without a CRS)."),
@@ -143,14 +137,29 @@ def sun_options(f):
         click.option("--sun-tolerance", type=float, default=0.05, show_default=True,
                      help="Degrees the sun's direction may vary across the raster before it is "
                           "computed per tile."),
-    ]
-    for opt in reversed(opts):
-        f = opt(f)
-    return f
+    ])
+
+
+def sun_options(f):
+    """Where the sun is: given, or from times at the DEM's place (shared by the lighting commands)."""
+    return _stack(place_options(f), [
+        click.option("--azimuth", type=float, default=None,
+                     help="Sun azimuth, degrees clockwise from the raster's north (any value wraps)."),
+        click.option("--elevation", "--altitude", "elevation", type=float, default=None,
+                     help="Sun elevation above the horizon, degrees, > 0 and <= 90."),
+        click.option("--time", "time", multiple=True, metavar="ISO8601",
+                     help="Sun from this instant (e.g. 2026-06-21T14:30:00+02:00) at the DEM's "
+                          "centre; repeat for a series (one band per time)."),
+        click.option("--start", default=None, metavar="ISO8601", help="Series: first time."),
+        click.option("--end", default=None, metavar="ISO8601",
+                     help="Series: last time (included when a step lands on it)."),
+        click.option("--step", default=None, metavar="DURATION",
+                     help="Series: interval, e.g. 30min, 1h, 1h30min, PT10M."),
+    ])
 
 
 def physics_options(f):
-    opts = [
+    return _stack(f, [
         click.option("--earth-curvature/--no-earth-curvature", "curvature", default=None,
                      help="Let the terrain fall away by d^2(1-k)/2R along each ray (default: on "
                           "when rays can be longer than 1 km)."),
@@ -160,10 +169,7 @@ def physics_options(f):
         click.option("--soft", is_flag=True,
                      help="The sun as a disk of 0.533 deg: the visible fraction of the disk "
                           "(0..1, from the exact horizon angle) instead of hard shadows."),
-    ]
-    for opt in reversed(opts):
-        f = opt(f)
-    return f
+    ])
 
 
 def algorithm_option(f):
@@ -175,7 +181,7 @@ def algorithm_option(f):
 
 
 def run_options(f):
-    opts = [
+    return _stack(f, [
         click.option("--output-pattern", default=None, metavar="PATTERN",
                      help="One file per time instead of one multi-band OUTPUT, e.g. "
                           "'out_{time:%Y%m%dT%H%M}.tif' (fields: time, index, azimuth, elevation)."),
@@ -189,10 +195,7 @@ def run_options(f):
         click.option("--overwrite", is_flag=True,
                      help="Replace outputs (and the report, the preview) if they exist."),
         click.option("-q", "--quiet", is_flag=True, help="No progress bar or summary on stderr."),
-    ]
-    for opt in reversed(opts):
-        f = opt(f)
-    return f
+    ])
 
 
 _SUN_KEYS = ("azimuth", "elevation", "time", "start", "end", "step", "tz", "lat", "lon",
@@ -375,7 +378,7 @@ def _light(dem, output, kind, algorithm, options, curvature, refraction_k, soft,
                        backend_requested=backend, threads=numba.get_num_threads(),
                        seconds=seconds, stats=_mean_stats(records, product_stats(kind, soft, arr)),
                        height_range=(zmin, zmax), options=options, algorithm_stats=algo_stats,
-                       gpu=shader._gpu.report() if shader._gpu is not None else None)
+                       gpu=shader.gpu_report())
     rep["sun"] = records[0] if len(records) == 1 else None
     rep["sun_source"] = "time" if req.from_time else "given"
     if sun_info is not None:
@@ -409,16 +412,7 @@ def _light(dem, output, kind, algorithm, options, curvature, refraction_k, soft,
               help="Last day of a range (included); the hours are the total over the range.")
 @click.option("--step", default="10min", show_default=True, metavar="DURATION",
               help="Sampling interval; each sample stands for the interval around it.")
-@click.option("--tz", default=None, metavar="ZONE",
-              help="Days run midnight to midnight in this IANA zone (default: local mean solar "
-                   "time at the DEM's longitude).")
-@click.option("--lat", type=float, default=None, help="Observer latitude (default: DEM centre).")
-@click.option("--lon", type=float, default=None, help="Observer longitude (with --lat).")
-@click.option("--pressure", type=float, default=None, help="Air pressure for refraction, hPa.")
-@click.option("--temperature", type=float, default=None, help="Air temperature, degrees C.")
-@click.option("--no-refraction", is_flag=True, help="True sun elevation, not apparent.")
-@click.option("--sun-tolerance", type=float, default=0.05, show_default=True,
-              help="Degrees the sun may vary across the raster before it is computed per tile.")
+@place_options
 @algorithm_option
 @physics_options
 @click.option("--self-shadow/--no-self-shadow", default=True, show_default=True,

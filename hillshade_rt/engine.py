@@ -176,24 +176,15 @@ class Shader:
         dxm = float(np.min(self.grid.dx[r0:r1]))
         dym = float(np.min(self.grid.dy[r0:r1]))
 
-        def extra(comp, spacing, n):
+        def grow(lo, hi, comp, spacing, n):
+            """Extend [lo, hi) toward the sun's side of this axis (both sides when the sun moves
+            along the other axis only)."""
             if abs(comp) < 1e-12:
-                return 2
-            return n if not math.isfinite(reach) else min(n, int(math.ceil(reach * abs(comp) / spacing)) + 2)
-        ec = extra(east, dxm, cols)
-        er = extra(north, dym, rows)
-        if east > 1e-12:
-            c1 = min(cols, c1 + ec)
-        elif east < -1e-12:
-            c0 = max(0, c0 - ec)
-        else:
-            c0, c1 = max(0, c0 - ec), min(cols, c1 + ec)
-        if north > 1e-12:
-            r1 = min(rows, r1 + er)
-        elif north < -1e-12:
-            r0 = max(0, r0 - er)
-        else:
-            r0, r1 = max(0, r0 - er), min(rows, r1 + er)
+                return max(0, lo - 2), min(n, hi + 2)
+            more = n if not math.isfinite(reach) else int(math.ceil(reach * abs(comp) / spacing)) + 2
+            return (lo, min(n, hi + more)) if comp > 0 else (max(0, lo - more), hi)
+        c0, c1 = grow(c0, c1, east, dxm, cols)
+        r0, r1 = grow(r0, r1, north, dym, rows)
         return slice(r0, r1), slice(c0, c1)
 
     def _piece(self, region: Region, elevation_for_halo: float):
@@ -276,6 +267,10 @@ class Shader:
         from .algorithms.relief import incidence
         return incidence(self.z, self.grid, region.azimuth, region.elevation, region.rows,
                          region.cols)
+
+    def gpu_report(self) -> dict | None:
+        """The GPU figures of the whole-raster GpuDem (None when nothing ran on the GPU)."""
+        return self._gpu.report() if self._gpu is not None else None
 
     def report(self) -> dict:
         used = self.curvature_used

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import datetime as _dt
 import math
-import os
 import string
 from dataclasses import dataclass, field
 
@@ -158,13 +157,3 @@ def progress(items, quiet: bool, desc: str, unit: str = "time"):
     items = list(items)
     return tqdm(items, desc=desc, unit=unit, disable=True if quiet or len(items) < 2 else None,
                 leave=False)
-
-
-def check_outputs(paths, overwrite: bool) -> None:
-    from .io import check_output_path
-    for p in paths:
-        check_output_path(p, overwrite)
-
-
-def absolute(path: str) -> str:
-    return os.path.abspath(path)

@@ -172,16 +172,19 @@ class Atmosphere:
     pressure_hpa: float | None = None      # None: standard atmosphere at the observer's height
     temperature_c: float = STANDARD_TEMPERATURE_C
 
-    def pressure_at(self, height_m: float) -> float:
+    def pressure_at(self, height_m):
+        """hPa at ``height_m`` (a number or an array)."""
         if self.pressure_hpa is not None:
-            return float(self.pressure_hpa)
+            return np.full(np.shape(height_m), float(self.pressure_hpa)) if np.ndim(height_m) \
+                else float(self.pressure_hpa)
         return standard_pressure(height_m)
 
 
-def standard_pressure(height_m: float) -> float:
-    """hPa of the ICAO standard atmosphere at ``height_m`` (1013.25 at sea level)."""
-    h = min(max(float(height_m), -500.0), 11000.0)
-    return STANDARD_PRESSURE_HPA * (1.0 - 2.25577e-5 * h) ** 5.25588
+def standard_pressure(height_m):
+    """hPa of the ICAO standard atmosphere at ``height_m`` (1013.25 at sea level); arrays too."""
+    h = np.clip(np.asarray(height_m, np.float64), -500.0, 11000.0)
+    p = STANDARD_PRESSURE_HPA * (1.0 - 2.25577e-5 * h) ** 5.25588
+    return float(p) if p.ndim == 0 else p
 
 
 def solar_position(times, lat, lon, height_m=0.0, atmosphere: Atmosphere = Atmosphere(),
@@ -206,8 +209,7 @@ def solar_position(times, lat, lon, height_m=0.0, atmosphere: Atmosphere = Atmos
         years = dt64.astype("datetime64[Y]").astype(np.int64) + 1970
         months = dt64.astype("datetime64[M]").astype(np.int64) % 12 + 1
         delta_t = spa.calculate_deltat(years, months)
-    pressure = np.array([atmosphere.pressure_at(x) for x in h]) if atmosphere.pressure_hpa is None \
-        else np.full(h.shape, float(atmosphere.pressure_hpa))
+    pressure = atmosphere.pressure_at(h)
     zen_app, zen, el_app, el, az, _ = spa.solar_position_numpy(
         unix, lat, lon, h, pressure, float(atmosphere.temperature_c), delta_t, ATMOS_REFRACT, 1)
     if atmosphere.refraction:
