@@ -14,26 +14,19 @@ All ratios are measured within this one run, on the bundled example DEM (Big Tuj
 
 import argparse
 import os
-import statistics
 import subprocess
 import sys
 import tempfile
-import time
-
-import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 DEM = os.path.join(HERE, "..", "examples", "bigtujunga_srtm30m_utm11n_1197x643.tif")
 
 
 def median_time(fn, repeat):
+    """bench_cpu's median of ``repeat`` runs, after one warm-up run."""
+    from bench_cpu import timed
     fn()
-    ts = []
-    for _ in range(repeat):
-        t = time.perf_counter()
-        fn()
-        ts.append(time.perf_counter() - t)
-    return statistics.median(ts)
+    return timed(fn, repeat)
 
 
 def main():

@@ -376,7 +376,7 @@ def _light(dem, output, kind, algorithm, options, curvature, refraction_k, soft,
     rep = build_report(dem=d, output=output or pattern.pattern, azimuth=first.azimuth,
                        elevation=first.elevation, algorithm=algorithm, backend=ran_on,
                        backend_requested=backend, threads=numba.get_num_threads(),
-                       seconds=seconds, stats=_mean_stats(records, product_stats(kind, soft, arr)),
+                       seconds=seconds, stats=_mean_stats(records, st),
                        height_range=(zmin, zmax), options=options, algorithm_stats=algo_stats,
                        gpu=shader.gpu_report())
     rep["sun"] = records[0] if len(records) == 1 else None
@@ -453,20 +453,20 @@ def sun_hours(dem, output, date_, end_date, step, tz, lat, lon, pressure, temper
     last = parse_date(end_date, "--end-date") if end_date is not None else first
     if last < first:
         raise click.UsageError("--end-date is before --date")
-    req = SunRequest.from_options(time=("2000-01-01T00:00Z",), tz=tz, lat=lat, lon=lon,
-                                  pressure=pressure, temperature=temperature,
-                                  no_refraction=no_refraction, sun_tolerance=sun_tolerance)
+    try:
+        req = SunRequest.at_place([], tz, lat, lon, pressure, temperature, no_refraction,
+                                  sun_tolerance)
+    except HillshadeError as exc:
+        raise click.UsageError(str(exc)) from None
     if threads is not None:
         numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
     ran_on = choose_backend(backend, algorithm, {})
     with timer("read"):
         d = _read(dem, **read_opts)
     with timer("prepare"):
-        from .sun import dem_site
-        site = dem_site(d, lat, lon)
-        times, weights = day_samples(first, last, step, req.tz, site.lon)
-        req.times = times
-        suns, sun_info = req.suns(d)
+        site = req.site(d)
+        req.times, weights = day_samples(first, last, step, req.tz, site.lon)
+        suns, sun_info = req.suns(d, site)
         zmin, zmax = d.height_range()
         shader = Shader(d.heights, d.grid, algorithm, {}, ran_on,
                         "auto" if curvature is None else curvature, refraction_k,

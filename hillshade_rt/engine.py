@@ -302,11 +302,13 @@ def render(shader: Shader, sun: SunOver, kind: str = "shadow", *, soft: bool = F
         raise HillshadeError("classes are for hard shadows: --classes and --soft do not go together")
     shape = shader.z.shape
     regions = sun.regions(shape)
-    parts = [_render_region(shader, r, kind, soft, self_shadow, ambient, stats) for r in regions]
     if len(regions) == 1:
-        return parts[0]
-    out = np.empty(shape, parts[0].dtype)
-    for r, part in zip(regions, parts):
+        return _render_region(shader, regions[0], kind, soft, self_shadow, ambient, stats)
+    out = None
+    for r in regions:   # each tile into place as it is made: no list of all tiles' arrays
+        part = _render_region(shader, r, kind, soft, self_shadow, ambient, stats)
+        if out is None:
+            out = np.empty(shape, part.dtype)
         out[r.rows, r.cols] = part
     return out
 
@@ -320,12 +322,11 @@ def _render_region(shader, region, kind, soft, self_shadow, ambient, stats):
         lit = shader.visible_fraction(region)          # float32, NaN voids
     else:
         cast = shader.cast(region, stats)              # uint8 1/0/255
+    # valid cells whose surface faces away from the sun (all of them with the sun far below)
+    away = (~void if cosi is None else (cosi <= 0) & ~void) if need_cos else None
     if kind == "classes":
         out = np.where(cast == 1, np.uint8(CAST_SHADOW), np.uint8(LIT)).astype(np.uint8)
-        if cosi is not None:
-            out[cosi <= 0] = SELF_SHADOW
-        else:
-            out[...] = SELF_SHADOW
+        out[away] = SELF_SHADOW
         out[void] = NODATA
         return out
     if kind == "hillshade":
@@ -337,17 +338,11 @@ def _render_region(shader, region, kind, soft, self_shadow, ambient, stats):
         return out
     if kind == "shadow" and not soft:
         if self_shadow:
-            if cosi is None:
-                cast[~void] = 1
-            else:
-                cast[(cosi <= 0) & ~void] = 1
+            cast[away] = 1
         return cast
     # float products: soft shadow, or direct sun for sun hours
     light = lit if soft else np.where(void, np.float32(np.nan),
                                       (cast == 0).astype(np.float32)).astype(np.float32)
     if self_shadow:
-        if cosi is None:
-            light[~void] = 0.0
-        else:
-            light[(cosi <= 0) & ~void] = 0.0
+        light[away] = 0.0
     return light

@@ -75,6 +75,15 @@ class SunRequest:
         else:
             t0, t1 = parse_time(start, zone_), parse_time(end, zone_)
             times = time_range(t0, t1, parse_step(step))
+        return cls.at_place(times, tz, lat, lon, pressure, temperature, no_refraction,
+                            sun_tolerance)
+
+    @classmethod
+    def at_place(cls, times, tz=None, lat=None, lon=None, pressure=None, temperature=None,
+                 no_refraction=False, sun_tolerance=DEFAULT_TOLERANCE) -> "SunRequest":
+        """Suns at ``times`` (aware datetimes; may be filled in later, as sun-hours does once
+        it knows the place), with the place and atmosphere options checked."""
+        zone_ = zone(tz)
         if pressure is not None and not (math.isfinite(pressure) and 0 < pressure < 1200):
             raise HillshadeError(f"--pressure must be in hPa (mbar), between 0 and 1200, got {pressure}")
         if temperature is not None and not (math.isfinite(temperature) and -100 < temperature < 100):
@@ -86,11 +95,16 @@ class SunRequest:
         return cls(times=times, tz=zone_, lat=lat, lon=lon, atmosphere=atm,
                    tolerance=float(sun_tolerance))
 
-    def suns(self, dem) -> tuple[list[SunOver], dict | None]:
-        """(suns, site report) for ``dem``: the given sun, or the SPA's at each time."""
+    def site(self, dem):
+        """Where this request's suns are computed for ``dem`` (``sun.dem_site``)."""
+        return dem_site(dem, self.lat, self.lon)
+
+    def suns(self, dem, site=None) -> tuple[list[SunOver], dict | None]:
+        """(suns, site report) for ``dem``: the given sun, or the SPA's at each time (at
+        ``site`` when the caller already has it)."""
         if not self.from_time:
             return [SunOver(None, self.azimuth, self.elevation)], None
-        site = dem_site(dem, self.lat, self.lon)
+        site = site or self.site(dem)
         suns = sun_over(site, dem.shape, self.times, self.atmosphere, self.tolerance)
         atm = self.atmosphere
         info = {"site": site.as_dict(), "site_notes": site.notes,
