@@ -182,6 +182,8 @@ def algorithm_option(f):
 
 def run_options(f):
     return _stack(f, [
+        click.option("-o", "--output", default=None, type=click.Path(dir_okay=False),
+                     help="The output (then every path given is a DEM)."),
         click.option("--output-pattern", default=None, metavar="PATTERN",
                      help="One file per time instead of one multi-band OUTPUT, e.g. "
                           "'out_{time:%Y%m%dT%H%M}.tif' (fields: time, index, azimuth, elevation)."),
@@ -195,6 +197,19 @@ def run_options(f):
         click.option("--overwrite", is_flag=True,
                      help="Replace outputs (and the report, the preview) if they exist."),
         click.option("-q", "--quiet", is_flag=True, help="No progress bar or summary on stderr."),
+        click.option("--max-memory", metavar="SIZE", default=None,
+                     help="Memory the run may use, e.g. 2GB or 512MiB; a DEM that needs more is "
+                          "shaded in windows read and written through GDAL (default: half of "
+                          "this machine's memory)."),
+        click.option("--window-size", metavar="ROWS[xCOLS]", default=None,
+                     help="Shade in windows of this many output cells (each read with its halo "
+                          "toward the sun), whatever the DEM's size."),
+        click.option("--cog", is_flag=True,
+                     help="Write Cloud-Optimized GeoTIFF (512 px tiles, deflate, overviews)."),
+        click.option("--scheduler", metavar="ADDRESS", default=None,
+                     help="Run the windows as Dask tasks: a dask.distributed scheduler "
+                          "(tcp://host:8786) or 'local[:N]' (N worker processes here). Needs "
+                          "hillshade-rt[dask] and DEM paths the workers can read."),
     ])
 
 
@@ -213,8 +228,8 @@ def _pop_sun(kw: dict, default_sun=None):
 
 
 @cli.command()
-@click.argument("dem", type=click.Path(dir_okay=False))
-@click.argument("output", type=click.Path(dir_okay=False), required=False)
+@click.argument("files", metavar="DEM... [OUTPUT]", nargs=-1, required=True,
+                type=click.Path(dir_okay=False))
 @sun_options
 @algorithm_option
 @click.option("--nextv", type=click.Choice(["scan", "binary", "quad"]), default=None,
@@ -236,11 +251,12 @@ def _pop_sun(kw: dict, default_sun=None):
 @run_options
 @dem_options
 @_errors_to_click
-def shadow(dem, output, algorithm, nextv, better_nextv, horizon_method, sample_spacing,
+def shadow(files, algorithm, nextv, better_nextv, horizon_method, sample_spacing,
            exact_steps, curvature, refraction_k, soft, self_shadow, classes, **kw):
     """Write the cast-shadow mask of DEM to OUTPUT (GeoTIFF: 1 shadow, 0 lit, 255 nodata).
 
-    The sun: --azimuth/--elevation, or --time (repeatable) or --start/--end/--step at the DEM's
+    Several DEMs (tiles on one grid) are shaded as one mosaic, so that a mountain in one tile
+    shadows the next; OUTPUT is the last path, or give it with -o. The sun: --azimuth/--elevation, or --time (repeatable) or --start/--end/--step at the DEM's
     place (one band per time). --soft writes the visible fraction of the sun's disk (float32,
     1 = fully lit, -9999 nodata); --classes writes 0 lit / 1 self-shadow / 2 cast / 255."""
     options = _algorithm_options(algorithm, nextv=nextv, better_nextv=better_nextv,
@@ -249,13 +265,13 @@ def shadow(dem, output, algorithm, nextv, better_nextv, horizon_method, sample_s
     if classes and soft:
         raise click.UsageError("--classes and --soft do not go together (classes are hard)")
     kind = "classes" if classes else "shadow"
-    _light(dem, output, kind, algorithm, options, curvature, refraction_k, soft,
+    _light(files, kind, algorithm, options, curvature, refraction_k, soft,
            self_shadow or classes, 0.2, None, kw)
 
 
 @cli.command()
-@click.argument("dem", type=click.Path(dir_okay=False))
-@click.argument("output", type=click.Path(dir_okay=False), required=False)
+@click.argument("files", metavar="DEM... [OUTPUT]", nargs=-1, required=True,
+                type=click.Path(dir_okay=False))
 @sun_options
 @click.option("--ambient", type=click.FloatRange(0.0, 1.0), default=0.2, show_default=True,
               help="Light in shadow and on faces turned away, 0..1.")
@@ -267,7 +283,7 @@ def shadow(dem, output, algorithm, nextv, better_nextv, horizon_method, sample_s
 @run_options
 @dem_options
 @_errors_to_click
-def hillshade(dem, output, ambient, scale, algorithm, curvature, refraction_k, soft, **kw):
+def hillshade(files, ambient, scale, algorithm, curvature, refraction_k, soft, **kw):
     """Write 8-bit shaded relief with cast shadows of DEM to OUTPUT.
 
     Illumination = ambient + (1 - ambient) * max(0, L.N) in lit cells and ambient in shadow
@@ -278,31 +294,67 @@ def hillshade(dem, output, ambient, scale, algorithm, curvature, refraction_k, s
             raise click.UsageError(f"--scale must be a positive number, got {scale}")
         if kw.get("pixel_size") is not None:
             raise click.UsageError("--scale and --pixel-size do not go together")
-    _light(dem, output, "hillshade", algorithm, {}, curvature, refraction_k, soft, True, ambient,
+    _light(files, "hillshade", algorithm, {}, curvature, refraction_k, soft, True, ambient,
            scale, kw, default_sun=(315.0, 45.0))
 
 
-def _light(dem, output, kind, algorithm, options, curvature, refraction_k, soft, self_shadow,
-           ambient, scale, kw, default_sun=None):
-    """The body of ``shadow`` and ``hillshade``: one DEM, one or more suns, one output per sun
-    (bands of OUTPUT, or files of --output-pattern)."""
-    import numba
-    import numpy as np
+def _inputs_and_output(files, output, pattern):
+    """rio-style paths: ``DEM... OUTPUT``, or every path a DEM with -o/--output or
+    --output-pattern."""
+    files = list(files)
+    if output is not None or pattern is not None:
+        if output is not None and pattern is not None:
+            raise click.UsageError("give OUTPUT or --output-pattern (one of them)")
+        return files, output
+    if len(files) < 2:
+        raise click.UsageError("give OUTPUT or --output-pattern (one of them)")
+    inputs, output = files[:-1], files[-1]
+    if os.path.exists(output) and len(inputs) > 1:
+        # 'shadow a.tif b.tif' meant as two inputs would overwrite b.tif: be explicit then
+        raise click.UsageError(f"{output} exists; with several DEMs give the output with "
+                               "-o/--output")
+    return inputs, output
 
-    from .engine import Shader, dem_body, render
-    from .io import BandWriter, check_output_path, write_json, write_png, write_raster
-    from .preview import relief_rgb
-    from .report import Timer, build_report, product_stats, summary_line
-    from .runner import OutputPattern, label, progress, sun_tags
+
+def _window_size(text):
+    if text is None:
+        return None
+    import re
+    m = re.fullmatch(r"\s*(\d+)\s*(?:[xX,]\s*(\d+))?\s*", str(text))
+    if not m or int(m.group(1)) < 1 or (m.group(2) is not None and int(m.group(2)) < 1):
+        raise click.UsageError(f"--window-size must be ROWS or ROWSxCOLS (e.g. 2048x2048), got "
+                               f"{text!r}")
+    rows = int(m.group(1))
+    return rows, int(m.group(2)) if m.group(2) else rows
+
+
+def _light(files, kind, algorithm, options, curvature, refraction_k, soft, self_shadow,
+           ambient, scale, kw, default_sun=None):
+    """The body of ``shadow`` and ``hillshade``: one DEM (or a mosaic of several), one or more
+    suns, one output per sun (bands of OUTPUT, or files of --output-pattern). In memory when the
+    run fits --max-memory, else in windows (``tiling``), on Dask workers with --scheduler."""
+    import numba
+
+    from .io import check_output_path, write_json, write_png
+    from .report import Timer, build_report, summary_line
+    from .runner import OutputPattern
     from .shadow import choose_backend
+    from .tiling import bytes_per_cell, default_max_memory, parse_size
 
     timer = Timer()
     pattern, preview, backend, threads = (kw.pop("output_pattern"), kw.pop("preview"),
                                           kw.pop("backend"), kw.pop("threads"))
     report_path, overwrite, quiet = kw.pop("report_path"), kw.pop("overwrite"), kw.pop("quiet")
+    output = kw.pop("output")
+    max_memory, window_size, cog, scheduler = (kw.pop("max_memory"), kw.pop("window_size"),
+                                               kw.pop("cog"), kw.pop("scheduler"))
     req = _pop_sun(kw, default_sun)
-    if (output is None) == (pattern is None):
-        raise click.UsageError("give OUTPUT or --output-pattern (one of them)")
+    inputs, output = _inputs_and_output(files, output, pattern)
+    wshape = _window_size(window_size)
+    try:
+        limit = parse_size(max_memory) if max_memory is not None else default_max_memory()
+    except HillshadeError as exc:
+        raise click.UsageError(f"--max-memory: {exc}") from None
     if output is not None:
         check_output_path(output, overwrite)
     for extra in (report_path, preview):
@@ -313,16 +365,142 @@ def _light(dem, output, kind, algorithm, options, curvature, refraction_k, soft,
     if threads is not None:
         numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
     ran_on = choose_backend(backend, algorithm, options)
+    per_cell = bytes_per_cell(algorithm, kind, soft, self_shadow)
+    tiled = (scheduler is not None or wshape is not None or len(inputs) > 1
+             or _needs_windows(inputs[0], kw, limit, per_cell))
+    dtype, nodata = {"shadow": ("float32", -9999.0) if soft else ("uint8", 255),
+                     "classes": ("uint8", 255), "hillshade": ("uint8", 0)}[kind]
+    out = _Outputs(kind, soft, algorithm, dtype, nodata, output, pattern, overwrite, cog,
+                   preview is not None, ambient)
+    run = (_light_tiled if tiled else _light_in_memory)(
+        inputs, kw, scale, req, out, timer, algorithm, options, ran_on, curvature, refraction_k,
+        soft, self_shadow, ambient, quiet, limit=limit, window_shape=wshape, scheduler=scheduler,
+        per_cell=per_cell)
+    d, suns, records = run["dem"], run["suns"], run["records"]
+    if preview is not None:
+        with timer("write"):
+            day = [s for s in suns if not s.night]
+            s0 = day[0] if day else suns[0]
+            write_png(preview, run["relief"](s0.azimuth, s0.elevation))
+    seconds = dict(timer.seconds, total=timer.total())
+    first = suns[0]
+    rep = build_report(dem=d, output=output or pattern.pattern, azimuth=first.azimuth,
+                       elevation=first.elevation, algorithm=algorithm, backend=ran_on,
+                       backend_requested=backend, threads=numba.get_num_threads(),
+                       seconds=seconds, stats=_mean_stats(records, run["stats"]),
+                       height_range=run["zrange"], options=options,
+                       algorithm_stats=run["algo_stats"], gpu=run.get("gpu"))
+    rep["sun"] = records[0] if len(records) == 1 else None
+    rep["sun_source"] = "time" if req.from_time else "given"
+    if run["sun_info"] is not None:
+        rep.update(run["sun_info"])
+    if len(records) > 1 or req.from_time:
+        rep["times"] = records
+    rep["night_count"] = sum(1 for s in suns if s.night)
+    rep["product"] = {"kind": kind, "soft": soft, "self_shadow": self_shadow,
+                      "dtype": dtype, "nodata": nodata, "bands": len(suns) if output else 1,
+                      "cog": cog}
+    if kind == "hillshade":
+        rep["product"].update(ambient=ambient, scale=scale)
+    rep["curvature"] = run["curvature"]
+    rep["inputs"] = [os.path.abspath(p) for p in inputs]
+    rep["processing"] = run["processing"]
+    if preview is not None:
+        rep["preview"] = os.path.abspath(preview)
+    if report_path is not None:
+        write_json(report_path, rep)
+    if not quiet:
+        click.echo(summary_line(rep), err=True)
+        if run["algo_stats"].get("note"):
+            click.echo(f"hillshade-rt: note: {run['algo_stats']['note']}", err=True)
+        if rep["night_count"]:
+            click.echo(f"hillshade-rt: note: the sun is below the horizon at "
+                       f"{rep['night_count']} of {len(suns)} time(s): all shadow there", err=True)
 
+
+def _needs_windows(path, read_opts, limit, per_cell) -> bool:
+    """Whether shading ``path`` whole would need more than ``limit`` bytes (a DEM whose size
+    cannot be told without reading it is read whole, as before)."""
+    from .io import parse_pixel_size, parse_raw_shape
+    from .tiling import open_source, process_rss
+    try:
+        src = open_source(path, band=read_opts["band"], nodata=read_opts["nodata"],
+                          pixel_size=parse_pixel_size(read_opts["pixel_size"]),
+                          z_factor=read_opts["z_factor"],
+                          raw_shape=parse_raw_shape(read_opts["raw_shape"]),
+                          raw_dtype=read_opts["raw_dtype"],
+                          raw_byteorder=read_opts["raw_byteorder"])
+    except HillshadeError:
+        return False
+    rows, cols = src.shape
+    return rows * cols * per_cell + process_rss() > limit
+
+
+class _Outputs:
+    """Where a lighting run's products go: bands of OUTPUT or files of a pattern; their type,
+    nodata, tags and descriptions."""
+
+    def __init__(self, kind, soft, algorithm, dtype, nodata, output, pattern, overwrite, cog,
+                 preview, ambient):
+        self.kind, self.soft, self.dtype, self.nodata = kind, soft, dtype, nodata
+        self.output, self.pattern, self.overwrite, self.cog = output, pattern, overwrite, cog
+        self.preview, self.ambient = preview, ambient
+        self.base_tags = {"HILLSHADE_RT_VERSION": __version__, "ALGORITHM": algorithm,
+                          "VALUES": _VALUES[kind, soft]}
+        self.what = {"shadow": "visible fraction of the sun" if soft else "cast shadow",
+                     "classes": "shadow classes", "hillshade": "shaded relief"}[kind]
+        self.resampling = "average" if (soft or kind == "hillshade") else "nearest"
+        self.paths = None
+
+    def plan(self, suns):
+        from .io import check_output_path
+        if self.pattern is not None:
+            self.paths = self.pattern.paths(suns)
+            for p in self.paths:
+                check_output_path(p, self.overwrite)
+
+    def description(self, sun) -> str:
+        from .runner import label
+        return label(sun) if sun.time is not None else self.what
+
+    def writer(self, dem, count):
+        """The multi-band writer of OUTPUT (None with a pattern)."""
+        from .io import BandWriter
+        if self.output is None:
+            return contextlib.nullcontext()
+        return BandWriter(self.output, dem, count, self.dtype, self.nodata, self.base_tags,
+                          self.cog, self.resampling)
+
+    def file_writer(self, dem, i, sun):
+        from .io import BandWriter
+        from .runner import sun_tags
+        return BandWriter(self.paths[i], dem, 1, self.dtype, self.nodata,
+                          {**self.base_tags, **sun_tags(sun)}, self.cog, self.resampling)
+
+    def record(self, sun, i, st, seconds):
+        rec = dict(sun.as_dict(), shadow_fraction=st["shadow_fraction"], compute_s=seconds)
+        if self.paths:
+            rec["output"] = os.path.abspath(self.paths[i])
+        return rec
+
+
+def _light_in_memory(inputs, read_opts, scale, req, out, timer, algorithm, options, ran_on,
+                     curvature, refraction_k, soft, self_shadow, ambient, quiet, **_):
+    import numpy as np
+
+    from .engine import Shader, dem_body, render
+    from .preview import relief_rgb, shade_of
+    from .report import product_stats
+    from .runner import progress, sun_tags
+
+    kind = out.kind
     with timer("read"):
-        d = _read(dem, **kw)
+        d = _read(inputs[0], **read_opts)
         if scale is not None:
             _apply_scale(d, scale)
     with timer("prepare"):   # solar positions; numba compilation on a first run; GPU upload
         suns, sun_info = req.suns(d)
-        paths = pattern.paths(suns) if pattern is not None else None
-        for p in paths or ():
-            check_output_path(p, overwrite)
+        out.plan(suns)
         zmin, zmax = d.height_range()
         shader = Shader(d.heights, d.grid, algorithm, options, ran_on,
                         "auto" if curvature is None else curvature, refraction_k,
@@ -331,16 +509,9 @@ def _light(dem, output, kind, algorithm, options, curvature, refraction_k, soft,
         if day:
             shader.warm_up(day[0].azimuth, day[0].elevation, soft=soft,
                            incidence=self_shadow or kind != "shadow")
-    dtype, nodata = {"shadow": ("float32", -9999.0) if soft else ("uint8", 255),
-                     "classes": ("uint8", 255), "hillshade": ("uint8", 0)}[kind]
-    base_tags = {"HILLSHADE_RT_VERSION": __version__, "ALGORITHM": algorithm,
-                 "VALUES": _VALUES[kind, soft]}
-    description = {"shadow": "visible fraction of the sun" if soft else "cast shadow",
-                   "classes": "shadow classes", "hillshade": "shaded relief"}[kind]
     records, algo_stats = [], {}
-    share = None
-    writer = BandWriter(output, d, len(suns), dtype, nodata, base_tags) if output else None
-    with (writer if writer is not None else contextlib.nullcontext()):
+    share, st = None, None
+    with out.writer(d, len(suns)) as writer:
         for i, sun in enumerate(progress(suns, quiet, "hillshade-rt")):
             t0 = timer.seconds.get("compute", 0.0)
             with timer("compute"):
@@ -348,60 +519,136 @@ def _light(dem, output, kind, algorithm, options, curvature, refraction_k, soft,
                              ambient=ambient, stats=algo_stats)
             seconds = timer.seconds["compute"] - t0
             st = product_stats(kind, soft, arr)
-            if preview is not None:
-                sh = _shade_of(kind, soft, arr, ambient)
+            if out.preview:
+                sh = shade_of(kind, soft, arr, ambient)
                 share = sh / len(suns) if share is None else share + sh / len(suns)
             if soft:
-                arr = np.where(np.isnan(arr), np.float32(nodata), arr).astype(np.float32)
-            tags = sun_tags(sun)
+                arr = np.where(np.isnan(arr), np.float32(out.nodata), arr).astype(np.float32)
             with timer("write"):
                 if writer is not None:
-                    writer.write(i + 1, arr, description=(label(sun) if sun.time is not None
-                                                         else description), tags=tags)
+                    writer.write(i + 1, arr, description=out.description(sun), tags=sun_tags(sun))
                 else:
-                    write_raster(paths[i], arr, d, nodata=nodata,
-                                 description=label(sun) if sun.time is not None else description,
-                                 tags={**base_tags, **tags})
-            rec = dict(sun.as_dict(), shadow_fraction=st["shadow_fraction"], compute_s=seconds)
-            if paths:
-                rec["output"] = os.path.abspath(paths[i])
-            records.append(rec)
-    if preview is not None:
-        with timer("write"):
-            s0 = day[0] if day else suns[0]
-            write_png(preview, relief_rgb(d.heights, d.grid, s0.azimuth, s0.elevation,
-                                          shade=share))
-    seconds = dict(timer.seconds, total=timer.total())
-    first = suns[0]
-    rep = build_report(dem=d, output=output or pattern.pattern, azimuth=first.azimuth,
-                       elevation=first.elevation, algorithm=algorithm, backend=ran_on,
-                       backend_requested=backend, threads=numba.get_num_threads(),
-                       seconds=seconds, stats=_mean_stats(records, st),
-                       height_range=(zmin, zmax), options=options, algorithm_stats=algo_stats,
-                       gpu=shader.gpu_report())
-    rep["sun"] = records[0] if len(records) == 1 else None
-    rep["sun_source"] = "time" if req.from_time else "given"
-    if sun_info is not None:
-        rep.update(sun_info)
-    if len(records) > 1 or req.from_time:
-        rep["times"] = records
-    rep["night_count"] = sum(1 for s in suns if s.night)
-    rep["product"] = {"kind": kind, "soft": soft, "self_shadow": self_shadow,
-                      "dtype": dtype, "nodata": nodata, "bands": len(suns) if output else 1}
-    if kind == "hillshade":
-        rep["product"].update(ambient=ambient, scale=scale)
-    rep["curvature"] = shader.report()
-    if preview is not None:
-        rep["preview"] = os.path.abspath(preview)
-    if report_path is not None:
-        write_json(report_path, rep)
-    if not quiet:
-        click.echo(summary_line(rep), err=True)
-        if algo_stats.get("note"):
-            click.echo(f"hillshade-rt: note: {algo_stats['note']}", err=True)
-        if rep["night_count"]:
-            click.echo(f"hillshade-rt: note: the sun is below the horizon at "
-                       f"{rep['night_count']} of {len(suns)} time(s): all shadow there", err=True)
+                    with out.file_writer(d, i, sun) as w:
+                        w.write(1, arr, description=out.description(sun))
+            records.append(out.record(sun, i, st, seconds))
+    return {"dem": d, "suns": suns, "sun_info": sun_info, "records": records, "stats": st,
+            "algo_stats": algo_stats, "zrange": (zmin, zmax), "curvature": shader.report(),
+            "gpu": shader.gpu_report(),
+            "relief": lambda az, el: relief_rgb(d.heights, d.grid, az, el, shade=share),
+            "processing": {"mode": "in memory", "cells": int(d.heights.size)}}
+
+
+def _light_tiled(inputs, read_opts, scale, req, out, timer, algorithm, options, ran_on,
+                 curvature, refraction_k, soft, self_shadow, ambient, quiet, *, limit,
+                 window_shape, scheduler, per_cell):
+    import math
+
+    import numpy as np
+
+    from .engine import dem_body
+    from .geometry import Grid
+    from .io import parse_pixel_size, parse_raw_shape
+    from .preview import relief_rgb, shade_of
+    from .report import merge_stats, product_stats
+    from .runner import sun_tags
+    from .tiling import Job, Tally, WindowCache, block_stats, open_source, window_budget
+
+    kind = out.kind
+    with timer("read"):
+        src = open_source(inputs, band=read_opts["band"], nodata=read_opts["nodata"],
+                          pixel_size=parse_pixel_size(read_opts["pixel_size"]),
+                          z_factor=read_opts["z_factor"],
+                          raw_shape=parse_raw_shape(read_opts["raw_shape"]),
+                          raw_dtype=read_opts["raw_dtype"], raw_byteorder=read_opts["raw_byteorder"])
+        if scale is not None:
+            _apply_scale(src, scale)
+    rows, cols = src.shape
+    tally = Tally()
+    with timer("prepare"):   # one pass for the height ranges; solar positions; compilation
+        bstats = block_stats(src, preview_side=2048 if out.preview else None)
+        tally.stats_pass_bytes = rows * cols * src.itemsize
+        zrange = (bstats.zmin, bstats.zmax)
+        suns, sun_info = req.suns(src)
+        out.plan(suns)
+        dx, dy = src.grid.centre_spacing()
+        job = Job(src, algorithm, options, ran_on, "auto" if curvature is None else curvature,
+                  refraction_k, dem_body(src, req.lat), zrange, math.hypot(cols * dx, rows * dy),
+                  kind, soft, self_shadow, ambient)
+        budget, mem = window_budget(limit, per_cell)
+        plans = [job.pieces(s, bstats, budget, window_shape) for s in suns]
+        day = [s for s in suns if not s.night]
+        if day:
+            job.warm_up(day[0])
+    n = bstats.stride
+    share = (np.zeros(bstats.preview.shape, np.float32) if out.preview else None)
+    records, algo_stats, used = [], {}, set()
+    st = None
+    if scheduler is not None:
+        from .distributed import run_on_dask
+        with timer("compute"):
+            records, st, extra = run_on_dask(scheduler, job, suns, plans, out, share, n, quiet,
+                                             algo_stats, used, tally)
+    else:
+        from tqdm import tqdm
+        total = sum(len(p) for p in plans)
+        bar = tqdm(total=total, desc="hillshade-rt", unit="window", leave=False,
+                   disable=True if quiet or total < 2 else None)
+        with out.writer(src, len(suns)) as writer, src.reader() as rd, bar:
+            cache = WindowCache(rd)
+            for i, (sun, pieces) in enumerate(zip(suns, plans)):
+                t0 = timer.seconds.get("compute", 0.0)
+                with (out.file_writer(src, i, sun) if writer is None
+                      else contextlib.nullcontext(writer)) as w:
+                    band = 1 if writer is None else i + 1
+                    st = None
+                    for p in pieces:
+                        with timer("compute"):
+                            z = cache.get(p.window)
+                            arr = job.light(z, p, algo_stats, used)
+                        tally.add(p)
+                        st = merge_stats(st, product_stats(kind, soft, arr))
+                        if share is not None:
+                            _preview_share(share, shade_of(kind, soft, arr, ambient), p.region, n,
+                                           len(suns))
+                        if soft:
+                            arr = np.where(np.isnan(arr), np.float32(out.nodata), arr).astype(
+                                np.float32)
+                        with timer("write"):
+                            w.write(band, arr, window=p.region)
+                        bar.update(1)
+                    w.describe(band, out.description(sun),
+                               sun_tags(sun) if writer is not None else None)
+                records.append(out.record(sun, i, st, timer.seconds.get("compute", 0.0) - t0))
+            tally.bytes_read = rd.bytes_read
+            tally.bytes_carried = cache.carried_bytes
+        extra = {}
+    curv = {"setting": job.curvature, "applied": True in used,
+            "radius_m": job.body.radius(0.0) if True in used else None,
+            "refraction_k": job.k, "body": job.body.source}
+    processing = {"mode": "tiled" if scheduler is None else "dask", "cells": rows * cols,
+                  "memory": mem, "window_shape_requested": list(window_shape) if window_shape
+                  else None, **tally.as_dict(src.itemsize), **extra}
+    if src.tiles:
+        processing["mosaic"] = [{"path": os.path.abspath(t["path"]), "window": list(t["window"])}
+                                for t in src.tiles]
+
+    def relief(az, el):
+        pv = bstats.preview
+        g = Grid(pv.shape[0], pv.shape[1], src.grid.dx[::n] * n, src.grid.dy[::n] * n,
+                 src.grid.col_sign, src.grid.row_sign, src.grid.method)
+        return relief_rgb(pv, g, az, el, shade=share)
+    return {"dem": src, "suns": suns, "sun_info": sun_info, "records": records, "stats": st,
+            "algo_stats": algo_stats, "zrange": zrange, "curvature": curv, "gpu": None,
+            "relief": relief, "processing": processing}
+
+
+def _preview_share(share, shade, region, n, count):
+    """Add the every-n-th cells of one region's shade into the preview's share."""
+    r0, r1, c0, c1 = region
+    rs, cs = (-r0) % n, (-c0) % n
+    sub = shade[rs::n, cs::n]
+    share[(r0 + rs) // n:(r0 + rs) // n + sub.shape[0],
+          (c0 + cs) // n:(c0 + cs) // n + sub.shape[1]] += sub / count
 
 
 @cli.command("sun-hours")
@@ -525,19 +772,6 @@ _VALUES = {("shadow", False): "1=shadow 0=lit 255=nodata",
            ("classes", False): "0=lit 1=self-shadow 2=cast shadow 255=nodata",
            ("hillshade", False): "1..255 shaded relief with cast shadows, 0=nodata",
            ("hillshade", True): "1..255 shaded relief with soft shadows, 0=nodata"}
-
-
-def _shade_of(kind, soft, arr, ambient):
-    """0..1 'in shadow' per cell of one product, for the preview."""
-    import numpy as np
-    if kind == "hillshade":
-        base = 1.0 + np.rint(254.0 * ambient)
-        return ((arr > 0) & (arr <= base)).astype(np.float32)
-    if soft:
-        return np.nan_to_num(1.0 - arr, nan=0.0).astype(np.float32)
-    if kind == "classes":
-        return ((arr == 1) | (arr == 2)).astype(np.float32)
-    return (arr == 1).astype(np.float32)
 
 
 def _mean_stats(records, last):

@@ -30,15 +30,72 @@ from .geometry import (REFRACTION_K, WGS84_A, WGS84_B, Grid, SunRays, curvature_
                        radius_in_azimuth, sun_rays)
 from .sun import SUN_RADIUS_DEG, Region, SunOver, disk_fraction
 
-CURVATURE_AUTO_M = 1000.0
+CURVATURE_AUTO_M = 1000.0   # curvature "auto" turns on when rays can be longer than this
 # a tile whose window (tile + halo) holds more than this many times its own cells is marched by
 # brute over its own cells only (exact), instead of running the algorithm over the whole window
 TILE_BRUTE_RATIO = 3.0
-_TILE = 7   # scratch code: a cell of the tile, still to decide   # curvature "auto" turns on when rays can be longer than this
+_TILE = 7   # scratch code: a cell of the tile, still to decide
 SOFT_NODATA = -9999.0
 
 # output codes of --classes
 LIT, SELF_SHADOW, CAST_SHADOW, NODATA = 0, 1, 2, 255
+
+
+def reach_m(dz: float, elevation: float, curv_per_m2: float = 0.0) -> float:
+    """Ground metres after which a ray leaving at ``elevation`` has risen ``dz`` above its start
+    (with the Earth-curvature gain ``curv_per_m2`` * d^2 when that is > 0): terrain farther than
+    this toward the sun, and no higher than start + ``dz``, cannot shadow the start. inf for a sun
+    at or below the horizon, 0 at the zenith or when ``dz`` <= 0."""
+    if elevation <= 0:
+        return math.inf
+    if elevation >= 90 or dz <= 0:
+        return 0.0
+    t = math.tan(math.radians(elevation))
+    if curv_per_m2 > 0:
+        return (-t + math.sqrt(t * t + 4.0 * curv_per_m2 * dz)) / (2.0 * curv_per_m2)
+    return dz / t
+
+
+def halo_bounds(bounds: tuple[int, int, int, int], shape: tuple[int, int], grid: Grid,
+                azimuth: float, reach: float, margin: int = 0) -> tuple[int, int, int, int]:
+    """(r0, r1, c0, c1) of ``bounds`` (rows r0:r1, columns c0:c1 of a raster of ``shape``) grown
+    toward the sun at ``azimuth`` by ``reach`` ground metres plus 2 cells (on both sides of an
+    axis the sun does not move along), and by ``margin`` cells on every side, within the raster.
+
+    The rays of row r use row r's spacing, so the smallest spacing of the bounds' rows sets how
+    many cells ``reach`` spans."""
+    rows, cols = shape
+    r0, r1, c0, c1 = bounds
+    east = math.sin(math.radians(azimuth)) * grid.col_sign
+    north = math.cos(math.radians(azimuth)) * grid.row_sign
+    dxm = float(np.min(grid.dx[r0:r1]))
+    dym = float(np.min(grid.dy[r0:r1]))
+
+    def grow(lo, hi, comp, spacing, n):
+        if abs(comp) < 1e-12:
+            return max(0, lo - 2 - margin), min(n, hi + 2 + margin)
+        more = n if not math.isfinite(reach) else int(math.ceil(reach * abs(comp) / spacing)) + 2
+        if comp > 0:
+            return max(0, lo - margin), min(n, hi + more + margin)
+        return max(0, lo - more - margin), min(n, hi + margin)
+    c0, c1 = grow(c0, c1, east, dxm, cols)
+    r0, r1 = grow(r0, r1, north, dym, rows)
+    return r0, r1, c0, c1
+
+
+def curvature_coefficient(setting, body: "Body", k: float, extent_m: float,
+                          zrange: tuple[float, float], azimuth: float, elevation: float) -> float:
+    """(1 - k) / 2R for this sun, or 0 when curvature is off: ``setting`` True, False or "auto"
+    (on when a ray can run longer than 1 km before it rises above the highest cell or leaves a
+    raster ``extent_m`` across)."""
+    if setting is False:
+        return 0.0
+    if setting == "auto":
+        reach = extent_m if elevation <= 0 or elevation >= 90 else min(
+            extent_m, (zrange[1] - zrange[0]) / math.tan(math.radians(elevation)))
+        if reach <= CURVATURE_AUTO_M:
+            return 0.0
+    return curvature_per_m2(body.radius(azimuth), k)
 
 
 @dataclass
@@ -89,12 +146,17 @@ class Shader:
 
     curvature: True, False or "auto" (on when a ray can run longer than 1 km before it rises above
     the highest cell or leaves the raster). refraction_k: terrestrial refraction coefficient
-    (default 0.13 on the Earth, 0 elsewhere)."""
+    (default 0.13 on the Earth, 0 elsewhere).
+
+    A window of a larger raster (``tiling``): ``zrange`` and ``extent_m`` are the whole raster's
+    (so that curvature "auto" decides as for the whole), and ``halo_ready`` says that ``z``
+    already holds the halo of every region asked for: each region is computed on all of ``z``."""
 
     def __init__(self, z: np.ndarray, grid: Grid, algorithm: str = "smap",
                  options: dict | None = None, backend: str = "cpu", curvature="auto",
                  refraction_k: float | None = None, body: Body | None = None,
-                 zrange: tuple[float, float] | None = None):
+                 zrange: tuple[float, float] | None = None, extent_m: float | None = None,
+                 halo_ready: bool = False):
         from .algorithms import ALGORITHMS
         if algorithm not in ALGORITHMS:
             raise HillshadeError(f"unknown algorithm {algorithm!r}; choose one of "
@@ -113,7 +175,11 @@ class Shader:
         self.curvature = curvature
         rows, cols = z.shape
         dx, dy = grid.centre_spacing()
-        self.extent_m = math.hypot(cols * dx, rows * dy)
+        self.extent_m = math.hypot(cols * dx, rows * dy) if extent_m is None else float(extent_m)
+        self.halo_ready = halo_ready
+        # the heights of this array (a window's own range is tighter than the raster's)
+        self.local_range = ((float(np.nanmin(z)), float(np.nanmax(z))) if halo_ready
+                            and np.isfinite(z).any() else (self.zmin, self.zmax))
         self._gpu = None
         self.stats: dict = {}
         self.curvature_used: set[bool] = set()
@@ -141,14 +207,8 @@ class Shader:
     # -- per sun -------------------------------------------------------------------------------
     def curvature_for(self, azimuth: float, elevation: float) -> float:
         """(1 - k) / 2R for this sun, or 0 when curvature is off."""
-        if self.curvature is False:
-            return 0.0
-        if self.curvature == "auto":
-            reach = self.extent_m if elevation <= 0 or elevation >= 90 else min(
-                self.extent_m, (self.zmax - self.zmin) / math.tan(math.radians(elevation)))
-            if reach <= CURVATURE_AUTO_M:
-                return 0.0
-        return curvature_per_m2(self.body.radius(azimuth), self.k)
+        return curvature_coefficient(self.curvature, self.body, self.k, self.extent_m,
+                                     (self.zmin, self.zmax), azimuth, elevation)
 
     def rays(self, grid: Grid, azimuth: float, elevation: float) -> SunRays:
         c = self.curvature_for(azimuth, elevation)
@@ -165,33 +225,18 @@ class Shader:
             return region.rows, region.cols
         sub = self.z[r0:r1, c0:c1]
         low = float(np.nanmin(sub)) if np.isfinite(sub).any() else self.zmax
-        if elevation <= 0:
-            reach = math.inf
-        elif elevation >= 90:
-            reach = 0.0
-        else:
-            reach = max(0.0, self.zmax - low) / math.tan(math.radians(elevation))
-        east = math.sin(math.radians(region.azimuth)) * self.grid.col_sign
-        north = math.cos(math.radians(region.azimuth)) * self.grid.row_sign
-        dxm = float(np.min(self.grid.dx[r0:r1]))
-        dym = float(np.min(self.grid.dy[r0:r1]))
-
-        def grow(lo, hi, comp, spacing, n):
-            """Extend [lo, hi) toward the sun's side of this axis (both sides when the sun moves
-            along the other axis only)."""
-            if abs(comp) < 1e-12:
-                return max(0, lo - 2), min(n, hi + 2)
-            more = n if not math.isfinite(reach) else int(math.ceil(reach * abs(comp) / spacing)) + 2
-            return (lo, min(n, hi + more)) if comp > 0 else (max(0, lo - more), hi)
-        c0, c1 = grow(c0, c1, east, dxm, cols)
-        r0, r1 = grow(r0, r1, north, dym, rows)
+        reach = reach_m(self.zmax - low, elevation, 0.0)
+        r0, r1, c0, c1 = halo_bounds((r0, r1, c0, c1), (rows, cols), self.grid, region.azimuth,
+                                     reach)
         return slice(r0, r1), slice(c0, c1)
 
     def _piece(self, region: Region, elevation_for_halo: float):
         """(z, grid, inner) of the window of ``region``: heights (a view for the whole raster, a
         contiguous copy for a tile), its grid, and the region's place inside the window."""
-        wr, wc = self.window(region, elevation_for_halo)
         rows, cols = self.z.shape
+        if self.halo_ready:
+            return self.z, self.grid, (region.rows, region.cols), True
+        wr, wc = self.window(region, elevation_for_halo)
         if (wr.indices(rows)[:2], wc.indices(cols)[:2]) == ((0, rows), (0, cols)):
             return self.z, self.grid, (region.rows, region.cols), True
         z = np.ascontiguousarray(self.z[wr, wc])
@@ -207,7 +252,7 @@ class Shader:
         from .gpu import GpuDem
         if whole:
             if self._gpu is None:
-                self._gpu = GpuDem(z, (self.zmin, self.zmax, bool(np.isnan(z).any())))
+                self._gpu = GpuDem(z, (*self.local_range, bool(np.isnan(z).any())))
             return self._gpu
         return GpuDem(z)
 
@@ -220,7 +265,7 @@ class Shader:
         el = min(region.elevation, 90.0)
         z, g, inner, whole = self._piece(region, el)
         rays = self.rays(g, region.azimuth, el)
-        zmax = self.zmax if whole else float(np.nanmax(z))
+        zmax = self.local_range[1] if whole else float(np.nanmax(z))
         by_brute = self.backend == "cpu" and z.size > TILE_BRUTE_RATIO * sub.size
         if by_brute:
             # a tile whose halo is much larger than itself: march only the tile's own cells

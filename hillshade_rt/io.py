@@ -351,9 +351,11 @@ def _profile(dem: Dem, dtype: str, nodata) -> dict:
 
 
 def write_raster(path: str, data: np.ndarray, dem: Dem, nodata, description: str = "",
-                 tags: dict | None = None) -> None:
+                 tags: dict | None = None, cog: bool = False,
+                 overview_resampling: str = "nearest") -> None:
     """Write one band georeferenced like ``dem`` (temporary file, then rename)."""
-    with BandWriter(path, dem, 1, str(data.dtype), nodata, tags) as w:
+    with BandWriter(path, dem, 1, str(data.dtype), nodata, tags, cog,
+                    overview_resampling) as w:
         w.write(1, data, description)
 
 
@@ -365,18 +367,26 @@ def write_json(path: str, obj: dict) -> None:
 
 
 class BandWriter:
-    """A GeoTIFF georeferenced like ``dem`` written one band at a time (a series of times), into
-    a temporary file renamed into place only when every band is written::
+    """A GeoTIFF georeferenced like ``dem`` (a :class:`Dem` or a ``tiling.Source``) written one
+    band, or one window of a band, at a time, into a temporary file renamed into place only when
+    every band is written::
 
         with BandWriter(path, dem, count, "uint8", 255) as w:
             w.write(1, mask, description="2026-06-21T14:30+02:00", tags={...})
-    """
+            w.write(2, part, window=(r0, r1, c0, c1))
 
-    def __init__(self, path: str, dem: Dem, count: int, dtype: str, nodata, tags: dict | None = None):
+    ``cog``: the finished file is turned into a Cloud-Optimized GeoTIFF (GDAL's COG driver:
+    512 x 512 tiles, deflate, overviews by ``overview_resampling``) before it is renamed into
+    place; GDAL streams that copy block by block."""
+
+    def __init__(self, path: str, dem, count: int, dtype: str, nodata, tags: dict | None = None,
+                 cog: bool = False, overview_resampling: str = "nearest"):
         self.path, self.dem, self.count, self.dtype, self.nodata = path, dem, count, dtype, nodata
         self.tags = tags or {}
+        self.cog, self.resampling = cog, overview_resampling
         self._stack = contextlib.ExitStack()
         self._dst = None
+        self._tmp = None
 
     def __enter__(self):
         import rasterio
@@ -388,11 +398,16 @@ class BandWriter:
             prof["interleave"] = "band"   # bands are written one after another
         if self.dtype == "float32":
             prof["predictor"] = 3
+        if self.dem.shape[0] * self.dem.shape[1] * np.dtype(self.dtype).itemsize * self.count > 2e9:
+            prof["BIGTIFF"] = "IF_SAFER"
         try:
-            tmp = self._stack.enter_context(atomic_path(self.path, ".tif"))
+            self._final = self._stack.enter_context(atomic_path(self.path, ".tif"))
+            if self.cog:   # the GeoTIFF the bands go into, beside the output; COG copy at the end
+                self._tmp = self._stack.enter_context(_scratch_path(self.path, ".tif"))
             self._stack.enter_context(warnings.catch_warnings())
             warnings.simplefilter("ignore", NotGeoreferencedWarning)
-            self._dst = self._stack.enter_context(rasterio.open(tmp, "w", **prof))
+            self._dst = rasterio.open(self._tmp or self._final, "w", **prof)
+            self._stack.callback(self._close)
             if self.tags:
                 self._dst.update_tags(**{k: str(v) for k, v in self.tags.items()})
         except rasterio.errors.RasterioError as exc:
@@ -403,19 +418,76 @@ class BandWriter:
             raise
         return self
 
-    def write(self, band: int, data: np.ndarray, description: str = "", tags: dict | None = None):
+    def _close(self):
+        if self._dst is not None:
+            self._dst.close()
+            self._dst = None
+
+    def write(self, band: int, data: np.ndarray, description: str = "", tags: dict | None = None,
+              window: tuple[int, int, int, int] | None = None):
+        """Band ``band`` (1-based), whole or its ``window`` (r0, r1, c0, c1)."""
         import rasterio
         try:
-            self._dst.write(data, band)
-            if description:
-                self._dst.set_band_description(band, description)
-            if tags:
-                self._dst.update_tags(band, **{k: str(v) for k, v in tags.items()})
+            if window is None:
+                self._dst.write(data, band)
+            else:
+                from rasterio.windows import Window
+                r0, r1, c0, c1 = window
+                self._dst.write(data, band, window=Window(c0, r0, c1 - c0, r1 - r0))
+            self.describe(band, description, tags)
         except rasterio.errors.RasterioError as exc:
             raise HillshadeError(f"{self.path}: cannot write ({str(exc).splitlines()[0]})") from None
 
+    def describe(self, band: int, description: str = "", tags: dict | None = None):
+        """Band ``band``'s description and tags."""
+        if description:
+            self._dst.set_band_description(band, description)
+        if tags:
+            self._dst.update_tags(band, **{k: str(v) for k, v in tags.items()})
+
     def __exit__(self, *exc):
+        if exc[0] is None and self.cog:
+            try:
+                self._close()
+                to_cog(self._tmp, self._final, self.resampling)
+            except BaseException as err:
+                self._stack.__exit__(type(err), err, err.__traceback__)
+                raise
         return self._stack.__exit__(*exc)
+
+
+@contextlib.contextmanager
+def _scratch_path(path: str, suffix: str = ""):
+    """A temporary path beside ``path``, always removed afterwards."""
+    folder = os.path.dirname(os.path.abspath(path))
+    fd, tmp = tempfile.mkstemp(dir=folder, prefix="." + os.path.basename(path) + ".",
+                               suffix=".scratch" + suffix)
+    os.close(fd)
+    try:
+        yield tmp
+    finally:
+        for p in (tmp, tmp + ".ovr", tmp + ".aux.xml"):
+            with contextlib.suppress(OSError):
+                os.remove(p)
+
+
+def to_cog(src: str, dst: str, resampling: str = "nearest", blocksize: int = 512) -> None:
+    """Copy the GeoTIFF ``src`` to ``dst`` as a Cloud-Optimized GeoTIFF with overviews."""
+    import rasterio
+    import rasterio.shutil
+    from rasterio.errors import NotGeoreferencedWarning
+    with rasterio.open(src) as ds:
+        dtype = ds.dtypes[0]
+    opts = dict(driver="COG", COMPRESS="DEFLATE", BLOCKSIZE=blocksize,
+                RESAMPLING=resampling.upper(), OVERVIEWS="AUTO", BIGTIFF="IF_SAFER")
+    if dtype == "float32":
+        opts["PREDICTOR"] = "YES"
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", NotGeoreferencedWarning)
+            rasterio.shutil.copy(src, dst, **opts)
+    except rasterio.errors.RasterioError as exc:
+        raise HillshadeError(f"{dst}: cannot write a COG ({str(exc).splitlines()[0]})") from None
 
 
 def write_png(path: str, rgb: np.ndarray) -> None:

@@ -43,3 +43,15 @@ def relief_rgb(z: np.ndarray, grid: Grid, azimuth: float = 315.0, elevation: flo
     out = np.rint(255.0 * np.clip(rgb, 0.0, 1.0)).astype(np.uint8)
     out[np.isnan(zs)] = 255
     return out
+
+
+def shade_of(kind, soft, arr, ambient):
+    """0..1 'in shadow' per cell of one product, for the preview."""
+    if kind == "hillshade":
+        base = 1.0 + np.rint(254.0 * ambient)
+        return ((arr > 0) & (arr <= base)).astype(np.float32)
+    if soft:
+        return np.nan_to_num(1.0 - arr, nan=0.0).astype(np.float32)
+    if kind == "classes":
+        return ((arr == 1) | (arr == 2)).astype(np.float32)
+    return (arr == 1).astype(np.float32)

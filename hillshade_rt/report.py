@@ -62,6 +62,28 @@ def product_stats(kind: str, soft: bool, arr: np.ndarray) -> dict:
             "valid_cells": n, "shadow_fraction": (1.0 - mean) if mean is not None else None}
 
 
+def merge_stats(a: dict | None, b: dict) -> dict:
+    """The ``product_stats`` of two parts of one product taken together."""
+    if a is None:
+        return dict(b)
+    out = {}
+    for k in ("shadow_cells", "lit_cells", "nodata_cells", "valid_cells", "self_shadow_cells",
+              "cast_shadow_cells"):
+        if k in a or k in b:
+            va, vb = a.get(k), b.get(k)
+            out[k] = None if va is None or vb is None else va + vb
+    if out.get("shadow_cells") is not None:
+        valid = out["shadow_cells"] + out["lit_cells"]
+        out["shadow_fraction"] = out["shadow_cells"] / valid if valid else None
+    else:   # float products: the shadow fraction is 1 - the mean, weighted by valid cells
+        na, nb = a.get("valid_cells") or 0, b.get("valid_cells") or 0
+        fa, fb = a.get("shadow_fraction"), b.get("shadow_fraction")
+        parts = [(n, f) for n, f in ((na, fa), (nb, fb)) if n and f is not None]
+        out["shadow_fraction"] = (sum(n * f for n, f in parts) / sum(n for n, _ in parts)
+                                  if parts else None)
+    return out
+
+
 def build_report(*, dem, output: str, azimuth: float, elevation: float, algorithm: str,
                  backend: str, threads: int, seconds: dict, stats: dict,
                  height_range: tuple[float, float], options: dict | None = None,

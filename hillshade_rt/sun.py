@@ -246,9 +246,12 @@ class Site:
                 "source": self.source}
 
 
-def _centre_height(z: np.ndarray) -> tuple[float, str]:
+def centre_height_of(z: np.ndarray, r: int | None = None, c: int | None = None) -> tuple[float, str]:
+    """The observer's height: the centre cell (``r``, ``c``; default the middle of ``z``), else the
+    median of the valid cells nearest to it."""
     rows, cols = z.shape
-    r, c = rows // 2, cols // 2
+    r = rows // 2 if r is None else r
+    c = cols // 2 if c is None else c
     v = float(z[r, c])
     if math.isfinite(v):
         return v, "the DEM's centre cell"
@@ -261,7 +264,8 @@ def _centre_height(z: np.ndarray) -> tuple[float, str]:
 
 def dem_site(dem, lat: float | None = None, lon: float | None = None) -> Site:
     """The :class:`Site` of a :class:`~hillshade_rt.io.Dem`."""
-    height, hnote = _centre_height(dem.heights)
+    height, hnote = (dem.centre_height() if hasattr(dem, "centre_height")
+                     else centre_height_of(dem.heights))
     if (lat is None) != (lon is None):
         raise HillshadeError("--lat and --lon go together")
     if lat is not None:

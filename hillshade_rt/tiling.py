@@ -1,0 +1,865 @@
+"""Rasters larger than memory: windows read and written through rasterio, each with only the halo
+toward the sun that can shadow it.
+
+A :class:`Source` is a DEM opened for windowed reads: one file GDAL reads, several files (or a VRT)
+shaded as one mosaic, or a raw grid (memory-mapped). Nothing reads it whole.
+
+1. **Statistics pass.** One streaming pass over the DEM gives the lowest and highest height of
+   every ``STAT_BLOCK`` x ``STAT_BLOCK`` block (and the raster's range).
+2. **Plan** (:func:`plan`). A ray leaving a cell at height ``z0`` toward a sun at elevation E has
+   risen above every height ``zhigh`` after ``reach = (zhigh - z0) / tan E`` ground metres (less
+   with Earth curvature: ``d tan E + c d^2 = zhigh - z0``), so no terrain farther than that toward
+   the sun can shadow the cell. A window is its output region plus that halo, **on the sun's side
+   only** (two cells either side of an axis the sun does not move along), plus one cell all round
+   for the surface normals of self-shadow and relief. ``z0`` is the lowest height of the blocks
+   under the region, ``zhigh`` the highest of the blocks under the region and its halo, tightened
+   until it stops shrinking (the halo is found from the raster's highest cell first). Regions are
+   as large as ``--max-memory`` allows, shaped to waste the fewest halo cells: strips along the
+   sun's direction have no halo along their length.
+3. **Order and carry.** Windows run from the sun's side, so that the halo of a window is part of
+   the window before it; the heights two consecutive windows share are carried over in memory,
+   not read again.
+4. Each window is lit by the same code as an in-memory run (``engine.Shader`` with the whole
+   raster's height range and extent, so Earth curvature decides alike), and its region written
+   into the output, a GeoTIFF written through a temporary file (``io.BandWriter``).
+
+Because a window holds every cell whose terrain can shadow its region, the exact algorithms give
+the region exactly what a run on the whole raster gives it (tests compare them cell for cell).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import os
+import re
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+from numba import njit, prange
+
+from .errors import HillshadeError
+from .geometry import Grid, grid_from_transform, orientation
+
+STAT_BLOCK = 256          # cells per side of the blocks whose height range bounds the halos
+ALIGN = 256               # output regions are multiples of the output's block size
+READ_CHUNK = 32 << 20     # bytes of source values read at once (bounded scratch)
+GDAL_CACHE_MB = 64        # GDAL's block cache during a tiled run (its default is 5 % of RAM)
+
+# bytes per window cell while it is lit (heights, the carried previous window, the algorithm's
+# tables, the mask, the region's copies): an upper bound measured by benchmarks/bigdem.py
+_BYTES_ALGORITHM = {"brute": 11, "smap": 15, "horizon": 19, "sweep": 12}
+_BYTES_PRODUCT = {"shadow": 0, "classes": 6, "hillshade": 22, "sun": 9}
+_BYTES_SOFT = 20
+
+
+def bytes_per_cell(algorithm: str, kind: str = "shadow", soft: bool = False,
+                   self_shadow: bool = False) -> int:
+    """Working memory per window cell of one run (an upper bound)."""
+    n = _BYTES_ALGORITHM.get(algorithm, 20) + _BYTES_PRODUCT.get(kind, 22)
+    if soft:
+        n += _BYTES_SOFT
+    if self_shadow and kind == "shadow":
+        n += 6
+    return n
+
+
+# ---------------------------------------------------------------------------------------------
+# memory
+
+_SIZE = re.compile(r"^\s*(\d+(?:\.\d*)?|\.\d+)\s*([kmgtp]?)(i?)(b?)\s*$", re.IGNORECASE)
+
+
+def parse_size(text) -> int:
+    """'2GB' (2e9 bytes), '1.5GiB' (1.5 * 2**30), '800M', '1e9'-free plain integers -> bytes.
+    Decimal units unless written with 'i' (as Dask's ``parse_bytes``)."""
+    if isinstance(text, (int, np.integer)):
+        return int(text)
+    m = _SIZE.match(str(text))
+    if not m:
+        raise HillshadeError(f"memory size must be like 2GB, 512MB or 1.5GiB, got {text!r}")
+    value, unit, binary = float(m.group(1)), m.group(2).lower(), m.group(3)
+    power = "kmgtp".index(unit) + 1 if unit else 0
+    n = int(value * (1024 if binary else 1000) ** power)
+    if n <= 0:
+        raise HillshadeError(f"memory size must be positive, got {text!r}")
+    return n
+
+
+def format_size(n: float) -> str:
+    for unit, f in (("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
+        if abs(n) >= f:
+            return f"{n / f:.2f} {unit}"
+    return f"{int(n)} B"
+
+
+def _meminfo() -> dict:
+    out = {}
+    with contextlib.suppress(OSError, ValueError):
+        with open("/proc/meminfo", encoding="ascii") as fh:
+            for line in fh:
+                k, v = line.split(":", 1)
+                out[k] = int(v.split()[0]) * 1024
+    return out
+
+
+def default_max_memory() -> int:
+    """Half of the machine's memory, and no more than 80 % of what is available now."""
+    info = _meminfo()
+    total = info.get("MemTotal")
+    if total is None:
+        try:
+            total = os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+        except (ValueError, OSError, AttributeError):
+            total = 8 << 30
+    limit = total // 2
+    if "MemAvailable" in info:
+        limit = min(limit, int(info["MemAvailable"] * 0.8))
+    return max(limit, 256 << 20)
+
+
+def process_rss() -> int:
+    """Resident memory of this process now, bytes (0 where /proc is missing)."""
+    with contextlib.suppress(OSError, ValueError, IndexError):
+        with open("/proc/self/statm", encoding="ascii") as fh:
+            return int(fh.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+    return 0
+
+
+def window_budget(max_memory: int, per_cell: int) -> tuple[int, dict]:
+    """Cells a window may hold under ``max_memory`` for the whole process: what the process
+    already holds (interpreter, numba, GDAL) and GDAL's block cache are taken off first."""
+    base = process_rss()
+    cache = GDAL_CACHE_MB << 20
+    margin = 32 << 20
+    free = max_memory - base - cache - margin
+    info = {"max_memory": max_memory, "process_before": base, "gdal_cache": cache,
+            "bytes_per_cell": per_cell}
+    if free < per_cell * 64 * 64:
+        raise HillshadeError(
+            f"--max-memory {format_size(max_memory)} leaves no room for a window: the process "
+            f"already uses {format_size(base)} and GDAL's cache {format_size(cache)}; give more")
+    info["window_bytes"] = free
+    return free // per_cell, info
+
+
+# ---------------------------------------------------------------------------------------------
+# sources
+
+@dataclass
+class Source:
+    """A DEM opened for windowed reads (never read whole).
+
+    ``name`` is what GDAL opens (a path, or the VRT document of a mosaic); ``paths`` the files;
+    ``raw`` the numpy dtype of a raw grid (read through a memory map) or None."""
+
+    name: str
+    paths: list[str]
+    shape: tuple[int, int]
+    transform: object
+    crs: object
+    nodata: float | None
+    band: int
+    dtype: str
+    driver: str
+    grid: Grid = None          # type: ignore[assignment]
+    z_factor: float = 1.0
+    raw: str | None = None
+    tiles: list[dict] = field(default_factory=list)   # a mosaic's inputs: path, window
+
+    @property
+    def path(self) -> str:
+        return self.paths[0] if len(self.paths) == 1 else f"mosaic of {len(self.paths)} files"
+
+    @property
+    def kind(self) -> str:
+        return "raw" if self.raw else ("mosaic" if len(self.paths) > 1 else "gdal")
+
+    @property
+    def source_dtype(self) -> str:
+        return self.dtype
+
+    def crs_string(self) -> str | None:
+        if self.crs is None:
+            return None
+        epsg = self.crs.to_epsg()
+        return f"EPSG:{epsg}" if epsg else self.crs.to_wkt()
+
+    @property
+    def itemsize(self) -> int:
+        return np.dtype(self.dtype).itemsize
+
+    @contextlib.contextmanager
+    def reader(self):
+        """An open :class:`Reader` (one per process or task)."""
+        r = Reader(self)
+        try:
+            yield r
+        finally:
+            r.close()
+
+    def centre_height(self) -> tuple[float, str]:
+        """The height at the centre, as ``sun.dem_site`` takes it, read from the centre only."""
+        from .sun import centre_height_of
+        rows, cols = self.shape
+        r, c = rows // 2, cols // 2
+        r0, c0 = max(0, r - 128), max(0, c - 128)
+        r1, c1 = min(rows, r + 129), min(cols, c + 129)
+        z = np.empty((r1 - r0, c1 - c0), np.float32)
+        with self.reader() as rd:
+            rd.read((r0, r1, c0, c1), z)
+        if not np.isfinite(z).any():
+            return 0.0, "sea level (no valid cell within 128 cells of the centre)"
+        return centre_height_of(z, r - r0, c - c0)
+
+
+class Reader:
+    """Windowed reads of a :class:`Source` into float32 heights (NaN voids, z-factor applied)."""
+
+    def __init__(self, source: Source):
+        self.source = source
+        self.bytes_read = 0
+        self._ds = None
+        self._mm = None
+        if source.raw is not None:
+            self._mm = np.memmap(source.paths[0], dtype=np.dtype(source.raw), mode="r",
+                                 shape=source.shape)
+        else:
+            import rasterio
+            from rasterio.errors import NotGeoreferencedWarning
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", NotGeoreferencedWarning)
+                try:
+                    self._ds = rasterio.open(source.name)
+                except (rasterio.errors.RasterioError, OSError) as exc:
+                    raise HillshadeError(f"{source.path}: cannot read "
+                                         f"({str(exc).splitlines()[0]})") from None
+
+    def close(self):
+        if self._ds is not None:
+            self._ds.close()
+            self._ds = None
+        self._mm = None
+
+    def read(self, bounds: tuple[int, int, int, int], out: np.ndarray) -> None:
+        """Heights of rows r0:r1, columns c0:c1 into ``out`` (float32, that shape; may be a view),
+        a band of rows at a time (bounded scratch)."""
+        r0, r1, c0, c1 = bounds
+        if r1 <= r0 or c1 <= c0:
+            return
+        src = self.source
+        step = max(1, READ_CHUNK // max(1, (c1 - c0) * src.itemsize))
+        for a in range(r0, r1, step):
+            b = min(r1, a + step)
+            if self._mm is not None:
+                data = np.asarray(self._mm[a:b, c0:c1])
+            else:
+                from rasterio.windows import Window
+                try:
+                    data = self._ds.read(src.band, window=Window(c0, a, c1 - c0, b - a))
+                except Exception as exc:  # noqa: BLE001 -- GDAL read errors of many kinds
+                    raise HillshadeError(f"{src.path}: read failed at rows {a}:{b}, columns "
+                                         f"{c0}:{c1} ({str(exc).splitlines()[0]})") from None
+            self.bytes_read += data.nbytes
+            heights_into(data, src.nodata, out[a - r0:b - r0], src.z_factor)
+
+
+def heights_into(data: np.ndarray, nodata: float | None, out: np.ndarray,
+                 z_factor: float = 1.0) -> None:
+    """``out[...]`` = float32 heights of ``data``: nodata, NaN and +-inf as NaN (the rules of
+    ``io.read_dem``), times ``z_factor``."""
+    out[...] = data
+    if nodata is not None and not math.isnan(nodata):
+        nd = np.asarray(nodata).astype(data.dtype)
+        if data.dtype.kind == "f" or float(nd) == float(nodata):
+            out[data == nd] = np.nan
+    out[~np.isfinite(out)] = np.nan
+    if z_factor != 1.0:
+        out *= np.float32(z_factor)
+
+
+def open_source(paths, *, band: int = 1, nodata: float | None = None,
+                pixel_size: tuple[float, float] | None = None, z_factor: float = 1.0,
+                raw_shape=None, raw_dtype=None, raw_byteorder=None) -> Source:
+    """A :class:`Source` for one DEM path or several (a mosaic); the same options and checks as
+    ``io.read_dem``."""
+    from .io import RAW_EXTS
+    paths = [os.fspath(p) for p in ([paths] if isinstance(paths, (str, os.PathLike)) else paths)]
+    if not paths:
+        raise HillshadeError("no DEM given")
+    for p in paths:
+        if not os.path.exists(p):
+            raise HillshadeError(f"{p}: no such file")
+        if os.path.isdir(p):
+            raise HillshadeError(f"{p}: is a folder, not a raster file")
+    if not (math.isfinite(z_factor) and z_factor != 0):
+        raise HillshadeError(f"--z-factor must be a finite non-zero number, got {z_factor}")
+    if band < 1:
+        raise HillshadeError(f"--band must be 1 or more, got {band}")
+    raw = raw_shape is not None or raw_dtype is not None or raw_byteorder is not None or \
+        os.path.splitext(paths[0])[1].lower() in RAW_EXTS
+    if raw:
+        if len(paths) > 1:
+            raise HillshadeError("several raw grids cannot be shaded as one mosaic; give one, or "
+                                 "GeoTIFFs")
+        src = _raw_source(paths[0], raw_shape, raw_dtype, raw_byteorder, nodata)
+    elif len(paths) == 1:
+        src = _gdal_source(paths[0], band, nodata)
+    else:
+        src = _mosaic_source(paths, band, nodata)
+    src.z_factor = float(z_factor)
+    rows, cols = src.shape
+    if pixel_size is not None:
+        col_sign, row_sign = orientation(src.transform) if src.transform is not None else (1, -1)
+        src.grid = Grid.uniform(rows, cols, pixel_size[0], pixel_size[1], col_sign, row_sign,
+                                "--pixel-size")
+    elif src.transform is None:
+        raise HillshadeError(f"{src.path}: has no georeferencing; give the ground spacing with "
+                             "--pixel-size DX[,DY] (metres)")
+    else:
+        src.grid = grid_from_transform(src.transform, src.crs, (rows, cols))
+    return src
+
+
+def _open_meta(path: str, band: int):
+    import rasterio
+    from rasterio.errors import NotGeoreferencedWarning
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", NotGeoreferencedWarning)
+            with rasterio.open(path) as ds:
+                if ds.count < 1 or ds.width < 1 or ds.height < 1:
+                    raise HillshadeError(f"{path}: the raster is empty")
+                if band > ds.count:
+                    raise HillshadeError(f"{path}: has {ds.count} band(s), --band {band} asked")
+                georef = ds.crs is not None or not ds.transform.is_identity
+                return dict(shape=(ds.height, ds.width), transform=ds.transform if georef else None,
+                            crs=ds.crs, nodata=ds.nodatavals[band - 1],
+                            dtype=ds.dtypes[band - 1], driver=ds.driver)
+    except HillshadeError:
+        raise
+    except (rasterio.errors.RasterioError, OSError) as exc:
+        msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        if "not recognized as" in msg or "not recognised" in msg:
+            msg = "not a raster format GDAL can read"
+        raise HillshadeError(f"{path}: cannot read as a raster ({msg})") from None
+
+
+def _gdal_source(path: str, band: int, nodata: float | None) -> Source:
+    m = _open_meta(path, band)
+    if np.dtype(m["dtype"]).kind not in "iuf":
+        raise HillshadeError(f"{path}: pixel type {m['dtype']} is not a height")
+    return Source(path, [path], m["shape"], m["transform"], m["crs"],
+                  m["nodata"] if nodata is None else nodata, band, m["dtype"], m["driver"])
+
+
+def _raw_source(path, shape, dtype, byteorder, nodata) -> Source:
+    from .io import RAW_DTYPES
+    if dtype is None:
+        raise HillshadeError(f"{path}: raw input needs --raw-dtype ({', '.join(RAW_DTYPES)})")
+    if shape is None:
+        raise HillshadeError(f"{path}: raw input needs --raw-shape ROWSxCOLS")
+    dt = np.dtype(dtype).newbyteorder("<" if (byteorder or "little") == "little" else ">")
+    size = os.path.getsize(path)
+    if shape[0] * shape[1] * dt.itemsize != size:
+        raise HillshadeError(
+            f"{path}: --raw-shape {shape[0]}x{shape[1]} needs {shape[0] * shape[1] * dt.itemsize} "
+            f"bytes of {dtype}, the file holds {size}")
+    return Source(path, [path], tuple(shape), None, None, nodata, 1, dt.str, "raw", raw=dt.str)
+
+
+def _mosaic_source(paths: list[str], band: int, nodata: float | None) -> Source:
+    """Several rasters on one grid (same CRS and cell size, cells aligned) as one surface: a VRT
+    document in memory, float32 with NaN where no input has a valid cell."""
+    metas = [_open_meta(p, band) for p in paths]
+    first = metas[0]
+    t0 = first["transform"]
+    if t0 is None:
+        raise HillshadeError(f"{paths[0]}: a mosaic needs georeferenced inputs")
+    if t0.b != 0 or t0.d != 0:
+        raise HillshadeError(f"{paths[0]}: rotated geotransforms cannot be mosaicked")
+    offs = []
+    for p, m in zip(paths, metas):
+        t = m["transform"]
+        if t is None or m["crs"] != first["crs"]:
+            raise HillshadeError(f"{p}: its CRS differs from {paths[0]}'s; a mosaic needs one CRS "
+                                 "(reproject with gdalwarp first)")
+        if not (math.isclose(t.a, t0.a, rel_tol=1e-9) and math.isclose(t.e, t0.e, rel_tol=1e-9)
+                and t.b == 0 and t.d == 0):
+            raise HillshadeError(f"{p}: its cell size ({t.a:g}, {t.e:g}) differs from "
+                                 f"{paths[0]}'s ({t0.a:g}, {t0.e:g}); a mosaic needs one cell size")
+        fx, fy = (t.c - t0.c) / t0.a, (t.f - t0.f) / t0.e
+        if abs(fx - round(fx)) > 1e-6 or abs(fy - round(fy)) > 1e-6:
+            raise HillshadeError(f"{p}: its cells are not aligned with {paths[0]}'s (offset "
+                                 f"{fx:.3f}, {fy:.3f} cells); a mosaic needs aligned grids")
+        if np.dtype(m["dtype"]).kind not in "iuf":
+            raise HillshadeError(f"{p}: pixel type {m['dtype']} is not a height")
+        offs.append((int(round(fy)), int(round(fx))))
+    r_min = min(o[0] for o in offs)
+    c_min = min(o[1] for o in offs)
+    rows = max(o[0] + m["shape"][0] for o, m in zip(offs, metas)) - r_min
+    cols = max(o[1] + m["shape"][1] for o, m in zip(offs, metas)) - c_min
+    if rows * cols > 10 * sum(m["shape"][0] * m["shape"][1] for m in metas) + (1 << 20):
+        raise HillshadeError("the inputs lie far apart (their bounding box is more than ten times "
+                             "their area): shade them separately")
+    from affine import Affine
+    transform = t0 * Affine.translation(c_min, r_min)
+    tiles, sources = [], []
+    for p, o, m in zip(paths, offs, metas):
+        r0, c0 = o[0] - r_min, o[1] - c_min
+        tiles.append({"path": p, "window": (r0, r0 + m["shape"][0], c0, c0 + m["shape"][1]),
+                      "transform": m["transform"]})
+        nd = m["nodata"] if nodata is None else nodata
+        sources.append(VrtSource(os.path.abspath(p), band, (r0, c0), m["shape"], nd))
+    doc = vrt_xml((rows, cols), transform, first["crs"], [sources], "Float32", math.nan)
+    return Source(doc, paths, (rows, cols), transform, first["crs"], math.nan, 1, "float32",
+                  "VRT (mosaic)", tiles=tiles)
+
+
+@dataclass
+class VrtSource:
+    path: str
+    band: int
+    offset: tuple[int, int]      # (row, col) in the VRT
+    shape: tuple[int, int]
+    nodata: float | None = None
+
+
+def vrt_xml(shape, transform, crs, bands: list[list[VrtSource]], dtype: str = "Float32",
+            nodata: float | None = None, descriptions: list[str] | None = None) -> str:
+    """A GDAL VRT document: ``bands`` lists, per VRT band, the rasters placed in it (a source's
+    nodata cells are left to the band's nodata)."""
+    from xml.sax.saxutils import escape
+    rows, cols = shape
+    out = [f'<VRTDataset rasterXSize="{cols}" rasterYSize="{rows}">']
+    if crs is not None:
+        out.append(f"<SRS>{escape(crs.to_wkt())}</SRS>")
+    if transform is not None:
+        gt = transform.to_gdal()
+        out.append("<GeoTransform>" + ", ".join(repr(float(v)) for v in gt) + "</GeoTransform>")
+    for i, sources in enumerate(bands, start=1):
+        out.append(f'<VRTRasterBand dataType="{dtype}" band="{i}">')
+        if nodata is not None:
+            out.append(f"<NoDataValue>{'nan' if math.isnan(nodata) else repr(nodata)}</NoDataValue>")
+        if descriptions and descriptions[i - 1]:
+            out.append(f"<Description>{escape(descriptions[i - 1])}</Description>")
+        for s in sources:
+            r, c = s.offset
+            h, w = s.shape
+            out.append("<ComplexSource>")
+            out.append(f'<SourceFilename relativeToVRT="0">{escape(s.path)}</SourceFilename>')
+            out.append(f"<SourceBand>{s.band}</SourceBand>")
+            out.append(f'<SrcRect xOff="0" yOff="0" xSize="{w}" ySize="{h}"/>')
+            out.append(f'<DstRect xOff="{c}" yOff="{r}" xSize="{w}" ySize="{h}"/>')
+            if s.nodata is not None:
+                out.append(f"<NODATA>{'nan' if math.isnan(s.nodata) else repr(s.nodata)}</NODATA>")
+            out.append("</ComplexSource>")
+        out.append("</VRTRasterBand>")
+    out.append("</VRTDataset>")
+    return "".join(out)
+
+
+# ---------------------------------------------------------------------------------------------
+# statistics pass
+
+@njit(parallel=True, cache=True)
+def _block_range(z, B, bmin, bmax):
+    """Lowest and highest valid height of each B x B block of ``z`` (rows of blocks in ``bmin``,
+    ``bmax``; +inf / -inf for a block of voids); returns the count of valid cells."""
+    nbr, nbc = bmin.shape
+    rows, cols = z.shape
+    counts = np.zeros(nbr * nbc, np.int64)
+    for k in prange(nbr * nbc):
+        i = k // nbc
+        j = k % nbc
+        lo = np.inf
+        hi = -np.inf
+        n = 0
+        for r in range(i * B, min(rows, (i + 1) * B)):
+            for c in range(j * B, min(cols, (j + 1) * B)):
+                h = z[r, c]
+                if not math.isnan(h):
+                    n += 1
+                    if h < lo:
+                        lo = h
+                    if h > hi:
+                        hi = h
+        bmin[i, j] = lo
+        bmax[i, j] = hi
+        counts[k] = n
+    return counts.sum()
+
+
+@dataclass
+class BlockStats:
+    """Height range per ``block`` x ``block`` cells (``lo``/``hi``: +inf/-inf for void blocks)."""
+
+    block: int
+    lo: np.ndarray
+    hi: np.ndarray
+    valid: int
+    preview: np.ndarray | None = None    # every ``stride``-th height, for --preview
+    stride: int = 1
+
+    @property
+    def zmin(self) -> float:
+        return float(np.min(self.lo))
+
+    @property
+    def zmax(self) -> float:
+        return float(np.max(self.hi))
+
+    def range_over(self, bounds) -> tuple[float, float]:
+        r0, r1, c0, c1 = bounds
+        B = self.block
+        lo = self.lo[r0 // B:(r1 - 1) // B + 1, c0 // B:(c1 - 1) // B + 1]
+        hi = self.hi[r0 // B:(r1 - 1) // B + 1, c0 // B:(c1 - 1) // B + 1]
+        return float(lo.min()), float(hi.max())
+
+
+def block_stats(source: Source, block: int = STAT_BLOCK, preview_side: int | None = None,
+                progress=None) -> BlockStats:
+    """One pass over ``source`` in bands of ``block`` rows (bounded memory)."""
+    rows, cols = source.shape
+    nbr, nbc = -(-rows // block), -(-cols // block)
+    lo = np.empty((nbr, nbc), np.float32)
+    hi = np.empty((nbr, nbc), np.float32)
+    stride = max(1, math.ceil(max(rows, cols) / preview_side)) if preview_side else 1
+    pv = (np.empty((-(-rows // stride), -(-cols // stride)), np.float32) if preview_side
+          else None)
+    valid = 0
+    cw = max(block, (READ_CHUNK // (4 * block)) // block * block)   # columns per read
+    buf = np.empty((block, min(cols, cw)), np.float32)
+    with source.reader() as rd:
+        for i in range(nbr):
+            r0, r1 = i * block, min(rows, (i + 1) * block)
+            for c0 in range(0, cols, cw):
+                c1 = min(cols, c0 + cw)
+                z = buf[:r1 - r0, :c1 - c0]
+                rd.read((r0, r1, c0, c1), z)
+                valid += int(_block_range(z, block, lo[i:i + 1, c0 // block:-(-c1 // block)],
+                                          hi[i:i + 1, c0 // block:-(-c1 // block)]))
+                if pv is not None:
+                    rs = (-r0) % stride
+                    cs = (-c0) % stride
+                    sub = z[rs::stride, cs::stride]
+                    pv[(r0 + rs) // stride:(r0 + rs) // stride + sub.shape[0],
+                       (c0 + cs) // stride:(c0 + cs) // stride + sub.shape[1]] = sub
+            if progress is not None:
+                progress(r1 - r0)
+    if valid == 0:
+        raise HillshadeError(f"{source.path}: every cell is nodata, nothing to shade")
+    return BlockStats(block, lo, hi, valid, pv, stride)
+
+
+# ---------------------------------------------------------------------------------------------
+# plan
+
+@dataclass(frozen=True)
+class Piece:
+    """One unit of work: output ``region`` and the ``window`` read for it (r0, r1, c0, c1), lit
+    by the sun at ``azimuth``/``elevation``."""
+
+    region: tuple[int, int, int, int]
+    window: tuple[int, int, int, int]
+    azimuth: float
+    elevation: float
+
+    @property
+    def cells(self) -> int:
+        r0, r1, c0, c1 = self.window
+        return (r1 - r0) * (c1 - c0)
+
+    @property
+    def region_cells(self) -> int:
+        r0, r1, c0, c1 = self.region
+        return (r1 - r0) * (c1 - c0)
+
+    def inner(self) -> tuple[slice, slice]:
+        """The region's place inside the window."""
+        r0, r1, c0, c1 = self.region
+        w0, _, v0, _ = self.window
+        return slice(r0 - w0, r1 - w0), slice(c0 - v0, c1 - v0)
+
+
+def _cuts(lo: int, hi: int, size: int, align: int) -> list[tuple[int, int]]:
+    """[lo, hi) cut into parts of ``size`` (a multiple of ``align`` when it is at least that),
+    counted from ``lo``."""
+    if size >= hi - lo:
+        return [(lo, hi)]
+    if size >= align:
+        size = size // align * align
+    return [(a, min(hi, a + size)) for a in range(lo, hi, size)]
+
+
+def window_for(bounds, shape, grid: Grid, azimuth: float, elevation: float, curv: float,
+               stats: BlockStats, margin: int = 1) -> tuple[int, int, int, int]:
+    """The window of region ``bounds``: the region, its halo toward the sun (from the block
+    ranges, tightened until it stops shrinking) and ``margin`` cells all round."""
+    from .engine import halo_bounds, reach_m
+    low, _ = stats.range_over(bounds)
+    if not math.isfinite(low):          # voids only: nothing to shade, nothing to read around
+        return halo_bounds(bounds, shape, grid, azimuth, 0.0, margin)
+    zhigh = stats.zmax
+    win = None
+    for _ in range(8):
+        reach = reach_m(zhigh - low, elevation, curv)
+        new = halo_bounds(bounds, shape, grid, azimuth, reach, margin)
+        if new == win:
+            break
+        win = new
+        zhigh2 = stats.range_over(win)[1]
+        if zhigh2 >= zhigh:
+            break
+        zhigh = zhigh2
+    return win
+
+
+def halo_cells(grid: Grid, azimuth: float, reach: float, rows: tuple[int, int],
+               margin: int = 1) -> tuple[int, int]:
+    """(rows, columns) a window adds to a region of these rows (as ``engine.halo_bounds``, before
+    clipping to the raster)."""
+    east = math.sin(math.radians(azimuth)) * grid.col_sign
+    north = math.cos(math.radians(azimuth)) * grid.row_sign
+
+    def extra(comp, spacing):
+        if abs(comp) < 1e-12:
+            return 2 * (2 + margin)
+        if not math.isfinite(reach):
+            return 1 << 62
+        return int(math.ceil(reach * abs(comp) / spacing)) + 2 + 2 * margin
+    return (extra(north, float(np.min(grid.dy[rows[0]:rows[1]]))),
+            extra(east, float(np.min(grid.dx[rows[0]:rows[1]]))))
+
+
+def plan(shape, grid: Grid, azimuth: float, elevation: float, curv: float, stats: BlockStats,
+         budget_cells: int, window_shape: tuple[int, int] | None = None,
+         bounds: tuple[int, int, int, int] | None = None, align: int = ALIGN,
+         halo_elevation: float | None = None, night: bool = False) -> list[Piece]:
+    """Cut ``bounds`` (default: the raster) into regions whose windows hold at most
+    ``budget_cells`` cells (or regions of ``window_shape``), ordered from the sun's side so that
+    each window's halo was read by the window before.
+
+    ``halo_elevation``: the elevation the halo is made for (default ``elevation``; soft shadows
+    need the lower edge of the sun's disk). ``night``: nothing casts; windows have no halo."""
+    from .engine import halo_bounds, reach_m
+    rows, cols = shape
+    b = bounds or (0, rows, 0, cols)
+    br, bc = b[1] - b[0], b[3] - b[2]
+    hel = elevation if halo_elevation is None else halo_elevation
+    if window_shape is not None:
+        tr, tc = min(br, window_shape[0]), min(bc, window_shape[1])
+    else:
+        # halo sizes from the raster's whole range: an upper bound of every window's
+        reach = 0.0 if night else reach_m(stats.zmax - stats.zmin, hel, curv)
+        hr, hc = halo_cells(grid, azimuth, reach, (b[0], b[1]))
+        best = None
+        for tr_ in sorted({br} | set(range(align, br, align))):
+            wr = min(rows, tr_ + hr)
+            tc_ = budget_cells // wr - hc
+            if tc_ >= bc:
+                tc_ = bc
+            elif tc_ >= align:
+                tc_ = tc_ // align * align
+            if tc_ < 16 or (tc_ < min(bc, align) and tr_ < br):
+                continue       # too narrow (or narrow and not full height: unaligned writes)
+            n = -(-br // tr_) * -(-bc // tc_)
+            key = (n * wr * min(cols, tc_ + hc), n)   # cells read and lit, then windows
+            if best is None or key < best[0]:
+                best = (key, tr_, tc_)
+        if best is None:
+            need = min(rows, align + hr) * min(cols, 16 + hc)
+            raise HillshadeError(
+                f"the memory limit allows windows of {budget_cells:,} cells, but a window with "
+                f"the sun's halo needs at least {need:,} here (sun elevation {hel:.2f} deg): "
+                "raise --max-memory")
+        _, tr, tc = best
+    east = math.sin(math.radians(azimuth)) * grid.col_sign
+    north = math.cos(math.radians(azimuth)) * grid.row_sign
+    row_cuts = _cuts(b[0], b[1], tr, align)
+    col_cuts = _cuts(b[2], b[3], tc, align)
+    if north > 1e-12:        # the sun lies toward higher rows: start there
+        row_cuts.reverse()
+    if east > 1e-12:
+        col_cuts.reverse()
+    # the inner loop runs along the axis whose halo is larger, so that it is carried
+    cols_inner = abs(east) / grid.dx[0] >= abs(north) / grid.dy[0]
+    order = ([(r, c) for r in row_cuts for c in col_cuts] if cols_inner
+             else [(r, c) for c in col_cuts for r in row_cuts])
+    pieces = []
+    for (r0, r1), (c0, c1) in order:
+        region = (r0, r1, c0, c1)
+        win = (halo_bounds(region, shape, grid, azimuth, 0.0, 1) if night
+               else window_for(region, shape, grid, azimuth, hel, curv, stats))
+        pieces.append(Piece(region, win, azimuth, elevation))
+    return pieces
+
+
+# ---------------------------------------------------------------------------------------------
+# reading windows, carrying what consecutive windows share
+
+def _minus(outer, inner):
+    """``outer`` minus ``inner`` (a rectangle inside it) as up to four rectangles."""
+    r0, r1, c0, c1 = outer
+    i0, i1, j0, j1 = inner
+    parts = [(r0, i0, c0, c1), (i1, r1, c0, c1), (i0, i1, c0, j0), (i0, i1, j1, c1)]
+    return [p for p in parts if p[1] > p[0] and p[3] > p[2]]
+
+
+class WindowCache:
+    """Reads windows through a :class:`Reader`, copying the part a window shares with the
+    previous one instead of reading it again."""
+
+    def __init__(self, reader: Reader):
+        self.reader = reader
+        self.prev: tuple | None = None
+        self.carried_bytes = 0
+
+    def get(self, window) -> np.ndarray:
+        r0, r1, c0, c1 = window
+        if self.prev is not None and self.prev[0] == window:
+            return self.prev[1]
+        z = np.empty((r1 - r0, c1 - c0), np.float32)
+        todo = [window]
+        if self.prev is not None:
+            (p0, p1, q0, q1), pz = self.prev
+            i0, i1, j0, j1 = max(r0, p0), min(r1, p1), max(c0, q0), min(c1, q1)
+            if i1 > i0 and j1 > j0:
+                z[i0 - r0:i1 - r0, j0 - c0:j1 - c0] = pz[i0 - p0:i1 - p0, j0 - q0:j1 - q0]
+                self.carried_bytes += (i1 - i0) * (j1 - j0) * self.reader.source.itemsize
+                todo = _minus(window, (i0, i1, j0, j1))
+            self.prev = None          # let the previous window go before reading
+            del pz
+        for a0, a1, b0, b1 in todo:
+            self.reader.read((a0, a1, b0, b1), z[a0 - r0:a1 - r0, b0 - c0:b1 - c0])
+        self.prev = (window, z)
+        return z
+
+    def drop(self):
+        self.prev = None
+
+
+def window_grid(grid: Grid, window) -> Grid:
+    r0, r1, c0, c1 = window
+    return Grid(r1 - r0, c1 - c0, grid.dx[r0:r1], grid.dy[r0:r1], grid.col_sign, grid.row_sign,
+                grid.method)
+
+
+# ---------------------------------------------------------------------------------------------
+# lighting windows
+
+@dataclass
+class Job:
+    """What lights a window, the same for every window of a run (picklable: Dask tasks get it).
+
+    ``zrange`` and ``extent_m`` are the whole raster's, so that every window decides Earth
+    curvature as a run on the whole raster would."""
+
+    source: Source
+    algorithm: str = "smap"
+    options: dict = field(default_factory=dict)
+    backend: str = "cpu"
+    curvature: object = "auto"
+    refraction_k: float | None = None
+    body: object = None
+    zrange: tuple[float, float] = (0.0, 0.0)
+    extent_m: float = 0.0
+    kind: str = "shadow"
+    soft: bool = False
+    self_shadow: bool = False
+    ambient: float = 0.2
+
+    @property
+    def k(self) -> float:
+        from .geometry import REFRACTION_K
+        if self.refraction_k is not None:
+            return float(self.refraction_k)
+        return REFRACTION_K if self.body.earth else 0.0
+
+    def curv(self, azimuth: float, elevation: float) -> float:
+        from .engine import curvature_coefficient
+        return curvature_coefficient(self.curvature, self.body, self.k, self.extent_m,
+                                     self.zrange, azimuth, elevation)
+
+    def shader(self, z: np.ndarray, window):
+        from .engine import Shader
+        return Shader(z, window_grid(self.source.grid, window), self.algorithm, self.options,
+                      self.backend, self.curvature, self.refraction_k, self.body, self.zrange,
+                      extent_m=self.extent_m, halo_ready=True)
+
+    def light(self, z: np.ndarray, piece: Piece, stats: dict | None = None,
+              curvature_used: set | None = None) -> np.ndarray:
+        """The product over ``piece.region`` from its window's heights ``z``."""
+        from .engine import _render_region
+        from .sun import Region
+        sh = self.shader(z, piece.window)
+        rows, cols = piece.inner()
+        arr = _render_region(sh, Region(rows, cols, piece.azimuth, piece.elevation), self.kind,
+                             self.soft, self.self_shadow, self.ambient, stats)
+        if curvature_used is not None:
+            curvature_used |= sh.curvature_used
+        return arr
+
+    def pieces(self, sun, stats: BlockStats, budget_cells: int,
+               window_shape: tuple[int, int] | None = None) -> list[Piece]:
+        """The pieces of one sun (per-tile suns: each tile's, cut further to fit)."""
+        from .sun import SUN_RADIUS_DEG
+        out = []
+        shape = self.source.shape
+        for reg in sun.regions(shape):
+            r0, r1, _ = reg.rows.indices(shape[0])
+            c0, c1, _ = reg.cols.indices(shape[1])
+            el = reg.elevation
+            if self.soft:
+                night, hel = el + SUN_RADIUS_DEG <= 0, el - SUN_RADIUS_DEG
+            else:
+                night, hel = el <= 0, el
+            out += plan(shape, self.source.grid, reg.azimuth, el,
+                        0.0 if night else self.curv(reg.azimuth, max(hel, 1e-6)), stats,
+                        budget_cells, window_shape, (r0, r1, c0, c1), halo_elevation=hel,
+                        night=night)
+        return out
+
+    def warm_up(self, sun) -> None:
+        """Compile (or load from numba's cache) what the windows will run."""
+        from .engine import Shader
+        z = np.zeros((4, 4), np.float32)     # the kernels' argument types; the grid's spacing
+        sh = Shader(z, self.source.grid, self.algorithm, self.options, self.backend,
+                    self.curvature, self.refraction_k, self.body, self.zrange,
+                    extent_m=self.extent_m)
+        sh.warm_up(sun.azimuth, max(sun.elevation, 1.0), soft=self.soft,
+                   incidence=self.self_shadow or self.kind != "shadow")
+
+
+@dataclass
+class Tally:
+    """What a tiled run did: windows, cells lit, bytes read and carried."""
+
+    windows: int = 0
+    region_cells: int = 0
+    window_cells: int = 0
+    bytes_read: int = 0
+    bytes_carried: int = 0
+    stats_pass_bytes: int = 0
+    largest_window: tuple[int, int] = (0, 0)
+
+    def add(self, piece: Piece):
+        self.windows += 1
+        self.region_cells += piece.region_cells
+        self.window_cells += piece.cells
+        r0, r1, c0, c1 = piece.window
+        if (r1 - r0) * (c1 - c0) > self.largest_window[0] * self.largest_window[1]:
+            self.largest_window = (r1 - r0, c1 - c0)
+
+    def as_dict(self, itemsize: int) -> dict:
+        beyond = max(0, self.bytes_read - self.region_cells * itemsize)
+        return {"windows": self.windows, "largest_window": list(self.largest_window),
+                "cells_output": self.region_cells, "cells_lit": self.window_cells,
+                "halo_cells_fraction": (self.window_cells / self.region_cells - 1.0)
+                if self.region_cells else 0.0,
+                "bytes_read": self.bytes_read,
+                "bytes_read_beyond_output": beyond,
+                "bytes_read_beyond_output_fraction": beyond / max(1, self.region_cells * itemsize),
+                "bytes_carried": self.bytes_carried,
+                "statistics_pass_bytes": self.stats_pass_bytes}
