@@ -37,7 +37,7 @@ class _OneLineErrors(click.Group):
             click.echo(f"hillshade-rt: error: {msg}", err=True)
             sys.exit(exc.exit_code)
         except click.exceptions.Abort:
-            click.echo("hillshade-rt: aborted", err=True)
+            click.echo("hillshade-rt: interrupted; no output written", err=True)
             sys.exit(130)
         except KeyboardInterrupt:
             click.echo("hillshade-rt: interrupted; no output written", err=True)
@@ -308,12 +308,15 @@ def _inputs_and_output(files, output, pattern):
         return files, output
     if len(files) < 2:
         raise click.UsageError("give OUTPUT or --output-pattern (one of them)")
-    inputs, output = files[:-1], files[-1]
-    if os.path.exists(output) and len(inputs) > 1:
-        # 'shadow a.tif b.tif' meant as two inputs would overwrite b.tif: be explicit then
-        raise click.UsageError(f"{output} exists; with several DEMs give the output with "
-                               "-o/--output")
-    return inputs, output
+    return files[:-1], files[-1]
+
+
+def _not_an_input(output, inputs):
+    if output is None or not os.path.exists(output):
+        return
+    for p in inputs:
+        if os.path.exists(p) and os.path.samefile(p, output):
+            raise click.UsageError(f"{output} is also an input DEM; give another output")
 
 
 def _window_size(text):
@@ -350,6 +353,7 @@ def _light(files, kind, algorithm, options, curvature, refraction_k, soft, self_
                                                kw.pop("cog"), kw.pop("scheduler"))
     req = _pop_sun(kw, default_sun)
     inputs, output = _inputs_and_output(files, output, pattern)
+    _not_an_input(output, inputs)
     wshape = _window_size(window_size)
     try:
         limit = parse_size(max_memory) if max_memory is not None else default_max_memory()
@@ -422,7 +426,7 @@ def _needs_windows(path, read_opts, limit, per_cell) -> bool:
     """Whether shading ``path`` whole would need more than ``limit`` bytes (a DEM whose size
     cannot be told without reading it is read whole, as before)."""
     from .io import parse_pixel_size, parse_raw_shape
-    from .tiling import open_source, process_rss
+    from .tiling import open_source, window_budget
     try:
         src = open_source(path, band=read_opts["band"], nodata=read_opts["nodata"],
                           pixel_size=parse_pixel_size(read_opts["pixel_size"]),
@@ -431,9 +435,10 @@ def _needs_windows(path, read_opts, limit, per_cell) -> bool:
                           raw_dtype=read_opts["raw_dtype"],
                           raw_byteorder=read_opts["raw_byteorder"])
     except HillshadeError:
-        return False
+        return False      # read whole: read_dem says what is wrong with it
+    budget = window_budget(limit, per_cell)[0]   # a limit too small for anything: one line
     rows, cols = src.shape
-    return rows * cols * per_cell + process_rss() > limit
+    return rows * cols > budget
 
 
 class _Outputs:

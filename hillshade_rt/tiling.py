@@ -350,7 +350,7 @@ def _gdal_source(path: str, band: int, nodata: float | None) -> Source:
     m = _open_meta(path, band)
     if np.dtype(m["dtype"]).kind not in "iuf":
         raise HillshadeError(f"{path}: pixel type {m['dtype']} is not a height")
-    return Source(path, [path], m["shape"], m["transform"], m["crs"],
+    return Source(os.path.abspath(path), [path], m["shape"], m["transform"], m["crs"],
                   m["nodata"] if nodata is None else nodata, band, m["dtype"], m["driver"])
 
 
@@ -404,7 +404,7 @@ def _mosaic_source(paths: list[str], band: int, nodata: float | None) -> Source:
         raise HillshadeError("the inputs lie far apart (their bounding box is more than ten times "
                              "their area): shade them separately")
     from affine import Affine
-    transform = t0 * Affine.translation(c_min, r_min)
+    transform = t0 @ Affine.translation(c_min, r_min)
     tiles, sources = [], []
     for p, o, m in zip(paths, offs, metas):
         r0, c0 = o[0] - r_min, o[1] - c_min
@@ -426,13 +426,23 @@ class VrtSource:
     nodata: float | None = None
 
 
+def _metadata_xml(md: dict | None) -> str:
+    from xml.sax.saxutils import escape, quoteattr
+    if not md:
+        return ""
+    return ("<Metadata>" + "".join(f"<MDI key={quoteattr(str(k))}>{escape(str(v))}</MDI>"
+                                   for k, v in md.items()) + "</Metadata>")
+
+
 def vrt_xml(shape, transform, crs, bands: list[list[VrtSource]], dtype: str = "Float32",
-            nodata: float | None = None, descriptions: list[str] | None = None) -> str:
+            nodata: float | None = None, descriptions: list[str] | None = None,
+            metadata: dict | None = None, band_metadata: list[dict] | None = None) -> str:
     """A GDAL VRT document: ``bands`` lists, per VRT band, the rasters placed in it (a source's
-    nodata cells are left to the band's nodata)."""
+    nodata cells are left to the band's nodata); descriptions and metadata (tags) per band and
+    for the dataset, which a copy of the VRT carries over."""
     from xml.sax.saxutils import escape
     rows, cols = shape
-    out = [f'<VRTDataset rasterXSize="{cols}" rasterYSize="{rows}">']
+    out = [f'<VRTDataset rasterXSize="{cols}" rasterYSize="{rows}">', _metadata_xml(metadata)]
     if crs is not None:
         out.append(f"<SRS>{escape(crs.to_wkt())}</SRS>")
     if transform is not None:
@@ -444,6 +454,8 @@ def vrt_xml(shape, transform, crs, bands: list[list[VrtSource]], dtype: str = "F
             out.append(f"<NoDataValue>{'nan' if math.isnan(nodata) else repr(nodata)}</NoDataValue>")
         if descriptions and descriptions[i - 1]:
             out.append(f"<Description>{escape(descriptions[i - 1])}</Description>")
+        if band_metadata:
+            out.append(_metadata_xml(band_metadata[i - 1]))
         for s in sources:
             r, c = s.offset
             h, w = s.shape

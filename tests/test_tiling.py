@@ -1,0 +1,321 @@
+"""Rasters in windows: the same answers as in memory, halos from the physics on the sun's side
+only, bounded memory, mosaics of several files, COG output, Dask workers, Ctrl-C."""
+
+import json
+import math
+import os
+
+import numpy as np
+import pytest
+from affine import Affine
+from rasterio.crs import CRS
+
+from hillshade_rt import tiling
+from hillshade_rt.cli import cli
+from hillshade_rt.engine import Shader, dem_body, render
+from hillshade_rt.errors import HillshadeError
+from hillshade_rt.io import read_dem
+from hillshade_rt.sun import SunOver
+from conftest import data_path, fractal_terrain, read_band, write_geotiff
+
+LIDAR = data_path("lidar_dem_1m_utm15n_400x400.tif")
+EVEREST = data_path("everest_srtm3_voids_crop200.tif")
+UTM = CRS.from_epsg(32611)
+
+
+def _tiled(path, azimuth, elevation, algorithm, window_shape, kind="shadow", soft=False,
+           curvature="auto", options=None):
+    """The product of a tiled run, put together from its windows (API level)."""
+    src = tiling.open_source(path)
+    stats = tiling.block_stats(src)
+    rows, cols = src.shape
+    dx, dy = src.grid.centre_spacing()
+    job = tiling.Job(src, algorithm, options or {}, "cpu", curvature, None, dem_body(src),
+                     (stats.zmin, stats.zmax), math.hypot(cols * dx, rows * dy), kind, soft,
+                     kind != "shadow", 0.2)
+    pieces = job.pieces(SunOver(None, azimuth, elevation), stats, 1 << 40, window_shape)
+    out = None
+    with src.reader() as rd:
+        cache = tiling.WindowCache(rd)
+        for p in pieces:
+            arr = job.light(cache.get(p.window), p)
+            if out is None:
+                out = np.full(src.shape, 99, arr.dtype)
+            r0, r1, c0, c1 = p.region
+            out[r0:r1, c0:c1] = arr
+        carried = cache.carried_bytes
+    return out, pieces, carried
+
+
+def _whole(path, azimuth, elevation, algorithm, kind="shadow", soft=False, curvature="auto",
+           options=None):
+    d = read_dem(path)
+    sh = Shader(d.heights, d.grid, algorithm, options or {}, "cpu", curvature, None, dem_body(d))
+    return render(sh, SunOver(None, azimuth, elevation), kind, soft=soft,
+                  self_shadow=kind != "shadow")
+
+
+@pytest.mark.parametrize("algorithm", ["smap", "brute", "horizon", "sweep"])
+@pytest.mark.parametrize("azimuth,elevation", [(163.0, 8.0), (203.7, 4.0), (291.0, 15.0)])
+def test_windows_equal_the_whole_raster(algorithm, azimuth, elevation):
+    tiled, pieces, carried = _tiled(LIDAR, azimuth, elevation, algorithm, (96, 112))
+    whole = _whole(LIDAR, azimuth, elevation, algorithm)
+    assert len(pieces) >= 16 and carried > 0
+    assert 0.02 < np.mean(whole == 1) < 0.9
+    if algorithm != "sweep":
+        np.testing.assert_array_equal(tiled, whole)
+        return
+    # sweep is approximate: its interpolated stored values depend on where the sweep starts (a
+    # window's sun-side edge), so a few cells differ from the whole-raster sweep; both stay
+    # within the stated error against brute
+    exact = _whole(LIDAR, azimuth, elevation, "brute")
+    assert np.mean(tiled != exact) <= 0.003 and np.mean(whole != exact) <= 0.003
+    assert np.mean(tiled != whole) <= 0.002
+
+
+@pytest.mark.parametrize("azimuth", [37.0, 203.7])
+def test_windows_on_a_geographic_dem_with_voids(azimuth):
+    """Per-row spacing (EPSG:4326) and voids; the shared part carried between windows."""
+    tiled, pieces, _ = _tiled(EVEREST, azimuth, 6.0, "smap", (64, 80))
+    whole = _whole(EVEREST, azimuth, 6.0, "smap")
+    assert (whole == 255).any() and len(pieces) >= 9
+    np.testing.assert_array_equal(tiled, whole)
+
+
+@pytest.mark.parametrize("kind,soft", [("classes", False), ("hillshade", False),
+                                       ("shadow", True), ("hillshade", True)])
+def test_products_and_curvature_in_windows(kind, soft):
+    """Self-shadow normals need the neighbours across window edges; soft shadows the halo of the
+    sun's lower edge; curvature the whole raster's extent."""
+    tiled, _, _ = _tiled(LIDAR, 203.7, 3.0, "smap", (90, 130), kind, soft, curvature=True)
+    whole = _whole(LIDAR, 203.7, 3.0, "smap", kind, soft, curvature=True)
+    np.testing.assert_array_equal(tiled, whole)
+
+
+def test_halo_is_on_the_sun_side_only_and_as_long_as_the_physics_says(tmp_path):
+    """Flat ground with one 60 m tower; sun at 163 deg (south-south-east: toward higher rows and
+    columns of a north-up raster), 30 deg up, 1 m cells."""
+    z = np.zeros((600, 600), np.float32)
+    z[400:404, 300:304] = 60.0
+    p = write_geotiff(tmp_path / "t.tif", z, Affine(1, 0, 500000, 0, -1, 4000000), UTM)
+    src = tiling.open_source(p)
+    stats = tiling.block_stats(src, block=32)
+    az, el = 163.0, 30.0
+    east, south = math.sin(math.radians(az)), -math.cos(math.radians(az))
+    # a region just north-west of the tower: its halo reaches the tower
+    reg = (256, 384, 192, 288)
+    r0, r1, c0, c1 = tiling.window_for(reg, src.shape, src.grid, az, el, 0.0, stats)
+    reach = 60.0 / math.tan(math.radians(el))
+    assert (r0, c0) == (reg[0] - 1, reg[2] - 1)          # away from the sun: the 1-cell margin
+    assert r1 == reg[1] + math.ceil(reach * south) + 2 + 1
+    assert c1 == reg[3] + math.ceil(reach * east) + 2 + 1
+    # a region whose sun side is flat ground: the halo shrinks to the two cells of the model
+    reg = (0, 128, 0, 128)
+    assert tiling.window_for(reg, src.shape, src.grid, az, el, 0.0, stats) == (0, 131, 0, 131)
+    # curvature shortens the reach: d tan E + c d^2 = dh
+    c = 1e-4
+    r0, r1, c0, c1 = tiling.window_for((256, 384, 192, 288), src.shape, src.grid, az, el, c, stats)
+    t = math.tan(math.radians(el))
+    d = (-t + math.sqrt(t * t + 4 * c * 60.0)) / (2 * c)
+    assert r1 == 384 + math.ceil(d * south) + 3 and d < reach
+
+
+def test_window_order_follows_the_sun_and_the_plan_fits_the_budget(tmp_path):
+    z = fractal_terrain(700, 900, 5, relief=80.0)
+    p = write_geotiff(tmp_path / "f.tif", z, Affine(2, 0, 500000, 0, -2, 4000000), UTM)
+    src = tiling.open_source(p)
+    stats = tiling.block_stats(src)
+    budget = 250_000
+    pieces = tiling.plan(src.shape, src.grid, 250.0, 10.0, 0.0, stats, budget, align=64)
+    assert len(pieces) > 2 and all(q.cells <= budget for q in pieces)
+    # sun from the west-south-west: columns from the west edge first
+    starts = [q.region[2] for q in pieces]
+    assert starts == sorted(starts)
+    covered = np.zeros(src.shape, int)
+    for q in pieces:
+        r0, r1, c0, c1 = q.region
+        covered[r0:r1, c0:c1] += 1
+    assert (covered == 1).all()
+    with pytest.raises(HillshadeError, match="raise --max-memory"):
+        tiling.plan(src.shape, src.grid, 250.0, 1.0, 0.0, stats, 2_000)
+
+
+def test_parse_size():
+    assert tiling.parse_size("2GB") == 2_000_000_000
+    assert tiling.parse_size("1.5GiB") == int(1.5 * 2 ** 30)
+    assert tiling.parse_size("512 MB") == 512_000_000
+    assert tiling.parse_size("800M") == 800_000_000
+    assert tiling.parse_size("4096") == 4096
+    for bad in ("lots", "-1GB", "0", "2XB"):
+        with pytest.raises(HillshadeError):
+            tiling.parse_size(bad)
+
+
+# ------------------------------------------------------------------------------------------
+# command line
+
+def _run(runner, args):
+    r = runner.invoke(cli, args)
+    return r
+
+
+def test_cli_window_size_equals_in_memory_and_reports_reads(tmp_path, runner):
+    a, b, rep = tmp_path / "a.tif", tmp_path / "b.tif", tmp_path / "b.json"
+    base = ["--azimuth", "203.7", "--elevation", "6"]
+    assert _run(runner, ["shadow", LIDAR, str(a)] + base).exit_code == 0
+    r = _run(runner, ["shadow", LIDAR, str(b), "--window-size", "100x150", "--report",
+                      str(rep)] + base)
+    assert r.exit_code == 0, r.output
+    np.testing.assert_array_equal(read_band(a), read_band(b))
+    doc = json.loads(rep.read_text())["processing"]
+    assert doc["mode"] == "tiled" and doc["windows"] == 12
+    assert doc["cells_output"] == 400 * 400 and doc["cells_lit"] > doc["cells_output"]
+    assert 0 < doc["bytes_read_beyond_output"] < doc["bytes_read"]
+    assert doc["bytes_carried"] > 0
+    assert doc["bytes_read"] + doc["bytes_carried"] == doc["cells_lit"] * 4
+
+
+def test_cli_max_memory_switches_to_windows(tmp_path, runner):
+    out, rep = tmp_path / "m.tif", tmp_path / "m.json"
+    # room for the process, GDAL's cache and about 1 MB of windows: fewer cells than the DEM's
+    limit = tiling.process_rss() + ((tiling.GDAL_CACHE_MB + 32 + 1) << 20)
+    r = _run(runner, ["shadow", LIDAR, str(out), "--azimuth", "163", "--elevation", "10",
+                      "--max-memory", str(limit), "--report", str(rep)])
+    assert r.exit_code == 0, r.output
+    doc = json.loads(rep.read_text())["processing"]
+    assert doc["mode"] == "tiled" and doc["windows"] > 1
+    assert doc["largest_window"][0] * doc["largest_window"][1] * doc["memory"]["bytes_per_cell"] \
+        <= doc["memory"]["window_bytes"]
+    np.testing.assert_array_equal(read_band(out), _whole(LIDAR, 163.0, 10.0, "smap"))
+
+
+def test_cli_memory_too_small_is_one_line_and_no_output(tmp_path, runner):
+    out = tmp_path / "m.tif"
+    r = _run(runner, ["shadow", LIDAR, str(out), "--azimuth", "163", "--elevation", "10",
+                      "--max-memory", "20MB"])
+    assert r.exit_code == 1 and "--max-memory" in r.stderr and len(r.stderr.splitlines()) == 1
+    assert not out.exists() and os.listdir(tmp_path) == []
+    r = _run(runner, ["shadow", LIDAR, str(out), "--azimuth", "163", "--elevation", "10",
+                      "--max-memory", "plenty"])
+    assert r.exit_code == 2 and "--max-memory" in r.stderr
+
+
+def _split(tmp_path, z, transform, cuts_r, cuts_c, nodata=None):
+    paths = []
+    for i, (r0, r1) in enumerate(cuts_r):
+        for j, (c0, c1) in enumerate(cuts_c):
+            t = transform @ Affine.translation(c0, r0)
+            paths.append(write_geotiff(tmp_path / f"tile_{i}{j}.tif", z[r0:r1, c0:c1], t, UTM,
+                                       nodata))
+    return paths
+
+
+def test_mosaic_of_tiles_is_one_surface(tmp_path, runner):
+    """A ridge in one tile shadows the next: the mosaic equals the whole DEM, a tile alone does
+    not (the classic tile-edge error)."""
+    z = fractal_terrain(300, 360, 11, relief=150.0)
+    z[140:150, 170:178] = 400.0     # a tower near the tiles' corner
+    tr = Affine(5, 0, 400000, 0, -5, 3800000)
+    whole = write_geotiff(tmp_path / "whole.tif", z, tr, UTM)
+    tiles = _split(tmp_path, z, tr, [(0, 150), (150, 300)], [(0, 175), (175, 360)])
+    a, b, one = tmp_path / "a.tif", tmp_path / "b.tif", tmp_path / "one.tif"
+    sun = ["--azimuth", "291", "--elevation", "7"]
+    assert _run(runner, ["shadow", whole, str(a)] + sun).exit_code == 0
+    r = _run(runner, ["shadow", *tiles[::-1], "-o", str(b)] + sun)   # any order
+    assert r.exit_code == 0, r.output
+    np.testing.assert_array_equal(read_band(a), read_band(b))
+    import rasterio
+    with rasterio.open(b) as ds, rasterio.open(whole) as w:
+        assert ds.transform == w.transform and ds.crs == w.crs
+    # the south-east tile alone misses the tower's shadow across its edge
+    assert _run(runner, ["shadow", tiles[3], str(one)] + sun).exit_code == 0
+    alone = read_band(one)
+    assert (alone != read_band(a)[150:, 175:]).sum() > 20
+
+
+def test_mosaic_refuses_misaligned_or_foreign_tiles(tmp_path, runner):
+    z = fractal_terrain(64, 64, 2)
+    a = write_geotiff(tmp_path / "a.tif", z, Affine(5, 0, 400000, 0, -5, 3800000), UTM)
+    b = write_geotiff(tmp_path / "b.tif", z, Affine(5, 0, 400322.5, 0, -5, 3800000), UTM)
+    c = write_geotiff(tmp_path / "c.tif", z, Affine(5, 0, 400320, 0, -5, 3800000),
+                      CRS.from_epsg(32612))
+    out = tmp_path / "o.tif"
+    for other, msg in ((b, "not aligned"), (c, "CRS differs")):
+        r = _run(runner, ["shadow", a, other, "-o", str(out), "--azimuth", "90",
+                          "--elevation", "10"])
+        assert r.exit_code == 1 and msg in r.stderr and not out.exists()
+    # an input as the output
+    r = _run(runner, ["shadow", a, b, "-o", b, "--azimuth", "90", "--elevation", "10",
+                      "--overwrite"])
+    assert r.exit_code == 2 and "also an input" in r.stderr
+
+
+@pytest.mark.parametrize("window", [None, "200x256"])
+def test_cog_output(tmp_path, runner, window):
+    import rasterio
+    dem = "examples/bigtujunga_srtm30m_utm11n_1197x643.tif"
+    ref, out = tmp_path / "ref.tif", tmp_path / "cog.tif"
+    sun = ["--azimuth", "203.7", "--elevation", "12"]
+    assert _run(runner, ["shadow", dem, str(ref)] + sun).exit_code == 0
+    args = ["shadow", dem, str(out), "--cog"] + sun + (["--window-size", window] if window else [])
+    r = _run(runner, args)
+    assert r.exit_code == 0, r.output
+    with rasterio.open(out) as ds:
+        assert ds.driver == "GTiff" and ds.block_shapes[0] == (512, 512)
+        assert ds.overviews(1)[:1] == [2]
+        assert ds.tags(ns="IMAGE_STRUCTURE").get("LAYOUT") == "COG"
+        np.testing.assert_array_equal(ds.read(1), read_band(ref))
+    assert sorted(os.listdir(tmp_path)) == ["cog.tif", "ref.tif"]
+
+
+def test_series_and_per_tile_suns_in_windows(tmp_path, runner):
+    """Two times, the sun per tile (a tiny tolerance), in windows: equal to in memory."""
+    a, b = tmp_path / "a.tif", tmp_path / "b.tif"
+    sun = ["--time", "2026-03-02T08:10-06:00", "--time", "2026-03-02T16:40-06:00",
+           "--sun-tolerance", "0.0004"]
+    ra = _run(runner, ["shadow", LIDAR, str(a), "--report", str(tmp_path / "a.json")] + sun)
+    assert ra.exit_code == 0, ra.output
+    assert json.loads((tmp_path / "a.json").read_text())["times"][0]["mode"] == "per tile"
+    rb = _run(runner, ["shadow", LIDAR, str(b), "--window-size", "128x128"] + sun)
+    assert rb.exit_code == 0, rb.output
+    for band in (1, 2):
+        np.testing.assert_array_equal(read_band(a, band), read_band(b, band))
+
+
+def test_interrupt_leaves_no_output(tmp_path, runner, monkeypatch):
+    out = tmp_path / "m.tif"
+    calls = []
+    real = tiling.Job.light
+
+    def light(self, *a, **k):
+        calls.append(1)
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        return real(self, *a, **k)
+    monkeypatch.setattr(tiling.Job, "light", light)
+    r = _run(runner, ["shadow", LIDAR, str(out), "--azimuth", "163", "--elevation", "10",
+                      "--window-size", "100", "--cog"])
+    assert r.exit_code == 130 and "no output written" in r.stderr
+    assert os.listdir(tmp_path) == []
+
+
+def test_dask_local_cluster_equals_one_process(tmp_path, runner):
+    """Windows x times as tasks on three worker processes: the same bands as one process; the
+    parts folder is gone afterwards."""
+    pytest.importorskip("distributed")
+    a, b, rep = tmp_path / "a.tif", tmp_path / "b.tif", tmp_path / "b.json"
+    sun = ["--time", "2026-06-21T07:00-05:00", "--time", "2026-06-21T18:30-05:00"]
+    assert _run(runner, ["shadow", LIDAR, str(a)] + sun).exit_code == 0
+    r = _run(runner, ["shadow", LIDAR, str(b), "--scheduler", "local:3", "--window-size",
+                      "128x160", "--report", str(rep)] + sun)
+    assert r.exit_code == 0, r.output
+    doc = json.loads(rep.read_text())
+    assert doc["processing"]["mode"] == "dask" and doc["processing"]["workers"] == 3
+    assert doc["processing"]["tasks"] == 2 * math.ceil(400 / 128) * math.ceil(400 / 160)
+    import rasterio
+    with rasterio.open(a) as x, rasterio.open(b) as y:
+        assert y.count == 2 and y.descriptions == x.descriptions
+        assert y.tags(1)["TIME"] == x.tags(1)["TIME"]
+        for band in (1, 2):
+            np.testing.assert_array_equal(x.read(band), y.read(band))
+    assert sorted(os.listdir(tmp_path)) == ["a.tif", "b.json", "b.tif"]
