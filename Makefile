@@ -7,13 +7,15 @@ OUTDIR ?= out
 EXAMPLE_DEM := examples/bigtujunga_srtm30m_utm11n_1197x643.tif
 EXAMPLE_OUT := $(OUTDIR)/bigtujunga_shadow.tif
 
-.PHONY: run test install install-test bench bench-sun bench-gpu bench-peers clean help
+.PHONY: run test install install-test bench bench-sun bench-tiling bench-big bench-gpu bench-peers clean help
 
 help:
 	@echo "make run    - set up .venv, shade the bundled example DEM, print where the mask went"
 	@echo "make test   - set up .venv with test extras and run the test suite"
 	@echo "make bench  - run the benchmarks (writes docs/benchmarks.md figures to stdout)"
 	@echo "make bench-sun - time series, per-tile suns, curvature, soft shadows, sun hours"
+	@echo "make bench-tiling - Mpix/s in memory vs in windows vs Dask (2 workers)"
+	@echo "make bench-big - a 20000 x 20000 DEM under --max-memory 1GB: peak memory, a crop checked"
 	@echo "make bench-gpu - install the CUDA backend (numba-cuda) and time every algorithm on the GPU"
 	@echo "make bench-peers - install other shadow tools into .venv and time them against ours"
 	@echo "make clean  - remove .venv and outputs"
@@ -46,6 +48,13 @@ bench: $(VENV)/.installed
 
 bench-sun: $(VENV)/.installed
 	$(BIN)/python benchmarks/bench_sun.py
+
+# Dask comes with the test extras (and alone as hillshade-rt[dask])
+bench-tiling: $(VENV)/.installed-test
+	$(BIN)/python benchmarks/bench_tiling.py
+
+bench-big: $(VENV)/.installed
+	$(BIN)/python benchmarks/bigdem.py
 
 # The CUDA backend: numba-cuda and the CUDA 12 toolkit libraries from PyPI; needs an NVIDIA GPU
 # and driver (without one the benchmark says what is missing and exits 1).

@@ -376,10 +376,11 @@ def _light(files, kind, algorithm, options, curvature, refraction_k, soft, self_
                      "classes": ("uint8", 255), "hillshade": ("uint8", 0)}[kind]
     out = _Outputs(kind, soft, algorithm, dtype, nodata, output, pattern, overwrite, cog,
                    preview is not None, ambient)
-    run = (_light_tiled if tiled else _light_in_memory)(
-        inputs, kw, scale, req, out, timer, algorithm, options, ran_on, curvature, refraction_k,
-        soft, self_shadow, ambient, quiet, limit=limit, window_shape=wshape, scheduler=scheduler,
-        per_cell=per_cell)
+    with (_bounded_gdal_cache() if tiled else contextlib.nullcontext()):
+        run = (_light_tiled if tiled else _light_in_memory)(
+            inputs, kw, scale, req, out, timer, algorithm, options, ran_on, curvature,
+            refraction_k, soft, self_shadow, ambient, quiet, limit=limit, window_shape=wshape,
+            scheduler=scheduler, per_cell=per_cell)
     d, suns, records = run["dem"], run["suns"], run["records"]
     if preview is not None:
         with timer("write"):
@@ -420,6 +421,14 @@ def _light(files, kind, algorithm, options, curvature, refraction_k, soft, self_
         if rep["night_count"]:
             click.echo(f"hillshade-rt: note: the sun is below the horizon at "
                        f"{rep['night_count']} of {len(suns)} time(s): all shadow there", err=True)
+
+
+def _bounded_gdal_cache():
+    """GDAL's block cache held to ``tiling.GDAL_CACHE_MB`` (its default, 5 % of the machine's
+    memory, would break --max-memory on its own)."""
+    import rasterio
+    from .tiling import GDAL_CACHE_MB
+    return rasterio.Env(GDAL_CACHEMAX=GDAL_CACHE_MB)
 
 
 def _needs_windows(path, read_opts, limit, per_cell) -> bool:

@@ -69,6 +69,7 @@ def shade_piece(job, piece, path: str, nodata, stride: int | None = None) -> dic
     from .io import atomic_path
     from .preview import shade_of
     from .report import product_stats
+    from .tiling import GDAL_CACHE_MB
     import warnings
 
     t0 = time.perf_counter()
@@ -76,7 +77,7 @@ def shade_piece(job, piece, path: str, nodata, stride: int | None = None) -> dic
     z = np.empty((r1 - r0, c1 - c0), np.float32)
     stats: dict = {}
     used: set = set()
-    with job.source.reader() as rd:
+    with rasterio.Env(GDAL_CACHEMAX=GDAL_CACHE_MB), job.source.reader() as rd:
         rd.read(piece.window, z)
         nread = rd.bytes_read
     with _LOCK:
