@@ -827,8 +827,10 @@ class Job:
                 night, hel = el + SUN_RADIUS_DEG <= 0, el - SUN_RADIUS_DEG
             else:
                 night, hel = el <= 0, el
+            # the curvature the rays will have (decided at the sun's elevation, as the Shader
+            # does), applied to the halo's lower ray
             out += plan(shape, self.source.grid, reg.azimuth, el,
-                        0.0 if night else self.curv(reg.azimuth, max(hel, 1e-6)), stats,
+                        0.0 if night else self.curv(reg.azimuth, max(min(el, 90.0), 1e-6)), stats,
                         budget_cells, window_shape, (r0, r1, c0, c1), halo_elevation=hel,
                         night=night)
         return out

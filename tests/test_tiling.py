@@ -302,7 +302,6 @@ def test_interrupt_leaves_no_output(tmp_path, runner, monkeypatch):
 def test_dask_local_cluster_equals_one_process(tmp_path, runner):
     """Windows x times as tasks on three worker processes: the same bands as one process; the
     parts folder is gone afterwards."""
-    pytest.importorskip("distributed")
     a, b, rep = tmp_path / "a.tif", tmp_path / "b.tif", tmp_path / "b.json"
     sun = ["--time", "2026-06-21T07:00-05:00", "--time", "2026-06-21T18:30-05:00"]
     assert _run(runner, ["shadow", LIDAR, str(a)] + sun).exit_code == 0
