@@ -148,18 +148,39 @@ def _to_heights(data: np.ndarray, nodata: float | None) -> np.ndarray:
     ``data`` is an array this module has just read and owns: a float32 one is converted in place,
     any other type is cast once.
     """
+    z = data.astype(np.float32, copy=False)
+    heights_into(data, nodata, z)
+    return z
+
+
+def heights_into(data: np.ndarray, nodata: float | None, out: np.ndarray,
+                 z_factor: float = 1.0) -> None:
+    """``out[...]`` = float32 heights of ``data`` (``out`` may be ``data`` itself): nodata, NaN and
+    +-inf as NaN, times ``z_factor``. Nodata is compared in the source type: a float32 cast of
+    e.g. -3.4028235e38 must still match; a value the type cannot hold (-1 for uint16) matches
+    nothing instead of wrapping around."""
     bad = None
     if nodata is not None and not math.isnan(nodata):
-        # compare in the source type: a float32 cast of e.g. -3.4028235e38 must still match;
-        # a value the type cannot hold (-1 for uint16) matches nothing instead of wrapping around
         nd = np.asarray(nodata).astype(data.dtype)
         if data.dtype.kind == "f" or float(nd) == float(nodata):
             bad = data == nd
-    z = data.astype(np.float32, copy=False)
+    if out is not data:
+        out[...] = data
     if bad is not None:
-        z[bad] = np.nan
-    z[~np.isfinite(z)] = np.nan
-    return z
+        out[bad] = np.nan
+    out[~np.isfinite(out)] = np.nan
+    if z_factor != 1.0:
+        out *= np.float32(z_factor)
+
+
+def check_band(ds, path: str, band: int) -> bool:
+    """Refuse an empty raster or a missing band of the open dataset ``ds``; True when it is
+    georeferenced (a CRS or a non-identity transform)."""
+    if ds.count < 1 or ds.width < 1 or ds.height < 1:
+        raise HillshadeError(f"{path}: the raster is empty")
+    if band > ds.count:
+        raise HillshadeError(f"{path}: has {ds.count} band(s), --band {band} asked")
+    return ds.crs is not None or not ds.transform.is_identity
 
 
 def _read_gdal(path: str, band: int, nodata: float | None,
@@ -171,11 +192,7 @@ def _read_gdal(path: str, band: int, nodata: float | None,
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", NotGeoreferencedWarning)
             with rasterio.open(path) as ds:
-                if ds.count < 1 or ds.width < 1 or ds.height < 1:
-                    raise HillshadeError(f"{path}: the raster is empty")
-                if band > ds.count:
-                    raise HillshadeError(f"{path}: has {ds.count} band(s), --band {band} asked")
-                georef = ds.crs is not None or not ds.transform.is_identity
+                georef = check_band(ds, path, band)
                 if not georef and tiff_fallback:
                     return _read_tiff(path, band, nodata, pixel_size)
                 data = ds.read(band)
@@ -320,13 +337,19 @@ def check_output_path(path: str, overwrite: bool) -> str:
     return path
 
 
+def _temp_beside(path: str, suffix: str) -> str:
+    """A new empty file in ``path``'s folder, hidden, named after it."""
+    folder = os.path.dirname(os.path.abspath(path))
+    fd, tmp = tempfile.mkstemp(dir=folder, prefix="." + os.path.basename(path) + ".",
+                               suffix=suffix)
+    os.close(fd)
+    return tmp
+
+
 @contextlib.contextmanager
 def atomic_path(path: str, suffix: str = ""):
     """Yield a temporary path beside ``path``; rename it onto ``path`` only if the block succeeds."""
-    folder = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(dir=folder, prefix="." + os.path.basename(path) + ".",
-                               suffix=".part" + suffix)
-    os.close(fd)
+    tmp = _temp_beside(path, ".part" + suffix)
     umask = os.umask(0)
     os.umask(umask)
     os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; give the file the usual permissions
@@ -459,10 +482,7 @@ class BandWriter:
 @contextlib.contextmanager
 def _scratch_path(path: str, suffix: str = ""):
     """A temporary path beside ``path``, always removed afterwards."""
-    folder = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(dir=folder, prefix="." + os.path.basename(path) + ".",
-                               suffix=".scratch" + suffix)
-    os.close(fd)
+    tmp = _temp_beside(path, ".scratch" + suffix)
     try:
         yield tmp
     finally:

@@ -41,6 +41,7 @@ from numba import njit, prange
 
 from .errors import HillshadeError
 from .geometry import Grid, grid_from_transform, orientation
+from .io import check_band, heights_into
 
 STAT_BLOCK = 256          # cells per side of the blocks whose height range bounds the halos
 ALIGN = 256               # output regions are multiples of the output's block size
@@ -265,20 +266,6 @@ class Reader:
             heights_into(data, src.nodata, out[a - r0:b - r0], src.z_factor)
 
 
-def heights_into(data: np.ndarray, nodata: float | None, out: np.ndarray,
-                 z_factor: float = 1.0) -> None:
-    """``out[...]`` = float32 heights of ``data``: nodata, NaN and +-inf as NaN (the rules of
-    ``io.read_dem``), times ``z_factor``."""
-    out[...] = data
-    if nodata is not None and not math.isnan(nodata):
-        nd = np.asarray(nodata).astype(data.dtype)
-        if data.dtype.kind == "f" or float(nd) == float(nodata):
-            out[data == nd] = np.nan
-    out[~np.isfinite(out)] = np.nan
-    if z_factor != 1.0:
-        out *= np.float32(z_factor)
-
-
 def open_source(paths, *, band: int = 1, nodata: float | None = None,
                 pixel_size: tuple[float, float] | None = None, z_factor: float = 1.0,
                 raw_shape=None, raw_dtype=None, raw_byteorder=None) -> Source:
@@ -329,11 +316,7 @@ def _open_meta(path: str, band: int):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", NotGeoreferencedWarning)
             with rasterio.open(path) as ds:
-                if ds.count < 1 or ds.width < 1 or ds.height < 1:
-                    raise HillshadeError(f"{path}: the raster is empty")
-                if band > ds.count:
-                    raise HillshadeError(f"{path}: has {ds.count} band(s), --band {band} asked")
-                georef = ds.crs is not None or not ds.transform.is_identity
+                georef = check_band(ds, path, band)
                 return dict(shape=(ds.height, ds.width), transform=ds.transform if georef else None,
                             crs=ds.crs, nodata=ds.nodatavals[band - 1],
                             dtype=ds.dtypes[band - 1], driver=ds.driver)
