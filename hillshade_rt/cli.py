@@ -256,7 +256,8 @@ def shadow(files, algorithm, nextv, better_nextv, horizon_method, sample_spacing
     """Write the cast-shadow mask of DEM to OUTPUT (GeoTIFF: 1 shadow, 0 lit, 255 nodata).
 
     Several DEMs (tiles on one grid) are shaded as one mosaic, so that a mountain in one tile
-    shadows the next; OUTPUT is the last path, or give it with -o. The sun: --azimuth/--elevation, or --time (repeatable) or --start/--end/--step at the DEM's
+    shadows the next; OUTPUT is the last path, or give it with -o. The sun:
+    --azimuth/--elevation, or --time (repeatable) or --start/--end/--step at the DEM's
     place (one band per time). --soft writes the visible fraction of the sun's disk (float32,
     1 = fully lit, -9999 nodata); --classes writes 0 lit / 1 self-shadow / 2 cast / 255."""
     options = _algorithm_options(algorithm, nextv=nextv, better_nextv=better_nextv,
@@ -431,18 +432,23 @@ def _bounded_gdal_cache():
     return rasterio.Env(GDAL_CACHEMAX=GDAL_CACHE_MB)
 
 
+def _source(paths, read_opts):
+    """``tiling.open_source`` with the DEM options of the command line (as ``_read``)."""
+    from .io import parse_pixel_size, parse_raw_shape
+    from .tiling import open_source
+    return open_source(paths, band=read_opts["band"], nodata=read_opts["nodata"],
+                       pixel_size=parse_pixel_size(read_opts["pixel_size"]),
+                       z_factor=read_opts["z_factor"],
+                       raw_shape=parse_raw_shape(read_opts["raw_shape"]),
+                       raw_dtype=read_opts["raw_dtype"], raw_byteorder=read_opts["raw_byteorder"])
+
+
 def _needs_windows(path, read_opts, limit, per_cell) -> bool:
     """Whether shading ``path`` whole would need more than ``limit`` bytes (a DEM whose size
     cannot be told without reading it is read whole, as before)."""
-    from .io import parse_pixel_size, parse_raw_shape
-    from .tiling import open_source, window_budget
+    from .tiling import window_budget
     try:
-        src = open_source(path, band=read_opts["band"], nodata=read_opts["nodata"],
-                          pixel_size=parse_pixel_size(read_opts["pixel_size"]),
-                          z_factor=read_opts["z_factor"],
-                          raw_shape=parse_raw_shape(read_opts["raw_shape"]),
-                          raw_dtype=read_opts["raw_dtype"],
-                          raw_byteorder=read_opts["raw_byteorder"])
+        src = _source(path, read_opts)
     except HillshadeError:
         return False      # read whole: read_dem says what is wrong with it
     budget = window_budget(limit, per_cell)[0]   # a limit too small for anything: one line
@@ -561,19 +567,15 @@ def _light_tiled(inputs, read_opts, scale, req, out, timer, algorithm, options, 
 
     from .engine import dem_body
     from .geometry import Grid
-    from .io import parse_pixel_size, parse_raw_shape
-    from .preview import relief_rgb, shade_of
+    from .engine import curvature_report
+    from .preview import every_nth, relief_rgb, shade_of
     from .report import merge_stats, product_stats
     from .runner import sun_tags
-    from .tiling import Job, Tally, WindowCache, block_stats, open_source, window_budget
+    from .tiling import Job, Tally, WindowCache, block_stats, window_budget
 
     kind = out.kind
     with timer("read"):
-        src = open_source(inputs, band=read_opts["band"], nodata=read_opts["nodata"],
-                          pixel_size=parse_pixel_size(read_opts["pixel_size"]),
-                          z_factor=read_opts["z_factor"],
-                          raw_shape=parse_raw_shape(read_opts["raw_shape"]),
-                          raw_dtype=read_opts["raw_dtype"], raw_byteorder=read_opts["raw_byteorder"])
+        src = _source(inputs, read_opts)
         if scale is not None:
             _apply_scale(src, scale)
     rows, cols = src.shape
@@ -622,8 +624,9 @@ def _light_tiled(inputs, read_opts, scale, req, out, timer, algorithm, options, 
                         tally.add(p)
                         st = merge_stats(st, product_stats(kind, soft, arr))
                         if share is not None:
-                            _preview_share(share, shade_of(kind, soft, arr, ambient), p.region, n,
-                                           len(suns))
+                            sub, (a, b) = every_nth(shade_of(kind, soft, arr, ambient),
+                                                    p.region[0], p.region[2], n)
+                            share[a:a + sub.shape[0], b:b + sub.shape[1]] += sub / len(suns)
                         if soft:
                             arr = np.where(np.isnan(arr), np.float32(out.nodata), arr).astype(
                                 np.float32)
@@ -636,9 +639,7 @@ def _light_tiled(inputs, read_opts, scale, req, out, timer, algorithm, options, 
             tally.bytes_read = rd.bytes_read
             tally.bytes_carried = cache.carried_bytes
         extra = {}
-    curv = {"setting": job.curvature, "applied": True in used,
-            "radius_m": job.body.radius(0.0) if True in used else None,
-            "refraction_k": job.k, "body": job.body.source}
+    curv = curvature_report(job.curvature, used, job.body, job.k)
     processing = {"mode": "tiled" if scheduler is None else "dask", "cells": rows * cols,
                   "memory": mem, "window_shape_requested": list(window_shape) if window_shape
                   else None, **tally.as_dict(src.itemsize), **extra}
@@ -654,15 +655,6 @@ def _light_tiled(inputs, read_opts, scale, req, out, timer, algorithm, options, 
     return {"dem": src, "suns": suns, "sun_info": sun_info, "records": records, "stats": st,
             "algo_stats": algo_stats, "zrange": zrange, "curvature": curv, "gpu": None,
             "relief": relief, "processing": processing}
-
-
-def _preview_share(share, shade, region, n, count):
-    """Add the every-n-th cells of one region's shade into the preview's share."""
-    r0, r1, c0, c1 = region
-    rs, cs = (-r0) % n, (-c0) % n
-    sub = shade[rs::n, cs::n]
-    share[(r0 + rs) // n:(r0 + rs) // n + sub.shape[0],
-          (c0 + cs) // n:(c0 + cs) // n + sub.shape[1]] += sub / count
 
 
 @cli.command("sun-hours")

@@ -61,13 +61,13 @@ def client_for(scheduler):
 def shade_piece(job, piece, path: str, nodata, stride: int | None = None) -> dict:
     """The task: read ``piece``'s window, light it, write its region to ``path`` (GeoTIFF).
     Returns the product's cell counts, the algorithm's figures, bytes read, seconds, and the
-    every-``stride``-th cells of its shade for a preview."""
+    every-``stride``-th cells of its shade for a preview (with where they go there)."""
     import rasterio
     from affine import Affine
     from rasterio.errors import NotGeoreferencedWarning
 
     from .io import atomic_path
-    from .preview import shade_of
+    from .preview import every_nth, shade_of
     from .report import product_stats
     from .tiling import GDAL_CACHE_MB
     import warnings
@@ -86,9 +86,9 @@ def shade_piece(job, piece, path: str, nodata, stride: int | None = None) -> dic
     st = product_stats(job.kind, job.soft, arr)
     shade = None
     if stride:
-        g0, _, h0, _ = piece.region
-        sh = shade_of(job.kind, job.soft, arr, job.ambient)
-        shade = sh[(-g0) % stride::stride, (-h0) % stride::stride].copy()
+        sub, at = every_nth(shade_of(job.kind, job.soft, arr, job.ambient), piece.region[0],
+                            piece.region[2], stride)
+        shade = (sub.copy(), at)
     if job.soft:
         arr = np.where(np.isnan(arr), np.float32(nodata), arr).astype(np.float32)
     g0, g1, h0, h1 = piece.region
@@ -112,7 +112,6 @@ def run_on_dask(scheduler, job, suns, plans, out, share, stride, quiet, algo_sta
     report figures). ``out`` is the command's output description (bands or files)."""
     from tqdm import tqdm
 
-    from .io import check_output_path
     from .report import merge_stats
     from .runner import sun_tags
     from .tiling import VrtSource, vrt_xml
@@ -148,9 +147,7 @@ def run_on_dask(scheduler, job, suns, plans, out, share, stride, quiet, algo_sta
                 for k, v in res["algorithm_stats"].items():
                     algo_stats.setdefault(k, v)
                 if share is not None and res["shade"] is not None:
-                    r0, _, c0, _ = p.region
-                    a, b = (r0 + (-r0) % stride) // stride, (c0 + (-c0) % stride) // stride
-                    sh = res["shade"]
+                    sh, (a, b) = res["shade"]
                     share[a:a + sh.shape[0], b:b + sh.shape[1]] += sh / len(suns)
                 bar.update(1)
         # put the parts together: one VRT per output, copied (streaming) into place
@@ -169,7 +166,6 @@ def run_on_dask(scheduler, job, suns, plans, out, share, stride, quiet, algo_sta
             _copy_vrt(doc, out.output, out)
         else:
             for i, s in enumerate(suns):
-                check_output_path(out.paths[i], out.overwrite)
                 doc = vrt_xml(src.shape, src.transform, src.crs, [band_sources(i)], dtype,
                               out.nodata, [out.description(s)], {**out.base_tags, **sun_tags(s)})
                 _copy_vrt(doc, out.paths[i], out)

@@ -98,6 +98,22 @@ def curvature_coefficient(setting, body: "Body", k: float, extent_m: float,
     return curvature_per_m2(body.radius(azimuth), k)
 
 
+def refraction_for(body: "Body", refraction_k: float | None) -> float:
+    """The terrestrial refraction coefficient: ``refraction_k`` if given (checked), else 0.13 on
+    the Earth and 0 elsewhere."""
+    k = (REFRACTION_K if body.earth else 0.0) if refraction_k is None else float(refraction_k)
+    curvature_per_m2(1.0, k)   # validates k
+    return k
+
+
+def curvature_report(setting, used: set, body: "Body", k: float) -> dict:
+    """The report's ``curvature``: the setting, whether any sun's rays were curved (``used``: the
+    set of True/False seen), the radius and refraction."""
+    return {"setting": setting, "applied": (True in used),
+            "radius_m": body.radius(0.0) if True in used else None,
+            "refraction_k": k, "body": body.source}
+
+
 @dataclass
 class Body:
     """The surface the DEM lies on, for curvature: ellipsoid axes, latitude of the DEM, whether it
@@ -167,9 +183,7 @@ class Shader:
             zrange = (float(np.nanmin(z)), float(np.nanmax(z)))
         self.zmin, self.zmax = zrange
         self.body = body or Body()
-        self.k = (REFRACTION_K if self.body.earth else 0.0) if refraction_k is None \
-            else float(refraction_k)
-        curvature_per_m2(1.0, self.k)   # validates k
+        self.k = refraction_for(self.body, refraction_k)
         if curvature not in (True, False, "auto"):
             raise HillshadeError(f"curvature must be True, False or 'auto', got {curvature!r}")
         self.curvature = curvature
@@ -318,10 +332,7 @@ class Shader:
         return self._gpu.report() if self._gpu is not None else None
 
     def report(self) -> dict:
-        used = self.curvature_used
-        return {"setting": self.curvature, "applied": (True in used),
-                "radius_m": self.body.radius(0.0) if True in used else None,
-                "refraction_k": self.k, "body": self.body.source}
+        return curvature_report(self.curvature, self.curvature_used, self.body, self.k)
 
 
 KINDS = ("shadow", "classes", "hillshade", "sun")

@@ -52,6 +52,11 @@ class Dem:
     def valid_count(self) -> int:
         return int(np.count_nonzero(~np.isnan(self.heights)))
 
+    def centre_height(self) -> tuple[float, str]:
+        """The observer's height for suns from times (``sun.centre_height_of``)."""
+        from .sun import centre_height_of
+        return centre_height_of(self.heights)
+
     def height_range(self) -> tuple[float, float]:
         return float(np.nanmin(self.heights)), float(np.nanmax(self.heights))
 

@@ -45,6 +45,14 @@ def relief_rgb(z: np.ndarray, grid: Grid, azimuth: float = 315.0, elevation: flo
     return out
 
 
+def every_nth(arr: np.ndarray, r0: int, c0: int, n: int):
+    """The cells of ``arr`` (a part of a raster starting at row ``r0``, column ``c0``) whose
+    raster row and column are multiples of ``n``, and where they start in the raster's
+    every-``n``-th grid: ``(sub, (row, col))``. Windows put their parts of a preview together."""
+    rs, cs = (-r0) % n, (-c0) % n
+    return arr[rs::n, cs::n], ((r0 + rs) // n, (c0 + cs) // n)
+
+
 def shade_of(kind, soft, arr, ambient):
     """0..1 'in shadow' per cell of one product, for the preview."""
     if kind == "hillshade":

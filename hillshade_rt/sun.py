@@ -263,9 +263,9 @@ def centre_height_of(z: np.ndarray, r: int | None = None, c: int | None = None) 
 
 
 def dem_site(dem, lat: float | None = None, lon: float | None = None) -> Site:
-    """The :class:`Site` of a :class:`~hillshade_rt.io.Dem`."""
-    height, hnote = (dem.centre_height() if hasattr(dem, "centre_height")
-                     else centre_height_of(dem.heights))
+    """The :class:`Site` of a :class:`~hillshade_rt.io.Dem` or a ``tiling.Source`` (anything with
+    ``crs``, ``transform``, ``shape``, ``path`` and ``centre_height()``)."""
+    height, hnote = dem.centre_height()
     if (lat is None) != (lon is None):
         raise HillshadeError("--lat and --lon go together")
     if lat is not None:

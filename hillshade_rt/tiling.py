@@ -42,6 +42,7 @@ from numba import njit, prange
 from .errors import HillshadeError
 from .geometry import Grid, grid_from_transform, orientation
 from .io import check_band, heights_into
+from .preview import every_nth
 
 STAT_BLOCK = 256          # cells per side of the blocks whose height range bounds the halos
 ALIGN = 256               # output regions are multiples of the output's block size
@@ -513,8 +514,8 @@ class BlockStats:
         return float(lo.min()), float(hi.max())
 
 
-def block_stats(source: Source, block: int = STAT_BLOCK, preview_side: int | None = None,
-                progress=None) -> BlockStats:
+def block_stats(source: Source, block: int = STAT_BLOCK,
+                preview_side: int | None = None) -> BlockStats:
     """One pass over ``source`` in bands of ``block`` rows (bounded memory)."""
     rows, cols = source.shape
     nbr, nbc = -(-rows // block), -(-cols // block)
@@ -536,13 +537,8 @@ def block_stats(source: Source, block: int = STAT_BLOCK, preview_side: int | Non
                 valid += int(_block_range(z, block, lo[i:i + 1, c0 // block:-(-c1 // block)],
                                           hi[i:i + 1, c0 // block:-(-c1 // block)]))
                 if pv is not None:
-                    rs = (-r0) % stride
-                    cs = (-c0) % stride
-                    sub = z[rs::stride, cs::stride]
-                    pv[(r0 + rs) // stride:(r0 + rs) // stride + sub.shape[0],
-                       (c0 + cs) // stride:(c0 + cs) // stride + sub.shape[1]] = sub
-            if progress is not None:
-                progress(r1 - r0)
+                    sub, (a, b) = every_nth(z, r0, c0, stride)
+                    pv[a:a + sub.shape[0], b:b + sub.shape[1]] = sub
     if valid == 0:
         raise HillshadeError(f"{source.path}: every cell is nodata, nothing to shade")
     return BlockStats(block, lo, hi, valid, pv, stride)
@@ -767,10 +763,8 @@ class Job:
 
     @property
     def k(self) -> float:
-        from .geometry import REFRACTION_K
-        if self.refraction_k is not None:
-            return float(self.refraction_k)
-        return REFRACTION_K if self.body.earth else 0.0
+        from .engine import refraction_for
+        return refraction_for(self.body, self.refraction_k)
 
     def curv(self, azimuth: float, elevation: float) -> float:
         from .engine import curvature_coefficient

@@ -175,6 +175,19 @@ def test_cli_window_size_equals_in_memory_and_reports_reads(tmp_path, runner):
     assert doc["bytes_read"] + doc["bytes_carried"] == doc["cells_lit"] * 4
 
 
+def test_preview_from_windows_equals_in_memory(tmp_path, runner):
+    """The preview of a windowed run is put together from the windows' every-n-th cells."""
+    a, b = tmp_path / "a.png", tmp_path / "b.png"
+    base = ["shadow", LIDAR, "--azimuth", "203.7", "--elevation", "6"]
+    assert _run(runner, base + [str(tmp_path / "a.tif"), "--preview", str(a)]).exit_code == 0
+    r = _run(runner, base + [str(tmp_path / "b.tif"), "--preview", str(b), "--window-size",
+                             "100x150"])
+    assert r.exit_code == 0, r.output
+    pa, pb = read_band(a), read_band(b)
+    assert (pa != pa[0, 0]).any()
+    np.testing.assert_array_equal(pa, pb)
+
+
 def test_cli_max_memory_switches_to_windows(tmp_path, runner):
     out, rep = tmp_path / "m.tif", tmp_path / "m.json"
     # room for the process, GDAL's cache and about 1 MB of windows: fewer cells than the DEM's
@@ -305,8 +318,10 @@ def test_dask_local_cluster_equals_one_process(tmp_path, runner):
     a, b, rep = tmp_path / "a.tif", tmp_path / "b.tif", tmp_path / "b.json"
     sun = ["--time", "2026-06-21T07:00-05:00", "--time", "2026-06-21T18:30-05:00"]
     assert _run(runner, ["shadow", LIDAR, str(a)] + sun).exit_code == 0
+    assert _run(runner, ["shadow", LIDAR, str(tmp_path / "a2.tif"), "--preview",
+                         str(tmp_path / "a.png")] + sun).exit_code == 0
     r = _run(runner, ["shadow", LIDAR, str(b), "--scheduler", "local:3", "--window-size",
-                      "128x160", "--report", str(rep)] + sun)
+                      "128x160", "--report", str(rep), "--preview", str(tmp_path / "b.png")] + sun)
     assert r.exit_code == 0, r.output
     doc = json.loads(rep.read_text())
     assert doc["processing"]["mode"] == "dask" and doc["processing"]["workers"] == 3
@@ -317,4 +332,6 @@ def test_dask_local_cluster_equals_one_process(tmp_path, runner):
         assert y.tags(1)["TIME"] == x.tags(1)["TIME"]
         for band in (1, 2):
             np.testing.assert_array_equal(x.read(band), y.read(band))
-    assert sorted(os.listdir(tmp_path)) == ["a.tif", "b.json", "b.tif"]
+    np.testing.assert_array_equal(read_band(tmp_path / "a.png"), read_band(tmp_path / "b.png"))
+    assert sorted(os.listdir(tmp_path)) == ["a.png", "a.tif", "a2.tif", "b.json", "b.png",
+                                            "b.tif"]
