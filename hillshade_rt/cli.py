@@ -611,6 +611,7 @@ def _light_tiled(inputs, read_opts, scale, req, out, timer, algorithm, options, 
                    disable=True if quiet or total < 2 else None)
         with out.writer(src, len(suns)) as writer, src.reader() as rd, bar:
             cache = WindowCache(rd)
+            carry = job.carrier()
             for i, (sun, pieces) in enumerate(zip(suns, plans)):
                 t0 = timer.seconds.get("compute", 0.0)
                 with (out.file_writer(src, i, sun) if writer is None
@@ -620,7 +621,7 @@ def _light_tiled(inputs, read_opts, scale, req, out, timer, algorithm, options, 
                     for p in pieces:
                         with timer("compute"):
                             z = cache.get(p.window)
-                            arr = job.light(z, p, algo_stats, used)
+                            arr = job.light(z, p, algo_stats, used, carry)
                         tally.add(p)
                         st = merge_stats(st, product_stats(kind, soft, arr))
                         if share is not None:
@@ -638,6 +639,9 @@ def _light_tiled(inputs, read_opts, scale, req, out, timer, algorithm, options, 
                 records.append(out.record(sun, i, st, timer.seconds.get("compute", 0.0) - t0))
             tally.bytes_read = rd.bytes_read
             tally.bytes_carried = cache.carried_bytes
+            if carry is not None:
+                tally.lines_coloured = carry.lines_coloured
+                tally.lines_carried = carry.lines_carried
         extra = {}
     curv = curvature_report(job.curvature, used, job.body, job.k)
     processing = {"mode": "tiled" if scheduler is None else "dask", "cells": rows * cols,

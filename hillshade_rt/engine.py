@@ -166,13 +166,17 @@ class Shader:
 
     A window of a larger raster (``tiling``): ``zrange`` and ``extent_m`` are the whole raster's
     (so that curvature "auto" decides as for the whole), and ``halo_ready`` says that ``z``
-    already holds the halo of every region asked for: each region is computed on all of ``z``."""
+    already holds the halo of every region asked for: each region is computed on all of ``z``.
+    ``local_range``: bounds of the window's heights (known from the statistics pass; else
+    computed); ``carry`` (``smap.BandCarry``) and ``place`` (the window and the raster's shape)
+    let SMap reuse the tables of the window before and mask only the region."""
 
     def __init__(self, z: np.ndarray, grid: Grid, algorithm: str = "smap",
                  options: dict | None = None, backend: str = "cpu", curvature="auto",
                  refraction_k: float | None = None, body: Body | None = None,
                  zrange: tuple[float, float] | None = None, extent_m: float | None = None,
-                 halo_ready: bool = False):
+                 halo_ready: bool = False, local_range: tuple[float, float] | None = None,
+                 carry=None, place=None):
         from .algorithms import ALGORITHMS
         if algorithm not in ALGORITHMS:
             raise HillshadeError(f"unknown algorithm {algorithm!r}; choose one of "
@@ -192,8 +196,11 @@ class Shader:
         self.extent_m = math.hypot(cols * dx, rows * dy) if extent_m is None else float(extent_m)
         self.halo_ready = halo_ready
         # the heights of this array (a window's own range is tighter than the raster's)
-        self.local_range = ((float(np.nanmin(z)), float(np.nanmax(z))) if halo_ready
-                            and np.isfinite(z).any() else (self.zmin, self.zmax))
+        if local_range is None:
+            local_range = ((float(np.nanmin(z)), float(np.nanmax(z))) if halo_ready
+                           and np.isfinite(z).any() else (self.zmin, self.zmax))
+        self.local_range = local_range
+        self.carry, self.place = carry, place
         self._gpu = None
         self.stats: dict = {}
         self.curvature_used: set[bool] = set()
@@ -273,6 +280,7 @@ class Shader:
     def cast(self, region: Region, stats: dict | None = None) -> np.ndarray:
         """uint8 cast-shadow mask of ``region`` (1 shadow, 0 lit, 255 void)."""
         from .algorithms import ALGORITHMS, brute
+        from .algorithms.frames import frame_of, uniform_rays
         sub = self.z[region.rows, region.cols]
         if region.elevation <= 0:     # night
             return np.where(np.isnan(sub), np.uint8(255), np.uint8(1)).astype(np.uint8)
@@ -280,8 +288,18 @@ class Shader:
         z, g, inner, whole = self._piece(region, el)
         rays = self.rays(g, region.azimuth, el)
         zmax = self.local_range[1] if whole else float(np.nanmax(z))
-        by_brute = self.backend == "cpu" and z.size > TILE_BRUTE_RATIO * sub.size
-        if by_brute:
+        carried = (self.carry is not None and whole and self.algorithm == "smap"
+                   and self.backend == "cpu" and not self.options.get("better_nextv")
+                   and uniform_rays(rays))
+        by_brute = (not carried and self.backend == "cpu"
+                    and z.size > TILE_BRUTE_RATIO * sub.size)
+        if carried:
+            from .algorithms.smap import canonical_place
+            base, positions = canonical_place(frame_of(rays), *self.place)
+            zabs = max(abs(self.zmin), abs(self.zmax))
+            tol = 1e-7 * (1.0 + zabs + float(rays.rise[0]))
+            out = self.carry.mask(z, rays, zmax, tol, base, positions, inner)
+        elif by_brute:
             # a tile whose halo is much larger than itself: march only the tile's own cells
             # (brute, exact) rather than run the algorithm over the whole window
             out = np.zeros(z.shape, np.uint8)

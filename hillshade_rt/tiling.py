@@ -556,6 +556,7 @@ class Piece:
     window: tuple[int, int, int, int]
     azimuth: float
     elevation: float
+    zrange: tuple[float, float] | None = None    # bounds of the window's heights (block ranges)
 
     @property
     def cells(self) -> int:
@@ -627,10 +628,17 @@ def halo_cells(grid: Grid, azimuth: float, reach: float, rows: tuple[int, int],
 def plan(shape, grid: Grid, azimuth: float, elevation: float, curv: float, stats: BlockStats,
          budget_cells: int, window_shape: tuple[int, int] | None = None,
          bounds: tuple[int, int, int, int] | None = None, align: int = ALIGN,
-         halo_elevation: float | None = None, night: bool = False) -> list[Piece]:
+         halo_elevation: float | None = None, night: bool = False,
+         carry: bool = False) -> list[Piece]:
     """Cut ``bounds`` (default: the raster) into regions whose windows hold at most
     ``budget_cells`` cells (or regions of ``window_shape``), ordered from the sun's side so that
     each window's halo was read by the window before.
+
+    The regions form strips along the axis the sun moves along more (cells per step); within a
+    strip the inner loop walks away from the sun. ``carry``: the algorithm carries its tables
+    along a strip (SMap, ``smap.BandCarry``): the windows of a strip then span the same cells
+    across it and each reaches at least as far toward the sun as the next, and the sizes are
+    chosen for the fewest cells coloured (each strip's halo once) rather than the fewest read.
 
     ``halo_elevation``: the elevation the halo is made for (default ``elevation``; soft shadows
     need the lower edge of the sun's disk). ``night``: nothing casts; windows have no halo."""
@@ -639,6 +647,10 @@ def plan(shape, grid: Grid, azimuth: float, elevation: float, curv: float, stats
     b = bounds or (0, rows, 0, cols)
     br, bc = b[1] - b[0], b[3] - b[2]
     hel = elevation if halo_elevation is None else halo_elevation
+    east = math.sin(math.radians(azimuth)) * grid.col_sign
+    north = math.cos(math.radians(azimuth)) * grid.row_sign
+    # the inner loop runs along the axis whose halo is larger, so that it is carried
+    cols_inner = abs(east) / grid.dx[0] >= abs(north) / grid.dy[0]
     if window_shape is not None:
         tr, tc = min(br, window_shape[0]), min(bc, window_shape[1])
     else:
@@ -655,8 +667,15 @@ def plan(shape, grid: Grid, azimuth: float, elevation: float, curv: float, stats
                 tc_ = tc_ // align * align
             if tc_ < 16 or (tc_ < min(bc, align) and tr_ < br):
                 continue       # too narrow (or narrow and not full height: unaligned writes)
-            n = -(-br // tr_) * -(-bc // tc_)
-            key = (n * wr * min(cols, tc_ + hc), n)   # cells read and lit, then windows
+            nr, nc = -(-br // tr_), -(-bc // tc_)
+            n = nr * nc
+            wc = min(cols, tc_ + hc)
+            if carry:   # cells coloured (a strip's halo once), then a sixteenth for the copies
+                strips = (nr * min(cols, bc + hc) * wr if cols_inner
+                          else nc * min(rows, br + hr) * wc)
+                key = (strips + n * wr * wc // 16, n)
+            else:
+                key = (n * wr * wc, n)      # cells read and lit, then windows
             if best is None or key < best[0]:
                 best = (key, tr_, tc_)
         if best is None:
@@ -666,25 +685,44 @@ def plan(shape, grid: Grid, azimuth: float, elevation: float, curv: float, stats
                 f"the sun's halo needs at least {need:,} here (sun elevation {hel:.2f} deg): "
                 "raise --max-memory")
         _, tr, tc = best
-    east = math.sin(math.radians(azimuth)) * grid.col_sign
-    north = math.cos(math.radians(azimuth)) * grid.row_sign
     row_cuts = _cuts(b[0], b[1], tr, align)
     col_cuts = _cuts(b[2], b[3], tc, align)
     if north > 1e-12:        # the sun lies toward higher rows: start there
         row_cuts.reverse()
     if east > 1e-12:
         col_cuts.reverse()
-    # the inner loop runs along the axis whose halo is larger, so that it is carried
-    cols_inner = abs(east) / grid.dx[0] >= abs(north) / grid.dy[0]
     order = ([(r, c) for r in row_cuts for c in col_cuts] if cols_inner
              else [(r, c) for c in col_cuts for r in row_cuts])
-    pieces = []
-    for (r0, r1), (c0, c1) in order:
-        region = (r0, r1, c0, c1)
-        win = (halo_bounds(region, shape, grid, azimuth, 0.0, 1) if night
-               else window_for(region, shape, grid, azimuth, hel, curv, stats))
-        pieces.append(Piece(region, win, azimuth, elevation))
-    return pieces
+    regions = [(r0, r1, c0, c1) for (r0, r1), (c0, c1) in order]
+    wins = [halo_bounds(reg, shape, grid, azimuth, 0.0, 1) if night
+            else window_for(reg, shape, grid, azimuth, hel, curv, stats) for reg in regions]
+    if carry:
+        inner = len(col_cuts) if cols_inner else len(row_cuts)
+        for s0 in range(0, len(wins), inner):
+            wins[s0:s0 + inner] = _strip_windows(wins[s0:s0 + inner], cols_inner,
+                                                 (east if cols_inner else north) > 1e-12)
+    return [Piece(reg, win, azimuth, elevation, _finite(stats.range_over(win)))
+            for reg, win in zip(regions, wins)]
+
+
+def _finite(zr):
+    return zr if all(math.isfinite(v) for v in zr) else None
+
+
+def _strip_windows(wins, lines_are_cols: bool, sun_high: bool):
+    """The windows of one strip (in the order they are lit) made to span the same cells across
+    the strip and to reach, each, at least as far toward the sun as the next: the shape
+    ``smap.BandCarry`` needs. They stay within the planner's bound (same region width, halo on
+    the same side)."""
+    w = [list(x) for x in wins]
+    a, b = (0, 1) if lines_are_cols else (2, 3)        # the positions' axis
+    lo, hi = min(x[a] for x in w), max(x[b] for x in w)
+    for x in w:
+        x[a], x[b] = lo, hi
+    i = (3 if sun_high else 2) if lines_are_cols else (1 if sun_high else 0)
+    for k in range(len(w) - 2, -1, -1):
+        w[k][i] = max(w[k][i], w[k + 1][i]) if sun_high else min(w[k][i], w[k + 1][i])
+    return [tuple(x) for x in w]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -771,18 +809,33 @@ class Job:
         return curvature_coefficient(self.curvature, self.body, self.k, self.extent_m,
                                      self.zrange, azimuth, elevation)
 
-    def shader(self, z: np.ndarray, window):
+    @property
+    def carries(self) -> bool:
+        """Whether the algorithm carries tables from window to window (SMap on the CPU)."""
+        return (self.algorithm == "smap" and self.backend == "cpu"
+                and not self.options.get("better_nextv"))
+
+    def carrier(self):
+        """A fresh carrier of tables for a run of windows (None when nothing is carried)."""
+        from .algorithms.smap import BandCarry
+        return BandCarry() if self.carries else None
+
+    def shader(self, z: np.ndarray, window, local_range=None, carry=None):
         from .engine import Shader
         return Shader(z, window_grid(self.source.grid, window), self.algorithm, self.options,
                       self.backend, self.curvature, self.refraction_k, self.body, self.zrange,
-                      extent_m=self.extent_m, halo_ready=True)
+                      extent_m=self.extent_m, halo_ready=True, local_range=local_range,
+                      carry=carry, place=(window, self.source.shape))
 
     def light(self, z: np.ndarray, piece: Piece, stats: dict | None = None,
-              curvature_used: set | None = None) -> np.ndarray:
-        """The product over ``piece.region`` from its window's heights ``z``."""
+              curvature_used: set | None = None, carry=None) -> np.ndarray:
+        """The product over ``piece.region`` from its window's heights ``z``. ``carry``: the
+        run's ``carrier()``, for windows lit in plan order (a fresh one otherwise: SMap then
+        still masks the region only)."""
         from .engine import _render_region
         from .sun import Region
-        sh = self.shader(z, piece.window)
+        sh = self.shader(z, piece.window, piece.zrange,
+                         carry if carry is not None else self.carrier())
         rows, cols = piece.inner()
         arr = _render_region(sh, Region(rows, cols, piece.azimuth, piece.elevation), self.kind,
                              self.soft, self.self_shadow, self.ambient, stats)
@@ -809,7 +862,7 @@ class Job:
             out += plan(shape, self.source.grid, reg.azimuth, el,
                         0.0 if night else self.curv(reg.azimuth, max(min(el, 90.0), 1e-6)), stats,
                         budget_cells, window_shape, (r0, r1, c0, c1), halo_elevation=hel,
-                        night=night)
+                        night=night, carry=self.carries and not self.soft)
         return out
 
     def warm_up(self, sun) -> None:
@@ -834,6 +887,8 @@ class Tally:
     bytes_carried: int = 0
     stats_pass_bytes: int = 0
     largest_window: tuple[int, int] = (0, 0)
+    lines_coloured: int | None = None     # SMap lines coloured, and reused from the window before
+    lines_carried: int | None = None
 
     def add(self, piece: Piece):
         self.windows += 1
@@ -853,4 +908,6 @@ class Tally:
                 "bytes_read_beyond_output": beyond,
                 "bytes_read_beyond_output_fraction": beyond / max(1, self.region_cells * itemsize),
                 "bytes_carried": self.bytes_carried,
-                "statistics_pass_bytes": self.stats_pass_bytes}
+                "statistics_pass_bytes": self.stats_pass_bytes,
+                "smap_lines_coloured": self.lines_coloured,
+                "smap_lines_carried": self.lines_carried}
