@@ -186,7 +186,9 @@ def run_options(f):
                      help="The output (then every path given is a DEM)."),
         click.option("--output-pattern", default=None, metavar="PATTERN",
                      help="One file per time instead of one multi-band OUTPUT, e.g. "
-                          "'out_{time:%Y%m%dT%H%M}.tif' (fields: time, index, azimuth, elevation)."),
+                          "'out_{time:%Y%m%dT%H%M}.tif' (fields: time, index, azimuth, elevation, "
+                          "tile: the input's file name; with several input tiles, one file per "
+                          "tile)."),
         click.option("--preview", type=click.Path(dir_okay=False), default=None,
                      help="Also write a quick-look PNG (shaded relief, shadows tinted)."),
         backend_option,
@@ -377,11 +379,14 @@ def _light(files, kind, algorithm, options, curvature, refraction_k, soft, self_
                      "classes": ("uint8", 255), "hillshade": ("uint8", 0)}[kind]
     out = _Outputs(kind, soft, algorithm, dtype, nodata, output, pattern, overwrite, cog,
                    preview is not None, ambient)
-    with (_bounded_gdal_cache() if tiled else contextlib.nullcontext()):
-        run = (_light_tiled if tiled else _light_in_memory)(
-            inputs, kw, scale, req, out, timer, algorithm, options, ran_on, curvature,
-            refraction_k, soft, self_shadow, ambient, quiet, limit=limit, window_shape=wshape,
-            scheduler=scheduler, per_cell=per_cell)
+    try:
+        with (_bounded_gdal_cache() if tiled else contextlib.nullcontext()):
+            run = (_light_tiled if tiled else _light_in_memory)(
+                inputs, kw, scale, req, out, timer, algorithm, options, ran_on, curvature,
+                refraction_k, soft, self_shadow, ambient, quiet, limit=limit, window_shape=wshape,
+                scheduler=scheduler, per_cell=per_cell)
+    finally:
+        out.cleanup()
     d, suns, records = run["dem"], run["suns"], run["records"]
     if preview is not None:
         with timer("write"):
@@ -471,13 +476,70 @@ class _Outputs:
                      "classes": "shadow classes", "hillshade": "shaded relief"}[kind]
         self.resampling = "average" if (soft or kind == "hillshade") else "nearest"
         self.paths = None
+        self.tiles = self.tile_paths = None
+        self._scratch: list[str] = []
 
-    def plan(self, suns):
+    def plan(self, suns, inputs, tiles=None):
+        """The files of each sun. ``tiles``: a mosaic's input tiles (``Source.tiles``); with a
+        pattern naming ``{tile}`` each sun's mosaic is written to a scratch file beside the
+        outputs and cut into one file per tile (``finish``)."""
         from .io import check_output_path
-        if self.pattern is not None:
-            self.paths = self.pattern.paths(suns)
-            for p in self.paths:
+        if self.pattern is None:
+            return
+        per_tile = bool(self.pattern.per_tile and tiles)
+        paths = self.pattern.paths(suns, [t["path"] for t in tiles] if per_tile else inputs[:1])
+        for ps in paths:
+            for p in ps:
                 check_output_path(p, self.overwrite)
+        if per_tile:
+            self.tiles, self.tile_paths = tiles, paths
+            self.paths = [None] * len(suns)
+        else:
+            self.paths = [ps[0] for ps in paths]
+
+    @property
+    def file_cog(self) -> bool:
+        """Whether the per-sun files are written as COGs (not the scratch mosaics of tiles)."""
+        return self.cog and self.tile_paths is None
+
+    def target(self, i) -> str:
+        """Where sun ``i``'s file is written: its output, or a scratch mosaic to be cut."""
+        if self.paths[i] is None:
+            from .io import _temp_beside
+            self.paths[i] = _temp_beside(self.tile_paths[i][0], ".scratch.tif")
+            self._scratch.append(self.paths[i])
+        return self.paths[i]
+
+    def finish(self, i, sun, src):
+        """Cut sun ``i``'s scratch mosaic into its tiles' files (on each tile's own grid), then
+        remove it."""
+        if self.tile_paths is None:
+            return
+        from .io import copy_vrt
+        from .runner import sun_tags
+        from .tiling import VrtSource, vrt_xml
+        scratch = self.paths[i]
+        dtype = {"uint8": "Byte", "float32": "Float32"}[self.dtype]
+        for t, path in zip(self.tiles, self.tile_paths[i]):
+            r0, r1, c0, c1 = t["window"]
+            shape = (r1 - r0, c1 - c0)
+            doc = vrt_xml(shape, t["transform"], src.crs,
+                          [[VrtSource(scratch, 1, (0, 0), shape, src_offset=(r0, c0))]], dtype,
+                          self.nodata, [self.description(sun)],
+                          {**self.base_tags, **sun_tags(sun),
+                           "TILE_SOURCE": os.path.abspath(t["path"])})
+            copy_vrt(doc, path, self.dtype, self.cog, self.resampling)
+        self._remove(scratch)
+
+    def _remove(self, path):
+        for p in (path, path + ".aux.xml", path + ".ovr"):
+            with contextlib.suppress(OSError):
+                os.remove(p)
+
+    def cleanup(self):
+        """Remove scratch mosaics left by a failed or interrupted run."""
+        for p in self._scratch:
+            self._remove(p)
 
     def description(self, sun) -> str:
         from .runner import label
@@ -494,12 +556,14 @@ class _Outputs:
     def file_writer(self, dem, i, sun):
         from .io import BandWriter
         from .runner import sun_tags
-        return BandWriter(self.paths[i], dem, 1, self.dtype, self.nodata,
-                          {**self.base_tags, **sun_tags(sun)}, self.cog, self.resampling)
+        return BandWriter(self.target(i), dem, 1, self.dtype, self.nodata,
+                          {**self.base_tags, **sun_tags(sun)}, self.file_cog, self.resampling)
 
     def record(self, sun, i, st, seconds):
         rec = dict(sun.as_dict(), shadow_fraction=st["shadow_fraction"], compute_s=seconds)
-        if self.paths:
+        if self.tile_paths:
+            rec["outputs"] = [os.path.abspath(p) for p in self.tile_paths[i]]
+        elif self.paths:
             rec["output"] = os.path.abspath(self.paths[i])
         return rec
 
@@ -520,7 +584,7 @@ def _light_in_memory(inputs, read_opts, scale, req, out, timer, algorithm, optio
             _apply_scale(d, scale)
     with timer("prepare"):   # solar positions; numba compilation on a first run; GPU upload
         suns, sun_info = req.suns(d)
-        out.plan(suns)
+        out.plan(suns, inputs)
         zmin, zmax = d.height_range()
         shader = Shader(d.heights, d.grid, algorithm, options, ran_on,
                         "auto" if curvature is None else curvature, refraction_k,
@@ -585,7 +649,7 @@ def _light_tiled(inputs, read_opts, scale, req, out, timer, algorithm, options, 
         tally.stats_pass_bytes = rows * cols * src.itemsize
         zrange = (bstats.zmin, bstats.zmax)
         suns, sun_info = req.suns(src)
-        out.plan(suns)
+        out.plan(suns, inputs, src.tiles)
         dx, dy = src.grid.centre_spacing()
         job = Job(src, algorithm, options, ran_on, "auto" if curvature is None else curvature,
                   refraction_k, dem_body(src, req.lat), zrange, math.hypot(cols * dx, rows * dy),
@@ -636,6 +700,7 @@ def _light_tiled(inputs, read_opts, scale, req, out, timer, algorithm, options, 
                         bar.update(1)
                     w.describe(band, out.description(sun),
                                sun_tags(sun) if writer is not None else None)
+                out.finish(i, sun, src)
                 records.append(out.record(sun, i, st, timer.seconds.get("compute", 0.0) - t0))
             tally.bytes_read = rd.bytes_read
             tally.bytes_carried = cache.carried_bytes

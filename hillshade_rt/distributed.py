@@ -114,10 +114,11 @@ def run_on_dask(scheduler, job, suns, plans, out, share, stride, quiet, algo_sta
 
     from .report import merge_stats
     from .runner import sun_tags
+    from .io import copy_vrt
     from .tiling import VrtSource, vrt_xml
 
     client, cluster = client_for(scheduler)
-    dest = out.output or out.paths[0]
+    dest = out.output or (out.tile_paths[0][0] if out.tile_paths else out.paths[0])
     folder = tempfile.mkdtemp(dir=os.path.dirname(os.path.abspath(dest)),
                               prefix="." + os.path.basename(dest) + ".parts-")
     futures = []
@@ -163,12 +164,13 @@ def run_on_dask(scheduler, job, suns, plans, out, share, stride, quiet, algo_sta
                           [band_sources(i) for i in range(len(suns))], dtype, out.nodata,
                           [out.description(s) for s in suns], out.base_tags,
                           [sun_tags(s) for s in suns])
-            _copy_vrt(doc, out.output, out)
+            copy_vrt(doc, out.output, out.dtype, out.cog, out.resampling)
         else:
             for i, s in enumerate(suns):
                 doc = vrt_xml(src.shape, src.transform, src.crs, [band_sources(i)], dtype,
                               out.nodata, [out.description(s)], {**out.base_tags, **sun_tags(s)})
-                _copy_vrt(doc, out.paths[i], out)
+                copy_vrt(doc, out.target(i), out.dtype, out.file_cog, out.resampling)
+                out.finish(i, s, src)
         records = [out.record(s, i, per_sun[i]["stats"], per_sun[i]["seconds"])
                    for i, s in enumerate(suns)]
         info = {"scheduler": scheduler if isinstance(scheduler, str) else str(client),
@@ -184,24 +186,3 @@ def run_on_dask(scheduler, job, suns, plans, out, share, stride, quiet, algo_sta
             with contextlib.suppress(Exception):
                 client.close()
                 cluster.close()
-
-
-def _copy_vrt(doc: str, path: str, out) -> None:
-    """The VRT ``doc`` into ``path`` as a tiled GeoTIFF (or a COG), through a temporary file."""
-    import rasterio
-    import rasterio.shutil
-
-    from .io import atomic_path, to_cog
-    if out.cog:
-        with atomic_path(path, ".tif") as tmp:
-            to_cog(doc, tmp, out.resampling)
-        return
-    opts = dict(driver="GTiff", TILED="YES", BLOCKXSIZE=256, BLOCKYSIZE=256, COMPRESS="DEFLATE",
-                INTERLEAVE="BAND", BIGTIFF="IF_SAFER")
-    if out.dtype == "float32":
-        opts["PREDICTOR"] = 3
-    try:
-        with atomic_path(path, ".tif") as tmp:
-            rasterio.shutil.copy(doc, tmp, **opts)
-    except rasterio.errors.RasterioError as exc:
-        raise HillshadeError(f"{path}: cannot write ({str(exc).splitlines()[0]})") from None

@@ -532,3 +532,24 @@ def write_png(path: str, rgb: np.ndarray) -> None:
         finally:
             with contextlib.suppress(OSError):
                 os.remove(tmp + ".aux.xml")   # GDAL's side-car of a PNG: nothing worth keeping
+
+
+def copy_vrt(doc: str, path: str, dtype: str, cog: bool = False,
+             resampling: str = "nearest") -> None:
+    """The GDAL VRT document ``doc`` copied (block by block, by GDAL) into ``path``: a tiled,
+    deflated GeoTIFF, or a COG; through a temporary file renamed into place."""
+    import rasterio
+    import rasterio.shutil
+    if cog:
+        with atomic_path(path, ".tif") as tmp:
+            to_cog(doc, tmp, resampling)
+        return
+    opts = dict(driver="GTiff", TILED="YES", BLOCKXSIZE=256, BLOCKYSIZE=256, COMPRESS="DEFLATE",
+                INTERLEAVE="BAND", BIGTIFF="IF_SAFER")
+    if dtype == "float32":
+        opts["PREDICTOR"] = 3
+    try:
+        with atomic_path(path, ".tif") as tmp:
+            rasterio.shutil.copy(doc, tmp, **opts)
+    except rasterio.errors.RasterioError as exc:
+        raise HillshadeError(f"{path}: cannot write ({str(exc).splitlines()[0]})") from None

@@ -120,7 +120,11 @@ class SunRequest:
 
 class OutputPattern:
     """``--output-pattern 'out_{time:%Y%m%dT%H%M}.tif'``: one file per time. Fields: ``time``
-    (a datetime), ``index`` (0-based), ``azimuth``, ``elevation``."""
+    (a datetime), ``index`` (0-based), ``azimuth``, ``elevation``, and ``tile``: the input DEM's
+    file name without its extension; with several input tiles shaded as one mosaic, a pattern
+    with ``{tile}`` gives one output per input tile (cut from the mosaic, on the tile's grid)."""
+
+    FIELDS = ("time", "index", "azimuth", "elevation", "tile")
 
     def __init__(self, pattern: str):
         self.pattern = pattern
@@ -128,24 +132,34 @@ class OutputPattern:
             fields = {f for _, f, _, _ in string.Formatter().parse(pattern) if f is not None}
         except ValueError as exc:
             raise HillshadeError(f"--output-pattern {pattern!r}: {exc}") from None
-        bad = {f.split(".")[0].split("[")[0] for f in fields} - {"time", "index", "azimuth",
-                                                                   "elevation"}
+        names = {f.split(".")[0].split("[")[0] for f in fields}
+        bad = names - set(self.FIELDS)
         if bad:
             raise HillshadeError(f"--output-pattern {pattern!r}: unknown field(s) "
-                                 f"{', '.join(sorted(bad))} (use time, index, azimuth, elevation)")
+                                 f"{', '.join(sorted(bad))} (use {', '.join(self.FIELDS)})")
+        self.per_tile = "tile" in names
 
-    def paths(self, suns: list[SunOver]) -> list[str]:
+    def paths(self, suns: list[SunOver], tiles: list[str] | None = None) -> list[list[str]]:
+        """The files of each sun: one per name in ``tiles`` (the inputs' file names) when the
+        pattern has ``{tile}``, else one."""
+        import os
+        names = [os.path.splitext(os.path.basename(t))[0] for t in (tiles or [""])]
+        if not self.per_tile:
+            names = names[:1]
         out = []
         for i, s in enumerate(suns):
             try:
-                out.append(self.pattern.format(time=s.time, index=i, azimuth=s.azimuth,
-                                               elevation=s.elevation))
+                out.append([self.pattern.format(time=s.time, index=i, azimuth=s.azimuth,
+                                                elevation=s.elevation, tile=n) for n in names])
             except (ValueError, KeyError, AttributeError, IndexError, TypeError) as exc:
                 raise HillshadeError(f"--output-pattern {self.pattern!r}: {exc}") from None
-        if len(set(out)) != len(out):
-            raise HillshadeError(f"--output-pattern {self.pattern!r} gives two times the same file "
+        flat = [p for ps in out for p in ps]
+        if len(set(flat)) != len(flat):
+            what = "two times or two tiles" if self.per_tile else "two times"
+            raise HillshadeError(f"--output-pattern {self.pattern!r} gives {what} the same file "
                                  "name: add a finer time field (e.g. {time:%Y%m%dT%H%M%S}) or "
-                                 "{index}")
+                                 "{index}" + (" (tiles: input files of one name)"
+                                              if self.per_tile else ""))
         return out
 
 

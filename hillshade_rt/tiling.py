@@ -408,6 +408,7 @@ class VrtSource:
     offset: tuple[int, int]      # (row, col) in the VRT
     shape: tuple[int, int]
     nodata: float | None = None
+    src_offset: tuple[int, int] = (0, 0)   # (row, col) of the part taken from the source
 
 
 def _metadata_xml(md: dict | None) -> str:
@@ -446,7 +447,8 @@ def vrt_xml(shape, transform, crs, bands: list[list[VrtSource]], dtype: str = "F
             out.append("<ComplexSource>")
             out.append(f'<SourceFilename relativeToVRT="0">{escape(s.path)}</SourceFilename>')
             out.append(f"<SourceBand>{s.band}</SourceBand>")
-            out.append(f'<SrcRect xOff="0" yOff="0" xSize="{w}" ySize="{h}"/>')
+            sr, sc = s.src_offset
+            out.append(f'<SrcRect xOff="{sc}" yOff="{sr}" xSize="{w}" ySize="{h}"/>')
             out.append(f'<DstRect xOff="{c}" yOff="{r}" xSize="{w}" ySize="{h}"/>')
             if s.nodata is not None:
                 out.append(f"<NODATA>{'nan' if math.isnan(s.nodata) else repr(s.nodata)}</NODATA>")

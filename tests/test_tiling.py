@@ -271,6 +271,49 @@ def test_mosaic_of_tiles_is_one_surface(tmp_path, runner):
     assert (alone != read_band(a)[150:, 175:]).sum() > 20
 
 
+@pytest.mark.parametrize("extra", [[], ["--cog", "--window-size", "96x128"],
+                                   ["--scheduler", "local:2", "--window-size", "128"]])
+def test_mosaic_one_output_per_tile(tmp_path, runner, extra):
+    """--output-pattern with {tile}: the mosaic shaded as one surface, written as one file per
+    input tile and time on the tile's own grid (the same cells as the whole DEM's run there);
+    no scratch left beside them."""
+    import rasterio
+    z = fractal_terrain(260, 300, 5, relief=300.0)
+    z[120:128, 140:146] = 500.0
+    tr = Affine(5, 0, 400000, 0, -5, 3800000)
+    whole = write_geotiff(tmp_path / "whole.tif", z, tr, UTM)
+    tiles = _split(tmp_path, z, tr, [(0, 125), (125, 260)], [(0, 143), (143, 300)])
+    sun = ["--time", "2026-03-02T07:20-08:00", "--time", "2026-03-02T17:05-08:00"]
+    ref = tmp_path / "ref.tif"
+    assert _run(runner, ["shadow", whole, str(ref)] + sun).exit_code == 0
+    outdir = tmp_path / "out"
+    outdir.mkdir()
+    r = _run(runner, ["shadow", *tiles, "--output-pattern", str(outdir / "{tile}_{index}.tif"),
+                      "--report", str(tmp_path / "r.json")] + sun + extra)
+    assert r.exit_code == 0, r.output
+    names = sorted(f"tile_{i}{j}_{k}.tif" for i in range(2) for j in range(2) for k in range(2))
+    assert sorted(os.listdir(outdir)) == names
+    doc = json.loads((tmp_path / "r.json").read_text())
+    assert len(doc["times"][1]["outputs"]) == 4
+    with rasterio.open(ref) as rf:
+        want = [rf.read(1), rf.read(2)]
+        for t in tiles:
+            stem = os.path.basename(t)[:-4]
+            with rasterio.open(t) as src:
+                c0, r0 = (round(v) for v in ~tr @ (src.transform.c, src.transform.f))
+                for k in range(2):
+                    with rasterio.open(outdir / f"{stem}_{k}.tif") as ds:
+                        assert ds.transform == src.transform and ds.crs == src.crs
+                        assert ds.shape == src.shape and ds.nodata == 255
+                        assert ds.tags()["TILE_SOURCE"] == os.path.abspath(t)
+                        assert ds.tags()["TIME"] == rf.tags(k + 1)["TIME"]
+                        if "--cog" in extra:
+                            assert ds.tags(ns="IMAGE_STRUCTURE").get("LAYOUT") == "COG"
+                        np.testing.assert_array_equal(
+                            ds.read(1), want[k][r0:r0 + src.height, c0:c0 + src.width])
+    assert all(0.05 < np.mean(w == 1) < 0.9 for w in want)
+
+
 def test_mosaic_refuses_misaligned_or_foreign_tiles(tmp_path, runner):
     z = fractal_terrain(64, 64, 2)
     a = write_geotiff(tmp_path / "a.tif", z, Affine(5, 0, 400000, 0, -5, 3800000), UTM)
