@@ -3,9 +3,11 @@
 Each figure is a whole command-line run (read, statistics pass, compute, write), the median of
 --repeat runs after a warm-up, on a synthetic DEM (``bigdem.terrain``, 1 m cells, ~520 m of
 relief) of --size x --size cells. The windowed run gets --max-memory so that its windows hold
-about a quarter of the DEM each (what the planner makes of that is reported: windows, share of
-halo cells); the Dask run uses the same windows on ``--scheduler local:2`` (two worker processes,
-each with half of the cores). Ratios are within this one run.
+about a quarter of the DEM each (what the planner makes of that is reported: windows, window
+cells beyond the output, and for SMap the elements coloured beyond the output: its tables are
+carried along strips of windows, so a strip's halo is coloured once); the Dask run plans
+independent windows (nothing carried) on ``--scheduler local:2`` (two worker processes, each with
+half of the cores). Ratios are within this one run.
 
     python benchmarks/bench_tiling.py [--size 6000] [--repeat 2]
 """
@@ -51,9 +53,9 @@ def main():
     print(f"DEM {args.size} x {args.size} ({cells / 1e6:.0f} Mpix), {args.algorithm}, "
           f"azimuth 203.7, windowed runs with --max-memory {format_size(limit)}, "
           f"median of {args.repeat}")
-    print("| sun elevation | mode | windows | halo cells | wall s | Mpix/s (wall) | "
-          "compute Mpix/s | vs in memory |")
-    print("|---|---|---|---|---|---|---|---|")
+    print("| sun elevation | mode | windows | window cells beyond output | SMap cells coloured "
+          "beyond output | wall s | Mpix/s (wall) | compute Mpix/s | vs in memory |")
+    print("|---|---|---|---|---|---|---|---|---|")
     for el in [float(e) for e in args.elevations.split(",")]:
         base = [BIN, "shadow", dem, out, "--azimuth", "203.7", "--elevation", str(el),
                 "--algorithm", args.algorithm]
@@ -73,8 +75,10 @@ def main():
             p = d["processing"]
             ref = wall if ref is None else ref
             comp = d["seconds"]["compute"]
+            col = p.get("smap_coloured_beyond_output_fraction")
+            col = "–" if col is None else f"{100 * col:.0f} %"
             print(f"| {el:g} | {name} | {p.get('windows', 1)} | "
-                  f"{100 * p.get('halo_cells_fraction', 0.0):.0f} % | {wall:.1f} | "
+                  f"{100 * p.get('halo_cells_fraction', 0.0):.0f} % | {col} | {wall:.1f} | "
                   f"{cells / 1e6 / wall:.1f} | {cells / 1e6 / comp:.1f} | {wall / ref:.2f} |")
 
 

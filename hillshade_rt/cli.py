@@ -427,6 +427,7 @@ def _light(files, kind, algorithm, options, curvature, refraction_k, soft, self_
         if rep["night_count"]:
             click.echo(f"hillshade-rt: note: the sun is below the horizon at "
                        f"{rep['night_count']} of {len(suns)} time(s): all shadow there", err=True)
+    return rep
 
 
 def _bounded_gdal_cache():
@@ -655,7 +656,8 @@ def _light_tiled(inputs, read_opts, scale, req, out, timer, algorithm, options, 
                   refraction_k, dem_body(src, req.lat), zrange, math.hypot(cols * dx, rows * dy),
                   kind, soft, self_shadow, ambient)
         budget, mem = window_budget(limit, per_cell)
-        plans = [job.pieces(s, bstats, budget, window_shape) for s in suns]
+        plans = [job.pieces(s, bstats, budget, window_shape, in_order=scheduler is None)
+                 for s in suns]
         day = [s for s in suns if not s.night]
         if day:
             job.warm_up(day[0])
@@ -704,9 +706,7 @@ def _light_tiled(inputs, read_opts, scale, req, out, timer, algorithm, options, 
                 records.append(out.record(sun, i, st, timer.seconds.get("compute", 0.0) - t0))
             tally.bytes_read = rd.bytes_read
             tally.bytes_carried = cache.carried_bytes
-            if carry is not None:
-                tally.lines_coloured = carry.lines_coloured
-                tally.lines_carried = carry.lines_carried
+            tally.carry = carry
         extra = {}
     curv = curvature_report(job.curvature, used, job.body, job.k)
     processing = {"mode": "tiled" if scheduler is None else "dask", "cells": rows * cols,

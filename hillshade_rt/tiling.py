@@ -846,8 +846,10 @@ class Job:
         return arr
 
     def pieces(self, sun, stats: BlockStats, budget_cells: int,
-               window_shape: tuple[int, int] | None = None) -> list[Piece]:
-        """The pieces of one sun (per-tile suns: each tile's, cut further to fit)."""
+               window_shape: tuple[int, int] | None = None, in_order: bool = True) -> list[Piece]:
+        """The pieces of one sun (per-tile suns: each tile's, cut further to fit).
+        ``in_order``: the windows are lit one after the other in this order (SMap tables are
+        carried along strips); False for independent tasks (Dask), which carry nothing."""
         from .sun import SUN_RADIUS_DEG
         out = []
         shape = self.source.shape
@@ -864,7 +866,7 @@ class Job:
             out += plan(shape, self.source.grid, reg.azimuth, el,
                         0.0 if night else self.curv(reg.azimuth, max(min(el, 90.0), 1e-6)), stats,
                         budget_cells, window_shape, (r0, r1, c0, c1), halo_elevation=hel,
-                        night=night, carry=self.carries and not self.soft)
+                        night=night, carry=in_order and self.carries and not self.soft)
         return out
 
     def warm_up(self, sun) -> None:
@@ -889,8 +891,7 @@ class Tally:
     bytes_carried: int = 0
     stats_pass_bytes: int = 0
     largest_window: tuple[int, int] = (0, 0)
-    lines_coloured: int | None = None     # SMap lines coloured, and reused from the window before
-    lines_carried: int | None = None
+    carry: object = None                  # the run's smap.BandCarry, if any
 
     def add(self, piece: Piece):
         self.windows += 1
@@ -911,5 +912,4 @@ class Tally:
                 "bytes_read_beyond_output_fraction": beyond / max(1, self.region_cells * itemsize),
                 "bytes_carried": self.bytes_carried,
                 "statistics_pass_bytes": self.stats_pass_bytes,
-                "smap_lines_coloured": self.lines_coloured,
-                "smap_lines_carried": self.lines_carried}
+                **(self.carry.figures(self.region_cells) if self.carry is not None else {})}

@@ -773,6 +773,16 @@ class BandCarry:
         self.L = 0
         self.lines_carried = 0
         self.lines_coloured = 0
+        self.cells_coloured = 0
+
+    def figures(self, cells_output: int) -> dict:
+        """For a report: SMap elements coloured (each line of a strip about once) against the
+        output's cells, and lines coloured vs reused."""
+        return {"smap_cells_coloured": self.cells_coloured,
+                "smap_coloured_beyond_output_fraction":
+                    self.cells_coloured / cells_output - 1.0 if cells_output else 0.0,
+                "smap_lines_coloured": self.lines_coloured,
+                "smap_lines_carried": self.lines_carried}
 
     def _table(self, rows: int, E: int) -> np.ndarray:
         if self.buf is None or self.buf.size < rows * E:
@@ -807,6 +817,7 @@ class BandCarry:
         _nextv_scan(J, shift, min(fresh, L - 1))
         self.key, self.base, self.L = key, base, L
         self.lines_coloured += fresh
+        self.cells_coloured += fresh * P
         self.lines_carried += L - fresh
         out = np.zeros(z.shape, np.uint8)
         rs, cs = inner

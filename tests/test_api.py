@@ -1,0 +1,87 @@
+"""hillshade_rt.shade: whole runs from Python, the command line's code and report."""
+
+import json
+import os
+
+import numpy as np
+import pytest
+from affine import Affine
+from rasterio.crs import CRS
+
+import hillshade_rt as hr
+from conftest import fractal_terrain, read_band, write_geotiff
+from test_tiling import _split
+
+UTM = CRS.from_epsg(32611)
+
+
+@pytest.fixture
+def tiles(tmp_path):
+    z = fractal_terrain(200, 240, 8, relief=250.0)
+    tr = Affine(5, 0, 400000, 0, -5, 3800000)
+    whole = write_geotiff(tmp_path / "whole.tif", z, tr, UTM)
+    return whole, _split(tmp_path, z, tr, [(0, 100), (100, 200)], [(0, 120), (120, 240)])
+
+
+def test_shade_in_memory_windows_and_dask_client(tmp_path, tiles):
+    """One DEM in memory, the same as tiles in windows, and on a Dask client the caller owns:
+    identical masks; the report comes back as a dict (and as the file asked for)."""
+    from distributed import Client, LocalCluster
+    whole, parts = tiles
+    sun = dict(azimuth=203.7, elevation=9.0)
+    a = hr.shade(whole, tmp_path / "a.tif", **sun)
+    assert a["processing"]["mode"] == "in memory" and 0.05 < a["sun"]["shadow_fraction"] < 0.9
+    b = hr.shade(parts, tmp_path / "b.tif", window_size=(64, 96), report=str(tmp_path / "b.json"),
+                 **sun)
+    assert b["processing"]["mode"] == "tiled" and b["processing"]["windows"] >= 8
+    assert json.loads((tmp_path / "b.json").read_text())["processing"] == b["processing"]
+    np.testing.assert_array_equal(read_band(tmp_path / "a.tif"), read_band(tmp_path / "b.tif"))
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                      dashboard_address=None) as cluster, Client(cluster) as client:
+        c = hr.shade(parts, tmp_path / "c.tif", window_size=96, client=client, **sun)
+        assert c["processing"]["mode"] == "dask" and c["processing"]["workers"] == 2
+        assert client.status == "running"          # the caller's client is left open
+    np.testing.assert_array_equal(read_band(tmp_path / "a.tif"), read_band(tmp_path / "c.tif"))
+
+
+def test_shade_products_times_and_tiles(tmp_path, tiles):
+    whole, parts = tiles
+    rep = hr.shade(parts, output_pattern=str(tmp_path / "{tile}_{index}.tif"), product="hillshade",
+                   times=["2026-03-02T07:40-08:00", "2026-03-02T16:50-08:00"], max_memory="2GB")
+    assert len(rep["times"]) == 2 and len(rep["times"][0]["outputs"]) == 4
+    ref = hr.shade(whole, tmp_path / "ref.tif", product="hillshade",
+                   times=["2026-03-02T07:40-08:00", "2026-03-02T16:50-08:00"])
+    assert ref["product"]["kind"] == "hillshade"
+    import rasterio
+    with rasterio.open(tmp_path / "ref.tif") as r:
+        np.testing.assert_array_equal(read_band(tmp_path / "tile_11_1.tif"),
+                                      r.read(2)[100:, 120:])
+    cls = hr.shade(whole, tmp_path / "cls.tif", product="classes", azimuth=163, elevation=12,
+                   algorithm_options={"nextv": "quad"})
+    assert set(np.unique(read_band(tmp_path / "cls.tif"))) <= {0, 1, 2}
+    assert cls["algorithm_options"] == {"nextv": "quad"}
+
+
+def test_shade_errors_are_one_line_hillshade_errors(tmp_path, tiles):
+    whole, _ = tiles
+    out = tmp_path / "o.tif"
+    cases = [
+        (dict(azimuth=90), "--azimuth and --elevation go together"),
+        (dict(azimuth=90, elevation=10, max_memory="lots"), "--max-memory"),
+        (dict(azimuth=90, elevation=10, algorithm_options={"exact_steps": 4}), "applies to"),
+        (dict(azimuth=90, elevation=10, algorithm_options={"speed": 4}), "unknown algorithm"),
+        (dict(azimuth=90, elevation=10, product="contours"), "product must be one of"),
+        (dict(azimuth=90, elevation=10, client="local:0", window_size=64), "N must be 1"),
+    ]
+    for kw, msg in cases:
+        with pytest.raises(hr.HillshadeError, match=msg) as e:
+            hr.shade(whole, out, **kw)
+        assert "\n" not in str(e.value)
+    assert not out.exists()
+    with pytest.raises(hr.HillshadeError, match="missing.tif: no such file"):
+        hr.shade(str(tmp_path / "missing.tif"), out, azimuth=90, elevation=10)
+    with pytest.raises(TypeError, match="colour"):
+        hr.shade(whole, out, azimuth=90, elevation=10, colour="red")
+    # nothing half-written beside the inputs
+    assert sorted(os.listdir(tmp_path)) == ["tile_00.tif", "tile_01.tif", "tile_10.tif",
+                                            "tile_11.tif", "whole.tif"]
