@@ -677,7 +677,7 @@ def _light_tiled(inputs, read_opts, scale, req, out, timer, algorithm, options, 
                    disable=True if quiet or total < 2 else None)
         with out.writer(src, len(suns)) as writer, src.reader() as rd, bar:
             cache = WindowCache(rd)
-            carry = job.carrier()
+            carry = job.carrier(plans)
             for i, (sun, pieces) in enumerate(zip(suns, plans)):
                 t0 = timer.seconds.get("compute", 0.0)
                 with (out.file_writer(src, i, sun) if writer is None

@@ -817,10 +817,15 @@ class Job:
         return (self.algorithm == "smap" and self.backend == "cpu"
                 and not self.options.get("better_nextv"))
 
-    def carrier(self):
-        """A fresh carrier of tables for a run of windows (None when nothing is carried)."""
+    def carrier(self, plans=()):
+        """A fresh carrier of tables for a run of windows (None when nothing is carried), its
+        buffer sized for the largest window of ``plans`` (lists of pieces)."""
         from .algorithms.smap import BandCarry
-        return BandCarry() if self.carries else None
+        if not self.carries:
+            return None
+        most = max(((p.window[1] - p.window[0] + 2) * (p.window[3] - p.window[2] + 2)
+                    for ps in plans for p in ps), default=0)
+        return BandCarry(most)
 
     def shader(self, z: np.ndarray, window, local_range=None, carry=None):
         from .engine import Shader

@@ -35,7 +35,7 @@ def _tiled(path, azimuth, elevation, algorithm, window_shape, kind="shadow", sof
                      kind != "shadow", 0.2)
     pieces = job.pieces(SunOver(None, azimuth, elevation), stats, 1 << 40, window_shape)
     out = None
-    carry = job.carrier()
+    carry = job.carrier([pieces])
     with src.reader() as rd:
         cache = tiling.WindowCache(rd)
         for p in pieces:

@@ -766,8 +766,11 @@ class BandCarry:
     Equal, cell for cell, to ``shadow_mask`` on each window (tests: tiled runs at 163, 203.7 and
     291 degrees against the in-memory run)."""
 
-    def __init__(self):
-        self.buf = None        # flat int32 buffer; the current J is its first L * (P + 2) items
+    def __init__(self, capacity: int = 0):
+        # flat int32 buffer; the current J is its first L * (P + 2) items. ``capacity``: the
+        # largest table to come (the planner knows it), so that it is never grown while the
+        # carried lines are held (which would hold two tables at once)
+        self.buf = np.empty(capacity, np.int32) if capacity else None
         self.key = None
         self.base = 0
         self.L = 0
