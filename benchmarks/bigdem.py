@@ -108,7 +108,10 @@ def main():
     print(f"  mode {proc['mode']}, {proc['windows']} windows, largest {proc['largest_window']}, "
           f"halo cells {100 * proc['halo_cells_fraction']:.1f} %, read beyond the output "
           f"{100 * proc['bytes_read_beyond_output_fraction']:.1f} %, carried "
-          f"{format_size(proc['bytes_carried'])}")
+          f"{format_size(proc['bytes_carried'])}"
+          + (f", SMap cells coloured beyond the output "
+             f"{100 * proc['smap_coloured_beyond_output_fraction']:.1f} %"
+             if "smap_coloured_beyond_output_fraction" in proc else ""))
     print(f"  wall {secs:.1f} s; stages {json.dumps({k: round(v, 1) for k, v in doc['seconds'].items()})}; "
           f"{doc['mpix_per_s']:.1f} Mpix/s in compute")
     # compare a crop with an in-memory run that holds every cell able to shadow it
