@@ -26,6 +26,9 @@ from .errors import HillshadeError
 
 PRODUCTS = ("shadow", "classes", "hillshade")
 
+# the command line's run options, set from shade()'s own arguments
+_RUN_KEYS = ("output", "output_pattern", "preview", "backend", "threads", "report_path",
+             "overwrite", "quiet", "max_memory", "window_size", "cog", "scheduler")
 # keyword arguments passed on as the command line's options of the same name
 _PASSED = ("tz", "lat", "lon", "pressure", "temperature", "no_refraction", "sun_tolerance",
            "band", "nodata", "z_factor", "pixel_size", "raw_shape", "raw_dtype",
@@ -111,6 +114,3 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
     except click.ClickException as exc:
         raise HillshadeError(exc.format_message()) from None
 
-
-_RUN_KEYS = ("output", "output_pattern", "preview", "backend", "threads", "report_path",
-             "overwrite", "quiet", "max_memory", "window_size", "cog", "scheduler")

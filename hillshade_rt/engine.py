@@ -168,8 +168,9 @@ class Shader:
     (so that curvature "auto" decides as for the whole), and ``halo_ready`` says that ``z``
     already holds the halo of every region asked for: each region is computed on all of ``z``.
     ``local_range``: bounds of the window's heights (known from the statistics pass; else
-    computed); ``carry`` (``smap.BandCarry``) and ``place`` (the window and the raster's shape)
-    let SMap reuse the tables of the window before and mask only the region."""
+    computed); ``carry`` (a ``smap.BandCarry``, for ``smap`` on the CPU) and ``place`` (the window
+    and the raster's shape) let SMap reuse the tables of the window before and mask only the
+    region."""
 
     def __init__(self, z: np.ndarray, grid: Grid, algorithm: str = "smap",
                  options: dict | None = None, backend: str = "cpu", curvature="auto",
@@ -280,7 +281,7 @@ class Shader:
     def cast(self, region: Region, stats: dict | None = None) -> np.ndarray:
         """uint8 cast-shadow mask of ``region`` (1 shadow, 0 lit, 255 void)."""
         from .algorithms import ALGORITHMS, brute
-        from .algorithms.frames import frame_of, uniform_rays
+        from .algorithms.frames import uniform_rays
         sub = self.z[region.rows, region.cols]
         if region.elevation <= 0:     # night
             return np.where(np.isnan(sub), np.uint8(255), np.uint8(1)).astype(np.uint8)
@@ -288,17 +289,13 @@ class Shader:
         z, g, inner, whole = self._piece(region, el)
         rays = self.rays(g, region.azimuth, el)
         zmax = self.local_range[1] if whole else float(np.nanmax(z))
-        carried = (self.carry is not None and whole and self.algorithm == "smap"
-                   and self.backend == "cpu" and not self.options.get("better_nextv")
-                   and uniform_rays(rays))
+        # a carrier is only given for smap on the CPU (tiling.Job.carrier); it needs one ray
+        carried = self.carry is not None and whole and uniform_rays(rays)
         by_brute = (not carried and self.backend == "cpu"
                     and z.size > TILE_BRUTE_RATIO * sub.size)
         if carried:
-            from .algorithms.smap import canonical_place
-            base, positions = canonical_place(frame_of(rays), *self.place)
-            zabs = max(abs(self.zmin), abs(self.zmax))
-            tol = 1e-7 * (1.0 + zabs + float(rays.rise[0]))
-            out = self.carry.mask(z, rays, zmax, tol, base, positions, inner)
+            out = self.carry.mask(z, rays, zmax, max(abs(self.zmin), abs(self.zmax)),
+                                  *self.place, inner)
         elif by_brute:
             # a tile whose halo is much larger than itself: march only the tile's own cells
             # (brute, exact) rather than run the algorithm over the whole window

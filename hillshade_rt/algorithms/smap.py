@@ -61,6 +61,12 @@ _BLOCK = 256        # elements per parallel work item in the Black pass
 NEXTV_METHODS = ("scan", "binary", "quad")
 
 
+def tolerance(zabs: float, rise: float) -> float:
+    """Slack of the silhouette inequalities for heights up to ``zabs`` in magnitude: 1e-7 of the
+    height range, so that rounding never turns a silhouette White."""
+    return 1e-7 * (1.0 + zabs + rise)
+
+
 # ------------------------------------------------------------------------------------------
 # pass 0: colour (Black = some ray of the beam may peak here)
 
@@ -671,7 +677,7 @@ class SMap:
             self.J.fill(-1)
             return
         zabs = float(np.nanmax(np.abs(z)))
-        self.tol = 1e-7 * (1.0 + zabs + f.rise)
+        self.tol = tolerance(zabs, f.rise)
         _colour_pass(self.Z, f.s, f.rise, self.tol, self.frac, _pieces_table(f.s, self.frac), self.J,
                      0, L)
         self.black_fraction = float(np.count_nonzero(self.J <= -2)) / (L * P)
@@ -794,11 +800,15 @@ class BandCarry:
                 self.buf[:self.L * E] = old[:self.L * E]
         return self.buf[:rows * E].reshape(rows, E)
 
-    def mask(self, z: np.ndarray, rays: SunRays, zmax: float, tol: float, base: int,
-             positions: tuple[int, int], inner: tuple[slice, slice]) -> np.ndarray:
-        """uint8 mask of the window ``z`` (DEM order) with the cells of ``inner`` decided (1
-        shadow, 0 lit, 255 void) and the others 0. ``base``/``positions``: ``canonical_place``."""
+    def mask(self, z: np.ndarray, rays: SunRays, zmax: float, zabs: float, window,
+             shape, inner: tuple[slice, slice]) -> np.ndarray:
+        """uint8 mask of the window ``z`` (DEM order; ``window`` (r0, r1, c0, c1) of a raster of
+        ``shape``) with the cells of ``inner`` decided (1 shadow, 0 lit, 255 void) and the others
+        0. ``zabs``: the largest height magnitude of the whole raster (one tolerance for every
+        window)."""
         f = frame_of(rays)
+        base, positions = canonical_place(f, window, shape)
+        tol = tolerance(zabs, f.rise)
         Z = f.view(z)
         L, P = Z.shape
         E = P + 2
@@ -875,7 +885,7 @@ def shadow_mask_gpu(g, rays: SunRays, zmax: float, stats: dict | None = None, ne
     shift = np.floor(sv).astype(np.int64)
     frac = sv - shift
     zabs = max(abs(g.zmin), abs(g.zmax))
-    tol = 1e-7 * (1.0 + zabs + f.rise)
+    tol = tolerance(zabs, f.rise)
     tables = [g.upload(a) for a in (frac, shift) + _pieces_table(f.s, frac)]
     d_frac, d_shift, npc, oc, op, on, fr = tables
     J = g.empty((L, P + 2), np.int32)
