@@ -770,7 +770,7 @@ class BandCarry:
     raster's. Only the region's cells are masked.
 
     Equal, cell for cell, to ``shadow_mask`` on each window (tests: tiled runs at 163, 203.7 and
-    291 degrees against the in-memory run)."""
+    291 degrees against the in-memory run; all eight octants with voids against brute)."""
 
     def __init__(self, capacity: int = 0):
         # flat int32 buffer; the current J is its first L * (P + 2) items. ``capacity``: the
