@@ -153,13 +153,16 @@ class OutputPattern:
                                                 elevation=s.elevation, tile=n) for n in names])
             except (ValueError, KeyError, AttributeError, IndexError, TypeError) as exc:
                 raise HillshadeError(f"--output-pattern {self.pattern!r}: {exc}") from None
+        if len(set(names)) != len(names):
+            twins = sorted({t for t, n in zip(tiles, names) if names.count(n) > 1})
+            raise HillshadeError(f"--output-pattern {self.pattern!r}: input tiles {twins[0]} and "
+                                 f"{twins[1]} have the same file name, so {{tile}} cannot tell "
+                                 "their outputs apart: rename one")
         flat = [p for ps in out for p in ps]
         if len(set(flat)) != len(flat):
-            what = "two times or two tiles" if self.per_tile else "two times"
-            raise HillshadeError(f"--output-pattern {self.pattern!r} gives {what} the same file "
+            raise HillshadeError(f"--output-pattern {self.pattern!r} gives two times the same file "
                                  "name: add a finer time field (e.g. {time:%Y%m%dT%H%M%S}) or "
-                                 "{index}" + (" (tiles: input files of one name)"
-                                              if self.per_tile else ""))
+                                 "{index}")
         return out
 
 

@@ -314,6 +314,21 @@ def test_mosaic_one_output_per_tile(tmp_path, runner, extra):
     assert all(0.05 < np.mean(w == 1) < 0.9 for w in want)
 
 
+def test_tile_outputs_need_tiles_of_distinct_names(tmp_path, runner):
+    z = fractal_terrain(40, 60, 3)
+    (tmp_path / "d1").mkdir()
+    (tmp_path / "d2").mkdir()
+    a = write_geotiff(tmp_path / "d1" / "t.tif", z[:, :30].copy(),
+                      Affine(5, 0, 400000, 0, -5, 3800000), UTM)
+    b = write_geotiff(tmp_path / "d2" / "t.tif", z[:, 30:].copy(),
+                      Affine(5, 0, 400150, 0, -5, 3800000), UTM)
+    r = _run(runner, ["shadow", a, b, "--output-pattern", str(tmp_path / "o_{tile}.tif"),
+                      "--azimuth", "200", "--elevation", "10"])
+    assert r.exit_code == 1 and "have the same file name" in r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1
+    assert sorted(os.listdir(tmp_path)) == ["d1", "d2"]
+
+
 def test_mosaic_refuses_misaligned_or_foreign_tiles(tmp_path, runner):
     z = fractal_terrain(64, 64, 2)
     a = write_geotiff(tmp_path / "a.tif", z, Affine(5, 0, 400000, 0, -5, 3800000), UTM)
