@@ -27,8 +27,8 @@ from .errors import HillshadeError
 PRODUCTS = ("shadow", "classes", "hillshade")
 
 # the command line's run options, set from shade()'s own arguments
-_RUN_KEYS = ("output", "output_pattern", "preview", "backend", "threads", "report_path",
-             "overwrite", "quiet", "max_memory", "window_size", "cog", "scheduler")
+_RUN_KEYS = ("output", "output_pattern", "preview", "backend", "report_path", "overwrite",
+             "quiet", "max_memory", "window_size", "cog", "scheduler")
 # keyword arguments passed on as the command line's options of the same name
 _PASSED = ("tz", "lat", "lon", "pressure", "temperature", "no_refraction", "sun_tolerance",
            "band", "nodata", "z_factor", "pixel_size", "raw_shape", "raw_dtype",
@@ -96,17 +96,12 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
                              f"{', '.join(sorted(_cli._OPTION_OWNERS))})")
     try:
         if product == "hillshade":
-            if scale is not None and not scale > 0:
-                raise HillshadeError(f"scale must be a positive number, got {scale}")
             return _cli._light(files, "hillshade", algorithm,
                                _cli._algorithm_options(algorithm, **(algorithm_options or {})),
                                curvature, refraction_k, soft, True, ambient, scale, kw,
                                default_sun=(315.0, 45.0))
         if scale is not None:
             raise HillshadeError("scale applies to product='hillshade'")
-        if product == "classes" and soft:
-            raise HillshadeError("classes are hard shadows: product='classes' and soft=True do "
-                                 "not go together")
         return _cli._light(files, product, algorithm,
                            _cli._algorithm_options(algorithm, **(algorithm_options or {})),
                            curvature, refraction_k, soft, self_shadow or product == "classes",

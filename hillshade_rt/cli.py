@@ -265,8 +265,6 @@ def shadow(files, algorithm, nextv, better_nextv, horizon_method, sample_spacing
     options = _algorithm_options(algorithm, nextv=nextv, better_nextv=better_nextv,
                                  method=horizon_method, sample_spacing=sample_spacing,
                                  exact_steps=exact_steps)
-    if classes and soft:
-        raise click.UsageError("--classes and --soft do not go together (classes are hard)")
     kind = "classes" if classes else "shadow"
     _light(files, kind, algorithm, options, curvature, refraction_k, soft,
            self_shadow or classes, 0.2, None, kw)
@@ -292,11 +290,6 @@ def hillshade(files, ambient, scale, algorithm, curvature, refraction_k, soft, *
     Illumination = ambient + (1 - ambient) * max(0, L.N) in lit cells and ambient in shadow
     (normals by Horn's method, like gdaldem); written as 1..255, 0 nodata. Sun as for `shadow`
     (default --azimuth 315 --elevation 45, like gdaldem)."""
-    if scale is not None:
-        if not (math.isfinite(scale) and scale > 0):
-            raise click.UsageError(f"--scale must be a positive number, got {scale}")
-        if kw.get("pixel_size") is not None:
-            raise click.UsageError("--scale and --pixel-size do not go together")
     _light(files, "hillshade", algorithm, {}, curvature, refraction_k, soft, True, ambient,
            scale, kw, default_sun=(315.0, 45.0))
 
@@ -338,7 +331,8 @@ def _light(files, kind, algorithm, options, curvature, refraction_k, soft, self_
            ambient, scale, kw, default_sun=None):
     """The body of ``shadow`` and ``hillshade``: one DEM (or a mosaic of several), one or more
     suns, one output per sun (bands of OUTPUT, or files of --output-pattern). In memory when the
-    run fits --max-memory, else in windows (``tiling``), on Dask workers with --scheduler."""
+    run fits --max-memory, else in windows (``tiling``), on Dask workers with --scheduler.
+    Also the body of ``api.shade``: the checks of the options' combinations live here."""
     import numba
 
     from .io import check_output_path, write_json, write_png
@@ -347,6 +341,13 @@ def _light(files, kind, algorithm, options, curvature, refraction_k, soft, self_
     from .shadow import choose_backend
     from .tiling import bytes_per_cell, default_max_memory, parse_size
 
+    if kind == "classes" and soft:
+        raise click.UsageError("--classes and --soft do not go together (classes are hard)")
+    if scale is not None:
+        if not (math.isfinite(scale) and scale > 0):
+            raise click.UsageError(f"--scale must be a positive number, got {scale}")
+        if kw.get("pixel_size") is not None:
+            raise click.UsageError("--scale and --pixel-size do not go together")
     timer = Timer()
     pattern, preview, backend, threads = (kw.pop("output_pattern"), kw.pop("preview"),
                                           kw.pop("backend"), kw.pop("threads"))
