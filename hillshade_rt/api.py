@@ -28,7 +28,7 @@ PRODUCTS = ("shadow", "classes", "hillshade")
 
 # the command line's run options, set from shade()'s own arguments
 _RUN_KEYS = ("output", "output_pattern", "preview", "backend", "report_path", "overwrite",
-             "quiet", "max_memory", "window_size", "cog", "scheduler")
+             "quiet", "max_memory", "window_size", "cog", "scheduler", "fmt")
 # keyword arguments passed on as the command line's options of the same name
 _PASSED = ("tz", "lat", "lon", "pressure", "temperature", "no_refraction", "sun_tolerance",
            "band", "nodata", "z_factor", "pixel_size", "raw_shape", "raw_dtype",
@@ -42,6 +42,7 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
           self_shadow: bool = False, ambient: float = 0.2, scale: float | None = None,
           curvature: bool | None = None, refraction_k: float | None = None,
           backend: str = "auto", max_memory=None, window_size=None, cog: bool = False,
+          fmt: str | None = None,
           client=None, overwrite: bool = False, report: str | None = None,
           preview: str | None = None, progress: bool = False, **more) -> dict:
     """Shade DEM file(s) into ``output`` (one band per sun) or ``output_pattern`` files.
@@ -51,6 +52,7 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
     visible fraction of the disk with ``soft``), "classes" or "hillshade". The sun:
     ``azimuth``/``elevation``, or ``times`` (datetimes or ISO strings), or ``start``/``end``/
     ``step`` at the DEM's place. ``algorithm_options``: e.g. ``{"nextv": "quad"}``.
+    ``fmt``: a GDAL driver name (default from the extension, as ``--format``).
     ``max_memory`` (bytes or "2GB"), ``window_size`` ((rows, cols), an int, or "2048x2048"):
     windows as ``--max-memory``/``--window-size``. ``client``: a ``distributed.Client`` (or a
     scheduler address, or "local:N"): windows and times run as Dask tasks on it; the client is
@@ -87,13 +89,16 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
               output=None if output is None else os.fspath(output),
               output_pattern=output_pattern, preview=preview, backend=backend,
               report_path=report, overwrite=overwrite, quiet=not progress,
-              max_memory=max_memory, window_size=window_size, cog=cog, scheduler=client)
+              max_memory=max_memory, window_size=window_size, cog=cog, scheduler=client,
+              fmt=fmt)
     if output is None and output_pattern is None:
         raise HillshadeError("give output or output_pattern")
     bad = set(algorithm_options or {}) - set(_cli._OPTION_OWNERS)
     if bad:
         raise HillshadeError(f"unknown algorithm option(s) {', '.join(sorted(bad))} (known: "
                              f"{', '.join(sorted(_cli._OPTION_OWNERS))})")
+    from .writes import virtual_outputs
+    token = virtual_outputs.set(True)    # /vsimem/ outputs are fine from Python
     try:
         if product == "hillshade":
             return _cli._light(files, "hillshade", algorithm,
@@ -108,4 +113,6 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
                            0.2, None, kw)
     except click.ClickException as exc:
         raise HillshadeError(exc.format_message()) from None
+    finally:
+        virtual_outputs.reset(token)
 

@@ -17,36 +17,92 @@ import sys
 import click
 
 from . import __version__
-from .errors import HillshadeError
+from .errors import HillshadeError, UsageProblem
+
+
+def _signal_name(signum: int) -> str:
+    import signal
+    try:
+        return signal.Signals(signum).name
+    except ValueError:
+        return f"signal {signum}"
+
+
+def _complete_note() -> str:
+    """What this run has written whole, for a message about a failed or interrupted run."""
+    from .writes import completed
+    if not completed:
+        return ""
+    names = list(completed)
+    shown = ", ".join(names) if len(names) <= 4 else f"{names[0]}, {names[1]} ... {names[-1]}"
+    return f"; {len(names)} output(s) complete and kept: {shown}"
 
 
 class _OneLineErrors(click.Group):
-    """A group whose errors (usage errors included) print as a single line, never a traceback."""
+    """A group whose errors (usage errors included) print as a single line, never a traceback;
+    SIGINT, SIGTERM and SIGHUP stop a run like Ctrl-C (exit 130, 143, 129)."""
 
     def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
+        import signal
+        import threading
+
+        from . import writes
+        writes.reset()
+        previous = {}
+        if threading.current_thread() is threading.main_thread():
+            for s in writes._SIGNALS:
+                with contextlib.suppress(OSError, ValueError):
+                    previous[s] = signal.signal(s, writes.on_signal)
         try:
-            rv = super().main(args=args, prog_name=prog_name, complete_var=complete_var,
-                              standalone_mode=False, **extra)
-        except click.exceptions.NoArgsIsHelpError as exc:  # click >= 8.2: bare group prints help
-            click.echo(exc.ctx.get_help(), err=True)
-            sys.exit(2)
-        except click.ClickException as exc:
-            msg = exc.format_message()
-            if isinstance(exc, click.UsageError) and exc.ctx is not None:
-                msg += f" (see '{exc.ctx.command_path} --help')"
-            click.echo(f"hillshade-rt: error: {msg}", err=True)
-            sys.exit(exc.exit_code)
-        except click.exceptions.Abort:
-            click.echo("hillshade-rt: interrupted; no output written", err=True)
-            sys.exit(130)
-        except KeyboardInterrupt:
-            click.echo("hillshade-rt: interrupted; no output written", err=True)
-            sys.exit(130)
-        except BrokenPipeError:
-            sys.exit(1)
+            rv = self._main(args, prog_name, complete_var, **extra)
+        finally:
+            for s, h in previous.items():
+                with contextlib.suppress(OSError, ValueError, TypeError):
+                    signal.signal(s, h)
         if not standalone_mode:
             return rv
         sys.exit(rv if isinstance(rv, int) else 0)
+
+    def _main(self, args, prog_name, complete_var, **extra):
+        try:
+            return super().main(args=args, prog_name=prog_name, complete_var=complete_var,
+                                standalone_mode=False, **extra)
+        except SystemExit:
+            raise
+        except BaseException as exc:   # noqa: BLE001 -- every way out is one line
+            from .writes import caught
+            if caught or isinstance(exc, (KeyboardInterrupt, click.exceptions.Abort)):
+                signum = caught[0] if caught else 2
+                done = _complete_note()
+                click.echo(f"hillshade-rt: interrupted ({_signal_name(signum)}); "
+                           + (done[2:] + ", the unfinished output removed" if done
+                              else "no output written"), err=True)
+                sys.exit(128 + signum)
+            if isinstance(exc, click.exceptions.NoArgsIsHelpError):  # click >= 8.2: bare group
+                click.echo(exc.ctx.get_help(), err=True)
+                sys.exit(2)
+            if isinstance(exc, click.ClickException):
+                msg = exc.format_message()
+                if isinstance(exc, click.UsageError) and exc.ctx is not None:
+                    msg += f" (see '{exc.ctx.command_path} --help')"
+                elif exc.exit_code == 1:
+                    msg += _complete_note()
+                click.echo(f"hillshade-rt: error: {msg}", err=True)
+                sys.exit(exc.exit_code)
+            if isinstance(exc, BrokenPipeError):
+                sys.exit(1)
+            if isinstance(exc, OSError):
+                where = f"{exc.filename}: " if exc.filename else ""
+                click.echo(f"hillshade-rt: error: {where}{exc.strerror or exc}"
+                           f"{_complete_note()}", err=True)
+                sys.exit(1)
+            if os.environ.get("HILLSHADE_RT_DEBUG"):
+                raise
+            first = str(exc).splitlines()[0] if str(exc) else ""
+            click.echo(f"hillshade-rt: error: internal error ({type(exc).__name__}"
+                       f"{': ' + first if first else ''}); please report it, "
+                       f"HILLSHADE_RT_DEBUG=1 shows the traceback{_complete_note()}", err=True)
+            sys.exit(1)
 
 
 def _fail(exc: HillshadeError) -> click.ClickException:
@@ -82,6 +138,13 @@ def dem_options(f):
     ])
 
 
+def format_option(f):
+    return click.option("-f", "--format", "--of", "fmt", metavar="DRIVER", default=None,
+                     help="Output format, a GDAL driver name (GTiff, COG, PNG, JPEG, AAIGrid, "
+                          "...); default: from the output's extension (.png PNG, .jpg JPEG, "
+                          ".asc AAIGrid, ...), else GeoTIFF.")(f)
+
+
 def backend_option(f):
     return click.option(
         "--backend", type=click.Choice(["auto", "cpu", "gpu"]), default="auto", show_default=True,
@@ -102,6 +165,8 @@ def _errors_to_click(f):
     def wrapper(*args, **kwargs):
         try:
             return f(*args, **kwargs)
+        except UsageProblem as exc:
+            raise click.UsageError(str(exc)) from None
         except HillshadeError as exc:
             raise _fail(exc) from None
         except MemoryError:
@@ -208,6 +273,7 @@ def run_options(f):
                           "toward the sun), whatever the DEM's size."),
         click.option("--cog", is_flag=True,
                      help="Write Cloud-Optimized GeoTIFF (512 px tiles, deflate, overviews)."),
+        format_option,
         click.option("--scheduler", metavar="ADDRESS", default=None,
                      help="Run the windows as Dask tasks: a dask.distributed scheduler "
                           "(tcp://host:8786) or 'local[:N]' (N worker processes here). Needs "
@@ -307,14 +373,6 @@ def _inputs_and_output(files, output, pattern):
     return files[:-1], files[-1]
 
 
-def _not_an_input(output, inputs):
-    if output is None or not os.path.exists(output):
-        return
-    for p in inputs:
-        if os.path.exists(p) and os.path.samefile(p, output):
-            raise click.UsageError(f"{output} is also an input DEM; give another output")
-
-
 def _window_size(text):
     if text is None:
         return None
@@ -335,8 +393,9 @@ def _light(files, kind, algorithm, options, curvature, refraction_k, soft, self_
     Also the body of ``api.shade``: the checks of the options' combinations live here."""
     import numba
 
-    from .io import check_output_path, write_json, write_png
+    from .io import write_json, write_png
     from .report import Timer, build_report, summary_line
+    from .writes import Claims, reset
     from .runner import OutputPattern
     from .shadow import choose_backend
     from .tiling import bytes_per_cell, default_max_memory, parse_size
@@ -352,22 +411,23 @@ def _light(files, kind, algorithm, options, curvature, refraction_k, soft, self_
     pattern, preview, backend, threads = (kw.pop("output_pattern"), kw.pop("preview"),
                                           kw.pop("backend"), kw.pop("threads"))
     report_path, overwrite, quiet = kw.pop("report_path"), kw.pop("overwrite"), kw.pop("quiet")
-    output = kw.pop("output")
+    output, fmt = kw.pop("output"), kw.pop("fmt", None)
     max_memory, window_size, cog, scheduler = (kw.pop("max_memory"), kw.pop("window_size"),
                                                kw.pop("cog"), kw.pop("scheduler"))
     req = _pop_sun(kw, default_sun)
     inputs, output = _inputs_and_output(files, output, pattern)
-    _not_an_input(output, inputs)
+    reset()
     wshape = _window_size(window_size)
     try:
         limit = parse_size(max_memory) if max_memory is not None else default_max_memory()
     except HillshadeError as exc:
         raise click.UsageError(f"--max-memory: {exc}") from None
+    claims = Claims(inputs, overwrite)   # every path written: no input, no two the same
     if output is not None:
-        check_output_path(output, overwrite)
-    for extra in (report_path, preview):
+        claims.claim(output, "OUTPUT")
+    for extra, what in ((report_path, "--report"), (preview, "--preview")):
         if extra is not None:
-            check_output_path(extra, overwrite)
+            claims.claim(extra, what)
     if pattern is not None:
         pattern = OutputPattern(pattern)
     if threads is not None:
@@ -378,8 +438,12 @@ def _light(files, kind, algorithm, options, curvature, refraction_k, soft, self_
              or _needs_windows(inputs[0], kw, limit, per_cell))
     dtype, nodata = {"shadow": ("float32", -9999.0) if soft else ("uint8", 255),
                      "classes": ("uint8", 255), "hillshade": ("uint8", 0)}[kind]
-    out = _Outputs(kind, soft, algorithm, dtype, nodata, output, pattern, overwrite, cog,
-                   preview is not None, ambient)
+    out = _Outputs(kind, soft, algorithm, dtype, nodata, output, pattern, claims, cog,
+                   preview is not None, ambient, fmt)
+    if output is not None:   # the format can hold the product (before any work)
+        from .io import check_output_format, output_driver
+        check_output_format(output, output_driver(output, fmt, cog), dtype,
+                            len(req.times) if req.from_time else 1, out.continuous)
     try:
         with (_bounded_gdal_cache() if tiled else contextlib.nullcontext()):
             run = (_light_tiled if tiled else _light_in_memory)(
@@ -393,7 +457,7 @@ def _light(files, kind, algorithm, options, curvature, refraction_k, soft, self_
         with timer("write"):
             day = [s for s in suns if not s.night]
             s0 = day[0] if day else suns[0]
-            write_png(preview, run["relief"](s0.azimuth, s0.elevation))
+            write_png(preview, run["relief"](s0.azimuth, s0.elevation), overwrite)
     seconds = dict(timer.seconds, total=timer.total())
     first = suns[0]
     rep = build_report(dem=d, output=output or pattern.pattern, azimuth=first.azimuth,
@@ -420,7 +484,7 @@ def _light(files, kind, algorithm, options, curvature, refraction_k, soft, self_
     if preview is not None:
         rep["preview"] = os.path.abspath(preview)
     if report_path is not None:
-        write_json(report_path, rep)
+        write_json(report_path, rep, overwrite)
     if not quiet:
         click.echo(summary_line(rep), err=True)
         if run["algo_stats"].get("note"):
@@ -467,16 +531,18 @@ class _Outputs:
     """Where a lighting run's products go: bands of OUTPUT or files of a pattern; their type,
     nodata, tags and descriptions."""
 
-    def __init__(self, kind, soft, algorithm, dtype, nodata, output, pattern, overwrite, cog,
-                 preview, ambient):
+    def __init__(self, kind, soft, algorithm, dtype, nodata, output, pattern, claims, cog,
+                 preview, ambient, fmt=None):
         self.kind, self.soft, self.dtype, self.nodata = kind, soft, dtype, nodata
-        self.output, self.pattern, self.overwrite, self.cog = output, pattern, overwrite, cog
+        self.output, self.pattern, self.cog = output, pattern, cog
+        self.claims, self.overwrite, self.fmt = claims, claims.overwrite, fmt
         self.preview, self.ambient = preview, ambient
         self.base_tags = {"HILLSHADE_RT_VERSION": __version__, "ALGORITHM": algorithm,
                           "VALUES": _VALUES[kind, soft]}
         self.what = {"shadow": "visible fraction of the sun" if soft else "cast shadow",
                      "classes": "shadow classes", "hillshade": "shaded relief"}[kind]
         self.resampling = "average" if (soft or kind == "hillshade") else "nearest"
+        self.continuous = self.resampling == "average"   # lossy formats and 16-bit PNG allowed
         self.paths = None
         self.tiles = self.tile_paths = None
         self._scratch: list[str] = []
@@ -485,14 +551,18 @@ class _Outputs:
         """The files of each sun. ``tiles``: a mosaic's input tiles (``Source.tiles``); with a
         pattern naming ``{tile}`` each sun's mosaic is written to a scratch file beside the
         outputs and cut into one file per tile (``finish``)."""
-        from .io import check_output_path
+        from .io import check_output_format, output_driver
         if self.pattern is None:
             return
         per_tile = bool(self.pattern.per_tile and tiles)
         paths = self.pattern.paths(suns, [t["path"] for t in tiles] if per_tile else inputs[:1])
+        if tiles:   # a mosaic's tiles are inputs too
+            self.claims.inputs += [t["path"] for t in tiles]
         for ps in paths:
             for p in ps:
-                check_output_path(p, self.overwrite)
+                self.claims.claim(p, "--output-pattern")
+                check_output_format(p, output_driver(p, self.fmt, self.cog and not per_tile),
+                                    self.dtype, 1, self.continuous)
         if per_tile:
             self.tiles, self.tile_paths = tiles, paths
             self.paths = [None] * len(suns)
@@ -507,8 +577,8 @@ class _Outputs:
     def target(self, i) -> str:
         """Where sun ``i``'s file is written: its output, or a scratch mosaic to be cut."""
         if self.paths[i] is None:
-            from .io import _temp_beside
-            self.paths[i] = _temp_beside(self.tile_paths[i][0], ".scratch.tif")
+            from .writes import temp_beside
+            self.paths[i] = temp_beside(self.tile_paths[i][0], ".scratch.tif")
             self._scratch.append(self.paths[i])
         return self.paths[i]
 
@@ -530,7 +600,7 @@ class _Outputs:
                           self.nodata, [self.description(sun)],
                           {**self.base_tags, **sun_tags(sun),
                            "TILE_SOURCE": os.path.abspath(t["path"])})
-            copy_vrt(doc, path, self.dtype, self.cog, self.resampling)
+            copy_vrt(doc, path, self.dtype, self.cog, self.resampling, self.overwrite, self.fmt)
         self._remove(scratch)
 
     def _remove(self, path):
@@ -553,13 +623,15 @@ class _Outputs:
         if self.output is None:
             return contextlib.nullcontext()
         return BandWriter(self.output, dem, count, self.dtype, self.nodata, self.base_tags,
-                          self.cog, self.resampling)
+                          self.cog, self.resampling, overwrite=self.overwrite, fmt=self.fmt)
 
     def file_writer(self, dem, i, sun):
         from .io import BandWriter
         from .runner import sun_tags
+        scratch = self.tile_paths is not None   # a mosaic to be cut into tiles: a GeoTIFF
         return BandWriter(self.target(i), dem, 1, self.dtype, self.nodata,
-                          {**self.base_tags, **sun_tags(sun)}, self.file_cog, self.resampling)
+                          {**self.base_tags, **sun_tags(sun)}, self.file_cog, self.resampling,
+                          overwrite=self.overwrite or scratch, fmt=None if scratch else self.fmt)
 
     def record(self, sun, i, st, seconds):
         rec = dict(sun.as_dict(), shadow_fraction=st["shadow_fraction"], compute_s=seconds)
@@ -749,11 +821,12 @@ def _light_tiled(inputs, read_opts, scale, req, out, timer, algorithm, options, 
               help="Write a JSON report here.")
 @click.option("--overwrite", is_flag=True, help="Replace outputs if they exist.")
 @click.option("-q", "--quiet", is_flag=True, help="No progress bar or summary on stderr.")
+@format_option
 @dem_options
 @_errors_to_click
 def sun_hours(dem, output, date_, end_date, step, tz, lat, lon, pressure, temperature,
               no_refraction, sun_tolerance, algorithm, curvature, refraction_k, soft, self_shadow,
-              preview, backend, threads, report_path, overwrite, quiet, **read_opts):
+              preview, backend, threads, report_path, overwrite, quiet, fmt, **read_opts):
     """Write the hours of direct sun per cell of DEM over a day (or a range of days) to OUTPUT
     (float32 hours, -9999 nodata), like WhiteboxTools' TimeInDaylight or GRASS r.sun's insolation
     time: the sun every --step, each lit sample counting for its interval."""
@@ -761,17 +834,21 @@ def sun_hours(dem, output, date_, end_date, step, tz, lat, lon, pressure, temper
     import numpy as np
 
     from .engine import Shader, dem_body, render
-    from .io import check_output_path, write_json, write_png, write_raster
+    from .io import write_json, write_png, write_raster
     from .preview import relief_rgb
     from .report import Timer
     from .runner import SunRequest, progress
+    from .writes import Claims
     from .shadow import choose_backend
     from .sun import SUN_RADIUS_DEG, day_samples, parse_date
 
     timer = Timer()
-    for path in (output, report_path, preview):
+    claims = Claims([dem], overwrite)
+    for path, what in ((output, "OUTPUT"), (report_path, "--report"), (preview, "--preview")):
         if path is not None:
-            check_output_path(path, overwrite)
+            claims.claim(path, what)
+    from .io import check_output_format, output_driver
+    check_output_format(output, output_driver(output, fmt), "float32", 1, False)
     first = parse_date(date_, "--date")
     last = parse_date(end_date, "--end-date") if end_date is not None else first
     if last < first:
@@ -816,11 +893,13 @@ def sun_hours(dem, output, date_, end_date, step, tz, lat, lon, pressure, temper
             else f"local mean solar time at longitude {site.lon:.4f}"}
     with timer("write"):
         write_raster(output, np.where(np.isnan(hours), np.float32(-9999.0), hours), d,
-                     nodata=-9999.0, description="hours of direct sun", tags=tags)
+                     nodata=-9999.0, description="hours of direct sun", tags=tags,
+                     overwrite=overwrite, fmt=fmt)
         if preview is not None:
             top = float(np.nanmax(hours)) if np.isfinite(hours).any() else 0.0
             write_png(preview, relief_rgb(d.heights, d.grid,
-                                          warm=hours / top if top > 0 else np.zeros_like(hours)))
+                                          warm=hours / top if top > 0 else np.zeros_like(hours)),
+                      overwrite)
     valid = hours[~np.isnan(hours)]
     rep = {"input": os.path.abspath(d.path), "output": os.path.abspath(output),
            "shape": list(d.shape), "algorithm": algorithm, "backend": ran_on,
@@ -834,7 +913,7 @@ def sun_hours(dem, output, date_, end_date, step, tz, lat, lon, pressure, temper
            "seconds": dict(timer.seconds, total=timer.total()), "version": __version__}
     rep.update(sun_info or {})
     if report_path is not None:
-        write_json(report_path, rep)
+        write_json(report_path, rep, overwrite)
     if not quiet:
         h = rep["hours"]
         click.echo(f"hillshade-rt: {output}: {d.shape[1]}x{d.shape[0]}, {days} day(s) from "
@@ -909,10 +988,11 @@ def _algorithm_options(algorithm: str, **given) -> dict:
               help="CPU threads (default: all cores).")
 @click.option("--overwrite", is_flag=True, help="Replace OUTPUT if it exists.")
 @click.option("-q", "--quiet", is_flag=True, help="No summary line on stderr.")
+@format_option
 @dem_options
 @_errors_to_click
 def horizon(dem, output, azimuth, method, sample_spacing, curvature, refraction_k, preview,
-            backend, threads, overwrite, quiet, **read_opts):
+            backend, threads, overwrite, quiet, fmt, **read_opts):
     """Write the horizon angle toward AZIMUTH of every cell of DEM to OUTPUT.
 
     Float32 degrees above the horizontal (negative: the cell looks down on everything ahead;
@@ -925,15 +1005,18 @@ def horizon(dem, output, azimuth, method, sample_spacing, curvature, refraction_
     from .engine import Shader, dem_body
     from .geometry import Grid, normalize_azimuth, sun_rays
     from .shadow import choose_backend, warm_up
-    from .io import check_output_path, write_png, write_raster
+    from .io import check_output_format, output_driver, write_png, write_raster
     from .preview import relief_rgb
     from .report import Timer
+    from .writes import Claims
 
     timer = Timer()
     az = normalize_azimuth(azimuth)
-    check_output_path(output, overwrite)
+    claims = Claims([dem], overwrite)
+    claims.claim(output, "OUTPUT")
     if preview is not None:
-        check_output_path(preview, overwrite)
+        claims.claim(preview, "--preview")
+    check_output_format(output, output_driver(output, fmt), "float32", 1, False)
     if method == "hull" and sample_spacing != 1:
         raise click.UsageError("--sample-spacing applies to --method scan only")
     if threads is not None:
@@ -973,9 +1056,10 @@ def horizon(dem, output, azimuth, method, sample_spacing, curvature, refraction_
             "EARTH_CURVATURE": (f"on, R {shader.body.radius(az):.0f} m, k {shader.k:g}"
                                 if rays.curved else "off")}
     with timer("write"):
-        write_raster(output, beta, d, nodata=-9999.0, description="horizon angle", tags=tags)
+        write_raster(output, beta, d, nodata=-9999.0, description="horizon angle", tags=tags,
+                     overwrite=overwrite, fmt=fmt)
         if preview is not None:
-            write_png(preview, relief_rgb(d.heights, d.grid, az, 45.0, shade=shade))
+            write_png(preview, relief_rgb(d.heights, d.grid, az, 45.0, shade=shade), overwrite)
     if not quiet:
         rows, cols = d.shape
         click.echo(f"hillshade-rt: {output}: {cols}x{rows}, horizon toward az {az:g} ({method}, "
@@ -995,13 +1079,13 @@ def horizon(dem, output, azimuth, method, sample_spacing, curvature, refraction_
 def info(dem, as_json, preview, overwrite, **read_opts):
     """Print what hillshade-rt understood of DEM: size, spacing, CRS, nodata, heights."""
     if preview is not None:
-        from .io import check_output_path
-        check_output_path(preview, overwrite)
+        from .writes import Claims
+        Claims([dem], overwrite).claim(preview, "--preview")
     d = _read(dem, **read_opts)
     if preview is not None:
         from .io import write_png
         from .preview import relief_rgb
-        write_png(preview, relief_rgb(d.heights, d.grid))
+        write_png(preview, relief_rgb(d.heights, d.grid), overwrite)
     rows, cols = d.shape
     dx, dy = d.grid.centre_spacing()
     zmin, zmax = d.height_range()

@@ -66,7 +66,7 @@ def shade_piece(job, piece, path: str, nodata, stride: int | None = None) -> dic
     from affine import Affine
     from rasterio.errors import NotGeoreferencedWarning
 
-    from .io import atomic_path
+    from .io import atomic_path, gdal_checked
     from .preview import every_nth, shade_of
     from .report import product_stats
     from .tiling import GDAL_CACHE_MB
@@ -101,7 +101,7 @@ def shade_piece(job, piece, path: str, nodata, stride: int | None = None) -> dic
         prof["transform"] = src.transform @ Affine.translation(h0, g0)
     with atomic_path(path, ".tif") as tmp, warnings.catch_warnings():
         warnings.simplefilter("ignore", NotGeoreferencedWarning)
-        with rasterio.open(tmp, "w", **prof) as dst:
+        with gdal_checked(path), rasterio.open(tmp, "w", **prof) as dst:
             dst.write(arr, 1)
     return {"stats": st, "algorithm_stats": stats, "curvature_used": used, "bytes_read": nread,
             "seconds": time.perf_counter() - t0, "shade": shade}
@@ -164,12 +164,14 @@ def run_on_dask(scheduler, job, suns, plans, out, share, stride, quiet, algo_sta
                           [band_sources(i) for i in range(len(suns))], dtype, out.nodata,
                           [out.description(s) for s in suns], out.base_tags,
                           [sun_tags(s) for s in suns])
-            copy_vrt(doc, out.output, out.dtype, out.cog, out.resampling)
+            copy_vrt(doc, out.output, out.dtype, out.cog, out.resampling, out.overwrite, out.fmt)
         else:
             for i, s in enumerate(suns):
                 doc = vrt_xml(src.shape, src.transform, src.crs, [band_sources(i)], dtype,
                               out.nodata, [out.description(s)], {**out.base_tags, **sun_tags(s)})
-                copy_vrt(doc, out.target(i), out.dtype, out.file_cog, out.resampling)
+                scratch = out.tile_paths is not None   # a mosaic cut into tiles: GeoTIFF
+                copy_vrt(doc, out.target(i), out.dtype, out.file_cog, out.resampling,
+                         out.overwrite or scratch, None if scratch else out.fmt)
                 out.finish(i, s, src)
         records = [out.record(s, i, per_sun[i]["stats"], per_sun[i]["seconds"])
                    for i, s in enumerate(suns)]

@@ -6,3 +6,17 @@ class HillshadeError(Exception):
 
     The message is one line that names the problem; the CLI prints it and exits non-zero.
     """
+
+
+class UsageProblem(HillshadeError):
+    """Bad input that is the command line's own fault (two options naming one file, say): the
+    CLI exits with status 2 as for any malformed command line."""
+
+
+class Interrupted(KeyboardInterrupt):
+    """SIGINT, SIGTERM or SIGHUP received: the run stops, removes what is unfinished and the
+    command line exits with 128 + the signal's number."""
+
+    def __init__(self, signum: int):
+        super().__init__(signum)
+        self.signum = signum

@@ -327,44 +327,58 @@ def _make_grid(dem: Dem, pixel_size: tuple[float, float] | None) -> Grid:
 # --------------------------------------------------------------------------------------------
 # writing
 
-def check_output_path(path: str, overwrite: bool) -> str:
-    """Fail early (before any computing) when ``path`` cannot be written."""
-    path = os.fspath(path)
-    folder = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(folder):
-        raise HillshadeError(f"{path}: output folder {folder} does not exist")
-    if os.path.isdir(path):
-        raise HillshadeError(f"{path}: is a folder")
-    if os.path.exists(path) and not overwrite:
-        raise HillshadeError(f"{path}: already exists (use --overwrite to replace it)")
-    if not os.access(folder, os.W_OK):
-        raise HillshadeError(f"{path}: output folder {folder} is not writable")
-    return path
+# re-exported: the checks and the atomic publishing live in ``writes``
+from .writes import atomic_path, check_output_path, gdal_checked  # noqa: E402
+
+# formats GDAL writes by copying a finished dataset (CreateCopy) rather than block by block;
+# what each can hold
+_INTEGER_ONLY = {"PNG": ("uint8", "uint16"), "JPEG": ("uint8",), "WEBP": ("uint8",),
+                 "BMP": ("uint8",), "GIF": ("uint8",)}
+_LOSSY = ("JPEG", "WEBP")
+_NOT_FOR_OUTPUT = {"VRT": "a VRT only points at other files", "MEM": "it stays in memory"}
 
 
-def _temp_beside(path: str, suffix: str) -> str:
-    """A new empty file in ``path``'s folder, hidden, named after it."""
-    folder = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(dir=folder, prefix="." + os.path.basename(path) + ".",
-                               suffix=suffix)
-    os.close(fd)
-    return tmp
+def output_driver(path: str, fmt: str | None = None, cog: bool = False) -> str:
+    """The GDAL driver an output is written with: ``fmt`` (like gdal_translate's -of, any case),
+    else the one GDAL names for the path's extension, else GTiff; "COG" with ``cog``."""
+    import rasterio
+    from rasterio.drivers import driver_from_extension
+
+    if fmt is not None:
+        with rasterio.Env() as env:
+            names = {n.lower(): n for n in env.drivers()}
+        drv = names.get(str(fmt).lower())
+        if drv is None:
+            raise HillshadeError(f"--format {fmt}: not a GDAL raster driver here (e.g. GTiff, "
+                                 "COG, PNG, JPEG, AAIGrid)")
+    else:
+        try:
+            drv = driver_from_extension(os.fspath(path))
+        except ValueError:
+            drv = "GTiff"
+    if drv in _NOT_FOR_OUTPUT:
+        raise HillshadeError(f"{path}: cannot write {drv} ({_NOT_FOR_OUTPUT[drv]}); use .tif")
+    if cog:
+        if drv not in ("GTiff", "COG"):
+            raise HillshadeError(f"{path}: --cog writes a GeoTIFF; this path names {drv}")
+        drv = "COG"
+    return drv
 
 
-@contextlib.contextmanager
-def atomic_path(path: str, suffix: str = ""):
-    """Yield a temporary path beside ``path``; rename it onto ``path`` only if the block succeeds."""
-    tmp = _temp_beside(path, ".part" + suffix)
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; give the file the usual permissions
-    try:
-        yield tmp
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.remove(tmp)
-        raise
+def check_output_format(path: str, drv: str, dtype: str, count: int, continuous: bool) -> None:
+    """Refuse what ``drv`` cannot hold: float values in an integer-only format (soft shadows in
+    PNG are the exception: 16 bits, see :class:`BandWriter`), a lossy format for masks, more
+    bands than one in a picture format."""
+    if drv in _INTEGER_ONLY:
+        if dtype == "float32" and not (continuous and "uint16" in _INTEGER_ONLY[drv]):
+            raise HillshadeError(f"{path}: {drv} holds integers, this product is float32; write "
+                                 "a GeoTIFF (.tif)")
+        if count > 1:
+            raise HillshadeError(f"{path}: {drv} holds one band, this run makes {count} (one "
+                                 "per sun); use --output-pattern or a GeoTIFF (.tif)")
+    if drv in _LOSSY and not continuous:
+        raise HillshadeError(f"{path}: {drv} is lossy and would change the mask's values; use "
+                             "PNG (.png) or GeoTIFF (.tif)")
 
 
 def _profile(dem: Dem, dtype: str, nodata) -> dict:
@@ -380,38 +394,52 @@ def _profile(dem: Dem, dtype: str, nodata) -> dict:
 
 def write_raster(path: str, data: np.ndarray, dem: Dem, nodata, description: str = "",
                  tags: dict | None = None, cog: bool = False,
-                 overview_resampling: str = "nearest") -> None:
+                 overview_resampling: str = "nearest", overwrite: bool = False,
+                 fmt: str | None = None) -> None:
     """Write one band georeferenced like ``dem`` (temporary file, then rename)."""
     with BandWriter(path, dem, 1, str(data.dtype), nodata, tags, cog,
-                    overview_resampling) as w:
+                    overview_resampling, overwrite=overwrite, fmt=fmt) as w:
         w.write(1, data, description)
 
 
-def write_json(path: str, obj: dict) -> None:
-    """Write ``obj`` as JSON (temporary file, then rename)."""
-    with atomic_path(path) as tmp, open(tmp, "w", encoding="utf-8") as fh:
-        json.dump(obj, fh, indent=2)
-        fh.write("\n")
+def write_json(path: str, obj: dict, overwrite: bool = False) -> None:
+    """Write ``obj`` as JSON (temporary file, checked close, then rename)."""
+    from .writes import os_error
+    text = json.dumps(obj, indent=2) + "\n"
+    with atomic_path(path, overwrite=overwrite) as tmp:
+        try:
+            with open(tmp, "w", encoding="utf-8") as fh:
+                fh.write(text)
+        except OSError as exc:
+            raise os_error(path, exc) from None
 
 
 class BandWriter:
-    """A GeoTIFF georeferenced like ``dem`` (a :class:`Dem` or a ``tiling.Source``) written one
-    band, or one window of a band, at a time, into a temporary file renamed into place only when
-    every band is written::
+    """A raster georeferenced like ``dem`` (a :class:`Dem` or a ``tiling.Source``) written one
+    band, or one window of a band, at a time, into a temporary file published under ``path``
+    only when every band is written and the file closed without error (``writes``)::
 
         with BandWriter(path, dem, count, "uint8", 255) as w:
             w.write(1, mask, description="2026-06-21T14:30+02:00", tags={...})
             w.write(2, part, window=(r0, r1, c0, c1))
 
-    ``cog``: the finished file is turned into a Cloud-Optimized GeoTIFF (GDAL's COG driver:
-    512 x 512 tiles, deflate, overviews by ``overview_resampling``) before it is renamed into
-    place; GDAL streams that copy block by block."""
+    The format is ``fmt`` or the path's extension (:func:`output_driver`): GeoTIFF is written
+    directly; a COG (``cog``: 512 x 512 tiles, deflate, overviews by ``overview_resampling``) and
+    the formats GDAL only copies into (PNG, JPEG, AAIGrid, ...) are made from a finished GeoTIFF
+    beside the output, GDAL streaming block by block. Soft shadows (float32 0..1) in PNG are
+    16-bit: 1 + round(65534 v), 0 nodata (like the hillshade's 1..255, 0 nodata)."""
 
     def __init__(self, path: str, dem, count: int, dtype: str, nodata, tags: dict | None = None,
-                 cog: bool = False, overview_resampling: str = "nearest"):
+                 cog: bool = False, overview_resampling: str = "nearest",
+                 overwrite: bool = False, fmt: str | None = None):
         self.path, self.dem, self.count, self.dtype, self.nodata = path, dem, count, dtype, nodata
         self.tags = tags or {}
-        self.cog, self.resampling = cog, overview_resampling
+        self.cog, self.resampling, self.overwrite = cog, overview_resampling, overwrite
+        self.driver = output_driver(path, fmt, cog)
+        self.continuous = overview_resampling == "average"
+        check_output_format(path, self.driver, dtype, count, self.continuous)
+        # soft shadows in a 16-bit format: written as integers
+        self.encode16 = self.driver in _INTEGER_ONLY and dtype == "float32"
         self._stack = contextlib.ExitStack()
         self._dst = None
         self._tmp = None
@@ -420,27 +448,29 @@ class BandWriter:
         import rasterio
         from rasterio.errors import NotGeoreferencedWarning
 
-        prof = _profile(self.dem, self.dtype, self.nodata)
+        dtype, nodata = ("uint16", 0) if self.encode16 else (self.dtype, self.nodata)
+        prof = _profile(self.dem, dtype, nodata)
         prof["count"] = self.count
         if self.count > 1:
             prof["interleave"] = "band"   # bands are written one after another
-        if self.dtype == "float32":
+        if dtype == "float32":
             prof["predictor"] = 3
-        if self.dem.shape[0] * self.dem.shape[1] * np.dtype(self.dtype).itemsize * self.count > 2e9:
+        if self.dem.shape[0] * self.dem.shape[1] * np.dtype(dtype).itemsize * self.count > 2e9:
             prof["BIGTIFF"] = "IF_SAFER"
         try:
-            self._final = self._stack.enter_context(atomic_path(self.path, ".tif"))
-            if self.cog:   # the GeoTIFF the bands go into, beside the output; COG copy at the end
+            self._final = self._stack.enter_context(
+                atomic_path(self.path, ".tif" if self.driver in ("GTiff", "COG") else
+                            os.path.splitext(self.path)[1] or ".out",
+                            overwrite=self.overwrite, sidecars=True))
+            if self.driver != "GTiff":   # the GeoTIFF the bands go into; copied at the end
                 self._tmp = self._stack.enter_context(_scratch_path(self.path, ".tif"))
             self._stack.enter_context(warnings.catch_warnings())
             warnings.simplefilter("ignore", NotGeoreferencedWarning)
-            self._dst = rasterio.open(self._tmp or self._final, "w", **prof)
+            with gdal_checked(self.path):
+                self._dst = rasterio.open(self._tmp or self._final, "w", **prof)
             self._stack.callback(self._close)
             if self.tags:
                 self._dst.update_tags(**{k: str(v) for k, v in self.tags.items()})
-        except rasterio.errors.RasterioError as exc:
-            self._stack.close()
-            raise HillshadeError(f"{self.path}: cannot write ({str(exc).splitlines()[0]})") from None
         except BaseException:
             self._stack.close()
             raise
@@ -448,14 +478,17 @@ class BandWriter:
 
     def _close(self):
         if self._dst is not None:
-            self._dst.close()
-            self._dst = None
+            dst, self._dst = self._dst, None
+            with gdal_checked(self.path):
+                dst.close()
 
     def write(self, band: int, data: np.ndarray, description: str = "", tags: dict | None = None,
               window: tuple[int, int, int, int] | None = None):
         """Band ``band`` (1-based), whole or its ``window`` (r0, r1, c0, c1)."""
-        import rasterio
-        try:
+        if self.encode16:
+            ok = np.isfinite(data) & (data != self.nodata)
+            data = np.where(ok, 1 + np.rint(np.clip(data, 0, 1) * 65534), 0).astype(np.uint16)
+        with gdal_checked(self.path):
             if window is None:
                 self._dst.write(data, band)
             else:
@@ -463,8 +496,6 @@ class BandWriter:
                 r0, r1, c0, c1 = window
                 self._dst.write(data, band, window=Window(c0, r0, c1 - c0, r1 - r0))
             self.describe(band, description, tags)
-        except rasterio.errors.RasterioError as exc:
-            raise HillshadeError(f"{self.path}: cannot write ({str(exc).splitlines()[0]})") from None
 
     def describe(self, band: int, description: str = "", tags: dict | None = None):
         """Band ``band``'s description and tags."""
@@ -474,20 +505,34 @@ class BandWriter:
             self._dst.update_tags(band, **{k: str(v) for k, v in tags.items()})
 
     def __exit__(self, *exc):
-        if exc[0] is None and self.cog:
+        if exc[0] is None:
             try:
                 self._close()
-                to_cog(self._tmp, self._final, self.resampling)
+                if self.driver == "COG":
+                    to_cog(self._tmp, self._final, self.resampling)
+                elif self.driver != "GTiff":
+                    _copy_as(self._tmp, self._final, self.driver, self.path)
             except BaseException as err:
                 self._stack.__exit__(type(err), err, err.__traceback__)
                 raise
         return self._stack.__exit__(*exc)
 
 
+def _copy_as(src: str, dst: str, driver: str, shown: str) -> None:
+    """The finished GeoTIFF ``src`` copied by GDAL into ``dst`` in ``driver``'s format."""
+    import rasterio.shutil
+    from rasterio.errors import NotGeoreferencedWarning
+    opts = {"ZLEVEL": 6} if driver == "PNG" else {}
+    with warnings.catch_warnings(), gdal_checked(shown):
+        warnings.simplefilter("ignore", NotGeoreferencedWarning)
+        rasterio.shutil.copy(src, dst, driver=driver, **opts)
+
+
 @contextlib.contextmanager
 def _scratch_path(path: str, suffix: str = ""):
     """A temporary path beside ``path``, always removed afterwards."""
-    tmp = _temp_beside(path, ".scratch" + suffix)
+    from .writes import temp_beside
+    tmp = temp_beside(path, ".scratch" + suffix)
     try:
         yield tmp
     finally:
@@ -496,8 +541,10 @@ def _scratch_path(path: str, suffix: str = ""):
                 os.remove(p)
 
 
-def to_cog(src: str, dst: str, resampling: str = "nearest", blocksize: int = 512) -> None:
-    """Copy the GeoTIFF ``src`` to ``dst`` as a Cloud-Optimized GeoTIFF with overviews."""
+def to_cog(src: str, dst: str, resampling: str = "nearest", blocksize: int = 512,
+           shown: str | None = None) -> None:
+    """Copy the GeoTIFF (or VRT document) ``src`` to ``dst`` as a Cloud-Optimized GeoTIFF with
+    overviews."""
     import rasterio
     import rasterio.shutil
     from rasterio.errors import NotGeoreferencedWarning
@@ -507,49 +554,52 @@ def to_cog(src: str, dst: str, resampling: str = "nearest", blocksize: int = 512
                 RESAMPLING=resampling.upper(), OVERVIEWS="AUTO", BIGTIFF="IF_SAFER")
     if dtype == "float32":
         opts["PREDICTOR"] = "YES"
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", NotGeoreferencedWarning)
-            rasterio.shutil.copy(src, dst, **opts)
-    except rasterio.errors.RasterioError as exc:
-        raise HillshadeError(f"{dst}: cannot write a COG ({str(exc).splitlines()[0]})") from None
+    with warnings.catch_warnings(), gdal_checked(shown or dst, "cannot write a COG"):
+        warnings.simplefilter("ignore", NotGeoreferencedWarning)
+        rasterio.shutil.copy(src, dst, **opts)
 
 
-def write_png(path: str, rgb: np.ndarray) -> None:
-    """Write an (rows, cols, 3) uint8 picture as PNG (temporary file, then rename)."""
+def write_png(path: str, rgb: np.ndarray, overwrite: bool = False) -> None:
+    """Write an (rows, cols, 3) uint8 picture as PNG (temporary file, checked, then rename)."""
     import rasterio
     from rasterio.errors import NotGeoreferencedWarning
 
     rows, cols, _ = rgb.shape
-    with atomic_path(path, ".png") as tmp, warnings.catch_warnings():
+    with atomic_path(path, ".png", overwrite=overwrite) as tmp, warnings.catch_warnings():
         warnings.simplefilter("ignore", NotGeoreferencedWarning)
         try:
-            with rasterio.open(tmp, "w", driver="PNG", width=cols, height=rows, count=3,
-                               dtype="uint8") as dst:
-                dst.write(np.moveaxis(rgb, -1, 0))
-        except rasterio.errors.RasterioError as exc:
-            raise HillshadeError(f"{path}: cannot write ({str(exc).splitlines()[0]})") from None
+            with gdal_checked(path):
+                with rasterio.open(tmp, "w", driver="PNG", width=cols, height=rows, count=3,
+                                   dtype="uint8") as dst:
+                    dst.write(np.moveaxis(rgb, -1, 0))
         finally:
             with contextlib.suppress(OSError):
                 os.remove(tmp + ".aux.xml")   # GDAL's side-car of a PNG: nothing worth keeping
 
 
 def copy_vrt(doc: str, path: str, dtype: str, cog: bool = False,
-             resampling: str = "nearest") -> None:
+             resampling: str = "nearest", overwrite: bool = False,
+             fmt: str | None = None) -> None:
     """The GDAL VRT document ``doc`` copied (block by block, by GDAL) into ``path``: a tiled,
-    deflated GeoTIFF, or a COG; through a temporary file renamed into place."""
-    import rasterio
+    deflated GeoTIFF, a COG, or the format ``fmt`` or the path's extension names (through a
+    GeoTIFF); through a temporary file published when complete."""
     import rasterio.shutil
-    if cog:
-        with atomic_path(path, ".tif") as tmp:
-            to_cog(doc, tmp, resampling)
+    drv = output_driver(path, fmt, cog)
+    if drv == "COG":
+        with atomic_path(path, ".tif", overwrite=overwrite) as tmp:
+            to_cog(doc, tmp, resampling, shown=path)
         return
+    check_output_format(path, drv, dtype, 1, False)
     opts = dict(driver="GTiff", TILED="YES", BLOCKXSIZE=256, BLOCKYSIZE=256, COMPRESS="DEFLATE",
                 INTERLEAVE="BAND", BIGTIFF="IF_SAFER")
     if dtype == "float32":
         opts["PREDICTOR"] = 3
-    try:
-        with atomic_path(path, ".tif") as tmp:
+    if drv == "GTiff":
+        with atomic_path(path, ".tif", overwrite=overwrite) as tmp, gdal_checked(path):
             rasterio.shutil.copy(doc, tmp, **opts)
-    except rasterio.errors.RasterioError as exc:
-        raise HillshadeError(f"{path}: cannot write ({str(exc).splitlines()[0]})") from None
+        return
+    with atomic_path(path, os.path.splitext(path)[1] or ".out", overwrite=overwrite,
+                     sidecars=True) as tmp, _scratch_path(path, ".tif") as gtiff:
+        with gdal_checked(path):
+            rasterio.shutil.copy(doc, gtiff, **opts)
+        _copy_as(gtiff, tmp, drv, path)

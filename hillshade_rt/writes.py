@@ -1,0 +1,448 @@
+"""How files are written: whole under their final name, or not at all.
+
+Every file a run writes (rasters, the JSON report, PNG previews, scratch mosaics) goes through
+:func:`atomic_path`: a hidden temporary file in the destination's folder, closed and checked
+(GDAL's write errors, ``fsync``), then published under its final name by a rename that does not
+replace a file that appeared meanwhile unless the run may overwrite (``os.link``, else Linux's
+``renameat2(RENAME_NOREPLACE)``, else a last look before the rename). A path that is a symbolic
+link is written through to its target (atomically, in the target's folder); devices, pipes and
+sockets are refused. On any failure or interruption the temporary file is removed.
+
+:class:`Claims` checks, before any work, that no path a run writes is one of its inputs (the same
+file, through symbolic or hard links) or another of its outputs. :data:`completed` lists what this
+run has published, so that an error or an interruption can say exactly which outputs are whole.
+
+GDAL reports some write failures (a full disk while flushing blocks at close) only through its
+error handler: :func:`gdal_checked` collects them (rasterio logs them) together with what GDAL's
+TIFF library prints on the process's stderr, and turns them into one :class:`HillshadeError`.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import contextvars
+import ctypes
+import errno
+import logging
+import os
+import signal
+import sys
+import tempfile
+import threading
+
+from .errors import HillshadeError, Interrupted, UsageProblem
+
+# what this process has published since the last reset() (final paths, in order)
+completed: list[str] = []
+
+# /vsimem/ outputs: for the Python API (api.shade sets it); the command line writes local files
+virtual_outputs = contextvars.ContextVar("virtual_outputs", default=False)
+
+_SIGNALS = tuple(s for s in (getattr(signal, "SIGINT", None), getattr(signal, "SIGTERM", None),
+                             getattr(signal, "SIGHUP", None)) if s is not None)
+
+
+def reset() -> None:
+    """Start a new run's list of published outputs."""
+    completed.clear()
+    caught.clear()
+    _deferral.update(depth=0, pending=None)
+
+
+def is_virtual(path: str) -> bool:
+    """A GDAL virtual file system path (/vsimem/, /vsizip/, ...) or a URL-like one."""
+    p = os.fspath(path)
+    return p.startswith("/vsi") or "://" in p
+
+
+def target_of(path: str) -> str:
+    """The file that writing ``path`` replaces: ``path`` itself, or the end of its chain of
+    symbolic links (which may not exist yet). Devices, pipes, sockets and /dev, /proc paths are
+    refused: a raster is never written over them."""
+    path = os.fspath(path)
+    if is_virtual(path):
+        return path
+    real = os.path.realpath(path)
+    for special in ("/dev/", "/proc/", "/sys/"):
+        if (real + "/").startswith(special) or (os.path.abspath(path) + "/").startswith(special):
+            raise HillshadeError(f"{path}: is a device or system file, not a file to write a "
+                                 "raster to; give a file name")
+    if os.path.exists(real) and not os.path.isfile(real):
+        what = "a folder" if os.path.isdir(real) else "not a regular file (a device, pipe or socket)"
+        raise HillshadeError(f"{path}: is {what}; give a file name")
+    return real
+
+
+def _same(a: str, b: str) -> bool:
+    """Whether paths ``a`` and ``b`` name one file (through symbolic and hard links)."""
+    if is_virtual(a) or is_virtual(b):
+        return a == b
+    try:
+        if os.path.exists(a) and os.path.exists(b):
+            return os.path.samefile(a, b)
+    except OSError:
+        pass
+    return os.path.realpath(a) == os.path.realpath(b)
+
+
+class Claims:
+    """The paths one run will write, checked before any work against its inputs and each
+    other; ``what`` names the option in messages ("OUTPUT", "--report", ...)."""
+
+    def __init__(self, inputs=(), overwrite: bool = False):
+        self.inputs = [os.fspath(p) for p in inputs if p is not None]
+        self.overwrite = overwrite
+        self.paths: list[tuple[str, str]] = []
+
+    def claim(self, path: str, what: str) -> str:
+        """Check ``path`` (see :func:`check_output_path`) and that it is no input and no other
+        output of the run; returns it."""
+        path = os.fspath(path)
+        check_output_path(path, self.overwrite)
+        for p in self.inputs:
+            if p != "-" and _same(path, p):
+                raise UsageProblem(f"{path}: {what} is also an input DEM ({p}); give another "
+                                   "path")
+        for q, other in self.paths:
+            if _same(path, q):
+                msg = (f"{path}: given twice as {what}" if other == what and path == q else
+                       f"{path}: {what} and {other} name the same file; give different paths")
+                raise UsageProblem(msg)
+        self.paths.append((path, what))
+        return path
+
+
+def check_output_path(path: str, overwrite: bool) -> str:
+    """Fail early (before any computing) when ``path`` cannot be written."""
+    path = os.fspath(path)
+    if path == "-":
+        raise HillshadeError("'-' (standard output) is not supported for outputs: rasters need "
+                             "a file they can seek in; give a file name")
+    if is_virtual(path):
+        if path.startswith("/vsimem/") and virtual_outputs.get():
+            return path
+        raise HillshadeError(f"{path}: outputs go to local files (or /vsimem/ from Python); "
+                             "write here, then copy")
+    if os.path.isdir(path):
+        raise HillshadeError(f"{path}: is a folder")
+    real = target_of(path)
+    folder = os.path.dirname(real)
+    if not os.path.isdir(folder):
+        raise HillshadeError(f"{path}: output folder {os.path.dirname(os.path.abspath(path))} "
+                             "does not exist")
+    if os.path.lexists(path) and os.path.exists(real) and not overwrite:
+        raise HillshadeError(f"{path}: already exists (use --overwrite to replace it)")
+    if not os.access(folder, os.W_OK):
+        raise HillshadeError(f"{path}: output folder {folder} is not writable")
+    return path
+
+
+def temp_beside(path: str, suffix: str) -> str:
+    """A new empty file in the folder ``path`` is written to (through links), hidden, named
+    after it."""
+    real = target_of(path)
+    folder = os.path.dirname(real)
+    try:
+        fd, tmp = tempfile.mkstemp(dir=folder, prefix="." + os.path.basename(real) + ".",
+                                   suffix=suffix)
+    except OSError as exc:
+        raise os_error(path, exc) from None
+    os.close(fd)
+    return tmp
+
+
+def os_error(path: str, exc: OSError) -> HillshadeError:
+    """``exc`` as one line naming ``path`` (a full disk says so)."""
+    reason = os.strerror(exc.errno).lower() if exc.errno else (str(exc) or type(exc).__name__)
+    return HillshadeError(f"{path}: cannot write ({reason})")
+
+
+# signals: the command line installs on_signal for SIGINT, SIGTERM and SIGHUP
+caught: list[int] = []          # the signals this run received (the first one stops it)
+_deferral = {"depth": 0, "pending": None}
+
+
+def on_signal(signum, frame):
+    """Stop the run: raise :class:`Interrupted` (a KeyboardInterrupt), so that every temporary
+    file is removed on the way out; held back inside :func:`signals_deferred`; later signals
+    are ignored while the run cleans up."""
+    if caught or _deferral["pending"] is not None:
+        return
+    if _deferral["depth"]:
+        _deferral["pending"] = signum
+        return
+    caught.append(signum)
+    raise Interrupted(signum)
+
+
+@contextlib.contextmanager
+def signals_deferred():
+    """A signal arriving inside the block stops the run only at its end: a publish (rename,
+    side-cars, the list of what is complete) or a redirection of stderr is never cut in half.
+    (Python runs signal handlers in the main thread between bytecodes whichever thread the
+    system delivered the signal to, so masking it per thread would not do.)"""
+    _deferral["depth"] += 1
+    try:
+        yield
+    finally:
+        _deferral["depth"] -= 1
+        pending = _deferral["pending"]
+        if _deferral["depth"] == 0 and pending is not None:
+            _deferral["pending"] = None
+            caught.append(pending)
+            raise Interrupted(pending)
+
+
+def _fsync(path: str) -> None:
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+_RENAME_NOREPLACE = 1
+_AT_FDCWD = -100
+
+
+def _rename_noreplace(src: str, dst: str) -> bool:
+    """Linux renameat2(RENAME_NOREPLACE); False where the system or file system lacks it."""
+    if not sys.platform.startswith("linux"):
+        return False
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        fn = libc.renameat2
+    except (OSError, AttributeError):
+        return False
+    fn.argtypes = [ctypes.c_int, ctypes.c_char_p, ctypes.c_int, ctypes.c_char_p, ctypes.c_uint]
+    if fn(_AT_FDCWD, os.fsencode(src), _AT_FDCWD, os.fsencode(dst), _RENAME_NOREPLACE) == 0:
+        return True
+    err = ctypes.get_errno()
+    if err in (errno.EINVAL, errno.ENOSYS, errno.EOPNOTSUPP):
+        return False
+    raise OSError(err, os.strerror(err), dst)
+
+
+def _appeared(path: str) -> HillshadeError:
+    return HillshadeError(f"{path}: appeared while this run was writing it (another run?); kept "
+                          "it and discarded this run's file (use --overwrite to replace it)")
+
+
+def publish(tmp: str, final: str, overwrite: bool, shown: str | None = None) -> None:
+    """Move the finished ``tmp`` to ``final`` (same folder). Without ``overwrite`` a file that
+    exists at ``final`` by now is kept and :class:`HillshadeError` raised."""
+    shown = shown or final
+    if overwrite:
+        os.replace(tmp, final)
+        return
+    try:
+        os.link(tmp, final)
+    except FileExistsError:
+        raise _appeared(shown) from None
+    except OSError as exc:
+        if exc.errno not in (errno.EPERM, errno.EOPNOTSUPP, errno.ENOSYS, errno.EXDEV,
+                             errno.EMLINK, errno.EACCES, errno.EINVAL):
+            raise
+        try:
+            if _rename_noreplace(tmp, final):
+                return
+        except FileExistsError:
+            raise _appeared(shown) from None
+        if os.path.lexists(final):      # a last look: the best a file system without links has
+            raise _appeared(shown) from None
+        os.rename(tmp, final)
+        return
+    os.remove(tmp)
+
+
+def _virtual_remove(path: str) -> None:
+    import rasterio.shutil
+    with contextlib.suppress(Exception):
+        rasterio.shutil.delete(path)
+
+
+def _sidecars_of(tmp: str) -> list[str]:
+    """Files GDAL wrote beside the temporary dataset ``tmp`` (x.aux.xml, x.prj, x.pgw, ...):
+    named after it without its extension."""
+    folder, name = os.path.split(tmp)
+    stem = os.path.splitext(name)[0] + "."
+    with contextlib.suppress(OSError):
+        return [os.path.join(folder, f) for f in os.listdir(folder)
+                if f.startswith(stem) and f != name]
+    return []
+
+
+@contextlib.contextmanager
+def atomic_path(path: str, suffix: str = "", overwrite: bool = False, sidecars: bool = False):
+    """Yield a temporary path beside ``path`` (beside its target when it is a link); when the
+    block succeeds, the file is synced and published onto ``path`` (:func:`publish`); on any
+    failure it is removed. ``sidecars``: files GDAL wrote next to the dataset (``.aux.xml``,
+    ``.prj``, world files) are published with it, renamed after ``path``. /vsimem/ paths (the
+    Python API) are written in place and deleted on failure."""
+    path = os.fspath(path)
+    if is_virtual(path):
+        try:
+            yield path
+        except BaseException:
+            _virtual_remove(path)
+            raise
+        completed.append(path)
+        return
+    final = target_of(path)
+    tmp = temp_beside(path, ".part" + suffix)
+    umask = os.umask(0)
+    os.umask(umask)
+    os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; give the file the usual permissions
+    stem, final_stem = os.path.splitext(tmp)[0], os.path.splitext(final)[0]
+    try:
+        yield tmp
+        try:
+            _fsync(tmp)
+            with signals_deferred():
+                publish(tmp, final, overwrite, path)
+                for extra in (_sidecars_of(tmp) if sidecars else ()):
+                    os.replace(extra, final_stem + extra[len(stem):])
+                completed.append(path)
+        except OSError as exc:
+            raise os_error(path, exc) from None
+    except BaseException:
+        for p in [tmp] + (_sidecars_of(tmp) if sidecars else []):
+            with contextlib.suppress(OSError):
+                os.remove(p)
+        raise
+
+
+# --------------------------------------------------------------------------------------------
+# GDAL's write errors
+
+class _Records(logging.Handler):
+    """Collects the failures GDAL signals while a block runs (rasterio logs them)."""
+
+    def __init__(self):
+        super().__init__(logging.DEBUG)
+        self.messages: list[str] = []
+
+    def emit(self, record):
+        msg = record.getMessage()
+        if msg.startswith("GDAL signalled an error") or record.levelno >= logging.ERROR:
+            # "GDAL signalled an error: err_no=1, msg='...'"
+            text = msg.split("msg=", 1)[-1].strip("'\"") if "msg=" in msg else msg
+            self.messages.append(text)
+
+
+class _StderrCapture:
+    """The process's stderr (file descriptor 2) read into memory while a block runs: GDAL's TIFF
+    library prints its I/O errors there ("_tiffWriteProc: No space left on device.")."""
+
+    def __init__(self):
+        self.text = ""
+        self._saved = None
+
+    def __enter__(self):
+        with signals_deferred():
+            return self._start()
+
+    def _start(self):
+        try:
+            sys.stderr.flush()
+        except (OSError, ValueError, AttributeError):
+            pass
+        try:
+            r, w = os.pipe()
+            self._saved = os.dup(2)
+        except OSError:
+            self._saved = None
+            return self
+        os.dup2(w, 2)
+        os.close(w)
+        chunks = []
+
+        def drain():
+            while True:
+                try:
+                    b = os.read(r, 65536)
+                except OSError:
+                    break
+                if not b:
+                    break
+                chunks.append(b)
+            os.close(r)
+        self._chunks = chunks
+        self._thread = threading.Thread(target=drain, daemon=True)
+        self._thread.start()
+        return self
+
+    def __exit__(self, *exc):
+        with signals_deferred():
+            return self._stop()
+
+    def _stop(self):
+        if self._saved is None:
+            return False
+        os.dup2(self._saved, 2)      # closes the pipe's write end: the reader sees EOF
+        os.close(self._saved)
+        self._thread.join(5)
+        self.text = b"".join(self._chunks).decode("utf-8", "replace")
+        return False
+
+    def replay(self):
+        if self.text:
+            with contextlib.suppress(OSError, ValueError):
+                sys.stderr.write(self.text)
+                sys.stderr.flush()
+
+
+def _disk_full(path: str) -> bool:
+    with contextlib.suppress(OSError):
+        st = os.statvfs(os.path.dirname(os.path.abspath(path)) or ".")
+        return st.f_bavail * st.f_frsize < 64 * 1024
+    return False
+
+
+@contextlib.contextmanager
+def gdal_checked(path: str, what: str = "cannot write"):
+    """Run a block of GDAL writes (opening, writing, closing a dataset) so that every failure
+    GDAL signals, even one it only prints, raises one :class:`HillshadeError` naming ``path``
+    (a full disk says "no space left on device")."""
+    import rasterio
+    from rasterio._err import CPLE_BaseError
+    from rasterio.errors import RasterioError
+
+    rec = _Records()
+    log = logging.getLogger("rasterio._env")
+    level = log.level
+    log.addHandler(rec)
+    if log.getEffectiveLevel() > logging.INFO:
+        log.setLevel(logging.INFO)
+    cap = _StderrCapture()
+    err = None
+    try:
+        with rasterio.Env(), cap:
+            try:
+                yield
+            except (RasterioError, CPLE_BaseError) as exc:
+                err = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            except OSError as exc:
+                raise os_error(path, exc) from None
+    finally:
+        log.removeHandler(rec)
+        log.setLevel(level)
+    printed = cap.text.lower()
+    io_error = any(t in printed for t in ("no space left on device", "quota exceeded",
+                                          "input/output error"))
+    if err is None and not rec.messages and not io_error:
+        cap.replay()
+        return
+    full = ("no space left on device" in printed or _disk_full(path)
+            or any("no space" in m.lower() for m in rec.messages))
+    if full:
+        reason = "no space left on device"
+    elif "quota" in printed:
+        reason = "disk quota exceeded"
+    elif "input/output error" in printed:
+        reason = "input/output error"
+    else:
+        msgs = [m for m in rec.messages if m] or ([err] if err else [])
+        useful = [m for m in msgs if "see previous exception" not in m.lower()]
+        reason = (useful or msgs or ["GDAL write error"])[0]
+    raise HillshadeError(f"{path}: {what} ({reason})")
