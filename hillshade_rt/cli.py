@@ -116,19 +116,51 @@ def _stack(f, opts):
     return f
 
 
+def _checked(parse):
+    """A click callback that checks an option's text with ``parse`` (a parser of ``io`` raising
+    HillshadeError) while the command line is parsed: a bad value is a usage error (exit status
+    2). The text itself is passed on (the command parses it again where it reads the DEM)."""
+    def callback(ctx, param, value):
+        if value is not None:
+            try:
+                parse(value)
+            except HillshadeError as exc:
+                raise click.UsageError(str(exc), ctx=ctx) from None
+        return value
+    return callback
+
+
+def _check_pixel_size(ctx, param, value):
+    from .io import parse_pixel_size
+    return _checked(parse_pixel_size)(ctx, param, value)
+
+
+def _check_raw_shape(ctx, param, value):
+    from .io import parse_raw_shape
+    return _checked(parse_raw_shape)(ctx, param, value)
+
+
+def _check_z_factor(ctx, param, value):
+    if value is not None and not (math.isfinite(value) and value != 0):
+        raise click.UsageError(f"--z-factor must be a finite non-zero number, got {value}",
+                               ctx=ctx)
+    return value
+
+
 def dem_options(f):
     """Options that say how to read a DEM (shared by every command that reads one)."""
     return _stack(f, [
-        click.option("-b", "--band", type=int, default=1, show_default=True,
+        click.option("-b", "--band", type=click.IntRange(min=1), default=1, show_default=True,
                      help="Band of a multi-band raster."),
         click.option("--nodata", type=float, default=None,
                      help="Nodata value (overrides the file's). NaN is always nodata."),
         click.option("-z", "--z-factor", type=float, default=1.0, show_default=True,
+                     callback=_check_z_factor,
                      help="Multiply heights by this (like gdaldem -z), e.g. 0.3048 for feet."),
         click.option("--pixel-size", metavar="DX[,DY]", default=None,
-                     help="Ground spacing in metres; overrides the geotransform. "
+                     callback=_check_pixel_size, help="Ground spacing in metres; overrides the geotransform. "
                           "Required for input without georeferencing."),
-        click.option("--raw-shape", metavar="ROWSxCOLS", default=None,
+        click.option("--raw-shape", metavar="ROWSxCOLS", default=None, callback=_check_raw_shape,
                      help="Read a raw binary grid of this shape."),
         click.option("--raw-dtype", type=click.Choice(
             ["int16", "uint16", "int32", "float32", "float64"]), default=None,
@@ -366,23 +398,49 @@ def _inputs_and_output(files, output, pattern):
     files = list(files)
     if output is not None or pattern is not None:
         if output is not None and pattern is not None:
-            raise click.UsageError("give OUTPUT or --output-pattern (one of them)")
+            raise click.UsageError("give -o/--output or --output-pattern, not both")
+        given = "--output-pattern" if pattern is not None else "-o/--output"
+        last = files[-1]
+        if len(files) > 1 and not _maybe_input(last):
+            # `shadow dem.tif out.tif --output-pattern 'x_{index}.tif'`: out.tif is no DEM
+            raise click.UsageError(f"{last} does not exist: give OUTPUT or {given}, not both "
+                                   f"(with {given} every path is a DEM)")
         return files, output
     if len(files) < 2:
         raise click.UsageError("give OUTPUT or --output-pattern (one of them)")
     return files[:-1], files[-1]
 
 
+def _maybe_input(path) -> bool:
+    """Whether ``path`` could be a DEM: an existing file, or a path for GDAL's virtual file
+    systems (/vsizip/..., zip://...!..., a URL) that the local disk cannot tell about."""
+    p = str(path)
+    return os.path.exists(p) or p.startswith("/vsi") or "://" in p
+
+
+# the smallest --window-size side: smaller windows make the run slow for nothing (each window has
+# its halo and its own read; 1x1 windows of a 465x457 DEM are 212 k windows, minutes of work)
+MIN_WINDOW_SIDE = 64
+
+
 def _window_size(text):
+    """--window-size ROWS[xCOLS] as (rows, cols); a malformed or too small size is a usage
+    error. (``tiling.plan`` itself takes any window shape.)"""
     if text is None:
         return None
     import re
     m = re.fullmatch(r"\s*(\d+)\s*(?:[xX,]\s*(\d+))?\s*", str(text))
-    if not m or int(m.group(1)) < 1 or (m.group(2) is not None and int(m.group(2)) < 1):
+    if not m:
         raise click.UsageError(f"--window-size must be ROWS or ROWSxCOLS (e.g. 2048x2048), got "
                                f"{text!r}")
     rows = int(m.group(1))
-    return rows, int(m.group(2)) if m.group(2) else rows
+    cols = int(m.group(2)) if m.group(2) else rows
+    if min(rows, cols) < MIN_WINDOW_SIDE:
+        raise click.UsageError(f"--window-size {str(text).strip()}: "
+                               f"windows must be at least {MIN_WINDOW_SIDE} cells on each side "
+                               f"(e.g. {MIN_WINDOW_SIDE}x{MIN_WINDOW_SIDE}; 1024x1024 or more is "
+                               "faster)")
+    return rows, cols
 
 
 def _light(files, kind, algorithm, options, curvature, refraction_k, soft, self_shadow,
@@ -394,7 +452,7 @@ def _light(files, kind, algorithm, options, curvature, refraction_k, soft, self_
     import numba
 
     from .io import write_json, write_png
-    from .report import Timer, build_report, summary_line
+    from .report import Timer, build_report, shown_paths, summary_line
     from .writes import Claims, reset
     from .runner import OutputPattern
     from .shadow import choose_backend
@@ -486,13 +544,41 @@ def _light(files, kind, algorithm, options, curvature, refraction_k, soft, self_
     if report_path is not None:
         write_json(report_path, rep, overwrite)
     if not quiet:
-        click.echo(summary_line(rep), err=True)
-        if run["algo_stats"].get("note"):
-            click.echo(f"hillshade-rt: note: {run['algo_stats']['note']}", err=True)
+        # the outputs named as the user gave them (as every command does), a pattern's files
+        click.echo(summary_line(rep, output if output is not None
+                                else shown_paths(pattern.planned) or pattern.pattern), err=True)
+        note = _note_to_show(run["algo_stats"], algorithm, options)
+        if note:
+            click.echo(f"hillshade-rt: note: {note}", err=True)
         if rep["night_count"]:
             click.echo(f"hillshade-rt: note: the sun is below the horizon at "
                        f"{rep['night_count']} of {len(suns)} time(s): all shadow there", err=True)
     return rep
+
+
+def _explicit(name: str) -> bool:
+    """Whether the option ``name`` was given on the command line (True outside a command line:
+    api.shade's arguments are the caller's choice)."""
+    from click.core import ParameterSource
+    ctx = click.get_current_context(silent=True)
+    if ctx is None or name not in ctx.params:
+        return True
+    return ctx.get_parameter_source(name) not in (ParameterSource.DEFAULT,
+                                                  ParameterSource.DEFAULT_MAP)
+
+
+def _note_to_show(algo_stats: dict, algorithm: str, options: dict) -> str | None:
+    """The algorithm's note, once per run, where it tells the user something they can act on: a
+    method they asked for did not run (horizon's hull replaced by the scan). SMap marching every
+    cell like brute on a DEM with per-row spacing (every geographic DEM, e.g. each SRTM tile) is
+    said only when SMap was asked for by name or with its options: with the default algorithm
+    the result is the same and the note would be noise. The report keeps the note always."""
+    note = algo_stats.get("note")
+    if not note:
+        return None
+    if algorithm == "smap" and not options and not _explicit("algorithm"):
+        return None
+    return note
 
 
 def _bounded_gdal_cache():
@@ -522,7 +608,10 @@ def _needs_windows(path, read_opts, limit, per_cell) -> bool:
         src = _source(path, read_opts)
     except HillshadeError:
         return False      # read whole: read_dem says what is wrong with it
-    budget = window_budget(limit, per_cell)[0]   # a limit too small for anything: one line
+    try:
+        budget = window_budget(limit, per_cell)[0]
+    except HillshadeError:
+        return True   # too small even for a window: the windowed run says what would do
     rows, cols = src.shape
     return rows * cols > budget
 
@@ -709,7 +798,8 @@ def _light_tiled(inputs, read_opts, scale, req, out, timer, algorithm, options, 
     from .preview import every_nth, relief_rgb, shade_of
     from .report import merge_stats, product_stats
     from .runner import sun_tags
-    from .tiling import Job, Tally, WindowCache, block_stats, window_budget
+    from .tiling import (MIN_WINDOW_CELLS, Job, MemoryTooSmall, Tally, WindowCache, block_stats,
+                         format_size, memory_needed, window_budget)
 
     kind = out.kind
     with timer("read"):
@@ -728,9 +818,27 @@ def _light_tiled(inputs, read_opts, scale, req, out, timer, algorithm, options, 
         job = Job(src, algorithm, options, ran_on, "auto" if curvature is None else curvature,
                   refraction_k, dem_body(src, req.lat), zrange, math.hypot(cols * dx, rows * dy),
                   kind, soft, self_shadow, ambient)
-        budget, mem = window_budget(limit, per_cell)
-        plans = [job.pieces(s, bstats, budget, window_shape, in_order=scheduler is None)
-                 for s in suns]
+        # a limit too small: measured now, after the preparation (the process has grown), the
+        # error says the smallest --max-memory that would do: room for the largest window the
+        # plan needs, or for the whole DEM where it could be shaded in memory
+        try:
+            budget, mem = window_budget(limit, per_cell)
+            small = None
+        except HillshadeError as exc:
+            budget, mem, small = 0, None, exc
+        try:
+            plans = [job.pieces(s, bstats, budget, window_shape, in_order=scheduler is None)
+                     for s in suns]
+        except MemoryTooSmall as exc:
+            small, cells = small or exc, exc.cells
+        else:
+            cells = max((p.cells for ps in plans for p in ps), default=0)
+        if small is not None:
+            least = memory_needed(per_cell, max(cells, MIN_WINDOW_CELLS))
+            if len(inputs) == 1 and window_shape is None and scheduler is None:
+                least = min(least, memory_needed(per_cell, rows * cols))
+            said = str(small).split("; give")[0].replace(": raise --max-memory", "")
+            raise HillshadeError(f"{said}; give at least --max-memory {format_size(least, up=True)}")
         day = [s for s in suns if not s.night]
         if day:
             job.warm_up(day[0])
@@ -864,7 +972,8 @@ def sun_hours(dem, output, date_, end_date, step, tz, lat, lon, pressure, temper
     with timer("read"):
         d = _read(dem, **read_opts)
     with timer("prepare"):
-        site = req.site(d)
+        site = req.site(d, "sun-hours computes the Earth's sun only (light a DEM of another "
+                           "body with shadow or hillshade, which take the sun's direction)")
         req.times, weights = day_samples(first, last, step, req.tz, site.lon)
         suns, sun_info = req.suns(d, site)
         zmin, zmax = d.height_range()

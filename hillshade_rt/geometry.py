@@ -82,12 +82,16 @@ def normalize_azimuth(azimuth: float) -> float:
     return 0.0 if a == 360.0 else a
 
 
-def check_elevation(elevation: float) -> float:
-    """Sun elevation in degrees: must be > 0 and <= 90."""
+def check_elevation(elevation: float, what: str = "sun elevation") -> float:
+    """Sun elevation in degrees: must be > 0 and <= 90. ``what`` names it in the error (e.g. the
+    option it came from)."""
     if not (math.isfinite(elevation) and 0.0 < elevation <= 90.0):
-        raise HillshadeError(
-            f"sun elevation must be > 0 and <= 90 degrees, got {elevation} "
-            "(a sun at or below the horizon lights nothing)")
+        if math.isfinite(elevation) and elevation <= 0.0:
+            raise HillshadeError(
+                f"{what} must be > 0 and <= 90 degrees, got {elevation:g} "
+                "(a sun at or below the horizon lights nothing)")
+        raise HillshadeError(f"{what} must be a number of degrees in (0, 90], got {elevation:g}"
+                             + (" (90 is the zenith)" if math.isfinite(elevation) else ""))
     return float(elevation)
 
 

@@ -125,8 +125,32 @@ def build_report(*, dem, output: str, azimuth: float, elevation: float, algorith
     }
 
 
-def summary_line(report: dict) -> str:
-    """One line for stderr."""
+def percent(frac: float) -> str:
+    """A fraction as a percentage for people: 2 decimals, but never "0.00%" for a fraction that
+    is not 0 nor "100.00%" for one that is not 1 ("<0.01%", ">99.99%"); exactly 0 and 1 are
+    "0%" and "100%"."""
+    if frac <= 0.0:
+        return "0%"
+    if frac >= 1.0:
+        return "100%"
+    if frac < 0.00005:
+        return "<0.01%"
+    if frac >= 0.99995:
+        return ">99.99%"
+    return f"{100 * frac:.2f}%"
+
+
+def shown_paths(paths: list[str]) -> str:
+    """Files written, for a summary line: all of them when few, else the first and the last and
+    how many."""
+    if len(paths) <= 2:
+        return ", ".join(paths)
+    return f"{paths[0]} .. {paths[-1]} ({len(paths)} files)"
+
+
+def summary_line(report: dict, shown: str | None = None) -> str:
+    """One line for stderr. ``shown``: what to name the output(s) as (the paths as the user gave
+    them; default the report's absolute output)."""
     rows, cols = report["shape"]
     frac = report["shadow_fraction"]
     mpx = report["mpix_per_s"]
@@ -147,9 +171,9 @@ def summary_line(report: dict) -> str:
     else:
         what = f"sun az {report['sun']['azimuth']:g} el {report['sun']['elevation']:g}"
     share = ("" if frac is None else
-             f"{100 * frac:.2f}% of valid cells in shadow" + (" (mean)" if len(times) > 1 else "")
+             f"{percent(frac)} of valid cells in shadow" + (" (mean)" if len(times) > 1 else "")
              + "; ")
-    return (f"hillshade-rt: {report['output']}: {cols}x{rows}, {what}, {where}: {share}"
+    return (f"hillshade-rt: {report['output'] if shown is None else shown}: {cols}x{rows}, {what}, {where}: {share}"
             f"compute {report['seconds']['compute']:.3f} s"
             + (f" ({mpx * max(1, len(times)):.1f} Mpix/s)" if mpx else "")
             + f", total {report['seconds']['total']:.2f} s")

@@ -69,11 +69,11 @@ class SunRequest:
             if given:
                 raise HillshadeError(f"{', '.join(given)} apply to a sun from --time or --start, "
                                      "not to --azimuth/--elevation")
-            return cls(normalize_azimuth(azimuth), check_elevation(elevation))
+            return cls(normalize_azimuth(azimuth), check_elevation(elevation, "--elevation"))
         if time:
-            times = [parse_time(t, zone_) for t in time]
+            times = [parse_time(t, zone_, "--time") for t in time]
         else:
-            t0, t1 = parse_time(start, zone_), parse_time(end, zone_)
+            t0, t1 = parse_time(start, zone_, "--start"), parse_time(end, zone_, "--end")
             times = time_range(t0, t1, parse_step(step))
         return cls.at_place(times, tz, lat, lon, pressure, temperature, no_refraction,
                             sun_tolerance)
@@ -84,6 +84,12 @@ class SunRequest:
         """Suns at ``times`` (aware datetimes; may be filled in later, as sun-hours does once
         it knows the place), with the place and atmosphere options checked."""
         zone_ = zone(tz)
+        if (lat is None) != (lon is None):
+            raise HillshadeError("--lat and --lon go together")
+        if lat is not None and not (math.isfinite(lat) and -90.0 <= lat <= 90.0):
+            raise HillshadeError(f"--lat must be a latitude within [-90, 90] degrees, got {lat}")
+        if lon is not None and not math.isfinite(lon):
+            raise HillshadeError(f"--lon must be a finite number of degrees, got {lon}")
         if pressure is not None and not (math.isfinite(pressure) and 0 < pressure < 1200):
             raise HillshadeError(f"--pressure must be in hPa (mbar), between 0 and 1200, got {pressure}")
         if temperature is not None and not (math.isfinite(temperature) and -100 < temperature < 100):
@@ -95,9 +101,10 @@ class SunRequest:
         return cls(times=times, tz=zone_, lat=lat, lon=lon, atmosphere=atm,
                    tolerance=float(sun_tolerance))
 
-    def site(self, dem):
-        """Where this request's suns are computed for ``dem`` (``sun.dem_site``)."""
-        return dem_site(dem, self.lat, self.lon)
+    def site(self, dem, other_body: str | None = None):
+        """Where this request's suns are computed for ``dem`` (``sun.dem_site``; ``other_body``:
+        what to advise for a DEM on another body than the Earth)."""
+        return dem_site(dem, self.lat, self.lon, other_body)
 
     def suns(self, dem, site=None) -> tuple[list[SunOver], dict | None]:
         """(suns, site report) for ``dem``: the given sun, or the SPA's at each time (at
@@ -138,6 +145,7 @@ class OutputPattern:
             raise HillshadeError(f"--output-pattern {pattern!r}: unknown field(s) "
                                  f"{', '.join(sorted(bad))} (use {', '.join(self.FIELDS)})")
         self.per_tile = "tile" in names
+        self.planned: list[str] = []    # the files of the last ``paths``, as the pattern names them
 
     def paths(self, suns: list[SunOver], tiles: list[str] | None = None) -> list[list[str]]:
         """The files of each sun: one per name in ``tiles`` (the inputs' file names) when the
@@ -163,6 +171,7 @@ class OutputPattern:
             raise HillshadeError(f"--output-pattern {self.pattern!r} gives two times the same file "
                                  "name: add a finer time field (e.g. {time:%Y%m%dT%H%M%S}) or "
                                  "{index}")
+        self.planned = flat
         return out
 
 

@@ -60,15 +60,23 @@ def localize(naive: _dt.datetime, tz, what: str) -> _dt.datetime:
     return a
 
 
-def parse_time(text: str, tz=None) -> _dt.datetime:
+def parse_time(text: str, tz=None, what: str = "--time") -> _dt.datetime:
     """An ISO 8601 time (``2026-06-21T14:30:00+02:00``, ``...Z``, or local time with ``tz``) as
     an aware datetime. A time with an offset keeps its instant; ``tz`` then only names the zone
-    outputs are labelled in."""
+    outputs are labelled in. A date without a time of day is refused (it is not an instant:
+    midnight is rarely what was meant). ``what``: the option named in errors."""
     s = str(text).strip()
+    try:
+        _dt.date.fromisoformat(s)
+    except ValueError:
+        pass
+    else:
+        raise HillshadeError(f"{what} {text!r} is a date without a time of day: give a time, "
+                             f"e.g. {s}T12:00 (for whole days: sun-hours --date)")
     try:
         t = _dt.datetime.fromisoformat(s.replace("z", "Z"))
     except ValueError:
-        raise HillshadeError(f"--time {text!r}: not an ISO 8601 time "
+        raise HillshadeError(f"{what} {text!r}: not an ISO 8601 time "
                              "(e.g. 2026-06-21T14:30:00+02:00)") from None
     if t.tzinfo is None:
         if tz is None:
@@ -262,9 +270,16 @@ def centre_height_of(z: np.ndarray, r: int | None = None, c: int | None = None) 
     return float(np.nanmedian(z)), "median of the DEM (its centre is a void)"
 
 
-def dem_site(dem, lat: float | None = None, lon: float | None = None) -> Site:
+OTHER_BODY_ADVICE = ("the solar position from --time is for the Earth: give "
+                     "--azimuth/--elevation")
+
+
+def dem_site(dem, lat: float | None = None, lon: float | None = None,
+             other_body: str | None = None) -> Site:
     """The :class:`Site` of a :class:`~hillshade_rt.io.Dem` or a ``tiling.Source`` (anything with
-    ``crs``, ``transform``, ``shape``, ``path`` and ``centre_height()``)."""
+    ``crs``, ``transform``, ``shape``, ``path`` and ``centre_height()``). ``other_body``: what the
+    error says after "not the Earth; " for a DEM on another body (default: the lighting
+    commands' advice, --azimuth/--elevation)."""
     height, hnote = dem.centre_height()
     if (lat is None) != (lon is None):
         raise HillshadeError("--lat and --lon go together")
@@ -275,7 +290,7 @@ def dem_site(dem, lat: float | None = None, lon: float | None = None) -> Site:
         site = Site(lat, lon, height, "--lat/--lon", notes=[f"observer height: {hnote}"])
         if dem.crs is not None and dem.transform is not None:
             # the sun at the given place, one vector; still turned to the DEM's grid north
-            centre = dem_site(dem)
+            centre = dem_site(dem, other_body=other_body)
             rows, cols = dem.shape
             site.north_offset = float(centre.convergence(np.array([(rows - 1) / 2.0]),
                                                          np.array([(cols - 1) / 2.0]))[0])
@@ -290,7 +305,7 @@ def dem_site(dem, lat: float | None = None, lon: float | None = None) -> Site:
     if ell is not None and not (EARTH_A_RANGE[0] <= ell.semi_major_metre <= EARTH_A_RANGE[1]):
         raise HillshadeError(
             f"{dem.path}: its CRS is on {ell.name} (a = {ell.semi_major_metre / 1000:.1f} km), not "
-            "the Earth; the solar position from --time is for the Earth: give --azimuth/--elevation")
+            "the Earth; " + (other_body or OTHER_BODY_ADVICE))
     geo = pcrs.geodetic_crs
     fwd = Transformer.from_crs(pcrs, geo, always_xy=True)
     back = Transformer.from_crs(geo, pcrs, always_xy=True)

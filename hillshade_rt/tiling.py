@@ -89,11 +89,40 @@ def parse_size(text) -> int:
     return n
 
 
-def format_size(n: float) -> str:
+def format_size(n: float, up: bool = False) -> str:
+    """``n`` bytes for people (2.50 GB, 512.00 MB). ``up``: rounded up to a whole number of the
+    unit and written as an option value that ``parse_size`` reads back (e.g. ``391MB``), for
+    an amount that must not be undershot."""
     for unit, f in (("GB", 1e9), ("MB", 1e6), ("kB", 1e3)):
         if abs(n) >= f:
+            if up:
+                return f"{math.ceil(n / f)}{unit}"
             return f"{n / f:.2f} {unit}"
-    return f"{int(n)} B"
+    return f"{math.ceil(n)}B" if up else f"{int(n)} B"
+
+
+class MemoryTooSmall(HillshadeError):
+    """--max-memory leaves no room for a window of ``cells`` cells (``tiling.plan``): the caller
+    knows the bytes per cell and says the smallest memory that would do (``memory_needed``)."""
+
+    def __init__(self, message: str, cells: int):
+        super().__init__(message)
+        self.cells = cells
+
+
+MIN_WINDOW_CELLS = 64 * 64   # the smallest window --max-memory must leave room for
+
+
+def _overhead() -> tuple[int, int, int]:
+    """(what the process holds now, GDAL's block cache, a margin): bytes a run's windows do
+    not get."""
+    return process_rss(), GDAL_CACHE_MB << 20, 32 << 20
+
+
+def memory_needed(per_cell: int, cells: int) -> int:
+    """The smallest --max-memory that leaves room for a window of ``cells`` cells now (with 2 %
+    headroom: the process grows a little while a run is prepared)."""
+    return int(math.ceil((sum(_overhead()) + per_cell * cells) * 1.02))
 
 
 def _meminfo() -> dict:
@@ -132,16 +161,16 @@ def process_rss() -> int:
 def window_budget(max_memory: int, per_cell: int) -> tuple[int, dict]:
     """Cells a window may hold under ``max_memory`` for the whole process: what the process
     already holds (interpreter, numba, GDAL) and GDAL's block cache are taken off first."""
-    base = process_rss()
-    cache = GDAL_CACHE_MB << 20
-    margin = 32 << 20
+    base, cache, margin = _overhead()
     free = max_memory - base - cache - margin
     info = {"max_memory": max_memory, "process_before": base, "gdal_cache": cache,
             "bytes_per_cell": per_cell}
-    if free < per_cell * 64 * 64:
+    if free < per_cell * MIN_WINDOW_CELLS:
+        least = memory_needed(per_cell, MIN_WINDOW_CELLS)
         raise HillshadeError(
             f"--max-memory {format_size(max_memory)} leaves no room for a window: the process "
-            f"already uses {format_size(base)} and GDAL's cache {format_size(cache)}; give more")
+            f"already uses {format_size(base)} and GDAL's cache {format_size(cache)}; give at "
+            f"least --max-memory {format_size(least, up=True)}")
     info["window_bytes"] = free
     return free // per_cell, info
 
@@ -681,11 +710,13 @@ def plan(shape, grid: Grid, azimuth: float, elevation: float, curv: float, stats
             if best is None or key < best[0]:
                 best = (key, tr_, tc_)
         if best is None:
-            need = min(rows, align + hr) * min(cols, 16 + hc)
-            raise HillshadeError(
+            # the fewest cells any candidate above would have accepted
+            need = min(min(rows, t + hr) * ((16 if t >= br else min(bc, align)) + hc)
+                       for t in sorted({br} | set(range(align, br, align))))
+            raise MemoryTooSmall(
                 f"the memory limit allows windows of {budget_cells:,} cells, but a window with "
                 f"the sun's halo needs at least {need:,} here (sun elevation {hel:.2f} deg): "
-                "raise --max-memory")
+                "raise --max-memory", need)
         _, tr, tc = best
     row_cuts = _cuts(b[0], b[1], tr, align)
     col_cuts = _cuts(b[2], b[3], tc, align)

@@ -41,6 +41,12 @@ from .raymath import line_position, madd, ray_origin, ray_sample, terrain_on_lin
 METHODS = ("scan", "hull")
 
 
+# why the rays differ from row to row (the note of a run that could not share one ray)
+PER_ROW_SPACING = ("the ground spacing varies per row (a geographic CRS, or a "
+                   "projection whose scale changes across the raster, as lunar polar "
+                   "stereographic DEMs)")
+
+
 @njit(cache=True)
 def _scan_cell(z, r, c, dom_col, sd, so, sp, zmax, rise, cv, decide):
     """Max of (T_k - h0 - k*k*cv) / k over the samples k = sp, 2sp, ... (-inf if none); ``cv``
@@ -232,8 +238,9 @@ def horizon_angles(z: np.ndarray, rays: SunRays, method: str = "scan", sample_sp
             beta = np.degrees(np.arctan(t / step_m)).astype(np.float32)
         return beta
     if method == "hull" and stats is not None:
-        stats["note"] = ("Earth curvature on: hull replaced by scan" if rays.curved else
-                         "ray direction varies per row (geographic CRS): hull replaced by scan")
+        stats["note"] = ("Earth curvature on: hull replaced by scan (exact, slower)"
+                         if rays.curved else
+                         PER_ROW_SPACING + ": hull replaced by scan (exact, slower)")
     beta = np.empty(z.shape, np.float32)
     _scan_kernel(z, rays.dom_col, rays.step_dom, rays.step_other, rays.rise, rays.step_m,
                  rays.curv, np.int64(sample_spacing), float(zmax), False, np.empty((1, 1), np.uint8), beta)
@@ -252,8 +259,9 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None, stats: 
         out = np.where(np.isnan(z), 255, (t > rays.rise[0]).astype(np.uint8)).astype(np.uint8)
         return out
     if method == "hull" and stats is not None:
-        stats["note"] = ("Earth curvature on: hull replaced by scan" if rays.curved else
-                         "ray direction varies per row (geographic CRS): hull replaced by scan")
+        stats["note"] = ("Earth curvature on: hull replaced by scan (exact, slower)"
+                         if rays.curved else
+                         PER_ROW_SPACING + ": hull replaced by scan (exact, slower)")
     out = np.empty(z.shape, np.uint8)
     _scan_kernel(z, rays.dom_col, rays.step_dom, rays.step_other, rays.rise, rays.step_m,
                  rays.curv, np.int64(sample_spacing), float(zmax), True, out, np.empty((1, 1), np.float32))

@@ -61,6 +61,12 @@ _BLOCK = 256        # elements per parallel work item in the Black pass
 NEXTV_METHODS = ("scan", "binary", "quad")
 
 
+# why the rays differ from row to row (the note of a run that could not share one ray)
+PER_ROW_SPACING = ("the ground spacing varies per row (a geographic CRS, or a "
+                   "projection whose scale changes across the raster, as lunar polar "
+                   "stereographic DEMs)")
+
+
 def tolerance(zabs: float, rise: float) -> float:
     """Slack of the silhouette inequalities for heights up to ``zabs`` in magnitude: 1e-7 of the
     height range, so that rounding never turns a silhouette White."""
@@ -850,8 +856,8 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None, stats: 
     if not uniform_rays(rays):
         from . import brute
         if stats is not None:
-            stats["note"] = ("ray direction varies per row (geographic CRS): smap marched every "
-                             "cell's ray like brute (same result, brute's speed)")
+            stats["note"] = (PER_ROW_SPACING + ": smap marched every cell's ray like brute "
+                             "(same result, brute's speed)")
         return brute.shadow_mask(z, rays, zmax)
     sm = SMap(z, 0.0, 0.0, rays=rays, zmax=zmax, nextv=nextv, better_nextv=better_nextv)
     if stats is not None:
@@ -873,8 +879,8 @@ def shadow_mask_gpu(g, rays: SunRays, zmax: float, stats: dict | None = None, ne
     from . import brute
     if not uniform_rays(rays):
         if stats is not None:
-            stats["note"] = ("ray direction varies per row (geographic CRS): smap marched every "
-                             "cell's ray like brute (same result, brute's speed)")
+            stats["note"] = (PER_ROW_SPACING + ": smap marched every cell's ray like brute "
+                             "(same result, brute's speed)")
         return brute.shadow_mask_gpu(g, rays, zmax)
     f = frame_of(rays)
     rows, cols = g.shape
