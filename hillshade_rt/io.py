@@ -160,6 +160,16 @@ def gdal_path(path: str) -> str:
     return loc
 
 
+def input_label(path: str) -> str:
+    """How a report names the input ``path``: a local file's absolute path, a GDAL name or URL
+    as given (``os.path.abspath`` would mangle ``zip://…``), ``<stdin>`` for ``-``."""
+    if path in (STDIN, STDIN_NAME):
+        return STDIN_NAME
+    if is_gdal_name(path) and not os.path.exists(path):
+        return path
+    return os.path.abspath(path)
+
+
 def check_input_path(path: str) -> None:
     """The clear local checks of an input path (no such file, a folder); a name for GDAL
     (:func:`is_gdal_name`) that is not a local file is left to GDAL to open."""

@@ -177,6 +177,9 @@ def test_gdal_path_of_rasterio_urls(tmp_path, monkeypatch):
     assert gdal_path("s3://b/k/d.tif") == "/vsis3/b/k/d.tif"
     for same in ("/vsizip/a.zip/d.tif", "d.tif", "NETCDF:f.nc:z", "/abs/d.tif"):
         assert gdal_path(same) == same
+    from hillshade_rt.io import input_label
+    assert input_label("zip://a.zip!d.tif") == "zip://a.zip!d.tif"
+    assert input_label("d.tif") == f"{tmp_path}/d.tif" and input_label("-") == "<stdin>"
 
 
 # ---------------------------------------------------------------------------------------------
