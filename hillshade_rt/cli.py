@@ -590,9 +590,14 @@ def _bounded_gdal_cache():
 
 
 def _source(paths, read_opts):
-    """``tiling.open_source`` with the DEM options of the command line (as ``_read``)."""
-    from .io import parse_pixel_size, parse_raw_shape
+    """``tiling.open_source`` with the DEM options of the command line (as ``_read``). A DEM
+    from standard input is read whole only: with windows or a mosaic, a usage error."""
+    from .io import STDIN, parse_pixel_size, parse_raw_shape
     from .tiling import open_source
+    if STDIN in ([paths] if isinstance(paths, str) else list(paths)):
+        raise click.UsageError("a DEM from standard input ('-') is read whole, in memory: it "
+                               "does not go with --window-size, --scheduler or other DEMs "
+                               "(a mosaic); give it as a file")
     return open_source(paths, band=read_opts["band"], nodata=read_opts["nodata"],
                        pixel_size=parse_pixel_size(read_opts["pixel_size"]),
                        z_factor=read_opts["z_factor"],
@@ -603,7 +608,10 @@ def _source(paths, read_opts):
 def _needs_windows(path, read_opts, limit, per_cell) -> bool:
     """Whether shading ``path`` whole would need more than ``limit`` bytes (a DEM whose size
     cannot be told without reading it is read whole, as before)."""
+    from .io import STDIN
     from .tiling import window_budget
+    if path == STDIN:
+        return False      # standard input is read whole (once)
     try:
         src = _source(path, read_opts)
     except HillshadeError:

@@ -106,12 +106,202 @@ def parse_raw_shape(text: str | None) -> tuple[int, int] | None:
 # --------------------------------------------------------------------------------------------
 # reading
 
+STDIN = "-"                 # the DEM path that means standard input
+STDIN_NAME = "<stdin>"      # how messages (and Dem.path) name it
+
+# rasterio-style URL schemes (``zip://a.zip!dem.tif``, ``zip+https://…``, ``s3://…``) and the GDAL
+# virtual file system of each; a ``scheme:`` GDAL knows otherwise (``NETCDF:f.nc:z``) is left alone
+_URL = re.compile(r"^([A-Za-z][A-Za-z0-9]*(?:\+[A-Za-z][A-Za-z0-9]*)*)://(.*)$", re.DOTALL)
+_VSI_OF = {"zip": "vsizip", "tar": "vsitar", "gzip": "vsigzip", "http": "vsicurl",
+           "https": "vsicurl", "ftp": "vsicurl", "s3": "vsis3", "gs": "vsigs", "az": "vsiaz",
+           "oss": "vsioss", "file": ""}
+_ARCHIVES = ("zip", "tar", "gzip")
+_CURL = ("http", "https", "ftp")
+# a GDAL dataset name rather than a local path: /vsi…, a URL, DRIVER:… (one letter is a drive)
+_GDAL_NAME = re.compile(r"^(/vsi[a-z0-9_]*/|[A-Za-z][A-Za-z0-9+.\-]+:)")
+_TIFF_MAGIC = (b"II*\x00", b"MM\x00*", b"II+\x00", b"MM\x00+")
+_CORRUPT_HINTS = re.compile(r"TIFF|IReadBlock|read error|decod|decompress|truncat|corrupt|"
+                            r"checksum|data check|unexpected end|short read", re.IGNORECASE)
+
+
+def is_gdal_name(path: str) -> bool:
+    """Whether ``path`` is a GDAL or rasterio dataset name (``/vsizip/…``, ``/vsimem/…``,
+    ``zip://…!…``, ``https://…``, ``NETCDF:…``) rather than a path on the local disk."""
+    return bool(_GDAL_NAME.match(path))
+
+
+def gdal_path(path: str) -> str:
+    """What GDAL opens for ``path``: a rasterio-style URL as its /vsi path (``zip://a.zip!x.tif``
+    -> ``/vsizip//abs/a.zip/x.tif``, the archive of a local one made absolute), any other path as
+    it is. (rasterio's own conversion loses a relative archive without a folder, ``zip://a.zip!x``.)"""
+    m = _URL.match(path)
+    if not m:
+        return path
+    schemes = m.group(1).lower().split("+")
+    if not all(s in _VSI_OF for s in schemes):
+        return path
+    rest, member = m.group(2), None
+    archive = schemes[0] if schemes[0] in _ARCHIVES else None
+    if archive and "!" in rest:
+        rest, member = rest.rsplit("!", 1)
+    transport = [s for s in schemes[1 if archive else 0:] if s != "file"]
+    if len(transport) > 1 or (not archive and not transport and schemes != ["file"]):
+        return path
+    if not transport:
+        loc = os.path.abspath(rest) if rest else rest
+    elif transport[0] in _CURL:
+        loc = f"/vsicurl/{transport[0]}://{rest}"
+    else:
+        loc = f"/{_VSI_OF[transport[0]]}/{rest}"
+    if archive:
+        loc = f"/{_VSI_OF[archive]}/{loc}"
+        if member:
+            loc += "/" + member.lstrip("/")
+    return loc
+
+
+def input_label(path: str) -> str:
+    """How a report names the input ``path``: a local file's absolute path, a GDAL name or URL
+    as given (``os.path.abspath`` would mangle ``zip://…``), ``<stdin>`` for ``-``."""
+    if path in (STDIN, STDIN_NAME):
+        return STDIN_NAME
+    if is_gdal_name(path) and not os.path.exists(path):
+        return path
+    return os.path.abspath(path)
+
+
+def check_input_path(path: str) -> None:
+    """The clear local checks of an input path (no such file, a folder); a name for GDAL
+    (:func:`is_gdal_name`) that is not a local file is left to GDAL to open."""
+    if path == STDIN:
+        return
+    if os.path.exists(path):
+        if os.path.isdir(path) and not path.lower().rstrip("/").endswith((".gdb", ".zarr")):
+            raise HillshadeError(f"{path}: is a folder, not a raster file")
+        return
+    if not is_gdal_name(path):
+        raise HillshadeError(f"{path}: no such file")
+
+
+def gdal_message(exc: BaseException, *names: str) -> str:
+    """GDAL's first useful message behind ``exc`` (one line): rasterio chains the errors GDAL
+    reported, the first reported (the most specific: libtiff's) deepest; the generic "Read
+    failed. See previous exception" is skipped, and a leading ``name:`` of the file dropped."""
+    msgs, seen, e = [], set(), exc
+    while e is not None and id(e) not in seen:
+        seen.add(id(e))
+        text = " ".join(str(e).split())
+        if text and "see previous exception" not in text.lower():
+            msgs.append(text)
+        e = e.__cause__ or e.__context__
+    msg = msgs[-1] if msgs else type(exc).__name__
+    prefixes = [n for n in names if n] + [os.path.basename(n) for n in names if n]
+    for _ in range(3):   # "c.tif: c.tif:Cannot read TIFF header", "x.tif, band 1: …"
+        for p in prefixes:
+            for tail in (":", ", band"):
+                if msg.startswith(p + tail):
+                    msg = msg[len(p):].lstrip(":, ")
+                    if msg.startswith("band "):
+                        msg = re.sub(r"^band \d+:\s*", "", msg)
+    msg = re.sub(r"^[A-Za-z_]\w*:(?=\S)", "", msg) or msg   # libtiff's "TIFFFillTile:Read …"
+    return msg if len(msg) <= 200 else msg[:197] + "..."
+
+
+def _has_tiff_magic(path: str, data: bytes | None = None) -> bool:
+    if data is None:
+        try:
+            with open(path, "rb") as fh:
+                data = fh.read(4)
+        except OSError:
+            return False
+    return data[:4] in _TIFF_MAGIC
+
+
+def open_error(path: str, exc: BaseException, *, data: bytes | None = None,
+               gdal_name: str | None = None) -> HillshadeError:
+    """The one-line error for a dataset GDAL could not open: no such file (GDAL says it does not
+    exist), truncated or corrupt (a TIFF that its header names, or GDAL's decoders say so), or
+    cannot read as a raster (GDAL's reason)."""
+    msg = gdal_message(exc, path, gdal_name or path)
+    low = msg.lower()
+    if "does not exist in the file system" in low or "no such file or directory" in low:
+        return HillshadeError(f"{path}: no such file")
+    tiff = _has_tiff_magic(path, data) if (data is not None or os.path.isfile(path)) else False
+    if tiff or ("not recognized" not in low and _CORRUPT_HINTS.search(msg)):
+        return HillshadeError(f"{path}: truncated or corrupt ({msg})")
+    if "not recognized as" in low or "not recognised" in low:
+        msg = "not a raster format GDAL can read"
+    return HillshadeError(f"{path}: cannot read as a raster ({msg})")
+
+
+def read_error(path: str, exc: BaseException, gdal_name: str | None = None) -> HillshadeError:
+    """The one-line error for a dataset that opened but whose values could not be read."""
+    return HillshadeError(f"{path}: truncated or corrupt "
+                          f"({gdal_message(exc, path, gdal_name or path)})")
+
+
+def check_transform(path: str, transform) -> tuple[int, int]:
+    """(col_sign, row_sign) of the geotransform of ``path`` (see ``geometry.orientation``); a
+    rotated, sheared, degenerate (zero pixel size) or non-finite one is refused, naming the
+    file."""
+    try:
+        if not all(math.isfinite(v) for v in tuple(transform)[:6]):
+            raise HillshadeError(f"geotransform has non-finite terms {tuple(transform)[:6]}")
+        return orientation(transform)
+    except HillshadeError as exc:
+        raise HillshadeError(f"{path}: {exc}") from None
+
+
+def grid_of(path: str, transform, crs, shape: tuple[int, int],
+            pixel_size: tuple[float, float] | None = None) -> Grid:
+    """The :class:`Grid` of a raster at ``path`` (``pixel_size``: the --pixel-size override);
+    a rotated, sheared, degenerate (zero pixel size) or non-finite geotransform is refused
+    with a message that names the file."""
+    rows, cols = shape
+    col_sign, row_sign = check_transform(path, transform) if transform is not None else (1, -1)
+    if pixel_size is None:
+        if transform is None:
+            raise HillshadeError(f"{path}: has no georeferencing; give the ground spacing with "
+                                 "--pixel-size DX[,DY] (metres)")
+        try:
+            return grid_from_transform(transform, crs, (rows, cols))
+        except HillshadeError as exc:   # rows beyond the poles, a CRS without an ellipsoid
+            raise HillshadeError(f"{path}: {exc}") from None
+    return Grid.uniform(rows, cols, pixel_size[0], pixel_size[1], col_sign, row_sign,
+                        "--pixel-size")
+
+
+def _read_stdin() -> bytes:
+    """All of standard input (a DEM piped in: ``curl … | hillshade-rt shadow - out.tif``)."""
+    import sys
+    stream = sys.stdin
+    if stream is None:
+        raise HillshadeError(f"{STDIN_NAME}: there is no standard input to read a DEM from")
+    with contextlib.suppress(AttributeError, ValueError, OSError):
+        if stream.isatty():
+            raise HillshadeError(f"{STDIN_NAME}: is a terminal; pipe a DEM into it "
+                                 "(e.g. curl URL | hillshade-rt shadow - out.tif)")
+    try:
+        data = getattr(stream, "buffer", stream).read()
+    except (OSError, ValueError) as exc:   # closed, or captured (pytest)
+        raise HillshadeError(f"{STDIN_NAME}: cannot read standard input ({exc})") from None
+    if isinstance(data, str):
+        raise HillshadeError(f"{STDIN_NAME}: standard input is text, not the bytes of a raster")
+    if not data:
+        raise HillshadeError(f"{STDIN_NAME}: standard input is empty")
+    return data
+
+
 def read_dem(path: str, *, band: int = 1, nodata: float | None = None,
              pixel_size: tuple[float, float] | None = None, z_factor: float = 1.0,
              raw_shape: tuple[int, int] | None = None, raw_dtype: str | None = None,
              raw_byteorder: str | None = None) -> Dem:
     """Read a DEM from ``path``.
 
+    ``path``: a local file, any dataset name GDAL opens (``/vsizip/a.zip/dem.tif``,
+    ``zip://a.zip!dem.tif``, ``/vsigzip/…``, ``/vsimem/…``, ``/vsicurl/…``, ``NETCDF:f.nc:z``),
+    or ``-``: all of standard input, read into memory (any format GDAL reads, or raw with the
+    ``raw_*`` options).
     Dispatch: raw binary when any ``raw_*`` option is given, or for .hgt files GDAL cannot
     georeference, or for the raw extensions (.raw .bin .dem .r16 .r32 .f32); TIFF files without
     georeferencing through tifffile; everything else through rasterio (GDAL).
@@ -119,25 +309,29 @@ def read_dem(path: str, *, band: int = 1, nodata: float | None = None,
     input has no georeferencing.
     """
     path = os.fspath(path)
-    if not os.path.exists(path):
-        raise HillshadeError(f"{path}: no such file")
-    if os.path.isdir(path) and not path.lower().endswith((".gdb", ".zarr")):
-        raise HillshadeError(f"{path}: is a folder, not a raster file")
+    check_input_path(path)
     if not (math.isfinite(z_factor) and z_factor != 0):
         raise HillshadeError(f"--z-factor must be a finite non-zero number, got {z_factor}")
     if band < 1:
         raise HillshadeError(f"--band must be 1 or more, got {band}")
-    ext = os.path.splitext(path)[1].lower()
+    data = None
+    if path == STDIN:
+        data = _read_stdin()
+        path = STDIN_NAME
+    ext = os.path.splitext(path)[1].lower() if data is None else ""
     raw_requested = raw_shape is not None or raw_dtype is not None or raw_byteorder is not None
     if raw_requested or ext in RAW_EXTS:
-        dem = _read_raw(path, raw_shape, raw_dtype, raw_byteorder, nodata, pixel_size)
+        dem = _read_raw(path, raw_shape, raw_dtype, raw_byteorder, nodata, pixel_size, data)
     elif ext == ".hgt":
         try:
             dem = _read_gdal(path, band, nodata, pixel_size)
         except HillshadeError:
+            if is_gdal_name(path) and not os.path.exists(path):
+                raise
             dem = _read_raw(path, None, "int16", "big", nodata, pixel_size)
     else:
-        dem = _read_gdal(path, band, nodata, pixel_size, tiff_fallback=ext in TIFF_EXTS)
+        tiff = ext in TIFF_EXTS or (data is not None and _has_tiff_magic(path, data))
+        dem = _read_gdal(path, band, nodata, pixel_size, tiff_fallback=tiff, data=data)
     if z_factor != 1.0:
         dem.heights *= np.float32(z_factor)
     if dem.heights.size == 0:
@@ -188,69 +382,96 @@ def check_band(ds, path: str, band: int) -> bool:
     return ds.crs is not None or not ds.transform.is_identity
 
 
-def _read_gdal(path: str, band: int, nodata: float | None,
-               pixel_size: tuple[float, float] | None, tiff_fallback: bool = False) -> Dem:
+def open_raster(path: str, stack: contextlib.ExitStack, data: bytes | None = None,
+                name: str | None = None):
+    """``path`` opened by rasterio inside ``stack``: what GDAL opens is ``name``, or
+    :func:`gdal_path` of ``path``, or ``data`` (the bytes of a raster held in memory, e.g.
+    standard input, through a ``rasterio.MemoryFile``); GDAL's refusal as :func:`open_error`,
+    naming ``path``."""
     import rasterio
     from rasterio.errors import NotGeoreferencedWarning, RasterioError
 
+    stack.enter_context(warnings.catch_warnings())
+    warnings.simplefilter("ignore", NotGeoreferencedWarning)
+    if data is None and name is None:
+        name = gdal_path(path)
     try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", NotGeoreferencedWarning)
-            with rasterio.open(path) as ds:
-                georef = check_band(ds, path, band)
-                if not georef and tiff_fallback:
-                    return _read_tiff(path, band, nodata, pixel_size)
-                data = ds.read(band)
-                src_nodata = ds.nodatavals[band - 1]
-                dem = Dem(heights=_to_heights(data, src_nodata if nodata is None else nodata),
-                          grid=None, path=path, kind="gdal",  # type: ignore[arg-type]
-                          transform=ds.transform if georef else None, crs=ds.crs,
-                          nodata=src_nodata if nodata is None else nodata, band=band,
-                          driver=ds.driver, source_dtype=str(data.dtype))
-    except HillshadeError:
-        raise
+        if data is not None:
+            return stack.enter_context(stack.enter_context(rasterio.MemoryFile(data)).open())
+        return stack.enter_context(rasterio.open(name))
     except (RasterioError, OSError) as exc:
-        if tiff_fallback:
+        raise open_error(path, exc, data=data, gdal_name=name) from None
+
+
+def _read_gdal(path: str, band: int, nodata: float | None,
+               pixel_size: tuple[float, float] | None, tiff_fallback: bool = False,
+               data: bytes | None = None) -> Dem:
+    """Through rasterio (GDAL); ``data``: the raster's bytes (standard input), ``path`` then only
+    names it. A TIFF GDAL cannot open, or one without georeferencing, goes to tifffile."""
+    from rasterio.errors import RasterioError
+
+    with contextlib.ExitStack() as stack:
+        try:
+            ds = open_raster(path, stack, data)
+        except HillshadeError:
+            if tiff_fallback:
+                with contextlib.suppress(HillshadeError):
+                    return _read_tiff(path, band, nodata, pixel_size, data)
+            raise
+        georef = check_band(ds, path, band)
+        if not georef and tiff_fallback:
             try:
-                return _read_tiff(path, band, nodata, pixel_size)
-            except HillshadeError:
-                pass
-        msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        if "not recognized as" in msg or "not recognised" in msg:
-            msg = "not a raster format GDAL can read"
-        raise HillshadeError(f"{path}: cannot read as a raster ({msg})") from None
+                return _read_tiff(path, band, nodata, pixel_size, data)
+            except _TiffUnreadable:
+                pass    # GDAL reads it, or says why it cannot (truncated, corrupt)
+        try:
+            values = ds.read(band)
+        except (RasterioError, OSError) as exc:
+            raise read_error(path, exc, gdal_path(path)) from None
+        src_nodata = ds.nodatavals[band - 1]
+        nd = src_nodata if nodata is None else nodata
+        dem = Dem(heights=_to_heights(values, nd), grid=None, path=path,  # type: ignore[arg-type]
+                  kind="gdal", transform=ds.transform if georef else None, crs=ds.crs,
+                  nodata=nd, band=band, driver=ds.driver, source_dtype=str(values.dtype))
     dem.grid = _make_grid(dem, pixel_size)
     return dem
 
 
+class _TiffUnreadable(HillshadeError):
+    """tifffile could not read the file (GDAL may still)."""
+
+
 def _read_tiff(path: str, band: int, nodata: float | None,
-               pixel_size: tuple[float, float] | None) -> Dem:
-    """A TIFF without georeferencing, through tifffile."""
+               pixel_size: tuple[float, float] | None, data: bytes | None = None) -> Dem:
+    """A TIFF without georeferencing, through tifffile (``data``: its bytes, held in memory)."""
+    import io as _io
+
     import tifffile
 
     try:
-        with tifffile.TiffFile(path) as tif:
+        with tifffile.TiffFile(_io.BytesIO(data) if data is not None else path) as tif:
             page = tif.pages[0]
-            data = page.asarray()
+            values = page.asarray()
             tag = page.tags.get("GDAL_NODATA") or page.tags.get(42113)
             file_nodata = float(str(tag.value).strip("\x00 ")) if tag is not None else None
     except Exception as exc:  # noqa: BLE001 -- tifffile raises many kinds for bad files
-        raise HillshadeError(f"{path}: cannot read as a TIFF ({str(exc).splitlines()[0]})") from None
-    if data.ndim == 3:
+        msg = " ".join(str(exc).split()) or type(exc).__name__
+        raise _TiffUnreadable(f"{path}: cannot read as a TIFF ({msg})") from None
+    if values.ndim == 3:
         # planar (bands, rows, cols) or contiguous (rows, cols, samples)
-        if page.planarconfig == 2 or data.shape[0] < data.shape[-1]:
-            data = np.moveaxis(data, 0, -1)
-        if band > data.shape[-1]:
-            raise HillshadeError(f"{path}: has {data.shape[-1]} band(s), --band {band} asked")
-        data = data[..., band - 1]
-    elif data.ndim != 2 or band != 1:
-        raise HillshadeError(f"{path}: expected a single-band 2-D image, got shape {data.shape}")
-    if data.dtype.kind not in "iuf":
-        raise HillshadeError(f"{path}: pixel type {data.dtype} is not a height")
+        if page.planarconfig == 2 or values.shape[0] < values.shape[-1]:
+            values = np.moveaxis(values, 0, -1)
+        if band > values.shape[-1]:
+            raise HillshadeError(f"{path}: has {values.shape[-1]} band(s), --band {band} asked")
+        values = values[..., band - 1]
+    elif values.ndim != 2 or band != 1:
+        raise HillshadeError(f"{path}: expected a single-band 2-D image, got shape {values.shape}")
+    if values.dtype.kind not in "iuf":
+        raise HillshadeError(f"{path}: pixel type {values.dtype} is not a height")
     nd = file_nodata if nodata is None else nodata
-    dem = Dem(heights=_to_heights(data, nd), grid=None, path=path,  # type: ignore[arg-type]
+    dem = Dem(heights=_to_heights(values, nd), grid=None, path=path,  # type: ignore[arg-type]
               kind="tiff", nodata=nd, band=band, driver="TIFF (tifffile)",
-              source_dtype=str(data.dtype))
+              source_dtype=str(values.dtype))
     dem.grid = _make_grid(dem, pixel_size)
     return dem
 
@@ -272,9 +493,13 @@ def _hgt_geometry(path: str, rows: int):
 
 def _read_raw(path: str, shape: tuple[int, int] | None, dtype: str | None,
               byteorder: str | None, nodata: float | None,
-              pixel_size: tuple[float, float] | None) -> Dem:
+              pixel_size: tuple[float, float] | None, data: bytes | None = None) -> Dem:
+    """A raw grid from a local file, or from ``data`` (its bytes: standard input)."""
+    if data is None and not os.path.isfile(path):
+        raise HillshadeError(f"{path}: a raw grid is read from a local file or standard input "
+                             "only (GDAL reads it from elsewhere given an ENVI .hdr or a VRT)")
     is_hgt = path.lower().endswith(".hgt")
-    size = os.path.getsize(path)
+    size = os.path.getsize(path) if data is None else len(data)
     if size == 0:
         raise HillshadeError(f"{path}: the file is empty")
     if is_hgt:
@@ -303,9 +528,12 @@ def _read_raw(path: str, shape: tuple[int, int] | None, dtype: str | None,
         raise HillshadeError(
             f"{path}: --raw-shape {shape[0]}x{shape[1]} needs {shape[0] * shape[1]} {dtype} values "
             f"({shape[0] * shape[1] * dt.itemsize} bytes), the file holds {count} ({size} bytes)")
-    data = np.fromfile(path, dtype=dt).reshape(shape)
+    if data is None:
+        values = np.fromfile(path, dtype=dt).reshape(shape)
+    else:   # a writable copy: float32 heights are converted in place
+        values = np.frombuffer(bytearray(data), dtype=dt).reshape(shape)
     transform, crs = _hgt_geometry(path, shape[0]) if is_hgt else (None, None)
-    dem = Dem(heights=_to_heights(data, nodata), grid=None, path=path,  # type: ignore[arg-type]
+    dem = Dem(heights=_to_heights(values, nodata), grid=None, path=path,  # type: ignore[arg-type]
               kind="raw", transform=transform, crs=crs, nodata=nodata,
               driver="raw" if not is_hgt else "SRTM .hgt (raw)", source_dtype=dt.str)
     dem.grid = _make_grid(dem, pixel_size)
@@ -313,15 +541,7 @@ def _read_raw(path: str, shape: tuple[int, int] | None, dtype: str | None,
 
 
 def _make_grid(dem: Dem, pixel_size: tuple[float, float] | None) -> Grid:
-    rows, cols = dem.heights.shape
-    if pixel_size is not None:
-        col_sign, row_sign = orientation(dem.transform) if dem.transform is not None else (1, -1)
-        return Grid.uniform(rows, cols, pixel_size[0], pixel_size[1], col_sign, row_sign,
-                            "--pixel-size")
-    if dem.transform is None:
-        raise HillshadeError(
-            f"{dem.path}: has no georeferencing; give the ground spacing with --pixel-size DX[,DY] (metres)")
-    return grid_from_transform(dem.transform, dem.crs, (rows, cols))
+    return grid_of(dem.path, dem.transform, dem.crs, dem.heights.shape, pixel_size)
 
 
 # --------------------------------------------------------------------------------------------

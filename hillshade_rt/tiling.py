@@ -33,15 +33,15 @@ import contextlib
 import math
 import os
 import re
-import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 from numba import njit, prange
 
 from .errors import HillshadeError
-from .geometry import Grid, grid_from_transform, orientation
-from .io import check_band, heights_into
+from .geometry import Grid
+from .io import (STDIN, STDIN_NAME, check_band, check_input_path, check_transform, gdal_path,
+                 grid_of, heights_into, open_raster, read_error)
 from .preview import every_nth
 
 STAT_BLOCK = 256          # cells per side of the blocks whose height range bounds the halos
@@ -182,8 +182,10 @@ def window_budget(max_memory: int, per_cell: int) -> tuple[int, dict]:
 class Source:
     """A DEM opened for windowed reads (never read whole).
 
-    ``name`` is what GDAL opens (a path, or the VRT document of a mosaic); ``paths`` the files;
-    ``raw`` the numpy dtype of a raw grid (read through a memory map) or None."""
+    ``name`` is what GDAL opens (an absolute path, a /vsi path, or the VRT document of a mosaic);
+    ``paths`` the files as given (messages name them); ``raw`` the numpy dtype of a raw grid
+    (read through a memory map) or None; ``tiles``: a mosaic's inputs (``path`` as given,
+    ``name`` what GDAL opens, ``band``, ``window`` in the mosaic, ``transform``)."""
 
     name: str
     paths: list[str]
@@ -257,19 +259,16 @@ class Reader:
             self._mm = np.memmap(source.paths[0], dtype=np.dtype(source.raw), mode="r",
                                  shape=source.shape)
         else:
-            import rasterio
-            from rasterio.errors import NotGeoreferencedWarning
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", NotGeoreferencedWarning)
-                try:
-                    self._ds = rasterio.open(source.name)
-                except (rasterio.errors.RasterioError, OSError) as exc:
-                    raise HillshadeError(f"{source.path}: cannot read "
-                                         f"({str(exc).splitlines()[0]})") from None
+            self._stack = contextlib.ExitStack()
+            try:
+                self._ds = open_raster(source.path, self._stack, name=source.name)
+            except BaseException:
+                self._stack.close()
+                raise
 
     def close(self):
         if self._ds is not None:
-            self._ds.close()
+            self._stack.close()
             self._ds = None
         self._mm = None
 
@@ -290,10 +289,41 @@ class Reader:
                 try:
                     data = self._ds.read(src.band, window=Window(c0, a, c1 - c0, b - a))
                 except Exception as exc:  # noqa: BLE001 -- GDAL read errors of many kinds
-                    raise HillshadeError(f"{src.path}: read failed at rows {a}:{b}, columns "
-                                         f"{c0}:{c1} ({str(exc).splitlines()[0]})") from None
+                    if src.tiles:   # which tile? each one under the window, read on its own
+                        raise _bad_tile(src, (a, b, c0, c1)) or read_error(src.path, exc) \
+                            from None
+                    raise read_error(src.path, exc, src.name) from None
             self.bytes_read += data.nbytes
             heights_into(data, src.nodata, out[a - r0:b - r0], src.z_factor)
+
+
+def _bad_tile(src: Source, bounds) -> HillshadeError | None:
+    """The error of the first tile of the mosaic ``src`` under ``bounds`` (r0, r1, c0, c1) that
+    cannot be opened or read there on its own (None if every one can)."""
+    from rasterio.windows import Window
+    r0, r1, c0, c1 = bounds
+    for t in src.tiles:
+        tr0, tr1, tc0, tc1 = t["window"]
+        a, b, c, d = max(r0, tr0), min(r1, tr1), max(c0, tc0), min(c1, tc1)
+        if a >= b or c >= d:
+            continue
+        try:
+            with contextlib.ExitStack() as stack:
+                ds = open_raster(t["path"], stack, name=t.get("name"))
+                ds.read(t.get("band", 1), window=Window(c - tc0, a - tr0, d - c, b - a))
+        except HillshadeError as exc:
+            return exc
+        except Exception as exc:  # noqa: BLE001 -- GDAL read errors of many kinds
+            return read_error(t["path"], exc, t.get("name"))
+    return None
+
+
+def dataset_name(path: str) -> str:
+    """What GDAL opens for the input ``path`` in a VRT or on another process: a local file's
+    absolute path, else :func:`io.gdal_path` (``/vsizip/…``; rasterio URLs converted)."""
+    if os.path.exists(path) and not path.startswith("/vsi"):
+        return os.path.abspath(path)
+    return gdal_path(path)
 
 
 def open_source(paths, *, band: int = 1, nodata: float | None = None,
@@ -305,11 +335,12 @@ def open_source(paths, *, band: int = 1, nodata: float | None = None,
     paths = [os.fspath(p) for p in ([paths] if isinstance(paths, (str, os.PathLike)) else paths)]
     if not paths:
         raise HillshadeError("no DEM given")
+    if STDIN in paths:
+        raise HillshadeError(f"{STDIN_NAME}: a DEM from standard input ('-') is read whole, in "
+                             "memory: not in windows (--window-size, --max-memory, --scheduler) "
+                             "nor as a tile of a mosaic")
     for p in paths:
-        if not os.path.exists(p):
-            raise HillshadeError(f"{p}: no such file")
-        if os.path.isdir(p):
-            raise HillshadeError(f"{p}: is a folder, not a raster file")
+        check_input_path(p)
     if not (math.isfinite(z_factor) and z_factor != 0):
         raise HillshadeError(f"--z-factor must be a finite non-zero number, got {z_factor}")
     if band < 1:
@@ -326,44 +357,26 @@ def open_source(paths, *, band: int = 1, nodata: float | None = None,
     else:
         src = _mosaic_source(paths, band, nodata)
     src.z_factor = float(z_factor)
-    rows, cols = src.shape
-    if pixel_size is not None:
-        col_sign, row_sign = orientation(src.transform) if src.transform is not None else (1, -1)
-        src.grid = Grid.uniform(rows, cols, pixel_size[0], pixel_size[1], col_sign, row_sign,
-                                "--pixel-size")
-    elif src.transform is None:
-        raise HillshadeError(f"{src.path}: has no georeferencing; give the ground spacing with "
-                             "--pixel-size DX[,DY] (metres)")
-    else:
-        src.grid = grid_from_transform(src.transform, src.crs, (rows, cols))
+    src.grid = grid_of(src.path, src.transform, src.crs, src.shape, pixel_size)
     return src
 
 
 def _open_meta(path: str, band: int):
-    import rasterio
-    from rasterio.errors import NotGeoreferencedWarning
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", NotGeoreferencedWarning)
-            with rasterio.open(path) as ds:
-                georef = check_band(ds, path, band)
-                return dict(shape=(ds.height, ds.width), transform=ds.transform if georef else None,
-                            crs=ds.crs, nodata=ds.nodatavals[band - 1],
-                            dtype=ds.dtypes[band - 1], driver=ds.driver)
-    except HillshadeError:
-        raise
-    except (rasterio.errors.RasterioError, OSError) as exc:
-        msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        if "not recognized as" in msg or "not recognised" in msg:
-            msg = "not a raster format GDAL can read"
-        raise HillshadeError(f"{path}: cannot read as a raster ({msg})") from None
+    """What a windowed run needs to know of ``path`` (opened, not read); errors name it."""
+    name = dataset_name(path)
+    with contextlib.ExitStack() as stack:
+        ds = open_raster(path, stack, name=name)
+        georef = check_band(ds, path, band)
+        return dict(shape=(ds.height, ds.width), transform=ds.transform if georef else None,
+                    crs=ds.crs, nodata=ds.nodatavals[band - 1],
+                    dtype=ds.dtypes[band - 1], driver=ds.driver, name=name)
 
 
 def _gdal_source(path: str, band: int, nodata: float | None) -> Source:
     m = _open_meta(path, band)
     if np.dtype(m["dtype"]).kind not in "iuf":
         raise HillshadeError(f"{path}: pixel type {m['dtype']} is not a height")
-    return Source(os.path.abspath(path), [path], m["shape"], m["transform"], m["crs"],
+    return Source(m["name"], [path], m["shape"], m["transform"], m["crs"],
                   m["nodata"] if nodata is None else nodata, band, m["dtype"], m["driver"])
 
 
@@ -373,6 +386,9 @@ def _raw_source(path, shape, dtype, byteorder, nodata) -> Source:
         raise HillshadeError(f"{path}: raw input needs --raw-dtype ({', '.join(RAW_DTYPES)})")
     if shape is None:
         raise HillshadeError(f"{path}: raw input needs --raw-shape ROWSxCOLS")
+    if not os.path.isfile(path):
+        raise HillshadeError(f"{path}: a raw grid is read from a local file only (GDAL reads it "
+                             "from elsewhere given an ENVI .hdr or a VRT)")
     dt = np.dtype(dtype).newbyteorder("<" if (byteorder or "little") == "little" else ">")
     size = os.path.getsize(path)
     if shape[0] * shape[1] * dt.itemsize != size:
@@ -390,8 +406,9 @@ def _mosaic_source(paths: list[str], band: int, nodata: float | None) -> Source:
     t0 = first["transform"]
     if t0 is None:
         raise HillshadeError(f"{paths[0]}: a mosaic needs georeferenced inputs")
-    if t0.b != 0 or t0.d != 0:
-        raise HillshadeError(f"{paths[0]}: rotated geotransforms cannot be mosaicked")
+    for p, m in zip(paths, metas):     # rotated, degenerate: named before any arithmetic
+        if m["transform"] is not None:
+            check_transform(p, m["transform"])
     offs = []
     for p, m in zip(paths, metas):
         t = m["transform"]
@@ -422,9 +439,9 @@ def _mosaic_source(paths: list[str], band: int, nodata: float | None) -> Source:
     for p, o, m in zip(paths, offs, metas):
         r0, c0 = o[0] - r_min, o[1] - c_min
         tiles.append({"path": p, "window": (r0, r0 + m["shape"][0], c0, c0 + m["shape"][1]),
-                      "transform": m["transform"]})
+                      "transform": m["transform"], "name": m["name"], "band": band})
         nd = m["nodata"] if nodata is None else nodata
-        sources.append(VrtSource(os.path.abspath(p), band, (r0, c0), m["shape"], nd))
+        sources.append(VrtSource(m["name"], band, (r0, c0), m["shape"], nd))
     doc = vrt_xml((rows, cols), transform, first["crs"], [sources], "Float32", math.nan)
     return Source(doc, paths, (rows, cols), transform, first["crs"], math.nan, 1, "float32",
                   "VRT (mosaic)", tiles=tiles)
