@@ -1,0 +1,991 @@
+"""Fuzzing the command line (issue 16): whatever the input file and the options, a run ends
+
+* with exit status 0 and valid outputs (each opens with rasterio, has the input's shape, the
+  product's dtype and only values in its documented range; nothing else new on disk), or
+* with exit status 1 or 2, exactly one line on stderr beginning ``hillshade-rt: error:``, and
+  nothing new on disk (no output, no hidden ``.o.tif.*.part.tif`` or ``.scratch`` files);
+  a command line that is malformed on its own (an option value or combination that no input
+  could make right, e.g. ``--pixel-size 0``, ``--lat 95``, ``--band 0``) exits 2,
+
+and never with a traceback.
+
+Inputs: random bytes (.tif .hgt .raw .png), small real GeoTIFFs/PNGs truncated or with bytes
+overwritten, raw grids with random --raw-shape/--raw-dtype/--raw-byteorder, two-tile mosaics, and
+random option values for shadow, hillshade, horizon, info and sun-hours.
+
+Each run is in-process (click's CliRunner) but made to look like a fresh process on stderr:
+Python warnings shown as a fresh interpreter shows them, log records with no handler printed by
+logging's last resort (as tifffile's are in a real run), and anything written to file
+descriptor 2 (GDAL's own messages) counted as stderr too.
+
+In the suite: a few hundred examples, derandomized (reproducible). A long run:
+``HILLSHADE_FUZZ_EXAMPLES=3000 pytest tests/test_fuzz.py`` (the number is shared among the tests).
+``HILLSHADE_FUZZ_COLLECT=dir`` records every violation (JSON lines, with the input files)
+instead of failing at the first one, to survey a long run.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import json
+import logging
+import os
+import re
+import shutil
+import sys
+import tempfile
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings, strategies as st
+
+from conftest import fractal_terrain
+
+pytestmark = pytest.mark.filterwarnings("ignore")
+
+_TOTAL = int(os.environ.get("HILLSHADE_FUZZ_EXAMPLES", "0") or 0)
+_COLLECT = os.environ.get("HILLSHADE_FUZZ_COLLECT")
+
+
+def _examples(default: int, share: float) -> int:
+    return max(1, int(_TOTAL * share)) if _TOTAL else default
+
+
+def _settings(default: int, share: float):
+    return settings(max_examples=_examples(default, share), deadline=None, derandomize=True,
+                    database=None, print_blob=False,
+                    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large,
+                                           HealthCheck.filter_too_much])
+
+
+# ---------------------------------------------------------------------------------------------
+# a case: files to write, a command line, what a success must produce
+
+IN, OUT = "@IN/", "@OUT/"   # placeholders in argv for the input and output folders
+
+
+@dataclass
+class Case:
+    command: str
+    argv: list[str]
+    files: dict[str, bytes] = field(default_factory=dict)      # name in IN -> content
+    recipe: list[str] = field(default_factory=list)           # how the files were made
+    malformed: list[str] = field(default_factory=list)        # why the command line is bad alone
+    shape: tuple[int, int] | None = None                       # the input's (rows, cols) if known
+    product: str = ""            # shadow, classes, soft, hillshade, horizon, sun-hours, info
+    bands: int | None = 1        # bands of the output (None: not known in advance)
+    outputs: list[str] = field(default_factory=list)          # files in OUT a success writes
+    report: str | None = None    # name in OUT
+    preview: str | None = None   # name in OUT
+    info_json: bool = False
+
+    def shell(self) -> str:
+        import shlex
+        args = [a.replace(IN, "in/").replace(OUT, "out/") for a in self.argv]
+        return "hillshade-rt " + " ".join(shlex.quote(a) for a in args)
+
+    def __repr__(self):   # what hypothesis prints for a falsifying example
+        return f"Case({self.shell()!r}; files: {'; '.join(self.recipe) or 'none'})"
+
+
+# ---------------------------------------------------------------------------------------------
+# input files
+
+_GEO = {
+    "utm": ((30.0, 0.0, 400000.0, 0.0, -30.0, 3800000.0), "EPSG:32611"),
+    "geographic": ((1 / 1200, 0.0, -84.0, 0.0, -1 / 1200, 36.5), "EPSG:4326"),
+    "south-up": ((30.0, 0.0, 400000.0, 0.0, 30.0, 3790000.0), "EPSG:32611"),
+    "rotated": ((29.5, 5.2, 400000.0, 5.2, -29.5, 3800000.0), "EPSG:32611"),
+    "none": (None, None),
+}
+_NODATA = {"int16": [None, -32768, -9999], "uint16": [None, 0, 65535], "uint8": [None, 0, 255],
+           "int32": [None, -9999], "float32": [None, -9999.0, float("nan")],
+           "float64": [None, -9999.0, -3.4028234663852886e38]}
+
+
+def _heights(rows, cols, dtype, seed, voids, nodata):
+    z = fractal_terrain(rows, cols, seed, relief=150.0) + (20.0 if dtype.startswith("u") else 500.0)
+    if dtype == "uint8":
+        z = z * (200.0 / 650.0)
+    z = z.astype(dtype)
+    if voids:
+        rng = np.random.default_rng(seed + 1)
+        holes = rng.random((rows, cols)) < voids
+        if nodata is not None:
+            z[holes] = nodata
+        elif dtype.startswith("float"):
+            z[holes] = np.nan
+    return z
+
+
+@functools.lru_cache(maxsize=512)
+def raster_bytes(driver, rows, cols, dtype, geo, nodata, seed, voids, bands, compress):
+    """A small real raster (GTiff or PNG) as bytes."""
+    import rasterio
+    from affine import Affine
+    from rasterio.io import MemoryFile
+
+    z = np.stack([_heights(rows, cols, dtype, seed + b, voids, nodata) for b in range(bands)])
+    prof = dict(driver=driver, width=cols, height=rows, count=bands, dtype=dtype, nodata=nodata)
+    if driver == "GTiff":
+        tr, crs = _GEO[geo]
+        if tr is not None:
+            prof.update(transform=Affine(*tr), crs=crs)
+        if compress:
+            prof.update(compress=compress, tiled=True, blockxsize=16, blockysize=16)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with MemoryFile() as mf:
+            with mf.open(**prof) as dst:
+                dst.write(z)
+            return bytes(mf.read())
+
+
+@st.composite
+def real_raster(draw, driver=None):
+    """(bytes, recipe, shape, georeferenced, extension) of a valid small GeoTIFF or PNG."""
+    driver = driver or draw(st.sampled_from(["GTiff"] * 5 + ["PNG"]))
+    rows, cols = draw(st.integers(12, 40)), draw(st.integers(12, 40))
+    if driver == "PNG":
+        dtype, geo, compress = draw(st.sampled_from(["uint8", "uint16"])), "none", None
+    else:
+        dtype = draw(st.sampled_from(["float32", "int16", "float32", "uint16", "float64",
+                                      "int32", "uint8"]))
+        geo = draw(st.sampled_from(["utm", "utm", "geographic", "south-up", "none", "rotated"]))
+        compress = draw(st.sampled_from([None, None, "deflate", "lzw"]))
+    nodata = draw(st.sampled_from(_NODATA[dtype]))
+    voids = draw(st.sampled_from([0.0, 0.0, 0.05, 0.5, 1.0]))
+    bands = draw(st.sampled_from([1, 1, 1, 2])) if driver == "GTiff" else 1
+    seed = draw(st.integers(0, 5))
+    data = raster_bytes(driver, rows, cols, dtype, geo, nodata, seed, voids, bands, compress)
+    ext = ".tif" if driver == "GTiff" else ".png"
+    recipe = (f"{driver} {rows}x{cols} {dtype} geo={geo} nodata={nodata} voids={voids} "
+              f"bands={bands} compress={compress} (tests/test_fuzz.py::raster_bytes seed {seed})")
+    return data, recipe, (rows, cols), geo not in ("none",), ext
+
+
+@st.composite
+def damaged_input(draw):
+    """Random bytes, or a real raster truncated or with some bytes overwritten."""
+    how = draw(st.sampled_from(["random", "truncated", "truncated", "flipped", "flipped"]))
+    if how == "random":
+        ext = draw(st.sampled_from([".tif", ".hgt", ".raw", ".png"]))
+        magic = draw(st.sampled_from([b"", b"II*\x00", b"MM\x00*", b"II+\x00",
+                                      b"\x89PNG\r\n\x1a\n"]))
+        body = draw(st.binary(min_size=0, max_size=3000))
+        data = magic + body
+        return data, f"random bytes: magic {magic!r} + {len(body)} random bytes", None, False, ext
+    data, recipe, shape, georef, ext = draw(real_raster())
+    if how == "truncated":
+        n = draw(st.integers(0, len(data) - 1))
+        return data[:n], f"{recipe}, truncated to {n} of {len(data)} bytes", None, georef, ext
+    buf = bytearray(data)
+    k = draw(st.integers(1, 8))
+    edits = []
+    for _ in range(k):
+        head = draw(st.booleans())
+        pos = draw(st.integers(0, min(len(buf), 600) - 1 if head else len(buf) - 1))
+        val = draw(st.integers(0, 255))
+        buf[pos] = val
+        edits.append((pos, val))
+    return bytes(buf), f"{recipe}, bytes overwritten (pos, value): {edits}", None, georef, ext
+
+
+_RAW = {"int16": 2, "uint16": 2, "int32": 4, "float32": 4, "float64": 8}
+
+
+@st.composite
+def raw_input(draw):
+    """(files, recipe, options, shape or None, malformed) of a raw grid with random options."""
+    dtype = draw(st.sampled_from(sorted(_RAW)))
+    order = draw(st.sampled_from(["little", "big"]))
+    hgt = draw(st.integers(0, 5)) == 0
+    rows = draw(st.integers(12, 40))
+    cols = rows if hgt else draw(st.integers(12, 40))
+    content = draw(st.sampled_from(["terrain", "terrain", "random"]))
+    if content == "terrain":
+        z = _heights(rows, cols, dtype, draw(st.integers(0, 5)), 0.0, None)
+        data = z.astype(np.dtype(dtype).newbyteorder("<" if order == "little" else ">")).tobytes()
+    else:
+        data = draw(st.binary(min_size=rows * cols * _RAW[dtype], max_size=rows * cols * _RAW[dtype]))
+    cut = draw(st.sampled_from([0, 0, 0, 1, 3, -1]))   # bytes removed (-1: one added)
+    data = data[:len(data) - cut] if cut > 0 else data + (b"\x00" if cut < 0 else b"")
+    name = ("N36W084.hgt" if hgt else
+            "grid" + draw(st.sampled_from([".raw", ".bin", ".f32", ".r16", ".dem", ".dat"])))
+    opts, malformed = [], []
+    shape_opt = draw(st.sampled_from(["match", "match", "swapped", "wrong", "garbage", "none"]))
+    if shape_opt == "match":
+        opts += ["--raw-shape", f"{rows}x{cols}"]
+    elif shape_opt == "swapped":
+        opts += ["--raw-shape", f"{cols}X{rows}"]
+    elif shape_opt == "wrong":
+        opts += ["--raw-shape", f"{rows},{cols + draw(st.integers(1, 5))}"]
+    elif shape_opt == "garbage":
+        g = draw(st.sampled_from(["abc", "0x5", "12", "12x", "-3x4", "x", "1e3x2", "", "12x0"]))
+        opts += ["--raw-shape", g]
+        malformed.append(f"--raw-shape {g!r}")
+    dt_opt = draw(st.sampled_from(["match", "match", "other", "none", "bad"]))
+    if dt_opt == "match":
+        opts += ["--raw-dtype", dtype]
+    elif dt_opt == "other":
+        opts += ["--raw-dtype", draw(st.sampled_from(sorted(_RAW)))]
+    elif dt_opt == "bad":
+        bad = draw(st.sampled_from(["int8", "float16", "f4"]))
+        opts += ["--raw-dtype", bad]
+        malformed.append(f"--raw-dtype {bad}")
+    bo = draw(st.sampled_from(["match", "other", "none", "none", "bad"]))
+    if bo == "match":
+        opts += ["--raw-byteorder", order]
+    elif bo == "other":
+        opts += ["--raw-byteorder", "big" if order == "little" else "little"]
+    elif bo == "bad":
+        opts += ["--raw-byteorder", "middle"]
+        malformed.append("--raw-byteorder middle")
+    recipe = (f"raw {name}: {rows}x{cols} {dtype} {order}-endian {content} values "
+              f"({len(data)} bytes; {cut} removed, -1 = one added)")
+    shape = (rows, cols) if shape_opt == "match" and cut == 0 else None
+    return {name: data}, recipe, opts, name, shape, malformed, hgt
+
+
+# ---------------------------------------------------------------------------------------------
+# option values
+
+_FLOAT_EDGES = ["nan", "inf", "-inf", "-0.0", "0", "1e308", "-1e308", "1e-300", "5e-324"]
+
+
+def _num(x) -> str:
+    return x if isinstance(x, str) else repr(float(x))
+
+
+def floats_text(lo, hi):
+    """A float option value as text: mostly in [lo, hi], sometimes an edge or any float."""
+    return st.one_of(st.floats(lo, hi).map(_num), st.floats(lo, hi).map(_num),
+                     st.sampled_from(_FLOAT_EDGES),
+                     st.floats(allow_nan=True, allow_infinity=True).map(_num))
+
+
+def _as_float(text):
+    try:
+        return float(text)
+    except ValueError:
+        return None
+
+
+def _finite(text) -> bool:
+    v = _as_float(text)
+    return v is not None and np.isfinite(v)
+
+
+def pick(draw, wild, good, bad=()):
+    """A value from ``good`` (a list or a strategy), or with ``wild`` now and then from ``bad``
+    (values no input could make right, or anything at all)."""
+    src = good
+    if wild and bad and draw(st.integers(0, 2)) == 0:
+        src = bad
+    return draw(src if isinstance(src, st.SearchStrategy) else st.sampled_from(list(src)))
+
+
+def often(draw, n) -> bool:
+    """True with probability 1/n."""
+    return draw(st.integers(0, n - 1)) == 0
+
+
+_TIMES = ["2026-06-21T12:00:00+00:00", "2026-06-21T19:30Z", "2026-06-21T07:30-07:00",
+          "2026-12-21T20:00:00+00:00", "2026-06-21T08:00Z", "2026-06-21T14:30+02:00"]
+_LOCAL_TIMES = ["2026-06-21T14:30", "2026-06-21", "2026-03-29T02:30", "2026-11-01T01:30"]
+_BAD_TIMES = ["noon", "2026-13-45T99:00Z", "", "T12:00Z", "2026-06-21T12:00+25:00",
+              "2026-06-21 18:00 UTC", "1e3"]
+_ZONES = ["UTC", "Europe/Zurich", "America/Los_Angeles", "America/New_York"]
+_BAD_ZONES = ["Mars/Olympus_Mons", "", "Nowhere/Special", "../etc/passwd"]
+
+
+def _time_ok(text, tz) -> bool | None:
+    """True: a well-formed instant; False: malformed whatever the DEM; None: not decided here
+    (a date without a time, a local time a zone skips or repeats)."""
+    import datetime as dt
+    try:
+        t = dt.datetime.fromisoformat(text.strip().replace("z", "Z"))
+    except ValueError:
+        return False
+    if t.tzinfo is None and tz is None:
+        return False
+    if "T" not in text or t.tzinfo is None:
+        return None     # date only (issue 16 item 12), or local: may not exist in the zone
+    return True
+
+
+@st.composite
+def sun_options(draw, command, wild):
+    """The sun options of shadow / hillshade: (argv, malformed, number of suns or None)."""
+    argv, bad = [], []
+    way = pick(draw, wild, ["given"] * 6 + ["time"] * 2 + ["series"] +
+               (["none"] if command == "hillshade" else []), ["both", "half", "none"])
+    nsuns = 1
+    if way in ("given", "both", "half"):
+        az = pick(draw, wild, st.one_of(st.floats(-720, 720).map(_num),
+                                        st.sampled_from(["0", "90", "180", "203.7", "1e300"])),
+                  st.one_of(floats_text(-720, 720), st.sampled_from(["west", "1e400", "nan"])))
+        el = pick(draw, wild, st.one_of(st.floats(0.5, 89.0).map(_num),
+                                        st.sampled_from(["90", "1e-300", "0.01"])),
+                  st.one_of(floats_text(-100, 200), st.sampled_from(["91", "0", "low", "nan"])))
+        argv += ["--azimuth", az]
+        if way != "half":
+            argv += ["--elevation", el]
+        else:
+            bad.append("--azimuth without --elevation")
+        if _as_float(az) is None:
+            bad.append(f"--azimuth {az!r} not a number")
+        elif not _finite(az):
+            bad.append(f"--azimuth {az}")
+        elif way != "half":
+            v = _as_float(el)
+            if v is None or not (np.isfinite(v) and 0 < v <= 90):
+                bad.append(f"--elevation {el}")
+    tz = None
+    if way in ("time", "series", "both") and draw(st.booleans()):
+        tz = pick(draw, wild, _ZONES, _BAD_ZONES)
+        argv += ["--tz", tz]
+        if tz in _BAD_ZONES:
+            bad.append(f"--tz {tz!r}")
+    if way in ("time", "both"):
+        times = draw(st.lists(st.just(None), min_size=1, max_size=3))
+        times = [pick(draw, wild, _TIMES + (_LOCAL_TIMES if tz else []), _BAD_TIMES + _LOCAL_TIMES)
+                 for _ in times]
+        for t in times:
+            argv += ["--time", t]
+            if _time_ok(t, None if tz in _BAD_ZONES else tz) is False:
+                bad.append(f"--time {t!r}" + ("" if tz else " without --tz"))
+        nsuns = len(times)
+    if way == "series":
+        start = pick(draw, wild, ["2026-06-21T18:00Z", "2026-06-21T10:00-07:00"], ["soon"])
+        end = pick(draw, wild, ["2026-06-21T19:00Z", "2026-06-21T18:00Z"],
+                   ["later", "2026-06-21T17:00Z"])
+        step = pick(draw, wild, ["30min", "1h", "PT20M"], ["0s", "abc", "-5min", "1 fortnight"])
+        argv += ["--start", start, "--end", end, "--step", step]
+        nsuns = None
+        if start == "soon" or end == "later":
+            bad.append("--start/--end not a time")
+        elif step in ("0s", "abc", "-5min", "1 fortnight"):
+            bad.append(f"--step {step!r}")
+        elif start == "2026-06-21T18:00Z" and end == "2026-06-21T17:00Z":
+            bad.append("--end before --start")
+    if way == "both":
+        bad.append("--azimuth/--elevation with --time")
+    if way == "none" and command == "shadow":
+        bad.append("no sun given")
+    if way in ("time", "series") and often(draw, 4):
+        lat = pick(draw, wild, ["36.3", "-89.9", "90"], ["95", "-91", "nan", "inf"])
+        with_lon = not (wild and often(draw, 4))
+        argv += ["--lat", lat]
+        lon = None
+        if with_lon:
+            lon = pick(draw, wild, ["-84.1", "200", "-540"], ["nan", "inf"])
+            argv += ["--lon", lon]
+        v = float(lat)
+        if not with_lon:
+            bad.append("--lat without --lon")
+        elif not (np.isfinite(v) and -90 <= v <= 90) or not _finite(lon):
+            bad.append(f"--lat {lat} --lon {lon}")
+    if way in ("given", "both") and wild and often(draw, 10):
+        argv += ["--tz", "UTC"]
+        bad.append("--tz with --azimuth/--elevation")
+    return argv, bad, nsuns
+
+
+@st.composite
+def dem_options(draw, georef: bool, raw: bool, wild: bool):
+    argv, bad = [], []
+    if often(draw, 10):
+        b = pick(draw, wild, ["1", "2"], ["0", "-1", "x"])
+        argv += ["--band", b]
+        if b in ("0", "-1", "x"):
+            bad.append(f"--band {b}")
+    if often(draw, 7):
+        nd = pick(draw, wild, st.one_of(st.floats(-40000, 70000).map(_num),
+                                        st.sampled_from(["-32768", "nan", "0"])),
+                  st.one_of(floats_text(-1e40, 1e40), st.sampled_from(["none"])))
+        argv += ["--nodata", nd]
+        if _as_float(nd) is None:
+            bad.append(f"--nodata {nd!r}")
+    if often(draw, 7):
+        zf = pick(draw, wild, st.one_of(st.sampled_from(["0.3048", "-1", "1e30", "1e-30", "3"]),
+                                        st.floats(-1000, 1000).filter(bool).map(_num)),
+                  floats_text(-1000, 1000))
+        argv += ["-z", zf]
+        v = _as_float(zf)
+        if v is None or not np.isfinite(v) or v == 0:
+            bad.append(f"--z-factor {zf}")
+    if (raw or not georef) and not (wild and often(draw, 5)) or often(draw, 10):
+        ps = pick(draw, wild, ["30", "30", "1,2", " 30 , 30 ", "1e-300", "1e300", "0.5"],
+                  ["0", "-1", "nan", "inf", "1,2,3", "abc", "", "30,0"])
+        argv += ["--pixel-size", ps]
+        try:
+            vals = [float(p) for p in ps.split(",")]
+            ok = len(vals) in (1, 2) and all(np.isfinite(v) and v > 0 for v in vals)
+        except ValueError:
+            ok = False
+        if not ok:
+            bad.append(f"--pixel-size {ps!r}")
+    return argv, bad
+
+
+@st.composite
+def algorithm_options(draw, wild):
+    argv, bad = [], []
+    algo = pick(draw, wild, ["smap", "smap", "brute", "horizon", "sweep", None], ["quick"])
+    if algo == "quick":
+        bad.append("--algorithm quick")
+    if algo is not None:
+        argv += ["--algorithm", algo]
+    algo = algo or "smap"
+    owners = {"--nextv": "smap", "--better-nextv": "smap", "--horizon-method": "horizon",
+              "--sample-spacing": "horizon", "--exact-steps": "sweep"}
+    for opt, owner in owners.items():
+        if not often(draw, 6) or (owner != algo and not wild):
+            continue
+        if opt == "--better-nextv":
+            argv.append(opt)
+        elif opt == "--nextv":
+            argv += [opt, draw(st.sampled_from(["scan", "binary", "quad"]))]
+        elif opt == "--horizon-method":
+            argv += [opt, draw(st.sampled_from(["scan", "hull"]))]
+        else:
+            n = pick(draw, wild, ["1", "2", "5"], ["0", "-3", "two"])
+            argv += [opt, n]
+            if n in ("0", "-3", "two"):
+                bad.append(f"{opt} {n}")
+        if owner != algo and algo in ("smap", "brute", "horizon", "sweep"):
+            bad.append(f"{opt} with --algorithm {algo}")
+    return argv, bad
+
+
+@st.composite
+def run_options(draw, command, nsuns, wild):
+    """Outputs and the run's other options: (argv, bad, report, preview, pattern?)."""
+    argv, bad = [], []
+    report = preview = None
+    if often(draw, 4):
+        report = "r.json"
+        argv += ["--report", OUT + report]
+    if often(draw, 5):
+        preview = "p.png"
+        argv += ["--preview", OUT + preview]
+    if often(draw, 10):
+        argv.append("--cog")
+    if draw(st.booleans()):
+        argv.append("-q")
+    if often(draw, 6):
+        mm = pick(draw, wild, ["4GB", "512MiB", "300MB", "2 GB", "64GB", "1kB"],
+                  ["0", "abc", "1e9", "-1GB", "0.0001kB"])
+        argv += ["--max-memory", mm]
+        if mm in ("0", "abc", "1e9", "-1GB", "0.0001kB"):
+            bad.append(f"--max-memory {mm!r}")
+    if often(draw, 5):
+        ws = pick(draw, wild, ["8", "16x32", "13,7", "64", "5"],
+                  ["0", "abc", "-5", "8x0", "", "1e3"])
+        argv += ["--window-size", ws]
+        if not re.fullmatch(r"\s*(\d+)\s*(?:[xX,]\s*(\d+))?\s*", ws) or \
+                any(int(g) < 1 for g in re.findall(r"\d+", ws)):
+            bad.append(f"--window-size {ws!r}")
+    if often(draw, 10):
+        th = pick(draw, wild, ["1", "2"], ["0"])
+        argv += ["--threads", th]
+        if th == "0":
+            bad.append("--threads 0")
+    pattern = nsuns is not None and often(draw, 8)
+    return argv, bad, report, preview, pattern
+
+
+# ---------------------------------------------------------------------------------------------
+# whole cases
+
+@st.composite
+def input_file(draw, kinds=("real", "damaged", "raw")):
+    """(files, recipe, dem argv, shape or None, georef, extra dem options, malformed, raw)."""
+    kind = draw(st.sampled_from(kinds))
+    if kind == "raw":
+        files, recipe, opts, name, shape, bad, hgt = draw(raw_input())
+        return files, [recipe], [IN + name], shape, hgt, opts, bad, True
+    data, recipe, shape, georef, ext = draw(real_raster() if kind == "real" else damaged_input())
+    name = "dem" + ext
+    files = {name: data}
+    dems = [IN + name]
+    if kind == "real" and re.search(r"geo=(utm|geographic|south-up) ", recipe) and often(draw, 8):
+        # a mosaic: a second tile beside the first (east of it), perhaps damaged
+        second, r2, _, _, _ = draw(real_raster("GTiff"))
+        mode = draw(st.sampled_from(["beside", "damaged", "random"]))
+        if mode == "damaged":
+            second = second[:draw(st.integers(0, len(second) - 1))]
+        elif mode == "random":
+            second = draw(st.binary(max_size=2000))
+        files["dem2.tif"] = _shifted(data, shape) if mode == "beside" else second
+        recipe += "; dem2.tif: " + ("dem.tif shifted east by its width" if mode == "beside"
+                                    else f"{mode}: {r2}")
+        dems.append(IN + "dem2.tif")
+        shape = (shape[0], 2 * shape[1]) if mode == "beside" else None
+    return files, [recipe], dems, shape, georef, [], [], False
+
+
+def _shifted(data: bytes, shape) -> bytes:
+    """The raster ``data`` moved east by its own width (a tile of a mosaic)."""
+    import rasterio
+    from rasterio.io import MemoryFile
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with MemoryFile(data) as src_f, src_f.open() as src:
+            prof = src.profile
+            z = src.read()
+            t = src.transform
+            prof["transform"] = rasterio.Affine(t.a, t.b, t.c + t.a * shape[1], t.d, t.e, t.f)
+            with MemoryFile() as mf:
+                with mf.open(**prof) as dst:
+                    dst.write(z)
+                return bytes(mf.read())
+
+
+def _lighting_case(draw, command, inp, wild):
+    files, recipe, dems, shape, georef, dem_extra, bad, raw = inp
+    sun, sbad, nsuns = draw(sun_options(command, wild))
+    dopt, dbad = draw(dem_options(georef, raw, wild))
+    run, rbad, report, preview, pattern = draw(run_options(command, nsuns, wild))
+    argv, bad = [command] + dems + sun, bad + sbad + dbad + rbad
+    product = "hillshade" if command == "hillshade" else "shadow"
+    if command == "shadow":
+        aopt, abad = draw(algorithm_options(wild))
+        argv += aopt
+        bad += abad
+        soft, classes = often(draw, 5), often(draw, 6)
+        if classes and soft and not wild:
+            soft = False
+        if soft:
+            argv.append("--soft")
+            product = "soft"
+        if classes:
+            argv.append("--classes")
+            product = "classes"
+            if soft:
+                bad.append("--classes with --soft")
+        if often(draw, 5):
+            argv.append("--self-shadow")
+    else:
+        if often(draw, 5):
+            argv += ["--algorithm", draw(st.sampled_from(["smap", "brute", "horizon", "sweep"]))]
+        if often(draw, 6):
+            argv.append("--soft")
+        if often(draw, 5):
+            amb = pick(draw, wild, ["0", "0.5", "1"], ["1.5", "-0.1", "nan"])
+            argv += ["--ambient", amb]
+            if amb in ("1.5", "-0.1", "nan"):
+                bad.append(f"--ambient {amb}")
+        if often(draw, 7) and (wild or "--pixel-size" not in dopt):
+            sc = pick(draw, wild, ["1", "111120"], ["0", "-1", "nan", "inf"])
+            argv += ["--scale", sc]
+            if sc in ("0", "-1", "nan", "inf"):
+                bad.append(f"--scale {sc}")
+            elif "--pixel-size" in dopt:
+                bad.append("--scale with --pixel-size")
+    if often(draw, 10):
+        argv.append(draw(st.sampled_from(["--earth-curvature", "--no-earth-curvature"])))
+    if often(draw, 12):
+        argv += ["--refraction-coefficient", draw(st.sampled_from(["0.13", "0", "-1", "2"]))]
+    if pattern:
+        argv += ["--output-pattern", OUT + "o_{index}.tif"]
+        outputs, bands = [f"o_{i}.tif" for i in range(nsuns)], 1
+    elif often(draw, 12):
+        argv += ["-o", OUT + "o.tif"]
+        outputs, bands = ["o.tif"], nsuns
+    else:
+        argv.append(OUT + "o.tif")
+        outputs, bands = ["o.tif"], nsuns
+    argv += run + dem_extra + dopt
+    return Case(command, argv, files, recipe, bad, shape, product, bands, outputs, report,
+                preview)
+
+
+def _horizon_case(draw, inp, wild):
+    files, recipe, dems, shape, georef, dem_extra, bad, raw = inp
+    argv = ["horizon", dems[0], OUT + "o.tif"]
+    if len(dems) > 1:
+        bad.append("horizon takes one DEM")   # click: "Got unexpected extra argument"
+        argv = ["horizon"] + dems + [OUT + "o.tif"]
+    az = pick(draw, wild, st.floats(-720, 720).map(_num),
+              st.one_of(floats_text(-720, 720), st.sampled_from(["north"])))
+    argv += ["--azimuth", az]
+    if not _finite(az):
+        bad.append(f"--azimuth {az}")
+    method = draw(st.sampled_from([None, "scan", "hull"]))
+    if method:
+        argv += ["--method", method]
+    if often(draw, 4):
+        n = pick(draw, wild, ["1", "3"], ["0"])
+        argv += ["--sample-spacing", n]
+        if n == "0":
+            bad.append("--sample-spacing 0")
+        elif method == "hull" and n != "1":
+            bad.append("--sample-spacing with --method hull")
+    if often(draw, 6):
+        argv.append(draw(st.sampled_from(["--earth-curvature", "--no-earth-curvature"])))
+    preview = None
+    if often(draw, 5):
+        preview = "p.png"
+        argv += ["--preview", OUT + preview]
+    dopt, dbad = draw(dem_options(georef, raw, wild))
+    argv += dem_extra + dopt
+    return Case("horizon", argv, files, recipe, bad + dbad, shape, "horizon", 1, ["o.tif"],
+                None, preview)
+
+
+def _sun_hours_case(draw, inp, wild):
+    files, recipe, dems, shape, georef, dem_extra, bad, raw = inp
+    argv = ["sun-hours", dems[0], OUT + "o.tif"]
+    if len(dems) > 1:
+        bad.append("sun-hours takes one DEM")
+        argv = ["sun-hours"] + dems + [OUT + "o.tif"]
+    date = pick(draw, wild, ["2026-06-21", "2026-12-21", "2026-03-29"],
+                ["21/06/2026", "", "2026-06-21T12:00"])
+    argv += ["--date", date]
+    if date in ("21/06/2026", "", "2026-06-21T12:00"):
+        bad.append(f"--date {date!r}")
+    step = pick(draw, wild, ["1h", "2h", "90min", "6h"], ["0s", "abc"])
+    argv += ["--step", step]
+    if step in ("0s", "abc"):
+        bad.append(f"--step {step!r}")
+    if often(draw, 4):
+        tz = pick(draw, wild, _ZONES, _BAD_ZONES)
+        argv += ["--tz", tz]
+        if tz in _BAD_ZONES:
+            bad.append(f"--tz {tz!r}")
+    if often(draw, 5):
+        lat = pick(draw, wild, ["36.3", "-45"], ["95", "nan"])
+        argv += ["--lat", lat]
+        if not (wild and often(draw, 3)):
+            argv += ["--lon", "-84.1"]
+            if lat in ("95", "nan"):
+                bad.append(f"--lat {lat}")
+        else:
+            bad.append("--lat without --lon")
+    if often(draw, 5):
+        argv.append("--soft")
+    if often(draw, 5):
+        argv.append("--no-self-shadow")
+    report = preview = None
+    if often(draw, 4):
+        report = "r.json"
+        argv += ["--report", OUT + report]
+    if often(draw, 5):
+        preview = "p.png"
+        argv += ["--preview", OUT + preview]
+    dopt, dbad = draw(dem_options(georef, raw, wild))
+    argv += dem_extra + dopt
+    return Case("sun-hours", argv, files, recipe, bad + dbad, shape, "sun-hours", 1, ["o.tif"],
+                report, preview)
+
+
+def _info_case(draw, inp, wild):
+    files, recipe, dems, shape, georef, dem_extra, bad, raw = inp
+    argv = ["info", dems[0]]
+    if len(dems) > 1:
+        bad.append("info takes one DEM")
+        argv = ["info"] + dems
+    as_json = draw(st.booleans())
+    if as_json:
+        argv.append("--json")
+    preview = None
+    if often(draw, 5):
+        preview = "p.png"
+        argv += ["--preview", OUT + preview]
+    dopt, dbad = draw(dem_options(georef, raw, wild))
+    argv += dem_extra + dopt
+    return Case("info", argv, files, recipe, bad + dbad, shape, "info", None, [], None, preview,
+                info_json=as_json)
+
+
+_BUILDERS = {"shadow": _lighting_case, "hillshade": _lighting_case, "info": _info_case, "horizon": _horizon_case, "sun-hours": _sun_hours_case}
+
+
+@st.composite
+def cases(draw, kinds, weights=(5, 2, 3, 1, 1), wild=0.5):
+    """Any command on an input of ``kinds``; ``weights``: shadow, hillshade, info, horizon,
+    sun-hours; ``wild``: the share of cases whose options may be malformed (the others have
+    well-formed options only, so that the input decides)."""
+    names = [n for n, w in zip(_BUILDERS, weights) for _ in range(w)]
+    command = draw(st.sampled_from(names))
+    is_wild = draw(st.floats(0, 1)) < wild
+    inp = draw(input_file(kinds))
+    if command in ("shadow", "hillshade"):
+        return _lighting_case(draw, command, inp, is_wild)
+    return _BUILDERS[command](draw, inp, is_wild)
+
+
+# ---------------------------------------------------------------------------------------------
+# running a case and judging its outcome
+
+@contextlib.contextmanager
+def _fd2_captured(sink: list):
+    """Whatever is written to file descriptor 2 (C libraries such as GDAL) while inside."""
+    sys.stderr.flush()
+    with tempfile.TemporaryFile() as tmp:
+        saved = os.dup(2)
+        os.dup2(tmp.fileno(), 2)
+        try:
+            yield
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            tmp.seek(0)
+            sink.append(tmp.read().decode("utf-8", "replace"))
+
+
+def _show_on_stderr(message, category, filename, lineno, file=None, line=None):
+    sys.stderr.write(warnings.formatwarning(message, category, filename, lineno, line))
+
+
+@contextlib.contextmanager
+def _like_a_fresh_process():
+    """Warnings and log records reach stderr as they would in ``hillshade-rt`` run from a shell
+    (pytest would otherwise collect them silently); numba's thread count restored afterwards."""
+    import numba
+    root = logging.getLogger()
+    handlers, level = root.handlers[:], root.level
+    root.handlers = []
+    root.setLevel(logging.WARNING)
+    try:
+        with warnings.catch_warnings():
+            warnings.resetwarnings()
+            warnings.simplefilter("default")
+            for cat in (DeprecationWarning, PendingDeprecationWarning, ImportWarning,
+                        ResourceWarning):
+                warnings.simplefilter("ignore", cat)
+            warnings.showwarning = _show_on_stderr
+            yield
+    finally:
+        root.handlers, root.level = handlers, level
+        numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+
+
+def _tree(folder) -> dict[str, int]:
+    out = {}
+    for dirpath, dirnames, filenames in os.walk(folder):
+        for n in dirnames + filenames:
+            p = os.path.join(dirpath, n)
+            out[os.path.relpath(p, folder)] = os.path.getsize(p) if os.path.isfile(p) else -1
+    return out
+
+
+def _open_raster(path):
+    import rasterio
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        with rasterio.open(path) as ds:
+            return ds.driver, ds.count, ds.shape, ds.dtypes, ds.read()
+
+
+def _input_shape(case, in_dir):
+    """The input's shape: known from the recipe, else what rasterio reads of a damaged file."""
+    if case.shape is not None:
+        return case.shape
+    names = [a[len(IN):] for a in case.argv if a.startswith(IN)]
+    if len(names) != 1:
+        return None
+    try:
+        return _open_raster(os.path.join(in_dir, names[0]))[2]
+    except Exception:  # noqa: BLE001 -- unknown: not checked
+        return None
+
+
+_RANGES = {  # product: (dtype, test of the values)
+    "shadow": ("uint8", lambda v: np.isin(v, [0, 1, 255]).all()),
+    "classes": ("uint8", lambda v: np.isin(v, [0, 1, 2, 255]).all()),
+    "soft": ("float32", lambda v: (((v >= 0) & (v <= 1)) | (v == -9999)).all()),
+    "hillshade": ("uint8", lambda v: True),
+    "horizon": ("float32", lambda v: (((v >= -90) & (v <= 90)) | (v == -9999)).all()),
+    "sun-hours": ("float32", lambda v: (((v >= 0) & (v <= 25.0)) | (v == -9999)).all()),
+}
+
+
+def _check_success(case, r, in_dir, out_dir, new_out) -> list[str]:
+    bad = []
+    expected = set(case.outputs) | {p for p in (case.report, case.preview) if p}
+    if set(new_out) != expected:
+        bad.append(f"exit 0: files in the output folder {sorted(new_out)}, expected "
+                   f"{sorted(expected)}")
+    shape = _input_shape(case, in_dir)
+    for name in case.outputs:
+        path = os.path.join(out_dir, name)
+        if not os.path.exists(path):
+            continue
+        try:
+            driver, count, oshape, dtypes, values = _open_raster(path)
+        except Exception as exc:  # noqa: BLE001
+            bad.append(f"exit 0 but {name} does not open: {type(exc).__name__}: {exc}")
+            continue
+        dtype, in_range = _RANGES[case.product]
+        if driver != "GTiff":
+            bad.append(f"{name}: driver {driver}, expected GTiff")
+        if set(dtypes) != {dtype}:
+            bad.append(f"{name}: dtype {dtypes}, expected {dtype}")
+        if shape is not None and tuple(oshape) != tuple(shape):
+            bad.append(f"{name}: shape {oshape}, the input's is {shape}")
+        if case.bands is not None and count != case.bands:
+            bad.append(f"{name}: {count} bands, expected {case.bands}")
+        if not in_range(values):
+            vals = np.unique(values)
+            bad.append(f"{name}: values outside the {case.product} range: "
+                       f"{vals[:8].tolist()}{' ...' if vals.size > 8 else ''}")
+    if case.report and os.path.exists(os.path.join(out_dir, case.report)):
+        try:
+            with open(os.path.join(out_dir, case.report), encoding="utf-8") as fh:
+                json.load(fh)
+        except ValueError as exc:
+            bad.append(f"the report is not JSON: {exc}")
+    if case.preview and os.path.exists(os.path.join(out_dir, case.preview)):
+        try:
+            driver, count, _, dtypes, _ = _open_raster(os.path.join(out_dir, case.preview))
+            if driver != "PNG" or count not in (3, 4) or set(dtypes) != {"uint8"}:
+                bad.append(f"the preview is {driver} with {count} bands {dtypes}")
+        except Exception as exc:  # noqa: BLE001
+            bad.append(f"the preview does not open: {type(exc).__name__}: {exc}")
+    if case.command == "info":
+        if not r.stdout.strip():
+            bad.append("info: exit 0 and nothing on stdout")
+        elif case.info_json:
+            try:
+                doc = json.loads(r.stdout)
+                if shape is not None and tuple(doc["shape"]) != tuple(shape):
+                    bad.append(f"info --json: shape {doc['shape']}, the input's is {shape}")
+            except (ValueError, KeyError, TypeError) as exc:
+                bad.append(f"info --json: not the JSON document ({exc})")
+    return bad
+
+
+def run_case(case: Case) -> list[str]:
+    """Run ``case`` through the CLI; the list of ways its outcome breaks the property."""
+    from click.testing import CliRunner
+
+    from hillshade_rt.cli import cli
+
+    with tempfile.TemporaryDirectory(prefix="hsfuzz-") as tmp:
+        in_dir, out_dir = os.path.join(tmp, "in"), os.path.join(tmp, "out")
+        os.mkdir(in_dir)
+        os.mkdir(out_dir)
+        for name, data in case.files.items():
+            with open(os.path.join(in_dir, name), "wb") as fh:
+                fh.write(data)
+        before_in = _tree(in_dir)
+        argv = [a.replace(IN, in_dir + os.sep).replace(OUT, out_dir + os.sep) for a in case.argv]
+        fd2: list[str] = []
+        with _like_a_fresh_process(), _fd2_captured(fd2):
+            r = CliRunner().invoke(cli, argv, prog_name="hillshade-rt")
+        stderr = r.stderr + fd2[0]
+        new_out = sorted(_tree(out_dir))
+        new_in = sorted(set(_tree(in_dir)) - set(before_in))
+        bad = []
+        if r.exception is not None and not isinstance(r.exception, SystemExit):
+            import traceback
+            tb = "".join(traceback.format_exception(r.exception)).strip().splitlines()
+            bad.append(f"exception {type(r.exception).__name__}: {r.exception} "
+                       f"(raised at {tb[-3].strip() if len(tb) > 2 else '?'})")
+        if "Traceback" in stderr or "Traceback" in r.stdout:
+            bad.append("a traceback printed")
+        if new_in:
+            bad.append(f"new files beside the input: {new_in}")
+        if r.exit_code == 0:
+            bad += _check_success(case, r, in_dir, out_dir, new_out)
+            if case.malformed:
+                bad.append(f"exit 0 although the command line is malformed: {case.malformed}")
+        else:
+            if r.exit_code not in (1, 2):
+                bad.append(f"exit status {r.exit_code}")
+            lines = stderr.strip().splitlines()
+            if len(lines) != 1 or not lines[0].startswith("hillshade-rt: error:"):
+                bad.append(f"stderr is not one error line: {stderr.strip()[:1000]!r}")
+            if new_out:
+                bad.append(f"exit {r.exit_code} but new files in the output folder: {new_out}")
+            if case.malformed and r.exit_code != 2:
+                bad.append(f"exit {r.exit_code} for a malformed command line "
+                           f"({'; '.join(case.malformed)}), expected 2")
+        if bad and _COLLECT:
+            _record(case, r, stderr, bad, in_dir)
+        if _COLLECT:
+            with open(os.path.join(_COLLECT, "outcomes.jsonl"), "a", encoding="utf-8") as fh:
+                fh.write(json.dumps([case.command, r.exit_code, (stderr.strip().splitlines()
+                                                                 or [""])[-1][:200]]) + "\n")
+        return bad, r, stderr
+
+
+_RECORDED = [0]
+
+
+def _record(case, r, stderr, bad, in_dir):
+    os.makedirs(_COLLECT, exist_ok=True)
+    _RECORDED[0] += 1
+    n = f"{os.getpid()}-{_RECORDED[0]}"
+    keep = os.path.join(_COLLECT, "inputs", n)
+    shutil.copytree(in_dir, keep)
+    with open(os.path.join(_COLLECT, "violations.jsonl"), "a", encoding="utf-8") as fh:
+        fh.write(json.dumps({"id": n, "command": case.command, "shell": case.shell(),
+                             "argv": case.argv, "recipe": case.recipe,
+                             "malformed": case.malformed, "exit": r.exit_code,
+                             "stderr": stderr[-3000:], "violations": bad,
+                             "exception": type(r.exception).__name__ if r.exception else None})
+                 + "\n")
+
+
+def check(case: Case):
+    bad, r, stderr = run_case(case)
+    if _COLLECT:
+        return
+    assert not bad, (f"\n{case.shell()}\ninput: {'; '.join(case.recipe)}\nexit {r.exit_code}\n"
+                     f"stderr: {stderr.strip()[:2000]}\nviolations:\n  " + "\n  ".join(bad))
+
+
+# ---------------------------------------------------------------------------------------------
+# the tests
+
+@_settings(120, 0.4)
+@given(case=cases(("damaged",), weights=(5, 2, 4, 1, 1), wild=0.2))
+def test_fuzz_damaged_inputs(case):
+    """Random bytes, truncated and overwritten rasters, with sane or random options."""
+    check(case)
+
+
+@_settings(80, 0.25)
+@given(case=cases(("raw",), weights=(4, 1, 3, 1, 1), wild=0.2))
+def test_fuzz_raw_grids(case):
+    """Raw grids and .hgt tiles with random --raw-shape/--raw-dtype/--raw-byteorder."""
+    check(case)
+
+
+@_settings(120, 0.35)
+@given(case=cases(("real",), wild=0.5))
+def test_fuzz_options(case):
+    """Real small rasters (GeoTIFF in several CRSs and types, PNG, two-tile mosaics) with random
+    option values for every command."""
+    check(case)
+
+
+def test_fuzz_harness_sees_a_traceback_and_leftovers(monkeypatch):
+    """The judge itself: a crash inside a run, and a part file left behind, are both caught."""
+    from hillshade_rt import cli as cli_mod
+    data = raster_bytes("GTiff", 12, 12, "float32", "utm", None, 0, 0.0, 1, None)
+    case = Case("shadow", ["shadow", IN + "dem.tif", OUT + "o.tif", "--azimuth", "10",
+                           "--elevation", "20"], {"dem.tif": data}, ["a valid GeoTIFF"],
+                shape=(12, 12), product="shadow", outputs=["o.tif"])
+    assert run_case(case)[0] == []
+
+    def boom(*a, **k):
+        raise ZeroDivisionError("planted")
+    monkeypatch.setattr(cli_mod, "_light_in_memory", boom)
+    bad = run_case(case)[0]
+    assert any("ZeroDivisionError" in b for b in bad), bad
+
+    def leave_part(inputs, *a, **k):
+        out_dir = os.path.dirname(a[3].output)
+        open(os.path.join(out_dir, ".o.tif.x.part.tif"), "wb").close()
+        raise cli_mod.HillshadeError("planted")
+    monkeypatch.setattr(cli_mod, "_light_in_memory", leave_part)
+    bad = run_case(case)[0]
+    assert any("new files in the output folder" in b for b in bad), bad
