@@ -30,10 +30,12 @@ def _signal_name(signum: int) -> str:
 
 def _complete_note() -> str:
     """What this run has written whole, for a message about a failed or interrupted run."""
-    from .writes import completed
-    if not completed:
+    from .writes import completed, is_virtual
+    # what is still there: scratch files published and removed again (a mosaic cut into its
+    # tiles, Dask's parts) are no outputs
+    names = [p for p in completed if is_virtual(p) or os.path.lexists(p)]
+    if not names:
         return ""
-    names = list(completed)
     shown = ", ".join(names) if len(names) <= 4 else f"{names[0]}, {names[1]} ... {names[-1]}"
     return f"; {len(names)} output(s) complete and kept: {shown}"
 
@@ -138,6 +140,13 @@ def _check_pixel_size(ctx, param, value):
 def _check_raw_shape(ctx, param, value):
     from .io import parse_raw_shape
     return _checked(parse_raw_shape)(ctx, param, value)
+
+
+def _finite(ctx, param, value):
+    """A click callback: a float option must be a finite number (click's float takes nan, inf)."""
+    if value is not None and not math.isfinite(value):
+        raise click.BadParameter(f"must be a finite number, got {value}", ctx=ctx, param=param)
+    return value
 
 
 def _check_z_factor(ctx, param, value):
@@ -373,6 +382,7 @@ def shadow(files, algorithm, nextv, better_nextv, horizon_method, sample_spacing
                 type=click.Path(dir_okay=False))
 @sun_options
 @click.option("--ambient", type=click.FloatRange(0.0, 1.0), default=0.2, show_default=True,
+              callback=lambda c, p, v: _finite(c, p, v),
               help="Light in shadow and on faces turned away, 0..1.")
 @click.option("-s", "--scale", type=float, default=None,
               help="Ratio of vertical units to horizontal (gdaldem -s), e.g. 111120 for a DEM "
@@ -537,7 +547,8 @@ def _light(files, kind, algorithm, options, curvature, refraction_k, soft, self_
     if kind == "hillshade":
         rep["product"].update(ambient=ambient, scale=scale)
     rep["curvature"] = run["curvature"]
-    rep["inputs"] = [os.path.abspath(p) for p in inputs]
+    from .io import input_label
+    rep["inputs"] = [input_label(p) for p in inputs]
     rep["processing"] = run["processing"]
     if preview is not None:
         rep["preview"] = os.path.abspath(preview)
@@ -684,7 +695,7 @@ class _Outputs:
         remove it."""
         if self.tile_paths is None:
             return
-        from .io import copy_vrt
+        from .io import copy_vrt, input_label
         from .runner import sun_tags
         from .tiling import VrtSource, vrt_xml
         scratch = self.paths[i]
@@ -696,7 +707,7 @@ class _Outputs:
                           [[VrtSource(scratch, 1, (0, 0), shape, src_offset=(r0, c0))]], dtype,
                           self.nodata, [self.description(sun)],
                           {**self.base_tags, **sun_tags(sun),
-                           "TILE_SOURCE": os.path.abspath(t["path"])})
+                           "TILE_SOURCE": input_label(t["path"])})
             copy_vrt(doc, path, self.dtype, self.cog, self.resampling, self.overwrite, self.fmt)
         self._remove(scratch)
 
@@ -902,7 +913,8 @@ def _light_tiled(inputs, read_opts, scale, req, out, timer, algorithm, options, 
                   "memory": mem, "window_shape_requested": list(window_shape) if window_shape
                   else None, **tally.as_dict(src.itemsize), **extra}
     if src.tiles:
-        processing["mosaic"] = [{"path": os.path.abspath(t["path"]), "window": list(t["window"])}
+        from .io import input_label
+        processing["mosaic"] = [{"path": input_label(t["path"]), "window": list(t["window"])}
                                 for t in src.tiles]
 
     def relief(az, el):
@@ -1018,7 +1030,8 @@ def sun_hours(dem, output, date_, end_date, step, tz, lat, lon, pressure, temper
                                           warm=hours / top if top > 0 else np.zeros_like(hours)),
                       overwrite)
     valid = hours[~np.isnan(hours)]
-    rep = {"input": os.path.abspath(d.path), "output": os.path.abspath(output),
+    from .io import input_label
+    rep = {"input": input_label(d.path), "output": os.path.abspath(output),
            "shape": list(d.shape), "algorithm": algorithm, "backend": ran_on,
            "dates": [first.isoformat(), last.isoformat()], "days": days, "step": step,
            "samples": len(suns), "samples_with_sun": len(work), "day_definition": tags["DAY"],
@@ -1087,7 +1100,7 @@ def _algorithm_options(algorithm: str, **given) -> dict:
 @cli.command()
 @click.argument("dem", type=click.Path(dir_okay=False))
 @click.argument("output", type=click.Path(dir_okay=False))
-@click.option("--azimuth", type=float, required=True,
+@click.option("--azimuth", type=float, required=True, callback=lambda c, p, v: _finite(c, p, v),
               help="Azimuth along which to look, degrees clockwise from north.")
 @click.option("--method", type=click.Choice(["scan", "hull"]), default="scan", show_default=True,
               help="scan: exact per-cell march; hull: convex-hull approximation, much faster.")

@@ -441,6 +441,20 @@ class _TiffUnreadable(HillshadeError):
     """tifffile could not read the file (GDAL may still)."""
 
 
+@contextlib.contextmanager
+def _quiet_logger(name: str):
+    """The library logger ``name`` silenced in the block: what it says about a damaged file is
+    in the one-line error (tifffile logs a line per bad tag, printed when no handler is set)."""
+    import logging
+    log = logging.getLogger(name)
+    was = log.disabled
+    log.disabled = True
+    try:
+        yield
+    finally:
+        log.disabled = was
+
+
 def _read_tiff(path: str, band: int, nodata: float | None,
                pixel_size: tuple[float, float] | None, data: bytes | None = None) -> Dem:
     """A TIFF without georeferencing, through tifffile (``data``: its bytes, held in memory)."""
@@ -449,7 +463,8 @@ def _read_tiff(path: str, band: int, nodata: float | None,
     import tifffile
 
     try:
-        with tifffile.TiffFile(_io.BytesIO(data) if data is not None else path) as tif:
+        with _quiet_logger("tifffile"), \
+                tifffile.TiffFile(_io.BytesIO(data) if data is not None else path) as tif:
             page = tif.pages[0]
             values = page.asarray()
             tag = page.tags.get("GDAL_NODATA") or page.tags.get(42113)

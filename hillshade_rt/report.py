@@ -94,12 +94,13 @@ def build_report(*, dem, output: str, azimuth: float, elevation: float, algorith
     ``height_range`` is the (min, max) the run already computed: no second pass over the DEM.
     ``gpu`` (GPU runs): device name, kernel milliseconds (CUDA events; None on the simulator),
     transfer milliseconds, host->device and device->host bytes."""
+    from .io import input_label
     rows, cols = dem.shape
     dx, dy = dem.grid.centre_spacing()
     compute = seconds.get("compute", 0.0)
     zmin, zmax = height_range
     return {
-        "input": os.path.abspath(dem.path),
+        "input": input_label(dem.path),
         "output": os.path.abspath(output),
         "shape": [rows, cols],
         "spacing_m": [dx, dy],

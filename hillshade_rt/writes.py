@@ -116,8 +116,8 @@ def check_output_path(path: str, overwrite: bool) -> str:
     """Fail early (before any computing) when ``path`` cannot be written."""
     path = os.fspath(path)
     if path == "-":
-        raise HillshadeError("'-' (standard output) is not supported for outputs: rasters need "
-                             "a file they can seek in; give a file name")
+        raise UsageProblem("'-' (standard output) is not supported for outputs: rasters need "
+                           "a file they can seek in; give a file name")
     if is_virtual(path):
         if path.startswith("/vsimem/") and virtual_outputs.get():
             return path

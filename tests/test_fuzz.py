@@ -890,6 +890,8 @@ def run_case(case: Case) -> list[str]:
                        f"(raised at {tb[-3].strip() if len(tb) > 2 else '?'})")
         if "Traceback" in stderr or "Traceback" in r.stdout:
             bad.append("a traceback printed")
+        if "internal error" in stderr:   # a bug, reported in one line (HILLSHADE_RT_DEBUG=1)
+            bad.append(f"an internal error: {stderr.strip().splitlines()[-1]}")
         if new_in:
             bad.append(f"new files beside the input: {new_in}")
         if r.exit_code == 0:

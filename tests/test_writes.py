@@ -361,7 +361,7 @@ def test_devices_and_pipes_are_refused(tmp_path, runner):
         assert "not a regular file" in line or "device" in line
     assert os.path.islink("/dev/stdout") or not os.path.isfile("/dev/stdout")
     r = runner.invoke(cli, ["shadow", LIDAR, "-"] + SUN)
-    assert "standard output" in one_line_error(r) and not os.path.exists("-")
+    assert "standard output" in one_line_error(r, 2) and not os.path.exists("-")
 
 
 # ---------------------------------------------------------------------------------------------
