@@ -968,7 +968,7 @@ def sun_hours(dem, output, date_, end_date, step, tz, lat, lon, pressure, temper
     from .runner import SunRequest, progress
     from .writes import Claims
     from .shadow import choose_backend
-    from .sun import SUN_RADIUS_DEG, day_samples, parse_date
+    from .sun import SUN_RADIUS_DEG, day_samples, parse_date, parse_step
 
     timer = Timer()
     claims = Claims([dem], overwrite)
@@ -977,15 +977,16 @@ def sun_hours(dem, output, date_, end_date, step, tz, lat, lon, pressure, temper
             claims.claim(path, what)
     from .io import check_output_format, output_driver
     check_output_format(output, output_driver(output, fmt), "float32", 1, False)
-    first = parse_date(date_, "--date")
-    last = parse_date(end_date, "--end-date") if end_date is not None else first
-    if last < first:
-        raise click.UsageError("--end-date is before --date")
-    try:
+    try:    # the command line alone decides these: a bad one is a usage error (exit 2)
+        first = parse_date(date_, "--date")
+        last = parse_date(end_date, "--end-date") if end_date is not None else first
+        parse_step(step)
         req = SunRequest.at_place([], tz, lat, lon, pressure, temperature, no_refraction,
                                   sun_tolerance)
     except HillshadeError as exc:
         raise click.UsageError(str(exc)) from None
+    if last < first:
+        raise click.UsageError("--end-date is before --date")
     if threads is not None:
         numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
     ran_on = choose_backend(backend, algorithm, {})
@@ -994,7 +995,10 @@ def sun_hours(dem, output, date_, end_date, step, tz, lat, lon, pressure, temper
     with timer("prepare"):
         site = req.site(d, "sun-hours computes the Earth's sun only (light a DEM of another "
                            "body with shadow or hillshade, which take the sun's direction)")
-        req.times, weights = day_samples(first, last, step, req.tz, site.lon)
+        try:
+            req.times, weights = day_samples(first, last, step, req.tz, site.lon)
+        except HillshadeError as exc:   # too many samples for the dates and the step
+            raise click.UsageError(str(exc)) from None
         suns, sun_info = req.suns(d, site)
         zmin, zmax = d.height_range()
         shader = Shader(d.heights, d.grid, algorithm, {}, ran_on,
