@@ -508,10 +508,13 @@ def _light(files, kind, algorithm, options, curvature, refraction_k, soft, self_
                      "classes": ("uint8", 255), "hillshade": ("uint8", 0)}[kind]
     out = _Outputs(kind, soft, algorithm, dtype, nodata, output, pattern, claims, cog,
                    preview is not None, ambient, fmt)
+    # Dask's parts are put together by GDAL (no 16-bit encoding of soft shadows on the way)
+    out.via_vrt = scheduler is not None
     if output is not None:   # the format can hold the product (before any work)
         from .io import check_output_format, output_driver
         check_output_format(output, output_driver(output, fmt, cog), dtype,
-                            len(req.times) if req.from_time else 1, out.continuous)
+                            len(req.times) if req.from_time else 1,
+                            out.continuous and not out.via_vrt)
     try:
         with (_bounded_gdal_cache() if tiled else contextlib.nullcontext()):
             run = (_light_tiled if tiled else _light_in_memory)(
@@ -651,6 +654,7 @@ class _Outputs:
                      "classes": "shadow classes", "hillshade": "shaded relief"}[kind]
         self.resampling = "average" if (soft or kind == "hillshade") else "nearest"
         self.continuous = self.resampling == "average"   # lossy formats and 16-bit PNG allowed
+        self.via_vrt = False    # outputs assembled by GDAL from parts (Dask)
         self.paths = None
         self.tiles = self.tile_paths = None
         self._scratch: list[str] = []
@@ -670,7 +674,8 @@ class _Outputs:
             for p in ps:
                 self.claims.claim(p, "--output-pattern")
                 check_output_format(p, output_driver(p, self.fmt, self.cog and not per_tile),
-                                    self.dtype, 1, self.continuous)
+                                    self.dtype, 1,
+                                    self.continuous and not (per_tile or self.via_vrt))
         if per_tile:
             self.tiles, self.tile_paths = tiles, paths
             self.paths = [None] * len(suns)

@@ -512,3 +512,23 @@ def test_report_is_valid_json_and_written_last(tmp_path, runner):
                          + SUN).exit_code == 0
     assert json.loads(rep.read_text())["output"] == str(out)
     assert sorted(os.listdir(tmp_path)) == ["m.tif", "r.json"]
+
+
+def test_formats_of_mosaic_tiles_and_their_limits(tmp_path, runner):
+    """One PNG per input tile (the mosaic cut through GDAL); soft shadows, whose 16-bit PNG
+    encoding needs the writer, are refused there before any work."""
+    z = fractal_terrain(128, 128, 3, relief=300)
+    a = write_geotiff(tmp_path / "a.tif", z[:, :64], Affine(5, 0, 400000, 0, -5, 3800000), UTM)
+    b = write_geotiff(tmp_path / "b.tif", z[:, 64:], Affine(5, 0, 400320, 0, -5, 3800000), UTM)
+    out = tmp_path / "out"
+    out.mkdir()
+    r = runner.invoke(cli, ["shadow", a, b, "--output-pattern", str(out / "{tile}_m.png"),
+                            "-q"] + SUN)
+    assert r.exit_code == 0, r.output
+    for t in ("a", "b"):
+        with rasterio.open(out / f"{t}_m.png") as ds:
+            assert ds.driver == "PNG" and ds.shape == (128, 64)
+    r = runner.invoke(cli, ["shadow", a, b, "--output-pattern", str(out / "{tile}_s.png"),
+                            "--soft"] + SUN)
+    assert "float32" in one_line_error(r)
+    assert not any("_s" in f for f in os.listdir(out)) and not hidden(out)
