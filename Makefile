@@ -7,7 +7,7 @@ OUTDIR ?= out
 EXAMPLE_DEM := examples/bigtujunga_srtm30m_utm11n_1197x643.tif
 EXAMPLE_OUT := $(OUTDIR)/bigtujunga_shadow.tif
 
-.PHONY: run test install install-test bench bench-sun bench-tiling bench-big bench-gpu bench-peers clean help
+.PHONY: run test install install-test bench bench-sun bench-tiling bench-big bench-gpu bench-peers bench-writes clean help
 
 help:
 	@echo "make run    - set up .venv, shade the bundled example DEM, print where the mask went"
@@ -15,6 +15,7 @@ help:
 	@echo "make bench  - run the benchmarks (writes docs/benchmarks.md figures to stdout)"
 	@echo "make bench-sun - time series, per-tile suns, curvature, soft shadows, sun hours"
 	@echo "make bench-tiling - Mpix/s in memory vs in windows vs Dask (2 workers)"
+	@echo "make bench-writes - what the checked (atomic, fsync, GDAL-error) writes cost vs bare rasterio"
 	@echo "make bench-big - a 20000 x 20000 DEM under --max-memory 1GB: peak memory, a crop checked"
 	@echo "make bench-gpu - install the CUDA backend (numba-cuda) and time every algorithm on the GPU"
 	@echo "make bench-peers - install other shadow tools into .venv and time them against ours"
@@ -52,6 +53,9 @@ bench-sun: $(VENV)/.installed
 # Dask comes with the test extras (and alone as hillshade-rt[dask])
 bench-tiling: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/bench_tiling.py
+
+bench-writes: $(VENV)/.installed
+	$(BIN)/python benchmarks/bench_writes.py
 
 bench-big: $(VENV)/.installed
 	$(BIN)/python benchmarks/bigdem.py
