@@ -62,11 +62,14 @@ def target_of(path: str) -> str:
     path = os.fspath(path)
     if is_virtual(path):
         return path
-    real = os.path.realpath(path)
-    for special in ("/dev/", "/proc/", "/sys/"):
-        if (real + "/").startswith(special) or (os.path.abspath(path) + "/").startswith(special):
-            raise HillshadeError(f"{path}: is a device or system file, not a file to write a "
-                                 "raster to; give a file name")
+    given, real = os.path.abspath(path), os.path.realpath(path)
+    # /dev/stdout and the like name whatever the process's streams are (a terminal, a pipe, or a
+    # file a shell redirected them to): never written over; /dev/shm is a file system like others
+    if (given in ("/dev/stdout", "/dev/stderr", "/dev/stdin", "/dev/tty")
+            or given.startswith(("/dev/fd/", "/proc/", "/sys/"))
+            or real.startswith(("/proc/", "/sys/"))):
+        raise HillshadeError(f"{path}: is a device or system file, not a file to write a "
+                             "raster to; give a file name")
     if os.path.exists(real) and not os.path.isfile(real):
         what = "a folder" if os.path.isdir(real) else "not a regular file (a device, pipe or socket)"
         raise HillshadeError(f"{path}: is {what}; give a file name")
@@ -316,13 +319,17 @@ def atomic_path(path: str, suffix: str = "", overwrite: bool = False, sidecars: 
 # GDAL's write errors
 
 class _Records(logging.Handler):
-    """Collects the failures GDAL signals while a block runs (rasterio logs them)."""
+    """Collects the failures GDAL signals in this thread while a block runs (rasterio logs them,
+    in the thread that made the GDAL call)."""
 
     def __init__(self):
         super().__init__(logging.DEBUG)
         self.messages: list[str] = []
+        self.thread = threading.get_ident()
 
     def emit(self, record):
+        if record.thread != self.thread:
+            return
         msg = record.getMessage()
         if msg.startswith("GDAL signalled an error") or record.levelno >= logging.ERROR:
             # "GDAL signalled an error: err_no=1, msg='...'"
@@ -392,6 +399,9 @@ class _StderrCapture:
                 sys.stderr.flush()
 
 
+_CAPTURE = threading.Lock()
+
+
 def _disk_full(path: str) -> bool:
     with contextlib.suppress(OSError):
         st = os.statvfs(os.path.dirname(os.path.abspath(path)) or ".")
@@ -414,7 +424,9 @@ def gdal_checked(path: str, what: str = "cannot write"):
     log.addHandler(rec)
     if log.getEffectiveLevel() > logging.INFO:
         log.setLevel(logging.INFO)
-    cap = _StderrCapture()
+    # stderr is the process's: one thread at a time reads it (another thread's writes go
+    # without, their failures still come through rasterio's log)
+    cap = _StderrCapture() if _CAPTURE.acquire(blocking=False) else contextlib.nullcontext()
     err = None
     try:
         with rasterio.Env(), cap:
@@ -427,11 +439,14 @@ def gdal_checked(path: str, what: str = "cannot write"):
     finally:
         log.removeHandler(rec)
         log.setLevel(level)
-    printed = cap.text.lower()
+        if isinstance(cap, _StderrCapture):
+            _CAPTURE.release()
+    printed = cap.text.lower() if isinstance(cap, _StderrCapture) else ""
     io_error = any(t in printed for t in ("no space left on device", "quota exceeded",
                                           "input/output error"))
     if err is None and not rec.messages and not io_error:
-        cap.replay()
+        if isinstance(cap, _StderrCapture):
+            cap.replay()
         return
     full = ("no space left on device" in printed or _disk_full(path)
             or any("no space" in m.lower() for m in rec.messages))
