@@ -1,15 +1,29 @@
-"""hillshade-rt: terrain cast-shadow masks from DEMs."""
+"""hillshade-rt: terrain cast-shadow masks from DEMs.
+
+The public names are imported when first used (PEP 562): ``import hillshade_rt`` and the command
+line start without loading numpy, numba or GDAL, so that the command line can take over SIGINT,
+SIGTERM and SIGHUP before any of that work begins (``cli._OneLineErrors.main``).
+"""
+
+import importlib
 
 __version__ = "0.1.0"
 
-from .errors import HillshadeError  # noqa: E402
-from .geometry import Grid, sun_rays  # noqa: E402
-from .io import Dem, read_dem  # noqa: E402
-from .shadow import horizon_angles, is_shadowed, shadow_mask  # noqa: E402
-from .engine import Shader, render  # noqa: E402
-from .sun import parse_time, solar_position, sun_over  # noqa: E402
-from .api import shade  # noqa: E402
+_EXPORTS = {"HillshadeError": "errors", "Grid": "geometry", "sun_rays": "geometry",
+            "Dem": "io", "read_dem": "io", "shadow_mask": "shadow", "horizon_angles": "shadow",
+            "is_shadowed": "shadow", "Shader": "engine", "render": "engine",
+            "solar_position": "sun", "parse_time": "sun", "sun_over": "sun", "shade": "api"}
 
-__all__ = ["HillshadeError", "Grid", "sun_rays", "Dem", "read_dem", "shadow_mask", "horizon_angles",
-           "is_shadowed", "Shader", "render", "solar_position", "parse_time", "sun_over",
-           "shade", "__version__"]
+__all__ = list(_EXPORTS) + ["__version__"]
+
+
+def __getattr__(name):
+    if name in _EXPORTS:
+        value = getattr(importlib.import_module(f".{_EXPORTS[name]}", __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_EXPORTS))

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import datetime as _dt
 import math
+import os
 import string
 from dataclasses import dataclass, field
 
@@ -18,6 +19,14 @@ import numpy as np
 from .errors import HillshadeError
 from .sun import (DEFAULT_TOLERANCE, Atmosphere, SunOver, dem_site, iso, parse_step, parse_time,
                   sun_over, time_range, zone)
+
+
+def tile_name(path: str) -> str:
+    """``{tile}`` of an input: its file name without the extension; for an archive member given
+    the rasterio way (``zip://t.zip!n46/e007.tif``) the member's (``e007``)."""
+    if "://" in path and "!" in path:
+        path = path.rsplit("!", 1)[1]
+    return os.path.splitext(os.path.basename(path.rstrip("/")))[0]
 
 
 @dataclass
@@ -151,7 +160,7 @@ class OutputPattern:
         """The files of each sun: one per name in ``tiles`` (the inputs' file names) when the
         pattern has ``{tile}``, else one."""
         import os
-        names = [os.path.splitext(os.path.basename(t))[0] for t in (tiles or [""])]
+        names = [tile_name(t) for t in (tiles or [""])]
         if not self.per_tile:
             names = names[:1]
         out = []
