@@ -107,11 +107,17 @@ def refraction_for(body: "Body", refraction_k: float | None) -> float:
 
 
 def curvature_report(setting, used: set, body: "Body", k: float) -> dict:
-    """The report's ``curvature``: the setting, whether any sun's rays were curved (``used``: the
-    set of True/False seen), the radius and refraction."""
-    return {"setting": setting, "applied": (True in used),
-            "radius_m": body.radius(0.0) if True in used else None,
-            "refraction_k": k, "body": body.source}
+    """The report's ``curvature``: the setting, whether any sun's rays were curved, the radius
+    the curved rays used (the body's radius of curvature in the sun's direction: one sun's, or
+    the mean of a series' with ``radius_m_range``) and refraction. ``used``: the set of True/False
+    seen and the radii (float metres) of the suns whose rays were curved (``Shader.rays``)."""
+    radii = sorted(v for v in used if type(v) is float)
+    rep = {"setting": setting, "applied": (True in used),
+           "radius_m": (radii[0] if len(radii) == 1 else sum(radii) / len(radii)) if radii
+           else None, "refraction_k": k, "body": body.source}
+    if len(radii) > 1:
+        rep["radius_m_range"] = [radii[0], radii[-1]]
+    return rep
 
 
 @dataclass
@@ -204,7 +210,7 @@ class Shader:
         self.carry, self.place = carry, place
         self._gpu = None
         self.stats: dict = {}
-        self.curvature_used: set[bool] = set()
+        self.curvature_used: set = set()   # True/False seen, and the radii used (m)
 
     def warm_up(self, azimuth: float, elevation: float, soft: bool = False,
                 incidence: bool = False) -> None:
@@ -235,6 +241,8 @@ class Shader:
     def rays(self, grid: Grid, azimuth: float, elevation: float) -> SunRays:
         c = self.curvature_for(azimuth, elevation)
         self.curvature_used.add(c > 0)
+        if c > 0:   # the radius these rays use, for the report (rounded: one per direction)
+            self.curvature_used.add(round(float(self.body.radius(azimuth)), 1))
         return sun_rays(grid, azimuth, elevation, c)
 
     def window(self, region: Region, elevation: float) -> tuple[slice, slice]:
