@@ -212,6 +212,35 @@ def _ellipsoid_spacing(lat_deg: np.ndarray, a: float, b: float,
     return n * np.cos(phi) * dlon_rad, m * dlat_rad
 
 
+def _geodesic(geod, to_geo, x0, y0, x1, y1) -> np.ndarray:
+    """Geodesic metres between projected points (NaN where a point has no place on the body:
+    beyond a pole, outside the projection's domain)."""
+    lon0, lat0 = to_geo.transform(x0, y0)
+    lon1, lat1 = to_geo.transform(x1, y1)
+    lat0, lat1 = np.asarray(lat0, np.float64), np.asarray(lat1, np.float64)
+    g = np.asarray(geod.inv(lon0, lat0, lon1, lat1)[2], dtype=np.float64)
+    bad = ~(np.isfinite(g) & (np.abs(lat0) <= 90.0) & (np.abs(lat1) <= 90.0))
+    return np.where(bad, np.nan, g)
+
+
+def _cell_step(geod, to_geo, xs, y, sx: float, sy: float) -> np.ndarray:
+    """Ground metres of one cell step (``sx``, ``sy`` CRS units) centred at each (xs, y): the
+    geodesic between the cell's two edges; where an edge lies beyond a pole or outside the
+    projection (the first and last rows of a global grid whose edge overshoots the pole by a
+    rounding), the derivative at the cell centre: a step of 1/1000 of the cell centred there,
+    else one-sided from the centre toward the inside, scaled up. NaN where none exists."""
+    g = _geodesic(geod, to_geo, xs - sx / 2, y - sy / 2, xs + sx / 2, y + sy / 2)
+    h = 1e-3
+    for lo, hi in ((-h / 2, h / 2), (0.0, h), (-h, 0.0)):
+        bad = ~(np.isfinite(g) & (g > 0))
+        if not bad.any():
+            break
+        part = _geodesic(geod, to_geo, xs[bad] + sx * lo, y[bad] + sy * lo, xs[bad] + sx * hi,
+                         y[bad] + sy * hi) / h
+        g[bad] = np.where(np.isfinite(part) & (part > 0), part, np.nan)
+    return np.where(np.isfinite(g) & (g > 0), g, np.nan)
+
+
 def orientation(transform) -> tuple[int, int]:
     """(col_sign, row_sign) of a north-up or south-up geotransform; refuses rotation and shear."""
     if transform.b != 0.0 or transform.d != 0.0:
@@ -273,17 +302,16 @@ def grid_from_transform(transform, crs, shape: tuple[int, int]) -> Grid:
         geod = pcrs.get_geod()
         to_geo = Transformer.from_crs(pcrs, pcrs.geodetic_crs, always_xy=True)
         xs = np.full(rows, x_mid)
-        lon_w, lat_w = to_geo.transform(xs - a / 2, y)
-        lon_e, lat_e = to_geo.transform(xs + a / 2, y)
-        lon_n, lat_n = to_geo.transform(xs, y - e / 2)
-        lon_s, lat_s = to_geo.transform(xs, y + e / 2)
-        gx = np.asarray(geod.inv(lon_w, lat_w, lon_e, lat_e)[2], dtype=np.float64)
-        gy = np.asarray(geod.inv(lon_n, lat_n, lon_s, lat_s)[2], dtype=np.float64)
-        ok = np.isfinite(gx) & np.isfinite(gy) & (gx > 0) & (gy > 0)
-        if ok.any():
-            dx[ok], dy[ok] = gx[ok], gy[ok]
+        gx = _cell_step(geod, to_geo, xs, y, a, 0.0)
+        gy = _cell_step(geod, to_geo, xs, y, 0.0, e)
+        okx, oky = np.isfinite(gx), np.isfinite(gy)
+        if okx.any() or oky.any():
+            dx[okx], dy[oky] = gx[okx], gy[oky]
             method = ("projected: geodesic length of one cell on the CRS's ellipsoid "
                       "at the centre column of each row")
+            if not (okx.all() and oky.all()):
+                method += f" (transform units where the projection has no inverse: " \
+                          f"{int((~(okx & oky)).sum())} row(s))"
             dx, dy, snapped = snap_uniform(dx, dy)
             if snapped:
                 method = ("projected: geodesic length of one cell on the CRS's ellipsoid at the "
