@@ -110,7 +110,7 @@ def crs_name(crs) -> str | None:
     a = ell.semi_major_metre
     shape = (f"sphere, R {a:.0f} m" if not ell.inverse_flattening
              else f"ellipsoid a {a:.0f} m, 1/f {ell.inverse_flattening:g}")
-    named = ell.name if ell.name and ell.name.lower() != "unknown" else None
+    named = ell.name if ell.name and ell.name.lower() not in ("unknown", "unnamed") else None
     body = body_name(a)
     on = ", ".join(x for x in (named, shape) if x)
     return f"{what} on {body + ' (' + on + ')' if body else on}"
