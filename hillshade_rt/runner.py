@@ -136,9 +136,11 @@ class SunRequest:
 
 class OutputPattern:
     """``--output-pattern 'out_{time:%Y%m%dT%H%M}.tif'``: one file per time. Fields: ``time``
-    (a datetime), ``index`` (0-based), ``azimuth``, ``elevation``, and ``tile``: the input DEM's
-    file name without its extension; with several input tiles shaded as one mosaic, a pattern
-    with ``{tile}`` gives one output per input tile (cut from the mosaic, on the tile's grid)."""
+    (an aware datetime in the zone of the times, with each instant's own offset: ``%z`` tells
+    apart the hour repeated when clocks go back), ``index`` (0-based), ``azimuth``,
+    ``elevation``, and ``tile``: the input DEM's file name without its extension; with several
+    input tiles shaded as one mosaic, a pattern with ``{tile}`` gives one output per input tile
+    (cut from the mosaic, on the tile's grid)."""
 
     FIELDS = ("time", "index", "azimuth", "elevation", "tile")
 
@@ -177,8 +179,20 @@ class OutputPattern:
                                  "their outputs apart: rename one")
         flat = [p for ps in out for p in ps]
         if len(set(flat)) != len(flat):
+            seen: dict = {}
+            for s, ps in zip(suns, out):
+                for p in ps:
+                    seen.setdefault(p, []).append(s.time)
+            twice = next(ts for ts in seen.values() if len(ts) > 1)
+            if all(t is not None for t in twice) and \
+                    twice[0].replace(tzinfo=None) == twice[1].replace(tzinfo=None):
+                # the same local clock time twice: the hour repeated when the clocks go back
+                raise HillshadeError(
+                    f"--output-pattern {self.pattern!r} gives {iso(twice[0])} and "
+                    f"{iso(twice[1])} (the same clock time, before and after the clocks go back) "
+                    "the same file name: add the offset (e.g. {time:%Y%m%dT%H%M%z}) or {index}")
             raise HillshadeError(f"--output-pattern {self.pattern!r} gives two times the same file "
-                                 "name: add a finer time field (e.g. {time:%Y%m%dT%H%M%S}) or "
+                                 "name: add a finer time field (e.g. {time:%Y%m%dT%H%M%S%z}) or "
                                  "{index}")
         self.planned = flat
         return out

@@ -2,7 +2,10 @@
 
 * Times are ISO 8601 instants. A time without a UTC offset is refused unless an IANA zone is
   named (``tz``), which then also decides daylight saving; ambiguous and non-existent local times
-  (the hour that repeats or is skipped when clocks change) are refused with a hint.
+  (the hour that repeats or is skipped when clocks change) are refused, naming the gap or the
+  repeated span and, for a repeated one, the two offsets to choose from.
+* Series (:func:`time_range`) and sun-hours days (:func:`day_samples`) step in elapsed time,
+  computed in UTC; their times are shown in the zone with each instant's own offset.
 * The solar position is NREL's Solar Position Algorithm (Reda & Andreas 2004) as implemented by
   ``pvlib.spa`` (its numpy version): topocentric azimuth (clockwise from true north) and
   elevation, apparent (with the SPA's refraction) unless refraction is turned off.
@@ -46,18 +49,79 @@ def zone(name: str | None):
                              "(e.g. Europe/Zurich, America/Denver, UTC)") from None
 
 
-def localize(naive: _dt.datetime, tz, what: str) -> _dt.datetime:
-    """Attach zone ``tz`` to a naive local time; refuse times that the zone skips or repeats."""
+def _transition(tz, lo: _dt.datetime, hi: _dt.datetime) -> _dt.datetime:
+    """The first instant (UTC, whole seconds) in (lo, hi] whose offset in ``tz`` is that of
+    ``hi``: where the zone's clocks change, found by bisection (``zoneinfo`` has no public list of
+    transitions)."""
+    target = hi.astimezone(tz).utcoffset()
+    a, b = math.floor(lo.timestamp()), math.ceil(hi.timestamp())
+    while b - a > 1:
+        m = (a + b) // 2
+        if _dt.datetime.fromtimestamp(m, UTC).astimezone(tz).utcoffset() == target:
+            b = m
+        else:
+            a = m
+    return _dt.datetime.fromtimestamp(b, UTC)
+
+
+def _clock(t: _dt.datetime) -> str:
+    return t.strftime("%H:%M:%S" if t.second else "%H:%M")
+
+
+def clock_change(naive: _dt.datetime, tz):
+    """How zone ``tz`` treats the local time ``naive``: None when it happens exactly once, else
+    ``(kind, first, last, before, after, at)`` with ``kind`` "gap" (clocks jump forward over
+    [first, last)) or "fold" (clocks go back and [first, last) happens twice), the offsets
+    ``before`` and ``after`` the change and ``at``, the instant of the change (UTC)."""
     a = naive.replace(tzinfo=tz, fold=0)
     b = naive.replace(tzinfo=tz, fold=1)
-    if a.utcoffset() != b.utcoffset():
-        back = a.astimezone(UTC).astimezone(tz).replace(tzinfo=None)
-        if back != naive:
-            raise HillshadeError(f"{what} does not exist in {tz.key} (clocks skip it); "
-                                 "give a UTC offset instead")
-        raise HillshadeError(f"{what} happens twice in {tz.key} (clocks go back); give a UTC "
-                             f"offset ({a.isoformat()} or {b.isoformat()})")
-    return a
+    if a.utcoffset() == b.utcoffset():
+        return None
+    ua, ub = a.astimezone(UTC), b.astimezone(UTC)
+    at = _transition(tz, min(ua, ub), max(ua, ub))
+    before = (at - _dt.timedelta(seconds=1)).astimezone(tz).utcoffset()
+    after = at.astimezone(tz).utcoffset()
+    wall_before, wall_after = ((at + o).replace(tzinfo=None) for o in (before, after))
+    if after > before:
+        kind, first, last = "gap", wall_before, wall_after
+    else:
+        kind, first, last = "fold", wall_after, wall_before
+    if not first <= naive < last:      # a zone whose fold/gap flags disagree with the bisection
+        return None
+    return kind, first, last, before, after, at
+
+
+def _offset(td: _dt.timedelta) -> str:
+    """A UTC offset as ISO 8601 writes it: +02:00, -05:00, +10:30."""
+    sec = round(td.total_seconds())
+    sign, sec = ("+" if sec >= 0 else "-"), abs(sec)
+    h, rest = divmod(sec, 3600)
+    m, sec = divmod(rest, 60)
+    return f"{sign}{h:02d}:{m:02d}" + (f":{sec:02d}" if sec else "")
+
+
+def localize(naive: _dt.datetime, tz, what: str) -> _dt.datetime:
+    """Attach zone ``tz`` to a naive local time. A local time that the zone skips (clocks jump
+    forward over it) is refused, naming the gap; one that happens twice (clocks go back) is
+    refused too, naming both instants with their offsets: an hour's difference moves the sun by
+    about 15 degrees, so neither is picked silently."""
+    change = clock_change(naive, tz)
+    if change is None:
+        return naive.replace(tzinfo=tz, fold=0)
+    kind, first, last, before, after, _ = change
+    same_day = first.date() == last.date()
+    a, b = (_clock(first), _clock(last)) if same_day else (iso(first), iso(last))
+    span = f"{a}-{b} on {first.date().isoformat()}" if same_day else f"{a} to {b}"
+    local = iso(naive)
+    if kind == "gap":
+        raise HillshadeError(
+            f"{what} does not exist in {tz.key}: clocks jump from {a} ({_offset(before)}) to "
+            f"{b} ({_offset(after)}), skipping {span}; give a time outside the gap, or one with "
+            "a UTC offset")
+    raise HillshadeError(
+        f"{what} happens twice in {tz.key}: clocks go back from {b} ({_offset(before)}) to "
+        f"{a} ({_offset(after)}), so {span} repeats; give a UTC offset: "
+        f"{local}{_offset(before)} (the first) or {local}{_offset(after)} (the second)")
 
 
 def parse_time(text: str, tz=None, what: str = "--time") -> _dt.datetime:
@@ -82,7 +146,7 @@ def parse_time(text: str, tz=None, what: str = "--time") -> _dt.datetime:
         if tz is None:
             raise HillshadeError(f"time {text!r} has no UTC offset: add one (e.g. +02:00 or Z) or "
                                  "name the zone with --tz (e.g. --tz Europe/Zurich)")
-        return localize(t, tz, f"time {text!r}")
+        return localize(t, tz, f"{what} {text!r}")
     return t.astimezone(tz) if tz is not None else t
 
 
@@ -114,16 +178,23 @@ def parse_step(text: str) -> _dt.timedelta:
 
 def time_range(start: _dt.datetime, end: _dt.datetime, step: _dt.timedelta,
                limit: int = 1_000_000) -> list[_dt.datetime]:
-    """start, start + step, ... up to and including ``end``, stepping in absolute time (a series
-    across a daylight-saving change keeps equal intervals; labels keep each instant's offset)."""
-    if end < start:
-        raise HillshadeError(f"--end {end.isoformat()} is before --start {start.isoformat()}")
-    n = int((end - start) / step) + 1
+    """start, start + step, start + 2 step, ... while not after ``end`` (included when a step
+    lands on it exactly), all as instants: steps are elapsed time, so a series across a
+    daylight-saving change keeps equal intervals and covers the hour the clocks skip or repeat
+    once as it passes (e.g. 00:30 to 04:30 by 1h in America/New_York gives 4 times on the day
+    clocks spring forward, 6 on the day they fall back). Each time is shown in ``start``'s zone
+    with its own offset. The arithmetic and comparisons are done in UTC: Python subtracts and
+    compares two datetimes that share a zone object by their wall clocks."""
+    u0, u1 = start.astimezone(UTC), end.astimezone(UTC)
+    if u1 < u0:
+        raise HillshadeError(f"--end {iso(end)} is before --start {iso(start)}")
+    if step <= _dt.timedelta(0):
+        raise HillshadeError("--step must be positive")
+    n = (u1 - u0) // step + 1          # exact: timedeltas divide in whole microseconds
     if n > limit:
         raise HillshadeError(f"{n} times from --start to --end at this --step: more than {limit}")
     tz = start.tzinfo
-    t0 = start.astimezone(UTC)
-    return [(t0 + i * step).astimezone(tz) for i in range(n)]
+    return [(u0 + i * step).astimezone(tz) for i in range(n)]
 
 
 def parse_date(text: str, what: str = "--date") -> _dt.date:
@@ -133,20 +204,32 @@ def parse_date(text: str, what: str = "--date") -> _dt.date:
         raise HillshadeError(f"{what} {text!r}: not a date (YYYY-MM-DD)") from None
 
 
+def day_start(day: _dt.date, tz) -> _dt.datetime:
+    """The first instant (UTC) of ``day`` in zone ``tz``: local midnight; where the clocks skip
+    midnight (a gap that contains it, as in America/Santiago) the instant they jump, where
+    midnight happens twice its first occurrence."""
+    naive = _dt.datetime.combine(day, _dt.time(0))
+    change = clock_change(naive, tz)
+    if change is not None and change[0] == "gap":
+        return change[5]
+    return naive.replace(tzinfo=tz, fold=0).astimezone(UTC)
+
+
 def day_samples(first: _dt.date, last: _dt.date, step: str, tz, lon: float,
                 limit: int = 2_000_000) -> tuple[list[_dt.datetime], list[float]]:
     """Sample times and their weights in hours for the days ``first``..``last``: each day cut
-    into intervals of ``step`` (the last one shorter if the step does not divide the day), a
-    sample at the middle of each. Days run midnight to midnight in zone ``tz`` (23 or 25 hours on
-    a daylight-saving change), or in local mean solar time at ``lon`` when ``tz`` is None."""
+    into intervals of ``step`` (elapsed time; the last one shorter if the step does not divide
+    the day), a sample at the middle of each. Days run from midnight to midnight in zone ``tz``
+    (:func:`day_start`), so a day on which the clocks change has as many hours as elapse: 23 or
+    25 for a one-hour change, 23.5 or 24.5 in Australia/Lord_Howe; or in local mean solar time at
+    ``lon`` when ``tz`` is None (always 24 hours)."""
     dt = parse_step(step)
     times, weights = [], []
     day = first
     one = _dt.timedelta(days=1)
     while day <= last:
         if tz is not None:
-            t0 = _dt.datetime.combine(day, _dt.time(0), tz).astimezone(UTC)
-            t1 = _dt.datetime.combine(day + one, _dt.time(0), tz).astimezone(UTC)
+            t0, t1 = day_start(day, tz), day_start(day + one, tz)
         else:
             t0 = _dt.datetime.combine(day, _dt.time(0), UTC) - _dt.timedelta(hours=lon / 15.0)
             t1 = t0 + one

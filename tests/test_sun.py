@@ -162,13 +162,14 @@ def test_series_bands_and_pattern(tmp_path, runner):
                             "--lat", "46.9", "--lon", "7.4", "--report", str(rep), "-q"])
     assert r.exit_code == 0, r.output
     with rasterio.open(out) as ds:
-        assert ds.count == 4
-        # equal steps in absolute time across the daylight-saving change
+        # equal steps in elapsed time across the daylight-saving change: 00:30 +01:00 to
+        # 04:00 +02:00 is 2.5 hours, so three times, none after --end (tests/test_dst.py)
+        assert ds.count == 3
         assert ds.descriptions == ("2026-03-29T00:30+01:00", "2026-03-29T01:30+01:00",
-                                   "2026-03-29T03:30+02:00", "2026-03-29T04:30+02:00")
+                                   "2026-03-29T03:30+02:00")
         assert ds.tags(1)["TIME"] == "2026-03-29T00:30+01:00"
     doc = json.loads(rep.read_text())
-    assert len(doc["times"]) == 4 and doc["night_count"] == 4 and doc["sun"] is None
+    assert len(doc["times"]) == 3 and doc["night_count"] == 3 and doc["sun"] is None
 
     pat = str(tmp_path / "p_{time:%H%M}.tif")
     r = runner.invoke(cli, ["shadow", dem, "--output-pattern", pat, "--time",
