@@ -242,32 +242,44 @@ def _dem_index(i, n, flip):
 
 
 @njit(cache=True)
-def _copy_lines(z, ring, v, nb, p0, p1, dom_col, flip_line, flip_pos, load):
-    """Copy canonical lines v, v-1, ..., v-nb+1 at positions [p0, p1) between the DEM-shaped
-    array ``z`` and the ring rows ``(v - i) % R`` of ``ring`` (load: z -> ring, else ring -> z).
-    Lines that are DEM columns go position by position, so that each DEM row is touched once per
-    block, contiguously."""
+def _load_lines(z, ring, v, nb, p0, p1, dom_col, flip_line, flip_pos):
+    """Copy canonical lines v, v-1, ..., v-nb+1 at positions [p0, p1) of the DEM-shaped array
+    ``z`` into the ring rows ``(v - i) % R`` of ``ring``. Lines that are DEM columns go position
+    by position, so that each DEM row is touched once per block, contiguously. ``z`` is only
+    read (the caller's heights may be read-only: a memory map, ``setflags(write=False)``); its
+    twin ``_store_lines`` writes the mask, so that no kernel has a store into ``z``."""
     R = ring.shape[0]
     if dom_col:
         P, L = z.shape
         for p in range(p0, p1):
             r = _dem_index(p, P, flip_pos)
             for i in range(nb):
-                c = _dem_index(v - i, L, flip_line)
-                if load:
-                    ring[(v - i) % R, p] = z[r, c]
-                else:
-                    z[r, c] = ring[(v - i) % R, p]
+                ring[(v - i) % R, p] = z[r, _dem_index(v - i, L, flip_line)]
     else:
         L, P = z.shape
         for i in range(nb):
             r = _dem_index(v - i, L, flip_line)
             for p in range(p0, p1):
-                c = _dem_index(p, P, flip_pos)
-                if load:
-                    ring[(v - i) % R, p] = z[r, c]
-                else:
-                    z[r, c] = ring[(v - i) % R, p]
+                ring[(v - i) % R, p] = z[r, _dem_index(p, P, flip_pos)]
+
+
+@njit(cache=True)
+def _store_lines(out, ring, v, nb, p0, p1, dom_col, flip_line, flip_pos):
+    """The inverse of ``_load_lines``: ring rows of lines v, ..., v-nb+1 at positions [p0, p1)
+    into the DEM-shaped array ``out`` (the mask)."""
+    R = ring.shape[0]
+    if dom_col:
+        P, L = out.shape
+        for p in range(p0, p1):
+            r = _dem_index(p, P, flip_pos)
+            for i in range(nb):
+                out[r, _dem_index(v - i, L, flip_line)] = ring[(v - i) % R, p]
+    else:
+        L, P = out.shape
+        for i in range(nb):
+            r = _dem_index(v - i, L, flip_line)
+            for p in range(p0, p1):
+                out[r, _dem_index(p, P, flip_pos)] = ring[(v - i) % R, p]
 
 
 @njit(cache=True)
@@ -279,7 +291,7 @@ def _strip_block(z, Z, RZ, RS, RO, void, zfloor, zmax, T, d, fr, v_top, nb, p0, 
     ZL, VE, ring, wring = RZ[0], RZ[1], RS[0], RS[1]
     R = ring.shape[0]
     # one position more on the near side for the void edges (same values as the next strip's)
-    _copy_lines(z, ZL, v_top, nb, max(0, p0 - 1), p1, dom_col, flip_line, flip_pos, True)
+    _load_lines(z, ZL, v_top, nb, max(0, p0 - 1), p1, dom_col, flip_line, flip_pos)
     if void:
         for i in range(nb):
             row = (v_top - i) % R
@@ -297,7 +309,7 @@ def _strip_block(z, Z, RZ, RS, RO, void, zfloor, zmax, T, d, fr, v_top, nb, p0, 
             ring[row, p] = S
             wring[row, p] = w
             RO[row, p] = _decide(S, lo, hi, ZL[row, p])
-    _copy_lines(out, RO, v_top, nb, p0, p1, dom_col, flip_line, flip_pos, False)
+    _store_lines(out, RO, v_top, nb, p0, p1, dom_col, flip_line, flip_pos)
 
 
 @njit(parallel=True, cache=True)
