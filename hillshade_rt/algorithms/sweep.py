@@ -70,6 +70,11 @@ from .raymath import line_position, madd, terrain_on_line
 EXACT_STEPS = 8   # samples marched exactly before the stored values are used
 UNSURE = 2        # mask code of a cell left to the exact refinement pass
 MIN_STRIP = 256   # fewest positions per strip of the parallel wavefront
+# Rays that differ per row: how far the chain of stored rays may drift from a cell's own ray before
+# the cell goes to the exact march (``_trusted_floor``): sideways, in cells; in height, relative
+# to the ray's own rise over the same steps.
+DRIFT_CELLS = 1.0
+DRIFT_RISE = 0.01
 
 ERROR_SUMMARY = (
     "K=8 vs brute, 7 real DEMs x 8 suns (benchmarks/accuracy.py): mean 0.008-0.049 % of cells per "
@@ -362,10 +367,12 @@ def _sweep_uniform(z, Z, dom_col, flip_line, flip_pos, s, rise, K, nstrips, void
 
 
 @njit(cache=True, inline="always")
-def _sweep_cell(Z, ring, wring, void, zfloor, zmax, v, p, s_arr, rise_arr, per_line, K, out):
-    """Canonical cell (v, p) with its own row's ray (``s_arr``/``rise_arr`` indexed by line or
-    by position): S and W into the rings, the code into ``out``. The per-cell body of both
-    backends."""
+def _sweep_cell(Z, ring, wring, void, zfloor, zmax, v, p, s_arr, rise_arr, hmin_arr, per_line, K,
+                out):
+    """Canonical cell (v, p) with its own row's ray (``s_arr``/``rise_arr``/``hmin_arr`` indexed
+    by line or by position): S and W into the rings, the code into ``out``. A cell lower than
+    its row's ``hmin_arr`` (``_trusted_floor``: its ray reaches rows whose rays differ too much
+    from its own) is left unsure, i.e. to the exact march. The per-cell body of both backends."""
     v = np.int64(v)   # prange / grid indices may be unsigned; keep integer arithmetic integral
     p = np.int64(p)
     i = v if per_line else p
@@ -373,11 +380,15 @@ def _sweep_cell(Z, ring, wring, void, zfloor, zmax, v, p, s_arr, rise_arr, per_l
     row = v % ring.shape[0]
     ring[row, p] = S
     wring[row, p] = w
-    out[v, p] = _decide(S, lo, hi, Z[v, p])
+    h = Z[v, p]
+    if h < hmin_arr[i]:
+        lo = -np.inf
+        hi = np.inf
+    out[v, p] = _decide(S, lo, hi, h)
 
 
 @njit(parallel=True, cache=True)
-def _sweep_kernel(Z, s_arr, rise_arr, per_line, K, void, zfloor, zmax, out):
+def _sweep_lines(Z, s_arr, rise_arr, hmin_arr, per_line, K, void, zfloor, zmax, out):
     """Rays that differ from row to row (geographic CRS): lines from the sun's edge, the cells of
     a line in parallel, each through ``_march_cell`` with its own row's ray."""
     L, P = Z.shape
@@ -385,19 +396,28 @@ def _sweep_kernel(Z, s_arr, rise_arr, per_line, K, void, zfloor, zmax, out):
     ring, wring = RS[0], RS[1]
     for v in range(L - 1, -1, -1):
         for p in prange(P):
-            _sweep_cell(Z, ring, wring, void, zfloor, zmax, v, p, s_arr, rise_arr, per_line, K, out)
+            _sweep_cell(Z, ring, wring, void, zfloor, zmax, v, p, s_arr, rise_arr, hmin_arr,
+                        per_line, K, out)
+
+
+def _sweep_kernel(Z, s_arr, rise_arr, per_line, K, void, zfloor, zmax, out, hmin_arr=None):
+    """``_sweep_lines`` (the per-cell kernel); without ``hmin_arr`` every cell trusts the stored
+    values (what the line passes of one ray direction do)."""
+    if hmin_arr is None:
+        hmin_arr = np.full(len(s_arr), -np.inf)
+    _sweep_lines(Z, s_arr, rise_arr, hmin_arr, per_line, K, void, zfloor, zmax, out)
 
 
 @kernel
-def _sweep_gpu(Z, ring, wring, void, zfloor, zmax, v_top, nlines, s_arr, rise_arr, per_line, K,
-               out):
+def _sweep_gpu(Z, ring, wring, void, zfloor, zmax, v_top, nlines, s_arr, rise_arr, hmin_arr,
+               per_line, K, out):
     """CUDA: lines v_top, ..., v_top - nlines + 1 (nlines <= K) at once, one thread per cell. A
     line reads the stored S of the line K before it only, so K consecutive lines are independent;
     the rings hold 2K lines (those written, those read)."""
     p, i = cuda.grid(2)
     if i < nlines and p < Z.shape[1]:
-        _sweep_cell(Z, ring, wring, void, zfloor, zmax, v_top - i, p, s_arr, rise_arr, per_line, K,
-                    out)
+        _sweep_cell(Z, ring, wring, void, zfloor, zmax, v_top - i, p, s_arr, rise_arr, hmin_arr,
+                    per_line, K, out)
 
 
 def _per_cell_rays(rays: SunRays):
@@ -416,6 +436,67 @@ def _per_cell_rays(rays: SunRays):
     if f.flip_line if per_line else f.flip_pos:
         s, rise = s[::-1].copy(), rise[::-1].copy()
     return f, s, rise, per_line
+
+
+@njit(cache=True)
+def _trusted_floor(s_arr, rise_arr, per_line, K, zmin, zmax, shift, rtol):
+    """Per canonical index over the DEM's rows (``_per_cell_rays``): the lowest height from
+    which a cell there may use the stored values; a lower cell goes to the exact march.
+
+    A stored S is that of the ray of *its* row. Where the rays differ per row (geographic and
+    equirectangular grids: s and rise follow 1/cos(lat) or cos(lat)), a cell's S is in effect
+    computed along a chain of rays, K steps each with the geometry of the row where that block
+    starts: a path that drifts sideways from the cell's own straight ray by the sum of
+    K * |s_row - s| and whose height drifts by the sum of K * |rise_row - rise|. Walking the
+    chain block by block (the rows it may touch: those of the stored neighbours, widened by the
+    drift so far), the chain is trusted for the first m steps while the sideways drift stays
+    within ``shift`` cells and the height drift within ``rtol`` of the ray's own rise over those
+    steps. A cell whose ray clears ``zmax`` within those m steps decides nothing beyond them
+    (every later sample of the chain is lower than zmax less the chain's rise, itself at least
+    m * rise less the drift): such cells are trusted. Where the chain leaves the raster or the
+    lowest cell's ray clears ``zmax`` within the trusted steps, the floor is -inf; on uniform
+    rays the drift is 0 and so is the work of this function beyond one pass."""
+    n = len(s_arr)
+    out = np.full(n, -np.inf)
+    for i in range(n):
+        s0 = s_arr[i]
+        r0 = rise_arr[i]
+        if s0 > 1.0:
+            # the row's own dominant axis is the other one (``_per_cell_rays``): re-expressed in
+            # the frame's lines, its K "exact" samples would not be the model's (more than one
+            # position per line: terrain between the lines is never sampled). All exact.
+            out[i] = np.inf
+            continue
+        need = (zmax - zmin) / r0   # steps after which even the lowest cell's ray is clear
+        ds = 0.0
+        dr = 0.0
+        b = 1
+        while b * K < need:
+            if per_line:      # block b: lines i + b*K on, with the geometry of line i + b*K
+                q0 = i + b * K
+                q1 = q0
+                if q0 >= n:
+                    break     # the chain left the raster: nothing beyond it
+            else:             # positions around i + b*K*s0, with those rows' geometry
+                x = i + b * K * s0
+                q0 = int(math.floor(x - ds))
+                q1 = int(math.floor(x + ds)) + 1
+                if q0 > n - 1:
+                    break
+                q0 = max(q0, 0)
+                q1 = min(q1, n - 1)
+            es = 0.0
+            er = 0.0
+            for q in range(q0, q1 + 1):
+                es = max(es, abs(s_arr[q] - s0))
+                er = max(er, abs(rise_arr[q] - r0))
+            if ds + K * es > shift or dr + K * er > rtol * (b + 1) * K * r0:
+                out[i] = zmax - b * K * r0 + dr
+                break
+            ds += K * es
+            dr += K * er
+            b += 1
+    return out
 
 
 @njit(cache=True)
@@ -461,7 +542,8 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None,
                        zmax, out)
     else:
         f, s, rise, per_line = _per_cell_rays(rays)
-        _sweep_kernel(f.view(z), s, rise, per_line, K, void, zfloor, zmax, f.view(out))
+        hmin = _trusted_floor(s, rise, per_line, K, float(zmin), zmax, DRIFT_CELLS, DRIFT_RISE)
+        _sweep_lines(f.view(z), s, rise, hmin, per_line, K, void, zfloor, zmax, f.view(out))
     unsure = brute.refine(z, rays, out, UNSURE, zmax)
     if stats is not None:
         stats["unsure_fraction"] = unsure / max(1, out.size)
@@ -482,10 +564,13 @@ def shadow_mask_gpu(g, rays: SunRays, zmax: float, stats: dict | None = None,
         f = frame_of(rays)
         L = cols if f.dom_col else rows
         s, rise, per_line = np.full(L, f.s), np.full(L, f.rise), True
+        hmin = np.full(L, -np.inf)
     else:
         f, s, rise, per_line = _per_cell_rays(rays)
+        hmin = _trusted_floor(s, rise, per_line, np.int64(K), float(g.zmin), float(zmax),
+                              DRIFT_CELLS, DRIFT_RISE)
     L, P = (cols, rows) if f.dom_col else (rows, cols)
-    d_s, d_rise = g.upload(s), g.upload(rise)
+    d_s, d_rise, d_hmin = g.upload(s), g.upload(rise), g.upload(hmin)
     rays_d = g.rays(rays)
     R = 2 * K
     rings = g.upload(np.full((2, R, P), -np.inf))
@@ -499,7 +584,8 @@ def shadow_mask_gpu(g, rays: SunRays, zmax: float, stats: dict | None = None,
             blocks, threads = grid_2d(n, P, (128, 1))
             _sweep_gpu[blocks, threads, g.stream](Zc, rings[0], rings[1], g.void, zfloor,
                                                   float(zmax), np.int64(v_top), np.int64(n),
-                                                  d_s, d_rise, per_line, np.int64(K), outc)
+                                                  d_s, d_rise, d_hmin, per_line, np.int64(K),
+                                                  outc)
         from . import frames
         g.launch(frames.canonical_copy_gpu, L, P, out, outc, f.dom_col, f.flip_line, f.flip_pos,
                  False)
