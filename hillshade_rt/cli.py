@@ -515,6 +515,8 @@ def _light(files, kind, algorithm, options, curvature, refraction_k, soft, self_
         check_output_format(output, output_driver(output, fmt, cog), dtype,
                             len(req.times) if req.from_time else 1,
                             out.continuous and not out.via_vrt)
+    if not quiet:
+        _compile_note(algorithm, ran_on, self_shadow or kind != "shadow")
     try:
         with (_bounded_gdal_cache() if tiled else contextlib.nullcontext()):
             run = (_light_tiled if tiled else _light_in_memory)(
@@ -593,6 +595,19 @@ def _note_to_show(algo_stats: dict, algorithm: str, options: dict) -> str | None
     if algorithm == "smap" and not options and not _explicit("algorithm"):
         return None
     return note
+
+
+def _compile_note(algorithm: str, backend: str, relief: bool = False) -> None:
+    """One line on stderr before numba compiles kernels that are not in its cache yet (a first
+    run, or the first use of an algorithm: seconds to a minute with nothing else on screen)."""
+    if backend != "cpu":
+        return
+    from .algorithms._jitcache import cache_dir, cached
+    missing = [m for m in [algorithm] + (["relief"] if relief else []) if not cached(m)]
+    if missing:
+        where = cache_dir().replace(os.path.expanduser("~"), "~", 1)
+        click.echo(f"hillshade-rt: compiling the {' and '.join(missing)} kernels (first run "
+                   f"only: cached in {where})", err=True)
 
 
 def _bounded_gdal_cache():
@@ -995,6 +1010,8 @@ def sun_hours(dem, output, date_, end_date, step, tz, lat, lon, pressure, temper
     if threads is not None:
         numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
     ran_on = choose_backend(backend, algorithm, {})
+    if not quiet:
+        _compile_note(algorithm, ran_on, self_shadow)
     with timer("read"):
         d = _read(dem, **read_opts)
     with timer("prepare"):
@@ -1161,6 +1178,8 @@ def horizon(dem, output, azimuth, method, sample_spacing, curvature, refraction_
     if threads is not None:
         numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
     ran_on = choose_backend(backend, "horizon", {"method": method})
+    if not quiet:
+        _compile_note("horizon", ran_on)
     with timer("read"):
         d = _read(dem, **read_opts)
     stats: dict = {}

@@ -7,6 +7,7 @@ source file of this package folder: any change to any of them starts a fresh cac
 """
 
 import contextlib
+import functools
 import hashlib
 import os
 
@@ -15,6 +16,7 @@ import numba
 _HERE = os.path.dirname(os.path.abspath(__file__))
 
 
+@functools.lru_cache(maxsize=None)
 def source_digest() -> str:
     h = hashlib.sha256(numba.__version__.encode())
     for name in sorted(os.listdir(_HERE)):
@@ -30,6 +32,24 @@ def _cache_root() -> str:
         return os.environ["NUMBA_CACHE_DIR"]
     xdg = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
     return os.path.join(xdg, "hillshade-rt", "numba")
+
+
+def cache_dir() -> str:
+    """Where this version's compiled kernels are cached."""
+    return os.path.join(_cache_root(), source_digest())
+
+
+def cached(module: str) -> bool:
+    """Whether numba's cache already holds compiled kernels of ``algorithms/<module>.py`` for this
+    version (an index file ``<module>.<function>-<line>.py311.nbi``): if not, the first call
+    compiles them (seconds to a minute), which the command line says before it happens."""
+    root = cache_dir()
+    try:
+        subs = [os.path.join(root, d) for d in os.listdir(root)]
+        return any(f.startswith(module + ".") and f.endswith(".nbi")
+                   for sub in subs if os.path.isdir(sub) for f in os.listdir(sub))
+    except OSError:
+        return False
 
 
 @contextlib.contextmanager

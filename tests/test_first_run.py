@@ -1,0 +1,35 @@
+"""The first run says it is compiling (issue 18, item 8): numba compiles kernels that are not in
+its cache yet, seconds to a minute with nothing else on screen."""
+
+import os
+
+from hillshade_rt.algorithms import _jitcache
+from hillshade_rt.cli import cli
+from conftest import data_path
+
+LIDAR = data_path("lidar_dem_1m_utm15n_400x400.tif")
+SUN = ["--azimuth", "203.7", "--elevation", "12"]
+
+
+def test_cached_reads_numba_index_files(tmp_path, monkeypatch):
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    assert not _jitcache.cached("smap")
+    sub = tmp_path / _jitcache.source_digest() / "algorithms_0123"
+    sub.mkdir(parents=True)
+    (sub / "brute._brute_cpu-39.py311.nbi").write_bytes(b"")
+    assert _jitcache.cached("brute") and not _jitcache.cached("smap")
+
+
+def test_cli_says_once_that_it_compiles_and_quiet_says_nothing(tmp_path, runner, monkeypatch):
+    seen = []
+    monkeypatch.setattr(_jitcache, "cached", lambda m: seen.append(m) or m != "smap")
+    r = runner.invoke(cli, ["shadow", LIDAR, str(tmp_path / "a.tif")] + SUN)
+    assert r.exit_code == 0, r.output
+    notes = [l for l in r.stderr.splitlines() if "compiling" in l]
+    assert len(notes) == 1 and "smap kernels (first run only" in notes[0]
+    assert os.path.expanduser("~") not in notes[0] or "NUMBA_CACHE_DIR" in os.environ
+    r = runner.invoke(cli, ["shadow", LIDAR, str(tmp_path / "b.tif"), "-q"] + SUN)
+    assert r.exit_code == 0 and r.stderr == ""
+    r = runner.invoke(cli, ["hillshade", LIDAR, str(tmp_path / "c.tif"), "--algorithm", "brute"])
+    assert r.exit_code == 0 and "compiling" not in r.stderr     # brute and relief are cached
+    assert "relief" in seen
