@@ -24,8 +24,11 @@ help:
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
 
+# after installing, numba compiles the default kernels once (python -m hillshade_rt.warm): the
+# first run does not wait for them
 $(VENV)/.installed: pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install -q -e .
+	$(BIN)/python -m hillshade_rt.warm
 	@touch $@
 
 $(VENV)/.installed-test: pyproject.toml | $(BIN)/python

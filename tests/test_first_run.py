@@ -33,3 +33,21 @@ def test_cli_says_once_that_it_compiles_and_quiet_says_nothing(tmp_path, runner,
     r = runner.invoke(cli, ["hillshade", LIDAR, str(tmp_path / "c.tif"), "--algorithm", "brute"])
     assert r.exit_code == 0 and "compiling" not in r.stderr     # brute and relief are cached
     assert "relief" in seen
+
+
+def test_warm_step_compiles_what_a_first_run_needs(monkeypatch, capsys):
+    """`python -m hillshade_rt.warm` (run by `make install`): says what it compiles, runs smap's
+    warm-up on a projected and a per-row grid, and is silent when everything is cached."""
+    from hillshade_rt import warm
+    from hillshade_rt.engine import Shader
+    calls = []
+    real = Shader.warm_up
+    monkeypatch.setattr(Shader, "warm_up", lambda self, *a, **k: calls.append(
+        (self.algorithm, bool((self.grid.dx != self.grid.dx[0]).any()))) or real(self, *a, **k))
+    monkeypatch.setattr(_jitcache, "cached", lambda m: m != "smap")
+    assert warm.main() == 0
+    assert calls == [("smap", False), ("smap", True)]
+    assert "compiling the smap kernels once" in capsys.readouterr().err
+    monkeypatch.setattr(_jitcache, "cached", lambda m: True)
+    calls.clear()
+    assert warm.main() == 0 and calls == [] and capsys.readouterr().err == ""

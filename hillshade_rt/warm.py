@@ -1,0 +1,41 @@
+"""Compile, once, the kernels a first run needs: ``python -m hillshade_rt.warm`` (``make install``
+runs it), so that the first shading after an install does not wait for numba.
+
+What it compiles is what ``hillshade-rt shadow`` and ``hillshade`` use by default on the common
+DEMs: smap (with its curvature refinement) on a grid of one spacing (projected DEMs) and on a
+grid whose spacing varies per row (geographic DEMs), and the Horn normals of the relief. Each
+kernel lands in numba's cache (``~/.cache/hillshade-rt/numba/<digest>``); what is already there
+is only loaded.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+
+
+def main() -> int:
+    import numpy as np
+
+    from .algorithms._jitcache import cache_dir, cached
+    from .engine import Body, Shader
+    from .geometry import Grid
+
+    todo = [m for m in ("smap", "brute", "relief") if not cached(m)]
+    if not todo:
+        return 0
+    print(f"hillshade-rt: compiling the {', '.join(todo)} kernels once (cached in "
+          f"{cache_dir()})", file=sys.stderr, flush=True)
+    t0 = time.perf_counter()
+    z = np.zeros((4, 4), np.float32)
+    grids = [Grid.uniform(4, 4, 30.0),
+             Grid(4, 4, np.linspace(92.0, 60.0, 4), np.full(4, 92.5), 1, -1, "per row")]
+    for grid in grids:
+        sh = Shader(z, grid, "smap", {}, "cpu", True, None, Body(), (0.0, 1.0))
+        sh.warm_up(203.7, 10.0, soft=False, incidence=True)
+    print(f"hillshade-rt: kernels ready ({time.perf_counter() - t0:.0f} s)", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
