@@ -597,10 +597,18 @@ def _note_to_show(algo_stats: dict, algorithm: str, options: dict) -> str | None
     return note
 
 
+def _stderr_is_terminal() -> bool:
+    try:
+        return sys.stderr.isatty()
+    except (AttributeError, ValueError, OSError):
+        return False
+
+
 def _compile_note(algorithm: str, backend: str, relief: bool = False) -> None:
     """One line on stderr before numba compiles kernels that are not in its cache yet (a first
-    run, or the first use of an algorithm: seconds to a minute with nothing else on screen)."""
-    if backend != "cpu":
+    run, or the first use of an algorithm: seconds to a minute with nothing else on screen).
+    On a terminal only, like the progress bar: logs and pipelines keep their one summary line."""
+    if backend != "cpu" or not _stderr_is_terminal():
         return
     from .algorithms._jitcache import cache_dir, cached
     missing = [m for m in [algorithm] + (["relief"] if relief else []) if not cached(m)]

@@ -21,6 +21,10 @@ def test_cached_reads_numba_index_files(tmp_path, monkeypatch):
 
 
 def test_cli_says_once_that_it_compiles_and_quiet_says_nothing(tmp_path, runner, monkeypatch):
+    from hillshade_rt import cli as cli_mod
+    r = runner.invoke(cli, ["shadow", LIDAR, str(tmp_path / "z.tif")] + SUN)
+    assert "compiling" not in r.stderr        # not a terminal: logs keep their one line
+    monkeypatch.setattr(cli_mod, "_stderr_is_terminal", lambda: True)
     seen = []
     monkeypatch.setattr(_jitcache, "cached", lambda m: seen.append(m) or m != "smap")
     r = runner.invoke(cli, ["shadow", LIDAR, str(tmp_path / "a.tif")] + SUN)
