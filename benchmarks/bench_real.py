@@ -100,7 +100,9 @@ def cases(a):
     for n in a.sizes:
         for beta in a.betas:
             if a.tile_from and a.tile_from < n:
-                z = terrain.tiled(terrain.spectral(a.tile_from, beta, seed=int(10 * beta),
+                # the same surface as the tile_from² case, repeated
+                z = terrain.tiled(terrain.spectral(a.tile_from, beta,
+                                                   seed=int(10 * beta) + a.tile_from,
                                                    relief=RELIEF), n)
                 label = f"spectral β {beta:g} {a.tile_from}² tiled to {n}²"
             else:
@@ -134,6 +136,13 @@ def alternated(tools, repeat):
             if name not in masks:
                 masks[name], stats[name] = m, st
     return {t: statistics.median(v) for t, v in times.items()}, masks, stats
+
+
+def _load():
+    try:
+        return "/".join(f"{v:.2f}" for v in os.getloadavg())
+    except OSError:
+        return "n/a"
 
 
 def fmt_tool(t, t_brute, mpix):
@@ -179,7 +188,8 @@ def main(argv=None):
     log(f"`{cmd.strip()}` — {datetime.date.today().isoformat()}; {platform.machine()}, "
         f"{os.cpu_count()} cores, Python {platform.python_version()}, numpy {np.__version__}, "
         f"numba {numba.__version__}, {nthreads} threads; compute stage only, median of "
-        f"{a.repeat} alternated runs (whitebox: 1 run); flat Earth")
+        f"{a.repeat} alternated runs (whitebox: 1 run); flat Earth; load average at the start "
+        f"{_load()}")
     notes = []
     tools_avail = {}
     for p in peers:
@@ -282,7 +292,8 @@ def main(argv=None):
                 cells.append(f"{min(v):.2f} – {statistics.median(v):.2f} – {max(v):.2f}")
         log(f"| {label} | " + " | ".join(cells) + " |")
     log("")
-    log(f"(timed part: {time.perf_counter() - t_start:.0f} s)")
+    log(f"(timed part: {time.perf_counter() - t_start:.0f} s; load average at the end {_load()}: "
+        f"another process on the cores slows the tools unequally, sweep and doshade most)")
     for n in dict.fromkeys(notes):
         log(f"Note: {n}")
     if a.out:
