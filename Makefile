@@ -7,7 +7,7 @@ OUTDIR ?= out
 EXAMPLE_DEM := examples/bigtujunga_srtm30m_utm11n_1197x643.tif
 EXAMPLE_OUT := $(OUTDIR)/bigtujunga_shadow.tif
 
-.PHONY: run test install install-test bench bench-sun bench-tiling bench-big bench-gpu bench-peers bench-writes clean help
+.PHONY: run test install install-test bench bench-sun bench-tiling bench-big bench-gpu bench-peers bench-writes bench-real bench-real-quick clean help
 
 help:
 	@echo "make run    - set up .venv, shade the bundled example DEM, print where the mask went"
@@ -19,6 +19,8 @@ help:
 	@echo "make bench-big - a 20000 x 20000 DEM under --max-memory 1GB: peak memory, a crop checked"
 	@echo "make bench-gpu - install the CUDA backend (numba-cuda) and time every algorithm on the GPU"
 	@echo "make bench-peers - install other shadow tools into .venv and time them against ours"
+	@echo "make bench-real - real DEMs and spectral fractals (1024-4096), 18 suns, with the peers"
+	@echo "make bench-real-quick - the same with 1024 and 6 suns (a few minutes on 2 cores)"
 	@echo "make clean  - remove .venv and outputs"
 
 $(BIN)/python:
@@ -83,6 +85,15 @@ $(VENV)/.installed-peers: pyproject.toml | $(VENV)/.installed
 
 bench-peers: $(VENV)/.installed-peers
 	$(BIN)/python benchmarks/bench_peers.py
+
+# Benchmarks that look like Earth (issue 18): real DEMs (benchmarks/data/SOURCES.md), spectral
+# fractals (beta 2.4, 3.2), the smooth facet fractal labelled as such; peers in the same run.
+# BENCH_REAL_ARGS passes options, e.g. BENCH_REAL_ARGS="--sizes 8192 --no-real --no-smooth".
+bench-real: $(VENV)/.installed-peers
+	MALLOC_MMAP_THRESHOLD_=131072 $(BIN)/python benchmarks/bench_real.py $(BENCH_REAL_ARGS)
+
+bench-real-quick: $(VENV)/.installed-peers
+	MALLOC_MMAP_THRESHOLD_=131072 $(BIN)/python benchmarks/bench_real.py --quick $(BENCH_REAL_ARGS)
 
 clean:
 	rm -rf $(VENV) $(OUTDIR) .pytest_cache .hypothesis

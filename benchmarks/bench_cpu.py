@@ -1,5 +1,9 @@
 """CPU benchmarks: every algorithm on real DEMs and fractal terrains at high, mid and low sun.
 
+The fractal here is tests/conftest.fractal_terrain, labelled "smooth (facets)": a few noise
+octaves upsampled bilinearly, far smoother than any real DEM. Rough terrain (spectral fractals,
+more real DEMs, 18 suns, the peers) is in bench_real.py (``make bench-real``).
+
 Prints a markdown table (and writes it with --out). Each figure is the median of --repeat runs
 after one warm-up (compilation excluded). Ratios are measured within this one run:
   * floor ratio: algorithm time / time of one elementwise pass (``z > mean``) over the same
@@ -68,11 +72,11 @@ def cases(sizes):
     for n in sizes:
         # 1.5 km relief on 30 m cells, float32 like every DEM the tool reads
         z = fractal_terrain(n, n, seed=n, relief=1500.0, octaves=6).astype(np.float32)
-        yield f"fractal {n}²", z, Grid.uniform(n, n, 30.0)
+        yield f"smooth (facets) fractal {n}²", z, Grid.uniform(n, n, 30.0)
     n = sizes[0] if sizes else 512
     z = fractal_terrain(n, n, seed=n + 1, relief=1500.0, octaves=6).astype(np.float32)
     z[z < np.percentile(z, 50)] = np.nan   # islands in a nodata sea (half the cells are voids)
-    yield f"islands {n}² (half nodata)", z, Grid.uniform(n, n, 30.0)
+    yield f"smooth (facets) islands {n}² (half nodata)", z, Grid.uniform(n, n, 30.0)
 
 
 def main():

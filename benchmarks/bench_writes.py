@@ -27,20 +27,12 @@ from hillshade_rt.engine import Shader, dem_body, render  # noqa: E402
 from hillshade_rt.geometry import Grid  # noqa: E402
 from hillshade_rt.sun import SunOver  # noqa: E402
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from terrain import fractal  # noqa: E402  (power-law fractal, benchmarks/terrain.py)
+
 EXAMPLE = os.path.join(os.path.dirname(__file__), "..", "examples",
                        "bigtujunga_srtm30m_utm11n_1197x643.tif")
 REPEAT = 5
-
-
-def fractal(n: int, beta: float = 2.2, seed: int = 3) -> np.ndarray:
-    """Power-law (spectral) fractal terrain, n x n, 0..2000 m."""
-    rng = np.random.default_rng(seed)
-    k = np.fft.fftfreq(n)
-    kk = np.sqrt(k[:, None] ** 2 + k[None, :] ** 2)
-    kk[0, 0] = 1.0
-    spec = (rng.standard_normal((n, n)) + 1j * rng.standard_normal((n, n))) / kk ** (beta / 2 + 0.5)
-    z = np.fft.ifft2(spec).real
-    return ((z - z.min()) / (z.max() - z.min()) * 2000).astype(np.float32)
 
 
 def best(f) -> float:
