@@ -150,10 +150,8 @@ def _finite(ctx, param, value):
 
 
 def _check_z_factor(ctx, param, value):
-    if value is not None and not (math.isfinite(value) and value != 0):
-        raise click.UsageError(f"--z-factor must be a finite non-zero number, got {value}",
-                               ctx=ctx)
-    return value
+    from .io import check_z_factor
+    return _checked(check_z_factor)(ctx, param, value)
 
 
 def dem_options(f):
@@ -382,7 +380,7 @@ def shadow(files, algorithm, nextv, better_nextv, horizon_method, sample_spacing
                 type=click.Path(dir_okay=False))
 @sun_options
 @click.option("--ambient", type=click.FloatRange(0.0, 1.0), default=0.2, show_default=True,
-              callback=lambda c, p, v: _finite(c, p, v),
+              callback=_finite,
               help="Light in shadow and on faces turned away, 0..1.")
 @click.option("-s", "--scale", type=float, default=None,
               help="Ratio of vertical units to horizontal (gdaldem -s), e.g. 111120 for a DEM "
@@ -405,13 +403,14 @@ def hillshade(files, ambient, scale, algorithm, curvature, refraction_k, soft, *
 def _inputs_and_output(files, output, pattern):
     """rio-style paths: ``DEM... OUTPUT``, or every path a DEM with -o/--output or
     --output-pattern."""
+    from .io import is_gdal_name    # a DEM the local disk cannot tell about (/vsizip/, URLs)
     files = list(files)
     if output is not None or pattern is not None:
         if output is not None and pattern is not None:
             raise click.UsageError("give -o/--output or --output-pattern, not both")
         given = "--output-pattern" if pattern is not None else "-o/--output"
         last = files[-1]
-        if len(files) > 1 and not _maybe_input(last):
+        if len(files) > 1 and not (os.path.exists(last) or is_gdal_name(last)):
             # `shadow dem.tif out.tif --output-pattern 'x_{index}.tif'`: out.tif is no DEM
             raise click.UsageError(f"{last} does not exist: give OUTPUT or {given}, not both "
                                    f"(with {given} every path is a DEM)")
@@ -419,13 +418,6 @@ def _inputs_and_output(files, output, pattern):
     if len(files) < 2:
         raise click.UsageError("give OUTPUT or --output-pattern (one of them)")
     return files[:-1], files[-1]
-
-
-def _maybe_input(path) -> bool:
-    """Whether ``path`` could be a DEM: an existing file, or a path for GDAL's virtual file
-    systems (/vsizip/..., zip://...!..., a URL) that the local disk cannot tell about."""
-    p = str(path)
-    return os.path.exists(p) or p.startswith("/vsi") or "://" in p
 
 
 # the smallest --window-size side: smaller windows make the run slow for nothing (each window has
@@ -629,12 +621,8 @@ def _bounded_gdal_cache():
 def _source(paths, read_opts):
     """``tiling.open_source`` with the DEM options of the command line (as ``_read``). A DEM
     from standard input is read whole only: with windows or a mosaic, a usage error."""
-    from .io import STDIN, parse_pixel_size, parse_raw_shape
+    from .io import parse_pixel_size, parse_raw_shape
     from .tiling import open_source
-    if STDIN in ([paths] if isinstance(paths, str) else list(paths)):
-        raise click.UsageError("a DEM from standard input ('-') is read whole, in memory: it "
-                               "does not go with --window-size, --scheduler or other DEMs "
-                               "(a mosaic); give it as a file")
     return open_source(paths, band=read_opts["band"], nodata=read_opts["nodata"],
                        pixel_size=parse_pixel_size(read_opts["pixel_size"]),
                        z_factor=read_opts["z_factor"],
@@ -1134,7 +1122,7 @@ def _algorithm_options(algorithm: str, **given) -> dict:
 @cli.command()
 @click.argument("dem", type=click.Path(dir_okay=False))
 @click.argument("output", type=click.Path(dir_okay=False))
-@click.option("--azimuth", type=float, required=True, callback=lambda c, p, v: _finite(c, p, v),
+@click.option("--azimuth", type=float, required=True, callback=_finite,
               help="Azimuth along which to look, degrees clockwise from north.")
 @click.option("--method", type=click.Choice(["scan", "hull"]), default="scan", show_default=True,
               help="scan: exact per-cell march; hull: convex-hull approximation, much faster.")

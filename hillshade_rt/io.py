@@ -13,7 +13,6 @@ import json
 import math
 import os
 import re
-import tempfile
 import warnings
 from dataclasses import dataclass, field
 
@@ -79,8 +78,10 @@ _BODIES = {"the Moon": 1737400.0, "Mars": 3396190.0, "Mars (mean)": 3389500.0,
 
 
 def body_name(a_m: float) -> str | None:
-    """The body whose radius is ``a_m`` (within 0.2 %), the Earth for 6.35..6.39e6 m."""
-    if 6.35e6 <= a_m <= 6.39e6:
+    """The body whose radius is ``a_m`` (within 0.2 %), the Earth for the semi-major axes of its
+    ellipsoids (``sun.EARTH_A_RANGE``)."""
+    from .sun import EARTH_A_RANGE
+    if EARTH_A_RANGE[0] <= a_m <= EARTH_A_RANGE[1]:
         return "the Earth"
     for name, r in _BODIES.items():
         if abs(a_m - r) <= 0.002 * r:
@@ -128,6 +129,13 @@ def parse_pixel_size(text: str | None) -> tuple[float, float] | None:
     if len(vals) not in (1, 2) or not all(math.isfinite(v) and v > 0 for v in vals):
         raise HillshadeError(f"--pixel-size must be one or two positive numbers, got {text!r}")
     return (vals[0], vals[-1])
+
+
+def check_z_factor(z_factor: float) -> float:
+    """``-z/--z-factor``: a finite, non-zero number."""
+    if not (math.isfinite(z_factor) and z_factor != 0):
+        raise HillshadeError(f"--z-factor must be a finite non-zero number, got {z_factor}")
+    return z_factor
 
 
 def parse_raw_shape(text: str | None) -> tuple[int, int] | None:
@@ -350,8 +358,7 @@ def read_dem(path: str, *, band: int = 1, nodata: float | None = None,
     """
     path = os.fspath(path)
     check_input_path(path)
-    if not (math.isfinite(z_factor) and z_factor != 0):
-        raise HillshadeError(f"--z-factor must be a finite non-zero number, got {z_factor}")
+    check_z_factor(z_factor)
     if band < 1:
         raise HillshadeError(f"--band must be 1 or more, got {band}")
     data = None

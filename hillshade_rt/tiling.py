@@ -40,8 +40,9 @@ from numba import njit, prange
 
 from .errors import HillshadeError
 from .geometry import Grid
-from .io import (STDIN, STDIN_NAME, check_band, check_input_path, check_transform, gdal_path,
-                 grid_of, heights_into, open_raster, read_error)
+from .errors import UsageProblem
+from .io import (STDIN, STDIN_NAME, check_band, check_input_path, check_transform,
+                 check_z_factor, gdal_path, grid_of, heights_into, open_raster, read_error)
 from .preview import every_nth
 
 STAT_BLOCK = 256          # cells per side of the blocks whose height range bounds the halos
@@ -335,14 +336,13 @@ def open_source(paths, *, band: int = 1, nodata: float | None = None,
     paths = [os.fspath(p) for p in ([paths] if isinstance(paths, (str, os.PathLike)) else paths)]
     if not paths:
         raise HillshadeError("no DEM given")
-    if STDIN in paths:
-        raise HillshadeError(f"{STDIN_NAME}: a DEM from standard input ('-') is read whole, in "
+    if STDIN in paths:    # the command line's own fault: a usage error
+        raise UsageProblem(f"{STDIN_NAME}: a DEM from standard input ('-') is read whole, in "
                              "memory: not in windows (--window-size, --max-memory, --scheduler) "
                              "nor as a tile of a mosaic")
     for p in paths:
         check_input_path(p)
-    if not (math.isfinite(z_factor) and z_factor != 0):
-        raise HillshadeError(f"--z-factor must be a finite non-zero number, got {z_factor}")
+    check_z_factor(z_factor)
     if band < 1:
         raise HillshadeError(f"--band must be 1 or more, got {band}")
     raw = raw_shape is not None or raw_dtype is not None or raw_byteorder is not None or \

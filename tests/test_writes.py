@@ -534,9 +534,15 @@ def test_formats_of_mosaic_tiles_and_their_limits(tmp_path, runner):
     assert not any("_s" in f for f in os.listdir(out)) and not hidden(out)
 
 
-def test_dev_shm_is_a_place_to_write_but_dev_stdout_is_not(runner):
+def test_dev_stdout_and_the_like_are_refused(runner):
+    for path in ("/dev/stderr", "/proc/self/fd/1", "/dev/fd/2"):
+        assert "device or system" in one_line_error(runner.invoke(cli, ["shadow", LIDAR, path,
+                                                                        "--overwrite"] + SUN))
+
+
+def test_dev_shm_is_a_place_to_write(runner):
     if not os.path.isdir("/dev/shm") or not os.access("/dev/shm", os.W_OK):
-        pytest.skip("no writable /dev/shm here")
+        pytest.skip("no writable /dev/shm on this machine")
     out = f"/dev/shm/hillshade-rt-test-{uuid.uuid4().hex}.tif"
     try:
         assert runner.invoke(cli, ["shadow", LIDAR, out, "-q"] + SUN).exit_code == 0
@@ -544,9 +550,6 @@ def test_dev_shm_is_a_place_to_write_but_dev_stdout_is_not(runner):
     finally:
         with contextlib.suppress(OSError):
             os.remove(out)
-    for path in ("/dev/stderr", "/proc/self/fd/1", "/dev/fd/2"):
-        assert "device or system" in one_line_error(runner.invoke(cli, ["shadow", LIDAR, path,
-                                                                        "--overwrite"] + SUN))
 
 
 def test_gdal_errors_of_another_thread_are_not_ours():

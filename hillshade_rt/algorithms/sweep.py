@@ -416,14 +416,6 @@ def _sweep_lines(Z, s_arr, rise_arr, hmin_arr, per_line, K, void, zfloor, zmax, 
                         per_line, K, out)
 
 
-def _sweep_kernel(Z, s_arr, rise_arr, per_line, K, void, zfloor, zmax, out, hmin_arr=None):
-    """``_sweep_lines`` (the per-cell kernel); without ``hmin_arr`` every cell trusts the stored
-    values (what the line passes of one ray direction do)."""
-    if hmin_arr is None:
-        hmin_arr = np.full(len(s_arr), -np.inf)
-    _sweep_lines(Z, s_arr, rise_arr, hmin_arr, per_line, K, void, zfloor, zmax, out)
-
-
 @kernel
 def _sweep_gpu(Z, ring, wring, void, zfloor, zmax, v_top, nlines, s_arr, rise_arr, hmin_arr,
                per_line, K, out):
