@@ -13,6 +13,7 @@ import json
 import math
 import os
 import re
+import sys
 import warnings
 from dataclasses import dataclass, field
 
@@ -754,8 +755,10 @@ class BandWriter:
             if self.tags:
                 self._dst.update_tags(**{k: str(v) for k, v in self.tags.items()})
         except BaseException:
-            self._stack.close()
-            raise
+            # the contexts must see the failure: close() would exit them as if all went well,
+            # and atomic_path would publish the empty temporary file
+            if not self._stack.__exit__(*sys.exc_info()):
+                raise
         return self
 
     def _close(self):

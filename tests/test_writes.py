@@ -595,3 +595,27 @@ def test_interrupts_at_random_moments_of_a_per_tile_series_are_always_one_line(t
         assert not hidden(out)
         done = sorted(os.listdir(out))
         assert all(d in lines[0] for d in done[:2]) and f"{len(done)} output(s)" in lines[0]
+
+
+@pytest.mark.parametrize("where", ["open", "tags"])
+def test_interrupt_while_the_writer_opens_publishes_nothing(tmp_path, monkeypatch, where):
+    """A signal while BandWriter opens its dataset (found by SIGTERM on a cold numba cache: an
+    empty m.tif was published as complete): the temporary file goes, nothing under the name."""
+    import rasterio
+    from hillshade_rt import io as hio
+    from hillshade_rt.errors import Interrupted
+    d = hio.read_dem(LIDAR)
+    real_open = rasterio.open
+
+    def interrupted_open(*a, **k):
+        if where == "open":
+            raise Interrupted(signal.SIGTERM)
+        ds = real_open(*a, **k)
+        ds.update_tags = lambda *a, **k: (_ for _ in ()).throw(Interrupted(signal.SIGTERM))
+        return ds
+    monkeypatch.setattr(rasterio, "open", interrupted_open)
+    writes.reset()
+    with pytest.raises(Interrupted):
+        hio.write_raster(str(tmp_path / "m.tif"), np.zeros(d.shape, np.uint8), d, 255,
+                         tags={"A": 1})
+    assert os.listdir(tmp_path) == [] and writes.completed == []
