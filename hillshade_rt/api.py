@@ -38,7 +38,7 @@ _PASSED = ("tz", "lat", "lon", "pressure", "temperature", "no_refraction", "sun_
 def shade(dems, output: str | None = None, *, product: str = "shadow",
           output_pattern: str | None = None, azimuth: float | None = None,
           elevation: float | None = None, times=(), start=None, end=None, step: str | None = None,
-          algorithm: str = "smap", algorithm_options: dict | None = None, soft: bool = False,
+          algorithm: str = "auto", algorithm_options: dict | None = None, soft: bool = False,
           self_shadow: bool = False, ambient: float = 0.2, scale: float | None = None,
           curvature: bool | None = None, refraction_k: float | None = None,
           backend: str = "auto", max_memory=None, window_size=None, cog: bool = False,

@@ -278,10 +278,13 @@ def physics_options(f):
 
 def algorithm_option(f):
     return click.option(
-        "--algorithm", type=click.Choice(["brute", "smap", "horizon", "sweep"]), default="smap",
-        show_default=True,
-        help="brute: exact reference; smap: exact, fastest at low sun; horizon: exact (horizon "
-             "angles); sweep: approximate, fastest (see docs/algorithms.md).")(f)
+        "--algorithm", type=click.Choice(["auto", "bounds", "brute", "smap", "horizon", "sweep"]),
+        default="auto", show_default=True,
+        help="auto: the fastest exact method for this DEM, sun and backend (bounds or brute; "
+             "the report says which ran and why); bounds: exact, guaranteed horizon bounds + "
+             "pyramid march; brute: exact reference march (over a max-height pyramid unless "
+             "--no-pyramid); smap, horizon: exact (the seeds' methods); sweep: approximate "
+             "(see docs/algorithms.md).")(f)
 
 
 def run_options(f):
@@ -350,6 +353,9 @@ def _pop_sun(kw: dict, default_sun=None):
               help="horizon scan: use every N-th sample only (faster, approximate; default 1).")
 @click.option("--exact-steps", type=click.IntRange(min=1), default=None,
               help="sweep: samples marched exactly before stored values are reused (default 8).")
+@click.option("--no-pyramid", "no_pyramid", is_flag=True, default=None,
+              help="brute: the plain march, every sample taken (same mask; the benchmarks' "
+                   "reference).")
 @physics_options
 @click.option("--self-shadow", is_flag=True,
               help="Also shadow cells whose surface faces away from the sun (Horn normals).")
@@ -359,7 +365,7 @@ def _pop_sun(kw: dict, default_sun=None):
 @dem_options
 @_errors_to_click
 def shadow(files, algorithm, nextv, better_nextv, horizon_method, sample_spacing,
-           exact_steps, curvature, refraction_k, soft, self_shadow, classes, **kw):
+           exact_steps, no_pyramid, curvature, refraction_k, soft, self_shadow, classes, **kw):
     """Write the cast-shadow mask of DEM to OUTPUT (GeoTIFF: 1 shadow, 0 lit, 255 nodata).
 
     Several DEMs (tiles on one grid) are shaded as one mosaic, so that a mountain in one tile
@@ -369,7 +375,8 @@ def shadow(files, algorithm, nextv, better_nextv, horizon_method, sample_spacing
     1 = fully lit, -9999 nodata); --classes writes 0 lit / 1 self-shadow / 2 cast / 255."""
     options = _algorithm_options(algorithm, nextv=nextv, better_nextv=better_nextv,
                                  method=horizon_method, sample_spacing=sample_spacing,
-                                 exact_steps=exact_steps)
+                                 exact_steps=exact_steps,
+                                 pyramid=False if no_pyramid else None)
     kind = "classes" if classes else "shadow"
     _light(files, kind, algorithm, options, curvature, refraction_k, soft,
            self_shadow or classes, 0.2, None, kw)
@@ -603,7 +610,8 @@ def _compile_note(algorithm: str, backend: str, relief: bool = False) -> None:
     if backend != "cpu" or not _stderr_is_terminal():
         return
     from .algorithms._jitcache import cache_dir, cached
-    missing = [m for m in [algorithm] + (["relief"] if relief else []) if not cached(m)]
+    names = (["bounds", "brute", "pyramid"] if algorithm == "auto" else [algorithm])
+    missing = [m for m in names + (["relief"] if relief else []) if not cached(m)]
     if missing:
         where = cache_dir().replace(os.path.expanduser("~"), "~", 1)
         click.echo(f"hillshade-rt: compiling the {' and '.join(missing)} kernels (first run "
@@ -1100,9 +1108,10 @@ def _apply_scale(d, scale):
 
 
 _OPTION_OWNERS = {"nextv": "smap", "better_nextv": "smap", "method": "horizon",
-                  "sample_spacing": "horizon", "exact_steps": "sweep"}
+                  "sample_spacing": "horizon", "exact_steps": "sweep", "pyramid": "brute"}
 _OPTION_FLAGS = {"nextv": "--nextv", "better_nextv": "--better-nextv", "method": "--horizon-method",
-                 "sample_spacing": "--sample-spacing", "exact_steps": "--exact-steps"}
+                 "sample_spacing": "--sample-spacing", "exact_steps": "--exact-steps",
+                 "pyramid": "--no-pyramid"}
 
 
 def _algorithm_options(algorithm: str, **given) -> dict:

@@ -178,7 +178,7 @@ class Shader:
     and the raster's shape) let SMap reuse the tables of the window before and mask only the
     region."""
 
-    def __init__(self, z: np.ndarray, grid: Grid, algorithm: str = "smap",
+    def __init__(self, z: np.ndarray, grid: Grid, algorithm: str = "auto",
                  options: dict | None = None, backend: str = "cpu", curvature="auto",
                  refraction_k: float | None = None, body: Body | None = None,
                  zrange: tuple[float, float] | None = None, extent_m: float | None = None,
@@ -209,6 +209,8 @@ class Shader:
         self.local_range = local_range
         self.carry, self.place = carry, place
         self._gpu = None
+        self._pyramid = None     # the maximum-height pyramid of the whole raster, built once
+        self._survey = None      # (valid fraction, lowest, highest) for --algorithm auto
         self.stats: dict = {}
         self.curvature_used: set = set()   # True/False seen, and the radii used (m)
 
@@ -217,8 +219,9 @@ class Shader:
         """Compile (or load from numba's cache) what the suns to come will run, on 4 x 4 grids,
         so that timings measure computing."""
         from .shadow import warm_up
-        warm_up(self.algorithm, self.grid, azimuth, max(elevation, 1.0), backend=self.backend,
-                **self.options)
+        for name in (("bounds", "brute") if self.algorithm == "auto" else (self.algorithm,)):
+            warm_up(name, self.grid, azimuth, max(elevation, 1.0), backend=self.backend,
+                    **self.options)
         small = Grid.uniform(4, 4, *self.grid.centre_spacing(), self.grid.col_sign,
                              self.grid.row_sign)
         z = np.zeros((4, 4), np.float32)
@@ -286,6 +289,34 @@ class Shader:
             return self._gpu
         return GpuDem(z)
 
+    def pyramid(self, z: np.ndarray, whole: bool):
+        """The maximum-height pyramid of ``z`` (kept for the next suns when ``z`` is the whole
+        raster), or False when the options ask for the plain march."""
+        from .algorithms.pyramid import MaxPyramid
+        if self.options.get("pyramid", True) is False:
+            return False
+        if not whole:
+            return MaxPyramid(z)
+        if self._pyramid is None:
+            self._pyramid = MaxPyramid(z)
+        return self._pyramid
+
+    def choose(self, z: np.ndarray, whole: bool, rays, stats: dict | None = None) -> str:
+        """The algorithm this sun runs: ``self.algorithm``, or for ``auto`` the one
+        ``algorithms.auto.choose`` picks (counted in ``stats``, else ``self.stats``)."""
+        if self.algorithm != "auto":
+            return self.algorithm
+        from .algorithms import auto
+        if whole:
+            if self._survey is None:
+                self._survey = auto.survey(z)
+            frac, lo, hi = self._survey
+        else:
+            frac, lo, hi = auto.survey(z)
+        name, why = auto.choose(z.shape, frac, (lo, hi), rays, self.backend)
+        auto.record(self.stats if stats is None else stats, name, why)
+        return name
+
     def cast(self, region: Region, stats: dict | None = None) -> np.ndarray:
         """uint8 cast-shadow mask of ``region`` (1 shadow, 0 lit, 255 void)."""
         from .algorithms import ALGORITHMS, brute
@@ -297,10 +328,15 @@ class Shader:
         z, g, inner, whole = self._piece(region, el)
         rays = self.rays(g, region.azimuth, el)
         zmax = self.local_range[1] if whole else float(np.nanmax(z))
+        algorithm = self.choose(z, whole, rays, stats)
+        options = dict(self.options)
         # a carrier is only given for smap on the CPU (tiling.Job.carrier); it needs one ray
         carried = self.carry is not None and whole and uniform_rays(rays)
         by_brute = (not carried and self.backend == "cpu"
                     and z.size > TILE_BRUTE_RATIO * sub.size)
+        pyr = self.pyramid(z, whole) if self.backend == "cpu" else False
+        if algorithm in ("brute", "bounds") and self.backend == "cpu":
+            options["pyramid"] = pyr
         if carried:
             out = self.carry.mask(z, rays, zmax, max(abs(self.zmin), abs(self.zmax)),
                                   *self.place, inner)
@@ -309,18 +345,17 @@ class Shader:
             # (brute, exact) rather than run the algorithm over the whole window
             out = np.zeros(z.shape, np.uint8)
             out[inner] = _TILE
-            brute.refine(z, rays, out, _TILE, zmax)
+            brute.refine(z, rays, out, _TILE, zmax, pyr)
             if stats is not None:
                 stats["tiles_marched_by_brute"] = stats.get("tiles_marched_by_brute", 0) + 1
         elif self.backend == "gpu":
-            out = self._gpu_dem(z, whole).shadow_mask(rays, self.algorithm, zmax, stats,
-                                                      **self.options)
+            out = self._gpu_dem(z, whole).shadow_mask(rays, algorithm, zmax, stats, **options)
         else:
-            out = ALGORITHMS[self.algorithm](z, rays, zmax, stats, **self.options)
-        curved_natively = by_brute or self.algorithm == "brute" or (
-            self.algorithm == "horizon" and self.options.get("method", "scan") == "scan")
+            out = ALGORITHMS[algorithm](z, rays, zmax, stats, **options)
+        curved_natively = by_brute or algorithm in ("brute", "bounds") or (
+            algorithm == "horizon" and options.get("method", "scan") == "scan")
         if rays.curved and not curved_natively:
-            n = brute.refine(z, rays, out, 1, zmax)
+            n = brute.refine(z, rays, out, 1, zmax, pyr if pyr is not False else True)
             if stats is not None:
                 stats["curvature_refined_fraction"] = n / max(1, out.size)
         return out if out.shape == sub.shape else np.ascontiguousarray(out[inner])

@@ -231,6 +231,8 @@ class GpuDem:
         self._canon_key = None
         self._canon = None
         self._staging: dict = {}
+        self._host_z = z           # for the pyramid, built at its first use (no copy)
+        self._pyramid = None
         self.check_memory(13 * z.size)
         with self._oom_errors():
             self.z = self.upload(z)
@@ -329,6 +331,24 @@ class GpuDem:
         blocks, threads = grid_2d(rows, cols)
         k[blocks, threads, self.stream](*args)
 
+    def pyramid_args(self, use: bool = True) -> tuple:
+        """The maximum-height pyramid's kernel arguments (``algorithms.pyramid``) on the device,
+        built on the host and uploaded once for all suns; with ``use`` False, the plain march's
+        placeholders."""
+        from .algorithms import brute, pyramid
+        if not use:
+            if getattr(self, "_no_pyramid", None) is None:
+                self._no_pyramid = tuple(self.upload(a) for a in brute._NO_PYRAMID[:3]) + (
+                    np.int64(0),)
+            return self._no_pyramid
+        if self._pyramid is None:
+            p = pyramid.MaxPyramid(self._host_z)
+            self.check_memory(p.nbytes)
+            with self._oom_errors():
+                self._pyramid = (self.upload(p.data), self.upload(p.offsets),
+                                 self.upload(p.widths), np.int64(p.nlev))
+        return self._pyramid
+
     def canonical(self, frame):
         """The heights in the canonical (line, position) order of ``frame`` (``frames.Frame``),
         as a contiguous device array: lines are contiguous, so kernels that walk along them read
@@ -345,7 +365,7 @@ class GpuDem:
             self._canon, self._canon_key = zc, key
         return self._canon
 
-    def shadow_mask(self, rays, algorithm: str = "smap", zmax: float | None = None,
+    def shadow_mask(self, rays, algorithm: str = "auto", zmax: float | None = None,
                     stats: dict | None = None, **options) -> np.ndarray:
         """The mask for one sun (``geometry.sun_rays``) by ``algorithm``; the heights stay on the
         device for the next call."""

@@ -32,7 +32,7 @@ def warm_up(algorithm: str, grid: Grid | None = None, azimuth: float = 203.7,
 
 def shadow_mask(heights: np.ndarray, azimuth: float, elevation: float,
                 spacing: float | tuple[float, float] | Grid = 1.0,
-                algorithm: str = "smap", stats: dict | None = None, backend: str = "auto",
+                algorithm: str = "auto", stats: dict | None = None, backend: str = "auto",
                 **options) -> np.ndarray:
     """Cast-shadow mask of a DEM: uint8, 1 = shadow, 0 = lit, 255 = nodata.
 
@@ -41,7 +41,8 @@ def shadow_mask(heights: np.ndarray, azimuth: float, elevation: float,
     azimuth, elevation: degrees (clockwise from north; above the horizon, 0 < E <= 90).
     spacing: ground metres per cell, ``d``, ``(dx, dy)`` or a :class:`Grid` (per-row spacing,
     orientation) such as ``read_dem(...).grid``.
-    algorithm: one of ``ALGORITHMS``: ``brute`` (exact reference), ``smap`` (exact, default),
+    algorithm: one of ``ALGORITHMS``: ``auto`` (default: the fastest exact method), ``bounds``,
+    ``brute`` (exact reference), ``smap`` (exact),
     ``horizon`` (exact with its default ``method="scan"``), ``sweep`` (approximate).
     stats: optional dict that receives the algorithm's figures (e.g. smap's ``black_fraction``);
     on the GPU also ``stats["gpu"]`` (device, kernel and transfer times, bytes moved).

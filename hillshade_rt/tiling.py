@@ -52,7 +52,7 @@ GDAL_CACHE_MB = 64        # GDAL's block cache during a tiled run (its default i
 
 # bytes per window cell while it is lit (heights, the carried previous window, the algorithm's
 # tables, the mask, the region's copies): an upper bound measured by benchmarks/bigdem.py
-_BYTES_ALGORITHM = {"brute": 11, "smap": 15, "horizon": 19, "sweep": 12}
+_BYTES_ALGORITHM = {"auto": 13, "bounds": 13, "brute": 13, "smap": 15, "horizon": 19, "sweep": 12}
 _BYTES_PRODUCT = {"shadow": 0, "classes": 6, "hillshade": 22, "sun": 9}
 _BYTES_SOFT = 20
 
@@ -836,7 +836,7 @@ class Job:
     curvature as a run on the whole raster would."""
 
     source: Source
-    algorithm: str = "smap"
+    algorithm: str = "auto"
     options: dict = field(default_factory=dict)
     backend: str = "cpu"
     curvature: object = "auto"

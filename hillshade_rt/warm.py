@@ -2,7 +2,7 @@
 runs it), so that the first shading after an install does not wait for numba.
 
 What it compiles is what ``hillshade-rt shadow`` and ``hillshade`` use by default on the common
-DEMs: smap (with its curvature refinement) on a grid of one spacing (projected DEMs) and on a
+DEMs: auto's two methods, bounds and brute over the pyramid (with curvature), on a grid of one spacing (projected DEMs) and on a
 grid whose spacing varies per row (geographic DEMs), and the Horn normals of the relief. Each
 kernel lands in numba's cache (``~/.cache/hillshade-rt/numba/<digest>``); what is already there
 is only loaded.
@@ -21,7 +21,7 @@ def main() -> int:
     from .engine import Body, Shader
     from .geometry import Grid
 
-    todo = [m for m in ("smap", "brute", "relief") if not cached(m)]
+    todo = [m for m in ("bounds", "brute", "pyramid", "relief") if not cached(m)]
     if not todo:
         return 0
     print(f"hillshade-rt: compiling the {', '.join(todo)} kernels once (cached in "
@@ -31,7 +31,7 @@ def main() -> int:
     grids = [Grid.uniform(4, 4, 30.0),
              Grid(4, 4, np.linspace(92.0, 60.0, 4), np.full(4, 92.5), 1, -1, "per row")]
     for grid in grids:
-        sh = Shader(z, grid, "smap", {}, "cpu", True, None, Body(), (0.0, 1.0))
+        sh = Shader(z, grid, "auto", {}, "cpu", True, None, Body(), (0.0, 1.0))
         sh.warm_up(203.7, 10.0, soft=False, incidence=True)
     print(f"hillshade-rt: kernels ready ({time.perf_counter() - t0:.0f} s)", file=sys.stderr)
     return 0

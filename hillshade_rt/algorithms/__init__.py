@@ -11,9 +11,11 @@ backend, where ``g`` is a ``gpu.GpuDem`` holding the heights on the device (``GP
 from ._jitcache import kernel_cache
 
 with kernel_cache():
-    from . import brute, horizon, raymath, relief, smap, sweep  # noqa: F401
+    from . import auto, bounds, brute, horizon, pyramid, raymath, relief, smap, sweep  # noqa: F401
 
 ALGORITHMS = {
+    "auto": auto.shadow_mask,
+    "bounds": bounds.shadow_mask,
     "brute": brute.shadow_mask,
     "smap": smap.shadow_mask,
     "horizon": horizon.shadow_mask,
@@ -21,6 +23,7 @@ ALGORITHMS = {
 }
 
 GPU_ALGORITHMS = {
+    "auto": auto.shadow_mask_gpu,
     "brute": brute.shadow_mask_gpu,
     "smap": smap.shadow_mask_gpu,
     "horizon": horizon.shadow_mask_gpu,
@@ -30,6 +33,9 @@ GPU_ALGORITHMS = {
 
 def gpu_unsupported(algorithm: str, options: dict) -> str | None:
     """Why these options cannot run on the GPU backend (None when they can)."""
+    if algorithm == "bounds":
+        return ("--algorithm bounds has no GPU kernel (its sweep runs line after line); "
+                "--algorithm auto or brute use the pyramid march on the GPU")
     if algorithm == "smap" and options.get("better_nextv"):
         return "--better-nextv has no GPU kernel (its per-beam stacks are as long as a beam)"
     if algorithm == "horizon" and options.get("method") == "hull":

@@ -1,8 +1,13 @@
 """``brute``: exhaustive ray casting, the reference every other algorithm is tested against.
 
 For every valid cell, march the ray toward the sun grid line by grid line (``raymath``) until it is
-blocked, leaves the raster, or rises above the highest cell. Cost O(N * L) for N cells and rays of
-L steps; exact on the terrain model by construction (docs/model.md). Parallel over rows.
+blocked, leaves the raster, or rises above the highest cell. Exact on the terrain model by
+construction (docs/model.md). Parallel over rows.
+
+By default the march skips, over the DEM's maximum-height pyramid (``pyramid``), every block
+lower than the ray: the same samples decide, the others are never taken, so the mask is the plain
+march's cell for cell. ``pyramid=False`` (``--no-pyramid``) is the plain march, O(N * L) for rays
+of L steps: the reference the benchmarks measure everything against.
 
 Output codes: 1 shadow, 0 lit, 255 nodata (a void cell is neither lit nor shadowed; rays crossing a
 void skip it, so a void casts no shadow).
@@ -15,29 +20,45 @@ from numba import njit, prange
 
 from ..geometry import SunRays
 from ..gpu import cuda, kernel
+from .pyramid import MaxPyramid, pyramid_for, ray_is_blocked_pyramid
 from .raymath import ray_is_blocked
 
 NODATA = np.uint8(255)
 
 
+_NO_PYRAMID = (np.zeros(1, np.float32), np.zeros(2, np.int64), np.zeros(1, np.int64), np.int64(0))
+
+
+def pyramid_args(z: np.ndarray, pyramid) -> tuple:
+    """The kernels' pyramid arguments: ``pyramid`` False for the plain march, True for a new
+    pyramid of ``z``, or a ``MaxPyramid`` of z's shape to reuse."""
+    if pyramid is False or pyramid is None:
+        return _NO_PYRAMID
+    return pyramid_for(z, pyramid if isinstance(pyramid, MaxPyramid) else None).args
+
+
 @njit(cache=True, inline="always")
-def _brute_cell(z, r, c, dc, sd, so, ri, cv, zmax, out, only):
+def _brute_cell(z, pyr, off, widths, nlev, r, c, dc, sd, so, ri, cv, zmax, out, only):
     """Decide cell (r, c) whose row's ray is (dc, sd, so, ri, cv) (or, with only >= 0, leave it
-    unless its code in ``out`` is ``only``). Returns 1 when it decided the cell. The per-cell
-    body of both backends."""
+    unless its code in ``out`` is ``only``), over the pyramid when ``nlev`` > 0. Returns 1 when it
+    decided the cell. The per-cell body of both backends."""
     if only >= 0 and out[r, c] != only:
         return 0
     if math.isnan(z[r, c]):
         out[r, c] = 255
-    elif ray_is_blocked(z, r, c, dc, sd, so, ri, cv, zmax):
-        out[r, c] = 1
+        return 1
+    if nlev > 0:
+        blocked = ray_is_blocked_pyramid(z, pyr, off, widths, nlev, r, c, dc, sd, so, ri, cv,
+                                         zmax)
     else:
-        out[r, c] = 0
+        blocked = ray_is_blocked(z, r, c, dc, sd, so, ri, cv, zmax)
+    out[r, c] = 1 if blocked else 0
     return 1
 
 
 @njit(parallel=True, cache=True)
-def _brute_cpu(z, dom_col, step_dom, step_other, rise, curv, zmax, out, only):
+def _brute_cpu(z, pyr, off, widths, nlev, dom_col, step_dom, step_other, rise, curv, zmax, out,
+               only):
     """Every cell, or (only >= 0) just the cells whose code in ``out`` is ``only``. Returns how
     many cells it decided."""
     rows, cols = z.shape
@@ -51,54 +72,67 @@ def _brute_cpu(z, dom_col, step_dom, step_other, rise, curv, zmax, out, only):
         for c in range(cols):
             if only >= 0 and out[r, c] != only:   # (also in _brute_cell) a vectorised skip
                 continue
-            n += _brute_cell(z, r, c, dc, sd, so, ri, cv, zmax, out, only)
+            n += _brute_cell(z, pyr, off, widths, nlev, r, c, dc, sd, so, ri, cv, zmax, out, only)
     return n
 
 
 @kernel
-def _brute_gpu(z, dom_col, step_dom, step_other, rise, curv, zmax, out, only, count):
+def _brute_gpu(z, pyr, off, widths, nlev, dom_col, step_dom, step_other, rise, curv, zmax, out,
+               only, count):
     """CUDA twin of ``_brute_cpu``: one thread per cell; ``count[0]`` += cells decided when
     ``only`` >= 0 (refinement)."""
     c, r = cuda.grid(2)
     if r < z.shape[0] and c < z.shape[1]:
-        if _brute_cell(z, r, c, dom_col[r] != 0, np.int64(step_dom[r]), step_other[r], rise[r],
-                       curv[r], zmax, out, only) and only >= 0:
+        if _brute_cell(z, pyr, off, widths, nlev, r, c, dom_col[r] != 0, np.int64(step_dom[r]),
+                       step_other[r], rise[r], curv[r], zmax, out, only) and only >= 0:
             cuda.atomic.add(count, 0, 1)
 
 
 def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None,
-                stats: dict | None = None) -> np.ndarray:
+                stats: dict | None = None, pyramid=True) -> np.ndarray:
     """Shadow mask of float32 heights ``z`` (NaN = void) for the sun rays of each row.
 
-    Returns uint8: 1 shadow, 0 lit, 255 void. ``stats`` is accepted for a uniform interface (brute
-    has nothing to add).
+    Returns uint8: 1 shadow, 0 lit, 255 void. ``pyramid``: True (default) marches over a new
+    maximum-height pyramid of ``z``, a ``MaxPyramid`` reuses one, False is the plain march (same
+    mask). ``stats`` gets ``pyramid`` (whether the pyramid was used).
     """
     if z.dtype != np.float32 or z.ndim != 2:
         raise TypeError("heights must be a 2-D float32 array")
     if zmax is None:
-        zmax = float(np.nanmax(z))
+        zmax = float(np.nanmax(z)) if np.isfinite(z).any() else -np.inf   # -inf: only voids
     out = np.empty(z.shape, dtype=np.uint8)
-    _brute_cpu(z, rays.dom_col, rays.step_dom, rays.step_other, rays.rise, rays.curv, float(zmax), out,
-               np.int64(-1))
+    _brute_cpu(z, *pyramid_args(z, pyramid), rays.dom_col, rays.step_dom, rays.step_other,
+               rays.rise, rays.curv, float(zmax), out, np.int64(-1))
+    if stats is not None:
+        stats["pyramid"] = pyramid is not False
     return out
 
 
-def refine(z: np.ndarray, rays: SunRays, out: np.ndarray, code: int, zmax: float) -> int:
-    """Replace every ``code`` in ``out`` by brute's exact answer for that cell (for approximate
-    algorithms that flag the cells they are unsure of). Returns how many cells were refined."""
-    return int(_brute_cpu(z, rays.dom_col, rays.step_dom, rays.step_other, rays.rise,
-                          rays.curv, float(zmax), out, np.int64(code)))
+def refine(z: np.ndarray, rays: SunRays, out: np.ndarray, code: int, zmax: float,
+           pyramid=True) -> int:
+    """Replace every ``code`` in ``out`` by brute's exact answer for that cell (for the algorithms
+    that flag the cells they are unsure of, and the curvature pass). ``pyramid`` as for
+    ``shadow_mask``. Returns how many cells were refined."""
+    if not (out == code).any():
+        return 0
+    return int(_brute_cpu(z, *pyramid_args(z, pyramid), rays.dom_col, rays.step_dom,
+                          rays.step_other, rays.rise, rays.curv, float(zmax), out,
+                          np.int64(code)))
 
 
-def shadow_mask_gpu(g, rays: SunRays, zmax: float, stats: dict | None = None) -> np.ndarray:
-    """``shadow_mask`` on the GPU: ``g`` is a ``gpu.GpuDem`` (heights already on the device)."""
-    dz = g.z
+def shadow_mask_gpu(g, rays: SunRays, zmax: float, stats: dict | None = None,
+                    pyramid=True) -> np.ndarray:
+    """``shadow_mask`` on the GPU: ``g`` is a ``gpu.GpuDem`` (heights already on the device; its
+    pyramid is built and uploaded once, at the first sun that uses it)."""
     rows, cols = g.shape
     dom_col, step_dom, step_other, rise, _, curv = g.rays(rays)
     out = g.empty((rows, cols), np.uint8)
     with g.timed():
-        g.launch(_brute_gpu, rows, cols, dz, dom_col, step_dom, step_other, rise, curv, float(zmax),
-                 out, np.int64(-1), g.empty(1, np.int64))
+        g.launch(_brute_gpu, rows, cols, g.z, *g.pyramid_args(pyramid is not False), dom_col,
+                 step_dom, step_other, rise, curv, float(zmax), out, np.int64(-1),
+                 g.empty(1, np.int64))
+    if stats is not None:
+        stats["pyramid"] = pyramid is not False
     return g.download(out)
 
 
@@ -108,6 +142,6 @@ def refine_gpu(g, rays_d, out, code: int, zmax: float) -> int:
     rows, cols = g.shape
     count = g.upload(np.zeros(1, np.int64))
     dom_col, step_dom, step_other, rise, _, curv = rays_d
-    g.launch(_brute_gpu, rows, cols, g.z, dom_col, step_dom, step_other, rise, curv, float(zmax),
-             out, np.int64(code), count)
+    g.launch(_brute_gpu, rows, cols, g.z, *g.pyramid_args(True), dom_col, step_dom, step_other,
+             rise, curv, float(zmax), out, np.int64(code), count)
     return int(g.download(count)[0])

@@ -1,0 +1,312 @@
+"""``bounds``: exact shadows from guaranteed bounds of every cell's horizon, the pyramid march
+for the few cells the bounds leave open.
+
+The flag-map sweep of seed 001 (``sweep``) stores for each cell what its ray met and lets the
+next rays interpolate it: fast, and wrong where a thin ridge passes between two neighbouring
+rays. Here the stored values are made **conservative**, so that a cell is decided only when no
+ray between the stored ones could decide it otherwise:
+
+* In the canonical frame (``frames``: the sun toward increasing line index, positions growing by
+  ``s`` per step) let ``S(v, x)`` be the lowest height at position x of line v from which a ray
+  toward the sun clears every sample ahead: ``S(v, x) = max_j (T(v+j, x + j*s) - j*rise)``, T the
+  model's interpolated terrain. A cell of height h is shadowed iff ``S(v+1, p+s) > h + rise``.
+* Cut each segment between two cell centres of a line into ``BINS`` bins. On a bin, T is linear,
+  so its extremes are at the bin's ends (exact). Because ``S(v, x) = max(T(v, x),
+  S(v+1, x+s) - rise)``, an upper bound of S over a bin is the larger of T's maximum there and
+  the upper bounds of the bins of line v+1 that the bin's rays reach, less the rise; a lower
+  bound, the same with minima. One pass from the sun's edge fills both bounds for every bin in
+  O(N * BINS). The bins a bin's rays reach on the next line widen the bounds by one bin per step
+  (a cone 1/BINS cell wider per line), so far terrain is bounded loosely but also counts less.
+* A cell takes ``EXACT_STEPS`` samples exactly (as the plain march), then looks up the bounds at
+  its ray's position ``EXACT_STEPS`` lines on: lit when both the exact samples and the upper bound
+  clear its ray, shadowed when an exact sample or the lower bound blocks it, **undecided**
+  otherwise. Undecided cells (a few % on real terrain at low sun: ``undecided_fraction``) are
+  marched exactly over the maximum-height pyramid (``brute.refine``). A margin far larger than
+  the rounding of the bounds (and far smaller than a millimetre) keeps every decision on the
+  safe side, so the mask is brute's cell for cell (tests).
+
+Voids: a bin with a void end is bounded above by its valid end and below by -inf (its interior
+meets no terrain). Beyond the raster S is -inf (no terrain). Earth curvature: the upper bound
+follows a fresh curved ray from each bin (a ray that has travelled k steps climbs faster than a
+fresh one, so it clears whatever the fresh one clears); the lower bound follows a straight ray as
+steep as the curved ray can get before it rises above the highest cell, so curvature costs
+nothing. Rays that differ per row (geographic CRS): the bounds take the smallest and largest
+``s`` and rise of all rows (the bins reached widen by their spread); each cell's exact samples
+and lookup use its own row's ray. Rows whose own dominant axis is the other one (near a
+diagonal) are left undecided.
+
+Parallel as the sweep's wavefront: strips of positions, each a block of lines behind the next.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+from numba import njit, prange
+
+from ..geometry import SunRays
+from . import brute
+from .frames import frame_of, uniform_rays
+from .sweep import _load_lines, _store_lines, _z_range
+
+BINS = 4           # bins per segment between two cell centres
+EXACT_STEPS = 4    # samples every cell marches exactly before it looks the bounds up
+UNDECIDED = 2      # mask code of a cell the bounds leave to the exact march
+MIN_STRIP = 256
+EPS_BIN = 1e-7     # slack (in bins) on the bins a ray may reach: covers position rounding
+
+
+@njit(cache=True)
+def _bin_pass(zl, su_n, sl_n, su_c, sl_c, i0, i1, pad, o1, o2, g0, g1, d_up, d_lo):
+    """Bounds of the bins of segments [i0, i1) of one line (``zl`` its heights) from those of the
+    next line (``su_n``, ``sl_n``; bin b at index pad + b): one pass over the bins, written so that
+    it vectorises (the two or three bins reached on the next line at fixed offsets)."""
+    Q = g0.size
+    lq = 0
+    while (1 << lq) < Q:
+        lq += 1
+    b_lo = pad + i0 * Q
+    b_hi = pad + i1 * Q
+    wide = o2 - o1 >= 2
+    for bi in range(b_lo, b_hi):
+        i = (bi - pad) >> lq
+        m = (bi - pad) & (Q - 1)
+        a = zl[i]
+        b = zl[i + 1]
+        ta = a + g0[m] * (b - a)
+        tb = a + g1[m] * (b - a)
+        hi_t = max(ta, tb)
+        lo_t = min(ta, tb)
+        if hi_t != hi_t:          # a void end: bounded above by the valid end, below by -inf
+            hi_t = a if a == a else (b if b == b else -np.inf)
+            lo_t = -np.inf
+        u = max(su_n[bi + o1], su_n[bi + o1 + 1])
+        lw = min(sl_n[bi + o1], sl_n[bi + o1 + 1])
+        if wide:
+            for j in range(o1 + 2, o2 + 1):
+                u = max(u, su_n[bi + j])
+                lw = min(lw, sl_n[bi + j])
+        u -= d_up
+        lw -= d_lo
+        su_c[bi] = u if u > hi_t else hi_t
+        sl_c[bi] = lw if lw > lo_t else lo_t
+
+
+@njit(cache=True)
+def _decide_line(ZL, SU, SL, R, v, p0, p1, P, s, rise, curv, K, pad, margin, ok, e, out):
+    """Codes of positions [p0, p1) of canonical line v whose cells share one ray (s, rise,
+    curv): the same decisions as ``_decide_cell``, with the sample offsets and fractions of the
+    line computed once, in passes along the line that vectorise. ``e`` is work space."""
+    n = p1 - p0
+    row = v % R
+    if not ok:
+        for q in range(n):
+            h = ZL[row, p0 + q]
+            out[q] = np.uint8(255) if h != h else np.uint8(UNDECIDED)
+        return
+    for q in range(n):
+        e[q] = -np.inf
+    for k in range(1, K + 1):
+        ks = k * s
+        d = int(ks)
+        f = ks - d
+        drop = k * rise + k * k * curv
+        zr = ZL[(v + k) % R]
+        if f == 0.0:
+            for q in range(n):
+                t = zr[p0 + d + q] - drop
+                e[q] = t if t > e[q] else e[q]     # NaN (void, outside) compares false
+        else:
+            for q in range(n):
+                za = zr[p0 + d + q]
+                t = za + f * (zr[p0 + d + q + 1] - za) - drop
+                e[q] = t if t > e[q] else e[q]
+    xk = K * s
+    b0 = int(math.floor(xk * BINS - EPS_BIN))
+    b1 = int(math.ceil(xk * BINS + EPS_BIN)) - 1
+    su = SU[(v + K) % R]
+    sl = SL[(v + K) % R]
+    hk = K * rise + K * K * curv
+    last = P - 1 - 1e-6 - xk          # lit only for positions up to here (see _decide_cell)
+    zl = ZL[row]
+    for q in range(n):
+        p = p0 + q
+        bi = pad + p * BINS + b0
+        u = su[bi]
+        lw = sl[bi]
+        if b1 > b0:
+            u = max(u, su[bi + 1])
+            lw = min(lw, sl[bi + 1])
+        h = zl[p]
+        sh = (e[q] > h + margin) or (lw > h + hk + margin)
+        lit = (e[q] <= h - margin) and (u <= h + hk - margin) and (p <= last)
+        c = np.uint8(1) if sh else (np.uint8(0) if lit else np.uint8(UNDECIDED))
+        out[q] = np.uint8(255) if h != h else c
+
+
+@njit(cache=True)
+def _decide_cell(ZL, SU, SL, R, v, p, P, h, s, rise, curv, K, pad, margin, ok):
+    """Code of canonical cell (v, p) of height h with ray (s, rise, curv): 0 / 1 when the exact
+    samples and the bounds decide it, UNDECIDED otherwise."""
+    if h != h:
+        return np.uint8(255)
+    if not ok:
+        return np.uint8(UNDECIDED)
+    e = -np.inf
+    for k in range(1, K + 1):
+        x = p + k * s
+        i0 = int(x)
+        f = x - i0
+        row = (v + k) % R
+        za = ZL[row, i0]
+        t = za if f == 0.0 else za + f * (ZL[row, i0 + 1] - za)
+        t = t - k * rise - k * k * curv
+        e = t if t > e else e            # NaN (void, outside) compares false
+    if e > h + margin:
+        return np.uint8(1)
+    x = p + K * s
+    b0 = int(math.floor(x * BINS - EPS_BIN))
+    b1 = int(math.ceil(x * BINS + EPS_BIN)) - 1
+    row = (v + K) % R
+    u = SU[row, pad + b0]
+    lw = SL[row, pad + b0]
+    for b in range(b0 + 1, b1 + 1):
+        u = max(u, SU[row, pad + b])
+        lw = min(lw, SL[row, pad + b])
+    hk = h + K * rise + K * K * curv
+    if lw > hk + margin:
+        return np.uint8(1)
+    # lit: every exact sample and the bound clear the ray; not within rounding of the far edge,
+    # where the model snaps a position onto the last cell centre
+    if e <= h - margin and u <= hk - margin and x <= P - 1 - 1e-6:
+        return np.uint8(0)
+    return np.uint8(UNDECIDED)
+
+
+@njit(cache=True)
+def _strip_block(z, ZL, SU, SL, RO, v_top, nb, p0, p1, L, P, pad, o1, o2, g0, g1, d_up, d_lo,
+                 s_arr, rise_arr, curv_arr, ok_arr, per_line, K, margin, dom_col, flip_line,
+                 flip_pos, out):
+    R = ZL.shape[0]
+    _load_lines(z, ZL, v_top, nb, p0, p1, dom_col, flip_line, flip_pos)
+    ie = min(p1, P - 1)
+    e = np.empty(p1 - p0)
+    for i in range(nb):
+        v = v_top - i
+        row = v % R
+        nxt = (v + 1) % R
+        if ie > p0:
+            _bin_pass(ZL[row], SU[nxt], SL[nxt], SU[row], SL[row], p0, ie, pad, o1, o2,
+                      g0, g1, d_up, d_lo)
+        if per_line:
+            _decide_line(ZL, SU, SL, R, v, p0, p1, P, s_arr[v], rise_arr[v], curv_arr[v], K, pad,
+                         margin, ok_arr[v], e, RO[row, p0:p1])
+        else:
+            for p in range(p0, p1):
+                RO[row, p] = _decide_cell(ZL, SU, SL, R, v, p, P, ZL[row, p], s_arr[p],
+                                          rise_arr[p], curv_arr[p], K, pad, margin, ok_arr[p])
+    _store_lines(out, RO, v_top, nb, p0, p1, dom_col, flip_line, flip_pos)
+
+
+@njit(parallel=True, cache=True)
+def _bounds_sweep(z, L, P, dom_col, flip_line, flip_pos, s_lo, s_hi, d_up, d_lo, s_arr, rise_arr,
+                  curv_arr, ok_arr, per_line, K, margin, nstrips, out):
+    """The sweep over canonical lines from the sun's edge (``L`` lines of ``P`` positions),
+    as a wavefront of ``nstrips`` strips (see ``sweep._sweep_uniform``). Writes 0 / 1 /
+    UNDECIDED / 255 into the DEM-shaped ``out``."""
+    B = max(16, K)
+    NS = nstrips
+    R = NS * B + K + 2
+    Q = BINS
+    nbins = max(1, (P - 1) * Q)
+    pad = Q + 4
+    o1 = int(math.floor(Q * s_lo - EPS_BIN))
+    o2 = int(math.ceil(1.0 + Q * s_hi + EPS_BIN)) - 1
+    reach = int(math.ceil(K * max(s_hi, 0.0))) + 2
+    ZL = np.full((R, P + reach + 2), np.nan)                    # heights; NaN beyond the line
+    SU = np.full((R, pad + nbins + Q * reach + pad), -np.inf)  # bounds; -inf beyond the line
+    SL = np.full((R, pad + nbins + Q * reach + pad), -np.inf)
+    RO = np.empty((R, P), np.uint8)
+    g0 = np.empty(Q)
+    g1 = np.empty(Q)
+    for m in range(Q):
+        g0[m] = m / Q
+        g1[m] = (m + 1) / Q
+    bounds = np.empty(NS + 1, np.int64)
+    for j in range(NS + 1):
+        bounds[j] = P - (j * P) // NS
+    nblocks = (L + B - 1) // B
+    for t in range(nblocks + NS - 1):
+        for jj in prange(NS):
+            j = np.int64(jj)
+            b = t - j
+            if b >= 0 and b < nblocks:
+                v_top = L - 1 - b * B
+                nb = min(B, v_top + 1)
+                _strip_block(z, ZL, SU, SL, RO, v_top, nb, bounds[j + 1], bounds[j], L, P, pad,
+                             o1, o2, g0, g1, d_up, d_lo, s_arr, rise_arr, curv_arr, ok_arr,
+                             per_line, K, margin, dom_col, flip_line, flip_pos, out)
+
+
+def _canonical_rays(rays: SunRays, f):
+    """Each row's ray in the frame ``f``: (s, rise, curv, ok) indexed by the canonical index
+    that runs over the DEM's rows (lines when lines are rows, else positions); ok is False for
+    rows whose own dominant axis or direction is not the frame's."""
+    ok = (rays.dom_col.astype(bool) == f.dom_col) & (rays.step_dom == f.sd)
+    s = rays.step_other * (-1.0 if f.flip_pos else 1.0)
+    ok &= (s >= 0.0) | ~np.isfinite(s)
+    s = np.where(ok, s, 0.0).astype(np.float64)
+    rise = np.where(ok, rays.rise, 0.0).astype(np.float64)
+    curv = np.where(ok, rays.curv, 0.0).astype(np.float64)
+    flip = f.flip_line if not f.dom_col else f.flip_pos
+    if flip:
+        s, rise, curv, ok = s[::-1].copy(), rise[::-1].copy(), curv[::-1].copy(), ok[::-1].copy()
+    return s, rise, curv, ok.astype(np.bool_)
+
+
+def _strips(P: int, s: float, K: int) -> int:
+    return max(1, min(numba.get_num_threads(), P // max(MIN_STRIP, int(math.ceil(K * s)) + 8)))
+
+
+def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None,
+                stats: dict | None = None, pyramid=True) -> np.ndarray:
+    """Exact shadow mask (uint8 1 shadow / 0 lit / 255 void), brute's cell for cell: the bounds
+    decide most cells, the pyramid march the rest. ``pyramid``: a ``MaxPyramid`` of ``z`` to
+    reuse (True: build one when cells are left; False: the plain march for them)."""
+    if z.dtype != np.float32 or z.ndim != 2:
+        raise TypeError("heights must be a 2-D float32 array")
+    out = np.empty(z.shape, np.uint8)
+    zmin, zhi, _ = _z_range(z)
+    if not math.isfinite(zmin):      # nothing but voids
+        out[...] = 255
+        return out
+    zmax = float(zhi) if zmax is None else float(zmax)
+    if not math.isfinite(float(np.max(rays.rise))):   # sun at the zenith
+        out[...] = np.where(np.isnan(z), 255, 0)
+        return out
+    f = frame_of(rays, len(rays.rise) // 2)
+    s, rise, curv, ok = _canonical_rays(rays, f)
+    L, P = (z.shape[1], z.shape[0]) if f.dom_col else z.shape
+    K = EXACT_STEPS
+    if ok.any() and L > 1 and P > 1:
+        s_lo, s_hi = float(s[ok].min()), float(s[ok].max())
+        r_lo, r_hi = float(rise[ok].min()), float(rise[ok].max())
+        c_lo, c_hi = float(curv[ok].min()), float(curv[ok].max())
+        # steps after which every ray stands above the highest cell: the straight ray of the
+        # lower bound must be at least as steep as the curved ray until then
+        kmax = min(L, math.ceil((zmax - zmin) / r_lo) + 1) if r_lo > 0 else L
+        d_lo = r_hi + (2 * kmax + 1) * c_hi
+        big = max(abs(zmin), abs(zmax)) + 1.0
+        margin = 1e-9 * big + 4e-16 * (L + K + 8) * (big + kmax * d_lo)
+        _bounds_sweep(z, L, P, f.dom_col, f.flip_line, f.flip_pos, s_lo, s_hi, r_lo + c_lo,
+                      d_lo, s, rise, curv, ok, not f.dom_col, K, margin,
+                      _strips(P, s_hi, K), out)
+    else:
+        out[...] = np.where(np.isnan(z), np.uint8(255), np.uint8(UNDECIDED))
+    left = brute.refine(z, rays, out, UNDECIDED, zmax, pyramid)
+    if stats is not None:
+        n = max(1, int(np.count_nonzero(out != 255)))
+        stats["undecided_fraction"] = left / n
+    return out

@@ -1,0 +1,165 @@
+"""The maximum-height pyramid and the exact march that skips over it ("maximum mipmaps", Tevs,
+Ihrke & Seidel 2008, adapted to the terrain model of docs/model.md).
+
+**The pyramid.** Level l (1 <= l <= ``nlev``) cuts the raster into blocks of 2^l x 2^l cells;
+block (i, j) stores the highest valid height among the cells of rows ``[i*2^l, (i+1)*2^l]`` and
+columns ``[j*2^l, (j+1)*2^l]`` (both ends included: one cell more than the block on the far
+side of each axis). The extra cell covers the model's interpolation: a sample on a grid line at a
+position whose lower neighbour ``floor(pos)`` lies in the block interpolates between that cell
+and the next, which is either in the block or in its padding. So every sample whose grid line and
+``floor(pos)`` lie in a block is at most the block's value. The values are rounded up by one
+float32 step, which covers the float64 rounding of the interpolation. Voids are ignored (a void
+never blocks a ray); a block of voids holds -inf. Built once per DEM in O(N), 4/3 bytes per cell
+(level 0 is the DEM itself), in parallel.
+
+**The march.** The ray's height grows with every step (``h0 + k*rise + k*k*curv``, rise > 0,
+curv >= 0, and float rounding keeps that order). At its current sample the march climbs to the
+coarsest level whose block there is lower than the ray: no sample inside that block can block the
+ray, so it jumps to the first sample outside the block (the count of samples left in the block is
+taken one short where rounding could matter). When even the finest block is not lower, it
+samples the terrain exactly as the plain march (``raymath.ray_is_blocked``) does, with the same
+arithmetic. Every sample it does not take is one that could not block, so the answer is the plain
+march's, cell for cell (tests); it only skips work. The march handles per-row rays unchanged (the
+pyramid is in raster coordinates, the ray's own geometry is used throughout).
+
+The level to try first follows the last one that worked (one level up after a skip, down while a
+block is not lower): along a clear ray the skips grow geometrically, near the terrain it is the
+plain march plus one pyramid read per step.
+"""
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from .raymath import line_position, madd, ray_origin, terrain_on_line
+
+MAX_LEVELS = 15
+
+
+class MaxPyramid:
+    """The pyramid of one DEM: ``data`` (float32, all levels, flat), ``offsets`` (int64, start of
+    level l at ``offsets[l]``), ``widths`` (int64, blocks per row of level l), ``nlev``."""
+
+    __slots__ = ("data", "offsets", "widths", "nlev", "shape")
+
+    def __init__(self, z: np.ndarray):
+        self.shape = z.shape
+        self.data, self.offsets, self.widths, self.nlev = _build(z)
+
+    @property
+    def args(self):
+        return self.data, self.offsets, self.widths, np.int64(self.nlev)
+
+    @property
+    def nbytes(self) -> int:
+        return int(self.data.nbytes)
+
+
+def pyramid_for(z: np.ndarray, pyramid: "MaxPyramid | None") -> "MaxPyramid":
+    """``pyramid`` when it is the pyramid of an array of z's shape, else a new one of ``z``."""
+    if pyramid is not None and pyramid.shape == z.shape:
+        return pyramid
+    return MaxPyramid(z)
+
+
+@njit(cache=True)
+def _levels(rows, cols):
+    n = max(rows, cols)
+    nlev = 0
+    while (1 << (nlev + 1)) < n and nlev < MAX_LEVELS:
+        nlev += 1
+    return max(nlev, 1)
+
+
+@njit(parallel=True, cache=True)
+def _build(z):
+    rows, cols = z.shape
+    nlev = _levels(rows, cols)
+    nr = np.zeros(nlev + 1, np.int64)
+    nc = np.zeros(nlev + 1, np.int64)
+    off = np.zeros(nlev + 2, np.int64)
+    nr[0] = rows
+    nc[0] = cols
+    for lev in range(1, nlev + 1):
+        nr[lev] = (rows - 1) // (1 << lev) + 1
+        nc[lev] = (cols - 1) // (1 << lev) + 1
+        off[lev + 1] = off[lev] + nr[lev] * nc[lev]
+    data = np.empty(max(1, off[nlev + 1]), np.float32)
+    w1 = nc[1]
+    for i in prange(nr[1]):                  # level 1 from the heights: 3 x 3 cells per block
+        for j in range(w1):
+            m = np.float32(-np.inf)
+            for a in range(2 * i, min(rows, 2 * i + 3)):
+                for b in range(2 * j, min(cols, 2 * j + 3)):
+                    v = z[a, b]
+                    if v > m:                # NaN (void) compares false
+                        m = v
+            data[off[1] + i * w1 + j] = m
+    for lev in range(2, nlev + 1):           # each level from the one below: 2 x 2 blocks
+        o, p, pw, ph, w = off[lev], off[lev - 1], nc[lev - 1], nr[lev - 1], nc[lev]
+        for i in prange(nr[lev]):
+            for j in range(w):
+                m = np.float32(-np.inf)
+                for a in range(2 * i, min(ph, 2 * i + 2)):
+                    for b in range(2 * j, min(pw, 2 * j + 2)):
+                        v = data[p + a * pw + b]
+                        if v > m:
+                            m = v
+                data[o + i * w + j] = m
+    inf32 = np.float32(np.inf)
+    for q in prange(data.size):   # up by one float32 step: covers float64 interpolation rounding
+        data[q] = np.nextafter(data[q], inf32)
+    return data, off, nc, nlev
+
+
+@njit(cache=True)
+def ray_is_blocked_pyramid(z, pyr, off, widths, nlev, r, c, dom_col, step_dom, step_other, rise,
+                           curv, zmax):
+    """``raymath.ray_is_blocked`` with the pyramid ``(pyr, off, widths, nlev)`` of ``z``: the same
+    answer, skipping every block lower than the ray (see the module's docstring)."""
+    line0, other0, n_dom, n_oth = ray_origin(z, r, c, dom_col)
+    h0 = float(z[np.int64(r), np.int64(c)])
+    k = 1
+    lev = 0
+    while True:
+        hr = madd(h0, float(k), rise)
+        if curv != 0.0:
+            hr = madd(hr, float(k * k), curv)
+        if hr >= zmax:
+            return False
+        line = line0 + k * step_dom
+        if line < 0 or line >= n_dom:
+            return False
+        pos = line_position(madd(float(other0), float(k), step_other), n_oth)
+        if pos < 0.0:
+            return False
+        i0 = np.int64(math.floor(pos))
+        rr = i0 if dom_col else line
+        cc = line if dom_col else i0
+        if lev < nlev:
+            lev += 1
+        while lev > 0:
+            if pyr[off[lev] + (rr >> lev) * widths[lev] + (cc >> lev)] < hr:
+                break
+            lev -= 1
+        if lev == 0:
+            if terrain_on_line(z, dom_col, line, pos) > hr:
+                return True
+            k += 1
+        else:
+            # samples left in the block after this one: along the dominant axis exactly, along
+            # the other axis one short where the position is within rounding of the block's edge
+            size = np.int64(1) << lev
+            within = line & (size - 1)
+            left = (size - 1 - within) if step_dom > 0 else within
+            start = (i0 >> lev) * size
+            if step_other > 0.0:
+                q = (float(start + size) - pos - 1e-7) / step_other
+                if q < left:
+                    left = np.int64(q) if q > 0.0 else np.int64(0)
+            elif step_other < 0.0:
+                q = (pos - float(start) - 1e-7) / (-step_other)
+                if q < left:
+                    left = np.int64(q) if q > 0.0 else np.int64(0)
+            k += left + 1

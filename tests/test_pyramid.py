@@ -1,0 +1,197 @@
+"""The exact fast methods of issue 18: the pyramid march, the bounds sweep, ``auto``.
+
+Each must give the plain march's mask cell for cell (brute with ``pyramid=False``, itself checked
+against the plain-Python model in test_brute): random terrains of every kind (noise, power-law
+spectral fractals, plateaus with flat tops, voids), uniform and per-row spacing (geographic),
+curvature on and off, any azimuth and elevation, drawn by hypothesis; plus fixed real DEMs at
+non-special azimuths, and the plain-Python reference itself on small grids.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings, strategies as st
+
+from conftest import data_path, reference_mask
+
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "benchmarks"))
+import terrain  # noqa: E402
+
+from hillshade_rt import read_dem
+from hillshade_rt.algorithms import auto, bounds, brute
+from hillshade_rt.algorithms.pyramid import MaxPyramid, _levels
+from hillshade_rt.geometry import Grid, curvature_per_m2, sun_rays
+
+SETTINGS = settings(max_examples=int(os.environ.get("HILLSHADE_PYRAMID_EXAMPLES", "120")),
+                    deadline=None, derandomize=True, database=None,
+                    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+
+
+def _terrain(kind: str, rows: int, cols: int, seed: int, relief: float) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    if kind == "noise":
+        z = rng.random((rows, cols)) * relief
+    elif kind == "spectral":
+        n = max(rows, cols)
+        z = terrain.spectral(n, float(rng.choice([2.0, 2.4, 3.2])), seed=seed,
+                             relief=relief)[:rows, :cols]
+    elif kind == "plateaus":   # flat tops and cliffs: ties between the ray and the terrain
+        z = np.round(rng.random((rows, cols)) * 4) * (relief / 4)
+    else:                      # steps of integer heights on integer spacing: exact ties
+        z = np.floor(np.add.outer(np.arange(rows), np.arange(cols)) * 0.5 % 7)
+    return np.ascontiguousarray(z, dtype=np.float32)
+
+
+@st.composite
+def cases(draw):
+    rows = draw(st.integers(2, 70))
+    cols = draw(st.integers(2, 70))
+    kind = draw(st.sampled_from(["noise", "spectral", "plateaus", "ties"]))
+    seed = draw(st.integers(0, 10_000))
+    relief = draw(st.sampled_from([1.0, 50.0, 800.0, 5000.0]))
+    z = _terrain(kind, rows, cols, seed, relief)
+    if draw(st.booleans()):      # voids
+        rng = np.random.default_rng(seed + 1)
+        z[rng.random(z.shape) < draw(st.sampled_from([0.02, 0.2, 0.6]))] = np.nan
+    dx = draw(st.sampled_from([1.0, 30.0, 92.6]))
+    dy = draw(st.sampled_from([1.0, 30.0, 92.6]))
+    if draw(st.booleans()):      # per-row spacing (geographic)
+        lat0 = draw(st.floats(-80, 80))
+        lat = lat0 + np.linspace(0, draw(st.sampled_from([0.5, 5.0, 20.0])), rows)
+        grid = Grid(rows, cols, dx * np.cos(np.radians(np.clip(lat, -89, 89))),
+                    np.full(rows, dy), 1, -1, "per row")
+    else:
+        grid = Grid.uniform(rows, cols, dx, dy)
+    az = draw(st.one_of(st.sampled_from([0.0, 45.0, 90.0, 163.0, 203.7, 290.0, 315.0]),
+                        st.floats(0, 360, exclude_max=True)))
+    el = draw(st.one_of(st.sampled_from([0.5, 3.0, 8.0, 20.0, 60.0, 89.9]),
+                        st.floats(0.05, 89.0)))
+    curv = curvature_per_m2(draw(st.sampled_from([6.371e6, 1.7374e6, 2e4])), 0.13) \
+        if draw(st.booleans()) else 0.0
+    return z, grid, az, el, curv
+
+
+def _plain(z, rays):
+    return brute.shadow_mask(z, rays, pyramid=False)
+
+
+@SETTINGS
+@given(cases())
+def test_pyramid_bounds_auto_equal_the_plain_march(case):
+    z, grid, az, el, curv = case
+    if not np.isfinite(z).any():
+        return
+    rays = sun_rays(grid, az, el, curv)
+    ref = _plain(z, rays)
+    np.testing.assert_array_equal(brute.shadow_mask(z, rays), ref, "pyramid march")
+    st_b = {}
+    np.testing.assert_array_equal(bounds.shadow_mask(z, rays, stats=st_b), ref, "bounds")
+    assert 0.0 <= st_b["undecided_fraction"] <= 1.0
+    np.testing.assert_array_equal(auto.shadow_mask(z, rays), ref, "auto")
+
+
+@pytest.mark.parametrize("az", [163.0, 203.7, 290.0, 20.0])
+@pytest.mark.parametrize("el", [3.0, 20.0])
+def test_against_the_plain_python_model(az, el):
+    """The independent plain-Python reference, not our own plain march."""
+    z = _terrain("spectral", 40, 52, 11, 300.0)
+    z[5:8, 30:33] = np.nan
+    ref = reference_mask(z, 30.0, 30.0, az, el)
+    rays = sun_rays(Grid.uniform(40, 52, 30.0), az, el)
+    np.testing.assert_array_equal(brute.shadow_mask(z, rays), ref)
+    np.testing.assert_array_equal(bounds.shadow_mask(z, rays), ref)
+
+
+@pytest.mark.parametrize("name", ["bigtujunga_srtm30m_utm11n_1197x643.tif",
+                                  "jacksboro_fault_srtm3_mpl_403x344.tif"])
+@pytest.mark.parametrize("az,el", [(163.0, 3.0), (203.7, 8.0), (290.0, 20.0)])
+@pytest.mark.parametrize("curved", [False, True])
+def test_real_dems(name, az, el, curved):
+    path = data_path(name) if os.path.exists(data_path(name)) else os.path.join(
+        os.path.dirname(__file__), "..", "examples", name)
+    d = read_dem(path)
+    z = np.ascontiguousarray(d.heights[:300, :400])
+    grid = Grid(z.shape[0], z.shape[1], d.grid.dx[:300].copy(), d.grid.dy[:300].copy(),
+                d.grid.col_sign, d.grid.row_sign, d.grid.method)
+    rays = sun_rays(grid, az, el, curvature_per_m2(6.371e6, 0.13) if curved else 0.0)
+    ref = _plain(z, rays)
+    np.testing.assert_array_equal(brute.shadow_mask(z, rays), ref)
+    st_b = {}
+    np.testing.assert_array_equal(bounds.shadow_mask(z, rays, stats=st_b), ref)
+    # the bounds decide most cells on real terrain: only a few are left to the march
+    assert st_b["undecided_fraction"] < 0.35
+
+
+def test_pyramid_is_a_bound_of_every_block():
+    z = _terrain("noise", 37, 53, 3, 100.0)
+    z[3, 4] = np.nan
+    p = MaxPyramid(z)
+    data, off, widths, nlev = p.args
+    assert nlev == _levels(37, 53)
+    for lev in range(1, nlev + 1):
+        size = 1 << lev
+        nr = (37 - 1) // size + 1
+        for i in range(nr):
+            for j in range(widths[lev]):
+                block = z[i * size:(i + 1) * size + 1, j * size:(j + 1) * size + 1]
+                top = np.nanmax(block) if np.isfinite(block).any() else -np.inf
+                v = data[off[lev] + i * widths[lev] + j]
+                assert v >= top and (not np.isfinite(top) or v == np.nextafter(
+                    np.float32(top), np.float32(np.inf)))
+
+
+def test_pyramid_is_reused_and_shape_checked():
+    z = _terrain("noise", 20, 20, 1, 10.0)
+    p = MaxPyramid(z)
+    rays = sun_rays(Grid.uniform(20, 20, 1.0), 203.7, 10.0)
+    np.testing.assert_array_equal(brute.shadow_mask(z, rays, pyramid=p), _plain(z, rays))
+    other = _terrain("noise", 20, 21, 2, 10.0)   # a pyramid of another shape is not used
+    rays2 = sun_rays(Grid.uniform(20, 21, 1.0), 203.7, 10.0)
+    np.testing.assert_array_equal(brute.shadow_mask(other, rays2, pyramid=p),
+                                  _plain(other, rays2))
+
+
+def test_auto_picks_bounds_on_mountains_and_brute_on_short_rays():
+    rays = sun_rays(Grid.uniform(500, 500, 30.0), 203.7, 3.0)
+    name, why = auto.choose((500, 500), 1.0, (0.0, 2000.0), rays)
+    assert name == "bounds" and "reach" in why
+    # gentle terrain under a high sun: rays clear the relief in a few steps
+    rays = sun_rays(Grid.uniform(500, 500, 1000.0), 203.7, 40.0)
+    assert auto.choose((500, 500), 1.0, (0.0, 300.0), rays)[0] == "brute"
+    # mostly sea (voids): brute skips voids for free
+    rays = sun_rays(Grid.uniform(500, 500, 30.0), 203.7, 3.0)
+    assert auto.choose((500, 500), 0.02, (0.0, 100.0), rays)[0] == "brute"
+    assert auto.choose((500, 500), 1.0, (0.0, 2000.0), rays, "gpu")[0] == "brute"
+    st_ = {}
+    auto.shadow_mask(_terrain("spectral", 64, 64, 5, 500.0), rays, stats=st_)
+    assert st_["auto"]["chose"] in ({"bounds": 1}, {"brute": 1}) and st_["auto"]["why"]
+
+
+def test_read_only_heights():
+    z = _terrain("spectral", 50, 60, 9, 400.0)
+    z.setflags(write=False)
+    rays = sun_rays(Grid.uniform(50, 60, 30.0), 290.0, 5.0)
+    ref = _plain(z, rays)
+    np.testing.assert_array_equal(bounds.shadow_mask(z, rays), ref)
+    np.testing.assert_array_equal(brute.shadow_mask(z, rays), ref)
+
+
+def test_degenerate_shapes_and_suns():
+    for shape in [(1, 1), (1, 9), (9, 1), (2, 2)]:
+        z = _terrain("noise", *shape, 4, 10.0)
+        for az in (0.0, 163.0, 290.0):
+            for el in (0.5, 45.0, 90.0):
+                rays = sun_rays(Grid.uniform(*shape, 1.0), az, el)
+                ref = _plain(z, rays)
+                np.testing.assert_array_equal(bounds.shadow_mask(z, rays), ref)
+                np.testing.assert_array_equal(brute.shadow_mask(z, rays), ref)
+    z = np.full((5, 5), np.nan, np.float32)
+    rays = sun_rays(Grid.uniform(5, 5, 1.0), 163.0, 5.0)
+    assert (bounds.shadow_mask(z, rays) == 255).all()
+    assert (auto.shadow_mask(z, rays) == 255).all()
+    assert math.isfinite(float(rays.rise[0]))
