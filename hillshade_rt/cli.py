@@ -373,10 +373,11 @@ def shadow(files, algorithm, nextv, better_nextv, horizon_method, sample_spacing
     --azimuth/--elevation, or --time (repeatable) or --start/--end/--step at the DEM's
     place (one band per time). --soft writes the visible fraction of the sun's disk (float32,
     1 = fully lit, -9999 nodata); --classes writes 0 lit / 1 self-shadow / 2 cast / 255."""
-    options = _algorithm_options(algorithm, nextv=nextv, better_nextv=better_nextv,
-                                 method=horizon_method, sample_spacing=sample_spacing,
-                                 exact_steps=exact_steps,
-                                 pyramid=False if no_pyramid else None)
+    given = dict(nextv=nextv, better_nextv=better_nextv, method=horizon_method,
+                 sample_spacing=sample_spacing, exact_steps=exact_steps,
+                 pyramid=False if no_pyramid else None)
+    algorithm = _algorithm_for(algorithm, **given)
+    options = _algorithm_options(algorithm, **given)
     kind = "classes" if classes else "shadow"
     _light(files, kind, algorithm, options, curvature, refraction_k, soft,
            self_shadow or classes, 0.2, None, kw)
@@ -1112,6 +1113,18 @@ _OPTION_OWNERS = {"nextv": "smap", "better_nextv": "smap", "method": "horizon",
 _OPTION_FLAGS = {"nextv": "--nextv", "better_nextv": "--better-nextv", "method": "--horizon-method",
                  "sample_spacing": "--sample-spacing", "exact_steps": "--exact-steps",
                  "pyramid": "--no-pyramid"}
+
+
+def _algorithm_for(algorithm: str, **given) -> str:
+    """``algorithm``, or for ``auto`` given options of one exact algorithm that has no
+    approximate mode (smap's ``--nextv``, brute's ``--no-pyramid``), that algorithm: auto has no
+    options of its own, and while SMap was the default ``--nextv quad`` alone ran it. Options of
+    the approximate methods (sweep, the horizon's hull or sample spacing) still need their
+    algorithm named: an approximate mask is never chosen for the user."""
+    owners = {_OPTION_OWNERS[k] for k, v in given.items() if v is not None}
+    if algorithm == "auto" and len(owners) == 1 and owners <= {"smap", "brute"}:
+        return owners.pop()
+    return algorithm
 
 
 def _algorithm_options(algorithm: str, **given) -> dict:

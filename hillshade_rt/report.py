@@ -156,12 +156,16 @@ def summary_line(report: dict, shown: str | None = None) -> str:
     frac = report["shadow_fraction"]
     mpx = report["mpix_per_s"]
     gpu = report.get("gpu")
+    algo = report["algorithm"]
+    chose = ((report.get("algorithm_stats") or {}).get("auto") or {}).get("chose")
+    if algo == "auto" and chose:    # what auto ran: "auto:bounds", or "auto:bounds+brute"
+        algo = "auto:" + "+".join(sorted(chose, key=lambda k: -chose[k]))
     if gpu:
         kms = gpu.get("kernel_ms")
-        where = (f"{report['algorithm']}/gpu ({gpu['device']}"
+        where = (f"{algo}/gpu ({gpu['device']}"
                  + (f", kernels {kms:.2f} ms" if kms is not None else "") + ")")
     else:
-        where = f"{report['algorithm']}/{report['backend']} x{report['threads']}"
+        where = f"{algo}/{report['backend']} x{report['threads']}"
     times = report.get("times") or []
     sun = report.get("sun")
     if len(times) > 1:

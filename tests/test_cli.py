@@ -28,7 +28,10 @@ def test_shadow_with_report(tmp_path, runner):
     assert doc["shape"] == [400, 400] and doc["crs"] == "EPSG:26915"
     assert doc["sun"]["azimuth"] == 163.0 and doc["sun"]["elevation"] == 5.0
     assert doc["sun"]["night"] is False and doc["sun_source"] == "given"
-    assert doc["algorithm"] == "smap" and doc["backend"] == "cpu" and doc["threads"] >= 1
+    assert doc["algorithm"] == "auto" and doc["backend"] == "cpu" and doc["threads"] >= 1
+    auto = doc["algorithm_stats"]["auto"]          # which exact method auto ran, and why
+    assert sum(auto["chose"].values()) == 1 and set(auto["chose"]) <= {"bounds", "brute"}
+    assert "reach" in auto["why"] and "auto:" in r.output
     assert set(doc["seconds"]) == {"read", "prepare", "compute", "write", "total"}
     assert doc["spacing_m"][0] == pytest.approx(1.0, rel=1e-3)
     m = read_band(out)

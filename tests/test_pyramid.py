@@ -27,7 +27,7 @@ from hillshade_rt.algorithms import auto, bounds, brute
 from hillshade_rt.algorithms.pyramid import MaxPyramid, _levels
 from hillshade_rt.geometry import Grid, curvature_per_m2, sun_rays
 
-SETTINGS = settings(max_examples=int(os.environ.get("HILLSHADE_PYRAMID_EXAMPLES", "120")),
+SETTINGS = settings(max_examples=int(os.environ.get("HILLSHADE_PYRAMID_EXAMPLES", "400")),
                     deadline=None, derandomize=True, database=None,
                     suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 

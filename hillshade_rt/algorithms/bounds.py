@@ -56,6 +56,7 @@ EXACT_STEPS = 4    # samples every cell marches exactly before it looks the boun
 UNDECIDED = 2      # mask code of a cell the bounds leave to the exact march
 MIN_STRIP = 256
 EPS_BIN = 1e-7     # slack (in bins) on the bins a ray may reach: covers position rounding
+SNAP = 1e-7        # fractions this close to 0 or 1 may be a cell centre in the model's rounding
 
 
 @njit(cache=True)
@@ -95,10 +96,10 @@ def _bin_pass(zl, su_n, sl_n, su_c, sl_c, i0, i1, pad, o1, o2, g0, g1, d_up, d_l
 
 
 @njit(cache=True)
-def _decide_line(ZL, SU, SL, R, v, p0, p1, P, s, rise, curv, K, pad, margin, ok, e, out):
+def _decide_line(ZL, SU, SL, R, v, p0, p1, P, s, rise, curv, K, pad, margin, ok, e, e_hi, out):
     """Codes of positions [p0, p1) of canonical line v whose cells share one ray (s, rise,
     curv): the same decisions as ``_decide_cell``, with the sample offsets and fractions of the
-    line computed once, in passes along the line that vectorise. ``e`` is work space."""
+    line computed once, in passes along the line that vectorise. ``e``, ``e_hi``: work space."""
     n = p1 - p0
     row = v % R
     if not ok:
@@ -108,6 +109,7 @@ def _decide_line(ZL, SU, SL, R, v, p0, p1, P, s, rise, curv, K, pad, margin, ok,
         return
     for q in range(n):
         e[q] = -np.inf
+        e_hi[q] = -np.inf
     for k in range(1, K + 1):
         ks = k * s
         d = int(ks)
@@ -118,11 +120,18 @@ def _decide_line(ZL, SU, SL, R, v, p0, p1, P, s, rise, curv, K, pad, margin, ok,
             for q in range(n):
                 t = zr[p0 + d + q] - drop
                 e[q] = t if t > e[q] else e[q]     # NaN (void, outside) compares false
+                e_hi[q] = t if t > e_hi[q] else e_hi[q]
         else:
+            snap = f < SNAP or f > 1.0 - SNAP
             for q in range(n):
                 za = zr[p0 + d + q]
-                t = za + f * (zr[p0 + d + q + 1] - za) - drop
-                e[q] = t if t > e[q] else e[q]
+                zb = zr[p0 + d + q + 1]
+                t = za + f * (zb - za) - drop
+                if not snap:
+                    e[q] = t if t > e[q] else e[q]
+                else:
+                    t = _sample_hi(za, zb, f) - drop
+                e_hi[q] = t if t > e_hi[q] else e_hi[q]
     xk = K * s
     b0 = int(math.floor(xk * BINS - EPS_BIN))
     b1 = int(math.ceil(xk * BINS + EPS_BIN)) - 1
@@ -141,9 +150,25 @@ def _decide_line(ZL, SU, SL, R, v, p0, p1, P, s, rise, curv, K, pad, margin, ok,
             lw = min(lw, sl[bi + 1])
         h = zl[p]
         sh = (e[q] > h + margin) or (lw > h + hk + margin)
-        lit = (e[q] <= h - margin) and (u <= h + hk - margin) and (p <= last)
+        lit = (e_hi[q] <= h - margin) and (u <= h + hk - margin) and (p <= last)
         c = np.uint8(1) if sh else (np.uint8(0) if lit else np.uint8(UNDECIDED))
         out[q] = np.uint8(255) if h != h else c
+
+
+@njit(cache=True, inline="always")
+def _sample_hi(za, zb, f):
+    """An upper bound of the model's sample between heights za, zb at fraction f, NaN when it is
+    surely a void. This frame's positions round differently from the model's (it counts from
+    the other end of a flipped line, and splits k*s into whole and fraction): where f is within
+    ``SNAP`` of 0 or 1 the model may land exactly on a cell centre, so a void neighbour does not
+    make the sample a void there: the valid neighbour bounds it. (Nor is such a sample counted
+    as a block: the model's may fall on the next segment, beside a void.)"""
+    t = za + f * (zb - za)
+    if t == t or not (f < SNAP or f > 1.0 - SNAP):
+        return t
+    if za == za:
+        return za if not zb == zb else max(za, zb)
+    return zb
 
 
 @njit(cache=True)
@@ -154,16 +179,21 @@ def _decide_cell(ZL, SU, SL, R, v, p, P, h, s, rise, curv, K, pad, margin, ok):
         return np.uint8(255)
     if not ok:
         return np.uint8(UNDECIDED)
-    e = -np.inf
+    e = -np.inf       # the highest exact sample above the ray (a lower bound: NaN skipped)
+    e_hi = -np.inf    # an upper bound of the same (see _sample_hi)
     for k in range(1, K + 1):
         x = p + k * s
         i0 = int(x)
         f = x - i0
         row = (v + k) % R
         za = ZL[row, i0]
-        t = za if f == 0.0 else za + f * (ZL[row, i0 + 1] - za)
-        t = t - k * rise - k * k * curv
-        e = t if t > e else e            # NaN (void, outside) compares false
+        zb = ZL[row, i0 + 1]
+        drop = k * rise + k * k * curv
+        t = (za if f == 0.0 else za + f * (zb - za)) - drop
+        if f == 0.0 or not (f < SNAP or f > 1.0 - SNAP):
+            e = t if t > e else e        # NaN (void, outside) compares false
+        t = _sample_hi(za, zb, f) - drop
+        e_hi = t if t > e_hi else e_hi
     if e > h + margin:
         return np.uint8(1)
     x = p + K * s
@@ -180,7 +210,7 @@ def _decide_cell(ZL, SU, SL, R, v, p, P, h, s, rise, curv, K, pad, margin, ok):
         return np.uint8(1)
     # lit: every exact sample and the bound clear the ray; not within rounding of the far edge,
     # where the model snaps a position onto the last cell centre
-    if e <= h - margin and u <= hk - margin and x <= P - 1 - 1e-6:
+    if e_hi <= h - margin and u <= hk - margin and x <= P - 1 - 1e-6:
         return np.uint8(0)
     return np.uint8(UNDECIDED)
 
@@ -193,6 +223,7 @@ def _strip_block(z, ZL, SU, SL, RO, v_top, nb, p0, p1, L, P, pad, o1, o2, g0, g1
     _load_lines(z, ZL, v_top, nb, p0, p1, dom_col, flip_line, flip_pos)
     ie = min(p1, P - 1)
     e = np.empty(p1 - p0)
+    e_hi = np.empty(p1 - p0)
     for i in range(nb):
         v = v_top - i
         row = v % R
@@ -202,7 +233,7 @@ def _strip_block(z, ZL, SU, SL, RO, v_top, nb, p0, p1, L, P, pad, o1, o2, g0, g1
                       g0, g1, d_up, d_lo)
         if per_line:
             _decide_line(ZL, SU, SL, R, v, p0, p1, P, s_arr[v], rise_arr[v], curv_arr[v], K, pad,
-                         margin, ok_arr[v], e, RO[row, p0:p1])
+                         margin, ok_arr[v], e, e_hi, RO[row, p0:p1])
         else:
             for p in range(p0, p1):
                 RO[row, p] = _decide_cell(ZL, SU, SL, R, v, p, P, ZL[row, p], s_arr[p],
