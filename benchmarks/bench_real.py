@@ -11,10 +11,13 @@ uniform and a small geographic grid), then the tools are timed in turn, alternat
 times, and each figure is the median. Ratios (x brute: brute's time / the tool's time, > 1 is
 faster) are measured within this one run, on the same terrain and sun.
 
-Columns: Mpix/s of brute, then each tool's Mpix/s and its speed relative to brute; smap's Black
-fraction (its stats), sweep's unsure fraction (cells it sent to the exact march) and the share of
-valid cells in which the approximate tools (sweep, the peers) differ from brute. The exact tools
-(smap, horizon scan) are checked against brute: a difference is printed as an error.
+Columns: Mpix/s of the plain march (brute --no-pyramid, brute as it was before issue 18: the
+reference), then each tool's Mpix/s and its speed relative to the plain march; auto against
+doshade (doshade's time ÷ auto's: >= 1 is the issue's target); what auto ran; the share of cells
+bounds left to the pyramid march, smap's Black fraction, sweep's unsure fraction, and the share
+of valid cells in which the approximate tools (sweep, the peers) differ from the exact mask.
+Every exact tool (auto, bounds, brute over the pyramid, smap, horizon scan) is checked against
+the plain march cell for cell: a difference is printed as an error and the run exits 1.
 
 Peers where installed (``make bench-peers`` installs them): insolation's doshade (square cells:
 a geographic DEM gets the geometric mean of its middle row's spacings) and whitebox-workflows'
@@ -44,7 +47,7 @@ sys.path.insert(0, os.path.join(HERE, "..", "tests"))
 
 import terrain  # noqa: E402
 from hillshade_rt import read_dem  # noqa: E402
-from hillshade_rt.algorithms import brute, horizon, smap, sweep  # noqa: E402
+from hillshade_rt.algorithms import auto, bounds, brute, horizon, smap, sweep  # noqa: E402
 from hillshade_rt.geometry import Grid, sun_rays  # noqa: E402
 from bench_peers import peer_doshade, peer_whitebox  # noqa: E402
 
@@ -55,12 +58,17 @@ CELL = 30.0
 RELIEF = 2000.0
 
 OURS = {
+    # the plain march (brute before issue 18, now --no-pyramid): the reference of every ratio
+    "plain": lambda z, r, zmax, st: brute.shadow_mask(z, r, zmax, stats=st, pyramid=False),
+    "auto": lambda z, r, zmax, st: auto.shadow_mask(z, r, zmax, stats=st),
+    "bounds": lambda z, r, zmax, st: bounds.shadow_mask(z, r, zmax, stats=st),
     "brute": lambda z, r, zmax, st: brute.shadow_mask(z, r, zmax, stats=st),
     "smap": lambda z, r, zmax, st: smap.shadow_mask(z, r, zmax, stats=st),
     "horizon": lambda z, r, zmax, st: horizon.shadow_mask(z, r, zmax, stats=st, method="scan"),
     "sweep": lambda z, r, zmax, st: sweep.shadow_mask(z, r, zmax, stats=st),
 }
-EXACT = ("smap", "horizon")
+EXACT = ("auto", "bounds", "brute", "smap", "horizon")
+SHOWN = ("auto", "bounds", "brute", "smap", "horizon", "sweep")
 
 
 def warm_up(azimuths, elevations, log):
@@ -200,21 +208,16 @@ def main(argv=None):
             notes.append(f"{name}: {run}")
     warm_up(azs, els, lambda s: print(s, flush=True))
 
-    head = ["terrain", "Mcells", "mean slope °", "az", "el", "brute Mpix/s",
-            "smap Mpix/s (× brute)", "horizon scan", "sweep"]
-    if tools_avail.get("doshade"):
-        head.append("doshade")
-    if tools_avail.get("whitebox"):
-        head.append("whitebox")
-    head += ["smap Black %", "sweep unsure %", "sweep ≠ brute %"]
-    if tools_avail.get("doshade"):
-        head.append("doshade ≠ brute %")
-    if tools_avail.get("whitebox"):
-        head.append("whitebox ≠ brute %")
+    peers = [p for p in ("doshade", "whitebox") if tools_avail.get(p)]
+    head = (["terrain", "Mcells", "mean slope °", "az", "el", "plain march Mpix/s"]
+            + [f"{n} Mpix/s (× plain)" for n in SHOWN] + peers
+            + (["auto ÷ doshade"] if "doshade" in peers else [])
+            + ["auto ran", "bounds undecided %", "smap Black %", "sweep unsure %",
+               "sweep ≠ exact %"] + [f"{p} ≠ exact %" for p in peers])
     log("")
     log("| " + " | ".join(head) + " |")
     log("|" + "---|" * len(head))
-    summary = {}     # terrain -> tool -> [x brute]
+    summary = {}     # terrain -> tool -> [x plain]
     t_start = time.perf_counter()
     for label, z, grid, kind in cases(a):
         zmax = float(np.nanmax(z))
@@ -240,7 +243,7 @@ def main(argv=None):
                 except Exception as e:   # a peer failing must not stop the run
                     notes.append(f"{label} az {az:g} el {el:g}: {type(e).__name__}: {e}")
                     continue
-                ref = masks["brute"]
+                ref = masks["plain"]
 
                 def wrong(name):
                     if name not in masks:
@@ -250,39 +253,43 @@ def main(argv=None):
                 for n in EXACT:
                     d = int(np.count_nonzero(masks[n] != ref))
                     if d:
-                        notes.append(f"ERROR: {n} differs from brute in {d} cells on {label}, "
-                                     f"az {az:g}, el {el:g}")
-                tb = times["brute"]
+                        notes.append(f"ERROR: {n} differs from the plain march in {d} cells on "
+                                     f"{label}, az {az:g}, el {el:g}")
+                tb = times["plain"]
                 row = [label, f"{mpix:.2f}", f"{slope:.0f}", f"{az:g}", f"{el:g}",
                        f"{mpix / tb:.2f}"]
-                for n in ("smap", "horizon", "sweep", "doshade", "whitebox"):
-                    if n in ("doshade", "whitebox") and not tools_avail.get(n):
-                        continue
+                for n in list(SHOWN) + peers:
                     row.append(fmt_tool(times[n], tb, mpix) if n in times else "–")
                     if n in times:
                         summary.setdefault(label, {}).setdefault(n, []).append(tb / times[n])
+                if "doshade" in peers:
+                    r = times["doshade"] / times["auto"]
+                    row.append(f"{r:.2f}")
+                    summary.setdefault(label, {}).setdefault("auto÷doshade", []).append(r)
+                row.append(", ".join(stats["auto"].get("auto", {}).get("chose", {})) or "–")
+                uf = stats["bounds"].get("undecided_fraction")
+                row.append(f"{100 * uf:.1f}" if uf is not None else "–")
                 bf = stats["smap"].get("black_fraction")
                 row.append(f"{100 * bf:.1f}" if bf is not None else "n/a (falls back to brute)")
                 uf = stats["sweep"].get("unsure_fraction")
                 row.append(f"{100 * uf:.1f}" if uf is not None else "–")
                 row.append(wrong("sweep"))
-                if tools_avail.get("doshade"):
-                    row.append(wrong("doshade"))
-                if tools_avail.get("whitebox"):
-                    row.append(wrong("whitebox"))
+                for p in peers:
+                    row.append(wrong(p))
                 log("| " + " | ".join(row) + " |")
-                summary.setdefault(label, {}).setdefault("_brute_mpix", []).append(mpix / tb)
+                summary.setdefault(label, {}).setdefault("_plain_mpix", []).append(mpix / tb)
     log("")
-    log(f"Summary: speed relative to brute (brute's time ÷ the tool's; > 1 is faster), min – "
-        f"median – max over the suns of this run; brute's Mpix/s likewise")
+    log("Summary: speed relative to the plain march (its time ÷ the tool's; > 1 is faster), and "
+        "auto's relative to doshade (doshade's time ÷ auto's), min – median – max over the suns "
+        "of this run; the plain march's Mpix/s likewise")
     log("")
-    names = ["smap", "horizon", "sweep"] + [p for p in ("doshade", "whitebox")
-                                             if tools_avail.get(p)]
-    log("| terrain | brute Mpix/s | " + " | ".join(f"{n} × brute" for n in names) + " |")
+    names = list(SHOWN) + peers + (["auto÷doshade"] if "doshade" in peers else [])
+    log("| terrain | plain Mpix/s | " + " | ".join(
+        (n if n == "auto÷doshade" else f"{n} × plain") for n in names) + " |")
     log("|---|---|" + "---|" * len(names))
     for label, d in summary.items():
         cells = []
-        for n in ["_brute_mpix"] + names:
+        for n in ["_plain_mpix"] + names:
             v = d.get(n)
             if not v:
                 cells.append("–")

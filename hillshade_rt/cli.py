@@ -611,7 +611,9 @@ def _compile_note(algorithm: str, backend: str, relief: bool = False) -> None:
     if backend != "cpu" or not _stderr_is_terminal():
         return
     from .algorithms._jitcache import cache_dir, cached
-    names = (["bounds", "brute", "pyramid"] if algorithm == "auto" else [algorithm])
+    # what each algorithm runs: auto either exact method; both march over the pyramid
+    names = {"auto": ["bounds", "brute", "pyramid"], "bounds": ["bounds", "brute", "pyramid"],
+             "brute": ["brute", "pyramid"]}.get(algorithm, [algorithm])
     missing = [m for m in names + (["relief"] if relief else []) if not cached(m)]
     if missing:
         where = cache_dir().replace(os.path.expanduser("~"), "~", 1)

@@ -26,11 +26,11 @@ def test_cli_says_once_that_it_compiles_and_quiet_says_nothing(tmp_path, runner,
     assert "compiling" not in r.stderr        # not a terminal: logs keep their one line
     monkeypatch.setattr(cli_mod, "_stderr_is_terminal", lambda: True)
     seen = []
-    monkeypatch.setattr(_jitcache, "cached", lambda m: seen.append(m) or m != "smap")
+    monkeypatch.setattr(_jitcache, "cached", lambda m: seen.append(m) or m != "bounds")
     r = runner.invoke(cli, ["shadow", LIDAR, str(tmp_path / "a.tif")] + SUN)
     assert r.exit_code == 0, r.output
     notes = [l for l in r.stderr.splitlines() if "compiling" in l]
-    assert len(notes) == 1 and "smap kernels (first run only" in notes[0]
+    assert len(notes) == 1 and "bounds kernels (first run only" in notes[0]
     assert os.path.expanduser("~") not in notes[0] or "NUMBA_CACHE_DIR" in os.environ
     r = runner.invoke(cli, ["shadow", LIDAR, str(tmp_path / "b.tif"), "-q"] + SUN)
     assert r.exit_code == 0 and r.stderr == ""
@@ -40,18 +40,19 @@ def test_cli_says_once_that_it_compiles_and_quiet_says_nothing(tmp_path, runner,
 
 
 def test_warm_step_compiles_what_a_first_run_needs(monkeypatch, capsys):
-    """`python -m hillshade_rt.warm` (run by `make install`): says what it compiles, runs smap's
-    warm-up on a projected and a per-row grid, and is silent when everything is cached."""
+    """`python -m hillshade_rt.warm` (run by `make install`): says what it compiles, runs the
+    default's (auto: bounds and brute) warm-up on a projected and a per-row grid, and is silent
+    when everything is cached."""
     from hillshade_rt import warm
     from hillshade_rt.engine import Shader
     calls = []
     real = Shader.warm_up
     monkeypatch.setattr(Shader, "warm_up", lambda self, *a, **k: calls.append(
         (self.algorithm, bool((self.grid.dx != self.grid.dx[0]).any()))) or real(self, *a, **k))
-    monkeypatch.setattr(_jitcache, "cached", lambda m: m != "smap")
+    monkeypatch.setattr(_jitcache, "cached", lambda m: m != "bounds")
     assert warm.main() == 0
-    assert calls == [("smap", False), ("smap", True)]
-    assert "compiling the smap kernels once" in capsys.readouterr().err
+    assert calls == [("auto", False), ("auto", True)]
+    assert "compiling the bounds kernels once" in capsys.readouterr().err
     monkeypatch.setattr(_jitcache, "cached", lambda m: True)
     calls.clear()
     assert warm.main() == 0 and calls == [] and capsys.readouterr().err == ""

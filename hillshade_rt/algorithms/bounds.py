@@ -59,40 +59,75 @@ EPS_BIN = 1e-7     # slack (in bins) on the bins a ray may reach: covers positio
 SNAP = 1e-7        # fractions this close to 0 or 1 may be a cell centre in the model's rounding
 
 
+@njit(cache=True, inline="always")
+def _bin_bounds(a, b, ga, gb):
+    """(upper, lower) bound of the terrain on the bin [ga, gb] (fractions) of the segment from
+    height a to b: its ends (the terrain is linear there); with a void end, the valid end
+    above (a ray may land exactly on it) and -inf below. Selects only: the pass vectorises."""
+    ta = a + ga * (b - a)
+    tb = a + gb * (b - a)
+    hi_t = ta if ta > tb else tb
+    lo_t = tb if ta > tb else ta
+    void = not (ta == ta and tb == tb)
+    top = a if a == a else (b if b == b else -np.inf)
+    return (top if void else hi_t), (-np.inf if void else lo_t)
+
+
 @njit(cache=True)
-def _bin_pass(zl, su_n, sl_n, su_c, sl_c, i0, i1, pad, o1, o2, g0, g1, d_up, d_lo):
+def _bin_pass(zl, su_n, sl_n, su_c, sl_c, i0, i1, padp, o1, o2, g0, g1, d_up, d_lo):
     """Bounds of the bins of segments [i0, i1) of one line (``zl`` its heights) from those of the
-    next line (``su_n``, ``sl_n``; bin b at index pad + b): one pass over the bins, written so that
-    it vectorises (the two or three bins reached on the next line at fixed offsets)."""
+    next line (``su_n``, ``sl_n``). Bins are stored by their place m in the segment: bin m of
+    segment i at ``[m, padp + i]``, so that for each m the bins reached on the next line are at
+    fixed (m', offset) and the pass over i is contiguous and vectorises."""
     Q = g0.size
-    lq = 0
-    while (1 << lq) < Q:
-        lq += 1
-    b_lo = pad + i0 * Q
-    b_hi = pad + i1 * Q
-    wide = o2 - o1 >= 2
-    for bi in range(b_lo, b_hi):
-        i = (bi - pad) >> lq
-        m = (bi - pad) & (Q - 1)
-        a = zl[i]
-        b = zl[i + 1]
-        ta = a + g0[m] * (b - a)
-        tb = a + g1[m] * (b - a)
-        hi_t = max(ta, tb)
-        lo_t = min(ta, tb)
-        if hi_t != hi_t:          # a void end: bounded above by the valid end, below by -inf
-            hi_t = a if a == a else (b if b == b else -np.inf)
-            lo_t = -np.inf
-        u = max(su_n[bi + o1], su_n[bi + o1 + 1])
-        lw = min(sl_n[bi + o1], sl_n[bi + o1 + 1])
-        if wide:
-            for j in range(o1 + 2, o2 + 1):
-                u = max(u, su_n[bi + j])
-                lw = min(lw, sl_n[bi + j])
-        u -= d_up
-        lw -= d_lo
-        su_c[bi] = u if u > hi_t else hi_t
-        sl_c[bi] = lw if lw > lo_t else lo_t
+    W = o2 - o1 + 1
+    for m in range(Q):
+        ga = g0[m]
+        gb = g1[m]
+        ma = (m + o1) % Q
+        da = padp + (m + o1) // Q
+        mb = (m + o1 + 1) % Q
+        db = padp + (m + o1 + 1) // Q
+        mc = (m + o1 + 2) % Q
+        dc = padp + (m + o1 + 2) // Q
+        sua, sub, suc = su_n[ma], su_n[mb], su_n[mc]
+        sla, slb, slc = sl_n[ma], sl_n[mb], sl_n[mc]
+        ou = su_c[m]
+        ol = sl_c[m]
+        if W == 2:
+            for i in range(i0, i1):
+                hi_t, lo_t = _bin_bounds(zl[i], zl[i + 1], ga, gb)
+                x, y = sua[da + i], sub[db + i]
+                u = (x if x > y else y) - d_up
+                x, y = sla[da + i], slb[db + i]
+                lw = (y if x > y else x) - d_lo
+                ou[padp + i] = u if u > hi_t else hi_t
+                ol[padp + i] = lw if lw > lo_t else lo_t
+        elif W == 3:
+            for i in range(i0, i1):
+                hi_t, lo_t = _bin_bounds(zl[i], zl[i + 1], ga, gb)
+                x, y, w = sua[da + i], sub[db + i], suc[dc + i]
+                x = x if x > y else y
+                u = (x if x > w else w) - d_up
+                x, y, w = sla[da + i], slb[db + i], slc[dc + i]
+                x = y if x > y else x
+                lw = (w if x > w else x) - d_lo
+                ou[padp + i] = u if u > hi_t else hi_t
+                ol[padp + i] = lw if lw > lo_t else lo_t
+        else:    # rays spread over more bins (per-row rays of a large geographic raster)
+            for i in range(i0, i1):
+                hi_t, lo_t = _bin_bounds(zl[i], zl[i + 1], ga, gb)
+                u = -np.inf
+                lw = np.inf
+                for j in range(o1, o2 + 1):
+                    mj = (m + j) % Q
+                    dj = padp + (m + j) // Q + i
+                    u = max(u, su_n[mj, dj])
+                    lw = min(lw, sl_n[mj, dj])
+                u -= d_up
+                lw -= d_lo
+                ou[padp + i] = u if u > hi_t else hi_t
+                ol[padp + i] = lw if lw > lo_t else lo_t
 
 
 @njit(cache=True)
@@ -137,17 +172,19 @@ def _decide_line(ZL, SU, SL, R, v, p0, p1, P, s, rise, curv, K, pad, margin, ok,
     b1 = int(math.ceil(xk * BINS + EPS_BIN)) - 1
     su = SU[(v + K) % R]
     sl = SL[(v + K) % R]
+    ma, da = b0 % BINS, pad + b0 // BINS      # bin Q*p + b0 is bin ma of segment p + b0 // Q
+    mb, db = b1 % BINS, pad + b1 // BINS
+    sua, sla, sub, slb = su[ma], sl[ma], su[mb], sl[mb]
     hk = K * rise + K * K * curv
     last = P - 1 - 1e-6 - xk          # lit only for positions up to here (see _decide_cell)
     zl = ZL[row]
     for q in range(n):
         p = p0 + q
-        bi = pad + p * BINS + b0
-        u = su[bi]
-        lw = sl[bi]
+        u = sua[da + p]
+        lw = sla[da + p]
         if b1 > b0:
-            u = max(u, su[bi + 1])
-            lw = min(lw, sl[bi + 1])
+            u = max(u, sub[db + p])
+            lw = min(lw, slb[db + p])
         h = zl[p]
         sh = (e[q] > h + margin) or (lw > h + hk + margin)
         lit = (e_hi[q] <= h - margin) and (u <= h + hk - margin) and (p <= last)
@@ -200,11 +237,11 @@ def _decide_cell(ZL, SU, SL, R, v, p, P, h, s, rise, curv, K, pad, margin, ok):
     b0 = int(math.floor(x * BINS - EPS_BIN))
     b1 = int(math.ceil(x * BINS + EPS_BIN)) - 1
     row = (v + K) % R
-    u = SU[row, pad + b0]
-    lw = SL[row, pad + b0]
-    for b in range(b0 + 1, b1 + 1):
-        u = max(u, SU[row, pad + b])
-        lw = min(lw, SL[row, pad + b])
+    u = -np.inf
+    lw = np.inf
+    for b in range(b0, b1 + 1):
+        u = max(u, SU[row, b % BINS, pad + b // BINS])
+        lw = min(lw, SL[row, b % BINS, pad + b // BINS])
     hk = h + K * rise + K * K * curv
     if lw > hk + margin:
         return np.uint8(1)
@@ -251,14 +288,13 @@ def _bounds_sweep(z, L, P, dom_col, flip_line, flip_pos, s_lo, s_hi, d_up, d_lo,
     NS = nstrips
     R = NS * B + K + 2
     Q = BINS
-    nbins = max(1, (P - 1) * Q)
-    pad = Q + 4
+    pad = 4                           # positions of -inf bins before the line
     o1 = int(math.floor(Q * s_lo - EPS_BIN))
     o2 = int(math.ceil(1.0 + Q * s_hi + EPS_BIN)) - 1
     reach = int(math.ceil(K * max(s_hi, 0.0))) + 2
     ZL = np.full((R, P + reach + 2), np.nan)                    # heights; NaN beyond the line
-    SU = np.full((R, pad + nbins + Q * reach + pad), -np.inf)  # bounds; -inf beyond the line
-    SL = np.full((R, pad + nbins + Q * reach + pad), -np.inf)
+    SU = np.full((R, Q, pad + P + reach + pad), -np.inf)  # bounds; -inf beyond the line
+    SL = np.full((R, Q, pad + P + reach + pad), -np.inf)
     RO = np.empty((R, P), np.uint8)
     g0 = np.empty(Q)
     g1 = np.empty(Q)

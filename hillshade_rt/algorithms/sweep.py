@@ -272,16 +272,26 @@ def _load_lines(z, ring, v, nb, p0, p1, dom_col, flip_line, flip_pos):
     R = ring.shape[0]
     if dom_col:
         P, L = z.shape
+        rows = np.empty(nb, np.int64)     # ring row and DEM column of each line, once
+        cols = np.empty(nb, np.int64)
+        for i in range(nb):
+            rows[i] = (v - i) % R
+            cols[i] = _dem_index(v - i, L, flip_line)
         for p in range(p0, p1):
             r = _dem_index(p, P, flip_pos)
             for i in range(nb):
-                ring[(v - i) % R, p] = z[r, _dem_index(v - i, L, flip_line)]
+                ring[rows[i], p] = z[r, cols[i]]
     else:
         L, P = z.shape
         for i in range(nb):
             r = _dem_index(v - i, L, flip_line)
-            for p in range(p0, p1):
-                ring[(v - i) % R, p] = z[r, _dem_index(p, P, flip_pos)]
+            dst = ring[(v - i) % R]
+            if flip_pos:
+                for p in range(p0, p1):
+                    dst[p] = z[r, P - 1 - p]
+            else:
+                for p in range(p0, p1):
+                    dst[p] = z[r, p]
 
 
 @njit(cache=True)
@@ -291,16 +301,26 @@ def _store_lines(out, ring, v, nb, p0, p1, dom_col, flip_line, flip_pos):
     R = ring.shape[0]
     if dom_col:
         P, L = out.shape
+        rows = np.empty(nb, np.int64)
+        cols = np.empty(nb, np.int64)
+        for i in range(nb):
+            rows[i] = (v - i) % R
+            cols[i] = _dem_index(v - i, L, flip_line)
         for p in range(p0, p1):
             r = _dem_index(p, P, flip_pos)
             for i in range(nb):
-                out[r, _dem_index(v - i, L, flip_line)] = ring[(v - i) % R, p]
+                out[r, cols[i]] = ring[rows[i], p]
     else:
         L, P = out.shape
         for i in range(nb):
             r = _dem_index(v - i, L, flip_line)
-            for p in range(p0, p1):
-                out[r, _dem_index(p, P, flip_pos)] = ring[(v - i) % R, p]
+            src = ring[(v - i) % R]
+            if flip_pos:
+                for p in range(p0, p1):
+                    out[r, P - 1 - p] = src[p]
+            else:
+                for p in range(p0, p1):
+                    out[r, p] = src[p]
 
 
 @njit(cache=True)
