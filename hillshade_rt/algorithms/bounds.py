@@ -57,13 +57,14 @@ UNDECIDED = 2      # mask code of a cell the bounds leave to the exact march
 MIN_STRIP = 256
 EPS_BIN = 1e-7     # slack (in bins) on the bins a ray may reach: covers position rounding
 SNAP = 1e-7        # fractions this close to 0 or 1 may be a cell centre in the model's rounding
+ZO = 2             # NaN positions kept before each line of heights (the bins around position 0)
 
 
 @njit(cache=True, inline="always")
 def _bin_bounds(a, b, ga, gb):
-    """(upper, lower) bound of the terrain on the bin [ga, gb] (fractions) of the segment from
-    height a to b: its ends (the terrain is linear there); with a void end, the valid end
-    above (a ray may land exactly on it) and -inf below. Selects only: the pass vectorises."""
+    """(upper, lower) bound of the terrain on [ga, gb] (fractions) of the segment from height a
+    to b: its ends (the terrain is linear there); with a void end, the valid end above (a ray
+    may land exactly on it) and -inf below. Selects only: the pass vectorises."""
     ta = a + ga * (b - a)
     tb = a + gb * (b - a)
     hi_t = ta if ta > tb else tb
@@ -73,67 +74,103 @@ def _bin_bounds(a, b, ga, gb):
     return (top if void else hi_t), (-np.inf if void else lo_t)
 
 
+@njit(cache=True, inline="always")
+def _phase(v, s_c):
+    """(off, phi) of line v's bins: bin t covers positions [t/BINS + phi, (t+1)/BINS + phi].
+    The bins of line 0 carried along rays of step ``s_c``: off = floor(BINS v s_c), so that bin t
+    of line v moves onto bin t + off(v+1) - off(v) of line v+1."""
+    x = v * s_c * BINS
+    off = math.floor(x)
+    return np.int64(off), (x - off) / BINS
+
+
 @njit(cache=True)
-def _bin_pass(zl, su_n, sl_n, su_c, sl_c, i0, i1, padp, o1, o2, g0, g1, d_up, d_lo):
-    """Bounds of the bins of segments [i0, i1) of one line (``zl`` its heights) from those of the
-    next line (``su_n``, ``sl_n``). Bins are stored by their place m in the segment: bin m of
-    segment i at ``[m, padp + i]``, so that for each m the bins reached on the next line are at
-    fixed (m', offset) and the pass over i is contiguous and vectorises."""
-    Q = g0.size
-    W = o2 - o1 + 1
+def _bin_pass(zb, zo, su_n, sl_n, su_c, sl_c, i0, i1, padp, phi, delta, o_lo, o_hi, d_up,
+              d_lo):
+    """Bounds of the bins t = BINS*i + m, i in [i0, i1), of one line (heights ``zb``, position
+    x at ``zb[zo + x]``, NaN beyond the line) from those of the next line (``su_n``, ``sl_n``).
+    Bin t is stored at ``[m, padp + i]``; the rays of bin t reach bins t + delta + o_lo ..
+    t + delta + o_hi of the next line (one bin, o_lo = o_hi = 0, when every row has the same
+    ray: the bins follow the rays exactly and the bounds do not widen). For each m the bins
+    reached are at a fixed place: the pass over i is contiguous and vectorises."""
+    Q = BINS
+    inv = 1.0 / Q
+    W = o_hi - o_lo + 1
     for m in range(Q):
-        ga = g0[m]
-        gb = g1[m]
-        ma = (m + o1) % Q
-        da = padp + (m + o1) // Q
-        mb = (m + o1 + 1) % Q
-        db = padp + (m + o1 + 1) // Q
-        mc = (m + o1 + 2) % Q
-        dc = padp + (m + o1 + 2) // Q
+        fa = m * inv + phi
+        fb = fa + inv
+        straddle = fb > 1.0        # the bin holds the next cell centre
+        q = m + delta + o_lo
+        ma = q % Q
+        da = padp + q // Q
+        mb = (q + 1) % Q
+        db = padp + (q + 1) // Q
+        mc = (q + 2) % Q
+        dc = padp + (q + 2) // Q
         sua, sub, suc = su_n[ma], su_n[mb], su_n[mc]
         sla, slb, slc = sl_n[ma], sl_n[mb], sl_n[mc]
         ou = su_c[m]
         ol = sl_c[m]
-        if W == 2:
-            for i in range(i0, i1):
-                hi_t, lo_t = _bin_bounds(zl[i], zl[i + 1], ga, gb)
+        for i in range(i0, i1):
+            a = zb[zo + i]
+            b = zb[zo + i + 1]
+            if straddle:
+                h1, l1 = _bin_bounds(a, b, fa, 1.0)
+                h2, l2 = _bin_bounds(b, zb[zo + i + 2], 0.0, fb - 1.0)
+                hi_t = h1 if h1 > h2 else h2
+                lo_t = l2 if l1 > l2 else l1
+            else:
+                hi_t, lo_t = _bin_bounds(a, b, fa, fb)
+            if W == 1:
+                u = sua[da + i]
+                lw = sla[da + i]
+            elif W == 2:
                 x, y = sua[da + i], sub[db + i]
-                u = (x if x > y else y) - d_up
+                u = x if x > y else y
                 x, y = sla[da + i], slb[db + i]
-                lw = (y if x > y else x) - d_lo
-                ou[padp + i] = u if u > hi_t else hi_t
-                ol[padp + i] = lw if lw > lo_t else lo_t
-        elif W == 3:
-            for i in range(i0, i1):
-                hi_t, lo_t = _bin_bounds(zl[i], zl[i + 1], ga, gb)
+                lw = y if x > y else x
+            elif W == 3:
                 x, y, w = sua[da + i], sub[db + i], suc[dc + i]
                 x = x if x > y else y
-                u = (x if x > w else w) - d_up
+                u = x if x > w else w
                 x, y, w = sla[da + i], slb[db + i], slc[dc + i]
                 x = y if x > y else x
-                lw = (w if x > w else x) - d_lo
-                ou[padp + i] = u if u > hi_t else hi_t
-                ol[padp + i] = lw if lw > lo_t else lo_t
-        else:    # rays spread over more bins (per-row rays of a large geographic raster)
-            for i in range(i0, i1):
-                hi_t, lo_t = _bin_bounds(zl[i], zl[i + 1], ga, gb)
+                lw = w if x > w else x
+            else:    # rays of many rows spread over more bins
                 u = -np.inf
                 lw = np.inf
-                for j in range(o1, o2 + 1):
-                    mj = (m + j) % Q
-                    dj = padp + (m + j) // Q + i
+                for j in range(W):
+                    mj = (q + j) % Q
+                    dj = padp + (q + j) // Q + i
                     u = max(u, su_n[mj, dj])
                     lw = min(lw, sl_n[mj, dj])
-                u -= d_up
-                lw -= d_lo
-                ou[padp + i] = u if u > hi_t else hi_t
-                ol[padp + i] = lw if lw > lo_t else lo_t
+            u -= d_up
+            lw -= d_lo
+            ou[padp + i] = u if u > hi_t else hi_t
+            ol[padp + i] = lw if lw > lo_t else lo_t
+
+
+@njit(cache=True, inline="always")
+def _sample_hi(za, zb, f):
+    """An upper bound of the model's sample between heights za, zb at fraction f, NaN when it is
+    surely a void. This frame's positions round differently from the model's (it counts from
+    the other end of a flipped line, and splits k*s into whole and fraction): where f is within
+    ``SNAP`` of 0 or 1 the model may land exactly on a cell centre, so a void neighbour does not
+    make the sample a void there: the valid neighbour bounds it. (Nor is such a sample counted
+    as a block: the model's may fall on the next segment, beside a void.)"""
+    t = za + f * (zb - za)
+    if t == t or not (f < SNAP or f > 1.0 - SNAP):
+        return t
+    if za == za:
+        return za if not zb == zb else max(za, zb)
+    return zb
 
 
 @njit(cache=True)
-def _decide_line(ZL, SU, SL, R, v, p0, p1, P, s, rise, curv, K, pad, margin, ok, e, e_hi, out):
+def _decide_line(ZL, SU, SL, R, v, p0, p1, P, s, rise, curv, K, pad, margin, ok, s_c, e, e_hi,
+                 out):
     """Codes of positions [p0, p1) of canonical line v whose cells share one ray (s, rise,
-    curv): the same decisions as ``_decide_cell``, with the sample offsets and fractions of the
+    curv): the same decisions as ``_decide_positions``, with the sample offsets and fractions of the
     line computed once, in passes along the line that vectorise. ``e``, ``e_hi``: work space."""
     n = p1 - p0
     row = v % R
@@ -168,15 +205,17 @@ def _decide_line(ZL, SU, SL, R, v, p0, p1, P, s, rise, curv, K, pad, margin, ok,
                     t = _sample_hi(za, zb, f) - drop
                 e_hi[q] = t if t > e_hi[q] else e_hi[q]
     xk = K * s
-    b0 = int(math.floor(xk * BINS - EPS_BIN))
-    b1 = int(math.ceil(xk * BINS + EPS_BIN)) - 1
+    _, phi = _phase(v + K, s_c)
+    y = (xk - phi) * BINS             # bin of position p + xk on line v+K: BINS * p + y
+    b0 = int(math.floor(y - EPS_BIN))
+    b1 = int(math.ceil(y + EPS_BIN)) - 1
     su = SU[(v + K) % R]
     sl = SL[(v + K) % R]
-    ma, da = b0 % BINS, pad + b0 // BINS      # bin Q*p + b0 is bin ma of segment p + b0 // Q
+    ma, da = b0 % BINS, pad + b0 // BINS
     mb, db = b1 % BINS, pad + b1 // BINS
     sua, sla, sub, slb = su[ma], sl[ma], su[mb], sl[mb]
     hk = K * rise + K * K * curv
-    last = P - 1 - 1e-6 - xk          # lit only for positions up to here (see _decide_cell)
+    last = P - 1 - 1e-6 - xk          # lit only for positions up to here (see _decide_positions)
     zl = ZL[row]
     for q in range(n):
         p = p0 + q
@@ -192,89 +231,94 @@ def _decide_line(ZL, SU, SL, R, v, p0, p1, P, s, rise, curv, K, pad, margin, ok,
         out[q] = np.uint8(255) if h != h else c
 
 
-@njit(cache=True, inline="always")
-def _sample_hi(za, zb, f):
-    """An upper bound of the model's sample between heights za, zb at fraction f, NaN when it is
-    surely a void. This frame's positions round differently from the model's (it counts from
-    the other end of a flipped line, and splits k*s into whole and fraction): where f is within
-    ``SNAP`` of 0 or 1 the model may land exactly on a cell centre, so a void neighbour does not
-    make the sample a void there: the valid neighbour bounds it. (Nor is such a sample counted
-    as a block: the model's may fall on the next segment, beside a void.)"""
-    t = za + f * (zb - za)
-    if t == t or not (f < SNAP or f > 1.0 - SNAP):
-        return t
-    if za == za:
-        return za if not zb == zb else max(za, zb)
-    return zb
+@njit(cache=True)
+def _decide_positions(ZL, SU, SL, R, v, p0, p1, P, s_arr, rise_arr, curv_arr, ok_arr, K, pad,
+                      margin, s_c, out):
+    """Codes of positions [p0, p1) of canonical line v when each position has its own ray
+    (``s_arr`` ... indexed by position: lines that are DEM columns of a per-row grid): K exact
+    samples, then the bounds K lines on; 0 / 1 when they decide, UNDECIDED otherwise (the same
+    tests as ``_decide_line``, one cell at a time)."""
+    rows = np.empty(K + 1, np.int64)
+    for k in range(K + 1):
+        rows[k] = (v + k) % R
+    _, phi = _phase(v + K, s_c)
+    su = SU[rows[K]]
+    sl = SL[rows[K]]
+    zl = ZL[rows[0]]
+    for p in range(p0, p1):
+        h = zl[p]
+        if h != h:
+            out[p - p0] = np.uint8(255)
+            continue
+        if not ok_arr[p]:
+            out[p - p0] = np.uint8(UNDECIDED)
+            continue
+        s = s_arr[p]
+        rise = rise_arr[p]
+        curv = curv_arr[p]
+        e = -np.inf       # the highest exact sample above the ray (a lower bound: NaN skipped)
+        e_hi = -np.inf    # an upper bound of the same (see _sample_hi)
+        for k in range(1, K + 1):
+            x = p + k * s
+            i0 = int(x)
+            f = x - i0
+            zr = ZL[rows[k]]
+            za = zr[i0]
+            zb = zr[i0 + 1]
+            drop = k * rise + k * k * curv
+            t = (za if f == 0.0 else za + f * (zb - za)) - drop
+            if f == 0.0 or not (f < SNAP or f > 1.0 - SNAP):
+                e = t if t > e else e    # NaN (void, outside) compares false
+            t = _sample_hi(za, zb, f) - drop
+            e_hi = t if t > e_hi else e_hi
+        x = p + K * s
+        y = (x - phi) * BINS
+        b0 = int(math.floor(y - EPS_BIN))
+        b1 = int(math.ceil(y + EPS_BIN)) - 1
+        u = -np.inf
+        lw = np.inf
+        for b in range(b0, b1 + 1):
+            u = max(u, su[b % BINS, pad + b // BINS])
+            lw = min(lw, sl[b % BINS, pad + b // BINS])
+        hk = h + K * rise + K * K * curv
+        if e > h + margin or lw > hk + margin:
+            code = np.uint8(1)
+        elif e_hi <= h - margin and u <= hk - margin and x <= P - 1 - 1e-6:
+            # lit: every exact sample and the bound clear the ray; not within rounding of the
+            # far edge, where the model snaps a position onto the last cell centre
+            code = np.uint8(0)
+        else:
+            code = np.uint8(UNDECIDED)
+        out[p - p0] = code
 
 
 @njit(cache=True)
-def _decide_cell(ZL, SU, SL, R, v, p, P, h, s, rise, curv, K, pad, margin, ok):
-    """Code of canonical cell (v, p) of height h with ray (s, rise, curv): 0 / 1 when the exact
-    samples and the bounds decide it, UNDECIDED otherwise."""
-    if h != h:
-        return np.uint8(255)
-    if not ok:
-        return np.uint8(UNDECIDED)
-    e = -np.inf       # the highest exact sample above the ray (a lower bound: NaN skipped)
-    e_hi = -np.inf    # an upper bound of the same (see _sample_hi)
-    for k in range(1, K + 1):
-        x = p + k * s
-        i0 = int(x)
-        f = x - i0
-        row = (v + k) % R
-        za = ZL[row, i0]
-        zb = ZL[row, i0 + 1]
-        drop = k * rise + k * k * curv
-        t = (za if f == 0.0 else za + f * (zb - za)) - drop
-        if f == 0.0 or not (f < SNAP or f > 1.0 - SNAP):
-            e = t if t > e else e        # NaN (void, outside) compares false
-        t = _sample_hi(za, zb, f) - drop
-        e_hi = t if t > e_hi else e_hi
-    if e > h + margin:
-        return np.uint8(1)
-    x = p + K * s
-    b0 = int(math.floor(x * BINS - EPS_BIN))
-    b1 = int(math.ceil(x * BINS + EPS_BIN)) - 1
-    row = (v + K) % R
-    u = -np.inf
-    lw = np.inf
-    for b in range(b0, b1 + 1):
-        u = max(u, SU[row, b % BINS, pad + b // BINS])
-        lw = min(lw, SL[row, b % BINS, pad + b // BINS])
-    hk = h + K * rise + K * K * curv
-    if lw > hk + margin:
-        return np.uint8(1)
-    # lit: every exact sample and the bound clear the ray; not within rounding of the far edge,
-    # where the model snaps a position onto the last cell centre
-    if e_hi <= h - margin and u <= hk - margin and x <= P - 1 - 1e-6:
-        return np.uint8(0)
-    return np.uint8(UNDECIDED)
-
-
-@njit(cache=True)
-def _strip_block(z, ZL, SU, SL, RO, v_top, nb, p0, p1, L, P, pad, o1, o2, g0, g1, d_up, d_lo,
+def _strip_block(z, ZB, SU, SL, RO, v_top, nb, p0, p1, L, P, pad, s_c, o_lo, o_hi, d_up, d_lo,
                  s_arr, rise_arr, curv_arr, ok_arr, per_line, K, margin, dom_col, flip_line,
                  flip_pos, out):
-    R = ZL.shape[0]
+    """Lines v_top .. v_top-nb+1, positions [p0, p1): load, bounds, decisions, store. ``ZB``
+    holds the heights with ``ZO`` NaN positions before each line."""
+    R = ZB.shape[0]
+    ZL = ZB[:, ZO:]
     _load_lines(z, ZL, v_top, nb, p0, p1, dom_col, flip_line, flip_pos)
-    ie = min(p1, P - 1)
+    i0 = p0 - 1 if p0 == 0 else p0    # the first strip also fills the bin that holds position 0
+    i1 = min(p1, P)
     e = np.empty(p1 - p0)
     e_hi = np.empty(p1 - p0)
     for i in range(nb):
         v = v_top - i
         row = v % R
         nxt = (v + 1) % R
-        if ie > p0:
-            _bin_pass(ZL[row], SU[nxt], SL[nxt], SU[row], SL[row], p0, ie, pad, o1, o2,
-                      g0, g1, d_up, d_lo)
+        off, phi = _phase(v, s_c)
+        off1, _ = _phase(v + 1, s_c)
+        _bin_pass(ZB[row], ZO, SU[nxt], SL[nxt], SU[row], SL[row], i0, i1, pad, phi,
+                  off1 - off, o_lo, o_hi, d_up, d_lo)
         if per_line:
             _decide_line(ZL, SU, SL, R, v, p0, p1, P, s_arr[v], rise_arr[v], curv_arr[v], K, pad,
-                         margin, ok_arr[v], e, e_hi, RO[row, p0:p1])
+                         margin, ok_arr[v], s_c, e, e_hi, RO[row, p0:p1])
         else:
-            for p in range(p0, p1):
-                RO[row, p] = _decide_cell(ZL, SU, SL, R, v, p, P, ZL[row, p], s_arr[p],
-                                          rise_arr[p], curv_arr[p], K, pad, margin, ok_arr[p])
+            _decide_positions(ZL, SU, SL, R, v, p0, p1, P, s_arr, rise_arr, curv_arr, ok_arr, K,
+                              pad, margin, s_c, RO[row, p0:p1])
     _store_lines(out, RO, v_top, nb, p0, p1, dom_col, flip_line, flip_pos)
 
 
@@ -289,18 +333,21 @@ def _bounds_sweep(z, L, P, dom_col, flip_line, flip_pos, s_lo, s_hi, d_up, d_lo,
     R = NS * B + K + 2
     Q = BINS
     pad = 4                           # positions of -inf bins before the line
-    o1 = int(math.floor(Q * s_lo - EPS_BIN))
-    o2 = int(math.ceil(1.0 + Q * s_hi + EPS_BIN)) - 1
-    reach = int(math.ceil(K * max(s_hi, 0.0))) + 2
-    ZL = np.full((R, P + reach + 2), np.nan)                    # heights; NaN beyond the line
-    SU = np.full((R, Q, pad + P + reach + pad), -np.inf)  # bounds; -inf beyond the line
+    if s_lo == s_hi:                  # one ray: the bins follow it exactly
+        s_c = s_lo
+        o_lo = 0
+        o_hi = 0
+    else:
+        # rays of several rows (per-row spacing): the bins follow the slowest ray, a faster one
+        # lands up to Q*(s_hi - s_lo) bins further on (two bins reached, while that is < 1)
+        s_c = s_lo
+        o_lo = 0
+        o_hi = int(math.ceil(1.0 + Q * (s_hi - s_lo) + EPS_BIN)) - 1
+    reach = int(math.ceil(K * max(s_hi, 0.0))) + 3
+    ZB = np.full((R, ZO + P + reach + 2), np.nan)          # heights; NaN around the line
+    SU = np.full((R, Q, pad + P + reach + pad), -np.inf)  # bounds; -inf around the line
     SL = np.full((R, Q, pad + P + reach + pad), -np.inf)
     RO = np.empty((R, P), np.uint8)
-    g0 = np.empty(Q)
-    g1 = np.empty(Q)
-    for m in range(Q):
-        g0[m] = m / Q
-        g1[m] = (m + 1) / Q
     bounds = np.empty(NS + 1, np.int64)
     for j in range(NS + 1):
         bounds[j] = P - (j * P) // NS
@@ -312,8 +359,8 @@ def _bounds_sweep(z, L, P, dom_col, flip_line, flip_pos, s_lo, s_hi, d_up, d_lo,
             if b >= 0 and b < nblocks:
                 v_top = L - 1 - b * B
                 nb = min(B, v_top + 1)
-                _strip_block(z, ZL, SU, SL, RO, v_top, nb, bounds[j + 1], bounds[j], L, P, pad,
-                             o1, o2, g0, g1, d_up, d_lo, s_arr, rise_arr, curv_arr, ok_arr,
+                _strip_block(z, ZB, SU, SL, RO, v_top, nb, bounds[j + 1], bounds[j], L, P, pad,
+                             s_c, o_lo, o_hi, d_up, d_lo, s_arr, rise_arr, curv_arr, ok_arr,
                              per_line, K, margin, dom_col, flip_line, flip_pos, out)
 
 
@@ -367,8 +414,13 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None,
         d_lo = r_hi + (2 * kmax + 1) * c_hi
         big = max(abs(zmin), abs(zmax)) + 1.0
         margin = 1e-9 * big + 4e-16 * (L + K + 8) * (big + kmax * d_lo)
+        per_line = not f.dom_col
+        if f.dom_col and ok.all() and s_lo == s_hi and r_lo == r_hi and c_lo == c_hi:
+            # one ray for every row: the line passes (indexed by line) serve the column frames too
+            s, rise, curv = np.full(L, s_lo), np.full(L, r_lo), np.full(L, c_lo)
+            ok, per_line = np.ones(L, np.bool_), True
         _bounds_sweep(z, L, P, f.dom_col, f.flip_line, f.flip_pos, s_lo, s_hi, r_lo + c_lo,
-                      d_lo, s, rise, curv, ok, not f.dom_col, K, margin,
+                      d_lo, s, rise, curv, ok, per_line, K, margin,
                       _strips(P, s_hi, K), out)
     else:
         out[...] = np.where(np.isnan(z), np.uint8(255), np.uint8(UNDECIDED))
