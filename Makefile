@@ -7,7 +7,7 @@ OUTDIR ?= out
 EXAMPLE_DEM := examples/bigtujunga_srtm30m_utm11n_1197x643.tif
 EXAMPLE_OUT := $(OUTDIR)/bigtujunga_shadow.tif
 
-.PHONY: run test install install-test bench bench-sun bench-tiling bench-big bench-gpu bench-peers bench-writes bench-real bench-real-quick clean help
+.PHONY: run test install install-test bench bench-sun bench-tiling bench-big bench-gpu bench-peers bench-writes bench-real bench-real-quick bench-fast gpu-check clean help
 
 help:
 	@echo "make run    - set up .venv, shade the bundled example DEM, print where the mask went"
@@ -18,9 +18,11 @@ help:
 	@echo "make bench-writes - what the checked (atomic, fsync, GDAL-error) writes cost vs bare rasterio"
 	@echo "make bench-big - a 20000 x 20000 DEM under --max-memory 1GB: peak memory, a crop checked"
 	@echo "make bench-gpu - install the CUDA backend (numba-cuda) and time every algorithm on the GPU"
+	@echo "make gpu-check - on a machine with a GPU: the GPU tests on the device, then make bench-gpu"
 	@echo "make bench-peers - install other shadow tools into .venv and time them against ours"
 	@echo "make bench-real - real DEMs and spectral fractals (1024-4096), 18 suns, with the peers"
 	@echo "make bench-real-quick - the same with 1024 and 6 suns (a few minutes on 2 cores)"
+	@echo "make bench-fast - the default's curvature cost, cost against size, geographic vs projected"
 	@echo "make clean  - remove .venv and outputs"
 
 $(BIN)/python:
@@ -74,6 +76,12 @@ $(VENV)/.installed-gpu: pyproject.toml | $(VENV)/.installed
 bench-gpu: $(VENV)/.installed-gpu
 	$(BIN)/python benchmarks/bench_gpu.py
 
+# One prepared script for a lent GPU (a few minutes): the GPU tests on the device instead of the
+# simulator, then the GPU benchmark (4096^2 and the real DEMs, a 100-sun series).
+gpu-check: $(VENV)/.installed-gpu $(VENV)/.installed-test
+	NUMBA_ENABLE_CUDASIM=0 $(BIN)/python -m pytest -q -x tests/test_gpu.py
+	$(BIN)/python benchmarks/bench_gpu.py --sizes 1024,4096
+
 # Peers: insolation (doshade), whitebox-workflows, topocalc (needs numpy and cython at build time,
 # so it is built without isolation; if it does not build, the benchmark says it was skipped).
 # GRASS r.sunmask is a system package (Debian grass-core), not installed here.
@@ -91,6 +99,9 @@ bench-peers: $(VENV)/.installed-peers
 # BENCH_REAL_ARGS passes options, e.g. BENCH_REAL_ARGS="--sizes 8192 --no-real --no-smooth".
 bench-real: $(VENV)/.installed-peers
 	MALLOC_MMAP_THRESHOLD_=131072 $(BIN)/python benchmarks/bench_real.py $(BENCH_REAL_ARGS)
+
+bench-fast: $(VENV)/.installed
+	MALLOC_MMAP_THRESHOLD_=131072 $(BIN)/python benchmarks/bench_fast.py
 
 bench-real-quick: $(VENV)/.installed-peers
 	MALLOC_MMAP_THRESHOLD_=131072 $(BIN)/python benchmarks/bench_real.py --quick $(BENCH_REAL_ARGS)

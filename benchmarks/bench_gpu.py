@@ -33,7 +33,7 @@ from hillshade_rt.geometry import Grid, sun_rays  # noqa: E402
 from conftest import fractal_terrain  # noqa: E402
 from bench_cpu import REAL  # noqa: E402
 
-EXACT = ("brute", "smap", "horizon")
+EXACT = ("auto", "brute", "smap", "horizon")
 
 
 def med(xs):
@@ -89,7 +89,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--sizes", default="1024,4096,8192,16384")
     ap.add_argument("--elevations", default="3,15")
-    ap.add_argument("--algorithms", default="brute,smap,horizon,sweep")
+    ap.add_argument("--algorithms", default="auto,brute,smap,horizon,sweep")
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--cpu-max", type=int, default=4096 * 4096)
     ap.add_argument("--series", type=int, default=100)

@@ -308,3 +308,28 @@ def test_gpu_curvature_soft_and_tiles_equal_cpu():
                                       "shadow", soft=True),
                                render(Shader(z, grid, curvature=True), sun, "shadow", soft=True),
                                atol=1e-6)
+
+
+def test_pyramid_march_on_the_gpu_equals_the_plain_march():
+    """Issue 18: the GPU kernel marches over the max-height pyramid (built and uploaded once per
+    DEM) and gives the plain march's mask: rough terrain with voids, per-row spacing (rows of a
+    geographic grid), Earth curvature, non-special azimuths; ``pyramid=False`` on the GPU is the
+    plain march too."""
+    from hillshade_rt.algorithms import brute
+    from hillshade_rt.geometry import curvature_per_m2
+    rng = np.random.default_rng(3)
+    z = (rng.random((20, 26)) * 300).astype(np.float32)
+    z[5:7, 8:11] = np.nan
+    grids = [Grid.uniform(20, 26, 30.0),
+             Grid(20, 26, 90.0 * np.cos(np.radians(np.linspace(60, 62, 20))), np.full(20, 92.5),
+                  1, -1, "per row")]
+    g = gpu.GpuDem(z)
+    for grid in grids:
+        for az, el, curved in [(163.0, 3.0, False), (203.7, 8.0, True), (290.0, 20.0, False)]:
+            rays = sun_rays(grid, az, el, curvature_per_m2(2e4, 0.13) if curved else 0.0)
+            ref = brute.shadow_mask(z, rays, pyramid=False)
+            np.testing.assert_array_equal(brute.shadow_mask_gpu(g, rays, g.zmax), ref)
+            np.testing.assert_array_equal(brute.shadow_mask_gpu(g, rays, g.zmax, pyramid=False),
+                                          ref)
+            np.testing.assert_array_equal(g.shadow_mask(rays, "auto"), ref)
+    assert g._pyramid is not None and g.pyramid_args() is g.pyramid_args()   # uploaded once

@@ -7,11 +7,13 @@ fitted to ``make bench-real`` (docs/benchmarks.md, 2 cores):
   marches the few cells it leaves open; ``brute`` (over the pyramid) pays per *valid* cell a
   march whose length grows with the **reach** of a ray: the steps it takes to rise over the
   DEM's relief, ``(zmax - zmin) / rise``, at most the raster's extent along the ray.
-* So brute wins where rays are short or most cells are voids (a high sun on gentle terrain, a
-  coastline with the sea as nodata), bounds everywhere else. The rule: ``bounds`` when
-  ``valid fraction * min(reach, extent) >= BOUNDS_MIN_STEPS``, else ``brute``. On New Zealand's
-  1 km DEM with 83 % sea this picks brute at every sun; on every mountain DEM and fractal of the
-  benchmark set at 3-20 deg it picks bounds.
+* So ``auto`` estimates both rates (Mcells/s, 2 cores, ``make bench-real``): bounds about
+  ``BOUNDS_MPIX`` on one ray for the raster, ``BOUNDS_MPIX_PER_ROW`` on per-row rays
+  (geographic), scaled by the share of threads its wavefront can use (one strip per 256
+  positions); brute ``BRUTE_MPIX`` per valid cell, faster in proportion where the reach is
+  shorter than ``SHORT_REACH`` steps. It runs the faster. On New Zealand's 1 km DEM with 83 %
+  sea as nodata that is brute at every sun; on the mountain DEMs and fractals bounds at 3-20
+  deg; on a small geographic tile (Jacksboro, 403 columns: one strip) brute.
 * On the GPU: ``brute`` over the pyramid (one thread per cell; the bounds sweep has no GPU
   kernel).
 
@@ -24,13 +26,18 @@ from __future__ import annotations
 
 import math
 
+import numba
 import numpy as np
 from numba import njit
 
 from ..geometry import SunRays
 from . import bounds, brute
+from .frames import uniform_rays
 
-BOUNDS_MIN_STEPS = 64.0
+BOUNDS_MPIX = 35.0           # bounds, one ray for the raster, all cells (2 cores)
+BOUNDS_MPIX_PER_ROW = 22.0   # bounds, per-row rays
+BRUTE_MPIX = 17.0            # brute over the pyramid, per valid cell, long rays (2 cores)
+SHORT_REACH = 64.0           # rays shorter than this many steps make brute faster in proportion
 
 
 @njit(cache=True)
@@ -56,29 +63,36 @@ def survey(z: np.ndarray) -> tuple[float, float, float]:
 
 def choose(shape: tuple[int, int], valid_fraction: float, zrange: tuple[float, float],
            rays: SunRays, backend: str = "cpu") -> tuple[str, str]:
-    """(algorithm, why) for these heights and rays on ``backend``."""
+    """(algorithm, why) for these heights and rays on ``backend``: the one with the higher
+    estimated rate (module docstring)."""
     if backend == "gpu":
         return "brute", "GPU: the pyramid march (one thread per cell)"
     rise = float(np.min(rays.rise))
-    L = shape[1] if bool(rays.dom_col[len(rays.rise) // 2]) else shape[0]
-    if not math.isfinite(rise) or rise <= 0 or valid_fraction == 0:
-        return "brute", "sun at the zenith or no valid cell"
-    reach = min(max(0.0, zrange[1] - zrange[0]) / rise, float(L))
-    steps = valid_fraction * reach
-    if steps >= BOUNDS_MIN_STEPS and min(shape) > 1:
-        return "bounds", (f"valid {valid_fraction:.0%} x reach {reach:.0f} steps = {steps:.0f} "
-                          f">= {BOUNDS_MIN_STEPS:.0f}")
-    return "brute", (f"valid {valid_fraction:.0%} x reach {reach:.0f} steps = {steps:.0f} "
-                     f"< {BOUNDS_MIN_STEPS:.0f}: short rays")
+    mid = len(rays.rise) // 2
+    dom_col = bool(rays.dom_col[mid])
+    L, P = (shape[1], shape[0]) if dom_col else shape
+    if not math.isfinite(rise) or rise <= 0 or valid_fraction == 0 or min(shape) < 2:
+        return "brute", "sun at the zenith, no valid cell or a single line"
+    reach = max(1.0, min(max(0.0, zrange[1] - zrange[0]) / rise, float(L)))
+    uniform = uniform_rays(rays)
+    threads = max(1, numba.get_num_threads())
+    strips = bounds._strips(P, abs(float(rays.step_other[mid])), bounds.EXACT_STEPS)
+    rate_bounds = (BOUNDS_MPIX if uniform else BOUNDS_MPIX_PER_ROW) * min(1.0, strips / threads)
+    rate_brute = BRUTE_MPIX / valid_fraction * max(1.0, SHORT_REACH / reach)
+    name = "bounds" if rate_bounds > rate_brute else "brute"
+    why = (f"estimated {rate_bounds:.0f} Mcells/s for bounds ({'one ray' if uniform else 'per-row rays'}"
+           f", {strips} of {threads} threads) vs {rate_brute:.0f} for brute (valid "
+           f"{valid_fraction:.0%}, reach {reach:.0f} steps)")
+    return name, why
 
 
 def record(stats: dict | None, name: str, why: str) -> None:
     """Count the choice in ``stats['auto']`` (a series makes one per sun)."""
     if stats is None:
         return
-    a = stats.setdefault("auto", {"chose": {}, "rule": f"bounds when valid fraction x "
-                                  f"min(reach, extent) >= {BOUNDS_MIN_STEPS:.0f} steps, else "
-                                  f"brute; GPU: brute"})
+    a = stats.setdefault("auto", {"chose": {}, "rule": "the exact method of the higher "
+                                  "estimated rate: bounds or brute (docs/algorithms.md); GPU: "
+                                  "brute"})
     a["chose"][name] = a["chose"].get(name, 0) + 1
     a["why"] = why
 

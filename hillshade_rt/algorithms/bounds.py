@@ -10,30 +10,37 @@ ray between the stored ones could decide it otherwise:
   ``s`` per step) let ``S(v, x)`` be the lowest height at position x of line v from which a ray
   toward the sun clears every sample ahead: ``S(v, x) = max_j (T(v+j, x + j*s) - j*rise)``, T the
   model's interpolated terrain. A cell of height h is shadowed iff ``S(v+1, p+s) > h + rise``.
-* Cut each segment between two cell centres of a line into ``BINS`` bins. On a bin, T is linear,
-  so its extremes are at the bin's ends (exact). Because ``S(v, x) = max(T(v, x),
+* Cut each line into bins of 1/``BINS`` cell that **follow the rays**: bin t of line v covers
+  positions ``[t/BINS + phi_v, (t+1)/BINS + phi_v]``, the lattice of line 0 carried along the sun
+  direction, so that the rays through a bin of line v all pass through one bin of line v+1 (a
+  tube of rays a quarter of a cell wide). On a bin the terrain is linear, or has one cell
+  centre inside, so its extremes are known exactly. Because ``S(v, x) = max(T(v, x),
   S(v+1, x+s) - rise)``, an upper bound of S over a bin is the larger of T's maximum there and
-  the upper bounds of the bins of line v+1 that the bin's rays reach, less the rise; a lower
-  bound, the same with minima. One pass from the sun's edge fills both bounds for every bin in
-  O(N * BINS). The bins a bin's rays reach on the next line widen the bounds by one bin per step
-  (a cone 1/BINS cell wider per line), so far terrain is bounded loosely but also counts less.
+  the upper bound of its tube's bin on the next line, less the rise; a lower bound, the same
+  with minima. One pass from the sun's edge fills both bounds for every bin in O(N * BINS), and
+  they never widen along the tube: they are the exact S of the tube's best and worst ray but for
+  the quarter cell's spread.
 * A cell takes ``EXACT_STEPS`` samples exactly (as the plain march), then looks up the bounds at
   its ray's position ``EXACT_STEPS`` lines on: lit when both the exact samples and the upper bound
   clear its ray, shadowed when an exact sample or the lower bound blocks it, **undecided**
-  otherwise. Undecided cells (a few % on real terrain at low sun: ``undecided_fraction``) are
-  marched exactly over the maximum-height pyramid (``brute.refine``). A margin far larger than
-  the rounding of the bounds (and far smaller than a millimetre) keeps every decision on the
-  safe side, so the mask is brute's cell for cell (tests).
+  otherwise. Undecided cells (``undecided_fraction``: 0.5-1.5 % of the cells on real projected
+  DEMs and spectral fractals at 3-20 deg) are marched exactly over the maximum-height pyramid
+  (``brute.refine``). A margin far larger than the rounding of the bounds (and far smaller than
+  a millimetre) keeps every decision on the safe side, so the mask is brute's cell for cell
+  (tests).
 
 Voids: a bin with a void end is bounded above by its valid end and below by -inf (its interior
 meets no terrain). Beyond the raster S is -inf (no terrain). Earth curvature: the upper bound
 follows a fresh curved ray from each bin (a ray that has travelled k steps climbs faster than a
 fresh one, so it clears whatever the fresh one clears); the lower bound follows a straight ray as
 steep as the curved ray can get before it rises above the highest cell, so curvature costs
-nothing. Rays that differ per row (geographic CRS): the bounds take the smallest and largest
-``s`` and rise of all rows (the bins reached widen by their spread); each cell's exact samples
-and lookup use its own row's ray. Rows whose own dominant axis is the other one (near a
-diagonal) are left undecided.
+nothing.
+
+Rays that differ per row (geographic CRS): the bins follow the slowest ray, and the rays of a
+bin reach two bins of the next line (a faster ray lands further on), so the bounds widen by one
+bin per line and leave more cells undecided (3-9 % on SRTM tiles); each cell's exact samples and
+lookup use its own row's ray. Rows whose own dominant axis is the other one (near a diagonal)
+are left undecided.
 
 Parallel as the sweep's wavefront: strips of positions, each a block of lines behind the next.
 """
