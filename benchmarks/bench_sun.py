@@ -60,7 +60,7 @@ def main():
                                       "-q", "--time", t], check=True)
         t_one = median_time(one_run, args.repeat)
         t_sep = median_time(separate_runs, args.repeat)
-    lines += ["| series of %d times (smap, 06:15..%02d:15 local) | s per time | ratio |" % (
+    lines += ["| series of %d times (the default, auto; 06:15..%02d:15 local) | s per time | ratio |" % (
         args.times, 6 + args.times - 1), "|---|---|---|",
         f"| one run, one band per time | {t_one / args.times:.3f} | 1 |",
         f"| {args.times} separate runs (new process each) | {t_sep / args.times:.3f} | "
@@ -76,8 +76,9 @@ def main():
         [one] = sun_over(site, d.shape, [t], tolerance=10.0)
         zr = d.height_range()
 
-        def sh(curv, alg="smap"):
-            return Shader(d.heights, d.grid, alg, {}, "cpu", curv, None, dem_body(d), zr)
+        def sh(curv, alg="auto", options=None):
+            return Shader(d.heights, d.grid, alg, options or {}, "cpu", curv, None, dem_body(d),
+                          zr)
         flat, curved = sh(False), sh(True)
         base = median_time(lambda: render(flat, one, "shadow"), args.repeat)
         variants = [
@@ -90,7 +91,11 @@ def main():
             ("one vector, --self-shadow", None,
              lambda: render(flat, one, "shadow", self_shadow=True)),
             ("one vector, hillshade", None, lambda: render(flat, one, "hillshade")),
-            ("one vector, brute", None, lambda: render(sh(False, "brute"), one, "shadow")),
+            ("one vector, brute (over the pyramid)", None,
+             lambda: render(sh(False, "brute"), one, "shadow")),
+            ("one vector, brute --no-pyramid (the plain march)", None,
+             lambda: render(sh(False, "brute", {"pyramid": False}), one, "shadow")),
+            ("one vector, smap", None, lambda: render(sh(False, "smap"), one, "shadow")),
         ]
         for name, _, fn in variants:
             s = fn if isinstance(fn, float) else median_time(fn, args.repeat)

@@ -337,6 +337,8 @@ class Shader:
         pyr = self.pyramid(z, whole) if self.backend == "cpu" else False
         if algorithm in ("brute", "bounds") and self.backend == "cpu":
             options["pyramid"] = pyr
+        if algorithm == "bounds" and whole and self.backend == "cpu":
+            options["zrange"] = self.local_range     # known: saves bounds a pass
         if carried:
             out = self.carry.mask(z, rays, zmax, max(abs(self.zmin), abs(self.zmax)),
                                   *self.place, inner)

@@ -53,7 +53,11 @@ def simulator_enabled() -> bool:
 
 def _numba_cuda():
     """``numba.cuda`` (numba-cuda's, or the simulator) or a HillshadeError naming what is
-    missing."""
+    missing. Without the numba-cuda package nothing is imported (numba's own deprecated CUDA
+    target is refused anyway, and importing it costs a third of a second of every run)."""
+    import importlib.util
+    if not simulator_enabled() and importlib.util.find_spec("numba_cuda") is None:
+        raise HillshadeError(f"no GPU backend: numba-cuda is not installed ({INSTALL_HINT})")
     try:
         from numba import cuda as nc
     except ImportError:
@@ -64,6 +68,17 @@ def _numba_cuda():
             f"no GPU backend: numba-cuda is not installed, and numba's own deprecated CUDA target "
             f"is not used ({INSTALL_HINT})")
     return nc
+
+
+def _no_driver_here() -> bool:
+    """True on Linux when no NVIDIA driver is loaded (no /dev/nvidiactl, /dev/dxg of WSL or
+    /proc/driver/nvidia, and no NUMBA_CUDA_DRIVER): then there is no GPU to find, and importing
+    numba-cuda to learn that would cost a third of a second of every run."""
+    import sys
+    if not sys.platform.startswith("linux") or os.environ.get("NUMBA_CUDA_DRIVER"):
+        return False
+    return not any(os.path.exists(p) for p in ("/dev/nvidiactl", "/dev/dxg",
+                                               "/proc/driver/nvidia"))
 
 
 def _runtime():
@@ -88,6 +103,11 @@ def status() -> tuple[bool, str]:
     if _STATUS:
         return _STATUS[0]
     try:
+        if not simulator_enabled() and _no_driver_here():
+            import importlib.util
+            if importlib.util.find_spec("numba_cuda") is not None:
+                raise HillshadeError("no usable CUDA GPU: no NVIDIA driver on this machine "
+                                     "(no /dev/nvidiactl)")
         nc = _numba_cuda()
         if simulator_enabled():
             res = (True, "numba CUDA simulator (NUMBA_ENABLE_CUDASIM=1)")

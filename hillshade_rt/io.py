@@ -666,8 +666,10 @@ def check_output_format(path: str, drv: str, dtype: str, count: int, continuous:
 
 def _profile(dem: Dem, dtype: str, nodata) -> dict:
     rows, cols = dem.shape
+    # num_threads: GDAL compresses the blocks on every core (same bytes, less time)
     prof = dict(driver="GTiff", width=cols, height=rows, count=1, dtype=dtype, nodata=nodata,
-                compress="deflate", tiled=True, blockxsize=256, blockysize=256)
+                compress="deflate", tiled=True, blockxsize=256, blockysize=256,
+                num_threads="ALL_CPUS")
     if dem.crs is not None:
         prof["crs"] = dem.crs
     if dem.transform is not None:

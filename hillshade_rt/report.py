@@ -33,7 +33,8 @@ class Timer:
 
 def mask_stats(mask: np.ndarray) -> dict:
     """Counts of shadow / lit / nodata cells of a uint8 mask (1 / 0 / 255)."""
-    counts = np.bincount(mask.ravel(), minlength=256)
+    from .algorithms.counts import code_counts
+    counts = code_counts(mask)
     shadow, lit, nodata = int(counts[1]), int(counts[0]), int(counts[255])
     valid = shadow + lit
     return {"shadow_cells": shadow, "lit_cells": lit, "nodata_cells": nodata,
@@ -45,7 +46,8 @@ def product_stats(kind: str, soft: bool, arr: np.ndarray) -> dict:
     if kind == "shadow" and not soft:
         return mask_stats(arr)
     if kind == "classes":
-        counts = np.bincount(arr.ravel(), minlength=256)
+        from .algorithms.counts import code_counts
+        counts = code_counts(arr)
         shadow, lit, nodata = int(counts[1] + counts[2]), int(counts[0]), int(counts[255])
         valid = shadow + lit
         return {"shadow_cells": shadow, "lit_cells": lit, "nodata_cells": nodata,

@@ -202,3 +202,13 @@ def test_degenerate_shapes_and_suns():
     assert (bounds.shadow_mask(z, rays) == 255).all()
     assert (auto.shadow_mask(z, rays) == 255).all()
     assert math.isfinite(float(rays.rise[0]))
+
+
+def test_code_counts_equal_bincount():
+    from hillshade_rt.algorithms.counts import code_counts
+    rng = np.random.default_rng(8)
+    for shape in [(1, 1), (3, 5000), (70, 130), (200, 3)]:
+        a = rng.choice(np.array([0, 1, 2, 255], np.uint8), size=shape)
+        np.testing.assert_array_equal(code_counts(a), np.bincount(a.ravel(), minlength=256))
+    v = np.arange(256, dtype=np.uint8)[None, :].repeat(80, 0)[:, ::2]   # a strided view
+    np.testing.assert_array_equal(code_counts(v), np.bincount(v.ravel(), minlength=256))

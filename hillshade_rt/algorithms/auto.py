@@ -28,7 +28,7 @@ import math
 
 import numba
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from ..geometry import SunRays
 from . import bounds, brute
@@ -40,19 +40,22 @@ BRUTE_MPIX = 17.0            # brute over the pyramid, per valid cell, long rays
 SHORT_REACH = 64.0           # rays shorter than this many steps make brute faster in proportion
 
 
-@njit(cache=True)
+@njit(parallel=True, cache=True)
 def _valid_range(z):
-    """(valid cells, lowest, highest valid height) in one pass."""
-    n = 0
-    lo = np.inf
-    hi = -np.inf
-    for r in range(z.shape[0]):
+    """(valid cells, lowest, highest valid height) in one pass, parallel over rows."""
+    rows = z.shape[0]
+    n = np.zeros(rows, np.int64)
+    lo = np.full(rows, np.inf)
+    hi = np.full(rows, -np.inf)
+    for r in prange(rows):
+        a, b, c = 0, np.inf, -np.inf
         for h in z[r]:
             if h == h:
-                n += 1
-                lo = min(lo, h)
-                hi = max(hi, h)
-    return n, lo, hi
+                a += 1
+                b = min(b, h)
+                c = max(c, h)
+        n[r], lo[r], hi[r] = a, b, c
+    return n.sum(), lo.min() if rows else np.inf, hi.max() if rows else -np.inf
 
 
 def survey(z: np.ndarray) -> tuple[float, float, float]:
@@ -103,8 +106,9 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None,
     frac, lo, hi = survey(z)
     name, why = choose(z.shape, frac, (lo, hi if zmax is None else zmax), rays)
     record(stats, name, why)
-    fn = bounds.shadow_mask if name == "bounds" else brute.shadow_mask
-    return fn(z, rays, zmax, stats, pyramid=pyramid)
+    if name == "bounds":
+        return bounds.shadow_mask(z, rays, zmax, stats, pyramid=pyramid, zrange=(lo, hi))
+    return brute.shadow_mask(z, rays, zmax, stats, pyramid=pyramid)
 
 
 def shadow_mask_gpu(g, rays: SunRays, zmax: float, stats: dict | None = None) -> np.ndarray:

@@ -392,14 +392,16 @@ def _strips(P: int, s: float, K: int) -> int:
 
 
 def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None,
-                stats: dict | None = None, pyramid=True) -> np.ndarray:
+                stats: dict | None = None, pyramid=True,
+                zrange: tuple[float, float] | None = None) -> np.ndarray:
     """Exact shadow mask (uint8 1 shadow / 0 lit / 255 void), brute's cell for cell: the bounds
     decide most cells, the pyramid march the rest. ``pyramid``: a ``MaxPyramid`` of ``z`` to
-    reuse (True: build one when cells are left; False: the plain march for them)."""
+    reuse (True: build one when cells are left; False: the plain march for them). ``zrange``:
+    the lowest and highest valid height of ``z`` when the caller knows them (saves a pass)."""
     if z.dtype != np.float32 or z.ndim != 2:
         raise TypeError("heights must be a 2-D float32 array")
     out = np.empty(z.shape, np.uint8)
-    zmin, zhi, _ = _z_range(z)
+    zmin, zhi = (_z_range(z)[:2] if zrange is None else (float(zrange[0]), float(zrange[1])))
     if not math.isfinite(zmin):      # nothing but voids
         out[...] = 255
         return out
@@ -432,7 +434,6 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None,
     else:
         out[...] = np.where(np.isnan(z), np.uint8(255), np.uint8(UNDECIDED))
     left = brute.refine(z, rays, out, UNDECIDED, zmax, pyramid)
-    if stats is not None:
-        n = max(1, int(np.count_nonzero(out != 255)))
-        stats["undecided_fraction"] = left / n
+    if stats is not None:   # of all cells (a count of the valid ones would cost a pass)
+        stats["undecided_fraction"] = left / max(1, out.size)
     return out
