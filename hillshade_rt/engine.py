@@ -362,6 +362,44 @@ class Shader:
                 stats["curvature_refined_fraction"] = n / max(1, out.size)
         return out if out.shape == sub.shape else np.ascontiguousarray(out[inner])
 
+    def field_ok(self, sun: SunOver, soft: bool) -> bool:
+        """Whether a sun that varies across the raster can be marched with every cell's own
+        direction (``algorithms.field``) instead of tile by tile: hard shadows of an exact
+        march-based method over the whole raster in memory (soft shadows, smap, the horizon
+        scan, sweep and windows of a larger raster keep the tiles)."""
+        return (sun.tiles is not None and sun.lattice is not None and not soft
+                and self.algorithm in ("auto", "brute", "bounds") and not self.halo_ready
+                and self.carry is None and self.options.get("pyramid", True) is not False)
+
+    def cast_field(self, sun: SunOver, stats: dict | None = None) -> np.ndarray:
+        """uint8 cast-shadow mask of the whole raster, each cell with its own sun interpolated
+        on ``sun.lattice`` (1 shadow, 0 lit, 255 void; a cell whose sun is below the horizon
+        is in shadow)."""
+        from .algorithms import field
+        c = self.curvature_for(sun.azimuth, max(sun.elevation, 1e-6))
+        self.curvature_used.add(c > 0)
+        if c > 0:
+            self.curvature_used.add(round(float(self.body.radius(sun.azimuth)), 1))
+        zmax = self.local_range[1]
+        if self.backend == "gpu":
+            out = field.shadow_mask_gpu(self._gpu_dem(self.z, True), self.grid, sun.lattice, c,
+                                        zmax)
+        else:
+            from .algorithms import bounds
+            # the method for the centre's sun (auto: its estimate), with every cell's own ray
+            name = self.choose(self.z, True, sun_rays(self.grid, sun.azimuth,
+                                                      min(max(sun.elevation, 1e-6), 90.0)),
+                               stats)
+            if name == "bounds":
+                out = bounds.shadow_mask_field(self.z, self.grid, sun.lattice, c, zmax, stats,
+                                               self.pyramid(self.z, True), self.local_range)
+            else:
+                out = field.shadow_mask(self.z, self.grid, sun.lattice, c, zmax,
+                                        self.pyramid(self.z, True))
+        if stats is not None:
+            stats["sun_field"] = stats.get("sun_field", 0) + 1
+        return out
+
     def visible_fraction(self, region: Region) -> np.ndarray:
         """float32 visible fraction (0..1) of the solar disk over ``region`` (NaN on voids),
         from the exact horizon angle toward the sun against its elevation +- its radius."""
@@ -420,24 +458,30 @@ def render(shader: Shader, sun: SunOver, kind: str = "shadow", *, soft: bool = F
     regions = sun.regions(shape)
     if len(regions) == 1:
         return _render_region(shader, regions[0], kind, soft, self_shadow, ambient, stats)
+    # a sun that varies across the raster: every cell's own direction in one march when the
+    # method allows (the tiles then only serve the incidence of the relief)
+    whole = shader.cast_field(sun, stats) if shader.field_ok(sun, soft) else None
     out = None
     for r in regions:   # each tile into place as it is made: no list of all tiles' arrays
-        part = _render_region(shader, r, kind, soft, self_shadow, ambient, stats)
+        part = _render_region(shader, r, kind, soft, self_shadow, ambient, stats,
+                              None if whole is None else whole[r.rows, r.cols])
         if out is None:
             out = np.empty(shape, part.dtype)
         out[r.rows, r.cols] = part
     return out
 
 
-def _render_region(shader, region, kind, soft, self_shadow, ambient, stats):
+def _render_region(shader, region, kind, soft, self_shadow, ambient, stats, cast=None):
     sub = shader.z[region.rows, region.cols]
     void = np.isnan(sub)
     need_cos = kind in ("classes", "hillshade") or self_shadow
     cosi = shader.incidence(region) if need_cos and region.elevation > -SUN_RADIUS_DEG else None
     if soft:
         lit = shader.visible_fraction(region)          # float32, NaN voids
-    else:
+    elif cast is None:
         cast = shader.cast(region, stats)              # uint8 1/0/255
+    else:
+        cast = cast.copy()                             # (self-shadow marks it below)
     # valid cells whose surface faces away from the sun (all of them with the sun far below)
     away = (~void if cosi is None else (cosi <= 0) & ~void) if need_cos else None
     if kind == "classes":

@@ -447,7 +447,10 @@ class SunOver:
     deviation_deg: float = 0.0      # largest angle between the centre's sun and any other place's
     tiles: list[Region] | None = None
     tile_deviation_deg: float = 0.0  # estimated largest deviation inside one tile
-
+    # the SPA's n x n lattice over the raster as unit vectors (east, north, up; grid azimuth and
+    # apparent elevation): each cell's own sun, interpolated (algorithms.field)
+    lattice: np.ndarray | None = None
+    field_deviation_deg: float | None = None   # interpolated vs SPA at the tile centres
     def regions(self, shape) -> list[Region]:
         if self.tiles is not None:
             return self.tiles
@@ -463,6 +466,8 @@ class SunOver:
             d.update(time=iso(self.time), true_azimuth=self.true_azimuth, zenith=self.zenith)
         d["night"] = self.night
         d["mode"] = "per tile" if self.tiles else "one vector"
+        if self.field_deviation_deg is not None:
+            d["field_deviation_deg"] = self.field_deviation_deg
         d["deviation_deg"] = self.deviation_deg
         if self.tiles:
             d["tiles"] = len(self.tiles)
@@ -477,6 +482,23 @@ def _vectors(az, el):
 
 def _angle(u, v):
     return np.degrees(np.arccos(np.clip(np.sum(u * v, axis=-1), -1.0, 1.0)))
+
+
+def _field_deviation(lattice, rows, cols, r, c, spa_vectors) -> float:
+    """Largest angle (deg) between the interpolated sun of ``algorithms.field`` and the SPA's at
+    the places (r, c): how well the lattice stands for the SPA between its nodes."""
+    worst = 0.0
+    for k in range(len(r)):
+        n = lattice.shape[0]
+        fi = r[k] * (n - 1.0) / max(rows - 1.0, 1.0)
+        fj = c[k] * (n - 1.0) / max(cols - 1.0, 1.0)
+        i0, j0 = min(int(fi), n - 2), min(int(fj), n - 2)
+        ti, tj = fi - i0, fj - j0
+        v = ((1 - ti) * (1 - tj) * lattice[i0, j0] + (1 - ti) * tj * lattice[i0, j0 + 1]
+             + ti * (1 - tj) * lattice[i0 + 1, j0] + ti * tj * lattice[i0 + 1, j0 + 1])
+        v = v / np.linalg.norm(v)
+        worst = max(worst, float(_angle(v, spa_vectors[k])))   # (field.cell_ray's weights)
+    return worst
 
 
 def sun_over(site: Site, shape, times, atmosphere: Atmosphere = Atmosphere(),
@@ -532,6 +554,9 @@ def sun_over(site: Site, shape, times, atmosphere: Atmosphere = Atmosphere(),
                               float(taz[a * nc + b]), float(tel[a * nc + b]))
                        for a in range(nr) for b in range(nc)]
             s.tile_deviation_deg = 0.5 * (per_c * cols / nc + per_r * rows / nr)
+            s.lattice = np.ascontiguousarray(vec[i])
+            s.field_deviation_deg = _field_deviation(s.lattice, rows, cols, tr_.ravel(),
+                                                     tc_.ravel(), _vectors(taz, tel))
         out.append(s)
     return out
 

@@ -212,3 +212,99 @@ def test_code_counts_equal_bincount():
         np.testing.assert_array_equal(code_counts(a), np.bincount(a.ravel(), minlength=256))
     v = np.arange(256, dtype=np.uint8)[None, :].repeat(80, 0)[:, ::2]   # a strided view
     np.testing.assert_array_equal(code_counts(v), np.bincount(v.ravel(), minlength=256))
+
+
+def _lattice(az0, el0, daz, del_, n=9):
+    from hillshade_rt.algorithms.field import lattice_vectors
+    i, j = np.meshgrid(np.linspace(-1, 1, n), np.linspace(-1, 1, n), indexing="ij")
+    return lattice_vectors(az0 + daz * j + 0.3 * daz * i * j, el0 + del_ * i)
+
+
+@pytest.mark.parametrize("az0,el0", [(163.0, 3.0), (203.7, 8.0), (290.0, 1.0), (44.0, 0.3)])
+@pytest.mark.parametrize("curved", [False, True])
+def test_per_cell_sun_is_each_cells_own_ray(az0, el0, curved):
+    """Item 6: every cell marched with its own interpolated sun equals, cell by cell, the plain
+    march of that cell with the ray ``cell_ray`` gives it (a night cell is shadowed); the
+    direction varies by several degrees here, far more than a time-based sun does."""
+    from hillshade_rt.algorithms import field
+    from hillshade_rt.algorithms.raymath import ray_is_blocked
+    z = _terrain("spectral", 23, 31, 4, 400.0)
+    z[4:6, 7:9] = np.nan
+    lat = np.linspace(45, 46, 23)
+    grid = Grid(23, 31, 30.0 * np.cos(np.radians(lat)) / np.cos(np.radians(45)),
+                np.full(23, 30.0), 1, -1, "per row")
+    vec = _lattice(az0, el0, 4.0, 2.5)
+    c = curvature_per_m2(2e4, 0.13) if curved else 0.0
+    zmax = float(np.nanmax(z))
+    got = field.shadow_mask(z, grid, vec, c)
+    plain = field.shadow_mask(z, grid, vec, c, pyramid=False)
+    for r in range(23):
+        for col in range(31):
+            if np.isnan(z[r, col]):
+                assert got[r, col] == 255
+                continue
+            night, dc, sd, so, ri, cv = field.cell_ray.py_func(
+                r, col, 23, 31, vec, grid.dx, grid.dy, 1.0, -1.0, c)
+            want = 1 if night else int(ray_is_blocked(z, r, col, dc, sd, so, ri, cv, zmax))
+            assert got[r, col] == want == plain[r, col], (r, col)
+
+
+def test_per_cell_sun_with_one_direction_is_the_fixed_sun():
+    from hillshade_rt.algorithms import field
+    z = _terrain("spectral", 40, 50, 6, 500.0)
+    grid = Grid.uniform(40, 50, 30.0)
+    for az, el in [(163.0, 4.0), (203.7, 12.0), (290.0, 2.0)]:
+        vec = _lattice(az, el, 0.0, 0.0)
+        got = field.shadow_mask(z, grid, vec)
+        ref = _plain(z, sun_rays(grid, az, el))
+        # the same direction, computed through unit vectors: at most a rounding tie apart
+        assert np.count_nonzero(got != ref) <= 2
+
+
+def test_time_based_sun_uses_the_per_cell_field():
+    """A time-based sun over a large DEM: the engine marches every cell with its own sun in one
+    pass (no tiles), and the mask agrees with the per-tile one but where the two approximations
+    of the sun differ (cells at the edge of a shadow)."""
+    from hillshade_rt.engine import Shader, render
+    from hillshade_rt.sun import Site, parse_time, sun_over
+    from pyproj import CRS, Transformer
+    z = _terrain("spectral", 300, 400, 12, 2500.0)
+    grid = Grid.uniform(300, 400, 150.0)   # 60 km across
+    crs = CRS.from_epsg(32633)
+    tr = Transformer.from_crs(crs, crs.geodetic_crs, always_xy=True)
+
+    def to_lonlat(r, c):
+        return tr.transform(500000.0 + 150.0 * (np.asarray(c) + 0.5),
+                            5200000.0 - 150.0 * (np.asarray(r) + 0.5))
+    site = Site(lat=47.0, lon=15.0, height=500.0, source="test", to_lonlat=to_lonlat,
+                convergence=lambda r, c: np.zeros(np.shape(r)))
+    [sun] = sun_over(site, z.shape, [parse_time("2026-06-21T06:10+02:00")], tolerance=0.05)
+    assert sun.tiles and sun.lattice is not None and sun.field_deviation_deg < 0.01
+    st = {}
+    sh = Shader(z, grid, "auto", {}, "cpu", False)
+    got = render(sh, sun, "shadow", stats=st)
+    assert st["sun_field"] == 1 and sum(st["auto"]["chose"].values()) == 1  # one march, no tiles
+    tiles = render(Shader(z, grid, "smap", {}, "cpu", False), sun, "shadow")
+    assert np.count_nonzero(got != tiles) < 0.02 * z.size
+    # brute with the field gives the same mask as auto (bounds) with it
+    np.testing.assert_array_equal(render(Shader(z, grid, "brute", {}, "cpu", False), sun,
+                                         "shadow"), got)
+
+
+@pytest.mark.parametrize("az0,el0,daz", [(163.0, 3.0, 4.0), (203.7, 8.0, 0.4), (290.0, 1.0, 2.0),
+                                         (44.0, 0.3, 1.0), (89.0, 5.0, 3.0)])
+@pytest.mark.parametrize("curved", [False, True])
+def test_bounds_with_a_per_cell_sun_equal_the_field_march(az0, el0, daz, curved):
+    from hillshade_rt.algorithms import field
+    for seed, shape in [(4, (23, 31)), (9, (60, 45))]:
+        z = _terrain("spectral", *shape, seed, 600.0)
+        z[4:6, 7:9] = np.nan
+        lat = np.linspace(45, 47, shape[0])
+        grid = Grid(*shape, 30.0 * np.cos(np.radians(lat)) / np.cos(np.radians(45)),
+                    np.full(shape[0], 30.0), 1, -1, "per row")
+        vec = _lattice(az0, el0, daz, 0.5 * daz)
+        c = curvature_per_m2(2e4, 0.13) if curved else 0.0
+        ref = field.shadow_mask(z, grid, vec, c, pyramid=False)
+        st_ = {}
+        np.testing.assert_array_equal(bounds.shadow_mask_field(z, grid, vec, c, stats=st_), ref)
+        assert 0 <= st_["undecided_fraction"] <= 1

@@ -11,7 +11,8 @@ backend, where ``g`` is a ``gpu.GpuDem`` holding the heights on the device (``GP
 from ._jitcache import kernel_cache
 
 with kernel_cache():
-    from . import auto, bounds, brute, counts, horizon, pyramid, raymath, relief, smap, sweep  # noqa: F401
+    from . import (auto, bounds, brute, counts, field, horizon, pyramid, raymath, relief,  # noqa: F401
+                   smap, sweep)
 
 ALGORITHMS = {
     "auto": auto.shadow_mask,

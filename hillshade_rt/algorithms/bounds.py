@@ -55,7 +55,8 @@ from numba import njit, prange
 
 from ..geometry import SunRays
 from . import brute
-from .frames import frame_of, uniform_rays
+from .field import cell_ray
+from .frames import Frame, dem_index, frame_of, uniform_rays
 from .sweep import _load_lines, _store_lines, _z_range
 
 BINS = 4           # bins per segment between two cell centres
@@ -240,11 +241,15 @@ def _decide_line(ZL, SU, SL, R, v, p0, p1, P, s, rise, curv, K, pad, margin, ok,
 
 @njit(cache=True)
 def _decide_positions(ZL, SU, SL, R, v, p0, p1, P, s_arr, rise_arr, curv_arr, ok_arr, K, pad,
-                      margin, s_c, out):
+                      margin, s_c, out, fld):
     """Codes of positions [p0, p1) of canonical line v when each position has its own ray
-    (``s_arr`` ... indexed by position: lines that are DEM columns of a per-row grid): K exact
-    samples, then the bounds K lines on; 0 / 1 when they decide, UNDECIDED otherwise (the same
-    tests as ``_decide_line``, one cell at a time)."""
+    (``s_arr`` ... indexed by position: lines that are DEM columns of a per-row grid), or, with
+    a field ``fld`` (``_field_args``: use, lattice, dx, dy, signs, curvature, shape, frame),
+    each cell its own sun (``field.cell_ray``; a cell whose sun is down is shadowed, one whose
+    ray is not in the frame's octant undecided): K exact samples, then the bounds K lines on;
+    0 / 1 when they decide, UNDECIDED otherwise (the same tests as ``_decide_line``, one cell at
+    a time)."""
+    use, vec, fdx, fdy, csign, rsign, ccoef, nrows, ncols, L, fdom, fsd, fl_line, fl_pos = fld
     rows = np.empty(K + 1, np.int64)
     for k in range(K + 1):
         rows[k] = (v + k) % R
@@ -257,12 +262,24 @@ def _decide_positions(ZL, SU, SL, R, v, p0, p1, P, s_arr, rise_arr, curv_arr, ok
         if h != h:
             out[p - p0] = np.uint8(255)
             continue
-        if not ok_arr[p]:
-            out[p - p0] = np.uint8(UNDECIDED)
-            continue
-        s = s_arr[p]
-        rise = rise_arr[p]
-        curv = curv_arr[p]
+        if use:
+            r, c = dem_index(v, p, L, P, fdom, fl_line, fl_pos)
+            night, dc, sd, so, rise, curv = cell_ray(r, c, nrows, ncols, vec, fdx, fdy, csign,
+                                                     rsign, ccoef)
+            s = -so if fl_pos else so
+            if night:
+                out[p - p0] = np.uint8(1)
+                continue
+            if dc != fdom or sd != fsd or not s >= 0.0:
+                out[p - p0] = np.uint8(UNDECIDED)
+                continue
+        else:
+            if not ok_arr[p]:
+                out[p - p0] = np.uint8(UNDECIDED)
+                continue
+            s = s_arr[p]
+            rise = rise_arr[p]
+            curv = curv_arr[p]
         e = -np.inf       # the highest exact sample above the ray (a lower bound: NaN skipped)
         e_hi = -np.inf    # an upper bound of the same (see _sample_hi)
         for k in range(1, K + 1):
@@ -302,7 +319,7 @@ def _decide_positions(ZL, SU, SL, R, v, p0, p1, P, s_arr, rise_arr, curv_arr, ok
 @njit(cache=True)
 def _strip_block(z, ZB, SU, SL, RO, v_top, nb, p0, p1, L, P, pad, s_c, o_lo, o_hi, d_up, d_lo,
                  s_arr, rise_arr, curv_arr, ok_arr, per_line, K, margin, dom_col, flip_line,
-                 flip_pos, out):
+                 flip_pos, out, fld):
     """Lines v_top .. v_top-nb+1, positions [p0, p1): load, bounds, decisions, store. ``ZB``
     holds the heights with ``ZO`` NaN positions before each line."""
     R = ZB.shape[0]
@@ -320,18 +337,18 @@ def _strip_block(z, ZB, SU, SL, RO, v_top, nb, p0, p1, L, P, pad, s_c, o_lo, o_h
         off1, _ = _phase(v + 1, s_c)
         _bin_pass(ZB[row], ZO, SU[nxt], SL[nxt], SU[row], SL[row], i0, i1, pad, phi,
                   off1 - off, o_lo, o_hi, d_up, d_lo)
-        if per_line:
+        if per_line and not fld[0]:
             _decide_line(ZL, SU, SL, R, v, p0, p1, P, s_arr[v], rise_arr[v], curv_arr[v], K, pad,
                          margin, ok_arr[v], s_c, e, e_hi, RO[row, p0:p1])
         else:
             _decide_positions(ZL, SU, SL, R, v, p0, p1, P, s_arr, rise_arr, curv_arr, ok_arr, K,
-                              pad, margin, s_c, RO[row, p0:p1])
+                              pad, margin, s_c, RO[row, p0:p1], fld)
     _store_lines(out, RO, v_top, nb, p0, p1, dom_col, flip_line, flip_pos)
 
 
 @njit(parallel=True, cache=True)
 def _bounds_sweep(z, L, P, dom_col, flip_line, flip_pos, s_lo, s_hi, d_up, d_lo, s_arr, rise_arr,
-                  curv_arr, ok_arr, per_line, K, margin, nstrips, out):
+                  curv_arr, ok_arr, per_line, K, margin, nstrips, out, fld):
     """The sweep over canonical lines from the sun's edge (``L`` lines of ``P`` positions),
     as a wavefront of ``nstrips`` strips (see ``sweep._sweep_uniform``). Writes 0 / 1 /
     UNDECIDED / 255 into the DEM-shaped ``out``."""
@@ -368,7 +385,19 @@ def _bounds_sweep(z, L, P, dom_col, flip_line, flip_pos, s_lo, s_hi, d_up, d_lo,
                 nb = min(B, v_top + 1)
                 _strip_block(z, ZB, SU, SL, RO, v_top, nb, bounds[j + 1], bounds[j], L, P, pad,
                              s_c, o_lo, o_hi, d_up, d_lo, s_arr, rise_arr, curv_arr, ok_arr,
-                             per_line, K, margin, dom_col, flip_line, flip_pos, out)
+                             per_line, K, margin, dom_col, flip_line, flip_pos, out, fld)
+
+
+def _field_args(vec=None, grid=None, curv_coef=0.0, shape=(1, 1), f=None, L=1):
+    """The field tuple of the kernels: (use, lattice, dx, dy, col sign, row sign, curvature,
+    rows, cols, L, frame dom_col, frame step_dom, flip_line, flip_pos); unused without a field."""
+    if vec is None:
+        return (False, np.zeros((2, 2, 3)), np.ones(1), np.ones(1), 1.0, -1.0, 0.0, np.int64(1),
+                np.int64(1), np.int64(1), False, np.int64(1), False, False)
+    return (True, np.ascontiguousarray(vec, np.float64), np.ascontiguousarray(grid.dx, np.float64),
+            np.ascontiguousarray(grid.dy, np.float64), float(grid.col_sign), float(grid.row_sign),
+            float(curv_coef), np.int64(shape[0]), np.int64(shape[1]), np.int64(L), bool(f.dom_col),
+            np.int64(f.sd), bool(f.flip_line), bool(f.flip_pos))
 
 
 def _canonical_rays(rays: SunRays, f):
@@ -430,10 +459,57 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None,
             ok, per_line = np.ones(L, np.bool_), True
         _bounds_sweep(z, L, P, f.dom_col, f.flip_line, f.flip_pos, s_lo, s_hi, r_lo + c_lo,
                       d_lo, s, rise, curv, ok, per_line, K, margin,
-                      _strips(P, s_hi, K), out)
+                      _strips(P, s_hi, K), out, _field_args())
     else:
         out[...] = np.where(np.isnan(z), np.uint8(255), np.uint8(UNDECIDED))
     left = brute.refine(z, rays, out, UNDECIDED, zmax, pyramid)
     if stats is not None:   # of all cells (a count of the valid ones would cost a pass)
+        stats["undecided_fraction"] = left / max(1, out.size)
+    return out
+
+
+def shadow_mask_field(z: np.ndarray, grid, vec: np.ndarray, curv_coef: float = 0.0,
+                      zmax: float | None = None, stats: dict | None = None, pyramid=True,
+                      zrange: tuple[float, float] | None = None) -> np.ndarray:
+    """``shadow_mask`` with every cell's own sun (``field``: the lattice ``vec``): the bounds
+    take the range of the cells' rays, each cell its own ray for its exact samples and lookup,
+    undecided cells the field's exact march. The mask equals ``field.shadow_mask``'s."""
+    from . import field
+    if z.dtype != np.float32 or z.ndim != 2:
+        raise TypeError("heights must be a 2-D float32 array")
+    out = np.empty(z.shape, np.uint8)
+    zmin, zhi = (_z_range(z)[:2] if zrange is None else (float(zrange[0]), float(zrange[1])))
+    if not math.isfinite(zmin):
+        out[...] = 255
+        return out
+    zmax = float(zhi) if zmax is None else float(zmax)
+    rows, cols = z.shape
+    vec = np.ascontiguousarray(vec, np.float64)
+    dx = np.ascontiguousarray(grid.dx, np.float64)
+    dy = np.ascontiguousarray(grid.dy, np.float64)
+    cs, rs = float(grid.col_sign), float(grid.row_sign)
+    _, dc, sd, so, ri, _ = field.cell_ray(rows // 2, cols // 2, rows, cols, vec, dx, dy, cs, rs,
+                                          float(curv_coef))
+    f = Frame(dom_col=bool(dc), flip_line=sd < 0, flip_pos=so < 0, s=abs(so), so=so, sd=int(sd),
+              rise=ri, step_m=0.0)
+    s_lo, s_hi, r_lo, r_hi, c_lo, c_hi, n = field.field_ranges(
+        rows, cols, vec, dx, dy, cs, rs, float(curv_coef), bool(dc), np.int64(sd),
+        bool(f.flip_pos))
+    L, P = (cols, rows) if f.dom_col else (rows, cols)
+    K = EXACT_STEPS
+    if n > 0 and L > 1 and P > 1 and math.isfinite(r_hi):
+        kmax = min(L, math.ceil((zmax - zmin) / r_lo) + 1) if r_lo > 0 else L
+        d_lo = r_hi + (2 * kmax + 1) * c_hi
+        big = max(abs(zmin), abs(zmax)) + 1.0
+        margin = 1e-9 * big + 4e-16 * (L + K + 8) * (big + kmax * d_lo)
+        one = np.zeros(1)
+        _bounds_sweep(z, L, P, f.dom_col, f.flip_line, f.flip_pos, s_lo, s_hi, r_lo + c_lo,
+                      d_lo, one, one, one, np.ones(1, np.bool_), False, K, margin,
+                      _strips(P, s_hi, K), out,
+                      _field_args(vec, grid, curv_coef, z.shape, f, L))
+    else:
+        out[...] = np.where(np.isnan(z), np.uint8(255), np.uint8(UNDECIDED))
+    left = field.refine(z, grid, vec, curv_coef, zmax, out, UNDECIDED, pyramid)
+    if stats is not None:
         stats["undecided_fraction"] = left / max(1, out.size)
     return out
