@@ -5,6 +5,8 @@
   DEMs and a spectral fractal, at 3, 8 and 20 deg; target <= 1.2x;
 * **O(N)**: Mpix/s of the default on the same rough terrain (a spectral fractal, beta 3.2,
   2048², repeated seamlessly) at 2048², 4096², 8192²; target: 8192² >= 0.7 x the smallest;
+* **a sun from a time** over a 61 km DEM: every cell's own sun (the default) against one vector
+  for the whole raster; target <= 1.3x;
 * **geographic vs projected**: the Everest SRTM tile (geographic, per-row spacing) against the
   same heights on a uniform grid of its middle row's spacing (what a UTM copy would have).
 
@@ -87,6 +89,37 @@ def main(argv=None):
             first.setdefault(az, mp)
             print(f"| {n}² | {az:g} | {t:.3f} | {mp:.1f} | {mp / first[az]:.2f} |", flush=True)
         del z
+
+    print("\n### A sun from a time over a 61 km DEM: every cell's own sun vs one vector\n")
+    print("(spectral β 3.2 2048² at 30 m in UTM 11N at 34° N, auto, flat; one vector: the same "
+          "instant with the tolerance raised so that one vector serves)\n")
+    print("| time (local) | el | deviation across the DEM ° | one vector s | per cell s | "
+          "per cell ÷ one vector |")
+    print("|---|---|---|---|---|---|")
+    import tempfile
+    import rasterio
+    from rasterio.transform import from_origin
+    from hillshade_rt.engine import render
+    from hillshade_rt.sun import dem_site, parse_time, sun_over
+    with tempfile.TemporaryDirectory() as tmp:
+        path = os.path.join(tmp, "d.tif")
+        with rasterio.open(path, "w", driver="GTiff", width=2048, height=2048, count=1,
+                           dtype="float32", crs="EPSG:32611",
+                           transform=from_origin(400000, 3800000, 30, 30)) as w:
+            w.write(spec, 1)
+        d = read_dem(path)
+    site = dem_site(d)
+    for when in ("2026-06-21T06:10-07:00", "2026-06-21T08:30-07:00", "2026-12-21T15:40-08:00"):
+        t = parse_time(when)
+        [var] = sun_over(site, d.shape, [t])
+        [one] = sun_over(site, d.shape, [t], tolerance=10.0)
+        sh = Shader(d.heights, d.grid, "auto", {}, "cpu", False, None, dem_body(d))
+        render(sh, var, "shadow")
+        render(sh, one, "shadow")
+        tt = timed({"one": lambda: render(sh, one, "shadow"),
+                    "var": lambda: render(sh, var, "shadow")}, a.repeat)
+        print(f"| {when} | {one.elevation:.1f} | {var.deviation_deg:.3f} | {tt['one']:.3f} | "
+              f"{tt['var']:.3f} | {tt['var'] / tt['one']:.2f} |", flush=True)
 
     print("\n### Geographic vs the same heights on one uniform spacing (Everest SRTM 3″ tile)\n")
     print("| az | el | geographic s | uniform s | geographic ÷ uniform |")

@@ -59,7 +59,8 @@ from .field import cell_ray
 from .frames import Frame, dem_index, frame_of, uniform_rays
 from .sweep import _load_lines, _store_lines, _z_range
 
-BINS = 4           # bins per segment between two cell centres
+BINS = 4           # bins per segment between two cell centres (a power of two)
+LOG_BINS = 2
 EXACT_STEPS = 4    # samples every cell marches exactly before it looks the bounds up
 UNDECIDED = 2      # mask code of a cell the bounds leave to the exact march
 MIN_STRIP = 256
@@ -223,7 +224,7 @@ def _decide_line(ZL, SU, SL, R, v, p0, p1, P, s, rise, curv, K, pad, margin, ok,
     mb, db = b1 % BINS, pad + b1 // BINS
     sua, sla, sub, slb = su[ma], sl[ma], su[mb], sl[mb]
     hk = K * rise + K * K * curv
-    last = P - 1 - 1e-6 - xk          # lit only for positions up to here (see _decide_positions)
+    last = P - 1 - 1e-6 - xk          # lit only for positions up to here (as in _decide_positions)
     zl = ZL[row]
     for q in range(n):
         p = p0 + q
@@ -241,79 +242,94 @@ def _decide_line(ZL, SU, SL, R, v, p0, p1, P, s, rise, curv, K, pad, margin, ok,
 
 @njit(cache=True)
 def _decide_positions(ZL, SU, SL, R, v, p0, p1, P, s_arr, rise_arr, curv_arr, ok_arr, K, pad,
-                      margin, s_c, out, fld):
+                      margin, s_c, out, fld, W):
     """Codes of positions [p0, p1) of canonical line v when each position has its own ray
     (``s_arr`` ... indexed by position: lines that are DEM columns of a per-row grid), or, with
     a field ``fld`` (``_field_args``: use, lattice, dx, dy, signs, curvature, shape, frame),
     each cell its own sun (``field.cell_ray``; a cell whose sun is down is shadowed, one whose
     ray is not in the frame's octant undecided): K exact samples, then the bounds K lines on;
-    0 / 1 when they decide, UNDECIDED otherwise (the same tests as ``_decide_line``, one cell at
-    a time)."""
+    0 / 1 when they decide, UNDECIDED otherwise (the same tests as ``_decide_line``). In passes
+    over the line (the rays, then each sample, then the lookup) so that each loop is short and
+    free of calls; ``W`` (5 x strip width) is work space."""
     use, vec, fdx, fdy, csign, rsign, ccoef, nrows, ncols, L, fdom, fsd, fl_line, fl_pos = fld
-    rows = np.empty(K + 1, np.int64)
-    for k in range(K + 1):
-        rows[k] = (v + k) % R
-    _, phi = _phase(v + K, s_c)
-    su = SU[rows[K]]
-    sl = SL[rows[K]]
-    zl = ZL[rows[0]]
-    for p in range(p0, p1):
+    n = p1 - p0
+    ss, rr, cc, e, e_hi = W[0], W[1], W[2], W[3], W[4]
+    zl = ZL[v % R]
+    for q in range(n):                       # each cell's ray; NaN marks a cell already coded
+        p = p0 + q
         h = zl[p]
+        e[q] = -np.inf
+        e_hi[q] = -np.inf
         if h != h:
-            out[p - p0] = np.uint8(255)
+            out[q] = np.uint8(255)
+            ss[q] = np.nan
             continue
         if use:
             r, c = dem_index(v, p, L, P, fdom, fl_line, fl_pos)
             night, dc, sd, so, rise, curv = cell_ray(r, c, nrows, ncols, vec, fdx, fdy, csign,
                                                      rsign, ccoef)
-            s = -so if fl_pos else so
+            sp = -so if fl_pos else so
             if night:
-                out[p - p0] = np.uint8(1)
+                out[q] = np.uint8(1)
+                ss[q] = np.nan
                 continue
-            if dc != fdom or sd != fsd or not s >= 0.0:
-                out[p - p0] = np.uint8(UNDECIDED)
+            if dc != fdom or sd != fsd or not sp >= 0.0:
+                out[q] = np.uint8(UNDECIDED)
+                ss[q] = np.nan
                 continue
         else:
             if not ok_arr[p]:
-                out[p - p0] = np.uint8(UNDECIDED)
+                out[q] = np.uint8(UNDECIDED)
+                ss[q] = np.nan
                 continue
-            s = s_arr[p]
-            rise = rise_arr[p]
-            curv = curv_arr[p]
-        e = -np.inf       # the highest exact sample above the ray (a lower bound: NaN skipped)
-        e_hi = -np.inf    # an upper bound of the same (see _sample_hi)
-        for k in range(1, K + 1):
-            x = p + k * s
+            sp, rise, curv = s_arr[p], rise_arr[p], curv_arr[p]
+        ss[q] = sp
+        rr[q] = rise
+        cc[q] = curv
+    for k in range(1, K + 1):                # the exact samples, one pass each
+        zr = ZL[(v + k) % R]
+        for q in range(n):
+            sp = ss[q]
+            if sp != sp:
+                continue
+            x = p0 + q + k * sp
             i0 = int(x)
             f = x - i0
-            zr = ZL[rows[k]]
             za = zr[i0]
             zb = zr[i0 + 1]
-            drop = k * rise + k * k * curv
+            drop = k * rr[q] + k * k * cc[q]
             t = (za if f == 0.0 else za + f * (zb - za)) - drop
             if f == 0.0 or not (f < SNAP or f > 1.0 - SNAP):
-                e = t if t > e else e    # NaN (void, outside) compares false
+                e[q] = t if t > e[q] else e[q]      # NaN (void, outside) compares false
             t = _sample_hi(za, zb, f) - drop
-            e_hi = t if t > e_hi else e_hi
-        x = p + K * s
+            e_hi[q] = t if t > e_hi[q] else e_hi[q]
+    _, phi = _phase(v + K, s_c)
+    su = SU[(v + K) % R]
+    sl = SL[(v + K) % R]
+    for q in range(n):                       # the bounds K lines on, and the decision
+        sp = ss[q]
+        if sp != sp:
+            continue
+        p = p0 + q
+        h = zl[p]
+        x = p + K * sp
         y = (x - phi) * BINS
         b0 = int(math.floor(y - EPS_BIN))
         b1 = int(math.ceil(y + EPS_BIN)) - 1
-        u = -np.inf
-        lw = np.inf
-        for b in range(b0, b1 + 1):
-            u = max(u, su[b % BINS, pad + b // BINS])
-            lw = min(lw, sl[b % BINS, pad + b // BINS])
-        hk = h + K * rise + K * K * curv
-        if e > h + margin or lw > hk + margin:
-            code = np.uint8(1)
-        elif e_hi <= h - margin and u <= hk - margin and x <= P - 1 - 1e-6:
+        u = su[b0 & (BINS - 1), pad + (b0 >> LOG_BINS)]   # bin b: place b & 3, segment b >> 2
+        lw = sl[b0 & (BINS - 1), pad + (b0 >> LOG_BINS)]
+        if b1 > b0:
+            u = max(u, su[b1 & (BINS - 1), pad + (b1 >> LOG_BINS)])
+            lw = min(lw, sl[b1 & (BINS - 1), pad + (b1 >> LOG_BINS)])
+        hk = h + K * rr[q] + K * K * cc[q]
+        if e[q] > h + margin or lw > hk + margin:
+            out[q] = np.uint8(1)
+        elif e_hi[q] <= h - margin and u <= hk - margin and x <= P - 1 - 1e-6:
             # lit: every exact sample and the bound clear the ray; not within rounding of the
             # far edge, where the model snaps a position onto the last cell centre
-            code = np.uint8(0)
+            out[q] = np.uint8(0)
         else:
-            code = np.uint8(UNDECIDED)
-        out[p - p0] = code
+            out[q] = np.uint8(UNDECIDED)
 
 
 @njit(cache=True)
@@ -329,6 +345,7 @@ def _strip_block(z, ZB, SU, SL, RO, v_top, nb, p0, p1, L, P, pad, s_c, o_lo, o_h
     i1 = min(p1, P)
     e = np.empty(p1 - p0)
     e_hi = np.empty(p1 - p0)
+    W = np.empty((5, p1 - p0))
     for i in range(nb):
         v = v_top - i
         row = v % R
@@ -342,7 +359,7 @@ def _strip_block(z, ZB, SU, SL, RO, v_top, nb, p0, p1, L, P, pad, s_c, o_lo, o_h
                          margin, ok_arr[v], s_c, e, e_hi, RO[row, p0:p1])
         else:
             _decide_positions(ZL, SU, SL, R, v, p0, p1, P, s_arr, rise_arr, curv_arr, ok_arr, K,
-                              pad, margin, s_c, RO[row, p0:p1], fld)
+                              pad, margin, s_c, RO[row, p0:p1], fld, W)
     _store_lines(out, RO, v_top, nb, p0, p1, dom_col, flip_line, flip_pos)
 
 
