@@ -5,8 +5,8 @@
   DEMs and a spectral fractal, at 3, 8 and 20 deg; target <= 1.2x;
 * **O(N)**: Mpix/s of the default on the same rough terrain (a spectral fractal, beta 3.2,
   2048², repeated seamlessly) at 2048², 4096², 8192²; target: 8192² >= 0.7 x the smallest;
-* **a sun from a time** over a 61 km DEM: every cell's own sun (the default) against one vector
-  for the whole raster; target <= 1.3x;
+* **a sun from a time** over a 61 km DEM: per tile (the default) and every cell's own sun
+  (``Shader(sun_field=True)``) against one vector for the whole raster; target <= 1.3x;
 * **geographic vs projected**: the Everest SRTM tile (geographic, per-row spacing) against the
   same heights on a uniform grid of its middle row's spacing (what a UTM copy would have).
 
@@ -93,9 +93,10 @@ def main(argv=None):
     print("\n### A sun from a time over a 61 km DEM: every cell's own sun vs one vector\n")
     print("(spectral β 3.2 2048² at 30 m in UTM 11N at 34° N, auto, flat; one vector: the same "
           "instant with the tolerance raised so that one vector serves)\n")
-    print("| time (local) | el | deviation across the DEM ° | one vector s | per cell s | "
-          "per cell ÷ one vector |")
-    print("|---|---|---|---|---|---|")
+    print("| time (local) | el | deviation across the DEM ° | tiles | one vector s | per tile s "
+          "(the default) | per cell s (sun_field) | per tile ÷ one vector | per cell ÷ one "
+          "vector |")
+    print("|---|---|---|---|---|---|---|---|---|")
     import tempfile
     import rasterio
     from rasterio.transform import from_origin
@@ -114,12 +115,16 @@ def main(argv=None):
         [var] = sun_over(site, d.shape, [t])
         [one] = sun_over(site, d.shape, [t], tolerance=10.0)
         sh = Shader(d.heights, d.grid, "auto", {}, "cpu", False, None, dem_body(d))
-        render(sh, var, "shadow")
-        render(sh, one, "shadow")
+        shf = Shader(d.heights, d.grid, "auto", {}, "cpu", False, None, dem_body(d),
+                     sun_field=True)
+        for s_, v_ in ((sh, one), (sh, var), (shf, var)):
+            render(s_, v_, "shadow")
         tt = timed({"one": lambda: render(sh, one, "shadow"),
-                    "var": lambda: render(sh, var, "shadow")}, a.repeat)
-        print(f"| {when} | {one.elevation:.1f} | {var.deviation_deg:.3f} | {tt['one']:.3f} | "
-              f"{tt['var']:.3f} | {tt['var'] / tt['one']:.2f} |", flush=True)
+                    "tiles": lambda: render(sh, var, "shadow"),
+                    "var": lambda: render(shf, var, "shadow")}, a.repeat)
+        print(f"| {when} | {one.elevation:.1f} | {var.deviation_deg:.3f} | "
+              f"{len(var.tiles or [])} | {tt['one']:.3f} | {tt['tiles']:.3f} | {tt['var']:.3f} | "
+              f"{tt['tiles'] / tt['one']:.2f} | {tt['var'] / tt['one']:.2f} |", flush=True)
 
     print("\n### Geographic vs the same heights on one uniform spacing (Everest SRTM 3″ tile)\n")
     print("| az | el | geographic s | uniform s | geographic ÷ uniform |")

@@ -183,7 +183,7 @@ class Shader:
                  refraction_k: float | None = None, body: Body | None = None,
                  zrange: tuple[float, float] | None = None, extent_m: float | None = None,
                  halo_ready: bool = False, local_range: tuple[float, float] | None = None,
-                 carry=None, place=None):
+                 carry=None, place=None, sun_field: bool = False):
         from .algorithms import ALGORITHMS
         if algorithm not in ALGORITHMS:
             raise HillshadeError(f"unknown algorithm {algorithm!r}; choose one of "
@@ -208,6 +208,10 @@ class Shader:
                            and np.isfinite(z).any() else (self.zmin, self.zmax))
         self.local_range = local_range
         self.carry, self.place = carry, place
+        # suns that vary across the raster: every cell's own sun (algorithms.field) instead of
+        # tiles; off by default until windowed runs do the same (a run's result must not depend
+        # on whether it was shaded in memory or in windows)
+        self.sun_field = sun_field
         self._gpu = None
         self._pyramid = None     # the maximum-height pyramid of the whole raster, built once
         self._survey = None      # (valid fraction, lowest, highest) for --algorithm auto
@@ -363,11 +367,11 @@ class Shader:
         return out if out.shape == sub.shape else np.ascontiguousarray(out[inner])
 
     def field_ok(self, sun: SunOver, soft: bool) -> bool:
-        """Whether a sun that varies across the raster can be marched with every cell's own
-        direction (``algorithms.field``) instead of tile by tile: hard shadows of an exact
-        march-based method over the whole raster in memory (soft shadows, smap, the horizon
-        scan, sweep and windows of a larger raster keep the tiles)."""
-        return (sun.tiles is not None and sun.lattice is not None and not soft
+        """Whether a sun that varies across the raster is marched with every cell's own
+        direction (``algorithms.field``) instead of tile by tile: asked for (``sun_field``), hard
+        shadows of an exact march-based method over the whole raster in memory (soft shadows,
+        smap, the horizon scan, sweep and windows of a larger raster keep the tiles)."""
+        return (self.sun_field and sun.tiles is not None and sun.lattice is not None and not soft
                 and self.algorithm in ("auto", "brute", "bounds") and not self.halo_ready
                 and self.carry is None and self.options.get("pyramid", True) is not False)
 

@@ -346,8 +346,15 @@ class _StderrCapture:
         self._saved = None
 
     def __enter__(self):
-        with signals_deferred():
-            return self._start()
+        try:
+            with signals_deferred():
+                return self._start()
+        except BaseException:
+            # a signal held back while stderr was being redirected stops the run here, before
+            # the with-block: put stderr back first, or the run's last line would go into the
+            # pipe and be lost (seen: exit 130 with nothing on stderr)
+            self._stop()
+            raise
 
     def _start(self):
         try:

@@ -281,14 +281,17 @@ def test_time_based_sun_uses_the_per_cell_field():
     [sun] = sun_over(site, z.shape, [parse_time("2026-06-21T06:10+02:00")], tolerance=0.05)
     assert sun.tiles and sun.lattice is not None and sun.field_deviation_deg < 0.01
     st = {}
-    sh = Shader(z, grid, "auto", {}, "cpu", False)
+    sh = Shader(z, grid, "auto", {}, "cpu", False, sun_field=True)
     got = render(sh, sun, "shadow", stats=st)
     assert st["sun_field"] == 1 and sum(st["auto"]["chose"].values()) == 1  # one march, no tiles
     tiles = render(Shader(z, grid, "smap", {}, "cpu", False), sun, "shadow")
     assert np.count_nonzero(got != tiles) < 0.02 * z.size
     # brute with the field gives the same mask as auto (bounds) with it
-    np.testing.assert_array_equal(render(Shader(z, grid, "brute", {}, "cpu", False), sun,
-                                         "shadow"), got)
+    np.testing.assert_array_equal(render(Shader(z, grid, "brute", {}, "cpu", False,
+                                                sun_field=True), sun, "shadow"), got)
+    st = {}   # without sun_field (the command line's default for now): tiles
+    render(Shader(z, grid, "auto", {}, "cpu", False), sun, "shadow", stats=st)
+    assert "sun_field" not in st and sum(st["auto"]["chose"].values()) == len(sun.tiles)
 
 
 @pytest.mark.parametrize("az0,el0,daz", [(163.0, 3.0, 4.0), (203.7, 8.0, 0.4), (290.0, 1.0, 2.0),

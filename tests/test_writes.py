@@ -619,3 +619,28 @@ def test_interrupt_while_the_writer_opens_publishes_nothing(tmp_path, monkeypatc
         hio.write_raster(str(tmp_path / "m.tif"), np.zeros(d.shape, np.uint8), d, 255,
                          tags={"A": 1})
     assert os.listdir(tmp_path) == [] and writes.completed == []
+
+
+def test_signal_held_back_while_stderr_is_redirected_restores_stderr(monkeypatch):
+    """A signal deferred while gdal_checked redirects stderr stops the run as the redirection
+    ends; stderr must be the process's again before the interrupt propagates, or the run's
+    one-line message goes into the pipe (found in issue 18: exit 130 with stderr empty)."""
+    from hillshade_rt import writes
+    from hillshade_rt.errors import Interrupted
+    before = os.readlink("/proc/self/fd/2") if os.path.exists("/proc/self/fd/2") else None
+    real = writes._StderrCapture._start
+
+    def start_then_signal(self):
+        out = real(self)
+        writes._deferral["pending"] = 2      # as on_signal does inside signals_deferred
+        return out
+    monkeypatch.setattr(writes._StderrCapture, "_start", start_then_signal)
+    writes.reset()
+    try:
+        with pytest.raises(Interrupted):
+            with writes._StderrCapture():
+                pytest.fail("the block must not run")
+        if before is not None:
+            assert os.readlink("/proc/self/fd/2") == before
+    finally:
+        writes.reset()
