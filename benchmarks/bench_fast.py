@@ -90,7 +90,8 @@ def main(argv=None):
             print(f"| {n}² | {az:g} | {t:.3f} | {mp:.1f} | {mp / first[az]:.2f} |", flush=True)
         del z
 
-    print("\n### A sun from a time over a 61 km DEM: every cell's own sun vs one vector\n")
+    print("\n### A sun from a time over a 61 km DEM: per tile and every cell's own sun vs one "
+          "vector\n")
     print("(spectral β 3.2 2048² at 30 m in UTM 11N at 34° N, auto, flat; one vector: the same "
           "instant with the tolerance raised so that one vector serves)\n")
     print("| time (local) | el | deviation across the DEM ° | tiles | one vector s | per tile s "
