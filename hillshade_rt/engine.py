@@ -413,10 +413,14 @@ class Shader:
             return np.where(np.isnan(sub), np.float32(np.nan), np.float32(0.0)).astype(np.float32)
         z, g, inner, whole = self._piece(region, region.elevation - SUN_RADIUS_DEG)
         rays = self.rays(g, region.azimuth, max(min(region.elevation, 90.0), 1e-6))
+        # only horizons across the disk matter: below its lower edge the disk is whole, above
+        # its upper edge hidden (the scan starts at the one and stops at the other)
+        lo, hi = region.elevation - SUN_RADIUS_DEG, region.elevation + SUN_RADIUS_DEG
         if self.backend == "gpu":
-            beta = hz.horizon_angles_gpu(self._gpu_dem(z, whole), rays)
+            beta = hz.horizon_angles_gpu(self._gpu_dem(z, whole), rays, floor_deg=lo, cap_deg=hi)
         else:
-            beta = hz.horizon_angles(z, rays)
+            beta = hz.horizon_angles(z, rays, pyramid=self.pyramid(z, whole) or True,
+                                     floor_deg=lo, cap_deg=hi)
         if beta.shape != sub.shape:
             beta = beta[inner]
         frac = disk_fraction(beta, region.elevation).astype(np.float32)

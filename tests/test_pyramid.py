@@ -311,3 +311,24 @@ def test_bounds_with_a_per_cell_sun_equal_the_field_march(az0, el0, daz, curved)
         st_ = {}
         np.testing.assert_array_equal(bounds.shadow_mask_field(z, grid, vec, c, stats=st_), ref)
         assert 0 <= st_["undecided_fraction"] <= 1
+
+
+@SETTINGS
+@given(cases())
+def test_horizon_scan_over_the_pyramid_is_the_plain_scan(case):
+    """The horizon angles over the pyramid equal the plain scan's bit for bit (the same samples
+    raise the maximum), and with a floor and a cap (soft shadows) they give the same visible
+    fraction of the sun's disk."""
+    from hillshade_rt.algorithms import horizon
+    from hillshade_rt.sun import SUN_RADIUS_DEG, disk_fraction
+    z, grid, az, el, curv = case
+    if not np.isfinite(z).any():
+        return
+    rays = sun_rays(grid, az, el, curv)
+    plain = horizon.horizon_angles(z, rays, pyramid=False)
+    np.testing.assert_array_equal(horizon.horizon_angles(z, rays), plain)
+    lo, hi = el - SUN_RADIUS_DEG, el + SUN_RADIUS_DEG
+    clipped = horizon.horizon_angles(z, rays, floor_deg=lo, cap_deg=hi)
+    ok = np.isfinite(plain)
+    np.testing.assert_array_equal(disk_fraction(clipped[ok], el), disk_fraction(plain[ok], el))
+    np.testing.assert_array_equal(horizon.shadow_mask(z, rays), _plain(z, rays))

@@ -48,23 +48,64 @@ PER_ROW_SPACING = ("the ground spacing varies per row (a geographic CRS, or a "
 
 
 @njit(cache=True)
-def _scan_cell(z, r, c, dom_col, sd, so, sp, zmax, rise, cv, decide):
+def _scan_cell(z, pyr, off, widths, nlev, r, c, dom_col, sd, so, sp, zmax, rise, cv, decide,
+               floor, cap):
     """Max of (T_k - h0 - k*k*cv) / k over the samples k = sp, 2sp, ... (-inf if none); ``cv``
     is the Earth-curvature term (the terrain k steps away sits k*k*cv lower; 0 when flat).
 
-    decide: stop as soon as the result is known relative to ``rise`` (mask mode)."""
+    decide: stop as soon as the result is known relative to ``rise`` (mask mode). ``floor``:
+    start the maximum there (the answer is then max(β, floor): soft shadows need no horizon
+    below the sun's lower edge); ``cap``: stop once the maximum exceeds it (nor above its upper
+    edge). Over the maximum-height pyramid (``nlev`` > 0, sp = 1) a block is skipped while the
+    maximum is >= 0 and the block lies below h0 + max*k + k*k*cv, which only rises along the ray:
+    no sample in it could raise the maximum, so the result is the plain scan's."""
     line0, other0, n_dom, n_oth = ray_origin(z, r, c, dom_col)
     h0 = float(z[np.int64(r), np.int64(c)])
-    best = -np.inf
+    best = floor
     k = sp
+    lev = 0
     while True:
         if zmax - h0 <= best * k:           # no later sample can raise the maximum
             break
         if decide and zmax - h0 <= rise * k:  # nothing ahead can reach the sun's elevation
             break
-        inside, t = ray_sample(z, dom_col, line0, other0, n_dom, n_oth, k, sd, so)
-        if not inside:
-            break
+        if nlev > 0 and best >= 0.0:
+            line = line0 + k * sd
+            if line < 0 or line >= n_dom:
+                break
+            pos = line_position(madd(float(other0), float(k), so), n_oth)
+            if pos < 0.0:
+                break
+            hr = h0 + best * k + k * k * cv
+            i0 = np.int64(math.floor(pos))
+            rr = i0 if dom_col else line
+            cc = line if dom_col else i0
+            if lev < nlev:
+                lev += 1
+            while lev > 0:
+                if pyr[off[lev] + (rr >> lev) * widths[lev] + (cc >> lev)] < hr:
+                    break
+                lev -= 1
+            if lev > 0:        # skip the rest of the block (as ray_is_blocked_pyramid)
+                size = np.int64(1) << lev
+                within = line & (size - 1)
+                left = (size - 1 - within) if sd > 0 else within
+                start = (i0 >> lev) * size
+                if so > 0.0:
+                    q = (float(start + size) - pos - 1e-7) / so
+                    if q < left:
+                        left = np.int64(q) if q > 0.0 else np.int64(0)
+                elif so < 0.0:
+                    q = (pos - float(start) - 1e-7) / (-so)
+                    if q < left:
+                        left = np.int64(q) if q > 0.0 else np.int64(0)
+                k += left + 1
+                continue
+            t = terrain_on_line(z, dom_col, line, pos)
+        else:
+            inside, t = ray_sample(z, dom_col, line0, other0, n_dom, n_oth, k, sd, so)
+            if not inside:
+                break
         lift = t - h0
         if cv != 0.0:   # t - h0 - k*k*cv, never fused on the GPU
             lift = madd(lift, -float(k * k), cv)
@@ -72,15 +113,18 @@ def _scan_cell(z, r, c, dom_col, sd, so, sp, zmax, rise, cv, decide):
             best = lift / k
             if decide and best > rise:
                 break
+            if best > cap:
+                break
         k += sp
     return best
 
 
 @njit(cache=True, inline="always")
-def _scan_write(z, r, c, dom_col, step_dom, step_other, rise, step_m, curv, sp, zmax, want_mask,
-                mask, beta):
-    """Cell (r, c) of the scan: its mask code (want_mask) or its angle β in degrees. The per-cell
-    body of both backends."""
+def _scan_write(z, pyr, off, widths, nlev, r, c, dom_col, step_dom, step_other, rise, step_m,
+                curv, sp, zmax, want_mask, mask, beta, floor_tan, cap_tan):
+    """Cell (r, c) of the scan: its mask code (want_mask) or its angle β in degrees (at least
+    atan(floor_tan); above atan(cap_tan) only known to be above it). The per-cell body of both
+    backends."""
     if math.isnan(z[r, c]):
         if want_mask:
             mask[r, c] = 255
@@ -88,32 +132,40 @@ def _scan_write(z, r, c, dom_col, step_dom, step_other, rise, step_m, curv, sp, 
             beta[r, c] = np.nan
         return
     ri = rise[r]
-    t = _scan_cell(z, r, c, dom_col[r] != 0, np.int64(step_dom[r]), step_other[r], sp, zmax, ri,
-                   curv[r], want_mask)
+    sm = step_m[r]
+    t = _scan_cell(z, pyr, off, widths, nlev if sp == 1 else np.int64(0), r, c, dom_col[r] != 0,
+                   np.int64(step_dom[r]), step_other[r], sp, zmax, ri, curv[r], want_mask,
+                   floor_tan * sm, cap_tan * sm)
     if want_mask:
         mask[r, c] = 1 if t > ri else 0
     else:
-        beta[r, c] = -90.0 if t == -np.inf else math.degrees(math.atan(t / step_m[r]))
+        fl = floor_tan * sm
+        if t == -np.inf or (floor_tan > -np.inf and t <= fl):
+            beta[r, c] = -90.0      # nothing ahead, or nothing above the floor: all the disk
+        elif t > cap_tan * sm:
+            beta[r, c] = 90.0       # above the cap: none of the disk
+        else:
+            beta[r, c] = math.degrees(math.atan(t / sm))
 
 
 @njit(parallel=True, cache=True)
-def _scan_kernel(z, dom_col, step_dom, step_other, rise, step_m, curv, sp, zmax, want_mask, mask,
-                 beta):
+def _scan_kernel(z, pyr, off, widths, nlev, dom_col, step_dom, step_other, rise, step_m, curv, sp,
+                 zmax, want_mask, mask, beta, floor_tan, cap_tan):
     rows, cols = z.shape
     for r in prange(rows):
         for c in range(cols):
-            _scan_write(z, r, c, dom_col, step_dom, step_other, rise, step_m, curv, sp, zmax,
-                        want_mask, mask, beta)
+            _scan_write(z, pyr, off, widths, nlev, r, c, dom_col, step_dom, step_other, rise,
+                        step_m, curv, sp, zmax, want_mask, mask, beta, floor_tan, cap_tan)
 
 
 @kernel
-def _scan_gpu(z, dom_col, step_dom, step_other, rise, step_m, curv, sp, zmax, want_mask, mask,
-              beta):
+def _scan_gpu(z, pyr, off, widths, nlev, dom_col, step_dom, step_other, rise, step_m, curv, sp,
+              zmax, want_mask, mask, beta, floor_tan, cap_tan):
     """CUDA twin of ``_scan_kernel``: one thread per cell."""
     c, r = cuda.grid(2)
     if r < z.shape[0] and c < z.shape[1]:
-        _scan_write(z, r, c, dom_col, step_dom, step_other, rise, step_m, curv, sp, zmax,
-                    want_mask, mask, beta)
+        _scan_write(z, pyr, off, widths, nlev, r, c, dom_col, step_dom, step_other, rise,
+                    step_m, curv, sp, zmax, want_mask, mask, beta, floor_tan, cap_tan)
 
 
 @njit(cache=True)
@@ -225,9 +277,30 @@ def _check(method, sample_spacing, rays):
     return method == "hull" and uniform_rays(rays) and not rays.curved
 
 
+def _pyramid(z, pyramid):
+    from .brute import pyramid_args
+    return pyramid_args(z, pyramid)
+
+
+def _tan_deg(a: float | None, default: float) -> float:
+    if a is None or not math.isfinite(a):
+        return default
+    if a <= -90.0:
+        return -np.inf
+    if a >= 90.0:
+        return np.inf
+    return math.tan(math.radians(a))
+
+
 def horizon_angles(z: np.ndarray, rays: SunRays, method: str = "scan", sample_spacing: int = 1,
-                   zmax: float | None = None, stats: dict | None = None) -> np.ndarray:
-    """β in degrees (float32, NaN on voids, -90 where no terrain lies ahead in the raster)."""
+                   zmax: float | None = None, stats: dict | None = None, pyramid=True,
+                   floor_deg: float | None = None, cap_deg: float | None = None) -> np.ndarray:
+    """β in degrees (float32, NaN on voids, -90 where no terrain lies ahead in the raster).
+
+    The scan marches over the maximum-height pyramid (``pyramid``: True, a ``MaxPyramid`` to
+    reuse, or False for the plain scan: same angles). ``floor_deg`` / ``cap_deg`` (soft
+    shadows): β below the floor comes back as the floor, β above the cap as some angle above it
+    (the march stops there)."""
     hull = _check(method, sample_spacing, rays)
     if zmax is None:
         zmax = float(np.nanmax(z))
@@ -242,8 +315,10 @@ def horizon_angles(z: np.ndarray, rays: SunRays, method: str = "scan", sample_sp
                          if rays.curved else
                          PER_ROW_SPACING + ": hull replaced by scan (exact, slower)")
     beta = np.empty(z.shape, np.float32)
-    _scan_kernel(z, rays.dom_col, rays.step_dom, rays.step_other, rays.rise, rays.step_m,
-                 rays.curv, np.int64(sample_spacing), float(zmax), False, np.empty((1, 1), np.uint8), beta)
+    _scan_kernel(z, *_pyramid(z, pyramid), rays.dom_col, rays.step_dom, rays.step_other,
+                 rays.rise, rays.step_m, rays.curv, np.int64(sample_spacing), float(zmax), False,
+                 np.empty((1, 1), np.uint8), beta, _tan_deg(floor_deg, -np.inf),
+                 _tan_deg(cap_deg, np.inf))
     return beta
 
 
@@ -263,20 +338,22 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None, stats: 
                          if rays.curved else
                          PER_ROW_SPACING + ": hull replaced by scan (exact, slower)")
     out = np.empty(z.shape, np.uint8)
-    _scan_kernel(z, rays.dom_col, rays.step_dom, rays.step_other, rays.rise, rays.step_m,
-                 rays.curv, np.int64(sample_spacing), float(zmax), True, out, np.empty((1, 1), np.float32))
+    _scan_kernel(z, *_pyramid(z, True), rays.dom_col, rays.step_dom, rays.step_other, rays.rise,
+                 rays.step_m, rays.curv, np.int64(sample_spacing), float(zmax), True, out,
+                 np.empty((1, 1), np.float32), -np.inf, np.inf)
     return out
 
 
-def _scan_gpu_run(g, rays, sample_spacing, zmax, want_mask):
+def _scan_gpu_run(g, rays, sample_spacing, zmax, want_mask, floor_deg=None, cap_deg=None):
     rows, cols = g.shape
     dom_col, step_dom, step_other, rise, step_m, curv = g.rays(rays)
     dummy = g.empty((1, 1), np.float32 if want_mask else np.uint8)
     out = g.empty((rows, cols), np.uint8 if want_mask else np.float32)
     args = (out, dummy) if want_mask else (dummy, out)
     with g.timed():
-        g.launch(_scan_gpu, rows, cols, g.z, dom_col, step_dom, step_other, rise, step_m, curv,
-                 np.int64(sample_spacing), float(zmax), want_mask, *args)
+        g.launch(_scan_gpu, rows, cols, g.z, *g.pyramid_args(True), dom_col, step_dom,
+                 step_other, rise, step_m, curv, np.int64(sample_spacing), float(zmax),
+                 want_mask, *args, _tan_deg(floor_deg, -np.inf), _tan_deg(cap_deg, np.inf))
     return g.download(out)
 
 
@@ -296,7 +373,8 @@ def shadow_mask_gpu(g, rays: SunRays, zmax: float, stats: dict | None = None, me
 
 
 def horizon_angles_gpu(g, rays: SunRays, method: str = "scan", sample_spacing: int = 1,
-                       stats: dict | None = None) -> np.ndarray:
+                       stats: dict | None = None, floor_deg: float | None = None,
+                       cap_deg: float | None = None) -> np.ndarray:
     """``horizon_angles`` on the GPU (float32 degrees, NaN on voids, -90 nothing ahead)."""
     _gpu_method(method, sample_spacing, rays)
-    return _scan_gpu_run(g, rays, sample_spacing, g.zmax, False)
+    return _scan_gpu_run(g, rays, sample_spacing, g.zmax, False, floor_deg, cap_deg)
