@@ -36,6 +36,7 @@ from numba import njit, prange
 from ..geometry import SunRays
 from .frames import frame_of, uniform_rays
 from ..gpu import cuda, kernel
+from .pyramid import climb, samples_left
 from .raymath import line_position, madd, ray_origin, ray_sample, terrain_on_line
 
 METHODS = ("scan", "hull")
@@ -78,28 +79,10 @@ def _scan_cell(z, pyr, off, widths, nlev, r, c, dom_col, sd, so, sp, zmax, rise,
                 break
             hr = h0 + best * k + k * k * cv
             i0 = np.int64(math.floor(pos))
-            rr = i0 if dom_col else line
-            cc = line if dom_col else i0
-            if lev < nlev:
-                lev += 1
-            while lev > 0:
-                if pyr[off[lev] + (rr >> lev) * widths[lev] + (cc >> lev)] < hr:
-                    break
-                lev -= 1
-            if lev > 0:        # skip the rest of the block (as ray_is_blocked_pyramid)
-                size = np.int64(1) << lev
-                within = line & (size - 1)
-                left = (size - 1 - within) if sd > 0 else within
-                start = (i0 >> lev) * size
-                if so > 0.0:
-                    q = (float(start + size) - pos - 1e-7) / so
-                    if q < left:
-                        left = np.int64(q) if q > 0.0 else np.int64(0)
-                elif so < 0.0:
-                    q = (pos - float(start) - 1e-7) / (-so)
-                    if q < left:
-                        left = np.int64(q) if q > 0.0 else np.int64(0)
-                k += left + 1
+            lev = climb(pyr, off, widths, nlev, lev, i0 if dom_col else line,
+                        line if dom_col else i0, hr)
+            if lev > 0:        # no sample in the block can raise the maximum: past it
+                k += samples_left(lev, line, i0, pos, sd, so) + 1
                 continue
             t = terrain_on_line(z, dom_col, line, pos)
         else:

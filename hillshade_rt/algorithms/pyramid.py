@@ -113,6 +113,39 @@ def _build(z):
     return data, off, nc, nlev
 
 
+@njit(cache=True, inline="always")
+def climb(pyr, off, widths, nlev, lev, rr, cc, hr):
+    """The coarsest level, from one above ``lev``, whose block holding cell (rr, cc) is lower
+    than ``hr`` (0: none is; take the sample)."""
+    if lev < nlev:
+        lev += 1
+    while lev > 0:
+        if pyr[off[lev] + (rr >> lev) * widths[lev] + (cc >> lev)] < hr:
+            break
+        lev -= 1
+    return lev
+
+
+@njit(cache=True, inline="always")
+def samples_left(lev, line, i0, pos, step_dom, step_other):
+    """How many more samples of the ray stay in the level-``lev`` block of its current sample
+    (grid line ``line``, position ``pos``, ``i0`` = floor(pos)): exactly along the dominant axis,
+    one short along the other where the position is within rounding of the block's edge."""
+    size = np.int64(1) << lev
+    within = line & (size - 1)
+    left = (size - 1 - within) if step_dom > 0 else within
+    start = (i0 >> lev) * size
+    if step_other > 0.0:
+        q = (float(start + size) - pos - 1e-7) / step_other
+        if q < left:
+            left = np.int64(q) if q > 0.0 else np.int64(0)
+    elif step_other < 0.0:
+        q = (pos - float(start) - 1e-7) / (-step_other)
+        if q < left:
+            left = np.int64(q) if q > 0.0 else np.int64(0)
+    return left
+
+
 @njit(cache=True)
 def ray_is_blocked_pyramid(z, pyr, off, widths, nlev, r, c, dom_col, step_dom, step_other, rise,
                            curv, zmax):
@@ -135,31 +168,11 @@ def ray_is_blocked_pyramid(z, pyr, off, widths, nlev, r, c, dom_col, step_dom, s
         if pos < 0.0:
             return False
         i0 = np.int64(math.floor(pos))
-        rr = i0 if dom_col else line
-        cc = line if dom_col else i0
-        if lev < nlev:
-            lev += 1
-        while lev > 0:
-            if pyr[off[lev] + (rr >> lev) * widths[lev] + (cc >> lev)] < hr:
-                break
-            lev -= 1
+        lev = climb(pyr, off, widths, nlev, lev, i0 if dom_col else line,
+                    line if dom_col else i0, hr)
         if lev == 0:
             if terrain_on_line(z, dom_col, line, pos) > hr:
                 return True
             k += 1
-        else:
-            # samples left in the block after this one: along the dominant axis exactly, along
-            # the other axis one short where the position is within rounding of the block's edge
-            size = np.int64(1) << lev
-            within = line & (size - 1)
-            left = (size - 1 - within) if step_dom > 0 else within
-            start = (i0 >> lev) * size
-            if step_other > 0.0:
-                q = (float(start + size) - pos - 1e-7) / step_other
-                if q < left:
-                    left = np.int64(q) if q > 0.0 else np.int64(0)
-            elif step_other < 0.0:
-                q = (pos - float(start) - 1e-7) / (-step_other)
-                if q < left:
-                    left = np.int64(q) if q > 0.0 else np.int64(0)
-            k += left + 1
+        else:   # no sample in the block can block the ray: past it
+            k += samples_left(lev, line, i0, pos, step_dom, step_other) + 1
