@@ -50,7 +50,7 @@ class Dem:
         return self.heights.shape  # type: ignore[return-value]
 
     def valid_count(self) -> int:
-        return int(np.count_nonzero(~np.isnan(self.heights)))
+        return int(self.heights.size - np.count_nonzero(np.isnan(self.heights)))
 
     def centre_height(self) -> tuple[float, str]:
         """The observer's height for suns from times (``sun.centre_height_of``)."""
@@ -406,16 +406,23 @@ def heights_into(data: np.ndarray, nodata: float | None, out: np.ndarray,
     +-inf as NaN, times ``z_factor``. Nodata is compared in the source type: a float32 cast of
     e.g. -3.4028235e38 must still match; a value the type cannot hold (-1 for uint16) matches
     nothing instead of wrapping around."""
-    bad = None
+    # one boolean scratch array and masked copies, no fancy indexing: on a 10000² DEM the read
+    # stage spent 1 s here (four temporaries and two boolean-index passes)
+    mask = np.empty(out.shape, np.bool_)
+    bad = False
     if nodata is not None and not math.isnan(nodata):
         nd = np.asarray(nodata).astype(data.dtype)
         if data.dtype.kind == "f" or float(nd) == float(nodata):
-            bad = data == nd
+            np.equal(data, nd, out=mask)
+            bad = True
     if out is not data:
         out[...] = data
-    if bad is not None:
-        out[bad] = np.nan
-    out[~np.isfinite(out)] = np.nan
+    nan = np.float32(np.nan)
+    if bad:
+        np.copyto(out, nan, where=mask)
+    np.isfinite(out, out=mask)
+    np.logical_not(mask, out=mask)
+    np.copyto(out, nan, where=mask)
     if z_factor != 1.0:
         out *= np.float32(z_factor)
 
