@@ -220,24 +220,40 @@ class Shader:
 
     def warm_up(self, azimuth: float, elevation: float, soft: bool = False,
                 incidence: bool = False) -> None:
-        """Compile (or load from numba's cache) what the suns to come will run, on 4 x 4 grids,
-        so that timings measure computing."""
+        """Compile (or load from numba's cache) what the suns to come will run, so that timings
+        measure computing. On the CPU by lighting a small rough terrain through this very path
+        (the same calls and argument types: the algorithm, or both methods of ``auto`` and its
+        survey; the pyramid, refinements, soft horizons, the report's counts), on a grid with
+        the same pattern of spacing; on the GPU through ``shadow.warm_up``."""
+        from .algorithms.counts import code_counts
         from .shadow import warm_up
-        for name in (("bounds", "brute") if self.algorithm == "auto" else (self.algorithm,)):
-            warm_up(name, self.grid, azimuth, max(elevation, 1.0), backend=self.backend,
-                    **self.options)
-        small = Grid.uniform(4, 4, *self.grid.centre_spacing(), self.grid.col_sign,
-                             self.grid.row_sign)
-        z = np.zeros((4, 4), np.float32)
-        if self.curvature is not False or soft:
-            from .algorithms import brute, horizon
-            rays = sun_rays(small, azimuth, max(elevation, 1.0), 1e-7)
-            brute.refine(z, rays, np.ones((4, 4), np.uint8), 1, 0.0)
-            if soft:
-                horizon.horizon_angles(z, rays)
+        el = min(max(elevation, 1.0), 89.0)
+        if self.backend != "cpu":
+            for name in (("brute",) if self.algorithm == "auto" else (self.algorithm,)):
+                warm_up(name, self.grid, azimuth, el, backend=self.backend, **self.options)
+        else:
+            n = 40
+            i = np.arange(n)
+            z = (60.0 * np.add.outer(np.sin(0.7 * i), np.cos(1.3 * i)) + 100.0).astype(np.float32)
+            z[5, 7] = np.nan
+            idx = np.linspace(0, self.grid.rows - 1, n).astype(int)
+            small = Grid(n, n, self.grid.dx[idx], self.grid.dy[idx], self.grid.col_sign,
+                         self.grid.row_sign, self.grid.method)
+            names = (("auto", "bounds", "brute") if self.algorithm == "auto"
+                     else (self.algorithm,))
+            region = Region(slice(0, n), slice(0, n), azimuth, el)
+            for name in names:
+                sh = Shader(z, small, name, self.options, "cpu", self.curvature, self.k,
+                            self.body, (self.zmin, self.zmax), self.extent_m)
+                sh.cast(region, {})
+                if soft:
+                    sh.visible_fraction(region)
+            code_counts(np.zeros((64, 64), np.uint8))    # the report's counts (>= 64 rows)
         if incidence:
             from .algorithms.relief import incidence as inc
-            inc(z, small, azimuth, elevation)
+            small4 = Grid.uniform(4, 4, *self.grid.centre_spacing(), self.grid.col_sign,
+                                  self.grid.row_sign)
+            inc(np.zeros((4, 4), np.float32), small4, azimuth, elevation)
 
     # -- per sun -------------------------------------------------------------------------------
     def curvature_for(self, azimuth: float, elevation: float) -> float:
