@@ -261,12 +261,17 @@ class Shader:
         return curvature_coefficient(self.curvature, self.body, self.k, self.extent_m,
                                      (self.zmin, self.zmax), azimuth, elevation)
 
-    def rays(self, grid: Grid, azimuth: float, elevation: float) -> SunRays:
+    def curvature_used_for(self, azimuth: float, elevation: float) -> float:
+        """``curvature_for``, noted for the report (whether rays were curved, and the radius they
+        used: rounded, one per direction)."""
         c = self.curvature_for(azimuth, elevation)
         self.curvature_used.add(c > 0)
-        if c > 0:   # the radius these rays use, for the report (rounded: one per direction)
+        if c > 0:
             self.curvature_used.add(round(float(self.body.radius(azimuth)), 1))
-        return sun_rays(grid, azimuth, elevation, c)
+        return c
+
+    def rays(self, grid: Grid, azimuth: float, elevation: float) -> SunRays:
+        return sun_rays(grid, azimuth, elevation, self.curvature_used_for(azimuth, elevation))
 
     def window(self, region: Region, elevation: float) -> tuple[slice, slice]:
         """Rows and columns to read for ``region``: the region plus the halo toward the sun
@@ -311,7 +316,8 @@ class Shader:
 
     def pyramid(self, z: np.ndarray, whole: bool):
         """The maximum-height pyramid of ``z`` (kept for the next suns when ``z`` is the whole
-        raster), or False when the options ask for the plain march."""
+        raster; built only when a march first uses it), or False when the options ask for the
+        plain march."""
         from .algorithms.pyramid import MaxPyramid
         if self.options.get("pyramid", True) is False:
             return False
@@ -355,7 +361,7 @@ class Shader:
         by_brute = (not carried and self.backend == "cpu"
                     and z.size > TILE_BRUTE_RATIO * sub.size)
         pyr = self.pyramid(z, whole) if self.backend == "cpu" else False
-        if algorithm in ("brute", "bounds") and self.backend == "cpu":
+        if self.backend == "cpu":   # every method marches some rays (refinements, fallbacks)
             options["pyramid"] = pyr
         if algorithm == "bounds" and whole and self.backend == "cpu":
             options["zrange"] = self.local_range     # known: saves bounds a pass
@@ -396,10 +402,7 @@ class Shader:
         on ``sun.lattice`` (1 shadow, 0 lit, 255 void; a cell whose sun is below the horizon
         is in shadow)."""
         from .algorithms import field
-        c = self.curvature_for(sun.azimuth, max(sun.elevation, 1e-6))
-        self.curvature_used.add(c > 0)
-        if c > 0:
-            self.curvature_used.add(round(float(self.body.radius(sun.azimuth)), 1))
+        c = self.curvature_used_for(sun.azimuth, max(sun.elevation, 1e-6))
         zmax = self.local_range[1]
         if self.backend == "gpu":
             out = field.shadow_mask_gpu(self._gpu_dem(self.z, True), self.grid, sun.lattice, c,

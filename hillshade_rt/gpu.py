@@ -355,18 +355,17 @@ class GpuDem:
         """The maximum-height pyramid's kernel arguments (``algorithms.pyramid``) on the device,
         built on the host and uploaded once for all suns; with ``use`` False, the plain march's
         placeholders."""
-        from .algorithms import brute, pyramid
+        from .algorithms import pyramid
         if not use:
             if getattr(self, "_no_pyramid", None) is None:
-                self._no_pyramid = tuple(self.upload(a) for a in brute._NO_PYRAMID[:3]) + (
+                self._no_pyramid = tuple(self.upload(a) for a in pyramid.NO_PYRAMID[:3]) + (
                     np.int64(0),)
             return self._no_pyramid
         if self._pyramid is None:
-            p = pyramid.MaxPyramid(self._host_z)
-            self.check_memory(p.nbytes)
+            data, off, widths, nlev = pyramid.MaxPyramid(self._host_z).args
+            self.check_memory(data.nbytes)
             with self._oom_errors():
-                self._pyramid = (self.upload(p.data), self.upload(p.offsets),
-                                 self.upload(p.widths), np.int64(p.nlev))
+                self._pyramid = (self.upload(data), self.upload(off), self.upload(widths), nlev)
         return self._pyramid
 
     def canonical(self, frame):

@@ -28,10 +28,10 @@ import math
 
 import numba
 import numpy as np
-from numba import njit, prange
 
 from ..geometry import SunRays
 from . import bounds, brute
+from .counts import valid_range
 from .frames import uniform_rays
 
 BOUNDS_MPIX = 35.0           # bounds, one ray for the raster, all cells (2 cores)
@@ -40,27 +40,9 @@ BRUTE_MPIX = 17.0            # brute over the pyramid, per valid cell, long rays
 SHORT_REACH = 64.0           # rays shorter than this many steps make brute faster in proportion
 
 
-@njit(parallel=True, cache=True)
-def _valid_range(z):
-    """(valid cells, lowest, highest valid height) in one pass, parallel over rows."""
-    rows = z.shape[0]
-    n = np.zeros(rows, np.int64)
-    lo = np.full(rows, np.inf)
-    hi = np.full(rows, -np.inf)
-    for r in prange(rows):
-        a, b, c = 0, np.inf, -np.inf
-        for h in z[r]:
-            if h == h:
-                a += 1
-                b = min(b, h)
-                c = max(c, h)
-        n[r], lo[r], hi[r] = a, b, c
-    return n.sum(), lo.min() if rows else np.inf, hi.max() if rows else -np.inf
-
-
 def survey(z: np.ndarray) -> tuple[float, float, float]:
     """(valid fraction, lowest, highest valid height) of ``z``: what ``choose`` needs of a DEM."""
-    n, lo, hi = _valid_range(z)
+    n, lo, hi = valid_range(z)
     return n / max(1, z.size), float(lo), float(hi)
 
 

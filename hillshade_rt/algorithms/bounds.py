@@ -49,7 +49,6 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 from numba import njit, prange
 
@@ -57,13 +56,13 @@ from ..geometry import SunRays
 from . import brute
 from .field import cell_ray
 from .frames import Frame, dem_index, frame_of, uniform_rays
-from .sweep import _load_lines, _store_lines, _z_range
+from .sweep import _load_lines, _store_lines, _z_range, strip_bounds, wave_block, wave_steps
+from .sweep import _strips as sweep_strips
 
 BINS = 4           # bins per segment between two cell centres (a power of two)
 LOG_BINS = 2
 EXACT_STEPS = 4    # samples every cell marches exactly before it looks the bounds up
 UNDECIDED = 2      # mask code of a cell the bounds leave to the exact march
-MIN_STRIP = 256
 EPS_BIN = 1e-7     # slack (in bins) on the bins a ray may reach: covers position rounding
 SNAP = 1e-7        # fractions this close to 0 or 1 may be a cell centre in the model's rounding
 ZO = 2             # NaN positions kept before each line of heights (the bins around position 0)
@@ -343,9 +342,7 @@ def _strip_block(z, ZB, SU, SL, RO, v_top, nb, p0, p1, L, P, pad, s_c, o_lo, o_h
     _load_lines(z, ZL, v_top, nb, p0, p1, dom_col, flip_line, flip_pos)
     i0 = p0 - 1 if p0 == 0 else p0    # the first strip also fills the bin that holds position 0
     i1 = min(p1, P)
-    e = np.empty(p1 - p0)
-    e_hi = np.empty(p1 - p0)
-    W = np.empty((5, p1 - p0))
+    W = np.empty((5, p1 - p0))        # work rows of the decisions
     for i in range(nb):
         v = v_top - i
         row = v % R
@@ -356,7 +353,7 @@ def _strip_block(z, ZB, SU, SL, RO, v_top, nb, p0, p1, L, P, pad, s_c, o_lo, o_h
                   off1 - off, o_lo, o_hi, d_up, d_lo)
         if per_line and not fld[0]:
             _decide_line(ZL, SU, SL, R, v, p0, p1, P, s_arr[v], rise_arr[v], curv_arr[v], K, pad,
-                         margin, ok_arr[v], s_c, e, e_hi, RO[row, p0:p1])
+                         margin, ok_arr[v], s_c, W[3], W[4], RO[row, p0:p1])
         else:
             _decide_positions(ZL, SU, SL, R, v, p0, p1, P, s_arr, rise_arr, curv_arr, ok_arr, K,
                               pad, margin, s_c, RO[row, p0:p1], fld, W)
@@ -389,17 +386,12 @@ def _bounds_sweep(z, L, P, dom_col, flip_line, flip_pos, s_lo, s_hi, d_up, d_lo,
     SU = np.full((R, Q, pad + P + reach + pad), -np.inf)  # bounds; -inf around the line
     SL = np.full((R, Q, pad + P + reach + pad), -np.inf)
     RO = np.empty((R, P), np.uint8)
-    bounds = np.empty(NS + 1, np.int64)
-    for j in range(NS + 1):
-        bounds[j] = P - (j * P) // NS
-    nblocks = (L + B - 1) // B
-    for t in range(nblocks + NS - 1):
+    bounds = strip_bounds(P, NS)
+    for t in range(wave_steps(L, B, NS)):
         for jj in prange(NS):
             j = np.int64(jj)
-            b = t - j
-            if b >= 0 and b < nblocks:
-                v_top = L - 1 - b * B
-                nb = min(B, v_top + 1)
+            v_top, nb = wave_block(t, j, L, B)
+            if nb > 0:
                 _strip_block(z, ZB, SU, SL, RO, v_top, nb, bounds[j + 1], bounds[j], L, P, pad,
                              s_c, o_lo, o_hi, d_up, d_lo, s_arr, rise_arr, curv_arr, ok_arr,
                              per_line, K, margin, dom_col, flip_line, flip_pos, out, fld)
@@ -411,10 +403,9 @@ def _field_args(vec=None, grid=None, curv_coef=0.0, shape=(1, 1), f=None, L=1):
     if vec is None:
         return (False, np.zeros((2, 2, 3)), np.ones(1), np.ones(1), 1.0, -1.0, 0.0, np.int64(1),
                 np.int64(1), np.int64(1), False, np.int64(1), False, False)
-    return (True, np.ascontiguousarray(vec, np.float64), np.ascontiguousarray(grid.dx, np.float64),
-            np.ascontiguousarray(grid.dy, np.float64), float(grid.col_sign), float(grid.row_sign),
-            float(curv_coef), np.int64(shape[0]), np.int64(shape[1]), np.int64(L), bool(f.dom_col),
-            np.int64(f.sd), bool(f.flip_line), bool(f.flip_pos))
+    from .field import sun_args
+    return (True, *sun_args(grid, vec, curv_coef), np.int64(shape[0]), np.int64(shape[1]),
+            np.int64(L), bool(f.dom_col), np.int64(f.sd), bool(f.flip_line), bool(f.flip_pos))
 
 
 def _canonical_rays(rays: SunRays, f):
@@ -433,8 +424,20 @@ def _canonical_rays(rays: SunRays, f):
     return s, rise, curv, ok.astype(np.bool_)
 
 
+def _drop_and_margin(zmin: float, zmax: float, L: int, K: int, r_lo: float, r_hi: float,
+                     c_hi: float) -> tuple[float, float]:
+    """(d_lo, margin): the per-step rise of the straight ray the lower bound follows, as steep
+    as the curved ray can get before every ray stands above the highest cell (kmax steps), and
+    the margin that keeps every decision clear of the bounds' rounding."""
+    kmax = min(L, math.ceil((zmax - zmin) / r_lo) + 1) if r_lo > 0 else L
+    d_lo = r_hi + (2 * kmax + 1) * c_hi
+    big = max(abs(zmin), abs(zmax)) + 1.0
+    return d_lo, 1e-9 * big + 4e-16 * (L + K + 8) * (big + kmax * d_lo)
+
+
 def _strips(P: int, s: float, K: int) -> int:
-    return max(1, min(numba.get_num_threads(), P // max(MIN_STRIP, int(math.ceil(K * s)) + 8)))
+    """The sweep's strips (``sweep._strips``), wider by the bins' reach on the next line."""
+    return sweep_strips(P, s, K, 8)
 
 
 def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None,
@@ -463,12 +466,7 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None,
         s_lo, s_hi = float(s[ok].min()), float(s[ok].max())
         r_lo, r_hi = float(rise[ok].min()), float(rise[ok].max())
         c_lo, c_hi = float(curv[ok].min()), float(curv[ok].max())
-        # steps after which every ray stands above the highest cell: the straight ray of the
-        # lower bound must be at least as steep as the curved ray until then
-        kmax = min(L, math.ceil((zmax - zmin) / r_lo) + 1) if r_lo > 0 else L
-        d_lo = r_hi + (2 * kmax + 1) * c_hi
-        big = max(abs(zmin), abs(zmax)) + 1.0
-        margin = 1e-9 * big + 4e-16 * (L + K + 8) * (big + kmax * d_lo)
+        d_lo, margin = _drop_and_margin(zmin, zmax, L, K, r_lo, r_hi, c_hi)
         per_line = not f.dom_col
         if f.dom_col and ok.all() and s_lo == s_hi and r_lo == r_hi and c_lo == c_hi:
             # one ray for every row: the line passes (indexed by line) serve the column frames too
@@ -501,24 +499,16 @@ def shadow_mask_field(z: np.ndarray, grid, vec: np.ndarray, curv_coef: float = 0
         return out
     zmax = float(zhi) if zmax is None else float(zmax)
     rows, cols = z.shape
-    vec = np.ascontiguousarray(vec, np.float64)
-    dx = np.ascontiguousarray(grid.dx, np.float64)
-    dy = np.ascontiguousarray(grid.dy, np.float64)
-    cs, rs = float(grid.col_sign), float(grid.row_sign)
-    _, dc, sd, so, ri, _ = field.cell_ray(rows // 2, cols // 2, rows, cols, vec, dx, dy, cs, rs,
-                                          float(curv_coef))
+    sun = field.sun_args(grid, vec, curv_coef)
+    _, dc, sd, so, ri, _ = field.cell_ray(rows // 2, cols // 2, rows, cols, *sun)
     f = Frame(dom_col=bool(dc), flip_line=sd < 0, flip_pos=so < 0, s=abs(so), so=so, sd=int(sd),
               rise=ri, step_m=0.0)
     s_lo, s_hi, r_lo, r_hi, c_lo, c_hi, n = field.field_ranges(
-        rows, cols, vec, dx, dy, cs, rs, float(curv_coef), bool(dc), np.int64(sd),
-        bool(f.flip_pos))
+        rows, cols, *sun, bool(dc), np.int64(sd), bool(f.flip_pos))
     L, P = (cols, rows) if f.dom_col else (rows, cols)
     K = EXACT_STEPS
     if n > 0 and L > 1 and P > 1 and math.isfinite(r_hi):
-        kmax = min(L, math.ceil((zmax - zmin) / r_lo) + 1) if r_lo > 0 else L
-        d_lo = r_hi + (2 * kmax + 1) * c_hi
-        big = max(abs(zmin), abs(zmax)) + 1.0
-        margin = 1e-9 * big + 4e-16 * (L + K + 8) * (big + kmax * d_lo)
+        d_lo, margin = _drop_and_margin(zmin, zmax, L, K, r_lo, r_hi, c_hi)
         one = np.zeros(1)
         _bounds_sweep(z, L, P, f.dom_col, f.flip_line, f.flip_pos, s_lo, s_hi, r_lo + c_lo,
                       d_lo, one, one, one, np.ones(1, np.bool_), False, K, margin,

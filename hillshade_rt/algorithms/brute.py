@@ -20,21 +20,10 @@ from numba import njit, prange
 
 from ..geometry import SunRays
 from ..gpu import cuda, kernel
-from .pyramid import MaxPyramid, pyramid_for, ray_is_blocked_pyramid
+from .pyramid import pyramid_args, ray_is_blocked_pyramid
 from .raymath import ray_is_blocked
 
 NODATA = np.uint8(255)
-
-
-_NO_PYRAMID = (np.zeros(1, np.float32), np.zeros(2, np.int64), np.zeros(1, np.int64), np.int64(0))
-
-
-def pyramid_args(z: np.ndarray, pyramid) -> tuple:
-    """The kernels' pyramid arguments: ``pyramid`` False for the plain march, True for a new
-    pyramid of ``z``, or a ``MaxPyramid`` of z's shape to reuse."""
-    if pyramid is False or pyramid is None:
-        return _NO_PYRAMID
-    return pyramid_for(z, pyramid if isinstance(pyramid, MaxPyramid) else None).args
 
 
 @njit(cache=True, inline="always")

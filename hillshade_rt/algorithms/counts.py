@@ -1,5 +1,6 @@
-"""Counting a product's codes in one parallel pass (the report's cell counts), without the
-int64 copy of every cell that ``np.bincount`` makes of a uint8 array."""
+"""Counting passes, parallel and without temporaries: a product's codes (the report's cell
+counts, without the int64 copy of every cell that ``np.bincount`` makes of a uint8 array), and a
+DEM's valid cells and height range (``auto``'s survey, ``sweep``, ``bounds``, the GPU)."""
 
 import numpy as np
 from numba import njit, prange
@@ -25,3 +26,22 @@ def code_counts(a: np.ndarray) -> np.ndarray:
         out = _count_rows(flat[:n].reshape(-1, 4096)) if n else np.zeros(256, np.int64)
         return out + np.bincount(flat[n:], minlength=256)
     return _count_rows(a)
+
+
+@njit(parallel=True, cache=True)
+def valid_range(z):
+    """(valid cells, lowest, highest valid height) of 2-D heights in one pass, parallel over
+    rows (inf / -inf when nothing is valid)."""
+    rows = z.shape[0]
+    n = np.zeros(rows, np.int64)
+    lo = np.full(rows, np.inf)
+    hi = np.full(rows, -np.inf)
+    for r in prange(rows):
+        a, b, c = 0, np.inf, -np.inf
+        for h in z[r]:
+            if h == h:
+                a += 1
+                b = min(b, h)
+                c = max(c, h)
+        n[r], lo[r], hi[r] = a, b, c
+    return n.sum(), lo.min() if rows else np.inf, hi.max() if rows else -np.inf

@@ -22,7 +22,7 @@ import numpy as np
 from numba import njit, prange
 
 from ..gpu import cuda, kernel
-from .pyramid import ray_is_blocked_pyramid
+from .pyramid import pyramid_args, ray_is_blocked_pyramid
 from .raymath import ray_is_blocked
 
 
@@ -146,20 +146,25 @@ def lattice_vectors(azimuth, elevation) -> np.ndarray:
                                           np.sin(e)], axis=-1))
 
 
+def sun_args(grid, vec: np.ndarray, curv_coef: float = 0.0) -> tuple:
+    """(lattice, dx, dy, col sign, row sign, curvature): what ``cell_ray`` takes besides the
+    cell, in the kernels' types."""
+    return (np.ascontiguousarray(vec, np.float64), np.ascontiguousarray(grid.dx, np.float64),
+            np.ascontiguousarray(grid.dy, np.float64), float(grid.col_sign),
+            float(grid.row_sign), float(curv_coef))
+
+
 def shadow_mask(z: np.ndarray, grid, vec: np.ndarray, curv_coef: float = 0.0,
                 zmax: float | None = None, pyramid=True) -> np.ndarray:
     """Cast-shadow mask (uint8 1 / 0 / 255) of ``z`` on ``grid`` with every cell's own sun from
     the lattice ``vec`` (``lattice_vectors``); ``curv_coef``: (1 - k) / 2R or 0; ``pyramid`` as
     for ``brute.shadow_mask``."""
-    from .brute import pyramid_args
     if z.dtype != np.float32 or z.ndim != 2:
         raise TypeError("heights must be a 2-D float32 array")
     if zmax is None:
         zmax = float(np.nanmax(z)) if np.isfinite(z).any() else -np.inf
     out = np.empty(z.shape, np.uint8)
-    _field_cpu(z, *pyramid_args(z, pyramid), np.ascontiguousarray(vec, np.float64),
-               np.ascontiguousarray(grid.dx, np.float64), np.ascontiguousarray(grid.dy, np.float64),
-               float(grid.col_sign), float(grid.row_sign), float(curv_coef), float(zmax), out,
+    _field_cpu(z, *pyramid_args(z, pyramid), *sun_args(grid, vec, curv_coef), float(zmax), out,
                np.int64(-1))
     return out
 
@@ -168,24 +173,18 @@ def refine(z: np.ndarray, grid, vec: np.ndarray, curv_coef: float, zmax: float,
            out: np.ndarray, code: int, pyramid=True) -> int:
     """Replace every ``code`` in ``out`` by the exact answer with the cell's own sun; returns how
     many cells were refined."""
-    from .brute import pyramid_args
     if not (out == code).any():
         return 0
-    return int(_field_cpu(z, *pyramid_args(z, pyramid), np.ascontiguousarray(vec, np.float64),
-                          np.ascontiguousarray(grid.dx, np.float64),
-                          np.ascontiguousarray(grid.dy, np.float64), float(grid.col_sign),
-                          float(grid.row_sign), float(curv_coef), float(zmax), out,
-                          np.int64(code)))
+    return int(_field_cpu(z, *pyramid_args(z, pyramid), *sun_args(grid, vec, curv_coef),
+                          float(zmax), out, np.int64(code)))
 
 
 def shadow_mask_gpu(g, grid, vec: np.ndarray, curv_coef: float, zmax: float) -> np.ndarray:
     """``shadow_mask`` on the GPU (``g``: a ``gpu.GpuDem``)."""
     rows, cols = g.shape
     out = g.empty((rows, cols), np.uint8)
-    args = (g.upload(np.ascontiguousarray(vec, np.float64)),
-            g.upload(np.ascontiguousarray(grid.dx, np.float64)),
-            g.upload(np.ascontiguousarray(grid.dy, np.float64)))
+    v, dx, dy, cs, rs, cc = sun_args(grid, vec, curv_coef)
     with g.timed():
-        g.launch(_field_gpu, rows, cols, g.z, *g.pyramid_args(True), *args, float(grid.col_sign),
-                 float(grid.row_sign), float(curv_coef), float(zmax), out)
+        g.launch(_field_gpu, rows, cols, g.z, *g.pyramid_args(True), g.upload(v), g.upload(dx),
+                 g.upload(dy), cs, rs, cc, float(zmax), out)
     return g.download(out)

@@ -36,7 +36,7 @@ from numba import njit, prange
 from ..geometry import SunRays
 from .frames import frame_of, uniform_rays
 from ..gpu import cuda, kernel
-from .pyramid import climb, samples_left
+from .pyramid import climb, pyramid_args, samples_left
 from .raymath import line_position, madd, ray_origin, ray_sample, terrain_on_line
 
 METHODS = ("scan", "hull")
@@ -260,11 +260,6 @@ def _check(method, sample_spacing, rays):
     return method == "hull" and uniform_rays(rays) and not rays.curved
 
 
-def _pyramid(z, pyramid):
-    from .brute import pyramid_args
-    return pyramid_args(z, pyramid)
-
-
 def _tan_deg(a: float | None, default: float) -> float:
     if a is None or not math.isfinite(a):
         return default
@@ -298,7 +293,7 @@ def horizon_angles(z: np.ndarray, rays: SunRays, method: str = "scan", sample_sp
                          if rays.curved else
                          PER_ROW_SPACING + ": hull replaced by scan (exact, slower)")
     beta = np.empty(z.shape, np.float32)
-    _scan_kernel(z, *_pyramid(z, pyramid), rays.dom_col, rays.step_dom, rays.step_other,
+    _scan_kernel(z, *pyramid_args(z, pyramid), rays.dom_col, rays.step_dom, rays.step_other,
                  rays.rise, rays.step_m, rays.curv, np.int64(sample_spacing), float(zmax), False,
                  np.empty((1, 1), np.uint8), beta, _tan_deg(floor_deg, -np.inf),
                  _tan_deg(cap_deg, np.inf))
@@ -306,7 +301,7 @@ def horizon_angles(z: np.ndarray, rays: SunRays, method: str = "scan", sample_sp
 
 
 def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None, stats: dict | None = None,
-                method: str = "scan", sample_spacing: int = 1) -> np.ndarray:
+                method: str = "scan", sample_spacing: int = 1, pyramid=True) -> np.ndarray:
     """Mask by eq. 6 (lit iff β <= α): uint8 1 shadow / 0 lit / 255 void. ``scan`` with sp = 1
     equals ``brute`` cell for cell."""
     hull = _check(method, sample_spacing, rays)
@@ -321,7 +316,7 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None, stats: 
                          if rays.curved else
                          PER_ROW_SPACING + ": hull replaced by scan (exact, slower)")
     out = np.empty(z.shape, np.uint8)
-    _scan_kernel(z, *_pyramid(z, True), rays.dom_col, rays.step_dom, rays.step_other, rays.rise,
+    _scan_kernel(z, *pyramid_args(z, pyramid), rays.dom_col, rays.step_dom, rays.step_other, rays.rise,
                  rays.step_m, rays.curv, np.int64(sample_spacing), float(zmax), True, out,
                  np.empty((1, 1), np.float32), -np.inf, np.inf)
     return out

@@ -38,29 +38,41 @@ MAX_LEVELS = 15
 
 
 class MaxPyramid:
-    """The pyramid of one DEM: ``data`` (float32, all levels, flat), ``offsets`` (int64, start of
-    level l at ``offsets[l]``), ``widths`` (int64, blocks per row of level l), ``nlev``."""
+    """The pyramid of one DEM, built at its first use (``args``): ``data`` (float32, all levels,
+    flat), ``offsets`` (int64, start of level l at ``offsets[l]``), ``widths`` (int64, blocks per
+    row of level l), ``nlev``. A caller can hand one to every method that might march (the
+    engine keeps one per raster); only a march pays for it, once."""
 
-    __slots__ = ("data", "offsets", "widths", "nlev", "shape")
+    __slots__ = ("_z", "_built", "shape")
 
     def __init__(self, z: np.ndarray):
-        self.shape = z.shape
-        self.data, self.offsets, self.widths, self.nlev = _build(z)
+        self._z, self._built, self.shape = z, None, z.shape
 
     @property
     def args(self):
-        return self.data, self.offsets, self.widths, np.int64(self.nlev)
+        if self._built is None:
+            data, off, widths, nlev = _build(self._z)
+            self._built, self._z = (data, off, widths, np.int64(nlev)), None
+        return self._built
 
     @property
     def nbytes(self) -> int:
-        return int(self.data.nbytes)
+        return int(self.args[0].nbytes)
 
 
-def pyramid_for(z: np.ndarray, pyramid: "MaxPyramid | None") -> "MaxPyramid":
-    """``pyramid`` when it is the pyramid of an array of z's shape, else a new one of ``z``."""
-    if pyramid is not None and pyramid.shape == z.shape:
-        return pyramid
-    return MaxPyramid(z)
+# the kernels' pyramid arguments for the plain march (nlev 0: no level to skip over)
+NO_PYRAMID = (np.zeros(1, np.float32), np.zeros(2, np.int64), np.zeros(1, np.int64), np.int64(0))
+
+
+def pyramid_args(z: np.ndarray, pyramid) -> tuple:
+    """The kernels' pyramid arguments: ``pyramid`` False (or None) for the plain march, True for
+    a new pyramid of ``z``, or a ``MaxPyramid`` to reuse (when it is of an array of z's shape;
+    else a new one)."""
+    if pyramid is False or pyramid is None:
+        return NO_PYRAMID
+    if isinstance(pyramid, MaxPyramid) and pyramid.shape == z.shape:
+        return pyramid.args
+    return MaxPyramid(z).args
 
 
 @njit(cache=True)

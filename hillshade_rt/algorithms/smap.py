@@ -846,7 +846,7 @@ class BandCarry:
 
 
 def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None, stats: dict | None = None,
-                nextv: str = "scan", better_nextv: bool = False) -> np.ndarray:
+                nextv: str = "scan", better_nextv: bool = False, pyramid=True) -> np.ndarray:
     """Shadow mask by SMap (uint8: 1 shadow, 0 lit, 255 void); equal to ``brute`` cell for cell.
 
     ``stats`` (a dict, optional) receives ``black_fraction`` and ``smap_bytes``, or a ``note`` when
@@ -858,7 +858,7 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None, stats: 
         if stats is not None:
             stats["note"] = (PER_ROW_SPACING + ": smap marched every cell's ray like brute "
                              "(same result, brute's speed)")
-        return brute.shadow_mask(z, rays, zmax)
+        return brute.shadow_mask(z, rays, zmax, pyramid=pyramid)
     sm = SMap(z, 0.0, 0.0, rays=rays, zmax=zmax, nextv=nextv, better_nextv=better_nextv)
     if stats is not None:
         stats["black_fraction"] = sm.black_fraction

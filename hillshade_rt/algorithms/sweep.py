@@ -78,6 +78,7 @@ from numba import njit, prange
 
 from ..geometry import SunRays
 from . import brute
+from .counts import valid_range
 from .frames import frame_of, uniform_rays
 from ..gpu import cuda, kernel
 from .raymath import line_position, madd, terrain_on_line
@@ -263,6 +264,18 @@ def _dem_index(i, n, flip):
 
 
 @njit(cache=True)
+def _line_slots(v, nb, R, L, flip_line):
+    """Ring row and DEM column of canonical lines v, v-1, ..., v-nb+1 (lines that are DEM
+    columns), worked out once per block for ``_load_lines`` and ``_store_lines``."""
+    rows = np.empty(nb, np.int64)
+    cols = np.empty(nb, np.int64)
+    for i in range(nb):
+        rows[i] = (v - i) % R
+        cols[i] = _dem_index(v - i, L, flip_line)
+    return rows, cols
+
+
+@njit(cache=True)
 def _load_lines(z, ring, v, nb, p0, p1, dom_col, flip_line, flip_pos):
     """Copy canonical lines v, v-1, ..., v-nb+1 at positions [p0, p1) of the DEM-shaped array
     ``z`` into the ring rows ``(v - i) % R`` of ``ring``. Lines that are DEM columns go position
@@ -272,11 +285,7 @@ def _load_lines(z, ring, v, nb, p0, p1, dom_col, flip_line, flip_pos):
     R = ring.shape[0]
     if dom_col:
         P, L = z.shape
-        rows = np.empty(nb, np.int64)     # ring row and DEM column of each line, once
-        cols = np.empty(nb, np.int64)
-        for i in range(nb):
-            rows[i] = (v - i) % R
-            cols[i] = _dem_index(v - i, L, flip_line)
+        rows, cols = _line_slots(v, nb, R, L, flip_line)
         for p in range(p0, p1):
             r = _dem_index(p, P, flip_pos)
             for i in range(nb):
@@ -301,11 +310,7 @@ def _store_lines(out, ring, v, nb, p0, p1, dom_col, flip_line, flip_pos):
     R = ring.shape[0]
     if dom_col:
         P, L = out.shape
-        rows = np.empty(nb, np.int64)
-        cols = np.empty(nb, np.int64)
-        for i in range(nb):
-            rows[i] = (v - i) % R
-            cols[i] = _dem_index(v - i, L, flip_line)
+        rows, cols = _line_slots(v, nb, R, L, flip_line)
         for p in range(p0, p1):
             r = _dem_index(p, P, flip_pos)
             for i in range(nb):
@@ -353,6 +358,33 @@ def _strip_block(z, Z, RZ, RS, RO, void, zfloor, zmax, T, d, fr, v_top, nb, p0, 
     _store_lines(out, RO, v_top, nb, p0, p1, dom_col, flip_line, flip_pos)
 
 
+@njit(cache=True)
+def strip_bounds(P, NS):
+    """Strip j of the wavefront covers positions [out[j+1], out[j]) (strip 0 at the far end of
+    the lines, the sun's side of the positions)."""
+    out = np.empty(NS + 1, np.int64)
+    for j in range(NS + 1):
+        out[j] = P - (j * P) // NS
+    return out
+
+
+@njit(cache=True, inline="always")
+def wave_block(t, j, L, B):
+    """(v_top, nb) of the block of lines strip j sweeps at step t of the wavefront: lines
+    v_top .. v_top-nb+1 from the sun's edge, strip j one block behind strip j-1; nb = 0 when
+    strip j has no block at that step. Steps run over range(wave_steps(L, B, NS))."""
+    b = t - j
+    if b < 0 or b >= (L + B - 1) // B:
+        return np.int64(0), np.int64(0)
+    v_top = L - 1 - b * B
+    return np.int64(v_top), np.int64(min(B, v_top + 1))
+
+
+@njit(cache=True, inline="always")
+def wave_steps(L, B, NS):
+    return (L + B - 1) // B + NS - 1
+
+
 @njit(parallel=True, cache=True)
 def _sweep_uniform(z, Z, dom_col, flip_line, flip_pos, s, rise, K, nstrips, void, zfloor,
                    zmax, out):
@@ -384,19 +416,14 @@ def _sweep_uniform(z, Z, dom_col, flip_line, flip_pos, s, rise, K, nstrips, void
         fr[k] = k * s - d[k]
     # positions whose K samples and both stored neighbours lie inside the line
     n_in = max(0, P - d[K] - (1 if fr[K] > 0.0 else 0))
-    bounds = np.empty(NS + 1, np.int64)   # strip j covers [bounds[j+1], bounds[j])
-    for j in range(NS + 1):
-        bounds[j] = P - (j * P) // NS
+    bounds = strip_bounds(P, NS)
     wmax = P // NS + 1
     T = np.empty((NS, 4, wmax))            # per strip: E, LO, HI, W of a line
-    nblocks = (L + B - 1) // B
-    for t in range(nblocks + NS - 1):
+    for t in range(wave_steps(L, B, NS)):
         for jj in prange(NS):
             j = np.int64(jj)
-            b = t - j
-            if b >= 0 and b < nblocks:
-                v_top = L - 1 - b * B
-                nb = min(B, v_top + 1)
+            v_top, nb = wave_block(t, j, L, B)
+            if nb > 0:
                 _strip_block(z, Z, RZ, RS, RO, void, zfloor, zmax, T[j], d, fr, v_top, nb,
                              bounds[j + 1], bounds[j], n_in, dom_col, flip_line, flip_pos,
                              s, rise, K, out)
@@ -529,31 +556,24 @@ def _trusted_floor(s_arr, rise_arr, per_line, K, zmin, zmax, shift, rtol):
     return out
 
 
-@njit(cache=True)
 def _z_range(z):
     """(lowest, highest valid height, whether there are voids) in one pass, no temporaries."""
-    lo = np.inf
-    hi = -np.inf
-    void = False
-    for r in range(z.shape[0]):   # 2-D loops: ravel() would copy a non-contiguous view
-        for h in z[r]:
-            if h != h:
-                void = True
-            else:
-                lo = min(lo, h)
-                hi = max(hi, h)
-    return lo, hi, void
+    n, lo, hi = valid_range(z)
+    return float(lo), float(hi), bool(n < z.size)
 
 
-def _strips(P: int, s: float, K: int) -> int:
+def _strips(P: int, s: float, K: int, slack: int = 2) -> int:
     """How many strips the wavefront cuts a line of P positions into: one per thread, each at
-    least MIN_STRIP positions and wider than the K-th sample's reach."""
-    return max(1, min(numba.get_num_threads(), P // max(MIN_STRIP, int(math.ceil(K * s)) + 2)))
+    least MIN_STRIP positions and wider than the K-th sample's reach (plus ``slack``)."""
+    return max(1, min(numba.get_num_threads(),
+                      P // max(MIN_STRIP, int(math.ceil(K * s)) + slack)))
 
 
 def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None,
-                stats: dict | None = None, exact_steps: int = EXACT_STEPS) -> np.ndarray:
-    """Shadow mask by the flag-map sweep: uint8 1 shadow / 0 lit / 255 void."""
+                stats: dict | None = None, exact_steps: int = EXACT_STEPS,
+                pyramid=True) -> np.ndarray:
+    """Shadow mask by the flag-map sweep: uint8 1 shadow / 0 lit / 255 void. ``pyramid``: for
+    the exact march of the unsure cells (as ``brute.refine``)."""
     out = np.empty(z.shape, np.uint8)
     if not math.isfinite(float(rays.rise[0])):   # sun at the zenith
         out[...] = np.where(np.isnan(z), 255, 0)
@@ -574,7 +594,7 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None,
         f, s, rise, per_line = _per_cell_rays(rays)
         hmin = _trusted_floor(s, rise, per_line, K, float(zmin), zmax, DRIFT_CELLS, DRIFT_RISE)
         _sweep_lines(f.view(z), s, rise, hmin, per_line, K, void, zfloor, zmax, f.view(out))
-    unsure = brute.refine(z, rays, out, UNSURE, zmax)
+    unsure = brute.refine(z, rays, out, UNSURE, zmax, pyramid)
     if stats is not None:
         stats["unsure_fraction"] = unsure / max(1, out.size)
     return out
