@@ -127,6 +127,33 @@ def test_real_dems(name, az, el, curved):
     assert st_b["undecided_fraction"] < 0.35
 
 
+@pytest.mark.parametrize("lat0,span", [(27.5, 1.0), (62.0, 8.0), (-75.0, 10.0)])
+@pytest.mark.parametrize("az", [163.0, 203.7, 290.0])
+def test_bounds_on_per_row_grids_carry_blocks_exactly(lat0, span, az):
+    """Per-row spacing: the bounds are carried bin to bin in blocks of lines and widen only at
+    a block's end (``bounds._blocks``). Rough terrain high enough for long rays, spacings from a
+    1-degree SRTM tile to polar rows (blocks of a few lines): the mask is the plain march's,
+    and the bounds leave about as few cells undecided as on one spacing (they left 5-10 times
+    as many when they widened by a bin per line)."""
+    rows, cols = 240, 200
+    z = _terrain("spectral", rows, cols, 11, 3000.0)
+    z[50:53, 60:70] = np.nan
+    lat = lat0 + np.linspace(0.0, span, rows)
+    dx = 92.6 * np.cos(np.radians(lat))
+    grid = Grid(rows, cols, dx, np.full(rows, 92.6), 1, -1, "per row")
+    uni = Grid.uniform(rows, cols, float(dx[rows // 2]), 92.6)
+    for el in (3.0, 8.0):
+        rays = sun_rays(grid, az, el)
+        s = np.abs(rays.step_other)
+        M, W_end = bounds._blocks(float(s.max() - s.min()))
+        assert (M > 1 and W_end == 2) if span <= 1.0 else M >= 1
+        st_g, st_u = {}, {}
+        np.testing.assert_array_equal(bounds.shadow_mask(z, rays, stats=st_g), _plain(z, rays))
+        bounds.shadow_mask(z, sun_rays(uni, az, el), stats=st_u)
+        if span <= 1.0:
+            assert st_g["undecided_fraction"] <= 2.0 * st_u["undecided_fraction"] + 0.002
+
+
 def test_pyramid_is_a_bound_of_every_block():
     z = _terrain("noise", 37, 53, 3, 100.0)
     z[3, 4] = np.nan
@@ -170,10 +197,14 @@ def test_auto_picks_bounds_on_mountains_and_brute_on_short_rays():
     # a geographic tile too narrow for the wavefront to use a second thread: brute
     import numba
     if numba.get_num_threads() >= 2:
+        lat = np.linspace(32.0, 32.1, 100)
+        grid = Grid(100, 300, 92.6 * np.cos(np.radians(lat)), np.full(100, 92.6), 1, -1, "")
+        rays = sun_rays(grid, 290.0, 3.0)
+        assert auto.choose((100, 300), 1.0, (0.0, 2000.0), rays)[0] == "brute"
         lat = np.linspace(32.0, 33.0, 300)
         grid = Grid(300, 300, 92.6 * np.cos(np.radians(lat)), np.full(300, 92.6), 1, -1, "")
-        rays = sun_rays(grid, 290.0, 3.0)
-        assert auto.choose((300, 300), 1.0, (0.0, 2000.0), rays)[0] == "brute"
+        rays = sun_rays(grid, 290.0, 3.0)     # two strips of 150 positions
+        assert auto.choose((300, 300), 1.0, (0.0, 2000.0), rays)[0] == "bounds"
     st_ = {}
     auto.shadow_mask(_terrain("spectral", 64, 64, 5, 500.0), rays, stats=st_)
     assert st_["auto"]["chose"] in ({"bounds": 1}, {"brute": 1}) and st_["auto"]["why"]

@@ -9,11 +9,11 @@ fitted to ``make bench-real`` (docs/benchmarks.md, 2 cores):
   DEM's relief, ``(zmax - zmin) / rise``, at most the raster's extent along the ray.
 * So ``auto`` estimates both rates (Mcells/s, 2 cores, ``make bench-real``): bounds about
   ``BOUNDS_MPIX`` on one ray for the raster, ``BOUNDS_MPIX_PER_ROW`` on per-row rays
-  (geographic), scaled by the share of threads its wavefront can use (one strip per 256
+  (geographic), scaled by the share of threads its wavefront can use (one strip per 64
   positions); brute ``BRUTE_MPIX`` per valid cell, faster in proportion where the reach is
   shorter than ``SHORT_REACH`` steps. It runs the faster. On New Zealand's 1 km DEM with 83 %
   sea as nodata that is brute at every sun; on the mountain DEMs and fractals bounds at 3-20
-  deg; on a small geographic tile (Jacksboro, 403 columns: one strip) brute.
+  deg; on a tile under 128 positions across (one strip) brute.
 * On the GPU: ``brute`` over the pyramid (one thread per cell; the bounds sweep has no GPU
   kernel).
 
@@ -35,7 +35,7 @@ from .counts import valid_range
 from .frames import uniform_rays
 
 BOUNDS_MPIX = 35.0           # bounds, one ray for the raster, all cells (2 cores)
-BOUNDS_MPIX_PER_ROW = 22.0   # bounds, per-row rays
+BOUNDS_MPIX_PER_ROW = 30.0   # bounds, per-row rays
 BRUTE_MPIX = 17.0            # brute over the pyramid, per valid cell, long rays (2 cores)
 SHORT_REACH = 64.0           # rays shorter than this many steps make brute faster in proportion
 

@@ -129,13 +129,10 @@ def _build(z):
 def climb(pyr, off, widths, nlev, lev, rr, cc, hr):
     """The coarsest level, from one above ``lev``, whose block holding cell (rr, cc) is lower
     than ``hr`` (0: none is; take the sample)."""
-    if lev < nlev:
-        lev += 1
-    while lev > 0:
-        if pyr[off[lev] + (rr >> lev) * widths[lev] + (cc >> lev)] < hr:
-            break
-        lev -= 1
-    return lev
+    up = lev + 1 if lev < nlev else lev
+    while up > 0 and not pyr[off[up] + (rr >> up) * widths[up] + (cc >> up)] < hr:
+        up -= 1
+    return up
 
 
 @njit(cache=True, inline="always")

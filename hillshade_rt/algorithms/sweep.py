@@ -562,11 +562,11 @@ def _z_range(z):
     return float(lo), float(hi), bool(n < z.size)
 
 
-def _strips(P: int, s: float, K: int, slack: int = 2) -> int:
+def _strips(P: int, s: float, K: int, slack: int = 2, min_strip: int = MIN_STRIP) -> int:
     """How many strips the wavefront cuts a line of P positions into: one per thread, each at
-    least MIN_STRIP positions and wider than the K-th sample's reach (plus ``slack``)."""
+    least ``min_strip`` positions and wider than the K-th sample's reach (plus ``slack``)."""
     return max(1, min(numba.get_num_threads(),
-                      P // max(MIN_STRIP, int(math.ceil(K * s)) + slack)))
+                      P // max(min_strip, int(math.ceil(K * s)) + slack)))
 
 
 def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None,
