@@ -797,7 +797,7 @@ def _light_in_memory(inputs, read_opts, scale, req, out, timer, algorithm, optio
         zmin, zmax = d.height_range()
         shader = Shader(d.heights, d.grid, algorithm, options, ran_on,
                         "auto" if curvature is None else curvature, refraction_k,
-                        dem_body(d, req.lat), (zmin, zmax))
+                        dem_body(d, req.lat), (zmin, zmax), survey=d.survey())
         day = [s for s in suns if not s.night]
         if day:
             shader.warm_up(day[0].azimuth, day[0].elevation, soft=soft,
@@ -1032,7 +1032,7 @@ def sun_hours(dem, output, date_, end_date, step, tz, lat, lon, pressure, temper
         zmin, zmax = d.height_range()
         shader = Shader(d.heights, d.grid, algorithm, {}, ran_on,
                         "auto" if curvature is None else curvature, refraction_k,
-                        dem_body(d, lat), (zmin, zmax))
+                        dem_body(d, lat), (zmin, zmax), survey=d.survey())
 
         def dark(s):
             top = max([r.elevation for r in s.tiles] if s.tiles else [s.elevation])

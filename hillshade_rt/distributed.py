@@ -66,7 +66,7 @@ def shade_piece(job, piece, path: str, nodata, stride: int | None = None) -> dic
     from affine import Affine
     from rasterio.errors import NotGeoreferencedWarning
 
-    from .io import atomic_path, gdal_checked
+    from .io import DEFLATE_LEVEL, atomic_path, gdal_checked
     from .preview import every_nth, shade_of
     from .report import product_stats
     from .tiling import GDAL_CACHE_MB
@@ -94,7 +94,8 @@ def shade_piece(job, piece, path: str, nodata, stride: int | None = None) -> dic
     g0, g1, h0, h1 = piece.region
     src = job.source
     prof = dict(driver="GTiff", width=h1 - h0, height=g1 - g0, count=1, dtype=arr.dtype.name,
-                nodata=nodata, compress="deflate", tiled=True, blockxsize=256, blockysize=256)
+                nodata=nodata, compress="deflate", zlevel=DEFLATE_LEVEL, tiled=True,
+                blockxsize=256, blockysize=256)
     if src.crs is not None:
         prof["crs"] = src.crs
     if src.transform is not None:

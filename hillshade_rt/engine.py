@@ -183,7 +183,8 @@ class Shader:
                  refraction_k: float | None = None, body: Body | None = None,
                  zrange: tuple[float, float] | None = None, extent_m: float | None = None,
                  halo_ready: bool = False, local_range: tuple[float, float] | None = None,
-                 carry=None, place=None, sun_field: bool = False):
+                 carry=None, place=None, sun_field: bool = False,
+                 survey: tuple[int, float, float] | None = None):
         from .algorithms import ALGORITHMS
         if algorithm not in ALGORITHMS:
             raise HillshadeError(f"unknown algorithm {algorithm!r}; choose one of "
@@ -214,7 +215,10 @@ class Shader:
         self.sun_field = sun_field
         self._gpu = None
         self._pyramid = None     # the maximum-height pyramid of the whole raster, built once
-        self._survey = None      # (valid fraction, lowest, highest) for --algorithm auto
+        # (valid fraction, lowest, highest) of z for --algorithm auto; ``survey``: the read's
+        # (valid cells, lowest, highest) of z, when the caller has it (saves a pass)
+        self._survey = (None if survey is None else
+                        (survey[0] / max(1, z.size), float(survey[1]), float(survey[2])))
         self.stats: dict = {}
         self.curvature_used: set = set()   # True/False seen, and the radii used (m)
 

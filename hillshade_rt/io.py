@@ -44,13 +44,23 @@ class Dem:
     driver: str = ""
     source_dtype: str = ""
     notes: list[str] = field(default_factory=list)
+    _survey: tuple | None = field(default=None, repr=False, compare=False)
 
     @property
     def shape(self) -> tuple[int, int]:
         return self.heights.shape  # type: ignore[return-value]
 
+    def survey(self) -> tuple[int, float, float]:
+        """(valid cells, lowest, highest valid height), found by the read's nodata pass or by one
+        parallel pass, kept (whoever changes ``heights`` in place sets ``_survey`` to None)."""
+        if self._survey is None:
+            from .algorithms.counts import valid_range
+            n, lo, hi = valid_range(self.heights)
+            self._survey = (int(n), float(lo), float(hi))
+        return self._survey
+
     def valid_count(self) -> int:
-        return int(self.heights.size - np.count_nonzero(np.isnan(self.heights)))
+        return self.survey()[0]
 
     def centre_height(self) -> tuple[float, str]:
         """The observer's height for suns from times (``sun.centre_height_of``)."""
@@ -58,7 +68,8 @@ class Dem:
         return centre_height_of(self.heights)
 
     def height_range(self) -> tuple[float, float]:
-        return float(np.nanmin(self.heights)), float(np.nanmax(self.heights))
+        """(lowest, highest) valid height; (inf, -inf) when none is valid."""
+        return self.survey()[1:]
 
     def crs_string(self) -> str | None:
         if self.crs is None:
@@ -381,7 +392,10 @@ def read_dem(path: str, *, band: int = 1, nodata: float | None = None,
         tiff = ext in TIFF_EXTS or (data is not None and _has_tiff_magic(path, data))
         dem = _read_gdal(path, band, nodata, pixel_size, tiff_fallback=tiff, data=data)
     if z_factor != 1.0:
-        dem.heights *= np.float32(z_factor)
+        with np.errstate(over="ignore"):
+            dem.heights *= np.float32(z_factor)
+        # a height the factor takes beyond float32 is no height (NaN, as -inf/inf on reading)
+        dem._survey = heights_into(dem.heights, None, dem.heights)
     if dem.heights.size == 0:
         raise HillshadeError(f"{path}: the raster is empty")
     if dem.valid_count() == 0:
@@ -389,23 +403,30 @@ def read_dem(path: str, *, band: int = 1, nodata: float | None = None,
     return dem
 
 
-def _to_heights(data: np.ndarray, nodata: float | None) -> np.ndarray:
-    """float32 heights with nodata (and NaN, and +-inf) as NaN.
+def _to_heights(data: np.ndarray, nodata: float | None) -> tuple[np.ndarray, tuple | None]:
+    """float32 heights with nodata (and NaN, and +-inf) as NaN, and their survey when the pass
+    found it (``heights_into``).
 
     ``data`` is an array this module has just read and owns: a float32 one is converted in place,
     any other type is cast once.
     """
     z = data.astype(np.float32, copy=False)
-    heights_into(data, nodata, z)
-    return z
+    return z, heights_into(data, nodata, z)
 
 
 def heights_into(data: np.ndarray, nodata: float | None, out: np.ndarray,
-                 z_factor: float = 1.0) -> None:
+                 z_factor: float = 1.0) -> tuple | None:
     """``out[...]`` = float32 heights of ``data`` (``out`` may be ``data`` itself): nodata, NaN and
     +-inf as NaN, times ``z_factor``. Nodata is compared in the source type: a float32 cast of
     e.g. -3.4028235e38 must still match; a value the type cannot hold (-1 for uint16) matches
-    nothing instead of wrapping around."""
+    nothing instead of wrapping around. Float32 heights converted in place take one parallel
+    pass that also returns their (valid cells, lowest, highest); otherwise None."""
+    if (out is data and data.dtype == np.float32 and data.ndim == 2 and z_factor == 1.0
+            and data.flags.c_contiguous and data.flags.writeable and data.size >= 1 << 16):
+        from .algorithms.counts import clean_heights
+        use = nodata is not None and not math.isnan(nodata)
+        n, lo, hi = clean_heights(data, float(nodata) if use else 0.0, use)
+        return int(n), float(lo), float(hi)
     # one boolean scratch array and masked copies, no fancy indexing: on a 10000² DEM the read
     # stage spent 1 s here (four temporaries and two boolean-index passes)
     mask = np.empty(out.shape, np.bool_)
@@ -485,9 +506,11 @@ def _read_gdal(path: str, band: int, nodata: float | None,
             raise read_error(path, exc, gdal_path(path)) from None
         src_nodata = ds.nodatavals[band - 1]
         nd = src_nodata if nodata is None else nodata
-        dem = Dem(heights=_to_heights(values, nd), grid=None, path=path,  # type: ignore[arg-type]
+        z, survey = _to_heights(values, nd)
+        dem = Dem(heights=z, grid=None, path=path,  # type: ignore[arg-type]
                   kind="gdal", transform=ds.transform if georef else None, crs=ds.crs,
-                  nodata=nd, band=band, driver=ds.driver, source_dtype=str(values.dtype))
+                  nodata=nd, band=band, driver=ds.driver, source_dtype=str(values.dtype),
+                  _survey=survey)
     dem.grid = _make_grid(dem, pixel_size)
     return dem
 
@@ -539,9 +562,10 @@ def _read_tiff(path: str, band: int, nodata: float | None,
     if values.dtype.kind not in "iuf":
         raise HillshadeError(f"{path}: pixel type {values.dtype} is not a height")
     nd = file_nodata if nodata is None else nodata
-    dem = Dem(heights=_to_heights(values, nd), grid=None, path=path,  # type: ignore[arg-type]
+    z, survey = _to_heights(values, nd)
+    dem = Dem(heights=z, grid=None, path=path,  # type: ignore[arg-type]
               kind="tiff", nodata=nd, band=band, driver="TIFF (tifffile)",
-              source_dtype=str(values.dtype))
+              source_dtype=str(values.dtype), _survey=survey)
     dem.grid = _make_grid(dem, pixel_size)
     return dem
 
@@ -603,9 +627,11 @@ def _read_raw(path: str, shape: tuple[int, int] | None, dtype: str | None,
     else:   # a writable copy: float32 heights are converted in place
         values = np.frombuffer(bytearray(data), dtype=dt).reshape(shape)
     transform, crs = _hgt_geometry(path, shape[0]) if is_hgt else (None, None)
-    dem = Dem(heights=_to_heights(values, nodata), grid=None, path=path,  # type: ignore[arg-type]
+    z, survey = _to_heights(values, nodata)
+    dem = Dem(heights=z, grid=None, path=path,  # type: ignore[arg-type]
               kind="raw", transform=transform, crs=crs, nodata=nodata,
-              driver="raw" if not is_hgt else "SRTM .hgt (raw)", source_dtype=dt.str)
+              driver="raw" if not is_hgt else "SRTM .hgt (raw)", source_dtype=dt.str,
+              _survey=survey)
     dem.grid = _make_grid(dem, pixel_size)
     return dem
 
@@ -671,12 +697,17 @@ def check_output_format(path: str, drv: str, dtype: str, count: int, continuous:
                              "PNG (.png) or GeoTIFF (.tif)")
 
 
+DEFLATE_LEVEL = 3   # GeoTIFF outputs: DEFLATE at this level (see _profile)
+
+
 def _profile(dem: Dem, dtype: str, nodata) -> dict:
     rows, cols = dem.shape
-    # num_threads: GDAL compresses the blocks on every core (same bytes, less time)
+    # num_threads: GDAL compresses the blocks on every core (same bytes, less time); zlevel 3:
+    # a 10000² shadow mask in 0.42 s instead of 1.6 s at GDAL's default 6, 11 % larger (a
+    # float32 band 27 % faster, 1 % larger)
     prof = dict(driver="GTiff", width=cols, height=rows, count=1, dtype=dtype, nodata=nodata,
-                compress="deflate", tiled=True, blockxsize=256, blockysize=256,
-                num_threads="ALL_CPUS")
+                compress="deflate", zlevel=DEFLATE_LEVEL, tiled=True, blockxsize=256,
+                blockysize=256, num_threads="ALL_CPUS")
     if dem.crs is not None:
         prof["crs"] = dem.crs
     if dem.transform is not None:

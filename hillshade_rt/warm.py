@@ -3,7 +3,8 @@ runs it), so that the first shading after an install does not wait for numba.
 
 What it compiles is what ``hillshade-rt shadow`` and ``hillshade`` use by default on the common
 DEMs: auto's two methods, bounds and brute over the pyramid (with curvature), on a grid of one spacing (projected DEMs) and on a
-grid whose spacing varies per row (geographic DEMs), and the Horn normals of the relief. Each
+grid whose spacing varies per row (geographic DEMs), the Horn normals of the relief and the
+read's nodata pass. Each
 kernel lands in numba's cache (``~/.cache/hillshade-rt/numba/<digest>``); what is already there
 is only loaded.
 """
@@ -21,7 +22,7 @@ def main() -> int:
     from .engine import Body, Shader
     from .geometry import Grid
 
-    todo = [m for m in ("bounds", "brute", "pyramid", "relief") if not cached(m)]
+    todo = [m for m in ("bounds", "brute", "pyramid", "relief", "counts") if not cached(m)]
     if not todo:
         return 0
     print(f"hillshade-rt: compiling the {', '.join(todo)} kernels once (cached in "
@@ -33,6 +34,8 @@ def main() -> int:
     for grid in grids:
         sh = Shader(z, grid, "auto", {}, "cpu", True, None, Body(), (0.0, 1.0))
         sh.warm_up(203.7, 10.0, soft=False, incidence=True)
+    from .algorithms.counts import clean_heights
+    clean_heights(np.zeros((4, 4), np.float32), 0.0, True)   # the read's nodata pass
     print(f"hillshade-rt: kernels ready ({time.perf_counter() - t0:.0f} s)", file=sys.stderr)
     return 0
 

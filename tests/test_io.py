@@ -46,6 +46,35 @@ def test_nodata_the_type_cannot_hold_matches_nothing(tmp_path):
     assert read_dem(p, nodata=65535).valid_count() == 1
 
 
+@pytest.mark.parametrize("nodata", [None, -9999.0, -3.4028234663852886e38, 0.0])
+def test_the_reads_one_pass_equals_numpy(tmp_path, nodata):
+    """Float32 DEMs of 2^16 cells or more take one parallel nodata pass (``counts.
+    clean_heights``) that also finds the valid count and height range: the same heights (NaN
+    where numpy's passes put them) and the survey of the result; z_factor drops the survey."""
+    rng = np.random.default_rng(4)
+    z = (rng.random((300, 310)) * 900 - 100).astype(np.float32)
+    z[rng.random(z.shape) < 0.05] = -9999.0
+    z[rng.random(z.shape) < 0.02] = np.float32(-3.4028234663852886e38)
+    z[3, 3], z[4, 4], z[5, 5], z[6, 6] = np.nan, np.inf, -np.inf, 0.0
+    p = write_geotiff(tmp_path / "f.tif", z, Affine(10, 0, 400000, 0, -10, 3800000), UTM, nodata)
+    d = read_dem(p)
+    want = z.copy()
+    want[~np.isfinite(want)] = np.nan
+    if nodata is not None:
+        want[z == np.float32(nodata)] = np.nan
+    np.testing.assert_array_equal(d.heights, want)
+    assert d._survey is not None            # found by the read's pass
+    assert d.survey() == (int(np.isfinite(want).sum()), float(np.nanmin(want)),
+                          float(np.nanmax(want)))
+    d2 = read_dem(p, z_factor=2.0)
+    with np.errstate(over="ignore"):
+        want2 = want * np.float32(2.0)
+    want2[~np.isfinite(want2)] = np.nan      # beyond float32: no height
+    np.testing.assert_array_equal(d2.heights, want2)
+    assert d2.survey() == (int(np.isfinite(want2).sum()), float(np.nanmin(want2)),
+                           float(np.nanmax(want2)))
+
+
 def test_band_selection(tmp_path):
     z = np.stack([np.zeros((10, 10), np.float32), box_terrain(10, 10, 5.0, 4, 6, 4, 6)])
     p = write_geotiff(tmp_path / "two.tif", z, Affine(1, 0, 400000, 0, -1, 3800000), UTM)

@@ -1,6 +1,7 @@
 """Counting passes, parallel and without temporaries: a product's codes (the report's cell
-counts, without the int64 copy of every cell that ``np.bincount`` makes of a uint8 array), and a
-DEM's valid cells and height range (``auto``'s survey, ``sweep``, ``bounds``, the GPU)."""
+counts, without the int64 copy of every cell that ``np.bincount`` makes of a uint8 array), a
+DEM's valid cells and height range (``auto``'s survey, ``sweep``, ``bounds``, the GPU), and the
+read's nodata-to-NaN pass that finds them on the way (``clean_heights``)."""
 
 import numpy as np
 from numba import njit, prange
@@ -44,4 +45,34 @@ def valid_range(z):
                 b = min(b, h)
                 c = max(c, h)
         n[r], lo[r], hi[r] = a, b, c
+    return n.sum(), lo.min() if rows else np.inf, hi.max() if rows else -np.inf
+
+
+@njit(cache=True)
+def _clean_line(line, nd, use_nodata):
+    nan = np.float32(np.nan)
+    a, b, c = 0, np.inf, -np.inf
+    for j in range(line.shape[0]):
+        h = line[j]
+        if (use_nodata and h == nd) or not np.isfinite(h):
+            line[j] = nan
+        else:
+            a += 1
+            b = min(b, h)
+            c = max(c, h)
+    return a, b, c
+
+
+@njit(parallel=True, cache=True)
+def clean_heights(z, nodata, use_nodata):
+    """In place on 2-D float32 heights: ``nodata`` (when ``use_nodata``), NaN and +-inf to NaN;
+    returns ``valid_range`` of the result. One parallel pass (numpy's took five, 0.32 s of a
+    10000² read, and the valid count and height range two more)."""
+    rows = z.shape[0]
+    nd = np.float32(nodata)
+    n = np.zeros(rows, np.int64)
+    lo = np.full(rows, np.inf)
+    hi = np.full(rows, -np.inf)
+    for r in prange(rows):
+        n[r], lo[r], hi[r] = _clean_line(z[r], nd, use_nodata)
     return n.sum(), lo.min() if rows else np.inf, hi.max() if rows else -np.inf
