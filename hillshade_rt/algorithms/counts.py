@@ -76,3 +76,17 @@ def clean_heights(z, nodata, use_nodata):
     for r in prange(rows):
         n[r], lo[r], hi[r] = _clean_line(z[r], nd, use_nodata)
     return n.sum(), lo.min() if rows else np.inf, hi.max() if rows else -np.inf
+
+
+@njit(parallel=True, cache=True)
+def has_code(a, code):
+    """Whether the 2-D uint8 array ``a`` holds ``code`` anywhere (parallel over rows, without the
+    boolean copy of ``(a == code).any()``)."""
+    rows = a.shape[0]
+    hit = np.zeros(rows, np.bool_)
+    for r in prange(rows):
+        for v in a[r]:
+            if v == code:
+                hit[r] = True
+                break
+    return hit.any()
