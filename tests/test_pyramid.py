@@ -23,7 +23,8 @@ sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "benchmarks"))
 import terrain  # noqa: E402
 
 from hillshade_rt import read_dem
-from hillshade_rt.algorithms import auto, bounds, brute
+from hillshade_rt.algorithms import auto, bounds, brute, smap
+from hillshade_rt.algorithms.frames import uniform_rays
 from hillshade_rt.algorithms.pyramid import MaxPyramid, _levels
 from hillshade_rt.geometry import Grid, curvature_per_m2, sun_rays
 
@@ -93,6 +94,12 @@ def test_pyramid_bounds_auto_equal_the_plain_march(case):
     np.testing.assert_array_equal(bounds.shadow_mask(z, rays, stats=st_b), ref, "bounds")
     assert 0.0 <= st_b["undecided_fraction"] <= 1.0
     np.testing.assert_array_equal(auto.shadow_mask(z, rays), ref, "auto")
+    if uniform_rays(rays):   # smap's jump loop over the pyramid (it takes straight rays)
+        flat = sun_rays(grid, az, el)
+        ref_flat = ref if curv == 0.0 else _plain(z, flat)
+        for pyr in (True, False):
+            np.testing.assert_array_equal(smap.shadow_mask(z, flat, pyramid=pyr), ref_flat,
+                                          f"smap, pyramid {pyr}")
 
 
 @pytest.mark.parametrize("az", [163.0, 203.7, 290.0, 20.0])

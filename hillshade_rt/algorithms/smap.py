@@ -54,11 +54,13 @@ from ..errors import HillshadeError
 from ..geometry import Grid, SunRays, heights_and_grid, sun_rays
 from .frames import Frame, frame_of, uniform_rays
 from ..gpu import cuda, kernel
+from .pyramid import NO_PYRAMID, climb, pyramid_args, samples_left
 from .raymath import line_position, madd, ray_origin, terrain_on_line
 
 WIDEN = 1e-6        # beams are widened by this much (cells) on both sides
 _BLOCK = 256        # elements per parallel work item in the Black pass
 NEXTV_METHODS = ("scan", "binary", "quad")
+PYRAMID_REACH = 32  # the jump loop takes the pyramid when rays may run this many steps or more
 
 
 # why the rays differ from row to row (the note of a run that could not share one ray)
@@ -339,6 +341,13 @@ def _colour(Z, v, e, s, rise, tol, fv, npc, oc, op, on, fr, bp, J):
     if v == 0:          # no ray samples the line farthest from the sun
         J[v, e] = -1
         return
+    P = Z.shape[1]
+    valid = False      # a section over voids only has no sample to peak (seas: most elements)
+    for j in range(max(0, e - 3), min(P, e + 1)):
+        valid = valid or Z[v, j] == Z[v, j]
+    if not valid:
+        J[v, e] = -1
+        return
     has_next = v < L - 1
     c = _is_black_fast(Z, v, e, rise, tol, npc, oc, op, on, fr, True, has_next)
     if c < 0:
@@ -527,11 +536,18 @@ def _nextv_better(Z, J, frac, shift, rise, tol):
 # IsShadowed
 
 @njit(cache=True)
-def _cell_blocked(z, J, frac, r, c, dom_col, sd, so, rise, flip_line, flip_pos, zmax):
+def _cell_blocked(z, pyr, off, widths, nlev, J, frac, r, c, dom_col, sd, so, rise, flip_line,
+                  flip_pos, zmax):
+    """Whether cell (r, c)'s ray is blocked: Black to Black through NextV, and over the
+    maximum-height pyramid ``(pyr, off, widths, nlev)`` of ``z`` (nlev 0: none) past every block
+    lower than the ray (``pyramid.climb``), which skips the Black lines of rough terrain where
+    the ray runs high (the jump loop alone visited most of them: 0.3-0.5x the plain march on
+    spectral fractals). Both skip only samples that cannot block: the same answer."""
     line0, other0, n_dom, n_oth = ray_origin(z, r, c, dom_col)
     h0 = float(z[np.int64(r), np.int64(c)])
     v0 = n_dom - 1 - line0 if flip_line else line0
     k = 1
+    lev = 0
     while True:
         v = v0 + k
         if v >= n_dom:
@@ -542,6 +558,14 @@ def _cell_blocked(z, J, frac, r, c, dom_col, sd, so, rise, flip_line, flip_pos, 
         pos = line_position(madd(float(other0), float(k), so), n_oth)
         if pos < 0.0:
             return False
+        if nlev > 0:
+            line = line0 + k * sd
+            i0 = np.int64(math.floor(pos))
+            lev = climb(pyr, off, widths, nlev, lev, i0 if dom_col else line,
+                        line if dom_col else i0, hr)
+            if lev > 0:        # the block is lower than the ray: past it
+                k += samples_left(lev, line, i0, pos, sd, so) + 1
+                continue
         p = (n_oth - 1) - pos if flip_pos else pos
         j = J[v, int(math.floor(p - frac[v])) + 2]
         if j == -1:
@@ -555,30 +579,35 @@ def _cell_blocked(z, J, frac, r, c, dom_col, sd, so, rise, flip_line, flip_pos, 
 
 
 @njit(cache=True, inline="always")
-def _mask_cell(z, J, frac, r, c, dom_col, sd, so, rise, flip_line, flip_pos, zmax, out):
+def _mask_cell(z, pyr, off, widths, nlev, J, frac, r, c, dom_col, sd, so, rise, flip_line,
+               flip_pos, zmax, out):
     if math.isnan(z[r, c]):
         out[r, c] = 255
-    elif _cell_blocked(z, J, frac, r, c, dom_col, sd, so, rise, flip_line, flip_pos, zmax):
+    elif _cell_blocked(z, pyr, off, widths, nlev, J, frac, r, c, dom_col, sd, so, rise,
+                       flip_line, flip_pos, zmax):
         out[r, c] = 1
     else:
         out[r, c] = 0
 
 
 @njit(parallel=True, cache=True)
-def _mask_kernel(z, J, frac, dom_col, sd, so, rise, flip_line, flip_pos, zmax, out, r0, r1, c0,
-                 c1):
+def _mask_kernel(z, pyr, off, widths, nlev, J, frac, dom_col, sd, so, rise, flip_line, flip_pos,
+                 zmax, out, r0, r1, c0, c1):
     """The cells of rows r0:r1, columns c0:c1 (of ``z`` and ``out``)."""
     for r in prange(r0, r1):
         for c in range(c0, c1):
-            _mask_cell(z, J, frac, r, c, dom_col, sd, so, rise, flip_line, flip_pos, zmax, out)
+            _mask_cell(z, pyr, off, widths, nlev, J, frac, r, c, dom_col, sd, so, rise,
+                       flip_line, flip_pos, zmax, out)
 
 
 @kernel
-def _mask_gpu(z, J, frac, dom_col, sd, so, rise, flip_line, flip_pos, zmax, out):
+def _mask_gpu(z, pyr, off, widths, nlev, J, frac, dom_col, sd, so, rise, flip_line, flip_pos,
+              zmax, out):
     """CUDA twin of ``_mask_kernel``: one thread per cell."""
     c, r = cuda.grid(2)
     if r < z.shape[0] and c < z.shape[1]:
-        _mask_cell(z, J, frac, r, c, dom_col, sd, so, rise, flip_line, flip_pos, zmax, out)
+        _mask_cell(z, pyr, off, widths, nlev, J, frac, r, c, dom_col, sd, so, rise, flip_line,
+                   flip_pos, zmax, out)
 
 
 @njit(parallel=True, cache=True)
@@ -694,15 +723,18 @@ class SMap:
         else:
             _nextv_doubling(self.J, self.shift, nextv == "quad")
 
-    def mask(self, out: np.ndarray | None = None) -> np.ndarray:
+    def mask(self, out: np.ndarray | None = None, pyramid=False) -> np.ndarray:
+        """The mask; ``pyramid`` (True, or a ``MaxPyramid`` of the heights) lets the jump loop
+        skip the blocks lower than a ray (same mask, less time on rough terrain)."""
         z, f = self.z, self.frame
         if out is None:
             out = np.empty(z.shape, np.uint8)
         if not (np.isfinite(self.zmax) and math.isfinite(f.rise)):
             out[...] = np.where(np.isnan(z), 255, 0)
             return out
-        _mask_kernel(z, self.J, self.frac, f.dom_col, np.int64(f.sd), f.so, f.rise, f.flip_line,
-                     f.flip_pos, self.zmax, out, 0, z.shape[0], 0, z.shape[1])
+        _mask_kernel(z, *pyramid_args(z, pyramid), self.J, self.frac, f.dom_col, np.int64(f.sd),
+                     f.so, f.rise, f.flip_line, f.flip_pos, self.zmax, out, 0, z.shape[0], 0,
+                     z.shape[1])
         return out
 
     def to_canonical(self, rows, cols):
@@ -840,8 +872,9 @@ class BandCarry:
         self.lines_carried += L - fresh
         out = np.zeros(z.shape, np.uint8)
         rs, cs = inner
-        _mask_kernel(z, J, frac, f.dom_col, np.int64(f.sd), f.so, f.rise, f.flip_line, f.flip_pos,
-                     float(zmax), out, rs.start, rs.stop, cs.start, cs.stop)
+        _mask_kernel(z, *NO_PYRAMID, J, frac, f.dom_col, np.int64(f.sd), f.so, f.rise,
+                     f.flip_line, f.flip_pos, float(zmax), out, rs.start, rs.stop, cs.start,
+                     cs.stop)
         return out
 
 
@@ -860,10 +893,16 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None, stats: 
                              "(same result, brute's speed)")
         return brute.shadow_mask(z, rays, zmax, pyramid=pyramid)
     sm = SMap(z, 0.0, 0.0, rays=rays, zmax=zmax, nextv=nextv, better_nextv=better_nextv)
+    # the pyramid pays where rays are long; on rays of a few steps its reads cost more than
+    # they skip (New Zealand's 1 km DEM at 20 deg: 7.9 ms against 4.8 for the jump loop alone)
+    lo = float(np.nanmin(z)) if pyramid is not False else zmax
+    if pyramid is not False and (zmax - lo) < PYRAMID_REACH * float(rays.rise[0]):
+        pyramid = False
     if stats is not None:
         stats["black_fraction"] = sm.black_fraction
         stats["smap_bytes"] = int(sm.J.nbytes)
-    return sm.mask()
+        stats["pyramid"] = pyramid is not False
+    return sm.mask(pyramid=pyramid)
 
 
 def shadow_mask_gpu(g, rays: SunRays, zmax: float, stats: dict | None = None, nextv: str = "scan",
@@ -903,8 +942,8 @@ def shadow_mask_gpu(g, rays: SunRays, zmax: float, stats: dict | None = None, ne
         while dist < L:
             g.launch(_nextv_pass_gpu, L, P + 2, J, d_shift, np.int64(dist))
             dist *= 2
-        g.launch(_mask_gpu, rows, cols, g.z, J, d_frac, f.dom_col, np.int64(f.sd), f.so, f.rise,
-                 f.flip_line, f.flip_pos, float(zmax), out)
+        g.launch(_mask_gpu, rows, cols, g.z, *g.pyramid_args(True), J, d_frac, f.dom_col,
+                 np.int64(f.sd), f.so, f.rise, f.flip_line, f.flip_pos, float(zmax), out)
     if stats is not None:
         stats["smap_bytes"] = int(L * (P + 2) * 4)
     return g.download(out)
