@@ -7,18 +7,19 @@ fitted to ``make bench-real`` (docs/benchmarks.md, 2 cores):
   marches the few cells it leaves open; ``brute`` (over the pyramid) pays per *valid* cell a
   march whose length grows with the **reach** of a ray: the steps it takes to rise over the
   DEM's relief, ``(zmax - zmin) / rise``, at most the raster's extent along the ray.
-* So ``auto`` estimates both rates (Mcells/s, 2 cores, ``make bench-real``): bounds about
-  ``BOUNDS_MPIX`` on one ray for the raster, ``BOUNDS_MPIX_PER_ROW`` on per-row rays
-  (geographic), scaled by the share of threads its wavefront can use (one strip per 64
-  positions); brute ``BRUTE_MPIX`` per valid cell, faster in proportion where the reach is
-  shorter than ``SHORT_REACH`` steps. It runs the faster. On New Zealand's 1 km DEM with 83 %
-  sea as nodata that is brute at every sun; on the mountain DEMs and fractals bounds at 3-20
-  deg; on a tile under 128 positions across (one strip) brute.
+* So ``auto`` estimates both costs (ns per cell on 2 cores, ``make bench-real``): bounds
+  ``BOUNDS_NS`` on one ray for the raster, ``BOUNDS_NS_PER_ROW`` on per-row rays (geographic),
+  divided by the share of threads its wavefront can use (one strip per 64 positions); brute
+  per *valid* cell ``BRUTE_NS_FIXED`` plus ``BRUTE_NS_PER_STEP`` per step of the reach, at most
+  ``BRUTE_NS_LONG`` (long rays skip over the pyramid: real DEMs gave 27 ns at a reach of 10
+  steps, 34-43 at 23-27, 49-62 at 59-72, 55-70 beyond). It runs the cheaper: brute on New
+  Zealand's 1 km DEM with 83 % sea as nodata at every sun and on gentle terrain under a high
+  sun; bounds on the mountain DEMs and fractals at 3-20 deg.
 * On the GPU: ``brute`` over the pyramid (one thread per cell; the bounds sweep has no GPU
   kernel).
 
-``smap``, ``horizon`` and ``sweep`` are never picked: on real terrain SMap is slower than the
-pyramid march at every benchmark sun, the horizon scan computes more than a mask, and sweep is
+``smap``, ``horizon`` and ``sweep`` are never picked: SMap (over the pyramid) is slower than
+bounds at every benchmark sun, the horizon scan computes more than a mask, and sweep is
 approximate. The choice and the figures behind it go to the report (``algorithm_stats.auto``).
 """
 
@@ -34,10 +35,12 @@ from . import bounds, brute
 from .counts import valid_range
 from .frames import uniform_rays
 
-BOUNDS_MPIX = 35.0           # bounds, one ray for the raster, all cells (2 cores)
-BOUNDS_MPIX_PER_ROW = 30.0   # bounds, per-row rays
-BRUTE_MPIX = 17.0            # brute over the pyramid, per valid cell, long rays (2 cores)
-SHORT_REACH = 64.0           # rays shorter than this many steps make brute faster in proportion
+# the cost model, ns per cell on 2 cores (make bench-real, 2026-12-02)
+BOUNDS_NS = 17.5             # bounds, one ray for the raster, every cell (voids too)
+BOUNDS_NS_PER_ROW = 25.0     # bounds, per-row rays (geographic)
+BRUTE_NS_FIXED = 15.0        # brute over the pyramid, per valid cell: a march's fixed cost
+BRUTE_NS_PER_STEP = 0.75     # ... and per step of the reach
+BRUTE_NS_LONG = 68.0         # ... at most (long rays skip over the pyramid's blocks)
 
 
 def survey(z: np.ndarray) -> tuple[float, float, float]:
@@ -62,8 +65,9 @@ def choose(shape: tuple[int, int], valid_fraction: float, zrange: tuple[float, f
     uniform = uniform_rays(rays)
     threads = max(1, numba.get_num_threads())
     strips = bounds._strips(P, abs(float(rays.step_other[mid])), bounds.EXACT_STEPS)
-    rate_bounds = (BOUNDS_MPIX if uniform else BOUNDS_MPIX_PER_ROW) * min(1.0, strips / threads)
-    rate_brute = BRUTE_MPIX / valid_fraction * max(1.0, SHORT_REACH / reach)
+    ns_bounds = (BOUNDS_NS if uniform else BOUNDS_NS_PER_ROW) / min(1.0, strips / threads)
+    ns_brute = valid_fraction * min(BRUTE_NS_LONG, BRUTE_NS_FIXED + BRUTE_NS_PER_STEP * reach)
+    rate_bounds, rate_brute = 1000.0 / ns_bounds, 1000.0 / ns_brute
     name = "bounds" if rate_bounds > rate_brute else "brute"
     why = (f"estimated {rate_bounds:.0f} Mcells/s for bounds ({'one ray' if uniform else 'per-row rays'}"
            f", {strips} of {threads} threads) vs {rate_brute:.0f} for brute (valid "
