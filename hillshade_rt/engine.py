@@ -365,6 +365,10 @@ class Shader:
         by_brute = (not carried and self.backend == "cpu"
                     and z.size > TILE_BRUTE_RATIO * sub.size)
         pyr = self.pyramid(z, whole) if self.backend == "cpu" else False
+        if algorithm == "brute" and pyr is not False:
+            from .algorithms.auto import pyramid_pays
+            if not pyramid_pays(z.shape, self.local_range if whole else (self.zmin, zmax), rays):
+                pyr = False     # rays of a few steps: the plain march, no pyramid to build
         if self.backend == "cpu":   # every method marches some rays (refinements, fallbacks)
             options["pyramid"] = pyr
         if algorithm == "bounds" and whole and self.backend == "cpu":
