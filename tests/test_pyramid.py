@@ -102,6 +102,25 @@ def test_pyramid_bounds_auto_equal_the_plain_march(case):
                                           f"smap, pyramid {pyr}")
 
 
+@SETTINGS
+@given(cases(), st.integers(2, 4))
+def test_bounds_in_narrow_strips_equal_the_plain_march(case, nstrips):
+    """The wavefront cut into several strips of as few as 12 positions (the raster's own
+    strips are at least 64 wide and these grids at most 70): each strip also bounds the segment
+    before it, where a cell's lookup can land, so no strip reads lines the strip behind it has
+    not reached (it did: 7 cells of a column at a strip's edge differed from the plain march)."""
+    z, grid, az, el, curv = case
+    if not np.isfinite(z).any():
+        return
+    rays = sun_rays(grid, az, el, curv)
+    real = bounds._strips
+    try:
+        bounds._strips = lambda P, s, K: max(1, min(nstrips, P // max(12, int(np.ceil(K * s)) + 8)))
+        np.testing.assert_array_equal(bounds.shadow_mask(z, rays), _plain(z, rays))
+    finally:
+        bounds._strips = real
+
+
 @pytest.mark.parametrize("az", [163.0, 203.7, 290.0, 20.0])
 @pytest.mark.parametrize("el", [3.0, 20.0])
 def test_against_the_plain_python_model(az, el):

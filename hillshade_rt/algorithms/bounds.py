@@ -178,6 +178,19 @@ def _sample_hi(za, zb, f):
     return zb
 
 
+@njit(cache=True, inline="always")
+def _code(e, e_hi, lw, u, h, hk, margin, x, P):
+    """The decision of a cell of height ``h`` whose ray stands at ``hk`` K lines on, at position
+    ``x``: shadowed (1) when an exact sample (max ``e``) or the lower bound ``lw`` blocks it, lit
+    (0) when every sample (max ``e_hi``) and the upper bound ``u`` clear it and ``x`` is not within
+    rounding of the far edge (where the model snaps a position onto the last cell centre),
+    UNDECIDED otherwise; 255 on a void."""
+    sh = (e > h + margin) or (lw > hk + margin)
+    lit = (e_hi <= h - margin) and (u <= hk - margin) and (x <= P - 1 - 1e-6)
+    c = np.uint8(1) if sh else (np.uint8(0) if lit else np.uint8(UNDECIDED))
+    return np.uint8(255) if h != h else c
+
+
 @njit(cache=True)
 def _decide_line(ZL, SU, SL, R, v, p0, p1, P, s, rise, curv, K, pad, margin, ok, s_c, e, e_hi,
                  out):
@@ -227,7 +240,6 @@ def _decide_line(ZL, SU, SL, R, v, p0, p1, P, s, rise, curv, K, pad, margin, ok,
     mb, db = b1 % BINS, pad + b1 // BINS
     sua, sla, sub, slb = su[ma], sl[ma], su[mb], sl[mb]
     hk = K * rise + K * K * curv
-    last = P - 1 - 1e-6 - xk          # lit only for positions up to here (as in _decide_positions)
     zl = ZL[row]
     for q in range(n):
         p = p0 + q
@@ -237,10 +249,7 @@ def _decide_line(ZL, SU, SL, R, v, p0, p1, P, s, rise, curv, K, pad, margin, ok,
             u = max(u, sub[db + p])
             lw = min(lw, slb[db + p])
         h = zl[p]
-        sh = (e[q] > h + margin) or (lw > h + hk + margin)
-        lit = (e_hi[q] <= h - margin) and (u <= h + hk - margin) and (p <= last)
-        c = np.uint8(1) if sh else (np.uint8(0) if lit else np.uint8(UNDECIDED))
-        out[q] = np.uint8(255) if h != h else c
+        out[q] = _code(e[q], e_hi[q], lw, u, h, h + hk, margin, p + xk, P)
 
 
 @njit(cache=True)
@@ -313,12 +322,8 @@ def _decide_run(ZL, SU, SL, R, v, p0, p1, P, s_arr, rise_arr, curv_arr, ok_arr, 
             u = max(u, sub[db + p])
             lw = min(lw, slb[db + p])
         h = zl[p]
-        hk = h + K * rp + K * K * cp
-        sh = (e > h + margin) or (lw > hk + margin)
-        lit = (e_hi <= h - margin) and (u <= hk - margin) and (p + K * sp <= P - 1 - 1e-6)
-        c = np.uint8(1) if sh else (np.uint8(0) if lit else np.uint8(UNDECIDED))
-        c = c if ok_arr[p] else np.uint8(UNDECIDED)
-        out[p - p0] = np.uint8(255) if h != h else c
+        c = _code(e, e_hi, lw, u, h, h + K * rp + K * K * cp, margin, p + K * sp, P)
+        out[p - p0] = c if ok_arr[p] or h != h else np.uint8(UNDECIDED)
 
 
 @njit(cache=True)
@@ -444,15 +449,7 @@ def _decide_cells(ZL, SU, SL, R, v, p0, qa, qb, P, s_arr, rise_arr, curv_arr, ok
         if b1 > b0:
             u = max(u, su[b1 & (BINS - 1), pad + (b1 >> LOG_BINS)])
             lw = min(lw, sl[b1 & (BINS - 1), pad + (b1 >> LOG_BINS)])
-        hk = h + K * rr[q] + K * K * cc[q]
-        if e[q] > h + margin or lw > hk + margin:
-            out[q] = np.uint8(1)
-        elif e_hi[q] <= h - margin and u <= hk - margin and x <= P - 1 - 1e-6:
-            # lit: every exact sample and the bound clear the ray; not within rounding of the
-            # far edge, where the model snaps a position onto the last cell centre
-            out[q] = np.uint8(0)
-        else:
-            out[q] = np.uint8(UNDECIDED)
+        out[q] = _code(e[q], e_hi[q], lw, u, h, h + K * rr[q] + K * K * cc[q], margin, x, P)
 
 
 @njit(cache=True)
@@ -484,8 +481,13 @@ def _strip_block(z, ZB, SU, SL, RO, v_top, nb, p0, p1, L, P, pad, s_c, M, spread
     holds the heights with ``ZO`` NaN positions before each line."""
     R = ZB.shape[0]
     ZL = ZB[:, ZO:]
-    _load_lines(z, ZL, v_top, nb, p0, p1, dom_col, flip_line, flip_pos)
-    i0 = p0 - 1 if p0 == 0 else p0    # the first strip also fills the bin that holds position 0
+    # the bins of the segment before the strip too, and the heights they need: a cell at p0
+    # looks its bounds up K lines on where its ray is, which the lattice's phase can put in
+    # segment p0 - 1, a segment of the strip behind, which has not reached those lines yet
+    # (with two strips of 85 positions, 7 cells of a column differed from the plain march).
+    # Both strips compute that segment of a line from the same values: the same bounds.
+    _load_lines(z, ZL, v_top, nb, max(p0 - 1, 0), p1, dom_col, flip_line, flip_pos)
+    i0 = p0 - 1
     i1 = min(p1, P)
     W = np.empty((5, p1 - p0))        # work rows of the decisions
     D = np.empty(K + 1, np.int64)
