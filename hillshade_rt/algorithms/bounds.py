@@ -23,7 +23,7 @@ ray between the stored ones could decide it otherwise:
 * A cell takes ``EXACT_STEPS`` samples exactly (as the plain march), then looks up the bounds at
   its ray's position ``EXACT_STEPS`` lines on: lit when both the exact samples and the upper bound
   clear its ray, shadowed when an exact sample or the lower bound blocks it, **undecided**
-  otherwise. Undecided cells (``undecided_fraction``: 0.5-1.5 % of the cells on real projected
+  otherwise. Undecided cells (``undecided_fraction``: 1-2 % of the cells on real projected
   DEMs and spectral fractals at 3-20 deg) are marched exactly over the maximum-height pyramid
   (``brute.refine``). A margin far larger than the rounding of the bounds (and far smaller than
   a millimetre) keeps every decision on the safe side, so the mask is brute's cell for cell
@@ -40,11 +40,11 @@ Rays that differ per row (geographic CRS) or per cell (a sun per cell): the bins
 slowest ray; a faster one drifts ahead of its tube by the slopes' spread per line. In blocks of
 lines short enough that the drift stays under a bin (``_blocks``), each line's bins are widened by
 the drift so far (their terrain bounded exactly) and carried bin to bin; only at a block's end do
-they take two bins of the next line. The bounds so widen by one bin per block (one per 50-90
+they take two bins of the next line. The bounds so widen by one bin per block (one per 100-170
 lines on SRTM tiles), about the rays' true spread, and leave about as few cells undecided as one
-ray does (0.7-1.1 % on the Everest tile; 3-9 % when they widened one bin per line). Each cell's
-exact samples and lookup use its own ray. Rows whose own dominant axis is the other one (near a diagonal)
-are left undecided.
+ray does (1.7-2.4 % on the Everest tile against 1.4-1.8 % on one spacing; 3-9 % when they
+widened one bin per line). Each cell's exact samples and lookup use its own ray. Rows whose own
+dominant axis is the other one (near a diagonal) are left undecided.
 
 Parallel as the sweep's wavefront: strips of positions, each a block of lines behind the next.
 """
@@ -445,7 +445,8 @@ def _decide_cells(ZL, SU, SL, R, v, p0, qa, qb, P, s_arr, rise_arr, curv_arr, ok
         y = (x - phi) * BINS
         b0 = int(math.floor(y - EPS_BIN))
         b1 = int(math.ceil(y + EPS_BIN)) - 1
-        u = su[b0 & (BINS - 1), pad + (b0 >> LOG_BINS)]   # bin b: place b & (BINS-1), segment b >> LOG_BINS
+        # bin b: place b & (BINS - 1), segment b >> LOG_BINS
+        u = su[b0 & (BINS - 1), pad + (b0 >> LOG_BINS)]
         lw = sl[b0 & (BINS - 1), pad + (b0 >> LOG_BINS)]
         if b1 > b0:
             u = max(u, su[b1 & (BINS - 1), pad + (b1 >> LOG_BINS)])
@@ -536,8 +537,8 @@ def _bounds_sweep(z, L, P, dom_col, flip_line, flip_pos, s_lo, s_hi, d_up, d_lo,
             v_top, nb = wave_block(t, j, L, B)
             if nb > 0:
                 _strip_block(z, ZB, SU, SL, RO, v_top, nb, bounds[j + 1], bounds[j], L, P, pad,
-                             s_c, M, s_hi - s_lo, W_end, d_up, d_lo, s_arr, rise_arr, curv_arr, ok_arr,
-                             per_line, K, margin, dom_col, flip_line, flip_pos, out, fld)
+                             s_c, M, s_hi - s_lo, W_end, d_up, d_lo, s_arr, rise_arr, curv_arr,
+                             ok_arr, per_line, K, margin, dom_col, flip_line, flip_pos, out, fld)
 
 
 def _field_args(vec=None, grid=None, curv_coef=0.0, shape=(1, 1), f=None, L=1):
