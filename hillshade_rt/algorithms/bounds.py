@@ -570,11 +570,22 @@ def _canonical_rays(rays: SunRays, f):
 
 def _drop_and_margin(zmin: float, zmax: float, L: int, K: int, r_lo: float, r_hi: float,
                      c_hi: float) -> tuple[float, float]:
-    """(d_lo, margin): the per-step rise of the straight ray the lower bound follows, as steep
-    as the curved ray can get before every ray stands above the highest cell (kmax steps), and
-    the margin that keeps every decision clear of the bounds' rounding."""
+    """(d_lo, margin): the per-step rise of the straight ray the lower bound follows, and the
+    margin that keeps every decision clear of the bounds' rounding.
+
+    The lower bound K lines on is max_j T(j) - j d_lo over the samples j steps further; a cell
+    is shadowed when it exceeds the cell's ray there. That is safe when j d_lo is at least the
+    curved ray's rise over those j steps, j r + (2Kj + j^2) c, for every j whose term could
+    matter: terms with j d_lo >= zmax - zmin fall below the lowest cell and never do. So d_lo
+    >= r + (2K + j) c for j < (zmax - zmin) / d_lo: the smallest such d_lo solves d^2 - (r +
+    2Kc) d - (zmax - zmin) c = 0 (or j < L). It was r + (2 kmax + 1) c, the steepest step of
+    the whole reach, twice the excess over r (the Moon's small radius: 1.7x the flat run at 3
+    deg)."""
     kmax = min(L, math.ceil((zmax - zmin) / r_lo) + 1) if r_lo > 0 else L
-    d_lo = r_hi + (2 * kmax + 1) * c_hi
+    a = r_hi + 2 * K * c_hi
+    span = max(0.0, zmax - zmin)
+    d_lo = min(0.5 * (a + math.sqrt(a * a + 4.0 * span * c_hi)), a + L * c_hi)
+    d_lo = d_lo * (1.0 + 1e-12) + 1e-12 * c_hi
     big = max(abs(zmin), abs(zmax)) + 1.0
     return d_lo, 1e-9 * big + 4e-16 * (L + K + 8) * (big + kmax * d_lo)
 
