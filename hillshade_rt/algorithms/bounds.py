@@ -30,11 +30,11 @@ ray between the stored ones could decide it otherwise:
   (tests).
 
 Voids: a bin with a void end is bounded above by its valid end and below by -inf (its interior
-meets no terrain). Beyond the raster S is -inf (no terrain). Earth curvature: the upper bound
-follows a fresh curved ray from each bin (a ray that has travelled k steps climbs faster than a
-fresh one, so it clears whatever the fresh one clears); the lower bound follows a straight ray as
-steep as the curved ray can get before it rises above the highest cell, so curvature costs
-nothing.
+meets no terrain). Beyond the raster S is -inf (no terrain). Earth curvature: a cell looks the
+bounds up K steps along its ray, after which its next j steps rise j r + (2Kj + j^2) c. The
+upper bound follows a straight ray rising r + (2K + 1) c per step (no more than the curved one
+over any j steps), the lower bound one rising at least as much as the curved one over every j
+whose terrain could still reach it (``_drop_and_margin``).
 
 Rays that differ per row (geographic CRS) or per cell (a sun per cell): the bins follow the
 slowest ray; a faster one drifts ahead of its tube by the slopes' spread per line. In blocks of
@@ -631,7 +631,8 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None,
             # one ray for every row: the line passes (indexed by line) serve the column frames too
             s, rise, curv = np.full(L, s_lo), np.full(L, r_lo), np.full(L, c_lo)
             ok, per_line = np.ones(L, np.bool_), True
-        _bounds_sweep(z, L, P, f.dom_col, f.flip_line, f.flip_pos, s_lo, s_hi, r_lo + c_lo,
+        _bounds_sweep(z, L, P, f.dom_col, f.flip_line, f.flip_pos, s_lo, s_hi,
+                      r_lo + (2 * K + 1) * c_lo,
                       d_lo, s, rise, curv, ok, per_line, K, margin,
                       _strips(P, s_hi, K), out, _field_args())
     else:
@@ -669,7 +670,8 @@ def shadow_mask_field(z: np.ndarray, grid, vec: np.ndarray, curv_coef: float = 0
     if n > 0 and L > 1 and P > 1 and math.isfinite(r_hi):
         d_lo, margin = _drop_and_margin(zmin, zmax, L, K, r_lo, r_hi, c_hi)
         one = np.zeros(1)
-        _bounds_sweep(z, L, P, f.dom_col, f.flip_line, f.flip_pos, s_lo, s_hi, r_lo + c_lo,
+        _bounds_sweep(z, L, P, f.dom_col, f.flip_line, f.flip_pos, s_lo, s_hi,
+                      r_lo + (2 * K + 1) * c_lo,
                       d_lo, one, one, one, np.ones(1, np.bool_), False, K, margin,
                       _strips(P, s_hi, K), out,
                       _field_args(vec, grid, curv_coef, z.shape, f, L))
