@@ -33,6 +33,7 @@ from .sun import SUN_RADIUS_DEG, Region, SunOver, disk_fraction
 CURVATURE_AUTO_M = 1000.0   # curvature "auto" turns on when rays can be longer than this
 # a tile whose window (tile + halo) holds more than this many times its own cells is marched by
 # brute over its own cells only (exact), instead of running the algorithm over the whole window
+# (bounds, auto's usual pick: by the cost model instead, algorithms.auto.tile_by_brute)
 TILE_BRUTE_RATIO = 3.0
 _TILE = 7   # scratch code: a cell of the tile, still to decide
 SOFT_NODATA = -9999.0
@@ -349,7 +350,7 @@ class Shader:
 
     def cast(self, region: Region, stats: dict | None = None) -> np.ndarray:
         """uint8 cast-shadow mask of ``region`` (1 shadow, 0 lit, 255 void)."""
-        from .algorithms import ALGORITHMS, brute
+        from .algorithms import ALGORITHMS, auto, brute
         from .algorithms.frames import uniform_rays
         sub = self.z[region.rows, region.cols]
         if region.elevation <= 0:     # night
@@ -362,8 +363,9 @@ class Shader:
         options = dict(self.options)
         # a carrier is only given for smap on the CPU (tiling.Job.carrier); it needs one ray
         carried = self.carry is not None and whole and uniform_rays(rays)
-        by_brute = (not carried and self.backend == "cpu"
-                    and z.size > TILE_BRUTE_RATIO * sub.size)
+        by_brute = (not carried and self.backend == "cpu" and z.size > sub.size
+                    and (auto.tile_by_brute(z.size, sub.size, (self.zmin, zmax), rays)
+                         if algorithm == "bounds" else z.size > TILE_BRUTE_RATIO * sub.size))
         pyr = self.pyramid(z, whole) if self.backend == "cpu" else False
         if algorithm == "brute" and pyr is not False:
             from .algorithms.auto import pyramid_pays

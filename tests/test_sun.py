@@ -486,6 +486,34 @@ def test_tiles_with_small_halos_run_the_algorithm_on_their_window():
         assert (m == 1).any() and (m == 0).any()
 
 
+@pytest.mark.parametrize("by_brute", [True, False])
+def test_tiles_of_auto_by_brute_or_by_bounds_on_the_window_equal_whole_runs(monkeypatch,
+                                                                            by_brute):
+    """Low suns (halos larger than the tiles): auto's tiles go to brute over their own cells or
+    to bounds over their window as ``auto.tile_by_brute`` estimates; both are exact (forced
+    here each way), and the estimate prefers bounds unless the window dwarfs the tile."""
+    from hillshade_rt.algorithms import auto
+    z = fractal_terrain(64, 72, 21, relief=120.0)
+    z[10, 60] = np.nan
+    grid = Grid.uniform(64, 72, 5.0)
+    tiles = [Region(slice(a, a + 32), slice(b, b + 36), az, el)
+             for (a, b), az, el in zip(((0, 0), (0, 36), (32, 0), (32, 36)),
+                                       (163.0, 203.7, 291.0, 20.0), (3.0, 5.0, 4.0, 6.0))]
+    monkeypatch.setattr(auto, "tile_by_brute", lambda *a: by_brute)
+    stats = {}
+    m = render(Shader(z, grid, "auto", curvature=False), SunOver(None, 0.0, 5.0, tiles=tiles),
+               "shadow", stats=stats)
+    assert ("tiles_marched_by_brute" in stats) == by_brute
+    for t in tiles:
+        ref = render(Shader(z, grid, "brute", curvature=False),
+                     SunOver(None, t.azimuth, t.elevation), "shadow")
+        assert (m[t.rows, t.cols] == ref[t.rows, t.cols]).all(), t
+    monkeypatch.undo()
+    rays = sun_rays(grid, 203.7, 5.0)
+    assert not auto.tile_by_brute(4 * 1000, 1000, (0.0, 120.0), rays)
+    assert auto.tile_by_brute(100 * 1000, 1000, (0.0, 120.0), rays)
+
+
 def test_lat_lon_on_a_projected_dem_still_turns_to_grid_north(tmp_path, runner):
     dem = _dem(tmp_path, fractal_terrain(30, 30, 8, relief=300.0))
     rep = tmp_path / "r.json"
