@@ -59,7 +59,7 @@ from numba import njit, prange
 from ..geometry import SunRays
 from . import brute
 from .field import cell_ray
-from .frames import Frame, dem_index, frame_of, uniform_rays
+from .frames import Frame, dem_index, frame_of
 from .sweep import _load_lines, _store_lines, _z_range, strip_bounds, wave_block, wave_steps
 from .sweep import _strips as sweep_strips
 
