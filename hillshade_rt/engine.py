@@ -367,10 +367,9 @@ class Shader:
                     and (auto.tile_by_brute(z.size, sub.size, (self.zmin, zmax), rays)
                          if algorithm == "bounds" else z.size > TILE_BRUTE_RATIO * sub.size))
         pyr = self.pyramid(z, whole) if self.backend == "cpu" else False
-        if algorithm == "brute" and pyr is not False:
-            from .algorithms.auto import pyramid_pays
-            if not pyramid_pays(z.shape, self.local_range if whole else (self.zmin, zmax), rays):
-                pyr = False     # rays of a few steps: the plain march, no pyramid to build
+        if algorithm == "brute" and pyr is not False and not auto.pyramid_pays(
+                z.shape, self.local_range if whole else (self.zmin, zmax), rays):
+            pyr = False     # rays of a few steps: the plain march, no pyramid to build
         if self.backend == "cpu":   # every method marches some rays (refinements, fallbacks)
             options["pyramid"] = pyr
         if algorithm == "bounds" and whole and self.backend == "cpu":
@@ -518,7 +517,7 @@ def _render_region(shader, region, kind, soft, self_shadow, ambient, stats, cast
         lit = shader.visible_fraction(region)          # float32, NaN voids
     elif cast is None:
         cast = shader.cast(region, stats)              # uint8 1/0/255
-    else:
+    elif self_shadow:
         cast = cast.copy()                             # (self-shadow marks it below)
     # valid cells whose surface faces away from the sun (all of them with the sun far below)
     away = (~void if cosi is None else (cosi <= 0) & ~void) if need_cos else None

@@ -33,7 +33,7 @@ import numpy as np
 from ..geometry import SunRays
 from . import bounds, brute
 from .counts import valid_range
-from .frames import uniform_rays
+from .frames import reach, uniform_rays
 
 # the cost model, ns per cell on 2 cores (make bench-real, 2026-12-02)
 BOUNDS_NS = 17.5             # bounds, one ray for the raster, every cell (voids too)
@@ -51,16 +51,6 @@ def survey(z: np.ndarray) -> tuple[float, float, float]:
     return n / max(1, z.size), float(lo), float(hi)
 
 
-def reach(shape: tuple[int, int], zrange: tuple[float, float], rays: SunRays) -> float:
-    """The steps a ray takes to rise over the relief ``zrange`` (at most the raster's extent
-    along the rays; inf for a sun at the zenith or below)."""
-    rise = float(np.min(rays.rise))
-    if not math.isfinite(rise) or rise <= 0:
-        return math.inf
-    L = shape[1] if bool(rays.dom_col[len(rays.rise) // 2]) else shape[0]
-    return max(1.0, min(max(0.0, zrange[1] - zrange[0]) / rise, float(L)))
-
-
 def pyramid_pays(shape: tuple[int, int], zrange: tuple[float, float], rays: SunRays) -> bool:
     """Whether brute's march should take the pyramid: not on rays of a few steps, where it
     rarely skips a block and building it costs more than the march saves (New Zealand's 1 km
@@ -73,6 +63,11 @@ def brute_ns(steps: float) -> float:
     return min(BRUTE_NS_LONG, BRUTE_NS_FIXED + BRUTE_NS_PER_STEP * steps)
 
 
+def bounds_ns(uniform: bool) -> float:
+    """Estimated ns (2 cores) of bounds' sweep per cell: one ray for the raster, or per row."""
+    return BOUNDS_NS if uniform else BOUNDS_NS_PER_ROW
+
+
 def tile_by_brute(window_cells: int, tile_cells: int, zrange: tuple[float, float],
                   rays: SunRays) -> bool:
     """Whether a tile of a sun that varies across the raster is cheaper marched by brute over
@@ -80,10 +75,10 @@ def tile_by_brute(window_cells: int, tile_cells: int, zrange: tuple[float, float
     ``choose``. A 61 km DEM at 4.8 deg: 39 of 50 tiles went to brute by a fixed ratio of 3
     window cells per tile cell, 0.37 s; by the model none, 0.31 s (brute on a tile also pays
     per window cell: its scratch mask and the window's pyramid)."""
-    ns_bounds = BOUNDS_NS if uniform_rays(rays) else BOUNDS_NS_PER_ROW
-    steps = reach((1 << 30, 1 << 30), zrange, rays)
-    return (tile_cells * brute_ns(steps) + window_cells * BRUTE_TILE_WINDOW_NS
-            < window_cells * ns_bounds)
+    # the reach over the relief (brute's cost saturates long before a window's cell count)
+    steps = reach((window_cells, window_cells), zrange, rays)
+    return (tile_cells * brute_ns(steps)
+            + window_cells * BRUTE_TILE_WINDOW_NS < window_cells * bounds_ns(uniform_rays(rays)))
 
 
 def choose(shape: tuple[int, int], valid_fraction: float, zrange: tuple[float, float],
@@ -102,7 +97,7 @@ def choose(shape: tuple[int, int], valid_fraction: float, zrange: tuple[float, f
     uniform = uniform_rays(rays)
     threads = max(1, numba.get_num_threads())
     strips = bounds._strips(P, abs(float(rays.step_other[mid])), bounds.EXACT_STEPS)
-    ns_bounds = (BOUNDS_NS if uniform else BOUNDS_NS_PER_ROW) / min(1.0, strips / threads)
+    ns_bounds = bounds_ns(uniform) / min(1.0, strips / threads)
     ns_brute = valid_fraction * brute_ns(steps)
     rate_bounds, rate_brute = 1000.0 / ns_bounds, 1000.0 / ns_brute
     name = "bounds" if rate_bounds > rate_brute else "brute"

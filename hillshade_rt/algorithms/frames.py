@@ -16,6 +16,7 @@ into the caller's array.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -52,6 +53,17 @@ def uniform_rays(rays: SunRays) -> bool:
     return bool(np.all(rays.dom_col == rays.dom_col[0]) and np.all(rays.step_dom == rays.step_dom[0])
                 and np.all(rays.step_other == rays.step_other[0])
                 and np.all(rays.rise == rays.rise[0]))
+
+
+def reach(shape: tuple[int, int], zrange: tuple[float, float], rays: SunRays) -> float:
+    """The steps a ray takes to rise over the relief ``zrange`` (at most the raster's extent
+    along the rays; inf for a sun at the zenith or below): what decides whether skipping over
+    the maximum-height pyramid pays (``auto``, ``smap``)."""
+    rise = float(np.min(rays.rise))
+    if not math.isfinite(rise) or rise <= 0:
+        return math.inf
+    L = shape[1] if bool(rays.dom_col[len(rays.rise) // 2]) else shape[0]
+    return max(1.0, min(max(0.0, zrange[1] - zrange[0]) / rise, float(L)))
 
 
 def frame_of(rays: SunRays, row: int = 0) -> Frame:

@@ -52,7 +52,7 @@ from numba import njit, prange
 
 from ..errors import HillshadeError
 from ..geometry import Grid, SunRays, heights_and_grid, sun_rays
-from .frames import Frame, frame_of, uniform_rays
+from .frames import Frame, frame_of, reach, uniform_rays
 from ..gpu import cuda, kernel
 from .pyramid import NO_PYRAMID, climb, pyramid_args, samples_left
 from .raymath import line_position, madd, ray_origin, terrain_on_line
@@ -898,9 +898,8 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None, stats: 
     # NextV already jumps over most lines (few Black elements: smooth slopes), its reads cost
     # more than they skip (New Zealand's 1 km DEM at 20 deg: 7.9 ms against 4.8 for the jump
     # loop alone; the smooth facet fractal: 2-3x slower)
-    lo = float(np.nanmin(z)) if pyramid is not False else zmax
-    if pyramid is not False and ((zmax - lo) < PYRAMID_REACH * float(rays.rise[0])
-                                 or sm.black_fraction < PYRAMID_BLACK):
+    if pyramid is not False and (sm.black_fraction < PYRAMID_BLACK or reach(
+            z.shape, (float(np.nanmin(z)), zmax), rays) < PYRAMID_REACH):
         pyramid = False
     if stats is not None:
         stats["black_fraction"] = sm.black_fraction
