@@ -768,8 +768,10 @@ class _Outputs:
                           {**self.base_tags, **sun_tags(sun)}, self.file_cog, self.resampling,
                           overwrite=self.overwrite or scratch, fmt=None if scratch else self.fmt)
 
-    def record(self, sun, i, st, seconds):
+    def record(self, sun, i, st, seconds, per_cell=False):
         rec = dict(sun.as_dict(), shadow_fraction=st["shadow_fraction"], compute_s=seconds)
+        if per_cell:          # each cell marched with its own sun (the tiles: incidence only)
+            rec["mode"] = "per cell"
         if self.tile_paths:
             rec["outputs"] = [os.path.abspath(p) for p in self.tile_paths[i]]
         elif self.paths:
@@ -801,7 +803,8 @@ def _light_in_memory(inputs, read_opts, scale, req, out, timer, algorithm, optio
         day = [s for s in suns if not s.night]
         if day:
             shader.warm_up(day[0].azimuth, day[0].elevation, soft=soft,
-                           incidence=self_shadow or kind != "shadow")
+                           incidence=self_shadow or kind != "shadow",
+                           field=any(s.fieldwise for s in day))
     records, algo_stats = [], {}
     share, st = None, None
     with out.writer(d, len(suns)) as writer:
@@ -823,7 +826,7 @@ def _light_in_memory(inputs, read_opts, scale, req, out, timer, algorithm, optio
                 else:
                     with out.file_writer(d, i, sun) as w:
                         w.write(1, arr, description=out.description(sun))
-            records.append(out.record(sun, i, st, seconds))
+            records.append(out.record(sun, i, st, seconds, shader.field_ok(sun, soft)))
     return {"dem": d, "suns": suns, "sun_info": sun_info, "records": records, "stats": st,
             "algo_stats": algo_stats, "zrange": (zmin, zmax), "curvature": shader.report(),
             "gpu": shader.gpu_report(),
@@ -930,7 +933,8 @@ def _light_tiled(inputs, read_opts, scale, req, out, timer, algorithm, options, 
                     w.describe(band, out.description(sun),
                                sun_tags(sun) if writer is not None else None)
                 out.finish(i, sun, src)
-                records.append(out.record(sun, i, st, timer.seconds.get("compute", 0.0) - t0))
+                records.append(out.record(sun, i, st, timer.seconds.get("compute", 0.0) - t0,
+                                          any(p.sun is not None for p in plans[i])))
             tally.bytes_read = rd.bytes_read
             tally.bytes_carried = cache.carried_bytes
             tally.carry = carry
@@ -1040,7 +1044,7 @@ def sun_hours(dem, output, date_, end_date, step, tz, lat, lon, pressure, temper
         work = [(s, w) for s, w in zip(suns, weights) if not dark(s)]
         if work:
             shader.warm_up(work[0][0].azimuth, max(work[0][0].elevation, 1.0), soft=soft,
-                           incidence=self_shadow)
+                           incidence=self_shadow, field=any(s.fieldwise for s, _ in work))
         hours = np.where(np.isnan(d.heights), np.float32(np.nan), np.float32(0.0))
     algo_stats: dict = {}
     with timer("compute"):

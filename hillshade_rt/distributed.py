@@ -174,7 +174,8 @@ def run_on_dask(scheduler, job, suns, plans, out, share, stride, quiet, algo_sta
                 copy_vrt(doc, out.target(i), out.dtype, out.file_cog, out.resampling,
                          out.overwrite or scratch, None if scratch else out.fmt)
                 out.finish(i, s, src)
-        records = [out.record(s, i, per_sun[i]["stats"], per_sun[i]["seconds"])
+        records = [out.record(s, i, per_sun[i]["stats"], per_sun[i]["seconds"],
+                              any(p.sun is not None for p in plans[i]))
                    for i, s in enumerate(suns)]
         info = {"scheduler": scheduler if isinstance(scheduler, str) else str(client),
                 "workers": workers, "tasks": len(futures)}

@@ -184,7 +184,7 @@ class Shader:
                  refraction_k: float | None = None, body: Body | None = None,
                  zrange: tuple[float, float] | None = None, extent_m: float | None = None,
                  halo_ready: bool = False, local_range: tuple[float, float] | None = None,
-                 carry=None, place=None, sun_field: bool = False,
+                 carry=None, place=None, sun_field: bool = True,
                  survey: tuple[int, float, float] | None = None):
         from .algorithms import ALGORITHMS
         if algorithm not in ALGORITHMS:
@@ -211,8 +211,7 @@ class Shader:
         self.local_range = local_range
         self.carry, self.place = carry, place
         # suns that vary across the raster: every cell's own sun (algorithms.field) instead of
-        # tiles; off by default until windowed runs do the same (a run's result must not depend
-        # on whether it was shaded in memory or in windows)
+        # one per tile, in memory and in windows alike (``tiling.Job.pieces``); False: tiles
         self.sun_field = sun_field
         self._gpu = None
         self._pyramid = None     # the maximum-height pyramid of the whole raster, built once
@@ -224,7 +223,7 @@ class Shader:
         self.curvature_used: set = set()   # True/False seen, and the radii used (m)
 
     def warm_up(self, azimuth: float, elevation: float, soft: bool = False,
-                incidence: bool = False) -> None:
+                incidence: bool = False, field: bool = False) -> None:
         """Compile (or load from numba's cache) what the suns to come will run, so that timings
         measure computing. On the CPU by lighting a small rough terrain through this very path
         (the same calls and argument types: the algorithm, or both methods of ``auto`` and its
@@ -247,12 +246,22 @@ class Shader:
             names = (("auto", "bounds", "brute") if self.algorithm == "auto"
                      else (self.algorithm,))
             region = Region(slice(0, n), slice(0, n), azimuth, el)
+            lattice = None
+            if field and field_method(self.algorithm, self.options, soft):
+                from types import SimpleNamespace
+                from .algorithms.field import lattice_vectors
+                gi, gj = np.meshgrid(np.linspace(-0.2, 0.2, 3), np.linspace(-0.2, 0.2, 3),
+                                     indexing="ij")
+                lattice = SimpleNamespace(azimuth=azimuth, elevation=el,
+                                          lattice=lattice_vectors(azimuth + gj, el + gi))
             for name in names:
                 sh = Shader(z, small, name, self.options, "cpu", self.curvature, self.k,
                             self.body, (self.zmin, self.zmax), self.extent_m)
                 sh.cast(region, {})
                 if soft:
                     sh.visible_fraction(region)
+                if lattice is not None:      # a sun per cell (``cast_field``)
+                    sh.cast_field(lattice, {})
             code_counts(np.zeros((64, 64), np.uint8))    # the report's counts (>= 64 rows)
         if incidence:
             from .algorithms.relief import incidence as inc
@@ -399,23 +408,32 @@ class Shader:
 
     def field_ok(self, sun: SunOver, soft: bool) -> bool:
         """Whether a sun that varies across the raster is marched with every cell's own
-        direction (``algorithms.field``) instead of tile by tile: asked for (``sun_field``), hard
-        shadows of an exact march-based method over the whole raster in memory (soft shadows,
-        smap, the horizon scan, sweep and windows of a larger raster keep the tiles)."""
-        return (self.sun_field and sun.tiles is not None and sun.lattice is not None and not soft
-                and self.algorithm in ("auto", "brute", "bounds") and not self.halo_ready
-                and self.carry is None and self.options.get("pyramid", True) is not False)
+        direction (``algorithms.field``) instead of tile by tile: hard shadows of an exact
+        march-based method (soft shadows, smap, the horizon scan, sweep and the plain march,
+        ``--no-pyramid``, keep the tiles)."""
+        return self.sun_field and sun.fieldwise and field_method(self.algorithm, self.options,
+                                                                 soft)
+
+    def field_place(self):
+        """(r0, c0, rows, cols): where ``z`` lies in the raster the sun's lattice spans (a
+        window of a larger raster, ``tiling``), for ``algorithms.field``."""
+        if self.place is None:
+            return (0, 0, *self.z.shape)
+        (r0, _, c0, _), shape = self.place
+        return (r0, c0, *shape)
 
     def cast_field(self, sun: SunOver, stats: dict | None = None) -> np.ndarray:
-        """uint8 cast-shadow mask of the whole raster, each cell with its own sun interpolated
+        """uint8 cast-shadow mask of all of ``z``, each cell with its own sun interpolated
         on ``sun.lattice`` (1 shadow, 0 lit, 255 void; a cell whose sun is below the horizon
-        is in shadow)."""
+        is in shadow). The method and the curvature are the raster's centre sun's
+        (``sun.azimuth``, ``sun.elevation``), in a window as on the whole raster."""
         from .algorithms import field
         c = self.curvature_used_for(sun.azimuth, max(sun.elevation, 1e-6))
         zmax = self.local_range[1]
+        place = self.field_place()
         if self.backend == "gpu":
             out = field.shadow_mask_gpu(self._gpu_dem(self.z, True), self.grid, sun.lattice, c,
-                                        zmax)
+                                        zmax, place)
         else:
             from .algorithms import bounds
             # the method for the centre's sun (auto: its estimate), with every cell's own ray
@@ -424,10 +442,11 @@ class Shader:
                                stats)
             if name == "bounds":
                 out = bounds.shadow_mask_field(self.z, self.grid, sun.lattice, c, zmax, stats,
-                                               self.pyramid(self.z, True), self.local_range)
+                                               self.pyramid(self.z, True), self.local_range,
+                                               place)
             else:
                 out = field.shadow_mask(self.z, self.grid, sun.lattice, c, zmax,
-                                        self.pyramid(self.z, True))
+                                        self.pyramid(self.z, True), place)
         if stats is not None:
             stats["sun_field"] = stats.get("sun_field", 0) + 1
         return out
@@ -472,6 +491,13 @@ class Shader:
 KINDS = ("shadow", "classes", "hillshade", "sun")
 
 
+def field_method(algorithm: str, options: dict, soft: bool) -> bool:
+    """Whether this method marches each cell with its own sun when the sun varies across the
+    raster (``Shader.field_ok``; ``tiling.Job.pieces`` plans such windows)."""
+    return (not soft and algorithm in ("auto", "brute", "bounds")
+            and options.get("pyramid", True) is not False)
+
+
 def render(shader: Shader, sun: SunOver, kind: str = "shadow", *, soft: bool = False,
            self_shadow: bool = False, ambient: float = 0.2, stats: dict | None = None) -> np.ndarray:
     """What one sun makes of the DEM, over the whole raster (tile by tile when the sun is per
@@ -492,11 +518,11 @@ def render(shader: Shader, sun: SunOver, kind: str = "shadow", *, soft: bool = F
         raise HillshadeError("classes are for hard shadows: --classes and --soft do not go together")
     shape = shader.z.shape
     regions = sun.regions(shape)
-    if len(regions) == 1:
-        return _render_region(shader, regions[0], kind, soft, self_shadow, ambient, stats)
     # a sun that varies across the raster: every cell's own direction in one march when the
     # method allows (the tiles then only serve the incidence of the relief)
     whole = shader.cast_field(sun, stats) if shader.field_ok(sun, soft) else None
+    if len(regions) == 1:
+        return _render_region(shader, regions[0], kind, soft, self_shadow, ambient, stats, whole)
     out = None
     for r in regions:   # each tile into place as it is made: no list of all tiles' arrays
         part = _render_region(shader, r, kind, soft, self_shadow, ambient, stats,

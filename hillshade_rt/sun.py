@@ -451,6 +451,39 @@ class SunOver:
     # apparent elevation): each cell's own sun, interpolated (algorithms.field)
     lattice: np.ndarray | None = None
     field_deviation_deg: float | None = None   # interpolated vs SPA at the tile centres
+
+    @property
+    def fieldwise(self) -> bool:
+        """Whether each cell may take its own sun from the lattice (``algorithms.field``): the
+        sun varies across the raster and is up at every node, so at every cell (the
+        interpolated vector is a convex combination of the nodes': it stays above the lowest
+        node's elevation and within the nodes' azimuths). Where it is down somewhere (the
+        terminator crosses the raster) the tiles serve."""
+        return (self.tiles is not None and self.lattice is not None
+                and bool(np.all(self.lattice[..., 2] > 1e-9)))
+
+    def lattice_span(self, shape, bounds, azimuth: float) -> tuple[float, float, float]:
+        """(lowest, highest grid azimuth, lowest elevation), degrees, of the suns the lattice
+        gives the cells of ``bounds`` (r0, r1, c0, c1 of a raster of ``shape``): over the nodes
+        of the lattice cells it covers (``fieldwise`` says why that bounds them); azimuths as
+        offsets from ``azimuth``, so that they do not wrap."""
+        n = self.lattice.shape[0]
+        rows, cols = shape
+        r0, r1, c0, c1 = bounds
+
+        def nodes(a, b, m):
+            if m <= 1 or n <= 1:
+                return 0, n
+            sc = (n - 1.0) / (m - 1.0)
+            return max(0, min(int(a * sc), n - 2)), min(n, min(int((b - 1) * sc), n - 2) + 2)
+        i0, i1 = nodes(r0, r1, rows)
+        j0, j1 = nodes(c0, c1, cols)
+        v = self.lattice[i0:i1, j0:j1].reshape(-1, 3)
+        az = np.degrees(np.arctan2(v[:, 0], v[:, 1]))
+        d = (az - azimuth + 180.0) % 360.0 - 180.0
+        el = np.degrees(np.arcsin(np.clip(v[:, 2] / np.linalg.norm(v, axis=1), -1.0, 1.0)))
+        return azimuth + float(d.min()), azimuth + float(d.max()), float(el.min())
+
     def regions(self, shape) -> list[Region]:
         if self.tiles is not None:
             return self.tiles

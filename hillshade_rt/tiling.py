@@ -33,7 +33,7 @@ import contextlib
 import math
 import os
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numba import njit, prange
@@ -605,6 +605,9 @@ class Piece:
     azimuth: float
     elevation: float
     zrange: tuple[float, float] | None = None    # bounds of the window's heights (block ranges)
+    # a sun per cell (``SunOver.fieldwise``): the whole sun (its lattice, centre azimuth and
+    # elevation), whose halo the window holds for every cell's ray
+    sun: object = field(default=None, compare=False)
 
     @property
     def cells(self) -> int:
@@ -677,7 +680,7 @@ def plan(shape, grid: Grid, azimuth: float, elevation: float, curv: float, stats
          budget_cells: int, window_shape: tuple[int, int] | None = None,
          bounds: tuple[int, int, int, int] | None = None, align: int = ALIGN,
          halo_elevation: float | None = None, night: bool = False,
-         carry: bool = False) -> list[Piece]:
+         carry: bool = False, azimuths: tuple[float, float] | None = None) -> list[Piece]:
     """Cut ``bounds`` (default: the raster) into regions whose windows hold at most
     ``budget_cells`` cells (or regions of ``window_shape``), ordered from the sun's side so that
     each window's halo was read by the window before.
@@ -689,7 +692,9 @@ def plan(shape, grid: Grid, azimuth: float, elevation: float, curv: float, stats
     chosen for the fewest cells coloured (each strip's halo once) rather than the fewest read.
 
     ``halo_elevation``: the elevation the halo is made for (default ``elevation``; soft shadows
-    need the lower edge of the sun's disk). ``night``: nothing casts; windows have no halo."""
+    need the lower edge of the sun's disk). ``night``: nothing casts; windows have no halo.
+    ``azimuths``: the lowest and highest azimuth of the cells' rays (a sun per cell): each
+    window then holds the halos of both and of ``azimuth``, so every ray in between."""
     from .engine import halo_bounds, reach_m
     rows, cols = shape
     b = bounds or (0, rows, 0, cols)
@@ -705,6 +710,9 @@ def plan(shape, grid: Grid, azimuth: float, elevation: float, curv: float, stats
         # halo sizes from the raster's whole range: an upper bound of every window's
         reach = 0.0 if night else reach_m(stats.zmax - stats.zmin, hel, curv)
         hr, hc = halo_cells(grid, azimuth, reach, (b[0], b[1]))
+        for az in azimuths or ():
+            hr_, hc_ = halo_cells(grid, az, reach, (b[0], b[1]), 2)
+            hr, hc = max(hr, hr_), max(hc, hc_)
         best = None
         for tr_ in sorted({br} | set(range(align, br, align))):
             wr = min(rows, tr_ + hr)
@@ -746,6 +754,9 @@ def plan(shape, grid: Grid, azimuth: float, elevation: float, curv: float, stats
     regions = [(r0, r1, c0, c1) for (r0, r1), (c0, c1) in order]
     wins = [halo_bounds(reg, shape, grid, azimuth, 0.0, 1) if night
             else window_for(reg, shape, grid, azimuth, hel, curv, stats) for reg in regions]
+    if azimuths and not night:
+        wins = [_union([w] + [window_for(reg, shape, grid, az, hel, curv, stats, 2)
+                              for az in azimuths]) for reg, w in zip(regions, wins)]
     if carry:
         inner = len(col_cuts) if cols_inner else len(row_cuts)
         for s0 in range(0, len(wins), inner):
@@ -753,6 +764,12 @@ def plan(shape, grid: Grid, azimuth: float, elevation: float, curv: float, stats
                                                  (east if cols_inner else north) > 1e-12)
     return [Piece(reg, win, azimuth, elevation, _finite(stats.range_over(win)))
             for reg, win in zip(regions, wins)]
+
+
+def _union(wins):
+    """The smallest window holding all of ``wins``."""
+    return (min(w[0] for w in wins), max(w[1] for w in wins), min(w[2] for w in wins),
+            max(w[3] for w in wins))
 
 
 def _finite(zr):
@@ -892,8 +909,10 @@ class Job:
         sh = self.shader(z, piece.window, piece.zrange,
                          carry if carry is not None else self.carrier())
         rows, cols = piece.inner()
+        # a sun per cell: the window's cells each with their own (as a run in memory does)
+        cast = None if piece.sun is None else sh.cast_field(piece.sun, stats)[rows, cols]
         arr = _render_region(sh, Region(rows, cols, piece.azimuth, piece.elevation), self.kind,
-                             self.soft, self.self_shadow, self.ambient, stats)
+                             self.soft, self.self_shadow, self.ambient, stats, cast)
         if curvature_used is not None:
             curvature_used |= sh.curvature_used
         return arr
@@ -903,9 +922,12 @@ class Job:
         """The pieces of one sun (per-tile suns: each tile's, cut further to fit).
         ``in_order``: the windows are lit one after the other in this order (SMap tables are
         carried along strips); False for independent tasks (Dask), which carry nothing."""
+        from .engine import field_method
         from .sun import SUN_RADIUS_DEG
         out = []
         shape = self.source.shape
+        # a sun per cell, as ``Shader.field_ok`` decides in memory
+        fieldwise = sun.fieldwise and field_method(self.algorithm, self.options, self.soft)
         for reg in sun.regions(shape):
             r0, r1, _ = reg.rows.indices(shape[0])
             c0, c1, _ = reg.cols.indices(shape[1])
@@ -914,12 +936,18 @@ class Job:
                 night, hel = el + SUN_RADIUS_DEG <= 0, el - SUN_RADIUS_DEG
             else:
                 night, hel = el <= 0, el
+            azimuths = None
+            if fieldwise:        # halos for every cell's ray: its lowest sun, both azimuths
+                az_lo, az_hi, el_lo = sun.lattice_span(shape, (r0, r1, c0, c1), reg.azimuth)
+                night, hel, azimuths = False, min(hel, el_lo), (az_lo, az_hi)
             # the curvature the rays will have (decided at the sun's elevation, as the Shader
-            # does), applied to the halo's lower ray
-            out += plan(shape, self.source.grid, reg.azimuth, el,
-                        0.0 if night else self.curv(reg.azimuth, max(min(el, 90.0), 1e-6)), stats,
-                        budget_cells, window_shape, (r0, r1, c0, c1), halo_elevation=hel,
-                        night=night, carry=in_order and self.carries and not self.soft)
+            # does; the raster's centre sun's for a sun per cell), applied to the halo's lower ray
+            curv = (self.curv(sun.azimuth, max(min(sun.elevation, 90.0), 1e-6)) if fieldwise
+                    else 0.0 if night else self.curv(reg.azimuth, max(min(el, 90.0), 1e-6)))
+            got = plan(shape, self.source.grid, reg.azimuth, el, curv, stats, budget_cells,
+                       window_shape, (r0, r1, c0, c1), halo_elevation=hel, night=night,
+                       carry=in_order and self.carries and not self.soft, azimuths=azimuths)
+            out += [replace(p, sun=sun) for p in got] if fieldwise else got
         return out
 
     def warm_up(self, sun) -> None:
@@ -929,7 +957,7 @@ class Job:
         sh = Shader(z, self.source.grid, self.algorithm, self.options, self.backend,
                     self.curvature, self.refraction_k, self.body, self.zrange,
                     extent_m=self.extent_m)
-        sh.warm_up(sun.azimuth, max(sun.elevation, 1.0), soft=self.soft,
+        sh.warm_up(sun.azimuth, max(sun.elevation, 1.0), soft=self.soft, field=sun.fieldwise,
                    incidence=self.self_shadow or self.kind != "shadow")
 
 

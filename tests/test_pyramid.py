@@ -302,7 +302,7 @@ def test_per_cell_sun_is_each_cells_own_ray(az0, el0, curved):
                 assert got[r, col] == 255
                 continue
             night, dc, sd, so, ri, cv = field.cell_ray.py_func(
-                r, col, 23, 31, vec, grid.dx, grid.dy, 1.0, -1.0, c)
+                r, col, vec, grid.dx, grid.dy, 1.0, -1.0, c, 0, 0, 23, 31)
             want = 1 if night else int(ray_is_blocked(z, r, col, dc, sd, so, ri, cv, zmax))
             assert got[r, col] == want == plain[r, col], (r, col)
 
@@ -339,7 +339,7 @@ def test_time_based_sun_uses_the_per_cell_field():
     [sun] = sun_over(site, z.shape, [parse_time("2026-06-21T06:10+02:00")], tolerance=0.05)
     assert sun.tiles and sun.lattice is not None and sun.field_deviation_deg < 0.01
     st = {}
-    sh = Shader(z, grid, "auto", {}, "cpu", False, sun_field=True)
+    sh = Shader(z, grid, "auto", {}, "cpu", False)          # the default: a sun per cell
     got = render(sh, sun, "shadow", stats=st)
     assert st["sun_field"] == 1 and sum(st["auto"]["chose"].values()) == 1  # one march, no tiles
     tiles = render(Shader(z, grid, "smap", {}, "cpu", False), sun, "shadow")
@@ -347,8 +347,8 @@ def test_time_based_sun_uses_the_per_cell_field():
     # brute with the field gives the same mask as auto (bounds) with it
     np.testing.assert_array_equal(render(Shader(z, grid, "brute", {}, "cpu", False,
                                                 sun_field=True), sun, "shadow"), got)
-    st = {}   # without sun_field (the command line's default for now): tiles
-    render(Shader(z, grid, "auto", {}, "cpu", False), sun, "shadow", stats=st)
+    st = {}   # sun_field=False: tiles
+    render(Shader(z, grid, "auto", {}, "cpu", False, sun_field=False), sun, "shadow", stats=st)
     assert "sun_field" not in st and sum(st["auto"]["chose"].values()) == len(sun.tiles)
 
 

@@ -58,7 +58,7 @@ from numba import njit, prange
 
 from ..geometry import SunRays
 from . import brute
-from .field import cell_ray
+from .field import lattice_scale, ray_of
 from .frames import Frame, dem_index, frame_of
 from .sweep import _load_lines, _store_lines, _z_range, strip_bounds, wave_block, wave_steps
 from .sweep import _strips as sweep_strips
@@ -295,65 +295,101 @@ def _run_offsets(s_lo, s_hi, K, phi, D):
 @njit(cache=True)
 def _decide_run(ZL, SU, SL, R, v, p0, p1, P, s_arr, rise_arr, curv_arr, ok_arr, K, pad, margin,
                 D, b0, b1, out):
-    """``_decide_positions`` for a run of positions [p0, p1) whose rays differ (each its row's)
-    but share their whole offsets (``_run_offsets``): one pass, each cell's K samples (K =
-    EXACT_STEPS, unrolled) and its lookup in registers; a cell within rounding of a cell centre
-    takes the exact treatment of ``_decide_cells``."""
-    zl = ZL[v % R]
+    """``_decide_positions`` for a run of positions [p0, p1) whose rays differ (each its row's
+    or its own sun's) but share their whole offsets (``_run_offsets``): one pass, each cell's
+    K = EXACT_STEPS = 4 samples and its lookup in registers, over views that start at 0 (numba
+    then drops its negative-index wrap: the pass vectorises); a cell within rounding of a cell
+    centre takes the exact treatment of ``_decide_cells`` after it."""
+    n = p1 - p0
+    S = s_arr[p0:p1]
+    RI = rise_arr[p0:p1]
+    CU = curv_arr[p0:p1]
+    OK = ok_arr[p0:p1]
+    d1, d2, d3, d4 = D[1], D[2], D[3], D[4]
+    z1 = ZL[(v + 1) % R, p0 + d1:p0 + d1 + n + 1]
+    z2 = ZL[(v + 2) % R, p0 + d2:p0 + d2 + n + 1]
+    z3 = ZL[(v + 3) % R, p0 + d3:p0 + d3 + n + 1]
+    z4 = ZL[(v + 4) % R, p0 + d4:p0 + d4 + n + 1]
     sua, sla, sub, slb, da, db = _lookup_rows(SU, SL, (v + K) % R, b0, b1, pad)
-    vr = v % R
-    for p in range(p0, p1):
-        sp = s_arr[p]
-        rp = rise_arr[p]
-        cp = curv_arr[p]
+    ua = sua[da + p0:da + p1]
+    la = sla[da + p0:da + p1]
+    ub = sub[db + p0:db + p1]
+    lb = slb[db + p0:db + p1]
+    zl = ZL[v % R, p0:p1]
+    two = b1 > b0
+    nsnap = 0
+    for q in range(n):
+        sp = S[q]
+        rp = RI[q]
+        cp = CU[q]
+        f1 = sp - d1
+        f2 = 2.0 * sp - d2
+        f3 = 3.0 * sp - d3
+        f4 = 4.0 * sp - d4
+        t1 = z1[q] + f1 * (z1[q + 1] - z1[q]) - (rp + cp)
+        t2 = z2[q] + f2 * (z2[q + 1] - z2[q]) - (2.0 * rp + 4.0 * cp)
+        t3 = z3[q] + f3 * (z3[q + 1] - z3[q]) - (3.0 * rp + 9.0 * cp)
+        t4 = z4[q] + f4 * (z4[q + 1] - z4[q]) - (4.0 * rp + 16.0 * cp)
+        e_hi = t1 if t1 > -np.inf else -np.inf     # NaN (void, outside) compares false
+        e_hi = t2 if t2 > e_hi else e_hi
+        e_hi = t3 if t3 > e_hi else e_hi
+        e_hi = t4 if t4 > e_hi else e_hi
+        e = e_hi
+        snaps = ((f1 < SNAP) | (f1 > 1.0 - SNAP) | (f2 < SNAP) | (f2 > 1.0 - SNAP)
+                 | (f3 < SNAP) | (f3 > 1.0 - SNAP) | (f4 < SNAP) | (f4 > 1.0 - SNAP))
+        u = ua[q]
+        lw = la[q]
+        if two:
+            u = max(u, ub[q])
+            lw = min(lw, lb[q])
+        h = zl[q]
+        c = _code(e, e_hi, lw, u, h, h + 4.0 * rp + 16.0 * cp, margin, p0 + q + 4.0 * sp, P)
+        c = c if OK[q] or h != h else np.uint8(UNDECIDED)
+        out[q] = np.uint8(UNDECIDED + 1) if (snaps and c != 255) else c
+        nsnap += snaps
+    if nsnap == 0:
+        return
+    for q in range(n):     # within rounding of a cell centre (rare): sample by sample
+        if out[q] != UNDECIDED + 1:
+            continue
         e = -np.inf
         e_hi = -np.inf
-        snaps = False
-        for k in range(1, EXACT_STEPS + 1):
-            rk = vr + k if vr + k < R else vr + k - R      # ring row of line v + k
+        for k in range(1, K + 1):
             d = D[k]
-            f = k * sp - d
-            za = ZL[rk, p + d]
-            t = za + f * (ZL[rk, p + d + 1] - za) - (k * rp + k * k * cp)
-            snap = (f < SNAP) | (f > 1.0 - SNAP)
-            snaps |= snap
-            te = -np.inf if snap else t
-            e = te if te > e else e                 # NaN (void, outside) compares false
+            f = k * S[q] - d
+            zr = ZL[(v + k) % R]
+            za = zr[p0 + q + d]
+            zb = zr[p0 + q + d + 1]
+            drop = k * RI[q] + k * k * CU[q]
+            if f < SNAP or f > 1.0 - SNAP:
+                if f == 0.0:                    # the model's sample is the centre itself
+                    e = max(e, za - drop) if za == za else e
+                t = _sample_hi(za, zb, f) - drop
+            else:
+                t = za + f * (zb - za) - drop
+                e = t if t > e else e
             e_hi = t if t > e_hi else e_hi
-        if snaps:                                   # within rounding of a cell centre (rare)
-            for k in range(1, EXACT_STEPS + 1):
-                rk = (v + k) % R
-                d = D[k]
-                f = k * sp - d
-                if f < SNAP or f > 1.0 - SNAP:
-                    za = ZL[rk, p + d]
-                    drop = k * rp + k * k * cp
-                    if f == 0.0:                    # the model's sample is the centre itself
-                        e = max(e, za - drop) if za == za else e
-                    t = _sample_hi(za, ZL[rk, p + d + 1], f) - drop
-                    e_hi = t if t > e_hi else e_hi
-        u, lw = _looked_up(sua, sla, sub, slb, da, db, p, b1 > b0)
-        h = zl[p]
-        c = _code(e, e_hi, lw, u, h, h + K * rp + K * K * cp, margin, p + K * sp, P)
-        out[p - p0] = c if ok_arr[p] or h != h else np.uint8(UNDECIDED)
+        u, lw = _looked_up(sua, sla, sub, slb, da, db, p0 + q, two)
+        h = zl[q]
+        c = _code(e, e_hi, lw, u, h, h + K * RI[q] + K * K * CU[q], margin, p0 + q + K * S[q],
+                  P)
+        out[q] = c if OK[q] else np.uint8(UNDECIDED)
 
 
 @njit(cache=True)
 def _decide_positions(ZL, SU, SL, R, v, p0, p1, P, s_arr, rise_arr, curv_arr, ok_arr, K, pad,
-                      margin, s_c, out, fld, W, D):
+                      margin, s_c, out, W, D):
     """Codes of positions [p0, p1) of canonical line v when each position has its own ray
-    (``s_arr`` ... indexed by position: lines that are DEM columns of a per-row grid), or, with
-    a field ``fld`` (``_field_args``: use, lattice, dx, dy, signs, curvature, shape, frame),
-    each cell its own sun (``field.cell_ray``; a cell whose sun is down is shadowed, one whose
-    ray is not in the frame's octant undecided): K exact samples, then the bounds K lines on;
-    0 / 1 when they decide, UNDECIDED otherwise (the same tests as ``_decide_line``). Rows' rays
-    change slowly along a line: runs of ``RUN`` positions whose rays share their whole offsets
-    go to ``_decide_run`` (contiguous passes), the others and the field's cells to
-    ``_decide_cells``. ``W`` (5 x strip width), ``D`` (K + 1): work space."""
+    (``s_arr`` ... indexed by position: lines that are DEM columns of a per-row grid, or each
+    cell's own sun, ``_field_line``): K exact samples, then the bounds K lines on; 0 / 1 when
+    they decide, UNDECIDED otherwise (the same tests as ``_decide_line``; a position whose
+    ``ok_arr`` is False is UNDECIDED). Rays change slowly along a line: runs of ``RUN``
+    positions whose rays share their whole offsets go to ``_decide_run`` (contiguous passes),
+    the others to ``_decide_cells``. ``W`` (5 x strip width), ``D`` (K + 1): work space."""
     n = p1 - p0
-    if fld[0] or K != EXACT_STEPS:
+    if K != 4:                               # (_decide_run takes exactly 4 samples)
         _decide_cells(ZL, SU, SL, R, v, p0, 0, n, P, s_arr, rise_arr, curv_arr, ok_arr, K, pad,
-                      margin, s_c, out, fld, W)
+                      margin, s_c, out, W)
         return
     _, phi = _phase(v + K, s_c)
     step = n                                 # the whole strip in one run, else runs of RUN
@@ -377,53 +413,27 @@ def _decide_positions(ZL, SU, SL, R, v, p0, p1, P, s_arr, rise_arr, curv_arr, ok
             continue
         else:
             _decide_cells(ZL, SU, SL, R, v, p0, qa, qb, P, s_arr, rise_arr, curv_arr, ok_arr, K,
-                          pad, margin, s_c, out, fld, W)
+                          pad, margin, s_c, out, W)
         qa = qb
 
 
 @njit(cache=True)
 def _decide_cells(ZL, SU, SL, R, v, p0, qa, qb, P, s_arr, rise_arr, curv_arr, ok_arr, K, pad,
-                  margin, s_c, out, fld, W):
-    """``_decide_positions`` cell by cell for positions p0 + [qa, qb): each cell's ray (its
-    row's, or its own sun's), its K samples at their own offsets, its lookup."""
-    use, vec, fdx, fdy, csign, rsign, ccoef, nrows, ncols, L, fdom, fsd, fl_line, fl_pos = fld
+                  margin, s_c, out, W):
+    """``_decide_positions`` cell by cell for positions p0 + [qa, qb): each cell's ray, its K
+    samples at their own offsets, its lookup."""
     ss, rr, cc, e, e_hi = W[0], W[1], W[2], W[3], W[4]
     zl = ZL[v % R]
-    if not use:                              # each position its own row's ray
-        for q in range(qa, qb):
-            p = p0 + q
-            h = zl[p]
-            e[q] = -np.inf
-            e_hi[q] = -np.inf
-            good = ok_arr[p] and h == h
-            out[q] = np.uint8(UNDECIDED) if h == h else np.uint8(255)
-            ss[q] = s_arr[p] if good else np.nan
-            rr[q] = rise_arr[p]
-            cc[q] = curv_arr[p]
-    for q in range(qa, qb if use else qa):   # each cell's sun; NaN: a cell already coded
+    for q in range(qa, qb):
         p = p0 + q
         h = zl[p]
         e[q] = -np.inf
         e_hi[q] = -np.inf
-        if h != h:
-            out[q] = np.uint8(255)
-            ss[q] = np.nan
-            continue
-        r, c = dem_index(v, p, L, P, fdom, fl_line, fl_pos)
-        night, dc, sd, so, rise, curv = cell_ray(r, c, nrows, ncols, vec, fdx, fdy, csign,
-                                                 rsign, ccoef)
-        sp = -so if fl_pos else so
-        if night:
-            out[q] = np.uint8(1)
-            ss[q] = np.nan
-            continue
-        if dc != fdom or sd != fsd or not sp >= 0.0:
-            out[q] = np.uint8(UNDECIDED)
-            ss[q] = np.nan
-            continue
-        ss[q] = sp
-        rr[q] = rise
-        cc[q] = curv
+        good = ok_arr[p] and h == h
+        out[q] = np.uint8(UNDECIDED) if h == h else np.uint8(255)
+        ss[q] = s_arr[p] if good else np.nan       # NaN: a cell already coded
+        rr[q] = rise_arr[p]
+        cc[q] = curv_arr[p]
     for k in range(1, K + 1):                # the exact samples, one pass each (selects only:
         zr = ZL[(v + k) % R]                 # it vectorises; a coded cell samples harmlessly)
         for q in range(qa, qb):
@@ -487,6 +497,129 @@ def _blocks(spread):
 
 
 @njit(cache=True)
+def _less_potential(ZL, v_top, nb, p0, p1, A, B):
+    """Lines v_top .. v_top-nb+1 of the ring, positions [p0, p1): the heights less the field's
+    potential A v^2 + B v p (``_field_fit``), linear along a line, so that the model's
+    interpolation between two centres carries it exactly."""
+    R = ZL.shape[0]
+    for i in range(nb):
+        w = v_top - i
+        zr = ZL[w % R]
+        aw = A * w * w
+        bw = B * w
+        for p in range(p0, p1):
+            zr[p] -= aw + bw * p
+
+
+@njit(cache=True, error_model="numpy")
+def _field_line(fld, v, p0, p1, L, P, FS, FR, FC, FOK, FN, IX, XP, PF, DXL, DYL):
+    """The rays of positions [p0, p1) of canonical line v with each cell's own sun (``fld``:
+    ``_field_args``), indexed by position, in the frame of the heights less the potential: s,
+    rise - its gradient along the ray, curv - its second difference; ``FOK``: the sun is up,
+    the ray in the frame's octant and within the ranges the bounds were made for; ``FN``:
+    night (the sun at or below the horizon). The same arithmetic as ``field.cell_ray``, cell
+    for cell, with the lattice's values hoisted out of each run of cells between two of its
+    nodes, over views that start at 0 (numba then drops its negative-index wrap, which made
+    the loop gather and scatter: 8 ns a cell, 1 ns now). ``XP``, ``PF``: each position's DEM
+    index along the line and itself, as floats; ``DXL``, ``DYL``: each position's spacing
+    (filled here for lines that are DEM rows); ``IX``: work space."""
+    (_, vec, fdx, fdy, cs, rs, ccoef, r0, c0, nrows, ncols, fdom, fsd, fl_line, fl_pos, _, A, B,
+     s_lo, s_hi, r_lo, r_hi, c_lo, c_hi) = fld
+    n = vec.shape[0]
+    si = lattice_scale(n, nrows)
+    sj = lattice_scale(n, ncols)
+    line = L - 1 - v if fl_line else v          # the DEM index the line fixes
+    s_pos = si if fdom else sj                  # lattice scale along the positions
+    fl = (line + (c0 if fdom else r0)) * (sj if fdom else si)
+    l0 = min(int(fl), n - 2) if n > 1 else 0
+    l1 = min(l0 + 1, n - 1)
+    tl = fl - l0
+    if not fdom:
+        for p in range(p0, p1):
+            DXL[p] = fdx[line]
+            DYL[p] = fdy[line]
+    for p in range(p0, p1):                     # each position's node interval
+        IX[p] = min(int(XP[p] * s_pos), n - 2) if n > 1 else 0
+    fv = float(v)
+    sgn = -1.0 if fl_pos else 1.0
+    qa = p0
+    while qa < p1:
+        k0 = IX[qa]
+        qb = qa + 1
+        while qb < p1 and IX[qb] == k0:
+            qb += 1
+        k1 = min(k0 + 1, n - 1)
+        # lattice_at: along the columns first (at the two node rows), then along the rows
+        if fdom:     # lines are DEM columns: j fixed (l0, tl), i varies (k0, t)
+            a0 = vec[k0, l0, 0] + tl * (vec[k0, l1, 0] - vec[k0, l0, 0])
+            b0 = vec[k1, l0, 0] + tl * (vec[k1, l1, 0] - vec[k1, l0, 0])
+            a1 = vec[k0, l0, 1] + tl * (vec[k0, l1, 1] - vec[k0, l0, 1])
+            b1 = vec[k1, l0, 1] + tl * (vec[k1, l1, 1] - vec[k1, l0, 1])
+            a2 = vec[k0, l0, 2] + tl * (vec[k0, l1, 2] - vec[k0, l0, 2])
+            b2 = vec[k1, l0, 2] + tl * (vec[k1, l1, 2] - vec[k1, l0, 2])
+            _field_run_i(XP[qa:qb], PF[qa:qb], DXL[qa:qb], DYL[qa:qb], s_pos, float(k0), a0,
+                         b0, a1, b1, a2, b2, cs, rs, ccoef, fv, A, B, fdom, fsd, sgn, s_lo,
+                         s_hi, r_lo, r_hi, c_lo, c_hi, FS[qa:qb], FR[qa:qb], FC[qa:qb],
+                         FOK[qa:qb], FN[qa:qb])
+        else:        # lines are DEM rows: i fixed (l0, tl), j varies (k0, t)
+            _field_run_j(XP[qa:qb], PF[qa:qb], DXL[qa:qb], DYL[qa:qb], s_pos, float(k0), tl,
+                         vec[l0, k0], vec[l0, k1], vec[l1, k0], vec[l1, k1], cs, rs, ccoef, fv,
+                         A, B, fdom, fsd, sgn, s_lo, s_hi, r_lo, r_hi, c_lo, c_hi, FS[qa:qb],
+                         FR[qa:qb], FC[qa:qb], FOK[qa:qb], FN[qa:qb])
+        qa = qb
+
+
+@njit(cache=True, error_model="numpy")
+def _field_run_i(XP, PF, DXL, DYL, s_pos, k0, a0, b0, a1, b1, a2, b2, cs, rs, ccoef, fv, A, B,
+                 fdom, fsd, sgn, s_lo, s_hi, r_lo, r_hi, c_lo, c_hi, FS, FR, FC, FOK, FN):
+    """Cells of one node interval of a line that is a DEM column (``_field_line``)."""
+    for i in range(XP.shape[0]):
+        t = XP[i] * s_pos - k0
+        e = a0 + t * (b0 - a0)
+        no = a1 + t * (b1 - a1)
+        up = a2 + t * (b2 - a2)
+        _field_ray(e, no, up, DXL[i], DYL[i], cs, rs, ccoef, fv, PF[i], A, B, fdom, fsd, sgn,
+                   s_lo, s_hi, r_lo, r_hi, c_lo, c_hi, i, FS, FR, FC, FOK, FN)
+
+
+@njit(cache=True, error_model="numpy")
+def _field_run_j(XP, PF, DXL, DYL, s_pos, k0, tl, q00, q01, q10, q11, cs, rs, ccoef, fv, A, B,
+                 fdom, fsd, sgn, s_lo, s_hi, r_lo, r_hi, c_lo, c_hi, FS, FR, FC, FOK, FN):
+    """Cells of one node interval of a line that is a DEM row (``_field_line``; q.. the four
+    nodes' vectors)."""
+    u0, u1, w0, w1 = q00[0], q01[0] - q00[0], q10[0], q11[0] - q10[0]
+    m0, m1, n0, n1 = q00[1], q01[1] - q00[1], q10[1], q11[1] - q10[1]
+    g0, g1, h0, h1 = q00[2], q01[2] - q00[2], q10[2], q11[2] - q10[2]
+    for i in range(XP.shape[0]):
+        t = XP[i] * s_pos - k0
+        a = u0 + t * u1
+        e = a + tl * ((w0 + t * w1) - a)
+        a = m0 + t * m1
+        no = a + tl * ((n0 + t * n1) - a)
+        a = g0 + t * g1
+        up = a + tl * ((h0 + t * h1) - a)
+        _field_ray(e, no, up, DXL[i], DYL[i], cs, rs, ccoef, fv, PF[i], A, B, fdom, fsd, sgn,
+                   s_lo, s_hi, r_lo, r_hi, c_lo, c_hi, i, FS, FR, FC, FOK, FN)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _field_ray(e, no, up, dxr, dyr, cs, rs, ccoef, fv, fp, A, B, fdom, fsd, sgn, s_lo, s_hi,
+               r_lo, r_hi, c_lo, c_hi, i, FS, FR, FC, FOK, FN):
+    """One cell of ``_field_line``: its ray (``field.ray_of``) in the lessened frame, at i."""
+    night, dc, sd, so, rise, curv = ray_of(e, no, up, dxr, dyr, cs, rs, ccoef)
+    sp = sgn * so
+    q = A + sp * B
+    rp = rise - ((A + q) * fv + B * fp)
+    cp = curv - q
+    FS[i] = sp
+    FR[i] = rp
+    FC[i] = cp
+    FN[i] = night
+    FOK[i] = ((not night) & (dc == fdom) & (sd == fsd) & (sp >= s_lo) & (sp <= s_hi)
+              & (rp >= r_lo) & (rp <= r_hi) & (cp >= c_lo) & (cp <= c_hi))
+
+
+@njit(cache=True)
 def _strip_block(z, ZB, SU, SL, RO, v_top, nb, p0, p1, L, P, pad, s_c, M, spread, W_end, d_up,
                  d_lo, s_arr, rise_arr, curv_arr, ok_arr, per_line, K, margin, dom_col, flip_line,
                  flip_pos, out, fld):
@@ -500,10 +633,27 @@ def _strip_block(z, ZB, SU, SL, RO, v_top, nb, p0, p1, L, P, pad, s_c, M, spread
     # (with two strips of 85 positions, 7 cells of a column differed from the plain march).
     # Both strips compute that segment of a line from the same values: the same bounds.
     _load_lines(z, ZL, v_top, nb, max(p0 - 1, 0), p1, dom_col, flip_line, flip_pos)
+    use = fld[0]
+    if use:                           # a sun per cell: the heights less the field's potential
+        _less_potential(ZL, v_top, nb, max(p0 - 1, 0), p1, fld[16], fld[17])
     i0 = p0 - 1
     i1 = min(p1, P)
     W = np.empty((5, p1 - p0))        # work rows of the decisions
     D = np.empty(K + 1, np.int64)
+    nf = P if use else 1              # each position's ray of a field's line, and its night
+    FS, FR, FC = np.empty(nf), np.empty(nf), np.empty(nf)
+    FOK, FN = np.zeros(nf, np.bool_), np.zeros(nf, np.bool_)
+    IX = np.empty(nf, np.int64)
+    XP, PF, DXL, DYL = np.empty(nf), np.empty(nf), np.empty(nf), np.empty(nf)
+    if use:   # positions' index in the lattice's raster (and spacing when it is per row)
+        o_pos = fld[7] if fld[11] else fld[8]
+        for p in range(p0, p1):
+            x = P - 1 - p if fld[14] else p
+            XP[p] = x + o_pos
+            PF[p] = p
+            if fld[11]:
+                DXL[p] = fld[2][x]
+                DYL[p] = fld[3][x]
     for i in range(nb):
         v = v_top - i
         row = v % R
@@ -514,12 +664,20 @@ def _strip_block(z, ZB, SU, SL, RO, v_top, nb, p0, p1, L, P, pad, s_c, M, spread
         ext = jb * spread + (EPS_BIN / BINS if jb > 0 and spread > 0.0 else 0.0)
         _bin_pass(ZB[row], ZO, SU[nxt], SL[nxt], SU[row], SL[row], i0, i1, pad, phi,
                   off1 - off, ext, W_end if jb == M - 1 else 1, d_up, d_lo)
-        if per_line and not fld[0]:
+        if use:
+            _field_line(fld, v, p0, p1, L, P, FS, FR, FC, FOK, FN, IX, XP, PF, DXL, DYL)
+            ro = RO[row, p0:p1]
+            _decide_positions(ZL, SU, SL, R, v, p0, p1, P, FS, FR, FC, FOK, K, pad, margin, s_c,
+                              ro, W, D)
+            for q in range(p1 - p0):  # a cell whose sun is down is shadowed
+                if FN[p0 + q] and ro[q] != 255:
+                    ro[q] = 1
+        elif per_line:
             _decide_line(ZL, SU, SL, R, v, p0, p1, P, s_arr[v], rise_arr[v], curv_arr[v], K, pad,
                          margin, ok_arr[v], s_c, W[3], W[4], RO[row, p0:p1])
         else:
             _decide_positions(ZL, SU, SL, R, v, p0, p1, P, s_arr, rise_arr, curv_arr, ok_arr, K,
-                              pad, margin, s_c, RO[row, p0:p1], fld, W, D)
+                              pad, margin, s_c, RO[row, p0:p1], W, D)
     _store_lines(out, RO, v_top, nb, p0, p1, dom_col, flip_line, flip_pos)
 
 
@@ -552,15 +710,62 @@ def _bounds_sweep(z, L, P, dom_col, flip_line, flip_pos, s_lo, s_hi, d_up, d_lo,
                              ok_arr, per_line, K, margin, dom_col, flip_line, flip_pos, out, fld)
 
 
-def _field_args(vec=None, grid=None, curv_coef=0.0, shape=(1, 1), f=None, L=1):
+def _field_args(vec=None, grid=None, curv_coef=0.0, f=None, L=1, fit=None, place=None):
     """The field tuple of the kernels: (use, lattice, dx, dy, col sign, row sign, curvature,
-    rows, cols, L, frame dom_col, frame step_dom, flip_line, flip_pos); unused without a field."""
+    r0, c0, rows, cols (``field.sun_args``, ``place``), frame dom_col, frame step_dom,
+    flip_line, flip_pos, L, A, B, s_lo, s_hi, r_lo, r_hi, c_lo, c_hi) (``fit``:
+    ``_field_fit``'s A, B and ranges); unused without a field (the same types: one compiled
+    sweep)."""
     if vec is None:
-        return (False, np.zeros((2, 2, 3)), np.ones(1), np.ones(1), 1.0, -1.0, 0.0, np.int64(1),
-                np.int64(1), np.int64(1), False, np.int64(1), False, False)
+        i0, i1 = np.int64(0), np.int64(1)
+        return (False, np.zeros((2, 2, 3)), np.ones(1), np.ones(1), 1.0, -1.0, 0.0, i0, i0, i1,
+                i1, False, i1, False, False, i1, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     from .field import sun_args
-    return (True, *sun_args(grid, vec, curv_coef), np.int64(shape[0]), np.int64(shape[1]),
-            np.int64(L), bool(f.dom_col), np.int64(f.sd), bool(f.flip_line), bool(f.flip_pos))
+    return (True, *sun_args(grid, vec, curv_coef, place), bool(f.dom_col), np.int64(f.sd),
+            bool(f.flip_line), bool(f.flip_pos), np.int64(L), *(float(x) for x in fit))
+
+
+def _field_fit(sample: np.ndarray, L: int, P: int):
+    """(A, B, s range, rise range, curv range, potential range) of a sun per cell from the rays
+    ``field.field_sample`` took (line v, position p, s, rise, curv).
+
+    A time-based sun rises toward the sun by about the arc the ground covers, the Earth's
+    curvature seen from the sky: across a 61 km DEM at 5 deg its rays' rise per step varies by
+    7 %, and bounds made for that whole range leave 3x the cells undecided. Let the heights
+    be lessened by a potential Phi(v, p) = A v^2 + B v p whose gradient along the rays is the
+    rise's variation (fitted: rise ~ r0 + a v + b p, so B = b, A = (a - s b) / 2); along a ray
+    of cell (v, p) with step s, Phi grows k ((A + q) v + B p) + k^2 q over k steps (q = A +
+    s B) exactly, so the ray over the lessened heights rises rise - ((A + q) v + B p) per step
+    with curvature curv - q: nearly one straight ray for every cell (the rest of the Earth's
+    curvature, the refraction's share, stays in the curvature). Phi is linear along a line,
+    so the interpolated terrain is lessened exactly: the same shadows, in another frame."""
+    v, p, s, rise, curv = (sample[:, i] for i in range(5))
+    A = B = 0.0
+    if len(v) >= 3:
+        X = np.stack([np.ones_like(v), v, p], axis=1)
+        coef, *_ = np.linalg.lstsq(X, rise, rcond=None)
+        if np.all(np.isfinite(coef)):
+            B = float(coef[2])
+            A = 0.5 * (float(coef[1]) - float(np.median(s)) * B)
+    q = A + s * B
+    rp = rise - ((A + q) * v + B * p)
+    cp = curv - q
+
+    def padded(x, lo_limit=-np.inf):
+        lo, hi = float(x.min()), float(x.max())
+        pad = 0.02 * (hi - lo) + 1e-9 * max(abs(lo), abs(hi))
+        return max(lo - pad, lo_limit), hi + pad
+    # the potential's extremes: linear in p, so at p = 0 or P - 1; there quadratic in v
+    vs = [0.0, L - 1.0]
+    phis = []
+    for pp in (0.0, P - 1.0):
+        if A != 0.0:
+            vv = -B * pp / (2.0 * A)
+            vs_ = vs + ([vv] if 0.0 < vv < L - 1.0 else [])
+        else:
+            vs_ = vs
+        phis += [A * x * x + B * x * pp for x in vs_]
+    return A, B, padded(s, 0.0), padded(rp), padded(cp), (min(phis), max(phis))
 
 
 def _canonical_rays(rays: SunRays, f):
@@ -579,26 +784,40 @@ def _canonical_rays(rays: SunRays, f):
     return s, rise, curv, ok.astype(np.bool_)
 
 
-def _drop_and_margin(zmin: float, zmax: float, L: int, K: int, r_lo: float, r_hi: float,
-                     c_hi: float) -> tuple[float, float]:
-    """(d_lo, margin): the per-step rise of the straight ray the lower bound follows, and the
-    margin that keeps every decision clear of the bounds' rounding.
+def _drops(zmin: float, zmax: float, L: int, K: int, r_lo: float, r_hi: float, c_lo: float,
+           c_hi: float) -> tuple[float, float, float]:
+    """(d_up, d_lo, margin): the per-step rise of the straight rays the upper and the lower
+    bound follow, and the margin that keeps every decision clear of the bounds' rounding.
 
-    The lower bound K lines on is max_j T(j) - j d_lo over the samples j steps further; a cell
-    is shadowed when it exceeds the cell's ray there. That is safe when j d_lo is at least the
-    curved ray's rise over those j steps, j r + (2Kj + j^2) c, for every j whose term could
-    matter: terms with j d_lo >= zmax - zmin fall below the lowest cell and never do. So d_lo
-    >= r + (2K + j) c for j < (zmax - zmin) / d_lo: the smallest such d_lo solves d^2 - (r +
-    2Kc) d - (zmax - zmin) c = 0 (or j < L). It was r + (2 kmax + 1) c, the steepest step of
-    the whole reach, twice the excess over r (the Moon's small radius: 1.7x the flat run at 3
-    deg)."""
-    kmax = min(L, math.ceil((zmax - zmin) / r_lo) + 1) if r_lo > 0 else L
-    a = r_hi + 2 * K * c_hi
+    K lines on, the ray of a cell rises j (r + (2K + j) c) over j more steps (rise r in
+    [r_lo, r_hi], curvature c in [c_lo, c_hi]; c < 0 for a sun per cell, ``_field_fit``).
+    The upper bound is max_j T(j) - j d_up: safe when j d_up is at most that rise for every j
+    whose term can matter, the lower bound max_j T(j) - j d_lo when j d_lo is at least it.
+    A term whose ray has risen over zmax - zmin cannot shadow (nor can a lower bound's term
+    with j d_lo >= zmax - zmin). So:
+
+    * d_up = r_lo + (2K + 1) c_lo when c_lo >= 0, else r_lo + (2K + J) c_lo, J the steps after
+      which every ray has risen over the relief (at most L);
+    * d_lo = r_hi + (2K + 1) c_hi when c_hi <= 0, else d >= r_hi + (2K + j) c_hi for every
+      j < (zmax - zmin) / d: the smallest such d solves d^2 - (r_hi + 2K c_hi) d - (zmax -
+      zmin) c_hi = 0 (or j < L). (It was r + (2 kmax + 1) c, the steepest step of the whole
+      reach, twice the excess over r: the Moon's small radius, 1.7x the flat run at 3 deg.)"""
     span = max(0.0, zmax - zmin)
-    d_lo = min(0.5 * (a + math.sqrt(a * a + 4.0 * span * c_hi)), a + L * c_hi)
-    d_lo = d_lo * (1.0 + 1e-12) + 1e-12 * c_hi
+    if c_lo >= 0.0:
+        d_up = r_lo + (2 * K + 1) * c_lo
+    else:
+        slowest = r_lo + (2 * K + L) * c_lo      # the least a step rises within the raster
+        J = min(L, math.ceil(span / slowest) + 1) if slowest > 0 else L
+        d_up = (r_lo + (2 * K + J) * c_lo) * (1.0 - 1e-12) + 1e-12 * c_lo
+    if c_hi <= 0.0:
+        d_lo = r_hi + (2 * K + 1) * c_hi
+    else:
+        a = r_hi + 2 * K * c_hi
+        d_lo = min(0.5 * (a + math.sqrt(a * a + 4.0 * span * c_hi)), a + L * c_hi)
+        d_lo = d_lo * (1.0 + 1e-12) + 1e-12 * c_hi
+    kmax = min(L, math.ceil(span / r_lo) + 1) if r_lo > 0 else L
     big = max(abs(zmin), abs(zmax)) + 1.0
-    return d_lo, 1e-9 * big + 4e-16 * (L + K + 8) * (big + kmax * d_lo)
+    return d_up, d_lo, 1e-9 * big + 4e-16 * (L + K + 8) * (big + kmax * abs(d_lo))
 
 
 MIN_STRIP = 64     # fewest positions per strip: a 400-column tile still takes two threads
@@ -636,16 +855,15 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None,
         s_lo, s_hi = float(s[ok].min()), float(s[ok].max())
         r_lo, r_hi = float(rise[ok].min()), float(rise[ok].max())
         c_lo, c_hi = float(curv[ok].min()), float(curv[ok].max())
-        d_lo, margin = _drop_and_margin(zmin, zmax, L, K, r_lo, r_hi, c_hi)
+        d_up, d_lo, margin = _drops(zmin, zmax, L, K, r_lo, r_hi, c_lo, c_hi)
         per_line = not f.dom_col
         if f.dom_col and ok.all() and s_lo == s_hi and r_lo == r_hi and c_lo == c_hi:
             # one ray for every row: the line passes (indexed by line) serve the column frames too
             s, rise, curv = np.full(L, s_lo), np.full(L, r_lo), np.full(L, c_lo)
             ok, per_line = np.ones(L, np.bool_), True
-        _bounds_sweep(z, L, P, f.dom_col, f.flip_line, f.flip_pos, s_lo, s_hi,
-                      r_lo + (2 * K + 1) * c_lo,
-                      d_lo, s, rise, curv, ok, per_line, K, margin,
-                      _strips(P, s_hi, K), out, _field_args())
+        _bounds_sweep(z, L, P, f.dom_col, f.flip_line, f.flip_pos, s_lo, s_hi, d_up, d_lo, s,
+                      rise, curv, ok, per_line, K, margin, _strips(P, s_hi, K), out,
+                      _field_args())
     else:
         out[...] = np.where(np.isnan(z), np.uint8(255), np.uint8(UNDECIDED))
     left = brute.refine(z, rays, out, UNDECIDED, zmax, pyramid)
@@ -656,10 +874,12 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None,
 
 def shadow_mask_field(z: np.ndarray, grid, vec: np.ndarray, curv_coef: float = 0.0,
                       zmax: float | None = None, stats: dict | None = None, pyramid=True,
-                      zrange: tuple[float, float] | None = None) -> np.ndarray:
-    """``shadow_mask`` with every cell's own sun (``field``: the lattice ``vec``): the bounds
-    take the range of the cells' rays, each cell its own ray for its exact samples and lookup,
-    undecided cells the field's exact march. The mask equals ``field.shadow_mask``'s."""
+                      zrange: tuple[float, float] | None = None, place=None) -> np.ndarray:
+    """``shadow_mask`` with every cell's own sun (``field``: the lattice ``vec``; ``place`` as
+    for ``field.sun_args``): the bounds made for the range of the cells' rays over the heights
+    less the field's potential (``_field_fit``), each cell its own ray for its exact samples
+    and lookup, undecided cells the field's exact march. The mask equals
+    ``field.shadow_mask``'s."""
     from . import field
     if z.dtype != np.float32 or z.ndim != 2:
         raise TypeError("heights must be a 2-D float32 array")
@@ -670,25 +890,28 @@ def shadow_mask_field(z: np.ndarray, grid, vec: np.ndarray, curv_coef: float = 0
         return out
     zmax = float(zhi) if zmax is None else float(zmax)
     rows, cols = z.shape
-    sun = field.sun_args(grid, vec, curv_coef)
-    _, dc, sd, so, ri, _ = field.cell_ray(rows // 2, cols // 2, rows, cols, *sun)
+    sun = field.sun_args(grid, vec, curv_coef, place)
+    _, dc, sd, so, ri, _ = field.cell_ray(rows // 2, cols // 2, *sun)
     f = Frame(dom_col=bool(dc), flip_line=sd < 0, flip_pos=so < 0, s=abs(so), so=so, sd=int(sd),
               rise=ri, step_m=0.0)
-    s_lo, s_hi, r_lo, r_hi, c_lo, c_hi, n = field.field_ranges(
-        rows, cols, *sun, bool(dc), np.int64(sd), bool(f.flip_pos))
     L, P = (cols, rows) if f.dom_col else (rows, cols)
+    # the rays of every 8th line and position (all on a small raster): their fit and ranges;
+    # a cell whose ray falls outside the ranges is left to the exact march
+    step = 1 if rows * cols <= 1 << 16 else 8
+    sample = field.field_sample(rows, cols, *sun, f.dom_col, np.int64(sd), f.flip_line,
+                                f.flip_pos, np.int64(step))
     K = EXACT_STEPS
-    if n > 0 and L > 1 and P > 1 and math.isfinite(r_hi):
-        d_lo, margin = _drop_and_margin(zmin, zmax, L, K, r_lo, r_hi, c_hi)
+    if len(sample) and L > 1 and P > 1 and np.isfinite(sample[:, 3]).all():
+        A, B, (s_lo, s_hi), (r_lo, r_hi), (c_lo, c_hi), (ph_lo, ph_hi) = _field_fit(sample, L, P)
+        d_up, d_lo, margin = _drops(zmin - ph_hi, zmax - ph_lo, L, K, r_lo, r_hi, c_lo, c_hi)
         one = np.zeros(1)
-        _bounds_sweep(z, L, P, f.dom_col, f.flip_line, f.flip_pos, s_lo, s_hi,
-                      r_lo + (2 * K + 1) * c_lo,
-                      d_lo, one, one, one, np.ones(1, np.bool_), False, K, margin,
-                      _strips(P, s_hi, K), out,
-                      _field_args(vec, grid, curv_coef, z.shape, f, L))
+        _bounds_sweep(z, L, P, f.dom_col, f.flip_line, f.flip_pos, s_lo, s_hi, d_up, d_lo, one,
+                      one, one, np.ones(1, np.bool_), False, K, margin, _strips(P, s_hi, K), out,
+                      _field_args(vec, grid, curv_coef, f, L,
+                                  (A, B, s_lo, s_hi, r_lo, r_hi, c_lo, c_hi), place))
     else:
         out[...] = np.where(np.isnan(z), np.uint8(255), np.uint8(UNDECIDED))
-    left = field.refine(z, grid, vec, curv_coef, zmax, out, UNDECIDED, pyramid)
+    left = field.refine(z, grid, vec, curv_coef, zmax, out, UNDECIDED, pyramid, place)
     if stats is not None:
         stats["undecided_fraction"] = left / max(1, out.size)
     return out

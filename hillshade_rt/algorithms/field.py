@@ -22,50 +22,81 @@ import numpy as np
 from numba import njit, prange
 
 from ..gpu import cuda, kernel
+from .frames import dem_index
 from .pyramid import pyramid_args, ray_is_blocked_pyramid
 from .raymath import ray_is_blocked
 
 
-@njit(cache=True)
-def cell_ray(r, c, rows, cols, vec, dx, dy, col_sign, row_sign, curv_coef):
-    """(night, dom_col, step_dom, step_other, rise, curv) of cell (r, c): its sun interpolated
-    on the lattice ``vec`` (n x n x 3 unit vectors east, north, up; node (i, j) at row
-    i*(rows-1)/(n-1), column j*(cols-1)/(n-1)); night when that sun is at or below the horizon."""
+@njit(cache=True, inline="always")
+def lattice_scale(n, m):
+    """Lattice nodes per cell along an axis of m cells for an n x n lattice (0 for one cell)."""
+    return (n - 1.0) / (m - 1.0) if m > 1 else 0.0
+
+
+@njit(cache=True, inline="always")
+def lattice_at(r, c, si, sj, vec):
+    """(east, north, up) at cell (r, c): the bilinear interpolation of the lattice ``vec`` (n x n
+    x 3 unit vectors; node (i, j) at row i / si, column j / sj, ``lattice_scale``), not
+    normalised: along the columns first, then along the rows."""
     n = vec.shape[0]
-    fi = (r * (n - 1.0) / (rows - 1.0)) if rows > 1 else 0.0
-    fj = (c * (n - 1.0) / (cols - 1.0)) if cols > 1 else 0.0
+    fi = r * si
+    fj = c * sj
     i0 = min(int(fi), n - 2) if n > 1 else 0
     j0 = min(int(fj), n - 2) if n > 1 else 0
     ti = fi - i0
     tj = fj - j0
     i1 = min(i0 + 1, n - 1)
     j1 = min(j0 + 1, n - 1)
-    w00 = (1.0 - ti) * (1.0 - tj)
-    w01 = (1.0 - ti) * tj
-    w10 = ti * (1.0 - tj)
-    w11 = ti * tj
-    e = w00 * vec[i0, j0, 0] + w01 * vec[i0, j1, 0] + w10 * vec[i1, j0, 0] + w11 * vec[i1, j1, 0]
-    no = w00 * vec[i0, j0, 1] + w01 * vec[i0, j1, 1] + w10 * vec[i1, j0, 1] + w11 * vec[i1, j1, 1]
-    up = w00 * vec[i0, j0, 2] + w01 * vec[i0, j1, 2] + w10 * vec[i1, j0, 2] + w11 * vec[i1, j1, 2]
-    h = math.sqrt(e * e + no * no)
-    if up <= 0.0 or h == 0.0:
-        return True, False, np.int64(1), 0.0, 0.0, 0.0
-    east = e / h
-    north = no / h
-    pc = east * col_sign / dx[r]
-    pr = north * row_sign / dy[r]
-    dom_col = abs(pc) >= abs(pr)
-    a_dom = abs(pc) if dom_col else abs(pr)
-    sd = (1 if pc >= 0.0 else -1) if dom_col else (1 if pr >= 0.0 else -1)
-    step_other = (pr if dom_col else pc) / a_dom
-    step_m = 1.0 / a_dom
-    rise = (up / h) * step_m
-    return False, dom_col, np.int64(sd), step_other, rise, curv_coef * step_m * step_m
+    a = vec[i0, j0, 0] + tj * (vec[i0, j1, 0] - vec[i0, j0, 0])
+    b = vec[i1, j0, 0] + tj * (vec[i1, j1, 0] - vec[i1, j0, 0])
+    e = a + ti * (b - a)
+    a = vec[i0, j0, 1] + tj * (vec[i0, j1, 1] - vec[i0, j0, 1])
+    b = vec[i1, j0, 1] + tj * (vec[i1, j1, 1] - vec[i1, j0, 1])
+    no = a + ti * (b - a)
+    a = vec[i0, j0, 2] + tj * (vec[i0, j1, 2] - vec[i0, j0, 2])
+    b = vec[i1, j0, 2] + tj * (vec[i1, j1, 2] - vec[i1, j0, 2])
+    up = a + ti * (b - a)
+    return e, no, up
 
 
 @njit(cache=True, inline="always")
-def _field_cell(z, pyr, off, widths, nlev, r, c, rows, cols, vec, dx, dy, col_sign, row_sign,
-                curv_coef, zmax, out, only):
+def ray_of(e, no, up, dx_r, dy_r, col_sign, row_sign, curv_coef):
+    """(night, dom_col, step_dom, step_other, rise, curv) of the sun (east, north, up: any
+    length) on a row of spacing dx_r, dy_r, the ray ``geometry.sun_rays`` makes from its
+    azimuth and elevation (up to rounding), with one division: the unit vector's length
+    cancels. Night when the sun is at or below the horizon. Selects only: a loop over cells
+    vectorises."""
+    h2 = e * e + no * no
+    night = not ((up > 0.0) & (h2 > 0.0))
+    ae = abs(e) * dy_r
+    an = abs(no) * dx_r
+    dom_col = ae >= an                  # |east| / dx >= |north| / dy
+    num = 1.0 if night else (ae if dom_col else an)
+    u = 1.0 / num
+    m = dx_r * dy_r * u                  # metres per step / horizontal length of the vector
+    lead = e * col_sign if dom_col else no * row_sign
+    sd = np.int64(1) if ((lead >= 0.0) | night) else np.int64(-1)
+    step_other = 0.0 if night else (no * row_sign * dx_r if dom_col else e * col_sign * dy_r) * u
+    rise = 0.0 if night else up * m
+    curv = 0.0 if night else curv_coef * h2 * m * m
+    return night, dom_col & (not night), sd, step_other, rise, curv
+
+
+@njit(cache=True)
+def cell_ray(r, c, vec, dx, dy, col_sign, row_sign, curv_coef, r0, c0, rows, cols):
+    """(night, dom_col, step_dom, step_other, rise, curv) of cell (r, c) of an array that is
+    the window at (r0, c0) of the rows x cols raster the lattice ``vec`` spans (``sun_args``):
+    its sun interpolated on the lattice at (r0 + r, c0 + c) (``lattice_at``), its ray on its
+    row's spacing ``dx[r]``, ``dy[r]`` (``ray_of``); night when that sun is at or below the
+    horizon."""
+    n = vec.shape[0]
+    e, no, up = lattice_at(r0 + r, c0 + c, lattice_scale(n, rows), lattice_scale(n, cols), vec)
+    return ray_of(e, no, up, dx[r], dy[r], col_sign, row_sign, curv_coef)
+
+
+@njit(cache=True, inline="always")
+def _field_cell(z, pyr, off, widths, nlev, r, c, vec, dx, dy, col_sign, row_sign, curv_coef,
+                r0, c0, rows, cols, zmax, out, only):
     """Decide cell (r, c) with its own sun (with only >= 0: only if its code in ``out`` is
     ``only``; returns 1 when it decided it): the per-cell body of both backends."""
     if only >= 0 and out[r, c] != only:
@@ -73,8 +104,8 @@ def _field_cell(z, pyr, off, widths, nlev, r, c, rows, cols, vec, dx, dy, col_si
     if math.isnan(z[r, c]):
         out[r, c] = 255
         return 1
-    night, dc, sd, so, ri, cv = cell_ray(r, c, rows, cols, vec, dx, dy, col_sign, row_sign,
-                                         curv_coef)
+    night, dc, sd, so, ri, cv = cell_ray(r, c, vec, dx, dy, col_sign, row_sign, curv_coef, r0,
+                                         c0, rows, cols)
     if night:
         out[r, c] = 1
     elif nlev > 0:
@@ -86,56 +117,58 @@ def _field_cell(z, pyr, off, widths, nlev, r, c, rows, cols, vec, dx, dy, col_si
 
 
 @njit(parallel=True, cache=True)
-def _field_cpu(z, pyr, off, widths, nlev, vec, dx, dy, col_sign, row_sign, curv_coef, zmax, out,
-               only):
+def _field_cpu(z, pyr, off, widths, nlev, vec, dx, dy, col_sign, row_sign, curv_coef, r0, c0,
+               rows_l, cols_l, zmax, out, only):
     rows, cols = z.shape
     n = 0
     for r in prange(rows):
         for c in range(cols):
             if only >= 0 and out[r, c] != only:
                 continue
-            n += _field_cell(z, pyr, off, widths, nlev, r, c, rows, cols, vec, dx, dy, col_sign,
-                             row_sign, curv_coef, zmax, out, only)
+            n += _field_cell(z, pyr, off, widths, nlev, r, c, vec, dx, dy, col_sign, row_sign,
+                             curv_coef, r0, c0, rows_l, cols_l, zmax, out, only)
     return n
 
 
 @kernel
-def _field_gpu(z, pyr, off, widths, nlev, vec, dx, dy, col_sign, row_sign, curv_coef, zmax, out):
+def _field_gpu(z, pyr, off, widths, nlev, vec, dx, dy, col_sign, row_sign, curv_coef, r0, c0,
+               rows_l, cols_l, zmax, out):
     c, r = cuda.grid(2)
     rows, cols = z.shape
     if r < rows and c < cols:
-        _field_cell(z, pyr, off, widths, nlev, r, c, rows, cols, vec, dx, dy, col_sign,
-                    row_sign, curv_coef, zmax, out, -1)
+        _field_cell(z, pyr, off, widths, nlev, r, c, vec, dx, dy, col_sign, row_sign, curv_coef,
+                    r0, c0, rows_l, cols_l, zmax, out, -1)
 
 
-@njit(parallel=True, cache=True)
-def field_ranges(rows, cols, vec, dx, dy, col_sign, row_sign, curv_coef, f_dom, f_sd, flip_pos):
-    """(s_lo, s_hi, rise_lo, rise_hi, curv_lo, curv_hi, n) over the cells whose sun is up and
-    whose ray lies in the frame's octant (dominant axis ``f_dom``, direction ``f_sd``, position
-    step >= 0 once flipped by ``flip_pos``): what ``bounds`` needs of a field."""
-    a = np.full((rows, 6), np.nan)
-    cnt = np.zeros(rows, np.int64)
-    for r in prange(rows):
-        s_lo, s_hi, r_lo, r_hi, c_lo, c_hi = np.inf, -np.inf, np.inf, -np.inf, np.inf, -np.inf
-        k = 0
-        for c in range(cols):
-            night, dc, sd, so, ri, cv = cell_ray(r, c, rows, cols, vec, dx, dy, col_sign,
-                                                 row_sign, curv_coef)
+@njit(cache=True)
+def field_sample(rows, cols, vec, dx, dy, col_sign, row_sign, curv_coef, r0, c0, rows_l, cols_l,
+                 f_dom, f_sd, flip_line, flip_pos, step):
+    """The rays of every ``step``-th canonical line and position (and the last ones) of the
+    frame (dominant axis ``f_dom``, direction ``f_sd``, flips): (line, position, s, rise, curv)
+    of those whose sun is up and whose ray lies in the frame's octant (s >= 0 once flipped).
+    What ``bounds`` fits and takes the ranges of."""
+    L, P = (cols, rows) if f_dom else (rows, cols)
+    nv = (L - 1) // step + 2
+    npos = (P - 1) // step + 2
+    a = np.empty((nv * npos, 5))
+    k = 0
+    for iv in range(nv):
+        v = min(iv * step, L - 1)
+        if iv == nv - 1 and (L - 1) % step == 0:
+            continue
+        for ip in range(npos):
+            p = min(ip * step, P - 1)
+            if ip == npos - 1 and (P - 1) % step == 0:
+                continue
+            r, c = dem_index(v, p, L, P, f_dom, flip_line, flip_pos)
+            night, dc, sd, so, ri, cv = cell_ray(r, c, vec, dx, dy, col_sign, row_sign,
+                                                 curv_coef, r0, c0, rows_l, cols_l)
             s = -so if flip_pos else so
             if night or dc != f_dom or sd != f_sd or not s >= 0.0:
                 continue
+            a[k, 0], a[k, 1], a[k, 2], a[k, 3], a[k, 4] = v, p, s, ri, cv
             k += 1
-            s_lo, s_hi = min(s_lo, s), max(s_hi, s)
-            r_lo, r_hi = min(r_lo, ri), max(r_hi, ri)
-            c_lo, c_hi = min(c_lo, cv), max(c_hi, cv)
-        cnt[r] = k
-        a[r, 0], a[r, 1], a[r, 2], a[r, 3], a[r, 4], a[r, 5] = s_lo, s_hi, r_lo, r_hi, c_lo, c_hi
-    n = cnt.sum()
-    if n == 0:
-        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, n
-    ok = cnt > 0
-    return (a[ok, 0].min(), a[ok, 1].max(), a[ok, 2].min(), a[ok, 3].max(), a[ok, 4].min(),
-            a[ok, 5].max(), n)
+    return a[:k]
 
 
 def lattice_vectors(azimuth, elevation) -> np.ndarray:
@@ -146,45 +179,50 @@ def lattice_vectors(azimuth, elevation) -> np.ndarray:
                                           np.sin(e)], axis=-1))
 
 
-def sun_args(grid, vec: np.ndarray, curv_coef: float = 0.0) -> tuple:
-    """(lattice, dx, dy, col sign, row sign, curvature): what ``cell_ray`` takes besides the
-    cell, in the kernels' types."""
+def sun_args(grid, vec: np.ndarray, curv_coef: float = 0.0, place=None) -> tuple:
+    """(lattice, dx, dy, col sign, row sign, curvature, r0, c0, rows, cols): what ``cell_ray``
+    takes besides the cell, in the kernels' types. ``place``: (r0, c0, rows, cols) when the
+    heights are the window at (r0, c0) of the rows x cols raster the lattice spans (``grid``
+    the window's); default the whole raster."""
+    r0, c0, rows, cols = place if place is not None else (0, 0, grid.rows, grid.cols)
     return (np.ascontiguousarray(vec, np.float64), np.ascontiguousarray(grid.dx, np.float64),
             np.ascontiguousarray(grid.dy, np.float64), float(grid.col_sign),
-            float(grid.row_sign), float(curv_coef))
+            float(grid.row_sign), float(curv_coef), np.int64(r0), np.int64(c0), np.int64(rows),
+            np.int64(cols))
 
 
 def shadow_mask(z: np.ndarray, grid, vec: np.ndarray, curv_coef: float = 0.0,
-                zmax: float | None = None, pyramid=True) -> np.ndarray:
+                zmax: float | None = None, pyramid=True, place=None) -> np.ndarray:
     """Cast-shadow mask (uint8 1 / 0 / 255) of ``z`` on ``grid`` with every cell's own sun from
     the lattice ``vec`` (``lattice_vectors``); ``curv_coef``: (1 - k) / 2R or 0; ``pyramid`` as
-    for ``brute.shadow_mask``."""
+    for ``brute.shadow_mask``; ``place`` as for ``sun_args`` (a window of the raster)."""
     if z.dtype != np.float32 or z.ndim != 2:
         raise TypeError("heights must be a 2-D float32 array")
     if zmax is None:
         zmax = float(np.nanmax(z)) if np.isfinite(z).any() else -np.inf
     out = np.empty(z.shape, np.uint8)
-    _field_cpu(z, *pyramid_args(z, pyramid), *sun_args(grid, vec, curv_coef), float(zmax), out,
-               np.int64(-1))
+    _field_cpu(z, *pyramid_args(z, pyramid), *sun_args(grid, vec, curv_coef, place), float(zmax),
+               out, np.int64(-1))
     return out
 
 
 def refine(z: np.ndarray, grid, vec: np.ndarray, curv_coef: float, zmax: float,
-           out: np.ndarray, code: int, pyramid=True) -> int:
+           out: np.ndarray, code: int, pyramid=True, place=None) -> int:
     """Replace every ``code`` in ``out`` by the exact answer with the cell's own sun; returns how
     many cells were refined."""
     if not (out == code).any():
         return 0
-    return int(_field_cpu(z, *pyramid_args(z, pyramid), *sun_args(grid, vec, curv_coef),
+    return int(_field_cpu(z, *pyramid_args(z, pyramid), *sun_args(grid, vec, curv_coef, place),
                           float(zmax), out, np.int64(code)))
 
 
-def shadow_mask_gpu(g, grid, vec: np.ndarray, curv_coef: float, zmax: float) -> np.ndarray:
+def shadow_mask_gpu(g, grid, vec: np.ndarray, curv_coef: float, zmax: float,
+                    place=None) -> np.ndarray:
     """``shadow_mask`` on the GPU (``g``: a ``gpu.GpuDem``)."""
     rows, cols = g.shape
     out = g.empty((rows, cols), np.uint8)
-    v, dx, dy, cs, rs, cc = sun_args(grid, vec, curv_coef)
+    v, dx, dy, cs, rs, cc, r0, c0, nr, nc = sun_args(grid, vec, curv_coef, place)
     with g.timed():
         g.launch(_field_gpu, rows, cols, g.z, *g.pyramid_args(True), g.upload(v), g.upload(dx),
-                 g.upload(dy), cs, rs, cc, float(zmax), out)
+                 g.upload(dy), cs, rs, cc, r0, c0, nr, nc, float(zmax), out)
     return g.download(out)
