@@ -16,6 +16,7 @@ Compute stage only, after a warm-up; the median of --repeat runs, the cases alte
 """
 
 import argparse
+import itertools
 import datetime
 import os
 import platform
@@ -92,12 +93,12 @@ def main(argv=None):
 
     print("\n### A sun from a time over a 61 km DEM: per tile and every cell's own sun vs one "
           "vector\n")
-    print("(spectral β 3.2 2048² at 30 m in UTM 11N at 34° N, auto, flat; one vector: the same "
-          "instant with the tolerance raised so that one vector serves)\n")
-    print("| time (local) | el | deviation across the DEM ° | tiles | one vector s | per tile s "
-          "(the default) | per cell s (sun_field) | per tile ÷ one vector | per cell ÷ one "
-          "vector |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    print("(spectral β 3.2 2048² at 30 m in UTM 11N at 34° N, auto, curvature as given; one "
+          "vector: the same instant with the tolerance raised so that one vector serves)\n")
+    print("| time (local) | curvature | el | deviation across the DEM ° | tiles | one vector s | "
+          "per tile s (sun_field=False) | per cell s (the default) | per tile ÷ one vector | "
+          "per cell ÷ one vector |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     import tempfile
     import rasterio
     from rasterio.transform import from_origin
@@ -111,19 +112,22 @@ def main(argv=None):
             w.write(spec, 1)
         d = read_dem(path)
     site = dem_site(d)
-    for when in ("2026-06-21T06:10-07:00", "2026-06-21T08:30-07:00", "2026-12-21T15:40-08:00"):
+    for when, curv in itertools.product(
+            ("2026-06-21T06:10-07:00", "2026-06-21T08:30-07:00", "2026-12-21T15:40-08:00"),
+            ("auto", False)):
         t = parse_time(when)
         [var] = sun_over(site, d.shape, [t])
         [one] = sun_over(site, d.shape, [t], tolerance=10.0)
-        sh = Shader(d.heights, d.grid, "auto", {}, "cpu", False, None, dem_body(d))
-        shf = Shader(d.heights, d.grid, "auto", {}, "cpu", False, None, dem_body(d),
-                     sun_field=True)
+        sh = Shader(d.heights, d.grid, "auto", {}, "cpu", curv, None, dem_body(d),
+                    sun_field=False)
+        shf = Shader(d.heights, d.grid, "auto", {}, "cpu", curv, None, dem_body(d))
         for s_, v_ in ((sh, one), (sh, var), (shf, var)):
             render(s_, v_, "shadow")
         tt = timed({"one": lambda: render(sh, one, "shadow"),
                     "tiles": lambda: render(sh, var, "shadow"),
                     "var": lambda: render(shf, var, "shadow")}, a.repeat)
-        print(f"| {when} | {one.elevation:.1f} | {var.deviation_deg:.3f} | "
+        print(f"| {when} | {'on (the default)' if curv else 'off'} | {one.elevation:.1f} | "
+              f"{var.deviation_deg:.3f} | "
               f"{len(var.tiles or [])} | {tt['one']:.3f} | {tt['tiles']:.3f} | {tt['var']:.3f} | "
               f"{tt['tiles'] / tt['one']:.2f} | {tt['var'] / tt['one']:.2f} |", flush=True)
 

@@ -5,8 +5,9 @@ All ratios are measured within this one run, on the bundled example DEM (Big Tuj
 
   * series: one ``shadow`` run with N times (one band each) vs N separate ``shadow`` runs (new
     processes, as a Makefile loop would do): seconds per time;
-  * per tile vs one vector: the same instant with the default tolerance (the sun varies 0.18 deg
-    across this DEM: 14 tiles) and with the tolerance raised so one vector serves;
+  * per cell (the default) and per tile vs one vector: the same instant with the default
+    tolerance (the sun varies 0.18 deg across this DEM) and with the tolerance raised so one
+    vector serves;
   * curvature on vs off, soft vs hard, self-shadow and hillshade vs the plain mask, at a 2 and a
     20 deg sun;
   * sun-hours of one day at 10 min.
@@ -76,17 +77,20 @@ def main():
         [one] = sun_over(site, d.shape, [t], tolerance=10.0)
         zr = d.height_range()
 
-        def sh(curv, alg="auto", options=None):
+        def sh(curv, alg="auto", options=None, per_cell=True):
             return Shader(d.heights, d.grid, alg, options or {}, "cpu", curv, None, dem_body(d),
-                          zr)
+                          zr, sun_field=per_cell)
         flat, curved = sh(False), sh(True)
+        flat_t, curved_t = sh(False, per_cell=False), sh(True, per_cell=False)
         base = median_time(lambda: render(flat, one, "shadow"), args.repeat)
         variants = [
             ("one vector, curvature off (plain)", lambda: None, base),
             ("one vector, curvature on", None, lambda: render(curved, one, "shadow")),
-            (f"per tile ({len(tiled.tiles or [])} tiles, dev {tiled.deviation_deg:.3f} deg), "
-             "curvature off", None, lambda: render(flat, tiled, "shadow")),
-            ("per tile, curvature on (the default)", None, lambda: render(curved, tiled, "shadow")),
+            (f"per cell (dev {tiled.deviation_deg:.3f} deg across the DEM), curvature off", None,
+             lambda: render(flat, tiled, "shadow")),
+            ("per cell, curvature on (the default)", None, lambda: render(curved, tiled, "shadow")),
+            (f"per tile ({len(tiled.tiles or [])} tiles), curvature on", None,
+             lambda: render(curved_t, tiled, "shadow")),
             ("one vector, --soft", None, lambda: render(flat, one, "shadow", soft=True)),
             ("one vector, --self-shadow", None,
              lambda: render(flat, one, "shadow", self_shadow=True)),

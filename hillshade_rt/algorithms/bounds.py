@@ -83,7 +83,7 @@ def _bin_bounds(a, b, ga, gb):
     tb = a + gb * (b - a)
     hi_t = ta if ta > tb else tb
     lo_t = tb if ta > tb else ta
-    void = not (ta == ta and tb == tb)
+    void = not ((ta == ta) & (tb == tb))      # '&': no branch, the pass vectorises
     top = a if a == a else (b if b == b else -np.inf)
     return (top if void else hi_t), (-np.inf if void else lo_t)
 
@@ -120,47 +120,73 @@ def _bin_pass(zb, zo, su_n, sl_n, su_c, sl_c, i0, i1, padp, phi, delta, ext, W, 
         db = padp + (q + 1) // Q
         mc = (q + 2) % Q
         dc = padp + (q + 2) // Q
-        sua, sub, suc = su_n[ma], su_n[mb], su_n[mc]
-        sla, slb, slc = sl_n[ma], sl_n[mb], sl_n[mc]
-        ou = su_c[m]
-        ol = sl_c[m]
-        for i in range(i0, i1):
-            a = zb[zo + i]
-            b = zb[zo + i + 1]
+        # views that start at 0: numba then drops its negative-index wrap (i0 may be -1), which
+        # kept the loop from vectorising
+        n = i1 - i0
+        Z = zb[zo + i0:zo + i1 + 2]
+        ua, ub, uc = su_n[ma, da + i0:da + i1], su_n[mb, db + i0:db + i1], su_n[mc, dc + i0:dc + i1]
+        la, lb, lc = sl_n[ma, da + i0:da + i1], sl_n[mb, db + i0:db + i1], sl_n[mc, dc + i0:dc + i1]
+        ou = su_c[m, padp + i0:padp + i1]
+        ol = sl_c[m, padp + i0:padp + i1]
+        if W <= 3:
+            _bin_loop(Z, ua, ub, uc, la, lb, lc, ou, ol, n, fa, fb, straddle, W, d_up, d_lo)
+            continue
+        for j in range(n):   # rays of many rows spread over more bins (rare)
+            a = Z[j]
+            b = Z[j + 1]
             if straddle:
                 h1, l1 = _bin_bounds(a, b, fa, 1.0)
-                h2, l2 = _bin_bounds(b, zb[zo + i + 2], 0.0, fb - 1.0)
+                h2, l2 = _bin_bounds(b, Z[j + 2], 0.0, fb - 1.0)
                 hi_t = h1 if h1 > h2 else h2
                 lo_t = l2 if l1 > l2 else l1
             else:
                 hi_t, lo_t = _bin_bounds(a, b, fa, fb)
-            if W == 1:
-                u = sua[da + i]
-                lw = sla[da + i]
-            elif W == 2:
-                x, y = sua[da + i], sub[db + i]
-                u = x if x > y else y
-                x, y = sla[da + i], slb[db + i]
-                lw = y if x > y else x
-            elif W == 3:
-                x, y, w = sua[da + i], sub[db + i], suc[dc + i]
-                x = x if x > y else y
-                u = x if x > w else w
-                x, y, w = sla[da + i], slb[db + i], slc[dc + i]
-                x = y if x > y else x
-                lw = w if x > w else x
-            else:    # rays of many rows spread over more bins
-                u = -np.inf
-                lw = np.inf
-                for j in range(W):
-                    mj = (q + j) % Q
-                    dj = padp + (q + j) // Q + i
-                    u = max(u, su_n[mj, dj])
-                    lw = min(lw, sl_n[mj, dj])
+            u = -np.inf
+            lw = np.inf
+            for k in range(W):
+                mj = (q + k) % Q
+                dj = padp + (q + k) // Q + i0 + j
+                u = max(u, su_n[mj, dj])
+                lw = min(lw, sl_n[mj, dj])
             u -= d_up
             lw -= d_lo
-            ou[padp + i] = u if u > hi_t else hi_t
-            ol[padp + i] = lw if lw > lo_t else lo_t
+            ou[j] = u if u > hi_t else hi_t
+            ol[j] = lw if lw > lo_t else lo_t
+
+
+@njit(cache=True)
+def _bin_loop(Z, ua, ub, uc, la, lb, lc, ou, ol, n, fa, fb, straddle, W, d_up, d_lo):
+    """The pass of ``_bin_pass`` over one bin place m for W <= 3, on views that start at 0 and
+    with selects only (in a function of its own it vectorises: 2x the speed of the pass)."""
+    for j in range(n):
+        a = Z[j]
+        b = Z[j + 1]
+        if straddle:
+            h1, l1 = _bin_bounds(a, b, fa, 1.0)
+            h2, l2 = _bin_bounds(b, Z[j + 2], 0.0, fb - 1.0)
+            hi_t = h1 if h1 > h2 else h2
+            lo_t = l2 if l1 > l2 else l1
+        else:
+            hi_t, lo_t = _bin_bounds(a, b, fa, fb)
+        if W == 1:
+            u = ua[j]
+            lw = la[j]
+        elif W == 2:
+            x, y = ua[j], ub[j]
+            u = x if x > y else y
+            x, y = la[j], lb[j]
+            lw = y if x > y else x
+        else:
+            x, y, w = ua[j], ub[j], uc[j]
+            x = x if x > y else y
+            u = x if x > w else w
+            x, y, w = la[j], lb[j], lc[j]
+            x = y if x > y else x
+            lw = w if x > w else x
+        u -= d_up
+        lw -= d_lo
+        ou[j] = u if u > hi_t else hi_t
+        ol[j] = lw if lw > lo_t else lo_t
 
 
 @njit(cache=True, inline="always")
@@ -209,18 +235,20 @@ def _code(e, e_hi, lw, u, h, hk, margin, x, P):
     (0) when every sample (max ``e_hi``) and the upper bound ``u`` clear it and ``x`` is not within
     rounding of the far edge (where the model snaps a position onto the last cell centre),
     UNDECIDED otherwise; 255 on a void."""
-    sh = (e > h + margin) or (lw > hk + margin)
-    lit = (e_hi <= h - margin) and (u <= hk - margin) and (x <= P - 1 - 1e-6)
+    sh = (e > h + margin) | (lw > hk + margin)          # '|', '&': no branch, loops vectorise
+    lit = (e_hi <= h - margin) & (u <= hk - margin) & (x <= P - 1 - 1e-6)
     c = np.uint8(1) if sh else (np.uint8(0) if lit else np.uint8(UNDECIDED))
     return np.uint8(255) if h != h else c
 
 
 @njit(cache=True)
 def _decide_line(ZL, SU, SL, R, v, p0, p1, P, s, rise, curv, K, pad, margin, ok, s_c, e, e_hi,
-                 out):
+                 out, PF):
     """Codes of positions [p0, p1) of canonical line v whose cells share one ray (s, rise,
-    curv): the same decisions as ``_decide_positions``, with the sample offsets and fractions of the
-    line computed once, in passes along the line that vectorise. ``e``, ``e_hi``: work space."""
+    curv): the same decisions as ``_decide_positions``, with the sample offsets and fractions of
+    the line computed once, in passes along the line over views that start at 0 (numba then
+    drops its negative-index wrap) with selects only: they vectorise. ``e``, ``e_hi``: work
+    space; ``PF``: each position as a float (no conversion in the loop)."""
     n = p1 - p0
     row = v % R
     if not ok:
@@ -236,22 +264,21 @@ def _decide_line(ZL, SU, SL, R, v, p0, p1, P, s, rise, curv, K, pad, margin, ok,
         d = int(ks)
         f = ks - d
         drop = k * rise + k * k * curv
-        zr = ZL[(v + k) % R]
+        zv = ZL[(v + k) % R, p0 + d:p0 + d + n + 1]
         if f == 0.0:
             for q in range(n):
-                t = zr[p0 + d + q] - drop
+                t = zv[q] - drop
                 e[q] = t if t > e[q] else e[q]     # NaN (void, outside) compares false
                 e_hi[q] = t if t > e_hi[q] else e_hi[q]
-        else:
-            snap = f < SNAP or f > 1.0 - SNAP
+        elif not (f < SNAP or f > 1.0 - SNAP):
             for q in range(n):
-                za = zr[p0 + d + q]
-                zb = zr[p0 + d + q + 1]
-                t = za + f * (zb - za) - drop
-                if not snap:
-                    e[q] = t if t > e[q] else e[q]
-                else:
-                    t = _sample_hi(za, zb, f) - drop
+                za = zv[q]
+                t = za + f * (zv[q + 1] - za) - drop
+                e[q] = t if t > e[q] else e[q]
+                e_hi[q] = t if t > e_hi[q] else e_hi[q]
+        else:                         # within rounding of a cell centre: bounded above only
+            for q in range(n):
+                t = _sample_hi(zv[q], zv[q + 1], f) - drop
                 e_hi[q] = t if t > e_hi[q] else e_hi[q]
     xk = K * s
     _, phi = _phase(v + K, s_c)
@@ -260,16 +287,22 @@ def _decide_line(ZL, SU, SL, R, v, p0, p1, P, s, rise, curv, K, pad, margin, ok,
     b1 = int(math.ceil(y + EPS_BIN)) - 1
     sua, sla, sub, slb, da, db = _lookup_rows(SU, SL, (v + K) % R, b0, b1, pad)
     hk = K * rise + K * K * curv
-    zl = ZL[row]
-    for q in range(n):   # _looked_up written out: inlined here it stops the loop vectorising
-        p = p0 + q        # (Big Tujunga and a 2048² fractal 12-15 % slower)
-        u = sua[da + p]
-        lw = sla[da + p]
-        if b1 > b0:
-            u = max(u, sub[db + p])
-            lw = min(lw, slb[db + p])
-        h = zl[p]
-        out[q] = _code(e[q], e_hi[q], lw, u, h, h + hk, margin, p + xk, P)
+    ua = sua[da + p0:da + p1]
+    la = sla[da + p0:da + p1]
+    zl = ZL[row, p0:p1]
+    X = PF[p0:p1]
+    if b1 > b0:
+        ub = sub[db + p0:db + p1]
+        lb = slb[db + p0:db + p1]
+        for q in range(n):
+            u = max(ua[q], ub[q])
+            lw = min(la[q], lb[q])
+            h = zl[q]
+            out[q] = _code(e[q], e_hi[q], lw, u, h, h + hk, margin, X[q] + xk, P)
+    else:
+        for q in range(n):
+            h = zl[q]
+            out[q] = _code(e[q], e_hi[q], la[q], ua[q], h, h + hk, margin, X[q] + xk, P)
 
 
 @njit(cache=True)
@@ -644,13 +677,15 @@ def _strip_block(z, ZB, SU, SL, RO, v_top, nb, p0, p1, L, P, pad, s_c, M, spread
     FS, FR, FC = np.empty(nf), np.empty(nf), np.empty(nf)
     FOK, FN = np.zeros(nf, np.bool_), np.zeros(nf, np.bool_)
     IX = np.empty(nf, np.int64)
-    XP, PF, DXL, DYL = np.empty(nf), np.empty(nf), np.empty(nf), np.empty(nf)
+    XP, DXL, DYL = np.empty(nf), np.empty(nf), np.empty(nf)
+    PF = np.empty(P)                  # each position as a float
+    for p in range(p0, p1):
+        PF[p] = p
     if use:   # positions' index in the lattice's raster (and spacing when it is per row)
         o_pos = fld[7] if fld[11] else fld[8]
         for p in range(p0, p1):
             x = P - 1 - p if fld[14] else p
             XP[p] = x + o_pos
-            PF[p] = p
             if fld[11]:
                 DXL[p] = fld[2][x]
                 DYL[p] = fld[3][x]
@@ -674,7 +709,7 @@ def _strip_block(z, ZB, SU, SL, RO, v_top, nb, p0, p1, L, P, pad, s_c, M, spread
                     ro[q] = 1
         elif per_line:
             _decide_line(ZL, SU, SL, R, v, p0, p1, P, s_arr[v], rise_arr[v], curv_arr[v], K, pad,
-                         margin, ok_arr[v], s_c, W[3], W[4], RO[row, p0:p1])
+                         margin, ok_arr[v], s_c, W[3], W[4], RO[row, p0:p1], PF)
         else:
             _decide_positions(ZL, SU, SL, R, v, p0, p1, P, s_arr, rise_arr, curv_arr, ok_arr, K,
                               pad, margin, s_c, RO[row, p0:p1], W, D)
