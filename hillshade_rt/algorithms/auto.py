@@ -3,7 +3,7 @@
 Every exact method gives the same mask, so the choice is only about time. The cost model,
 fitted to ``make bench-real`` (docs/benchmarks.md, 2 cores):
 
-* ``bounds`` pays a fixed sweep over every cell (about 15-25 ns per cell on 2 cores) and then
+* ``bounds`` pays a fixed sweep over every cell (about 9-15 ns per cell on 2 cores) and then
   marches the few cells it leaves open; ``brute`` (over the pyramid) pays per *valid* cell a
   march whose length grows with the **reach** of a ray: the steps it takes to rise over the
   DEM's relief, ``(zmax - zmin) / rise``, at most the raster's extent along the ray.
@@ -35,12 +35,15 @@ from . import bounds, brute
 from .counts import valid_range
 from .frames import reach, uniform_rays
 
-# the cost model, ns per cell on 2 cores (make bench-real, 2026-12-02)
-BOUNDS_NS = 17.5             # bounds, one ray for the raster, every cell (voids too)
-BOUNDS_NS_PER_ROW = 25.0     # bounds, per-row rays (geographic)
-BRUTE_NS_FIXED = 15.0        # brute over the pyramid, per valid cell: a march's fixed cost
-BRUTE_NS_PER_STEP = 0.75     # ... and per step of the reach
+# the cost model, ns per cell on 2 cores (make bench-real and spectral probes, 2026-12-02,
+# after bounds' passes vectorised: it was 17.5 and 25)
+BOUNDS_NS = 9.0              # bounds, one ray for the raster, every cell (voids too)
+BOUNDS_NS_PER_ROW = 15.0     # bounds, per-row rays (geographic)
+BRUTE_NS_FIXED = 12.0        # brute over the pyramid, per valid cell: a march's fixed cost
+BRUTE_NS_PER_STEP = 0.7      # ... and per step of the reach
 BRUTE_NS_LONG = 68.0         # ... at most (long rays skip over the pyramid's blocks)
+PLAIN_NS_FIXED = 4.5         # brute's plain march (rays shorter than PYRAMID_REACH), per cell
+PLAIN_NS_PER_STEP = 1.1      # ... and per step
 PYRAMID_REACH = 16           # brute marches over the pyramid from rays of this many steps
 BRUTE_TILE_WINDOW_NS = 6.0   # brute on a tile of a varying sun, per cell of its window
 
@@ -59,7 +62,10 @@ def pyramid_pays(shape: tuple[int, int], zrange: tuple[float, float], rays: SunR
 
 
 def brute_ns(steps: float) -> float:
-    """Estimated ns (2 cores) of brute's march of one valid cell whose ray takes ``steps``."""
+    """Estimated ns (2 cores) of brute's march of one valid cell whose ray takes ``steps``: the
+    plain march below ``PYRAMID_REACH`` steps (``pyramid_pays``), else over the pyramid."""
+    if steps < PYRAMID_REACH:
+        return PLAIN_NS_FIXED + PLAIN_NS_PER_STEP * steps
     return min(BRUTE_NS_LONG, BRUTE_NS_FIXED + BRUTE_NS_PER_STEP * steps)
 
 

@@ -59,7 +59,8 @@ from numba import njit, prange
 from ..geometry import SunRays
 from . import brute
 from .field import lattice_scale, ray_of
-from .frames import Frame, dem_index, frame_of
+from .frames import Frame, dem_index, frame_of, reach
+from .pyramid import MaxPyramid
 from .sweep import _load_lines, _store_lines, _z_range, strip_bounds, wave_block, wave_steps
 from .sweep import _strips as sweep_strips
 
@@ -855,6 +856,16 @@ def _drops(zmin: float, zmax: float, L: int, K: int, r_lo: float, r_hi: float, c
     return d_up, d_lo, 1e-9 * big + 4e-16 * (L + K + 8) * (big + kmax * abs(d_lo))
 
 
+def _pyramid_for_open(out: np.ndarray, pyramid, steps: float):
+    """The pyramid for the cells the bounds left open (``pyramid.for_few``: none to build for a
+    few of them)."""
+    from .counts import count_code
+    from .pyramid import for_few
+    if pyramid is False or (isinstance(pyramid, MaxPyramid) and pyramid.built):
+        return pyramid
+    return for_few(pyramid, int(count_code(out, np.uint8(UNDECIDED))), out.size, steps)
+
+
 MIN_STRIP = 64     # fewest positions per strip: a 400-column tile still takes two threads
 
 
@@ -901,7 +912,8 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None,
                       _field_args())
     else:
         out[...] = np.where(np.isnan(z), np.uint8(255), np.uint8(UNDECIDED))
-    left = brute.refine(z, rays, out, UNDECIDED, zmax, pyramid)
+    left = brute.refine(z, rays, out, UNDECIDED, zmax,
+                        _pyramid_for_open(out, pyramid, reach(z.shape, (zmin, zmax), rays)))
     if stats is not None:   # of all cells (a count of the valid ones would cost a pass)
         stats["undecided_fraction"] = left / max(1, out.size)
     return out
@@ -946,7 +958,9 @@ def shadow_mask_field(z: np.ndarray, grid, vec: np.ndarray, curv_coef: float = 0
                                   (A, B, s_lo, s_hi, r_lo, r_hi, c_lo, c_hi), place))
     else:
         out[...] = np.where(np.isnan(z), np.uint8(255), np.uint8(UNDECIDED))
-    left = field.refine(z, grid, vec, curv_coef, zmax, out, UNDECIDED, pyramid, place)
+    steps = min(float(max(L, P)), (zmax - zmin) / ri) if ri > 0 else float(max(L, P))
+    left = field.refine(z, grid, vec, curv_coef, zmax, out, UNDECIDED,
+                        _pyramid_for_open(out, pyramid, steps), place)
     if stats is not None:
         stats["undecided_fraction"] = left / max(1, out.size)
     return out

@@ -90,3 +90,16 @@ def has_code(a, code):
                 hit[r] = True
                 break
     return hit.any()
+
+
+@njit(parallel=True, cache=True)
+def count_code(a, code):
+    """How many cells of the 2-D uint8 array ``a`` hold ``code`` (parallel over rows)."""
+    rows = a.shape[0]
+    n = np.zeros(rows, np.int64)
+    for r in prange(rows):
+        k = 0
+        for v in a[r]:
+            k += v == code
+        n[r] = k
+    return n.sum()
