@@ -243,7 +243,7 @@ def _code(e, e_hi, lw, u, h, hk, margin, x, P):
 
 
 @njit(cache=True)
-def _decide_line(ZL, SU, SL, R, v, p0, p1, P, s, rise, curv, K, pad, margin, ok, s_c, e, e_hi,
+def _decide_line(ZB, SU, SL, R, v, p0, p1, P, s, rise, curv, K, pad, margin, ok, s_c, e, e_hi,
                  out, PF):
     """Codes of positions [p0, p1) of canonical line v whose cells share one ray (s, rise,
     curv): the same decisions as ``_decide_positions``, with the sample offsets and fractions of
@@ -254,7 +254,7 @@ def _decide_line(ZL, SU, SL, R, v, p0, p1, P, s, rise, curv, K, pad, margin, ok,
     row = v % R
     if not ok:
         for q in range(n):
-            h = ZL[row, p0 + q]
+            h = ZB[row, ZO + p0 + q]
             out[q] = np.uint8(255) if h != h else np.uint8(UNDECIDED)
         return
     for q in range(n):
@@ -265,7 +265,7 @@ def _decide_line(ZL, SU, SL, R, v, p0, p1, P, s, rise, curv, K, pad, margin, ok,
         d = int(ks)
         f = ks - d
         drop = k * rise + k * k * curv
-        zv = ZL[(v + k) % R, p0 + d:p0 + d + n + 1]
+        zv = ZB[(v + k) % R, ZO + p0 + d:ZO + p0 + d + n + 1]
         if f == 0.0:
             for q in range(n):
                 t = zv[q] - drop
@@ -290,7 +290,7 @@ def _decide_line(ZL, SU, SL, R, v, p0, p1, P, s, rise, curv, K, pad, margin, ok,
     hk = K * rise + K * K * curv
     ua = sua[da + p0:da + p1]
     la = sla[da + p0:da + p1]
-    zl = ZL[row, p0:p1]
+    zl = ZB[row, ZO + p0:ZO + p1]
     X = PF[p0:p1]
     if b1 > b0:
         ub = sub[db + p0:db + p1]
@@ -327,29 +327,31 @@ def _run_offsets(s_lo, s_hi, K, phi, D):
 
 
 @njit(cache=True)
-def _decide_run(ZL, SU, SL, R, v, p0, p1, P, s_arr, rise_arr, curv_arr, ok_arr, K, pad, margin,
-                D, b0, b1, out):
+def _decide_run(ZB, SU, SL, R, v, p0, p1, P, s_arr, rise_arr, curv_arr, ok_arr, K, pad, margin,
+                D, b0, b1, out, PF):
     """``_decide_positions`` for a run of positions [p0, p1) whose rays differ (each its row's
     or its own sun's) but share their whole offsets (``_run_offsets``): one pass, each cell's
     K = EXACT_STEPS = 4 samples and its lookup in registers, over views that start at 0 (numba
     then drops its negative-index wrap: the pass vectorises); a cell within rounding of a cell
-    centre takes the exact treatment of ``_decide_cells`` after it."""
+    centre takes the exact treatment of ``_decide_cells`` after it. ``PF``: each position as a
+    float (no conversion in the loop); selects only (``&``, ``|``): the pass vectorises."""
     n = p1 - p0
+    X = PF[p0:p1]
     S = s_arr[p0:p1]
     RI = rise_arr[p0:p1]
     CU = curv_arr[p0:p1]
     OK = ok_arr[p0:p1]
     d1, d2, d3, d4 = D[1], D[2], D[3], D[4]
-    z1 = ZL[(v + 1) % R, p0 + d1:p0 + d1 + n + 1]
-    z2 = ZL[(v + 2) % R, p0 + d2:p0 + d2 + n + 1]
-    z3 = ZL[(v + 3) % R, p0 + d3:p0 + d3 + n + 1]
-    z4 = ZL[(v + 4) % R, p0 + d4:p0 + d4 + n + 1]
+    z1 = ZB[(v + 1) % R, ZO + p0 + d1:ZO + p0 + d1 + n + 1]
+    z2 = ZB[(v + 2) % R, ZO + p0 + d2:ZO + p0 + d2 + n + 1]
+    z3 = ZB[(v + 3) % R, ZO + p0 + d3:ZO + p0 + d3 + n + 1]
+    z4 = ZB[(v + 4) % R, ZO + p0 + d4:ZO + p0 + d4 + n + 1]
     sua, sla, sub, slb, da, db = _lookup_rows(SU, SL, (v + K) % R, b0, b1, pad)
     ua = sua[da + p0:da + p1]
     la = sla[da + p0:da + p1]
     ub = sub[db + p0:db + p1]
     lb = slb[db + p0:db + p1]
-    zl = ZL[v % R, p0:p1]
+    zl = ZB[v % R, ZO + p0:ZO + p1]
     two = b1 > b0
     nsnap = 0
     for q in range(n):
@@ -377,10 +379,11 @@ def _decide_run(ZL, SU, SL, R, v, p0, p1, P, s_arr, rise_arr, curv_arr, ok_arr, 
             u = max(u, ub[q])
             lw = min(lw, lb[q])
         h = zl[q]
-        c = _code(e, e_hi, lw, u, h, h + 4.0 * rp + 16.0 * cp, margin, p0 + q + 4.0 * sp, P)
-        c = c if OK[q] or h != h else np.uint8(UNDECIDED)
-        out[q] = np.uint8(UNDECIDED + 1) if (snaps and c != 255) else c
-        nsnap += snaps
+        c = _code(e, e_hi, lw, u, h, h + 4.0 * rp + 16.0 * cp, margin, X[q] + 4.0 * sp, P)
+        c = c if (OK[q] | (h != h)) else np.uint8(UNDECIDED)
+        mark = snaps & (c != 255)
+        out[q] = np.uint8(UNDECIDED + 1) if mark else c
+        nsnap += np.int64(1) if mark else np.int64(0)
     if nsnap == 0:
         return
     for q in range(n):     # within rounding of a cell centre (rare): sample by sample
@@ -391,7 +394,7 @@ def _decide_run(ZL, SU, SL, R, v, p0, p1, P, s_arr, rise_arr, curv_arr, ok_arr, 
         for k in range(1, K + 1):
             d = D[k]
             f = k * S[q] - d
-            zr = ZL[(v + k) % R]
+            zr = ZB[(v + k) % R, ZO:]
             za = zr[p0 + q + d]
             zb = zr[p0 + q + d + 1]
             drop = k * RI[q] + k * k * CU[q]
@@ -411,8 +414,8 @@ def _decide_run(ZL, SU, SL, R, v, p0, p1, P, s_arr, rise_arr, curv_arr, ok_arr, 
 
 
 @njit(cache=True)
-def _decide_positions(ZL, SU, SL, R, v, p0, p1, P, s_arr, rise_arr, curv_arr, ok_arr, K, pad,
-                      margin, s_c, out, W, D):
+def _decide_positions(ZL, ZB, SU, SL, R, v, p0, p1, P, s_arr, rise_arr, curv_arr, ok_arr, K, pad,
+                      margin, s_c, out, W, D, PF):
     """Codes of positions [p0, p1) of canonical line v when each position has its own ray
     (``s_arr`` ... indexed by position: lines that are DEM columns of a per-row grid, or each
     cell's own sun, ``_field_line``): K exact samples, then the bounds K lines on; 0 / 1 when
@@ -440,8 +443,8 @@ def _decide_positions(ZL, SU, SL, R, v, p0, p1, P, s_arr, rise_arr, curv_arr, ok
         if lo <= hi:
             same, b0, b1 = _run_offsets(lo, hi, K, phi, D)
         if same:
-            _decide_run(ZL, SU, SL, R, v, p0 + qa, p0 + qb, P, s_arr, rise_arr, curv_arr, ok_arr,
-                        K, pad, margin, D, b0, b1, out[qa:qb])
+            _decide_run(ZB, SU, SL, R, v, p0 + qa, p0 + qb, P, s_arr, rise_arr, curv_arr, ok_arr,
+                        K, pad, margin, D, b0, b1, out[qa:qb], PF)
         elif step > RUN:
             step = RUN
             continue
@@ -531,22 +534,22 @@ def _blocks(spread):
 
 
 @njit(cache=True)
-def _less_potential(ZL, v_top, nb, p0, p1, A, B):
+def _less_potential(ZB, v_top, nb, p0, p1, A, B):
     """Lines v_top .. v_top-nb+1 of the ring, positions [p0, p1): the heights less the field's
     potential A v^2 + B v p (``_field_fit``), linear along a line, so that the model's
     interpolation between two centres carries it exactly."""
-    R = ZL.shape[0]
+    R = ZB.shape[0]
     for i in range(nb):
         w = v_top - i
-        zr = ZL[w % R]
+        zr = ZB[w % R, ZO + p0:ZO + p1]     # (a row of ZB: contiguous, the loop vectorises)
         aw = A * w * w
         bw = B * w
-        for p in range(p0, p1):
-            zr[p] -= aw + bw * p
+        for q in range(p1 - p0):
+            zr[q] -= aw + bw * (p0 + q)
 
 
 @njit(cache=True, error_model="numpy")
-def _field_line(fld, v, p0, p1, L, P, FS, FR, FC, FOK, FN, IX, XP, PF, DXL, DYL):
+def _field_line(fld, v, p0, p1, L, P, FS, FR, FC, FOK, FN, IX, XP, PF, DXL, DYL, RUNS, nruns):
     """The rays of positions [p0, p1) of canonical line v with each cell's own sun (``fld``:
     ``_field_args``), indexed by position, in the frame of the heights less the potential: s,
     rise - its gradient along the ray, curv - its second difference; ``FOK``: the sun is up,
@@ -556,7 +559,8 @@ def _field_line(fld, v, p0, p1, L, P, FS, FR, FC, FOK, FN, IX, XP, PF, DXL, DYL)
     nodes, over views that start at 0 (numba then drops its negative-index wrap, which made
     the loop gather and scatter: 8 ns a cell, 1 ns now). ``XP``, ``PF``: each position's DEM
     index along the line and itself, as floats; ``DXL``, ``DYL``: each position's spacing
-    (filled here for lines that are DEM rows); ``IX``: work space."""
+    (lines that are DEM columns); ``IX``, ``RUNS``, ``nruns``: each position's node interval and
+    the runs of positions that share one (``_field_runs``, the same for every line)."""
     (_, vec, fdx, fdy, cs, rs, ccoef, r0, c0, nrows, ncols, fdom, fsd, fl_line, fl_pos, _, A, B,
      s_lo, s_hi, r_lo, r_hi, c_lo, c_hi) = fld
     n = vec.shape[0]
@@ -568,20 +572,12 @@ def _field_line(fld, v, p0, p1, L, P, FS, FR, FC, FOK, FN, IX, XP, PF, DXL, DYL)
     l0 = min(int(fl), n - 2) if n > 1 else 0
     l1 = min(l0 + 1, n - 1)
     tl = fl - l0
-    if not fdom:
-        for p in range(p0, p1):
-            DXL[p] = fdx[line]
-            DYL[p] = fdy[line]
-    for p in range(p0, p1):                     # each position's node interval
-        IX[p] = min(int(XP[p] * s_pos), n - 2) if n > 1 else 0
     fv = float(v)
     sgn = -1.0 if fl_pos else 1.0
-    qa = p0
-    while qa < p1:
+    for ir in range(nruns):
+        qa = RUNS[ir]
+        qb = RUNS[ir + 1]
         k0 = IX[qa]
-        qb = qa + 1
-        while qb < p1 and IX[qb] == k0:
-            qb += 1
         k1 = min(k0 + 1, n - 1)
         # lattice_at: along the columns first (at the two node rows), then along the rows
         if fdom:     # lines are DEM columns: j fixed (l0, tl), i varies (k0, t)
@@ -596,11 +592,29 @@ def _field_line(fld, v, p0, p1, L, P, FS, FR, FC, FOK, FN, IX, XP, PF, DXL, DYL)
                          s_hi, r_lo, r_hi, c_lo, c_hi, FS[qa:qb], FR[qa:qb], FC[qa:qb],
                          FOK[qa:qb], FN[qa:qb])
         else:        # lines are DEM rows: i fixed (l0, tl), j varies (k0, t)
-            _field_run_j(XP[qa:qb], PF[qa:qb], DXL[qa:qb], DYL[qa:qb], s_pos, float(k0), tl,
+            _field_run_j(XP[qa:qb], PF[qa:qb], fdx[line], fdy[line], s_pos, float(k0), tl,
                          vec[l0, k0], vec[l0, k1], vec[l1, k0], vec[l1, k1], cs, rs, ccoef, fv,
                          A, B, fdom, fsd, sgn, s_lo, s_hi, r_lo, r_hi, c_lo, c_hi, FS[qa:qb],
                          FR[qa:qb], FC[qa:qb], FOK[qa:qb], FN[qa:qb])
-        qa = qb
+
+
+@njit(cache=True)
+def _field_runs(fld, p0, p1, XP, IX, RUNS):
+    """Each position's lattice node interval along the line (``lattice_at``'s, from ``XP``)
+    into ``IX`` and the runs of positions sharing one into ``RUNS`` (starts, then the end):
+    returns how many runs."""
+    n = fld[1].shape[0]
+    s_pos = lattice_scale(n, fld[9] if fld[11] else fld[10])
+    for p in range(p0, p1):
+        IX[p] = min(int(XP[p] * s_pos), n - 2) if n > 1 else 0
+    k = 0
+    RUNS[0] = p0
+    for p in range(p0 + 1, p1):
+        if IX[p] != IX[p - 1]:
+            k += 1
+            RUNS[k] = p
+    RUNS[k + 1] = p1
+    return k + 1
 
 
 @njit(cache=True, error_model="numpy")
@@ -617,7 +631,7 @@ def _field_run_i(XP, PF, DXL, DYL, s_pos, k0, a0, b0, a1, b1, a2, b2, cs, rs, cc
 
 
 @njit(cache=True, error_model="numpy")
-def _field_run_j(XP, PF, DXL, DYL, s_pos, k0, tl, q00, q01, q10, q11, cs, rs, ccoef, fv, A, B,
+def _field_run_j(XP, PF, dxr, dyr, s_pos, k0, tl, q00, q01, q10, q11, cs, rs, ccoef, fv, A, B,
                  fdom, fsd, sgn, s_lo, s_hi, r_lo, r_hi, c_lo, c_hi, FS, FR, FC, FOK, FN):
     """Cells of one node interval of a line that is a DEM row (``_field_line``; q.. the four
     nodes' vectors)."""
@@ -632,7 +646,7 @@ def _field_run_j(XP, PF, DXL, DYL, s_pos, k0, tl, q00, q01, q10, q11, cs, rs, cc
         no = a + tl * ((n0 + t * n1) - a)
         a = g0 + t * g1
         up = a + tl * ((h0 + t * h1) - a)
-        _field_ray(e, no, up, DXL[i], DYL[i], cs, rs, ccoef, fv, PF[i], A, B, fdom, fsd, sgn,
+        _field_ray(e, no, up, dxr, dyr, cs, rs, ccoef, fv, PF[i], A, B, fdom, fsd, sgn,
                    s_lo, s_hi, r_lo, r_hi, c_lo, c_hi, i, FS, FR, FC, FOK, FN)
 
 
@@ -669,7 +683,7 @@ def _strip_block(z, ZB, SU, SL, RO, v_top, nb, p0, p1, L, P, pad, s_c, M, spread
     _load_lines(z, ZL, v_top, nb, max(p0 - 1, 0), p1, dom_col, flip_line, flip_pos)
     use = fld[0]
     if use:                           # a sun per cell: the heights less the field's potential
-        _less_potential(ZL, v_top, nb, max(p0 - 1, 0), p1, fld[16], fld[17])
+        _less_potential(ZB, v_top, nb, max(p0 - 1, 0), p1, fld[16], fld[17])
     i0 = p0 - 1
     i1 = min(p1, P)
     W = np.empty((5, p1 - p0))        # work rows of the decisions
@@ -690,6 +704,8 @@ def _strip_block(z, ZB, SU, SL, RO, v_top, nb, p0, p1, L, P, pad, s_c, M, spread
             if fld[11]:
                 DXL[p] = fld[2][x]
                 DYL[p] = fld[3][x]
+    RUNS = np.empty(fld[1].shape[0] + 2 if use else 1, np.int64)   # (at most n - 1 runs)
+    nruns = _field_runs(fld, p0, p1, XP, IX, RUNS) if use else 0
     for i in range(nb):
         v = v_top - i
         row = v % R
@@ -701,19 +717,20 @@ def _strip_block(z, ZB, SU, SL, RO, v_top, nb, p0, p1, L, P, pad, s_c, M, spread
         _bin_pass(ZB[row], ZO, SU[nxt], SL[nxt], SU[row], SL[row], i0, i1, pad, phi,
                   off1 - off, ext, W_end if jb == M - 1 else 1, d_up, d_lo)
         if use:
-            _field_line(fld, v, p0, p1, L, P, FS, FR, FC, FOK, FN, IX, XP, PF, DXL, DYL)
+            _field_line(fld, v, p0, p1, L, P, FS, FR, FC, FOK, FN, IX, XP, PF, DXL, DYL, RUNS,
+                        nruns)
             ro = RO[row, p0:p1]
-            _decide_positions(ZL, SU, SL, R, v, p0, p1, P, FS, FR, FC, FOK, K, pad, margin, s_c,
-                              ro, W, D)
+            _decide_positions(ZL, ZB, SU, SL, R, v, p0, p1, P, FS, FR, FC, FOK, K, pad, margin,
+                              s_c, ro, W, D, PF)
             for q in range(p1 - p0):  # a cell whose sun is down is shadowed
-                if FN[p0 + q] and ro[q] != 255:
+                if FN[p0 + q] & (ro[q] != 255):
                     ro[q] = 1
         elif per_line:
-            _decide_line(ZL, SU, SL, R, v, p0, p1, P, s_arr[v], rise_arr[v], curv_arr[v], K, pad,
+            _decide_line(ZB, SU, SL, R, v, p0, p1, P, s_arr[v], rise_arr[v], curv_arr[v], K, pad,
                          margin, ok_arr[v], s_c, W[3], W[4], RO[row, p0:p1], PF)
         else:
-            _decide_positions(ZL, SU, SL, R, v, p0, p1, P, s_arr, rise_arr, curv_arr, ok_arr, K,
-                              pad, margin, s_c, RO[row, p0:p1], W, D)
+            _decide_positions(ZL, ZB, SU, SL, R, v, p0, p1, P, s_arr, rise_arr, curv_arr, ok_arr,
+                              K, pad, margin, s_c, RO[row, p0:p1], W, D, PF)
     _store_lines(out, RO, v_top, nb, p0, p1, dom_col, flip_line, flip_pos)
 
 
@@ -942,9 +959,9 @@ def shadow_mask_field(z: np.ndarray, grid, vec: np.ndarray, curv_coef: float = 0
     f = Frame(dom_col=bool(dc), flip_line=sd < 0, flip_pos=so < 0, s=abs(so), so=so, sd=int(sd),
               rise=ri, step_m=0.0)
     L, P = (cols, rows) if f.dom_col else (rows, cols)
-    # the rays of every 8th line and position (all on a small raster): their fit and ranges;
+    # the rays of every 16th line and position (all on a small raster): their fit and ranges;
     # a cell whose ray falls outside the ranges is left to the exact march
-    step = 1 if rows * cols <= 1 << 16 else 8
+    step = 1 if rows * cols <= 1 << 16 else 16
     sample = field.field_sample(rows, cols, *sun, f.dom_col, np.int64(sd), f.flip_line,
                                 f.flip_pos, np.int64(step))
     K = EXACT_STEPS
