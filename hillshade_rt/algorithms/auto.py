@@ -3,18 +3,19 @@
 Every exact method gives the same mask, so the choice is only about time. The cost model,
 fitted to ``make bench-real`` (docs/benchmarks.md, 2 cores):
 
-* ``bounds`` pays a fixed sweep over every cell (about 9-15 ns per cell on 2 cores) and then
+* ``bounds`` pays a fixed sweep over every cell (about 3-10 ns per cell on 2 cores) and then
   marches the few cells it leaves open; ``brute`` (over the pyramid) pays per *valid* cell a
   march whose length grows with the **reach** of a ray: the steps it takes to rise over the
   DEM's relief, ``(zmax - zmin) / rise``, at most the raster's extent along the ray.
-* So ``auto`` estimates both costs (ns per cell on 2 cores, ``make bench-real``): bounds
-  ``BOUNDS_NS`` on one ray for the raster, ``BOUNDS_NS_PER_ROW`` on per-row rays (geographic),
-  divided by the share of threads its wavefront can use (one strip per 64 positions); brute
-  per *valid* cell ``BRUTE_NS_FIXED`` plus ``BRUTE_NS_PER_STEP`` per step of the reach, at most
-  ``BRUTE_NS_LONG`` (long rays skip over the pyramid: real DEMs gave 27 ns at a reach of 10
-  steps, 34-43 at 23-27, 49-62 at 59-72, 55-70 beyond). It runs the cheaper: brute on New
-  Zealand's 1 km DEM with 83 % sea as nodata at every sun and on gentle terrain under a high
-  sun; bounds on the mountain DEMs and fractals at 3-20 deg.
+* So ``auto`` estimates both costs (ns per cell on 2 cores, ``make bench-real-quick``): bounds
+  ``BOUNDS_NS`` per valid cell and ``BOUNDS_NS_VOID`` per void on one ray for the raster
+  (``BOUNDS_NS_PER_ROW``... on per-row rays, geographic), divided by the share of threads its
+  wavefront can use (one strip per 64 positions); brute per *valid* cell ``BRUTE_NS_FIXED``
+  plus ``BRUTE_NS_PER_STEP`` per step of the reach, at most ``BRUTE_NS_LONG``, and the
+  pyramid's build per cell (``BUILD_NS``, voids too); rays under ``PYRAMID_REACH`` steps the
+  plain march, ``PLAIN_NS_FIXED`` + ``PLAIN_NS_PER_STEP`` per step. It runs the cheaper:
+  brute on gentle terrain under a high sun and on New Zealand's 1 km DEM (83 % sea as
+  nodata) at 20 deg; bounds on the mountain DEMs, the fractals and New Zealand at 3-8 deg.
 * On the GPU: ``brute`` over the pyramid (one thread per cell; the bounds sweep has no GPU
   kernel).
 
@@ -35,13 +36,16 @@ from . import bounds, brute
 from .counts import valid_range
 from .frames import reach, uniform_rays
 
-# the cost model, ns per cell on 2 cores (make bench-real and spectral probes, 2026-12-02,
-# after bounds' passes vectorised: it was 17.5 and 25)
-BOUNDS_NS = 9.0              # bounds, one ray for the raster, every cell (voids too)
-BOUNDS_NS_PER_ROW = 15.0     # bounds, per-row rays (geographic)
-BRUTE_NS_FIXED = 12.0        # brute over the pyramid, per valid cell: a march's fixed cost
+# the cost model, ns per cell on 2 cores (make bench-real-quick and spectral probes,
+# 2026-12-02, after bounds' passes vectorised: 17.5 and 25 ns a cell before)
+BOUNDS_NS = 7.0              # bounds, one ray for the raster, per valid cell ...
+BOUNDS_NS_VOID = 3.0         # ... and per void (its sweep carries the bounds, nothing to decide)
+BOUNDS_NS_PER_ROW = 10.0     # bounds, per-row rays (geographic), per valid cell ...
+BOUNDS_NS_PER_ROW_VOID = 4.0  # ... and per void
+BRUTE_NS_FIXED = 9.2         # brute over the pyramid, per valid cell: a march's fixed cost
 BRUTE_NS_PER_STEP = 0.7      # ... and per step of the reach
-BRUTE_NS_LONG = 68.0         # ... at most (long rays skip over the pyramid's blocks)
+BRUTE_NS_LONG = 65.0         # ... at most (long rays skip over the pyramid's blocks)
+BUILD_NS = 2.8               # the pyramid's build, per cell of the raster (voids too)
 PLAIN_NS_FIXED = 4.5         # brute's plain march (rays shorter than PYRAMID_REACH), per cell
 PLAIN_NS_PER_STEP = 1.1      # ... and per step
 PYRAMID_REACH = 16           # brute marches over the pyramid from rays of this many steps
@@ -61,17 +65,22 @@ def pyramid_pays(shape: tuple[int, int], zrange: tuple[float, float], rays: SunR
     return reach(shape, zrange, rays) >= PYRAMID_REACH
 
 
-def brute_ns(steps: float) -> float:
-    """Estimated ns (2 cores) of brute's march of one valid cell whose ray takes ``steps``: the
-    plain march below ``PYRAMID_REACH`` steps (``pyramid_pays``), else over the pyramid."""
+def brute_ns(steps: float, valid: float = 1.0) -> float:
+    """Estimated ns (2 cores) per cell of brute's march where a ``valid`` share of the cells
+    march rays of ``steps`` steps: the plain march below ``PYRAMID_REACH`` steps
+    (``pyramid_pays``), else over the pyramid, whose build every cell pays (voids too: New
+    Zealand's 83 % sea made a valid cell's march cost 45 ns at 26 steps)."""
     if steps < PYRAMID_REACH:
-        return PLAIN_NS_FIXED + PLAIN_NS_PER_STEP * steps
-    return min(BRUTE_NS_LONG, BRUTE_NS_FIXED + BRUTE_NS_PER_STEP * steps)
+        return valid * (PLAIN_NS_FIXED + PLAIN_NS_PER_STEP * steps)
+    return valid * min(BRUTE_NS_LONG, BRUTE_NS_FIXED + BRUTE_NS_PER_STEP * steps) + BUILD_NS
 
 
-def bounds_ns(uniform: bool) -> float:
-    """Estimated ns (2 cores) of bounds' sweep per cell: one ray for the raster, or per row."""
-    return BOUNDS_NS if uniform else BOUNDS_NS_PER_ROW
+def bounds_ns(uniform: bool, valid: float = 1.0) -> float:
+    """Estimated ns (2 cores) of bounds' sweep per cell (a ``valid`` share of them valid): one
+    ray for the raster, or per row."""
+    if uniform:
+        return valid * BOUNDS_NS + (1.0 - valid) * BOUNDS_NS_VOID
+    return valid * BOUNDS_NS_PER_ROW + (1.0 - valid) * BOUNDS_NS_PER_ROW_VOID
 
 
 def tile_by_brute(window_cells: int, tile_cells: int, zrange: tuple[float, float],
@@ -103,8 +112,8 @@ def choose(shape: tuple[int, int], valid_fraction: float, zrange: tuple[float, f
     uniform = uniform_rays(rays)
     threads = max(1, numba.get_num_threads())
     strips = bounds._strips(P, abs(float(rays.step_other[mid])), bounds.EXACT_STEPS)
-    ns_bounds = bounds_ns(uniform) / min(1.0, strips / threads)
-    ns_brute = valid_fraction * brute_ns(steps)
+    ns_bounds = bounds_ns(uniform, valid_fraction) / min(1.0, strips / threads)
+    ns_brute = brute_ns(steps, valid_fraction)
     rate_bounds, rate_brute = 1000.0 / ns_bounds, 1000.0 / ns_brute
     name = "bounds" if rate_bounds > rate_brute else "brute"
     why = (f"estimated {rate_bounds:.0f} Mcells/s for bounds ({'one ray' if uniform else 'per-row rays'}"
