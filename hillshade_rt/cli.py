@@ -848,7 +848,7 @@ def _light_tiled(inputs, read_opts, scale, req, out, timer, algorithm, options, 
     from .report import merge_stats, product_stats
     from .runner import sun_tags
     from .tiling import (MIN_WINDOW_CELLS, Job, MemoryTooSmall, Tally, WindowCache, block_stats,
-                         format_size, memory_needed, window_budget)
+                         format_size, marched_per_cell, memory_needed, window_budget)
 
     kind = out.kind
     with timer("read"):
@@ -934,7 +934,7 @@ def _light_tiled(inputs, read_opts, scale, req, out, timer, algorithm, options, 
                                sun_tags(sun) if writer is not None else None)
                 out.finish(i, sun, src)
                 records.append(out.record(sun, i, st, timer.seconds.get("compute", 0.0) - t0,
-                                          any(p.sun is not None for p in plans[i])))
+                                          marched_per_cell(plans[i])))
             tally.bytes_read = rd.bytes_read
             tally.bytes_carried = cache.carried_bytes
             tally.carry = carry

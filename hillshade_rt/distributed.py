@@ -116,7 +116,7 @@ def run_on_dask(scheduler, job, suns, plans, out, share, stride, quiet, algo_sta
     from .report import merge_stats
     from .runner import sun_tags
     from .io import copy_vrt
-    from .tiling import VrtSource, vrt_xml
+    from .tiling import VrtSource, marched_per_cell, vrt_xml
 
     client, cluster = client_for(scheduler)
     dest = out.output or (out.tile_paths[0][0] if out.tile_paths else out.paths[0])
@@ -175,7 +175,7 @@ def run_on_dask(scheduler, job, suns, plans, out, share, stride, quiet, algo_sta
                          out.overwrite or scratch, None if scratch else out.fmt)
                 out.finish(i, s, src)
         records = [out.record(s, i, per_sun[i]["stats"], per_sun[i]["seconds"],
-                              any(p.sun is not None for p in plans[i]))
+                              marched_per_cell(plans[i]))
                    for i, s in enumerate(suns)]
         info = {"scheduler": scheduler if isinstance(scheduler, str) else str(client),
                 "workers": workers, "tasks": len(futures)}

@@ -766,6 +766,12 @@ def plan(shape, grid: Grid, azimuth: float, elevation: float, curv: float, stats
             for reg, win in zip(regions, wins)]
 
 
+def marched_per_cell(pieces) -> bool:
+    """Whether the pieces of one sun march each cell with its own sun (``Job.pieces``): the
+    report's ``sun.mode`` "per cell"."""
+    return any(p.sun is not None for p in pieces)
+
+
 def _union(wins):
     """The smallest window holding all of ``wins``."""
     return (min(w[0] for w in wins), max(w[1] for w in wins), min(w[2] for w in wins),

@@ -34,6 +34,7 @@ import numpy as np
 from ..geometry import SunRays
 from . import bounds, brute
 from .counts import valid_range
+from .pyramid import BUILD_NS   # the pyramid's build, per cell of the raster (voids too)
 from .frames import reach, uniform_rays
 
 # the cost model, ns per cell on 2 cores (make bench-real-quick and spectral probes,
@@ -45,7 +46,6 @@ BOUNDS_NS_PER_ROW_VOID = 4.0  # ... and per void
 BRUTE_NS_FIXED = 9.2         # brute over the pyramid, per valid cell: a march's fixed cost
 BRUTE_NS_PER_STEP = 0.7      # ... and per step of the reach
 BRUTE_NS_LONG = 65.0         # ... at most (long rays skip over the pyramid's blocks)
-BUILD_NS = 2.8               # the pyramid's build, per cell of the raster (voids too)
 PLAIN_NS_FIXED = 4.5         # brute's plain march (rays shorter than PYRAMID_REACH), per cell
 PLAIN_NS_PER_STEP = 1.1      # ... and per step
 PYRAMID_REACH = 16           # brute marches over the pyramid from rays of this many steps

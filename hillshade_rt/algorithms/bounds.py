@@ -59,8 +59,7 @@ from numba import njit, prange
 from ..geometry import SunRays
 from . import brute
 from .field import lattice_scale, ray_of
-from .frames import Frame, dem_index, frame_of, reach
-from .pyramid import MaxPyramid
+from .frames import Frame, frame_of, reach
 from .sweep import _load_lines, _store_lines, _z_range, strip_bounds, wave_block, wave_steps
 from .sweep import _strips as sweep_strips
 
@@ -411,7 +410,7 @@ def _decide_run(ZB, SU, SL, R, v, p0, p1, P, s_arr, rise_arr, curv_arr, ok_arr, 
 
 
 @njit(cache=True)
-def _decide_positions(ZL, ZB, SU, SL, R, v, p0, p1, P, s_arr, rise_arr, curv_arr, ok_arr, K, pad,
+def _decide_positions(ZB, SU, SL, R, v, p0, p1, P, s_arr, rise_arr, curv_arr, ok_arr, K, pad,
                       margin, s_c, out, W, D, PF):
     """Codes of positions [p0, p1) of canonical line v when each position has its own ray
     (``s_arr`` ... indexed by position: lines that are DEM columns of a per-row grid, or each
@@ -422,7 +421,7 @@ def _decide_positions(ZL, ZB, SU, SL, R, v, p0, p1, P, s_arr, rise_arr, curv_arr
     the others to ``_decide_cells``. ``W`` (5 x strip width), ``D`` (K + 1): work space."""
     n = p1 - p0
     if K != 4:                               # (_decide_run takes exactly 4 samples)
-        _decide_cells(ZL, SU, SL, R, v, p0, 0, n, P, s_arr, rise_arr, curv_arr, ok_arr, K, pad,
+        _decide_cells(ZB, SU, SL, R, v, p0, 0, n, P, s_arr, rise_arr, curv_arr, ok_arr, K, pad,
                       margin, s_c, out, W)
         return
     _, phi = _phase(v + K, s_c)
@@ -446,18 +445,18 @@ def _decide_positions(ZL, ZB, SU, SL, R, v, p0, p1, P, s_arr, rise_arr, curv_arr
             step = RUN
             continue
         else:
-            _decide_cells(ZL, SU, SL, R, v, p0, qa, qb, P, s_arr, rise_arr, curv_arr, ok_arr, K,
+            _decide_cells(ZB, SU, SL, R, v, p0, qa, qb, P, s_arr, rise_arr, curv_arr, ok_arr, K,
                           pad, margin, s_c, out, W)
         qa = qb
 
 
 @njit(cache=True)
-def _decide_cells(ZL, SU, SL, R, v, p0, qa, qb, P, s_arr, rise_arr, curv_arr, ok_arr, K, pad,
+def _decide_cells(ZB, SU, SL, R, v, p0, qa, qb, P, s_arr, rise_arr, curv_arr, ok_arr, K, pad,
                   margin, s_c, out, W):
     """``_decide_positions`` cell by cell for positions p0 + [qa, qb): each cell's ray, its K
     samples at their own offsets, its lookup."""
     ss, rr, cc, e, e_hi = W[0], W[1], W[2], W[3], W[4]
-    zl = ZL[v % R]
+    zl = ZB[v % R, ZO:]                      # (rows of ZB: contiguous)
     for q in range(qa, qb):
         p = p0 + q
         h = zl[p]
@@ -469,7 +468,7 @@ def _decide_cells(ZL, SU, SL, R, v, p0, qa, qb, P, s_arr, rise_arr, curv_arr, ok
         rr[q] = rise_arr[p]
         cc[q] = curv_arr[p]
     for k in range(1, K + 1):                # the exact samples, one pass each (selects only:
-        zr = ZL[(v + k) % R]                 # it vectorises; a coded cell samples harmlessly)
+        zr = ZB[(v + k) % R, ZO:]            # it vectorises; a coded cell samples harmlessly)
         for q in range(qa, qb):
             sp = ss[q]
             sp = sp if sp == sp else 0.0
@@ -717,8 +716,8 @@ def _strip_block(z, ZB, SU, SL, RO, v_top, nb, p0, p1, L, P, pad, s_c, M, spread
             _field_line(fld, v, p0, p1, L, P, FS, FR, FC, FOK, FN, IX, XP, PF, DXL, DYL, RUNS,
                         nruns)
             ro = RO[row, p0:p1]
-            _decide_positions(ZL, ZB, SU, SL, R, v, p0, p1, P, FS, FR, FC, FOK, K, pad, margin,
-                              s_c, ro, W, D, PF)
+            _decide_positions(ZB, SU, SL, R, v, p0, p1, P, FS, FR, FC, FOK, K, pad, margin, s_c,
+                              ro, W, D, PF)
             for q in range(p1 - p0):  # a cell whose sun is down is shadowed
                 if FN[p0 + q] & (ro[q] != 255):
                     ro[q] = 1
@@ -726,8 +725,8 @@ def _strip_block(z, ZB, SU, SL, RO, v_top, nb, p0, p1, L, P, pad, s_c, M, spread
             _decide_line(ZB, SU, SL, R, v, p0, p1, P, s_arr[v], rise_arr[v], curv_arr[v], K, pad,
                          margin, ok_arr[v], s_c, W[3], W[4], RO[row, p0:p1], PF)
         else:
-            _decide_positions(ZL, ZB, SU, SL, R, v, p0, p1, P, s_arr, rise_arr, curv_arr, ok_arr,
-                              K, pad, margin, s_c, RO[row, p0:p1], W, D, PF)
+            _decide_positions(ZB, SU, SL, R, v, p0, p1, P, s_arr, rise_arr, curv_arr, ok_arr, K,
+                              pad, margin, s_c, RO[row, p0:p1], W, D, PF)
     _store_lines(out, RO, v_top, nb, p0, p1, dom_col, flip_line, flip_pos)
 
 
@@ -875,9 +874,7 @@ def _pyramid_for_open(out: np.ndarray, pyramid, steps: float):
     few of them)."""
     from .counts import count_code
     from .pyramid import for_few
-    if pyramid is False or (isinstance(pyramid, MaxPyramid) and pyramid.built):
-        return pyramid
-    return for_few(pyramid, int(count_code(out, np.uint8(UNDECIDED))), out.size, steps)
+    return for_few(pyramid, lambda: int(count_code(out, np.uint8(UNDECIDED))), out.size, steps)
 
 
 MIN_STRIP = 64     # fewest positions per strip: a 400-column tile still takes two threads

@@ -20,7 +20,7 @@ from numba import njit, prange
 
 from ..geometry import SunRays
 from ..gpu import cuda, kernel
-from .counts import has_code
+from .counts import any_code
 from .pyramid import pyramid_args, ray_is_blocked_pyramid
 from .raymath import ray_is_blocked
 
@@ -103,8 +103,7 @@ def refine(z: np.ndarray, rays: SunRays, out: np.ndarray, code: int, zmax: float
     """Replace every ``code`` in ``out`` by brute's exact answer for that cell (for the algorithms
     that flag the cells they are unsure of, and the curvature pass). ``pyramid`` as for
     ``shadow_mask``. Returns how many cells were refined."""
-    fast = out.ndim == 2 and out.flags.c_contiguous and out.dtype == np.uint8
-    if not (has_code(out, np.uint8(code)) if fast else (out == code).any()):
+    if not any_code(out, code):
         return 0
     return int(_brute_cpu(z, *pyramid_args(z, pyramid), rays.dom_col, rays.step_dom,
                           rays.step_other, rays.rise, rays.curv, float(zmax), out,

@@ -103,3 +103,11 @@ def count_code(a, code):
             k += v == code
         n[r] = k
     return n.sum()
+
+
+def any_code(a: np.ndarray, code: int) -> bool:
+    """Whether ``a`` holds ``code`` anywhere: ``has_code`` on a C-contiguous 2-D uint8 mask,
+    numpy otherwise (what the refinements ask before they march)."""
+    if a.ndim == 2 and a.flags.c_contiguous and a.dtype == np.uint8:
+        return bool(has_code(a, np.uint8(code)))
+    return bool((a == code).any())

@@ -22,7 +22,7 @@ import numpy as np
 from numba import njit, prange
 
 from ..gpu import cuda, kernel
-from .counts import has_code
+from .counts import any_code
 from .frames import dem_index
 from .pyramid import pyramid_args, ray_is_blocked_pyramid
 from .raymath import ray_is_blocked
@@ -211,8 +211,7 @@ def refine(z: np.ndarray, grid, vec: np.ndarray, curv_coef: float, zmax: float,
            out: np.ndarray, code: int, pyramid=True, place=None) -> int:
     """Replace every ``code`` in ``out`` by the exact answer with the cell's own sun; returns how
     many cells were refined."""
-    fast = out.ndim == 2 and out.flags.c_contiguous and out.dtype == np.uint8
-    if not (has_code(out, np.uint8(code)) if fast else (out == code).any()):
+    if not any_code(out, code):
         return 0
     return int(_field_cpu(z, *pyramid_args(z, pyramid), *sun_args(grid, vec, curv_coef, place),
                           float(zmax), out, np.int64(code)))
