@@ -510,6 +510,38 @@ def _decide_cells(ZB, SU, SL, R, v, p0, qa, qb, P, s_arr, rise_arr, curv_arr, ok
         out[q] = _code(e[q], e_hi[q], lw, u, h, h + K * rr[q] + K * K * cc[q], margin, x, P)
 
 
+@njit(cache=True, inline="always")
+def _ring_sample(za, zb, f, drop, h, margin, e_hi):
+    """One exact sample of a ray marched through the ring (``_settle``), between heights za
+    and zb at fraction f, the ray ``drop`` above the cell's height h: (blocked, the highest
+    sample so far, ``e_hi``, an upper bound of the model's). As ``_decide_cells``: within
+    rounding of a cell centre the sample is bounded above only (the model's may land on the
+    centre beside a void)."""
+    t = (za if f == 0.0 else za + f * (zb - za)) - drop
+    snap = f < SNAP or f > 1.0 - SNAP
+    if t > h + margin and (f == 0.0 or not snap):
+        return True, e_hi
+    alt = (za if za == za else zb) - drop
+    th = alt if (snap and not t == t) else t
+    return False, (th if th > e_hi else e_hi)
+
+
+@njit(cache=True, inline="always")
+def _ring_code(SU, SL, rw, b0, b1, pad, e_hi, h, drop, margin):
+    """The code of a ray marched through the ring at ring row ``rw``, in bins b0..b1 (b1 <=
+    b0 + 1), ``drop`` above the cell's height h, its samples so far at most ``e_hi``: lit when
+    they and the upper bound clear it, shadowed when the lower bound blocks it, else open."""
+    u = SU[rw, b0 & (BINS - 1), pad + (b0 >> LOG_BINS)]
+    lw = SL[rw, b0 & (BINS - 1), pad + (b0 >> LOG_BINS)]
+    if b1 > b0:
+        u = max(u, SU[rw, b1 & (BINS - 1), pad + (b1 >> LOG_BINS)])
+        lw = min(lw, SL[rw, b1 & (BINS - 1), pad + (b1 >> LOG_BINS)])
+    hk = h + drop
+    if e_hi <= h - margin and u <= hk - margin:
+        return np.uint8(0)
+    return np.uint8(1) if lw > hk + margin else np.uint8(UNDECIDED)
+
+
 @njit(cache=True)
 def _settle_line(ZB, SU, SL, R, v, p0, p1, L, P, s, rise, curv, K, J, x_own, x_next, k_next,
                  pad, margin, s_c, TAB, out):
@@ -551,29 +583,16 @@ def _settle_line(ZB, SU, SL, R, v, p0, p1, L, P, s, rise, curv, K, J, x_own, x_n
             za = ZB[rw, ZO + i0]
             zb = ZB[rw, ZO + i0 + 1]
             drop = DR[k]
-            t = (za if f == 0.0 else za + f * (zb - za)) - drop
-            snap = f < SNAP or f > 1.0 - SNAP
-            if t > h + margin and (f == 0.0 or not snap):
+            blocked, e_hi = _ring_sample(za, zb, f, drop, h, margin, e_hi)
+            if blocked:
                 code = np.uint8(1)
                 break
-            alt = (za if za == za else zb) - drop
-            th = alt if (snap and not t == t) else t
-            e_hi = th if th > e_hi else e_hi
             if k <= K or (k & (LOOK - 1)) != 0 or x > P - 1 - 1e-6:
                 continue
             b0 = BINS * p + np.int64(BA[k])
             b1 = BINS * p + np.int64(BB[k])
-            u = SU[rw, b0 & (BINS - 1), pad + (b0 >> LOG_BINS)]
-            lw = SL[rw, b0 & (BINS - 1), pad + (b0 >> LOG_BINS)]
-            if b1 > b0:
-                u = max(u, SU[rw, b1 & (BINS - 1), pad + (b1 >> LOG_BINS)])
-                lw = min(lw, SL[rw, b1 & (BINS - 1), pad + (b1 >> LOG_BINS)])
-            hk = h + drop
-            if e_hi <= h - margin and u <= hk - margin:
-                code = np.uint8(0)
-                break
-            if lw > hk + margin:
-                code = np.uint8(1)
+            code = _ring_code(SU, SL, rw, b0, b1, pad, e_hi, h, drop, margin)
+            if code != UNDECIDED:
                 break
         out[q] = code
 
@@ -629,30 +648,17 @@ def _settle(ZB, SU, SL, R, v, p0, p1, L, P, S, RI, CU, OKA, by_line, K, J, x_own
             za = ZB[rw, ZO + i0]
             zb = ZB[rw, ZO + i0 + 1]
             drop = k * rp + k * k * cp
-            t = (za if f == 0.0 else za + f * (zb - za)) - drop
-            snap = f < SNAP or f > 1.0 - SNAP
-            if t > h + margin and (f == 0.0 or not snap):
+            blocked, e_hi = _ring_sample(za, zb, f, drop, h, margin, e_hi)
+            if blocked:
                 code = np.uint8(1)
                 break
-            alt = (za if za == za else zb) - drop
-            th = alt if (snap and not t == t) else t
-            e_hi = th if th > e_hi else e_hi
             if k <= K or (k & (LOOK - 1)) != 0 or x > P - 1 - 1e-6:
                 continue
             y = (x - PH[k]) * BINS
             b0 = int(math.floor(y - EPS_BIN))
             b1 = int(math.ceil(y + EPS_BIN)) - 1
-            u = SU[rw, b0 & (BINS - 1), pad + (b0 >> LOG_BINS)]
-            lw = SL[rw, b0 & (BINS - 1), pad + (b0 >> LOG_BINS)]
-            if b1 > b0:
-                u = max(u, SU[rw, b1 & (BINS - 1), pad + (b1 >> LOG_BINS)])
-                lw = min(lw, SL[rw, b1 & (BINS - 1), pad + (b1 >> LOG_BINS)])
-            hk = h + drop
-            if e_hi <= h - margin and u <= hk - margin:
-                code = np.uint8(0)
-                break
-            if lw > hk + margin:
-                code = np.uint8(1)
+            code = _ring_code(SU, SL, rw, b0, b1, pad, e_hi, h, drop, margin)
+            if code != UNDECIDED:
                 break
         out[q] = code
 
