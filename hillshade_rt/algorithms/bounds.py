@@ -550,16 +550,7 @@ def _settle_line(ZB, SU, SL, R, v, p0, p1, L, P, s, rise, curv, K, J, x_own, x_n
     6 x (J + 1)), so a cell's step is two loads of heights, and on a LOOK-th line one or two of
     each bound."""
     D, F, DR, RW, BA, BB = TAB[0], TAB[1], TAB[2], TAB[3], TAB[4], TAB[5]
-    for k in range(1, J + 1):
-        ks = k * s
-        d = math.floor(ks)
-        D[k] = d
-        F[k] = ks - d
-        DR[k] = k * rise + k * k * curv
-        RW[k] = (v + k) % R
-        phi = _phase(v + k, s_c)[1]
-        BA[k] = math.floor((ks - phi) * BINS - EPS_BIN)      # bin of p + ks: BINS p + BA
-        BB[k] = math.ceil((ks - phi) * BINS + EPS_BIN) - 1
+    filled = 0                  # the steps tabulated so far (as far as an open cell needs)
     n = p1 - p0
     zl = ZB[v % R, ZO:]
     for q in range(n):
@@ -570,6 +561,17 @@ def _settle_line(ZB, SU, SL, R, v, p0, p1, L, P, s, rise, curv, K, J, x_own, x_n
         e_hi = -np.inf
         code = np.uint8(UNDECIDED)
         for k in range(1, J + 1):
+            if k > filled:
+                ks = k * s
+                d = math.floor(ks)
+                D[k] = d
+                F[k] = ks - d
+                DR[k] = k * rise + k * k * curv
+                RW[k] = (v + k) % R
+                phi = _phase(v + k, s_c)[1]
+                BA[k] = math.floor((ks - phi) * BINS - EPS_BIN)   # bin of p + ks: BINS p + BA
+                BB[k] = math.ceil((ks - phi) * BINS + EPS_BIN) - 1
+                filled = k
             x = p + k * s
             if v + k >= L or x > P - 1 + 1e-6:     # the ray has left the raster
                 if e_hi <= h - margin:
@@ -617,9 +619,7 @@ def _settle(ZB, SU, SL, R, v, p0, p1, L, P, S, RI, CU, OKA, by_line, K, J, x_own
     lines on below ``x_next`` (``_bounds_sweep``): the ray stops (open) beyond."""
     n = p1 - p0
     PH, RW = PHI[0], PHI[1]
-    for k in range(1, J + 1):
-        PH[k] = _phase(v + k, s_c)[1]
-        RW[k] = (v + k) % R
+    filled = 0                  # the lines tabulated so far (as far as an open cell needs)
     zl = ZB[v % R, ZO:]
     for q in range(n):
         if out[q] != UNDECIDED:
@@ -635,6 +635,10 @@ def _settle(ZB, SU, SL, R, v, p0, p1, L, P, S, RI, CU, OKA, by_line, K, J, x_own
         e_hi = -np.inf
         code = np.uint8(UNDECIDED)
         for k in range(1, J + 1):
+            if k > filled:
+                PH[k] = _phase(v + k, s_c)[1]
+                RW[k] = (v + k) % R
+                filled = k
             x = p + k * sp
             if v + k >= L or x > P - 1 + 1e-6:     # the ray has left the raster
                 if e_hi <= h - margin:
