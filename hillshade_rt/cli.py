@@ -502,8 +502,9 @@ def _light(files, kind, algorithm, options, curvature, refraction_k, soft, self_
         numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
     ran_on = choose_backend(backend, algorithm, options)
     per_cell = bytes_per_cell(algorithm, kind, soft, self_shadow)
-    tiled = (scheduler is not None or wshape is not None or len(inputs) > 1
-             or _needs_windows(inputs[0], kw, limit, per_cell))
+    with timer("read"):     # (opens the DEM for its size: part of reading it)
+        tiled = (scheduler is not None or wshape is not None or len(inputs) > 1
+                 or _needs_windows(inputs[0], kw, limit, per_cell))
     dtype, nodata = {"shadow": ("float32", -9999.0) if soft else ("uint8", 255),
                      "classes": ("uint8", 255), "hillshade": ("uint8", 0)}[kind]
     out = _Outputs(kind, soft, algorithm, dtype, nodata, output, pattern, claims, cog,
@@ -814,7 +815,8 @@ def _light_in_memory(inputs, read_opts, scale, req, out, timer, algorithm, optio
                 arr = render(shader, sun, kind, soft=soft, self_shadow=self_shadow,
                              ambient=ambient, stats=algo_stats)
             seconds = timer.seconds["compute"] - t0
-            st = product_stats(kind, soft, arr)
+            with timer("compute"):      # the product's statistics (counts over the raster)
+                st = product_stats(kind, soft, arr)
             if out.preview:
                 sh = shade_of(kind, soft, arr, ambient)
                 share = sh / len(suns) if share is None else share + sh / len(suns)
@@ -922,7 +924,8 @@ def _light_tiled(inputs, read_opts, scale, req, out, timer, algorithm, options, 
                             z = cache.get(p.window)
                             arr = job.light(z, p, algo_stats, used, carry)
                         tally.add(p)
-                        st = merge_stats(st, product_stats(kind, soft, arr))
+                        with timer("compute"):      # the window's statistics
+                            st = merge_stats(st, product_stats(kind, soft, arr))
                         if share is not None:
                             sub, (a, b) = every_nth(shade_of(kind, soft, arr, ambient),
                                                     p.region[0], p.region[2], n)
