@@ -247,14 +247,15 @@ def _decide_line(ZB, SU, SL, R, v, p0, p1, P, s, rise, curv, K, pad, margin, ok,
     curv): the same decisions as ``_decide_positions``, with the sample offsets and fractions of
     the line computed once, in passes along the line over views that start at 0 (numba then
     drops its negative-index wrap) with selects only: they vectorise. ``e``, ``e_hi``: work
-    space; ``PF``: each position as a float (no conversion in the loop)."""
+    space; ``PF``: each position as a float (no conversion in the loop). Returns how many cells
+    it left UNDECIDED (none: no ring march for the line)."""
     n = p1 - p0
     row = v % R
     if not ok:
         for q in range(n):
             h = ZB[row, ZO + p0 + q]
             out[q] = np.uint8(255) if h != h else np.uint8(UNDECIDED)
-        return
+        return np.int64(0)          # (nothing for _settle: the row's ray is not the frame's)
     for q in range(n):
         e[q] = -np.inf
         e_hi[q] = -np.inf
@@ -290,6 +291,7 @@ def _decide_line(ZB, SU, SL, R, v, p0, p1, P, s, rise, curv, K, pad, margin, ok,
     la = sla[da + p0:da + p1]
     zl = ZB[row, ZO + p0:ZO + p1]
     X = PF[p0:p1]
+    nopen = 0
     if b1 > b0:
         ub = sub[db + p0:db + p1]
         lb = slb[db + p0:db + p1]
@@ -297,11 +299,16 @@ def _decide_line(ZB, SU, SL, R, v, p0, p1, P, s, rise, curv, K, pad, margin, ok,
             u = max(ua[q], ub[q])
             lw = min(la[q], lb[q])
             h = zl[q]
-            out[q] = _code(e[q], e_hi[q], lw, u, h, h + hk, margin, X[q] + xk, P)
+            c = _code(e[q], e_hi[q], lw, u, h, h + hk, margin, X[q] + xk, P)
+            out[q] = c
+            nopen += np.int64(1) if c == UNDECIDED else np.int64(0)
     else:
         for q in range(n):
             h = zl[q]
-            out[q] = _code(e[q], e_hi[q], la[q], ua[q], h, h + hk, margin, X[q] + xk, P)
+            c = _code(e[q], e_hi[q], la[q], ua[q], h, h + hk, margin, X[q] + xk, P)
+            out[q] = c
+            nopen += np.int64(1) if c == UNDECIDED else np.int64(0)
+    return nopen
 
 
 @njit(cache=True)
@@ -886,9 +893,9 @@ def _strip_block(z, ZB, SU, SL, RO, v_top, nb, p0, p1, L, P, pad, s_c, M, spread
                 if FN[p0 + q] & (ro[q] != 255):
                     ro[q] = 1
         elif per_line:
-            _decide_line(ZB, SU, SL, R, v, p0, p1, P, s_arr[v], rise_arr[v], curv_arr[v], K, pad,
-                         margin, ok_arr[v], s_c, W[3], W[4], RO[row, p0:p1], PF)
-            if ok_arr[v]:
+            nopen = _decide_line(ZB, SU, SL, R, v, p0, p1, P, s_arr[v], rise_arr[v], curv_arr[v],
+                                 K, pad, margin, ok_arr[v], s_c, W[3], W[4], RO[row, p0:p1], PF)
+            if nopen > 0:
                 _settle_line(ZB, SU, SL, R, v, p0, p1, L, P, s_arr[v], rise_arr[v], curv_arr[v], K,
                              J, x_own, x_next, k_next, pad, margin, s_c, TAB,
                              RO[row, p0:p1])
