@@ -121,67 +121,6 @@ def test_bounds_in_narrow_strips_equal_the_plain_march(case, nstrips):
         bounds._strips = real
 
 
-@pytest.mark.parametrize("nstrips", [1, 2, 3, 12])
-@pytest.mark.parametrize("per_row,curved", [(False, False), (False, True), (True, False),
-                                            (True, True)])
-def test_undecided_rays_marched_through_the_ring_equal_the_plain_march(nstrips, per_row,
-                                                                        curved):
-    """``bounds._settle``: a cell the bounds leave open marches on through the lines the ring
-    still holds (FAR of them), reading the strip ahead's positions only while no strip can have
-    overwritten them. Rasters wide enough for rays to cross strips of 20-260 positions (the
-    raster's own are at least 64 wide: FAR lines never cross one; here they do), low
-    suns at non-special azimuths (most rays long, many cells open at the K-th line): the mask
-    is the plain march's, and the march through the ring settles most of the open cells (the
-    share left to the pyramid march falls by more than half)."""
-    rows, cols = 230, 260
-    z = _terrain("spectral", rows, cols, 21, 2500.0)
-    z[100:104, 30:200] = np.nan
-    if per_row:
-        lat = 40.0 + np.linspace(0.0, 3.0, rows)
-        grid = Grid(rows, cols, 30.0 * np.cos(np.radians(lat)), np.full(rows, 30.0), 1, -1,
-                    "per row")
-    else:
-        grid = Grid.uniform(rows, cols, 30.0, 25.0)
-    c = curvature_per_m2(2e5, 0.13) if curved else 0.0
-    real = bounds._strips
-    try:
-        bounds._strips = lambda P, s, K: max(1, min(nstrips, P // max(12, int(np.ceil(K * s)) + 8)))
-        for az, el in [(163.0, 2.0), (203.7, 4.0), (290.0, 3.0), (20.0, 6.0), (111.0, 1.0)]:
-            rays = sun_rays(grid, az, el, c)
-            ref = _plain(z, rays)
-            st_far, st_near = {}, {}
-            np.testing.assert_array_equal(bounds.shadow_mask(z, rays, stats=st_far), ref,
-                                          f"{az}/{el}")
-            far = bounds.FAR
-            try:
-                bounds.FAR = bounds.EXACT_STEPS       # no march through the ring
-                np.testing.assert_array_equal(bounds.shadow_mask(z, rays, stats=st_near), ref)
-            finally:
-                bounds.FAR = far
-            assert st_far["undecided_fraction"] < 0.5 * st_near["undecided_fraction"] + 1e-3
-    finally:
-        bounds._strips = real
-
-
-@pytest.mark.parametrize("az", [41.3, 138.2, 221.7, 316.0])
-def test_rays_through_the_ring_stop_where_a_strip_may_have_written(az):
-    """Three strips of about 20 positions (narrower than the FAR lines a ray marches through
-    the ring; the raster's own are at least 64) and near-diagonal suns: rays cross the whole
-    strip ahead, whose last position the strip two ahead writes, two blocks further on, so
-    ``_settle`` must stop there (it is told where: ``x_next``)."""
-    z = _terrain("spectral", 240, 62, 5, 2500.0)
-    real = bounds._strips
-    try:
-        bounds._strips = lambda P, s, K: 3
-        for el in (1.5, 3.0, 6.0):
-            for grid in (Grid.uniform(240, 62, 30.0), Grid.uniform(62, 240, 30.0)):
-                zz = z if grid.dx.shape[0] == 240 else np.ascontiguousarray(z.T)
-                rays = sun_rays(grid, az, el)
-                np.testing.assert_array_equal(bounds.shadow_mask(zz, rays), _plain(zz, rays))
-    finally:
-        bounds._strips = real
-
-
 @pytest.mark.parametrize("az", [163.0, 203.7, 290.0, 20.0])
 @pytest.mark.parametrize("el", [3.0, 20.0])
 def test_against_the_plain_python_model(az, el):

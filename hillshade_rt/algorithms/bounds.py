@@ -72,8 +72,6 @@ EPS_BIN = 1e-7     # slack (in bins) on the bins a ray may reach: covers positio
 SNAP = 1e-7        # fractions this close to 0 or 1 may be a cell centre in the model's rounding
 ZO = 2             # NaN positions kept before each line of heights (the bins around position 0)
 RUN = 64           # positions per run of rays that share their offsets (_decide_positions)
-FAR = 32           # lines an undecided cell's ray is marched on through the ring (_settle)
-LOOK = 8           # ... looking the bounds up on every LOOK-th of them (a power of two)
 
 
 @njit(cache=True, inline="always")
@@ -247,15 +245,14 @@ def _decide_line(ZB, SU, SL, R, v, p0, p1, P, s, rise, curv, K, pad, margin, ok,
     curv): the same decisions as ``_decide_positions``, with the sample offsets and fractions of
     the line computed once, in passes along the line over views that start at 0 (numba then
     drops its negative-index wrap) with selects only: they vectorise. ``e``, ``e_hi``: work
-    space; ``PF``: each position as a float (no conversion in the loop). Returns how many cells
-    it left UNDECIDED (none: no ring march for the line)."""
+    space; ``PF``: each position as a float (no conversion in the loop)."""
     n = p1 - p0
     row = v % R
     if not ok:
         for q in range(n):
             h = ZB[row, ZO + p0 + q]
             out[q] = np.uint8(255) if h != h else np.uint8(UNDECIDED)
-        return np.int64(0)          # (nothing for _settle: the row's ray is not the frame's)
+        return
     for q in range(n):
         e[q] = -np.inf
         e_hi[q] = -np.inf
@@ -291,7 +288,6 @@ def _decide_line(ZB, SU, SL, R, v, p0, p1, P, s, rise, curv, K, pad, margin, ok,
     la = sla[da + p0:da + p1]
     zl = ZB[row, ZO + p0:ZO + p1]
     X = PF[p0:p1]
-    nopen = 0
     if b1 > b0:
         ub = sub[db + p0:db + p1]
         lb = slb[db + p0:db + p1]
@@ -299,16 +295,11 @@ def _decide_line(ZB, SU, SL, R, v, p0, p1, P, s, rise, curv, K, pad, margin, ok,
             u = max(ua[q], ub[q])
             lw = min(la[q], lb[q])
             h = zl[q]
-            c = _code(e[q], e_hi[q], lw, u, h, h + hk, margin, X[q] + xk, P)
-            out[q] = c
-            nopen += np.int64(1) if c == UNDECIDED else np.int64(0)
+            out[q] = _code(e[q], e_hi[q], lw, u, h, h + hk, margin, X[q] + xk, P)
     else:
         for q in range(n):
             h = zl[q]
-            c = _code(e[q], e_hi[q], la[q], ua[q], h, h + hk, margin, X[q] + xk, P)
-            out[q] = c
-            nopen += np.int64(1) if c == UNDECIDED else np.int64(0)
-    return nopen
+            out[q] = _code(e[q], e_hi[q], la[q], ua[q], h, h + hk, margin, X[q] + xk, P)
 
 
 @njit(cache=True)
@@ -517,163 +508,6 @@ def _decide_cells(ZB, SU, SL, R, v, p0, qa, qb, P, s_arr, rise_arr, curv_arr, ok
         out[q] = _code(e[q], e_hi[q], lw, u, h, h + K * rr[q] + K * K * cc[q], margin, x, P)
 
 
-@njit(cache=True, inline="always")
-def _ring_sample(za, zb, f, drop, h, margin, e_hi):
-    """One exact sample of a ray marched through the ring (``_settle``), between heights za
-    and zb at fraction f, the ray ``drop`` above the cell's height h: (blocked, the highest
-    sample so far, ``e_hi``, an upper bound of the model's). As ``_decide_cells``: within
-    rounding of a cell centre the sample is bounded above only (the model's may land on the
-    centre beside a void)."""
-    t = (za if f == 0.0 else za + f * (zb - za)) - drop
-    snap = f < SNAP or f > 1.0 - SNAP
-    if t > h + margin and (f == 0.0 or not snap):
-        return True, e_hi
-    alt = (za if za == za else zb) - drop
-    th = alt if (snap and not t == t) else t
-    return False, (th if th > e_hi else e_hi)
-
-
-@njit(cache=True, inline="always")
-def _ring_code(SU, SL, rw, b0, b1, pad, e_hi, h, drop, margin):
-    """The code of a ray marched through the ring at ring row ``rw``, in bins b0..b1 (b1 <=
-    b0 + 1), ``drop`` above the cell's height h, its samples so far at most ``e_hi``: lit when
-    they and the upper bound clear it, shadowed when the lower bound blocks it, else open."""
-    u = SU[rw, b0 & (BINS - 1), pad + (b0 >> LOG_BINS)]
-    lw = SL[rw, b0 & (BINS - 1), pad + (b0 >> LOG_BINS)]
-    if b1 > b0:
-        u = max(u, SU[rw, b1 & (BINS - 1), pad + (b1 >> LOG_BINS)])
-        lw = min(lw, SL[rw, b1 & (BINS - 1), pad + (b1 >> LOG_BINS)])
-    hk = h + drop
-    if e_hi <= h - margin and u <= hk - margin:
-        return np.uint8(0)
-    return np.uint8(1) if lw > hk + margin else np.uint8(UNDECIDED)
-
-
-@njit(cache=True)
-def _settle_line(ZB, SU, SL, R, v, p0, p1, L, P, s, rise, curv, K, J, x_own, x_next, k_next,
-                 pad, margin, s_c, TAB, out):
-    """``_settle`` for a line whose cells share one ray (s, rise, curv): each step's offset,
-    fraction, drop, ring row and bins are the same for every cell (``TAB``: work space,
-    6 x (J + 1)), so a cell's step is two loads of heights, and on a LOOK-th line one or two of
-    each bound."""
-    D, F, DR, RW, BA, BB = TAB[0], TAB[1], TAB[2], TAB[3], TAB[4], TAB[5]
-    filled = 0                  # the steps tabulated so far (as far as an open cell needs)
-    n = p1 - p0
-    zl = ZB[v % R, ZO:]
-    for q in range(n):
-        if out[q] != UNDECIDED:
-            continue
-        p = p0 + q
-        h = zl[p]
-        e_hi = -np.inf
-        code = np.uint8(UNDECIDED)
-        for k in range(1, J + 1):
-            if k > filled:
-                ks = k * s
-                d = math.floor(ks)
-                D[k] = d
-                F[k] = ks - d
-                DR[k] = k * rise + k * k * curv
-                RW[k] = (v + k) % R
-                phi = _phase(v + k, s_c)[1]
-                BA[k] = math.floor((ks - phi) * BINS - EPS_BIN)   # bin of p + ks: BINS p + BA
-                BB[k] = math.ceil((ks - phi) * BINS + EPS_BIN) - 1
-                filled = k
-            x = p + k * s
-            if v + k >= L or x > P - 1 + 1e-6:     # the ray has left the raster
-                if e_hi <= h - margin:
-                    code = np.uint8(0)
-                break
-            if x >= x_own and (k > k_next or x >= x_next):
-                break                               # lines the ring no longer holds there
-            rw = np.int64(RW[k])
-            i0 = p + np.int64(D[k])
-            f = F[k]
-            za = ZB[rw, ZO + i0]
-            zb = ZB[rw, ZO + i0 + 1]
-            drop = DR[k]
-            blocked, e_hi = _ring_sample(za, zb, f, drop, h, margin, e_hi)
-            if blocked:
-                code = np.uint8(1)
-                break
-            if k <= K or (k & (LOOK - 1)) != 0 or x > P - 1 - 1e-6:
-                continue
-            b0 = BINS * p + np.int64(BA[k])
-            b1 = BINS * p + np.int64(BB[k])
-            code = _ring_code(SU, SL, rw, b0, b1, pad, e_hi, h, drop, margin)
-            if code != UNDECIDED:
-                break
-        out[q] = code
-
-
-@njit(cache=True)
-def _settle(ZB, SU, SL, R, v, p0, p1, L, P, S, RI, CU, OKA, by_line, K, J, x_own, x_next, k_next,
-            pad, margin, s_c, PHI, out):
-    """The cells of line v, positions [p0, p1), that the bounds left UNDECIDED in ``out``: each
-    ray marched on exactly through the lines the ring still holds (up to J lines on), while
-    they are in cache, looking the bounds up on every LOOK-th line past the K-th.
-
-    An open cell's ray grazes the terrain a few cells on (the edge of a shadow: half of them
-    within 5-20 steps on real DEMs); once past that contact, a later line's bounds usually
-    clear or block it. Lit when every sample so far and the upper bound of the line clear the
-    ray (or the ray has left the raster), shadowed when a sample or the lower bound blocks it,
-    still open otherwise (the pyramid march, ``brute.refine``): 1-2.4 % of the cells were open
-    after the K-th line, 0.01-0.6 % are after this. The bounds hold for a ray that has
-    travelled up to FAR steps (``_drops``). The ray is the cell's own (``S``, ``RI``, ``CU``
-    indexed by line with ``by_line``, else by position; ``OKA`` False: left open); the samples
-    as ``_decide_cells`` (near a cell centre bounded above only). The ring holds this strip's
-    lines up to R - 1 lines on below position ``x_own``, the strip ahead's up to ``k_next``
-    lines on below ``x_next`` (``_bounds_sweep``): the ray stops (open) beyond."""
-    n = p1 - p0
-    PH, RW = PHI[0], PHI[1]
-    filled = 0                  # the lines tabulated so far (as far as an open cell needs)
-    zl = ZB[v % R, ZO:]
-    for q in range(n):
-        if out[q] != UNDECIDED:
-            continue
-        p = p0 + q
-        i = v if by_line else p
-        if not OKA[i]:
-            continue
-        sp = S[i]
-        rp = RI[i]
-        cp = CU[i]
-        h = zl[p]
-        e_hi = -np.inf
-        code = np.uint8(UNDECIDED)
-        for k in range(1, J + 1):
-            if k > filled:
-                PH[k] = _phase(v + k, s_c)[1]
-                RW[k] = (v + k) % R
-                filled = k
-            x = p + k * sp
-            if v + k >= L or x > P - 1 + 1e-6:     # the ray has left the raster
-                if e_hi <= h - margin:
-                    code = np.uint8(0)
-                break
-            if x >= x_own and (k > k_next or x >= x_next):
-                break                               # lines the ring no longer holds there
-            rw = np.int64(RW[k])
-            i0 = int(x)
-            f = x - i0
-            za = ZB[rw, ZO + i0]
-            zb = ZB[rw, ZO + i0 + 1]
-            drop = k * rp + k * k * cp
-            blocked, e_hi = _ring_sample(za, zb, f, drop, h, margin, e_hi)
-            if blocked:
-                code = np.uint8(1)
-                break
-            if k <= K or (k & (LOOK - 1)) != 0 or x > P - 1 - 1e-6:
-                continue
-            y = (x - PH[k]) * BINS
-            b0 = int(math.floor(y - EPS_BIN))
-            b1 = int(math.ceil(y + EPS_BIN)) - 1
-            code = _ring_code(SU, SL, rw, b0, b1, pad, e_hi, h, drop, margin)
-            if code != UNDECIDED:
-                break
-        out[q] = code
-
-
 @njit(cache=True)
 def _blocks(spread):
     """(M, W_end): how rays of several slopes (``spread`` = the fastest's step less the
@@ -832,7 +666,7 @@ def _field_ray(e, no, up, dxr, dyr, cs, rs, ccoef, fv, fp, A, B, fdom, fsd, sgn,
 @njit(cache=True)
 def _strip_block(z, ZB, SU, SL, RO, v_top, nb, p0, p1, L, P, pad, s_c, M, spread, W_end, d_up,
                  d_lo, s_arr, rise_arr, curv_arr, ok_arr, per_line, K, margin, dom_col, flip_line,
-                 flip_pos, out, fld, x_own, x_next, k_own, k_next):
+                 flip_pos, out, fld):
     """Lines v_top .. v_top-nb+1, positions [p0, p1): load, bounds, decisions, store. ``ZB``
     holds the heights with ``ZO`` NaN positions before each line."""
     R = ZB.shape[0]
@@ -868,9 +702,6 @@ def _strip_block(z, ZB, SU, SL, RO, v_top, nb, p0, p1, L, P, pad, s_c, M, spread
                 DYL[p] = fld[3][x]
     RUNS = np.empty(fld[1].shape[0] + 2 if use else 1, np.int64)   # (at most n - 1 runs)
     nruns = _field_runs(fld, p0, p1, XP, IX, RUNS) if use else 0
-    J = k_own
-    PHI = np.empty((2, J + 1))         # the phase and ring row of each line a ray reads
-    TAB = np.empty((6, J + 1))
     for i in range(nb):
         v = v_top - i
         row = v % R
@@ -887,37 +718,27 @@ def _strip_block(z, ZB, SU, SL, RO, v_top, nb, p0, p1, L, P, pad, s_c, M, spread
             ro = RO[row, p0:p1]
             _decide_positions(ZB, SU, SL, R, v, p0, p1, P, FS, FR, FC, FOK, K, pad, margin, s_c,
                               ro, W, D, PF)
-            _settle(ZB, SU, SL, R, v, p0, p1, L, P, FS, FR, FC, FOK, False, K, J, x_own, x_next,
-                    k_next, pad, margin, s_c, PHI, ro)
             for q in range(p1 - p0):  # a cell whose sun is down is shadowed
                 if FN[p0 + q] & (ro[q] != 255):
                     ro[q] = 1
         elif per_line:
-            nopen = _decide_line(ZB, SU, SL, R, v, p0, p1, P, s_arr[v], rise_arr[v], curv_arr[v],
-                                 K, pad, margin, ok_arr[v], s_c, W[3], W[4], RO[row, p0:p1], PF)
-            if nopen > 0:
-                _settle_line(ZB, SU, SL, R, v, p0, p1, L, P, s_arr[v], rise_arr[v], curv_arr[v], K,
-                             J, x_own, x_next, k_next, pad, margin, s_c, TAB,
-                             RO[row, p0:p1])
+            _decide_line(ZB, SU, SL, R, v, p0, p1, P, s_arr[v], rise_arr[v], curv_arr[v], K, pad,
+                         margin, ok_arr[v], s_c, W[3], W[4], RO[row, p0:p1], PF)
         else:
             _decide_positions(ZB, SU, SL, R, v, p0, p1, P, s_arr, rise_arr, curv_arr, ok_arr, K,
                               pad, margin, s_c, RO[row, p0:p1], W, D, PF)
-            _settle(ZB, SU, SL, R, v, p0, p1, L, P, s_arr, rise_arr, curv_arr, ok_arr, False, K,
-                    J, x_own, x_next, k_next, pad, margin, s_c, PHI, RO[row, p0:p1])
     _store_lines(out, RO, v_top, nb, p0, p1, dom_col, flip_line, flip_pos)
 
 
 @njit(parallel=True, cache=True)
 def _bounds_sweep(z, L, P, dom_col, flip_line, flip_pos, s_lo, s_hi, d_up, d_lo, s_arr, rise_arr,
-                  curv_arr, ok_arr, per_line, K, margin, nstrips, out, fld, far):
+                  curv_arr, ok_arr, per_line, K, margin, nstrips, out, fld):
     """The sweep over canonical lines from the sun's edge (``L`` lines of ``P`` positions),
     as a wavefront of ``nstrips`` strips (see ``sweep._sweep_uniform``). Writes 0 / 1 /
     UNDECIDED / 255 into the DEM-shaped ``out``."""
     B = max(16, K)
     NS = nstrips
-    # ring rows: the lines in flight and K ahead, and FAR lines of the strip ahead that no strip
-    # overwrites before a ray of this strip has read them (_settle)
-    R = max(NS * B + K + 2, 2 * B + far + 1)
+    R = NS * B + K + 2
     Q = BINS
     pad = 4                           # positions of -inf bins before the line
     s_c = s_lo                        # the bins follow the slowest ray
@@ -933,17 +754,9 @@ def _bounds_sweep(z, L, P, dom_col, flip_line, flip_pos, s_lo, s_hi, d_up, d_lo,
             j = np.int64(jj)
             v_top, nb = wave_block(t, j, L, B)
             if nb > 0:
-                # how far its rays read the ring: this strip's positions but its last (which
-                # the strip ahead also writes), those of the strip ahead but its last, when
-                # that is not the last strip
-                x_own = bounds[j] - 2.0
-                x_next = (bounds[j - 1] - 2.0) if j >= 2 else np.inf
-                if j == 0:
-                    x_own = np.inf
                 _strip_block(z, ZB, SU, SL, RO, v_top, nb, bounds[j + 1], bounds[j], L, P, pad,
                              s_c, M, s_hi - s_lo, W_end, d_up, d_lo, s_arr, rise_arr, curv_arr,
-                             ok_arr, per_line, K, margin, dom_col, flip_line, flip_pos, out, fld,
-                             x_own, x_next, min(far, R - 1), R - 2 * B)
+                             ok_arr, per_line, K, margin, dom_col, flip_line, flip_pos, out, fld)
 
 
 def _field_args(vec=None, grid=None, curv_coef=0.0, f=None, L=1, fit=None, place=None):
@@ -1037,25 +850,18 @@ def _drops(zmin: float, zmax: float, L: int, K: int, r_lo: float, r_hi: float, c
     * d_lo = r_hi + (2K + 1) c_hi when c_hi <= 0, else d >= r_hi + (2K + j) c_hi for every
       j < (zmax - zmin) / d: the smallest such d solves d^2 - (r_hi + 2K c_hi) d - (zmax -
       zmin) c_hi = 0 (or j < L). (It was r + (2 kmax + 1) c, the steepest step of the whole
-      reach, twice the excess over r: the Moon's small radius, 1.7x the flat run at 3 deg.)
-
-    ``_settle`` looks the bounds up k > K lines on too (k <= FAR), where a ray rises j (r +
-    (2k + j) c) over its next j steps: the bounds hold for every such k when the lower bound's
-    K is FAR for c > 0 (a ray that has travelled further rises faster; 2 (FAR - K) c more per
-    step, 0.2 % of r on a 30 m Earth DEM, 1.5 % on the Moon) and the upper bound's is FAR for
-    c < 0 (it rises slower)."""
+      reach, twice the excess over r: the Moon's small radius, 1.7x the flat run at 3 deg.)"""
     span = max(0.0, zmax - zmin)
     if c_lo >= 0.0:
         d_up = r_lo + (2 * K + 1) * c_lo
-    else:   # (from the furthest line a ray looks the bounds up on: FAR, _settle)
-        kf = max(K, FAR)
-        slowest = r_lo + (2 * kf + L) * c_lo      # the least a step rises within the raster
+    else:
+        slowest = r_lo + (2 * K + L) * c_lo      # the least a step rises within the raster
         J = min(L, math.ceil(span / slowest) + 1) if slowest > 0 else L
-        d_up = (r_lo + (2 * kf + J) * c_lo) * (1.0 - 1e-12) + 1e-12 * c_lo
+        d_up = (r_lo + (2 * K + J) * c_lo) * (1.0 - 1e-12) + 1e-12 * c_lo
     if c_hi <= 0.0:
         d_lo = r_hi + (2 * K + 1) * c_hi
-    else:   # (for a ray that has travelled up to FAR steps: _settle looks it up there too)
-        a = r_hi + 2 * max(K, FAR) * c_hi
+    else:
+        a = r_hi + 2 * K * c_hi
         d_lo = min(0.5 * (a + math.sqrt(a * a + 4.0 * span * c_hi)), a + L * c_hi)
         d_lo = d_lo * (1.0 + 1e-12) + 1e-12 * c_hi
     kmax = min(L, math.ceil(span / r_lo) + 1) if r_lo > 0 else L
@@ -1114,7 +920,7 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None,
             ok, per_line = np.ones(L, np.bool_), True
         _bounds_sweep(z, L, P, f.dom_col, f.flip_line, f.flip_pos, s_lo, s_hi, d_up, d_lo, s,
                       rise, curv, ok, per_line, K, margin, _strips(P, s_hi, K), out,
-                      _field_args(), FAR)
+                      _field_args())
     else:
         out[...] = np.where(np.isnan(z), np.uint8(255), np.uint8(UNDECIDED))
     left = brute.refine(z, rays, out, UNDECIDED, zmax,
@@ -1160,8 +966,7 @@ def shadow_mask_field(z: np.ndarray, grid, vec: np.ndarray, curv_coef: float = 0
         _bounds_sweep(z, L, P, f.dom_col, f.flip_line, f.flip_pos, s_lo, s_hi, d_up, d_lo, one,
                       one, one, np.ones(1, np.bool_), False, K, margin, _strips(P, s_hi, K), out,
                       _field_args(vec, grid, curv_coef, f, L,
-                                  (A, B, s_lo, s_hi, r_lo, r_hi, c_lo, c_hi), place),
-                      FAR)
+                                  (A, B, s_lo, s_hi, r_lo, r_hi, c_lo, c_hi), place))
     else:
         out[...] = np.where(np.isnan(z), np.uint8(255), np.uint8(UNDECIDED))
     steps = min(float(max(L, P)), (zmax - zmin) / ri) if ri > 0 else float(max(L, P))
