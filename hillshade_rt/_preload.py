@@ -4,8 +4,9 @@ The first kernel a process loads from numba's cache costs 0.2-0.45 s more than t
 numba imports its typing and lowering registries then (``BaseContext.refresh``), Python work
 that holds the GIL. GDAL reads a raster with the GIL released. So ``while_numba_starts`` runs
 a read in a thread while the calling thread does numba's start-up (under numba's compiler lock,
-as its first compilation would): the two overlap (a 10000² DEM: the read stage 0.54 -> 0.33 s).
-The calling thread does the start-up itself: no kernel ever runs on another thread.
+as its first compilation would): the two overlap (a 10000² DEM: the read stage 0.54 s ->
+0.33-0.40 s). The calling thread does the start-up itself: no kernel ever runs on another
+thread.
 """
 
 from __future__ import annotations

@@ -83,6 +83,18 @@ def test_real_subprocess(tmp_path):
     assert "Traceback" not in p.stderr
 
 
+def test_subprocess_exit_keeps_status_and_flushes_output(tmp_path):
+    """``cli.main`` ends the process with os._exit (no interpreter teardown): what the command
+    printed must still arrive through pipes, and the exit status be the command's."""
+    exe = [sys.executable, "-m", "hillshade_rt"]
+    p = subprocess.run(exe + ["info", LIDAR, "--json"], capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    assert json.loads(p.stdout)["shape"] == [400, 400]
+    p = subprocess.run(exe + ["shadow"], capture_output=True, text=True)     # usage error
+    assert p.returncode == 2 and p.stdout == ""
+    assert p.stderr.strip().count("\n") == 0 and "Missing argument" in p.stderr
+
+
 def _bad_inputs(tmp_path):
     """(name, argv, expected text in the error) for every input error the issue lists."""
     txt = tmp_path / "notes.txt"

@@ -205,3 +205,27 @@ def test_parsers():
     for bad in ("12", "0x5", "axb"):
         with pytest.raises(HillshadeError):
             parse_raw_shape(bad)
+
+
+def test_read_while_numba_starts_returns_or_raises_in_the_caller():
+    """``_preload.while_numba_starts``: the read runs in a thread while numba starts in this
+    one; its value comes back, and its exception is raised here (the read's errors stay the
+    one-line errors of read_dem)."""
+    import threading
+
+    from hillshade_rt import _preload
+    was = _preload._done
+    try:
+        _preload._done = False
+        seen = []
+        assert _preload.while_numba_starts(lambda: seen.append(threading.current_thread())
+                                           or 42) == 42
+        assert seen and seen[0] is not threading.main_thread() and _preload._done
+        _preload._done = False
+
+        def fail():
+            raise OSError("disk on fire")
+        with pytest.raises(OSError, match="disk on fire"):
+            _preload.while_numba_starts(fail)
+    finally:
+        _preload._done = was
