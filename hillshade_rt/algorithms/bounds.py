@@ -59,7 +59,7 @@ from numba import njit, prange
 from ..geometry import SunRays
 from . import brute
 from .field import lattice_scale, ray_of
-from .frames import Frame, frame_of, reach
+from .frames import Frame, frame_of, reach, steps_over
 from .sweep import _load_lines, _store_lines, _z_range, strip_bounds, wave_block, wave_steps
 from .sweep import _strips as sweep_strips
 
@@ -969,9 +969,8 @@ def shadow_mask_field(z: np.ndarray, grid, vec: np.ndarray, curv_coef: float = 0
                                   (A, B, s_lo, s_hi, r_lo, r_hi, c_lo, c_hi), place))
     else:
         out[...] = np.where(np.isnan(z), np.uint8(255), np.uint8(UNDECIDED))
-    steps = min(float(max(L, P)), (zmax - zmin) / ri) if ri > 0 else float(max(L, P))
     left = field.refine(z, grid, vec, curv_coef, zmax, out, UNDECIDED,
-                        _pyramid_for_open(out, pyramid, steps), place)
+                        _pyramid_for_open(out, pyramid, steps_over(zmax - zmin, ri, L)), place)
     if stats is not None:
         stats["undecided_fraction"] = left / max(1, out.size)
     return out

@@ -59,11 +59,16 @@ def reach(shape: tuple[int, int], zrange: tuple[float, float], rays: SunRays) ->
     """The steps a ray takes to rise over the relief ``zrange`` (at most the raster's extent
     along the rays; inf for a sun at the zenith or below): what decides whether skipping over
     the maximum-height pyramid pays (``auto``, ``smap``)."""
-    rise = float(np.min(rays.rise))
+    L = shape[1] if bool(rays.dom_col[len(rays.rise) // 2]) else shape[0]
+    return steps_over(zrange[1] - zrange[0], float(np.min(rays.rise)), L)
+
+
+def steps_over(span: float, rise: float, lines: int) -> float:
+    """``reach`` of one ray rising ``rise`` per step over ``span`` of relief, across ``lines``
+    lines of its dominant axis."""
     if not math.isfinite(rise) or rise <= 0:
         return math.inf
-    L = shape[1] if bool(rays.dom_col[len(rays.rise) // 2]) else shape[0]
-    return max(1.0, min(max(0.0, zrange[1] - zrange[0]) / rise, float(L)))
+    return max(1.0, min(max(0.0, span) / rise, float(lines)))
 
 
 def frame_of(rays: SunRays, row: int = 0) -> Frame:
