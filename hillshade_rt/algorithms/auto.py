@@ -143,7 +143,9 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None,
         return bounds.shadow_mask(z, rays, zmax, stats, pyramid=pyramid, zrange=(lo, hi))
     if not pyramid_pays(z.shape, (lo, hi), rays):
         pyramid = False
-    return brute.shadow_mask(z, rays, zmax, stats, pyramid=pyramid)
+    # the survey's highest height: brute need not find it again (two passes, 0.8 ms of New
+    # Zealand's 6 ms at 20 deg, where auto took 0.93x the plain march)
+    return brute.shadow_mask(z, rays, hi if zmax is None else zmax, stats, pyramid=pyramid)
 
 
 def shadow_mask_gpu(g, rays: SunRays, zmax: float, stats: dict | None = None) -> np.ndarray:
