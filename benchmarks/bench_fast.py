@@ -32,7 +32,8 @@ sys.path.insert(0, HERE)
 
 import terrain  # noqa: E402
 from hillshade_rt import read_dem  # noqa: E402
-from hillshade_rt.engine import Shader, dem_body  # noqa: E402
+from hillshade_rt.shading import Shader  # noqa: E402
+from hillshade_rt.earth import dem_body  # noqa: E402
 from hillshade_rt.geometry import Grid  # noqa: E402
 from hillshade_rt.sun import SunOver  # noqa: E402
 
@@ -102,7 +103,7 @@ def main(argv=None):
     import tempfile
     import rasterio
     from rasterio.transform import from_origin
-    from hillshade_rt.engine import render
+    from hillshade_rt.shading import render
     from hillshade_rt.sun import dem_site, parse_time, sun_over
     with tempfile.TemporaryDirectory() as tmp:
         path = os.path.join(tmp, "d.tif")

@@ -37,7 +37,8 @@ def main():
     args = ap.parse_args()
 
     from hillshade_rt import read_dem
-    from hillshade_rt.engine import Shader, dem_body, render
+    from hillshade_rt.shading import Shader, render
+    from hillshade_rt.earth import dem_body
     from hillshade_rt.sun import dem_site, parse_time, sun_over
 
     d = read_dem(DEM)

@@ -23,7 +23,8 @@ import rasterio
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
 
 from hillshade_rt import io as hio  # noqa: E402
-from hillshade_rt.engine import Shader, dem_body, render  # noqa: E402
+from hillshade_rt.shading import Shader, render  # noqa: E402
+from hillshade_rt.earth import dem_body  # noqa: E402
 from hillshade_rt.geometry import Grid  # noqa: E402
 from hillshade_rt.sun import SunOver  # noqa: E402
 

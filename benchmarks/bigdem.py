@@ -61,7 +61,9 @@ def crop_reference(dem, crop, azimuth, elevation, pad):
     import rasterio
     from rasterio.windows import Window
 
-    from hillshade_rt.engine import Shader, dem_body, render
+    from hillshade_rt.shading import Shader, render
+
+    from hillshade_rt.earth import dem_body
     from hillshade_rt.sun import SunOver
     r0, r1, c0, c1 = crop
     with rasterio.open(dem) as ds:

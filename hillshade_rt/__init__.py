@@ -2,7 +2,7 @@
 
 The public names are imported when first used (PEP 562): ``import hillshade_rt`` and the command
 line start without loading numpy, numba or GDAL, so that the command line can take over SIGINT,
-SIGTERM and SIGHUP before any of that work begins (``cli._OneLineErrors.main``).
+SIGTERM and SIGHUP before any of that work begins (``cli.errors.OneLineErrors.main``).
 """
 
 import importlib
@@ -10,8 +10,8 @@ import importlib
 __version__ = "0.1.0"
 
 _EXPORTS = {"HillshadeError": "errors", "Grid": "geometry", "sun_rays": "geometry",
-            "Dem": "io", "read_dem": "io", "shadow_mask": "shadow", "horizon_angles": "shadow",
-            "is_shadowed": "shadow", "Shader": "engine", "render": "engine",
+            "Dem": "io", "read_dem": "io", "shadow_mask": "arrays", "horizon_angles": "arrays",
+            "is_shadowed": "arrays", "Shader": "shading", "render": "shading",
             "solar_position": "sun", "parse_time": "sun", "sun_over": "sun", "shade": "api"}
 
 __all__ = list(_EXPORTS) + ["__version__"]

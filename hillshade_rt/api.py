@@ -2,8 +2,9 @@
 
 :func:`shade` is ``hillshade-rt shadow`` / ``hillshade`` as a function: one DEM or a mosaic of
 tiles, one sun or a series of times, in memory or in windows under a memory limit, on this
-machine or on a Dask cluster given as a ``distributed.Client``. It runs the command line's own
-code (one source of truth for checks, outputs and the report) and returns the report as a dict.
+machine or on a Dask cluster given as a ``distributed.Client``. It builds the run's config and
+calls ``run.shade``, as the command line does (one source of truth for checks, outputs and the
+report), and returns the report as a dict.
 Bad input raises :class:`~hillshade_rt.errors.HillshadeError` with the command line's one-line
 message; nothing is left half-written.
 
@@ -24,15 +25,24 @@ import os
 
 from .errors import HillshadeError
 
-PRODUCTS = ("shadow", "classes", "hillshade")
+# keyword arguments passed on as the run's options of the same name
+_READ = ("band", "nodata", "z_factor", "pixel_size", "raw_shape", "raw_dtype", "raw_byteorder")
+_PLACE = ("tz", "lat", "lon", "pressure", "temperature", "no_refraction", "sun_tolerance")
+_PASSED = _PLACE + _READ + ("threads",)
 
-# the command line's run options, set from shade()'s own arguments
-_RUN_KEYS = ("output", "output_pattern", "preview", "backend", "report_path", "overwrite",
-             "quiet", "max_memory", "window_size", "cog", "scheduler", "fmt")
-# keyword arguments passed on as the command line's options of the same name
-_PASSED = ("tz", "lat", "lon", "pressure", "temperature", "no_refraction", "sun_tolerance",
-           "band", "nodata", "z_factor", "pixel_size", "raw_shape", "raw_dtype",
-           "raw_byteorder", "threads")
+
+def _iso(t):
+    return t.isoformat() if isinstance(t, _dt.datetime) else t
+
+
+def _stderr(kind: str, message: str) -> None:
+    """``say`` with ``progress=True``: the command line's lines on stderr."""
+    import sys
+    if kind == "note":
+        message = f"hillshade-rt: note: {message}"
+    elif kind == "compile":
+        return
+    print(message, file=sys.stderr)
 
 
 def shade(dems, output: str | None = None, *, product: str = "shadow",
@@ -60,9 +70,11 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
     ``lat``, ``lon``, ``band``, ``nodata``, ``z_factor``, ``pixel_size``, ``raw_shape``, ...).
 
     Returns the report (what ``--report`` writes; also written to ``report`` when given)."""
-    import click
-
-    from . import cli as _cli
+    from .run import ReadOptions, RunOptions, ShadeConfig
+    from .run import shade as run_shade
+    from .run.config import OPTION_OWNERS, PRODUCTS, algorithm_for, algorithm_options as owned
+    from .sun import DEFAULT_TOLERANCE
+    from .writes import virtual_outputs
     if product not in PRODUCTS:
         raise HillshadeError(f"product must be one of {', '.join(PRODUCTS)}, got {product!r}")
     unknown = set(more) - set(_PASSED)
@@ -72,48 +84,36 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
                                                                             for p in dems]
     if not files:
         raise HillshadeError("no DEM given")
-    cmd = _cli.cli.commands["hillshade" if product == "hillshade" else "shadow"]
-    ctx = click.Context(cmd)
-    kw = {p.name: p.get_default(ctx) for p in cmd.params if p.name not in ("files",)}
-    kw = {k: v for k, v in kw.items() if k in _cli._SUN_KEYS or k in _RUN_KEYS or k in _PASSED}
-    kw.update(more)
-    if isinstance(window_size, int):
-        window_size = f"{window_size}x{window_size}"
-    elif isinstance(window_size, (tuple, list)):
-        window_size = "x".join(str(int(v)) for v in window_size)
-    kw.update(azimuth=azimuth, elevation=elevation,
-              time=tuple(t.isoformat() if isinstance(t, _dt.datetime) else str(t)
-                         for t in ([times] if isinstance(times, (str, _dt.datetime)) else times)),
-              start=start.isoformat() if isinstance(start, _dt.datetime) else start,
-              end=end.isoformat() if isinstance(end, _dt.datetime) else end, step=step,
-              output=None if output is None else os.fspath(output),
-              output_pattern=output_pattern, preview=preview, backend=backend,
-              report_path=report, overwrite=overwrite, quiet=not progress,
-              max_memory=max_memory, window_size=window_size, cog=cog, scheduler=client,
-              fmt=fmt)
     if output is None and output_pattern is None:
         raise HillshadeError("give output or output_pattern")
-    bad = set(algorithm_options or {}) - set(_cli._OPTION_OWNERS)
+    bad = set(algorithm_options or {}) - set(OPTION_OWNERS)
     if bad:
         raise HillshadeError(f"unknown algorithm option(s) {', '.join(sorted(bad))} (known: "
-                             f"{', '.join(sorted(_cli._OPTION_OWNERS))})")
-    algorithm = _cli._algorithm_for(algorithm, **(algorithm_options or {}))
-    from .writes import virtual_outputs
+                             f"{', '.join(sorted(OPTION_OWNERS))})")
+    if scale is not None and product != "hillshade":
+        raise HillshadeError("scale applies to product='hillshade'")
+    algorithm = algorithm_for(algorithm, **(algorithm_options or {}))
+    options = owned(algorithm, **(algorithm_options or {}))
+    sun = dict(azimuth=azimuth, elevation=elevation,
+               time=tuple(str(_iso(t)) for t in ([times] if isinstance(times, (str, _dt.datetime))
+                                                 else times)),
+               start=_iso(start), end=_iso(end), step=step,
+               **{k: more.get(k, d) for k, d in zip(_PLACE, (None,) * 5 + (False, DEFAULT_TOLERANCE))})
+    read = ReadOptions(**{k: more[k] for k in _READ if k in more})
+    run = RunOptions(backend=backend, threads=more.get("threads"), report_path=report,
+                     overwrite=overwrite, quiet=not progress, fmt=fmt, preview=preview,
+                     say=_stderr)
+    hill = product == "hillshade"
+    cfg = ShadeConfig(files, product, sun, default_sun=(315.0, 45.0) if hill else None,
+                      algorithm=algorithm, options=options, curvature=curvature,
+                      refraction_k=refraction_k, soft=soft,
+                      self_shadow=hill or self_shadow or product == "classes",
+                      ambient=ambient if hill else 0.2, scale=scale if hill else None,
+                      read=read, run=run, output=None if output is None else os.fspath(output),
+                      output_pattern=output_pattern, max_memory=max_memory,
+                      window_size=window_size, cog=cog, scheduler=client)
     token = virtual_outputs.set(True)    # /vsimem/ outputs are fine from Python
     try:
-        if product == "hillshade":
-            return _cli._light(files, "hillshade", algorithm,
-                               _cli._algorithm_options(algorithm, **(algorithm_options or {})),
-                               curvature, refraction_k, soft, True, ambient, scale, kw,
-                               default_sun=(315.0, 45.0))
-        if scale is not None:
-            raise HillshadeError("scale applies to product='hillshade'")
-        return _cli._light(files, product, algorithm,
-                           _cli._algorithm_options(algorithm, **(algorithm_options or {})),
-                           curvature, refraction_k, soft, self_shadow or product == "classes",
-                           0.2, None, kw)
-    except click.ClickException as exc:
-        raise HillshadeError(exc.format_message()) from None
+        return run_shade(cfg)
     finally:
         virtual_outputs.reset(token)
-

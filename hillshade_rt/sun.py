@@ -602,3 +602,108 @@ def disk_fraction(horizon_deg, elevation_deg, radius_deg: float = SUN_RADIUS_DEG
     h = np.maximum(np.asarray(horizon_deg, np.float64), 0.0)
     d = np.clip((h - elevation_deg) / radius_deg, -1.0, 1.0)
     return (np.arccos(d) - d * np.sqrt(1.0 - d * d)) / math.pi
+
+
+@dataclass
+class SunRequest:
+    """The sun options of a command line, checked before anything is read."""
+
+    azimuth: float | None = None
+    elevation: float | None = None
+    times: list[_dt.datetime] = field(default_factory=list)
+    tz: object = None
+    lat: float | None = None
+    lon: float | None = None
+    atmosphere: Atmosphere = Atmosphere()
+    tolerance: float = DEFAULT_TOLERANCE
+
+    @property
+    def from_time(self) -> bool:
+        return bool(self.times)
+
+    @classmethod
+    def from_options(cls, azimuth=None, elevation=None, time=(), start=None, end=None, step=None,
+                     tz=None, lat=None, lon=None, pressure=None, temperature=None,
+                     no_refraction=False, sun_tolerance=DEFAULT_TOLERANCE,
+                     default_sun: tuple[float, float] | None = None) -> "SunRequest":
+        from .geometry import check_elevation, normalize_azimuth
+        zone_ = zone(tz)
+        time = tuple(time or ())
+        series = start is not None or end is not None or step is not None
+        explicit = azimuth is not None or elevation is not None
+        if sum([bool(time), series, explicit]) > 1:
+            raise HillshadeError("give the sun one way: --azimuth/--elevation, --time, or "
+                                 "--start/--end/--step")
+        if series and (start is None or end is None or step is None):
+            raise HillshadeError("--start, --end and --step go together")
+        if not (time or series or explicit):
+            if default_sun is None:
+                raise HillshadeError("no sun given: use --azimuth and --elevation, --time, or "
+                                     "--start/--end/--step")
+            azimuth, elevation = default_sun
+            explicit = True
+        timed_only = {"--tz": tz, "--lat": lat, "--lon": lon, "--pressure": pressure,
+                      "--temperature": temperature}
+        if explicit:
+            if azimuth is None or elevation is None:
+                raise HillshadeError("--azimuth and --elevation go together")
+            given = [k for k, v in timed_only.items() if v is not None]
+            if no_refraction:
+                given.append("--no-refraction")
+            if given:
+                raise HillshadeError(f"{', '.join(given)} apply to a sun from --time or --start, "
+                                     "not to --azimuth/--elevation")
+            return cls(normalize_azimuth(azimuth), check_elevation(elevation, "--elevation"))
+        if time:
+            times = [parse_time(t, zone_, "--time") for t in time]
+        else:
+            t0, t1 = parse_time(start, zone_, "--start"), parse_time(end, zone_, "--end")
+            times = time_range(t0, t1, parse_step(step))
+        return cls.at_place(times, tz, lat, lon, pressure, temperature, no_refraction,
+                            sun_tolerance)
+
+    @classmethod
+    def at_place(cls, times, tz=None, lat=None, lon=None, pressure=None, temperature=None,
+                 no_refraction=False, sun_tolerance=DEFAULT_TOLERANCE) -> "SunRequest":
+        """Suns at ``times`` (aware datetimes; may be filled in later, as sun-hours does once
+        it knows the place), with the place and atmosphere options checked."""
+        zone_ = zone(tz)
+        if (lat is None) != (lon is None):
+            raise HillshadeError("--lat and --lon go together")
+        if lat is not None and not (math.isfinite(lat) and -90.0 <= lat <= 90.0):
+            raise HillshadeError(f"--lat must be a latitude within [-90, 90] degrees, got {lat}")
+        if lon is not None and not math.isfinite(lon):
+            raise HillshadeError(f"--lon must be a finite number of degrees, got {lon}")
+        if pressure is not None and not (math.isfinite(pressure) and 0 < pressure < 1200):
+            raise HillshadeError(f"--pressure must be in hPa (mbar), between 0 and 1200, got {pressure}")
+        if temperature is not None and not (math.isfinite(temperature) and -100 < temperature < 100):
+            raise HillshadeError(f"--temperature must be in degrees Celsius, got {temperature}")
+        if not (math.isfinite(sun_tolerance) and sun_tolerance > 0):
+            raise HillshadeError(f"--sun-tolerance must be a positive number of degrees, got {sun_tolerance}")
+        atm = Atmosphere(not no_refraction, pressure,
+                         12.0 if temperature is None else float(temperature))
+        return cls(times=times, tz=zone_, lat=lat, lon=lon, atmosphere=atm,
+                   tolerance=float(sun_tolerance))
+
+    def site(self, dem, other_body: str | None = None):
+        """Where this request's suns are computed for ``dem`` (``sun.dem_site``; ``other_body``:
+        what to advise for a DEM on another body than the Earth)."""
+        return dem_site(dem, self.lat, self.lon, other_body)
+
+    def suns(self, dem, site=None) -> tuple[list[SunOver], dict | None]:
+        """(suns, site report) for ``dem``: the given sun, or the SPA's at each time (at
+        ``site`` when the caller already has it)."""
+        if not self.from_time:
+            return [SunOver(None, self.azimuth, self.elevation)], None
+        site = site or self.site(dem)
+        suns = sun_over(site, dem.shape, self.times, self.atmosphere, self.tolerance)
+        atm = self.atmosphere
+        info = {"site": site.as_dict(), "site_notes": site.notes,
+                "refraction": atm.refraction,
+                "pressure_hpa": atm.pressure_at(site.height) if atm.refraction else None,
+                "temperature_c": atm.temperature_c if atm.refraction else None,
+                "pressure_source": ("--pressure" if atm.pressure_hpa is not None
+                                    else "standard atmosphere at the observer's height"),
+                "solar_position": "NREL SPA (pvlib.spa, numpy)",
+                "tolerance_deg": self.tolerance}
+        return suns, info

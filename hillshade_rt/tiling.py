@@ -640,7 +640,7 @@ def window_for(bounds, shape, grid: Grid, azimuth: float, elevation: float, curv
                stats: BlockStats, margin: int = 1) -> tuple[int, int, int, int]:
     """The window of region ``bounds``: the region, its halo toward the sun (from the block
     ranges, tightened until it stops shrinking) and ``margin`` cells all round."""
-    from .engine import halo_bounds, reach_m
+    from .shading import halo_bounds, reach_m
     low, _ = stats.range_over(bounds)
     if not math.isfinite(low):          # voids only: nothing to shade, nothing to read around
         return halo_bounds(bounds, shape, grid, azimuth, 0.0, margin)
@@ -695,7 +695,7 @@ def plan(shape, grid: Grid, azimuth: float, elevation: float, curv: float, stats
     need the lower edge of the sun's disk). ``night``: nothing casts; windows have no halo.
     ``azimuths``: the lowest and highest azimuth of the cells' rays (a sun per cell): each
     window then holds the halos of both and of ``azimuth``, so every ray in between."""
-    from .engine import halo_bounds, reach_m
+    from .shading import halo_bounds, reach_m
     rows, cols = shape
     b = bounds or (0, rows, 0, cols)
     br, bc = b[1] - b[0], b[3] - b[2]
@@ -874,11 +874,11 @@ class Job:
 
     @property
     def k(self) -> float:
-        from .engine import refraction_for
+        from .earth import refraction_for
         return refraction_for(self.body, self.refraction_k)
 
     def curv(self, azimuth: float, elevation: float) -> float:
-        from .engine import curvature_coefficient
+        from .earth import curvature_coefficient
         return curvature_coefficient(self.curvature, self.body, self.k, self.extent_m,
                                      self.zrange, azimuth, elevation)
 
@@ -899,7 +899,7 @@ class Job:
         return BandCarry(most)
 
     def shader(self, z: np.ndarray, window, local_range=None, carry=None):
-        from .engine import Shader
+        from .shading import Shader
         return Shader(z, window_grid(self.source.grid, window), self.algorithm, self.options,
                       self.backend, self.curvature, self.refraction_k, self.body, self.zrange,
                       extent_m=self.extent_m, halo_ready=True, local_range=local_range,
@@ -910,14 +910,14 @@ class Job:
         """The product over ``piece.region`` from its window's heights ``z``. ``carry``: the
         run's ``carrier()``, for windows lit in plan order (a fresh one otherwise: SMap then
         still masks the region only)."""
-        from .engine import _render_region
+        from .shading import render_region
         from .sun import Region
         sh = self.shader(z, piece.window, piece.zrange,
                          carry if carry is not None else self.carrier())
         rows, cols = piece.inner()
         # a sun per cell: the window's cells each with their own (as a run in memory does)
         cast = None if piece.sun is None else sh.cast_field(piece.sun, stats)[rows, cols]
-        arr = _render_region(sh, Region(rows, cols, piece.azimuth, piece.elevation), self.kind,
+        arr = render_region(sh, Region(rows, cols, piece.azimuth, piece.elevation), self.kind,
                              self.soft, self.self_shadow, self.ambient, stats, cast)
         if curvature_used is not None:
             curvature_used |= sh.curvature_used
@@ -928,7 +928,7 @@ class Job:
         """The pieces of one sun (per-tile suns: each tile's, cut further to fit).
         ``in_order``: the windows are lit one after the other in this order (SMap tables are
         carried along strips); False for independent tasks (Dask), which carry nothing."""
-        from .engine import field_method
+        from .shading import field_method
         from .sun import SUN_RADIUS_DEG
         out = []
         shape = self.source.shape
@@ -958,7 +958,7 @@ class Job:
 
     def warm_up(self, sun) -> None:
         """Compile (or load from numba's cache) what the windows will run."""
-        from .engine import Shader
+        from .shading import Shader
         z = np.zeros((4, 4), np.float32)     # the kernels' argument types; the grid's spacing
         sh = Shader(z, self.source.grid, self.algorithm, self.options, self.backend,
                     self.curvature, self.refraction_k, self.body, self.zrange,

@@ -19,7 +19,8 @@ def main() -> int:
     import numpy as np
 
     from .algorithms._jitcache import cache_dir, cached
-    from .engine import Body, Shader
+    from .shading import Shader
+    from .earth import Body
     from .geometry import Grid
 
     todo = [m for m in ("bounds", "brute", "pyramid", "relief", "counts") if not cached(m)]

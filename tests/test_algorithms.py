@@ -1,5 +1,6 @@
 """smap, horizon and sweep against brute (and the independent reference) on the same model."""
 
+import functools
 import math
 
 import numpy as np
@@ -7,11 +8,17 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from conftest import box_terrain, data_path, fractal_terrain, reference_mask
-from hillshade_rt import horizon_angles, is_shadowed, shadow_mask
 from hillshade_rt.algorithms import brute, horizon, smap, sweep
 from hillshade_rt.algorithms.frames import frame_of
 from hillshade_rt.geometry import Grid, sun_rays
 from hillshade_rt.io import read_dem
+import hillshade_rt
+from hillshade_rt import is_shadowed
+
+# these tests check the algorithms against the flat model (analytic cases, references without
+# curvature): shadow_mask with Earth curvature off (its default is the command line's, "auto")
+shadow_mask = functools.partial(hillshade_rt.shadow_mask, curvature=False)
+horizon_angles = functools.partial(hillshade_rt.horizon_angles, curvature=False)
 
 settings.register_profile("ci", deadline=None, max_examples=60)
 settings.load_profile("ci")

@@ -88,3 +88,32 @@ def test_shade_errors_are_one_line_hillshade_errors(tmp_path, tiles):
     # nothing half-written beside the inputs
     assert sorted(os.listdir(tmp_path)) == ["tile_00.tif", "tile_01.tif", "tile_10.tif",
                                             "tile_11.tif", "whole.tif"]
+
+
+def test_cli_api_and_array_function_agree_at_default_settings(tmp_path):
+    """Issue 19: the command line, ``shade`` and ``shadow_mask`` give the same mask at their
+    default settings on a UTM DEM (Big Tujunga, 36 km across: Earth curvature is on by
+    default, and changes cells at this sun, so the test would see a default that differs)."""
+    from click.testing import CliRunner
+
+    from hillshade_rt.cli import cli
+    dem = os.path.join(os.path.dirname(__file__), "..", "examples",
+                       "bigtujunga_srtm30m_utm11n_1197x643.tif")
+    sun = ["--azimuth", "135", "--elevation", "15"]
+    r = CliRunner().invoke(cli, ["shadow", dem, str(tmp_path / "cli.tif")] + sun)
+    assert r.exit_code == 0, r.output
+    hr.shade(dem, tmp_path / "api.tif", azimuth=135, elevation=15)
+    d = hr.read_dem(dem)
+    arr = hr.shadow_mask(d, 135, 15)
+    flat = hr.shadow_mask(d, 135, 15, curvature=False)
+    cli_mask = read_band(tmp_path / "cli.tif")
+    np.testing.assert_array_equal(cli_mask, read_band(tmp_path / "api.tif"))
+    np.testing.assert_array_equal(cli_mask, arr)
+    assert (flat != arr).sum() > 0          # the default is not the flat model
+    # an array needs its spacing (it once defaulted to 1 m); with the DEM's grid and body it is
+    # the same mask
+    with pytest.raises(hr.HillshadeError, match="spacing"):
+        hr.shadow_mask(d.heights, 135, 15)
+    from hillshade_rt.earth import dem_body
+    np.testing.assert_array_equal(arr, hr.shadow_mask(d.heights, 135, 15, d.grid,
+                                                      body=dem_body(d)))

@@ -1,13 +1,19 @@
 """The brute-force reference against analytic cases and an independent implementation."""
 
+import functools
 import math
 
 import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from hillshade_rt import Grid, shadow_mask
 from conftest import box_terrain, fractal_terrain, reference_mask
+import hillshade_rt
+from hillshade_rt import Grid
+
+# these tests check the algorithms against the flat model (analytic cases, references without
+# curvature): shadow_mask with Earth curvature off (its default is the command line's, "auto")
+shadow_mask = functools.partial(hillshade_rt.shadow_mask, curvature=False)
 
 H = 10.0
 EL = 30.0  # h / tan(30 deg) = 17.32 cells at 1 m: never near an integer

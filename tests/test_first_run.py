@@ -21,10 +21,10 @@ def test_cached_reads_numba_index_files(tmp_path, monkeypatch):
 
 
 def test_cli_says_once_that_it_compiles_and_quiet_says_nothing(tmp_path, runner, monkeypatch):
-    from hillshade_rt import cli as cli_mod
+    from hillshade_rt.cli import errors as cli_errors
     r = runner.invoke(cli, ["shadow", LIDAR, str(tmp_path / "z.tif")] + SUN)
     assert "compiling" not in r.stderr        # not a terminal: logs keep their one line
-    monkeypatch.setattr(cli_mod, "_stderr_is_terminal", lambda: True)
+    monkeypatch.setattr(cli_errors, "stderr_is_terminal", lambda: True)
     seen = []
     monkeypatch.setattr(_jitcache, "cached", lambda m: seen.append(m) or m != "bounds")
     r = runner.invoke(cli, ["shadow", LIDAR, str(tmp_path / "a.tif")] + SUN)
@@ -44,7 +44,7 @@ def test_warm_step_compiles_what_a_first_run_needs(monkeypatch, capsys):
     default's (auto: bounds and brute) warm-up on a projected and a per-row grid, and is silent
     when everything is cached."""
     from hillshade_rt import warm
-    from hillshade_rt.engine import Shader
+    from hillshade_rt.shading import Shader
     calls = []
     real = Shader.warm_up
     monkeypatch.setattr(Shader, "warm_up", lambda self, *a, **k: calls.append(

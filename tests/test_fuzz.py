@@ -971,7 +971,8 @@ def test_fuzz_options(case):
 
 def test_fuzz_harness_sees_a_traceback_and_leftovers(monkeypatch):
     """The judge itself: a crash inside a run, and a part file left behind, are both caught."""
-    from hillshade_rt import cli as cli_mod
+    from hillshade_rt.errors import HillshadeError
+    from hillshade_rt.run import local as run_local
     data = raster_bytes("GTiff", 12, 12, "float32", "utm", None, 0, 0.0, 1, None)
     case = Case("shadow", ["shadow", IN + "dem.tif", OUT + "o.tif", "--azimuth", "10",
                            "--elevation", "20"], {"dem.tif": data}, ["a valid GeoTIFF"],
@@ -980,14 +981,14 @@ def test_fuzz_harness_sees_a_traceback_and_leftovers(monkeypatch):
 
     def boom(*a, **k):
         raise ZeroDivisionError("planted")
-    monkeypatch.setattr(cli_mod, "_light_in_memory", boom)
+    monkeypatch.setattr(run_local, "in_memory", boom)
     bad = run_case(case)[0]
     assert any("ZeroDivisionError" in b for b in bad), bad
 
     def leave_part(inputs, *a, **k):
         out_dir = os.path.dirname(a[3].output)
         open(os.path.join(out_dir, ".o.tif.x.part.tif"), "wb").close()
-        raise cli_mod.HillshadeError("planted")
-    monkeypatch.setattr(cli_mod, "_light_in_memory", leave_part)
+        raise HillshadeError("planted")
+    monkeypatch.setattr(run_local, "in_memory", leave_part)
     bad = run_case(case)[0]
     assert any("new files in the output folder" in b for b in bad), bad

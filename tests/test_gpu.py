@@ -286,7 +286,7 @@ def test_kernels_compile_for_a_real_gpu():
 def test_gpu_curvature_soft_and_tiles_equal_cpu():
     """Earth curvature (brute and the horizon scan march the curved ray on the device), soft
     shadows (horizon angles on the device) and a per-tile sun, through the Shader, GPU vs CPU."""
-    from hillshade_rt.engine import Shader, render
+    from hillshade_rt.shading import Shader, render
     from hillshade_rt.sun import Region, SunOver
 
     z = fractal_terrain(16, 18, 7, relief=2000.0)

@@ -332,6 +332,6 @@ def test_infinite_heights_are_nodata(tmp_path, runner):
 
 def test_tile_field_of_archive_members():
     """{tile} names a zip:// member by the member's own file name (was 't.zip!a')."""
-    from hillshade_rt.runner import tile_name
+    from hillshade_rt.run.outputs import tile_name
     assert tile_name("zip://t.zip!n46/e007.tif") == "e007"
     assert tile_name("/vsizip/t.zip/a.tif") == "a" and tile_name("dir/b.tif") == "b"

@@ -12,7 +12,7 @@ from rasterio.crs import CRS
 import hillshade_rt as hr
 from hillshade_rt.cli import cli
 from hillshade_rt.errors import HillshadeError
-from hillshade_rt import report
+from hillshade_rt.run import report
 from conftest import data_path, fractal_terrain, write_geotiff
 
 LIDAR = data_path("lidar_dem_1m_utm15n_400x400.tif")

@@ -323,7 +323,7 @@ def test_time_based_sun_uses_the_per_cell_field():
     """A time-based sun over a large DEM: the engine marches every cell with its own sun in one
     pass (no tiles), and the mask agrees with the per-tile one but where the two approximations
     of the sun differ (cells at the edge of a shadow)."""
-    from hillshade_rt.engine import Shader, render
+    from hillshade_rt.shading import Shader, render
     from hillshade_rt.sun import Site, parse_time, sun_over
     from pyproj import CRS, Transformer
     z = _terrain("spectral", 300, 400, 12, 2500.0)

@@ -11,7 +11,8 @@ from affine import Affine
 from rasterio.crs import CRS
 
 from hillshade_rt.cli import cli
-from hillshade_rt.engine import Body, Shader, render
+from hillshade_rt.shading import Shader, render
+from hillshade_rt.earth import Body
 from hillshade_rt.errors import HillshadeError
 from hillshade_rt.geometry import Grid, curvature_per_m2, grid_from_transform, sun_rays
 from hillshade_rt.sun import (Atmosphere, Region, SunOver, disk_fraction, parse_step, parse_time,

@@ -12,7 +12,8 @@ from rasterio.crs import CRS
 
 from hillshade_rt import tiling
 from hillshade_rt.cli import cli
-from hillshade_rt.engine import Shader, dem_body, render
+from hillshade_rt.shading import Shader, render
+from hillshade_rt.earth import dem_body
 from hillshade_rt.errors import HillshadeError
 from hillshade_rt.io import read_dem
 from hillshade_rt.sun import SunOver

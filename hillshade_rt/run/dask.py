@@ -25,7 +25,7 @@ import time
 
 import numpy as np
 
-from .errors import HillshadeError
+from ..errors import HillshadeError
 
 _LOCK = threading.Lock()   # one numba computation at a time per worker process
 
@@ -66,10 +66,10 @@ def shade_piece(job, piece, path: str, nodata, stride: int | None = None) -> dic
     from affine import Affine
     from rasterio.errors import NotGeoreferencedWarning
 
-    from .io import DEFLATE_LEVEL, atomic_path, gdal_checked
-    from .preview import every_nth, shade_of
+    from ..io import DEFLATE_LEVEL, atomic_path, gdal_checked
+    from ..preview import every_nth, shade_of
     from .report import product_stats
-    from .tiling import GDAL_CACHE_MB
+    from ..tiling import GDAL_CACHE_MB
     import warnings
 
     t0 = time.perf_counter()
@@ -114,9 +114,9 @@ def run_on_dask(scheduler, job, suns, plans, out, share, stride, quiet, algo_sta
     from tqdm import tqdm
 
     from .report import merge_stats
-    from .runner import sun_tags
-    from .io import copy_vrt
-    from .tiling import VrtSource, marched_per_cell, vrt_xml
+    from .outputs import sun_tags
+    from ..io import copy_vrt
+    from ..tiling import VrtSource, marched_per_cell, vrt_xml
 
     client, cluster = client_for(scheduler)
     dest = out.output or (out.tile_paths[0][0] if out.tile_paths else out.paths[0])

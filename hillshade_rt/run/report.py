@@ -9,7 +9,7 @@ from contextlib import contextmanager
 
 import numpy as np
 
-from . import __version__
+from .. import __version__
 
 
 class Timer:
@@ -33,7 +33,7 @@ class Timer:
 
 def mask_stats(mask: np.ndarray) -> dict:
     """Counts of shadow / lit / nodata cells of a uint8 mask (1 / 0 / 255)."""
-    from .algorithms.counts import code_counts
+    from ..algorithms.counts import code_counts
     counts = code_counts(mask)
     shadow, lit, nodata = int(counts[1]), int(counts[0]), int(counts[255])
     valid = shadow + lit
@@ -46,7 +46,7 @@ def product_stats(kind: str, soft: bool, arr: np.ndarray) -> dict:
     if kind == "shadow" and not soft:
         return mask_stats(arr)
     if kind == "classes":
-        from .algorithms.counts import code_counts
+        from ..algorithms.counts import code_counts
         counts = code_counts(arr)
         shadow, lit, nodata = int(counts[1] + counts[2]), int(counts[0]), int(counts[255])
         valid = shadow + lit
@@ -96,7 +96,7 @@ def build_report(*, dem, output: str, azimuth: float, elevation: float, algorith
     ``height_range`` is the (min, max) the run already computed: no second pass over the DEM.
     ``gpu`` (GPU runs): device name, kernel milliseconds (CUDA events; None on the simulator),
     transfer milliseconds, host->device and device->host bytes."""
-    from .io import input_label
+    from ..io import input_label
     rows, cols = dem.shape
     dx, dy = dem.grid.centre_spacing()
     compute = seconds.get("compute", 0.0)
@@ -184,3 +184,11 @@ def summary_line(report: dict, shown: str | None = None) -> str:
             f"compute {report['seconds']['compute']:.3f} s"
             + (f" ({mpx * max(1, len(times)):.1f} Mpix/s)" if mpx else "")
             + f", total {report['seconds']['total']:.2f} s")
+
+
+def progress(items, quiet: bool, desc: str, unit: str = "time"):
+    """A tqdm bar on stderr over ``items`` (off with ``quiet``, and when stderr is no terminal)."""
+    from tqdm import tqdm
+    items = list(items)
+    return tqdm(items, desc=desc, unit=unit, disable=True if quiet or len(items) < 2 else None,
+                leave=False)

@@ -21,16 +21,14 @@ so the result is exactly brute's.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
 from .errors import HillshadeError
-from .geometry import (REFRACTION_K, WGS84_A, WGS84_B, Grid, SunRays, curvature_per_m2,
-                       radius_in_azimuth, sun_rays)
+from .earth import Body, curvature_coefficient, curvature_report, refraction_for
+from .geometry import Grid, SunRays, sun_rays
 from .sun import SUN_RADIUS_DEG, Region, SunOver, disk_fraction
 
-CURVATURE_AUTO_M = 1000.0   # curvature "auto" turns on when rays can be longer than this
 # a tile whose window (tile + halo) holds more than this many times its own cells is marched by
 # brute over its own cells only (exact), instead of running the algorithm over the whole window
 # (bounds, auto's usual pick: by the cost model instead, algorithms.auto.tile_by_brute)
@@ -84,83 +82,38 @@ def halo_bounds(bounds: tuple[int, int, int, int], shape: tuple[int, int], grid:
     return r0, r1, c0, c1
 
 
-def curvature_coefficient(setting, body: "Body", k: float, extent_m: float,
-                          zrange: tuple[float, float], azimuth: float, elevation: float) -> float:
-    """(1 - k) / 2R for this sun, or 0 when curvature is off: ``setting`` True, False or "auto"
-    (on when a ray can run longer than 1 km before it rises above the highest cell or leaves a
-    raster ``extent_m`` across)."""
-    if setting is False:
-        return 0.0
-    if setting == "auto":
-        reach = extent_m if elevation <= 0 or elevation >= 90 else min(
-            extent_m, (zrange[1] - zrange[0]) / math.tan(math.radians(elevation)))
-        if reach <= CURVATURE_AUTO_M:
-            return 0.0
-    return curvature_per_m2(body.radius(azimuth), k)
+def warm_up(algorithm: str, grid: Grid | None = None, azimuth: float = 203.7,
+            elevation: float = 10.0, backend: str = "cpu", **options) -> None:
+    """Compile (or load from numba's cache) the kernels that a run of ``algorithm`` on ``grid``
+    with this sun will use, on a 4x4 grid with the same orientation and spacing pattern (same
+    array layouts and argument types), so that a timed run measures computing, not compiling.
+    ``backend`` "gpu": the CUDA kernels (compiled for this process's device)."""
+    z = np.zeros((4, 4), np.float32)
+    if grid is None:
+        small = Grid.uniform(4, 4, 1.0)
+    else:
+        idx = np.linspace(0, grid.rows - 1, 4).astype(int)
+        small = Grid(4, 4, grid.dx[idx], grid.dy[idx], grid.col_sign, grid.row_sign, grid.method)
+    rays = sun_rays(small, azimuth, elevation)
+    if backend == "gpu":
+        from .gpu import GpuDem
+        z[0, 0] = 1.0    # a non-flat DEM, so that no kernel is skipped
+        GpuDem(z).shadow_mask(rays, algorithm, None, None, **options)
+    else:
+        from .algorithms import ALGORITHMS
+        ALGORITHMS[algorithm](z, rays, 0.0, None, **options)
 
 
-def refraction_for(body: "Body", refraction_k: float | None) -> float:
-    """The terrestrial refraction coefficient: ``refraction_k`` if given (checked), else 0.13 on
-    the Earth and 0 elsewhere."""
-    k = (REFRACTION_K if body.earth else 0.0) if refraction_k is None else float(refraction_k)
-    curvature_per_m2(1.0, k)   # validates k
-    return k
-
-
-def curvature_report(setting, used: set, body: "Body", k: float) -> dict:
-    """The report's ``curvature``: the setting, whether any sun's rays were curved, the radius
-    the curved rays used (the body's radius of curvature in the sun's direction: one sun's, or
-    the mean of a series' with ``radius_m_range``) and refraction. ``used``: the set of True/False
-    seen and the radii (float metres) of the suns whose rays were curved (``Shader.rays``)."""
-    radii = sorted(v for v in used if type(v) is float)
-    rep = {"setting": setting, "applied": (True in used),
-           "radius_m": (radii[0] if len(radii) == 1 else sum(radii) / len(radii)) if radii
-           else None, "refraction_k": k, "body": body.source}
-    if len(radii) > 1:
-        rep["radius_m_range"] = [radii[0], radii[-1]]
-    return rep
-
-
-@dataclass
-class Body:
-    """The surface the DEM lies on, for curvature: ellipsoid axes, latitude of the DEM, whether it
-    is the Earth (terrestrial refraction applies) and where the figures came from."""
-
-    a: float = WGS84_A
-    b: float = WGS84_B
-    lat: float = 45.0
-    earth: bool = True
-    source: str = "WGS84"
-
-    def radius(self, azimuth: float) -> float:
-        return radius_in_azimuth(self.lat, azimuth, self.a, self.b)
-
-
-def dem_body(dem, lat: float | None = None) -> Body:
-    """The :class:`Body` of a DEM: its CRS's ellipsoid when that is not the Earth's (the Moon,
-    Mars), WGS84 otherwise, at the DEM's centre latitude (or ``lat``)."""
-    from .sun import EARTH_A_RANGE
-    if dem.crs is None or dem.transform is None:
-        if lat is not None:
-            return Body(lat=lat, source="WGS84 at --lat")
-        r = 6371008.8
-        return Body(r, r, 0.0, True, "no CRS: the Earth's mean radius")
-    from pyproj import CRS as PCRS, Transformer
-    pcrs = PCRS.from_user_input(dem.crs.to_wkt())
-    ell = pcrs.ellipsoid
-    rows, cols = dem.shape
-    tr = dem.transform
-    try:
-        _, la = Transformer.from_crs(pcrs, pcrs.geodetic_crs, always_xy=True).transform(
-            tr.c + tr.a * cols / 2.0, tr.f + tr.e * rows / 2.0)
-        la = float(la) if math.isfinite(la) else 45.0
-    except Exception:  # noqa: BLE001 -- a CRS pyproj cannot invert: mid-latitude
-        la = 45.0
-    if lat is not None:
-        la = lat
-    if ell is not None and not (EARTH_A_RANGE[0] <= ell.semi_major_metre <= EARTH_A_RANGE[1]):
-        return Body(ell.semi_major_metre, ell.semi_minor_metre, la, False, ell.name)
-    return Body(lat=la, source="WGS84")
+def choose_backend(backend: str, algorithm: str, options: dict) -> str:
+    """'cpu' or 'gpu' for a request: ``auto`` takes the GPU only when there is a real device and
+    the options have GPU kernels; ``gpu`` with options that have none is an error."""
+    from .algorithms import gpu_unsupported
+    from .gpu import resolve_backend
+    why = gpu_unsupported(algorithm, options)
+    if backend == "gpu" and why:
+        raise HillshadeError(f"{why}; use --backend cpu")
+    chosen = resolve_backend(backend)
+    return "cpu" if why else chosen
 
 
 class Shader:
@@ -230,7 +183,6 @@ class Shader:
         survey; the pyramid, refinements, soft horizons, the report's counts), on a grid with
         the same pattern of spacing; on the GPU through ``shadow.warm_up``."""
         from .algorithms.counts import code_counts
-        from .shadow import warm_up
         el = min(max(elevation, 1.0), 89.0)
         if self.backend != "cpu":
             for name in (("brute",) if self.algorithm == "auto" else (self.algorithm,)):
@@ -522,10 +474,10 @@ def render(shader: Shader, sun: SunOver, kind: str = "shadow", *, soft: bool = F
     # method allows (the tiles then only serve the incidence of the relief)
     whole = shader.cast_field(sun, stats) if shader.field_ok(sun, soft) else None
     if len(regions) == 1:
-        return _render_region(shader, regions[0], kind, soft, self_shadow, ambient, stats, whole)
+        return render_region(shader, regions[0], kind, soft, self_shadow, ambient, stats, whole)
     out = None
     for r in regions:   # each tile into place as it is made: no list of all tiles' arrays
-        part = _render_region(shader, r, kind, soft, self_shadow, ambient, stats,
+        part = render_region(shader, r, kind, soft, self_shadow, ambient, stats,
                               None if whole is None else whole[r.rows, r.cols])
         if out is None:
             out = np.empty(shape, part.dtype)
@@ -533,7 +485,7 @@ def render(shader: Shader, sun: SunOver, kind: str = "shadow", *, soft: bool = F
     return out
 
 
-def _render_region(shader, region, kind, soft, self_shadow, ambient, stats, cast=None):
+def render_region(shader, region, kind, soft, self_shadow, ambient, stats, cast=None):
     sub = shader.z[region.rows, region.cols]
     need_cos = kind in ("classes", "hillshade") or self_shadow
     # the voids, where a product needs them (a hard mask has them: 0.1 s of a 10000² run)

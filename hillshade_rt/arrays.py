@@ -1,0 +1,113 @@
+"""The array API: shadows and horizons of heights already in memory (numpy arrays), one
+function per operation."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .algorithms import ALGORITHMS
+from .errors import HillshadeError
+from .geometry import Grid, check_elevation, heights_and_grid, normalize_azimuth
+from .shading import choose_backend
+
+
+def _dem_parts(heights, spacing, body):
+    """(float32 heights, Grid, Body) of ``heights`` (an array, or a DEM from ``read_dem``, whose
+    grid and body are the defaults) and ``spacing``, which an array requires."""
+    if hasattr(heights, "heights") and hasattr(heights, "grid"):
+        dem = heights
+        heights = dem.heights
+        spacing = dem.grid if spacing is None else spacing
+        if body is None:
+            from .earth import dem_body
+            body = dem_body(dem)
+    if spacing is None:
+        raise HillshadeError("give the ground spacing of the heights: a Grid (e.g. "
+                             "read_dem(path).grid), d or (dx, dy) metres per cell")
+    z, grid = heights_and_grid(heights, spacing)
+    if body is None:
+        from .earth import mean_earth
+        body = mean_earth()
+    return z, grid, body
+
+
+def shadow_mask(heights, azimuth: float, elevation: float,
+                spacing: float | tuple[float, float] | Grid | None = None,
+                algorithm: str = "auto", stats: dict | None = None, backend: str = "auto", *,
+                curvature="auto", refraction_k: float | None = None, body=None,
+                **options) -> np.ndarray:
+    """Cast-shadow mask of a DEM: uint8, 1 = shadow, 0 = lit, 255 = nodata; with the command
+    line's defaults (the same mask as ``hillshade-rt shadow`` for the same DEM and sun).
+
+    heights: 2-D array, row 0 the northern edge (NaN = nodata), or a DEM from ``read_dem``
+    (then its grid and its body are the defaults). Converted to float32 once if it is not
+    float32 already; a float32 array is used in place, never copied.
+    azimuth, elevation: degrees (clockwise from north; above the horizon, 0 < E <= 90).
+    spacing: required for an array: ground metres per cell, ``d``, ``(dx, dy)`` or a
+    :class:`Grid` (per-row spacing, orientation) such as ``read_dem(...).grid``.
+    algorithm: one of ``ALGORITHMS``: ``auto`` (default: the fastest exact method), ``bounds``,
+    ``brute`` (exact reference), ``smap`` (exact),
+    ``horizon`` (exact with its default ``method="scan"``), ``sweep`` (approximate).
+    stats: optional dict that receives the algorithm's figures (e.g. smap's ``black_fraction``);
+    on the GPU also ``stats["gpu"]`` (device, kernel and transfer times, bytes moved).
+    backend: ``"cpu"``, ``"gpu"`` or ``"auto"`` (the GPU when numba-cuda finds a CUDA device and
+    the options have a GPU kernel, else the CPU). To keep a DEM on the GPU for many suns, use
+    :class:`hillshade_rt.gpu.GpuDem`.
+    curvature: True, False or "auto" (the default, as the command line: on when rays can run
+    longer than 1 km); refraction_k: terrestrial refraction (default 0.13 on the Earth); body:
+    an ``earth.Body`` (default: a DEM's from its CRS, an array's the Earth's mean sphere).
+    options: passed to the algorithm (smap: ``nextv``, ``better_nextv``; horizon: ``method``,
+    ``sample_spacing``; sweep: ``exact_steps``).
+    """
+    from .shading import Shader, render
+    from .sun import SunOver
+    z, grid, body = _dem_parts(heights, spacing, body)
+    if algorithm not in ALGORITHMS:
+        raise HillshadeError(
+            f"unknown algorithm {algorithm!r}; choose one of {', '.join(ALGORITHMS)}")
+    azimuth, elevation = normalize_azimuth(azimuth), check_elevation(elevation)
+    ran_on = choose_backend(backend, algorithm, options)
+    if not np.isfinite(z).any():
+        return np.full(z.shape, 255, dtype=np.uint8)
+    shader = Shader(z, grid, algorithm, options, ran_on, curvature, refraction_k, body)
+    out = render(shader, SunOver(None, azimuth, elevation), "shadow", stats=stats)
+    if stats is not None and ran_on == "gpu":
+        stats["gpu"] = shader.gpu_report()
+    return out
+
+
+def horizon_angles(heights, azimuth: float,
+                   spacing: float | tuple[float, float] | Grid | None = None,
+                   method: str = "scan", sample_spacing: int = 1, backend: str = "auto", *,
+                   curvature="auto", refraction_k: float | None = None,
+                   body=None) -> np.ndarray:
+    """Horizon angle (degrees, float32) of every cell toward ``azimuth``: lit by a sun at that
+    azimuth iff angle <= its elevation. NaN on voids, -90 where no terrain lies ahead.
+    ``method="scan"`` is exact on the model; ``"hull"`` is the faster approximation. As
+    ``hillshade-rt horizon``: curvature "auto" is on for the scan of a raster more than 1 km
+    across; ``heights``, ``spacing`` and ``body`` as for :func:`shadow_mask`."""
+    from .algorithms import horizon as hz
+    from .shading import Shader
+    z, grid, body = _dem_parts(heights, spacing, body)
+    azimuth = normalize_azimuth(azimuth)
+    ran_on = choose_backend(backend, "horizon", {"method": method})
+    shader = Shader(z, grid, "horizon", {}, ran_on, curvature, refraction_k, body,
+                    (0.0, 0.0))
+    if shader.curvature == "auto":   # the hull has no curvature: off unless asked for
+        shader.curvature = shader.extent_m > 1000.0 and method == "scan"
+    rays = shader.rays(grid, azimuth, 45.0)
+    if ran_on == "gpu":
+        from .gpu import GpuDem
+        return hz.horizon_angles_gpu(GpuDem(z), rays, method, sample_spacing)
+    return hz.horizon_angles(z, rays, method=method, sample_spacing=sample_spacing)
+
+
+def is_shadowed(heights, points, azimuth: float, elevation: float,
+                spacing: float | tuple[float, float] | Grid | None = None) -> np.ndarray:
+    """For 3-D points ``(row, col, height)`` in array coordinates (cell centres at whole row/col,
+    heights in the DEM's units; above, on or off the terrain), whether the ray toward the sun
+    passes strictly below the terrain (no curvature). Uses an SMap; build
+    ``algorithms.smap.SMap`` yourself to query one sun many times."""
+    from .algorithms.smap import SMap
+    z, grid, _ = _dem_parts(heights, spacing, None)
+    return SMap(z, azimuth, elevation, grid).is_shadowed(points)

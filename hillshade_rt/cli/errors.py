@@ -1,0 +1,135 @@
+"""How the command line fails: one line on stderr, never a traceback; exit status 1 for a failed
+run, 2 for a malformed command line, 128 + the signal's number when interrupted; and how it
+speaks (``say``: the run's messages for people on stderr)."""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import os
+import sys
+
+import click
+
+from ..errors import HillshadeError, UsageProblem
+
+
+def _signal_name(signum: int) -> str:
+    import signal
+    try:
+        return signal.Signals(signum).name
+    except ValueError:
+        return f"signal {signum}"
+
+
+def _complete_note() -> str:
+    """What this run has written whole, for a message about a failed or interrupted run."""
+    from ..writes import completed, is_virtual
+    # what is still there: scratch files published and removed again (a mosaic cut into its
+    # tiles, Dask's parts) are no outputs
+    names = [p for p in completed if is_virtual(p) or os.path.lexists(p)]
+    if not names:
+        return ""
+    shown = ", ".join(names) if len(names) <= 4 else f"{names[0]}, {names[1]} ... {names[-1]}"
+    return f"; {len(names)} output(s) complete and kept: {shown}"
+
+
+class OneLineErrors(click.Group):
+    """A group whose errors (usage errors included) print as a single line, never a traceback;
+    SIGINT, SIGTERM and SIGHUP stop a run like Ctrl-C (exit 130, 143, 129)."""
+
+    def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
+        import signal
+        import threading
+
+        from .. import writes
+        writes.reset()
+        previous = {}
+        if threading.current_thread() is threading.main_thread():
+            for s in writes._SIGNALS:
+                with contextlib.suppress(OSError, ValueError):
+                    previous[s] = signal.signal(s, writes.on_signal)
+        try:
+            rv = self._main(args, prog_name, complete_var, **extra)
+        finally:
+            for s, h in previous.items():
+                with contextlib.suppress(OSError, ValueError, TypeError):
+                    signal.signal(s, h)
+        if not standalone_mode:
+            return rv
+        sys.exit(rv if isinstance(rv, int) else 0)
+
+    def _main(self, args, prog_name, complete_var, **extra):
+        try:
+            return super().main(args=args, prog_name=prog_name, complete_var=complete_var,
+                                standalone_mode=False, **extra)
+        except SystemExit:
+            raise
+        except BaseException as exc:   # noqa: BLE001 -- every way out is one line
+            from ..writes import caught
+            if caught or isinstance(exc, (KeyboardInterrupt, click.exceptions.Abort)):
+                signum = caught[0] if caught else 2
+                done = _complete_note()
+                click.echo(f"hillshade-rt: interrupted ({_signal_name(signum)}); "
+                           + (done[2:] + ", the unfinished output removed" if done
+                              else "no output written"), err=True)
+                sys.exit(128 + signum)
+            if isinstance(exc, click.exceptions.NoArgsIsHelpError):  # click >= 8.2: bare group
+                click.echo(exc.ctx.get_help(), err=True)
+                sys.exit(2)
+            if isinstance(exc, click.ClickException):
+                msg = exc.format_message()
+                if isinstance(exc, click.UsageError) and exc.ctx is not None:
+                    msg += f" (see '{exc.ctx.command_path} --help')"
+                elif exc.exit_code == 1:
+                    msg += _complete_note()
+                click.echo(f"hillshade-rt: error: {msg}", err=True)
+                sys.exit(exc.exit_code)
+            if isinstance(exc, BrokenPipeError):
+                sys.exit(1)
+            if isinstance(exc, OSError):
+                where = f"{exc.filename}: " if exc.filename else ""
+                click.echo(f"hillshade-rt: error: {where}{exc.strerror or exc}"
+                           f"{_complete_note()}", err=True)
+                sys.exit(1)
+            if os.environ.get("HILLSHADE_RT_DEBUG"):
+                raise
+            first = str(exc).splitlines()[0] if str(exc) else ""
+            click.echo(f"hillshade-rt: error: internal error ({type(exc).__name__}"
+                       f"{': ' + first if first else ''}); please report it, "
+                       f"HILLSHADE_RT_DEBUG=1 shows the traceback{_complete_note()}", err=True)
+            sys.exit(1)
+
+
+def errors_to_click(f):
+    @functools.wraps(f)
+    def wrapper(*args, **kwargs):
+        try:
+            return f(*args, **kwargs)
+        except UsageProblem as exc:
+            raise click.UsageError(str(exc)) from None
+        except HillshadeError as exc:
+            raise click.ClickException(str(exc)) from None
+        except MemoryError:
+            raise click.ClickException("out of memory (the DEM is too large for this machine)") from None
+    return wrapper
+
+
+def stderr_is_terminal() -> bool:
+    try:
+        return sys.stderr.isatty()
+    except (AttributeError, ValueError, OSError):
+        return False
+
+
+def say(kind: str, message: str) -> None:
+    """The run's messages on stderr (``run.RunOptions.say``): the summary as it is, notes as
+    ``note:`` lines, and numba's "compiling" line on a terminal only, like the progress bar
+    (logs and pipelines keep their one summary line)."""
+    if kind == "compile":
+        if stderr_is_terminal():
+            click.echo(f"hillshade-rt: {message}", err=True)
+    elif kind == "note":
+        click.echo(f"hillshade-rt: note: {message}", err=True)
+    else:
+        click.echo(message, err=True)

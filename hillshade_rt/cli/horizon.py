@@ -1,0 +1,47 @@
+"""``hillshade-rt horizon``: options -> ``run.HorizonConfig`` -> ``run.horizon``."""
+
+from __future__ import annotations
+
+import click
+
+from .errors import errors_to_click, say
+from .options import (backend_option, dem_options, finite, format_option, to_read_options,
+                      to_run_options)
+
+
+@click.command()
+@click.argument("dem", type=click.Path(dir_okay=False))
+@click.argument("output", type=click.Path(dir_okay=False))
+@click.option("--azimuth", type=float, required=True, callback=finite,
+              help="Azimuth along which to look, degrees clockwise from north.")
+@click.option("--method", type=click.Choice(["scan", "hull"]), default="scan", show_default=True,
+              help="scan: exact per-cell march; hull: convex-hull approximation, much faster.")
+@click.option("--sample-spacing", type=click.IntRange(min=1), default=1, show_default=True,
+              help="scan: use every N-th sample only (the paper's sp; faster, approximate).")
+@click.option("--earth-curvature/--no-earth-curvature", "curvature", default=None,
+              help="Let the terrain fall away by d^2(1-k)/2R along each ray (default: on when "
+                   "the raster is more than 1 km across).")
+@click.option("--refraction-coefficient", "refraction_k", type=float, default=None,
+              help="Terrestrial refraction k (default 0.13 on the Earth, 0 on other bodies).")
+@click.option("--preview", type=click.Path(dir_okay=False), default=None,
+              help="Also write a quick-look PNG (relief, high horizons tinted).")
+@backend_option
+@click.option("--threads", type=click.IntRange(min=1), default=None,
+              help="CPU threads (default: all cores).")
+@click.option("--overwrite", is_flag=True, help="Replace OUTPUT if it exists.")
+@click.option("-q", "--quiet", is_flag=True, help="No summary line on stderr.")
+@format_option
+@dem_options
+@errors_to_click
+def horizon(dem, output, azimuth, method, sample_spacing, curvature, refraction_k, preview,
+            backend, threads, overwrite, quiet, fmt, **read_opts):
+    """Write the horizon angle toward AZIMUTH of every cell of DEM to OUTPUT.
+
+    Float32 degrees above the horizontal (negative: the cell looks down on everything ahead;
+    -90: no terrain ahead inside the raster); nodata -9999. A cell is lit by a sun at this
+    azimuth iff its angle <= the sun's elevation."""
+    from ..run import HorizonConfig, horizon as run_horizon
+    kw = dict(preview=preview, backend=backend, threads=threads, overwrite=overwrite,
+              quiet=quiet, fmt=fmt, **read_opts)
+    run_horizon(HorizonConfig(dem, output, azimuth, method, sample_spacing, curvature,
+                              refraction_k, to_read_options(kw), to_run_options(kw, say)))

@@ -1,0 +1,257 @@
+"""Every option of the command line, declared once (as rasterio's ``rio/options.py``): the
+commands stack these groups, and ``to_read_options`` / ``to_run_options`` turn the parsed values
+into the library's configs (``run.config``)."""
+
+from __future__ import annotations
+
+import math
+
+import click
+
+from ..errors import HillshadeError
+
+
+def _stack(f, opts):
+    """Apply click options in the order they are listed (the first shows first in --help)."""
+    for opt in reversed(opts):
+        f = opt(f)
+    return f
+
+
+def _checked(parse):
+    """A click callback that checks an option's text with ``parse`` (a parser of ``io`` raising
+    HillshadeError) while the command line is parsed: a bad value is a usage error (exit status
+    2). The text itself is passed on (the command parses it again where it reads the DEM)."""
+    def callback(ctx, param, value):
+        if value is not None:
+            try:
+                parse(value)
+            except HillshadeError as exc:
+                raise click.UsageError(str(exc), ctx=ctx) from None
+        return value
+    return callback
+
+
+def _check_pixel_size(ctx, param, value):
+    from ..io import parse_pixel_size
+    return _checked(parse_pixel_size)(ctx, param, value)
+
+
+def _check_raw_shape(ctx, param, value):
+    from ..io import parse_raw_shape
+    return _checked(parse_raw_shape)(ctx, param, value)
+
+
+def finite(ctx, param, value):
+    """A click callback: a float option must be a finite number (click's float takes nan, inf)."""
+    if value is not None and not math.isfinite(value):
+        raise click.BadParameter(f"must be a finite number, got {value}", ctx=ctx, param=param)
+    return value
+
+
+def _check_z_factor(ctx, param, value):
+    from ..io import check_z_factor
+    return _checked(check_z_factor)(ctx, param, value)
+
+
+def dem_options(f):
+    """Options that say how to read a DEM (shared by every command that reads one)."""
+    return _stack(f, [
+        click.option("-b", "--band", type=click.IntRange(min=1), default=1, show_default=True,
+                     help="Band of a multi-band raster."),
+        click.option("--nodata", type=float, default=None,
+                     help="Nodata value (overrides the file's). NaN is always nodata."),
+        click.option("-z", "--z-factor", type=float, default=1.0, show_default=True,
+                     callback=_check_z_factor,
+                     help="Multiply heights by this (like gdaldem -z), e.g. 0.3048 for feet."),
+        click.option("--pixel-size", metavar="DX[,DY]", default=None,
+                     callback=_check_pixel_size, help="Ground spacing in metres; overrides the geotransform. "
+                          "Required for input without georeferencing."),
+        click.option("--raw-shape", metavar="ROWSxCOLS", default=None, callback=_check_raw_shape,
+                     help="Read a raw binary grid of this shape."),
+        click.option("--raw-dtype", type=click.Choice(
+            ["int16", "uint16", "int32", "float32", "float64"]), default=None,
+            help="Value type of a raw grid (.hgt: int16)."),
+        click.option("--raw-byteorder", type=click.Choice(["little", "big"]), default=None,
+                     help="Byte order of a raw grid (default little; .hgt: big)."),
+    ])
+
+
+def format_option(f):
+    return click.option("-f", "--format", "--of", "fmt", metavar="DRIVER", default=None,
+                     help="Output format, a GDAL driver name (GTiff, COG, PNG, JPEG, AAIGrid, "
+                          "...); default: from the output's extension (.png PNG, .jpg JPEG, "
+                          ".asc AAIGrid, ...), else GeoTIFF.")(f)
+
+
+def backend_option(f):
+    return click.option(
+        "--backend", type=click.Choice(["auto", "cpu", "gpu"]), default="auto", show_default=True,
+        help="cpu: numba on all cores; gpu: CUDA through numba-cuda (pip install "
+             "'hillshade-rt[gpu]'); auto: the GPU when numba finds one, else the CPU.")(f)
+
+
+def place_options(f):
+    """How the sun is computed from a time: zone, place, atmosphere, tolerance."""
+    return _stack(f, [
+        click.option("--tz", default=None, metavar="ZONE",
+                     help="IANA zone, e.g. Europe/Zurich: times written without an offset are "
+                          "local times there (daylight saving included) and outputs are labelled "
+                          "in it; sun-hours: days run midnight to midnight there (default: local "
+                          "mean solar time)."),
+        click.option("--lat", type=float, default=None,
+                     help="Latitude of the sun's observer, degrees (default: the DEM's centre; "
+                          "required for input without a CRS)."),
+        click.option("--lon", type=float, default=None, help="Longitude, degrees east (with --lat)."),
+        click.option("--pressure", type=float, default=None,
+                     help="Air pressure for refraction, hPa (default: standard atmosphere at "
+                          "the DEM's centre height)."),
+        click.option("--temperature", type=float, default=None,
+                     help="Air temperature for refraction, degrees C (default 12)."),
+        click.option("--no-refraction", is_flag=True,
+                     help="True (geometric) sun elevation instead of the apparent one."),
+        click.option("--sun-tolerance", type=float, default=0.05, show_default=True,
+                     help="Degrees the sun's direction may vary across the raster before it is "
+                          "computed per tile."),
+    ])
+
+
+def sun_options(f):
+    """Where the sun is: given, or from times at the DEM's place (shared by the lighting commands)."""
+    return _stack(place_options(f), [
+        click.option("--azimuth", type=float, default=None,
+                     help="Sun azimuth, degrees clockwise from the raster's north (any value wraps)."),
+        click.option("--elevation", "--altitude", "elevation", type=float, default=None,
+                     help="Sun elevation above the horizon, degrees, > 0 and <= 90."),
+        click.option("--time", "time", multiple=True, metavar="ISO8601",
+                     help="Sun from this instant (e.g. 2026-06-21T14:30:00+02:00) at the DEM's "
+                          "centre; repeat for a series (one band per time)."),
+        click.option("--start", default=None, metavar="ISO8601", help="Series: first time."),
+        click.option("--end", default=None, metavar="ISO8601",
+                     help="Series: last time (included when a step lands on it)."),
+        click.option("--step", default=None, metavar="DURATION",
+                     help="Series: interval, e.g. 30min, 1h, 1h30min, PT10M."),
+    ])
+
+
+def physics_options(f):
+    return _stack(f, [
+        click.option("--earth-curvature/--no-earth-curvature", "curvature", default=None,
+                     help="Let the terrain fall away by d^2(1-k)/2R along each ray (default: on "
+                          "when rays can be longer than 1 km)."),
+        click.option("--refraction-coefficient", "refraction_k", type=float, default=None,
+                     help="Terrestrial refraction k for --earth-curvature (default 0.13 on the "
+                          "Earth, 0 on other bodies)."),
+        click.option("--soft", is_flag=True,
+                     help="The sun as a disk of 0.533 deg: the visible fraction of the disk "
+                          "(0..1, from the exact horizon angle) instead of hard shadows."),
+    ])
+
+
+def algorithm_option(f):
+    return click.option(
+        "--algorithm", type=click.Choice(["auto", "bounds", "brute", "smap", "horizon", "sweep"]),
+        default="auto", show_default=True,
+        help="auto: the fastest exact method for this DEM, sun and backend (bounds or brute; "
+             "the report says which ran and why); bounds: exact, guaranteed horizon bounds + "
+             "pyramid march; brute: exact reference march (over a max-height pyramid unless "
+             "--no-pyramid); smap, horizon: exact (the seeds' methods); sweep: approximate "
+             "(see docs/algorithms.md).")(f)
+
+
+def run_options(f):
+    return _stack(f, [
+        click.option("-o", "--output", default=None, type=click.Path(dir_okay=False),
+                     help="The output (then every path given is a DEM)."),
+        click.option("--output-pattern", default=None, metavar="PATTERN",
+                     help="One file per time instead of one multi-band OUTPUT, e.g. "
+                          "'out_{time:%Y%m%dT%H%M}.tif' (fields: time, index, azimuth, elevation, "
+                          "tile: the input's file name; with several input tiles, one file per "
+                          "tile)."),
+        click.option("--preview", type=click.Path(dir_okay=False), default=None,
+                     help="Also write a quick-look PNG (shaded relief, shadows tinted)."),
+        backend_option,
+        click.option("--threads", type=click.IntRange(min=1), default=None,
+                     help="CPU threads (default: all cores)."),
+        click.option("--report", "report_path", type=click.Path(dir_okay=False), default=None,
+                     help="Write a JSON timing report here."),
+        click.option("--overwrite", is_flag=True,
+                     help="Replace outputs (and the report, the preview) if they exist."),
+        click.option("-q", "--quiet", is_flag=True, help="No progress bar or summary on stderr."),
+        click.option("--max-memory", metavar="SIZE", default=None,
+                     help="Memory the run may use, e.g. 2GB or 512MiB; a DEM that needs more is "
+                          "shaded in windows read and written through GDAL (default: half of "
+                          "this machine's memory)."),
+        click.option("--window-size", metavar="ROWS[xCOLS]", default=None,
+                     help="Shade in windows of this many output cells (each read with its halo "
+                          "toward the sun), whatever the DEM's size."),
+        click.option("--cog", is_flag=True,
+                     help="Write Cloud-Optimized GeoTIFF (512 px tiles, deflate, overviews)."),
+        format_option,
+        click.option("--scheduler", metavar="ADDRESS", default=None,
+                     help="Run the windows as Dask tasks: a dask.distributed scheduler "
+                          "(tcp://host:8786) or 'local[:N]' (N worker processes here). Needs "
+                          "hillshade-rt[dask] and DEM paths the workers can read."),
+    ])
+
+
+# the algorithms' own options (each belongs to one algorithm: run.config.OPTION_OWNERS)
+def algorithm_flags(f):
+    return _stack(f, [
+        click.option("--nextv", type=click.Choice(["scan", "binary", "quad"]), default=None,
+                     help="smap: how NextV is built (same result; default scan)."),
+        click.option("--better-nextv", is_flag=True, default=None,
+                     help="smap: skip silhouettes hidden by nearer ones (paper's section 9)."),
+        click.option("--horizon-method", type=click.Choice(["scan", "hull"]), default=None,
+                     help="horizon: exact per-cell scan (default) or the faster convex-hull "
+                          "approximation."),
+        click.option("--sample-spacing", type=click.IntRange(min=1), default=None,
+                     help="horizon scan: use every N-th sample only (faster, approximate; "
+                          "default 1)."),
+        click.option("--exact-steps", type=click.IntRange(min=1), default=None,
+                     help="sweep: samples marched exactly before stored values are reused "
+                          "(default 8)."),
+        click.option("--no-pyramid", "no_pyramid", is_flag=True, default=None,
+                     help="brute: the plain march, every sample taken (same mask; the "
+                          "benchmarks' reference)."),
+    ])
+
+
+def pop_algorithm_options(kw: dict) -> dict:
+    """The algorithm options of ``algorithm_flags``, popped from ``kw``, under the keywords the
+    algorithms take."""
+    no_pyramid = kw.pop("no_pyramid")
+    return dict(nextv=kw.pop("nextv"), better_nextv=kw.pop("better_nextv"),
+                method=kw.pop("horizon_method"), sample_spacing=kw.pop("sample_spacing"),
+                exact_steps=kw.pop("exact_steps"), pyramid=False if no_pyramid else None)
+
+
+READ_KEYS = ("band", "nodata", "z_factor", "pixel_size", "raw_shape", "raw_dtype",
+             "raw_byteorder")
+SUN_KEYS = ("azimuth", "elevation", "time", "start", "end", "step", "tz", "lat", "lon",
+            "pressure", "temperature", "no_refraction", "sun_tolerance")
+PLACE_KEYS = ("tz", "lat", "lon", "pressure", "temperature", "no_refraction", "sun_tolerance")
+
+
+def to_read_options(kw: dict):
+    """The DEM options of ``dem_options``, popped from ``kw``, as ``run.ReadOptions``."""
+    from ..run.config import ReadOptions
+    return ReadOptions(**{k: kw.pop(k) for k in READ_KEYS})
+
+
+def to_run_options(kw: dict, say):
+    """The options every run takes (backend, threads, report, overwrite, quiet, format,
+    preview), popped from ``kw`` where given, as ``run.RunOptions``."""
+    from ..run.config import RunOptions
+    keys = ("backend", "threads", "report_path", "overwrite", "quiet", "fmt", "preview")
+    return RunOptions(say=say, **{k: kw.pop(k) for k in keys if k in kw})
+
+
+def given(name: str) -> bool:
+    """Whether the option ``name`` was given on the command line (not its default)."""
+    from click.core import ParameterSource
+    ctx = click.get_current_context(silent=True)
+    if ctx is None or name not in ctx.params:
+        return True
+    return ctx.get_parameter_source(name) not in (ParameterSource.DEFAULT,
+                                                  ParameterSource.DEFAULT_MAP)

@@ -1,0 +1,83 @@
+"""``hillshade-rt shadow`` and ``hillshade-rt hillshade``: options -> ``run.ShadeConfig`` ->
+``run.shade``."""
+
+from __future__ import annotations
+
+import click
+
+from .errors import errors_to_click, say
+from .options import (SUN_KEYS, algorithm_flags, algorithm_option, dem_options, finite, given,
+                      physics_options, pop_algorithm_options, run_options, sun_options,
+                      to_read_options, to_run_options)
+
+
+def _config(files, kind, algorithm, options, kw, **more):
+    """The ShadeConfig of a lighting command's parsed options ``kw``."""
+    from ..run.config import ShadeConfig
+    sun = {k: kw.pop(k) for k in SUN_KEYS}
+    read = to_read_options(kw)
+    run = to_run_options(kw, say)
+    return ShadeConfig(list(files), kind, sun, algorithm=algorithm, options=options,
+                       algorithm_explicit=given("algorithm"), read=read, run=run,
+                       output=kw.pop("output"), output_pattern=kw.pop("output_pattern"),
+                       max_memory=kw.pop("max_memory"), window_size=kw.pop("window_size"),
+                       cog=kw.pop("cog"), scheduler=kw.pop("scheduler"), **more)
+
+
+@click.command()
+@click.argument("files", metavar="DEM... [OUTPUT]", nargs=-1, required=True,
+                type=click.Path(dir_okay=False))
+@sun_options
+@algorithm_option
+@algorithm_flags
+@physics_options
+@click.option("--self-shadow", is_flag=True,
+              help="Also shadow cells whose surface faces away from the sun (Horn normals).")
+@click.option("--classes", is_flag=True,
+              help="Write classes: 0 lit, 1 self-shadow, 2 cast shadow, 255 nodata.")
+@run_options
+@dem_options
+@errors_to_click
+def shadow(files, algorithm, curvature, refraction_k, soft, self_shadow, classes, **kw):
+    """Write the cast-shadow mask of DEM to OUTPUT (GeoTIFF: 1 shadow, 0 lit, 255 nodata).
+
+    Several DEMs (tiles on one grid) are shaded as one mosaic, so that a mountain in one tile
+    shadows the next; OUTPUT is the last path, or give it with -o. The sun:
+    --azimuth/--elevation, or --time (repeatable) or --start/--end/--step at the DEM's
+    place (one band per time). --soft writes the visible fraction of the sun's disk (float32,
+    1 = fully lit, -9999 nodata); --classes writes 0 lit / 1 self-shadow / 2 cast / 255."""
+    from ..run import shade
+    from ..run.config import algorithm_for, algorithm_options
+    flags = pop_algorithm_options(kw)
+    algorithm = algorithm_for(algorithm, **flags)
+    options = algorithm_options(algorithm, **flags)
+    shade(_config(files, "classes" if classes else "shadow", algorithm, options, kw,
+                  curvature=curvature, refraction_k=refraction_k, soft=soft,
+                  self_shadow=self_shadow or classes))
+
+
+@click.command()
+@click.argument("files", metavar="DEM... [OUTPUT]", nargs=-1, required=True,
+                type=click.Path(dir_okay=False))
+@sun_options
+@click.option("--ambient", type=click.FloatRange(0.0, 1.0), default=0.2, show_default=True,
+              callback=finite,
+              help="Light in shadow and on faces turned away, 0..1.")
+@click.option("-s", "--scale", type=float, default=None,
+              help="Ratio of vertical units to horizontal (gdaldem -s), e.g. 111120 for a DEM "
+                   "in degrees with heights in metres; default: ground metres from the CRS.")
+@algorithm_option
+@physics_options
+@run_options
+@dem_options
+@errors_to_click
+def hillshade(files, ambient, scale, algorithm, curvature, refraction_k, soft, **kw):
+    """Write 8-bit shaded relief with cast shadows of DEM to OUTPUT.
+
+    Illumination = ambient + (1 - ambient) * max(0, L.N) in lit cells and ambient in shadow
+    (normals by Horn's method, like gdaldem); written as 1..255, 0 nodata. Sun as for `shadow`
+    (default --azimuth 315 --elevation 45, like gdaldem)."""
+    from ..run import shade
+    shade(_config(files, "hillshade", algorithm, {}, kw, default_sun=(315.0, 45.0),
+                  curvature=curvature, refraction_k=refraction_k, soft=soft, self_shadow=True,
+                  ambient=ambient, scale=scale))

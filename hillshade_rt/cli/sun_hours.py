@@ -1,0 +1,51 @@
+"""``hillshade-rt sun-hours``: options -> ``run.SunHoursConfig`` -> ``run.sun_hours``."""
+
+from __future__ import annotations
+
+import click
+
+from .errors import errors_to_click, say
+from .options import (PLACE_KEYS, algorithm_option, backend_option, dem_options, format_option,
+                      physics_options, place_options, to_read_options, to_run_options)
+
+
+@click.command("sun-hours")
+@click.argument("dem", type=click.Path(dir_okay=False))
+@click.argument("output", type=click.Path(dir_okay=False))
+@click.option("--date", "date_", required=True, metavar="YYYY-MM-DD", help="The day (or first day).")
+@click.option("--end-date", default=None, metavar="YYYY-MM-DD",
+              help="Last day of a range (included); the hours are the total over the range.")
+@click.option("--step", default="10min", show_default=True, metavar="DURATION",
+              help="Sampling interval; each sample stands for the interval around it.")
+@place_options
+@algorithm_option
+@physics_options
+@click.option("--self-shadow/--no-self-shadow", default=True, show_default=True,
+              help="Count no direct sun on surfaces facing away from the sun.")
+@click.option("--preview", type=click.Path(dir_okay=False), default=None,
+              help="Also write a quick-look PNG (relief tinted by sun hours).")
+@backend_option
+@click.option("--threads", type=click.IntRange(min=1), default=None,
+              help="CPU threads (default: all cores).")
+@click.option("--report", "report_path", type=click.Path(dir_okay=False), default=None,
+              help="Write a JSON report here.")
+@click.option("--overwrite", is_flag=True, help="Replace outputs if they exist.")
+@click.option("-q", "--quiet", is_flag=True, help="No progress bar or summary on stderr.")
+@format_option
+@dem_options
+@errors_to_click
+def sun_hours(dem, output, date_, end_date, step, tz, lat, lon, pressure, temperature,
+              no_refraction, sun_tolerance, algorithm, curvature, refraction_k, soft, self_shadow,
+              preview, backend, threads, report_path, overwrite, quiet, fmt, **read_opts):
+    """Write the hours of direct sun per cell of DEM over a day (or a range of days) to OUTPUT
+    (float32 hours, -9999 nodata), like WhiteboxTools' TimeInDaylight or GRASS r.sun's insolation
+    time: the sun every --step, each lit sample counting for its interval."""
+    from ..run import SunHoursConfig, sun_hours as run_sun_hours
+    kw = dict(tz=tz, lat=lat, lon=lon, pressure=pressure, temperature=temperature,
+              no_refraction=no_refraction, sun_tolerance=sun_tolerance, preview=preview,
+              backend=backend, threads=threads, report_path=report_path, overwrite=overwrite,
+              quiet=quiet, fmt=fmt, **read_opts)
+    place = {k: kw.pop(k) for k in PLACE_KEYS}
+    run_sun_hours(SunHoursConfig(dem, output, date_, end_date, step, place, algorithm, curvature,
+                                 refraction_k, soft, self_shadow, to_read_options(kw),
+                                 to_run_options(kw, say)))

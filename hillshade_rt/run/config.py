@@ -1,0 +1,247 @@
+"""What a run is asked to do, as plain data: the DEM's read options, the sun, the algorithm and
+its options, the product and where it goes. The command line and ``api.shade`` build these; the
+checks of the options' combinations live here (one place for both), raising
+:class:`~hillshade_rt.errors.UsageProblem` (exit status 2 on the command line) for a bad
+combination and :class:`~hillshade_rt.errors.HillshadeError` for a bad value.
+
+The messages name the command line's options (``--window-size``): the API takes the same names
+as keywords, so a Python caller reads them as its own arguments.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from dataclasses import dataclass, field
+from typing import Callable
+
+from ..errors import HillshadeError, UsageProblem
+
+# the sun options of the lighting commands (``sun.SunRequest.from_options``' keywords)
+SUN_KEYS = ("azimuth", "elevation", "time", "start", "end", "step", "tz", "lat", "lon",
+            "pressure", "temperature", "no_refraction", "sun_tolerance")
+
+# the smallest --window-size side: smaller windows make the run slow for nothing (each window has
+# its halo and its own read; 1x1 windows of a 465x457 DEM are 212 k windows, minutes of work)
+MIN_WINDOW_SIDE = 64
+
+PRODUCTS = ("shadow", "classes", "hillshade")
+
+
+@dataclass
+class ReadOptions:
+    """How to read a DEM (the command line's ``dem_options``): band, nodata, z-factor, the
+    spacing of an ungeoreferenced grid and the layout of a raw one (texts as given; parsed
+    where the DEM is read)."""
+
+    band: int = 1
+    nodata: float | None = None
+    z_factor: float = 1.0
+    pixel_size: object = None
+    raw_shape: object = None
+    raw_dtype: str | None = None
+    raw_byteorder: str | None = None
+
+    def kwargs(self) -> dict:
+        """The keywords of ``io.read_dem`` and ``tiling.open_source``."""
+        from ..io import parse_pixel_size, parse_raw_shape
+        return dict(band=self.band, nodata=self.nodata, z_factor=self.z_factor,
+                    pixel_size=parse_pixel_size(self.pixel_size),
+                    raw_shape=parse_raw_shape(self.raw_shape), raw_dtype=self.raw_dtype,
+                    raw_byteorder=self.raw_byteorder)
+
+    def read(self, path):
+        """The whole DEM at ``path`` (``io.read_dem``)."""
+        from ..io import read_dem
+        return read_dem(path, **self.kwargs())
+
+    def source(self, paths):
+        """A DEM (or a mosaic of tiles) to read in windows (``tiling.open_source``). A DEM from
+        standard input is read whole only: with windows or a mosaic, a usage error."""
+        from ..tiling import open_source
+        return open_source(paths, **self.kwargs())
+
+
+def say_nothing(kind: str, message: str) -> None:
+    """The default ``say`` of a run: silent."""
+
+
+@dataclass
+class RunOptions:
+    """How a run goes, whatever it makes: backend, threads, report, overwrite, messages.
+    ``say(kind, message)`` receives the run's messages for people: kind "compile" (numba is
+    about to compile kernels), "summary" (the one-line summary) and "note"."""
+
+    backend: str = "auto"
+    threads: int | None = None
+    report_path: str | None = None
+    overwrite: bool = False
+    quiet: bool = False
+    fmt: str | None = None
+    preview: str | None = None
+    say: Callable[[str, str], None] = say_nothing
+
+
+@dataclass
+class ShadeConfig:
+    """A ``shadow`` / ``hillshade`` run: ``files`` (DEMs, and OUTPUT last when neither
+    ``output`` nor ``output_pattern`` is given), the product ``kind`` ("shadow", "classes",
+    "hillshade"), the sun options (``sun``: ``SUN_KEYS``; ``default_sun`` when none is given),
+    the algorithm and its options, physics, windows and Dask."""
+
+    files: list
+    kind: str = "shadow"
+    sun: dict = field(default_factory=dict)
+    default_sun: tuple | None = None
+    algorithm: str = "auto"
+    options: dict = field(default_factory=dict)
+    algorithm_explicit: bool = True     # named by the user (not the default)
+    curvature: object = None            # None: "auto"
+    refraction_k: float | None = None
+    soft: bool = False
+    self_shadow: bool = False
+    ambient: float = 0.2
+    scale: float | None = None
+    read: ReadOptions = field(default_factory=ReadOptions)
+    run: RunOptions = field(default_factory=RunOptions)
+    output: str | None = None
+    output_pattern: str | None = None
+    max_memory: object = None
+    window_size: object = None
+    cog: bool = False
+    scheduler: object = None
+
+    def check(self) -> None:
+        """The combinations no run can take (before the sun is looked at, as before)."""
+        import math
+        if self.kind not in PRODUCTS:
+            raise HillshadeError(f"product must be one of {', '.join(PRODUCTS)}, got {self.kind!r}")
+        if self.kind == "classes" and self.soft:
+            raise UsageProblem("--classes and --soft do not go together (classes are hard)")
+        if self.scale is not None:
+            if not (math.isfinite(self.scale) and self.scale > 0):
+                raise UsageProblem(f"--scale must be a positive number, got {self.scale}")
+            if self.read.pixel_size is not None:
+                raise UsageProblem("--scale and --pixel-size do not go together")
+
+
+@dataclass
+class SunHoursConfig:
+    """A ``sun-hours`` run: the hours of direct sun per cell over a day or a range of days."""
+
+    dem: str
+    output: str
+    date: str
+    end_date: str | None = None
+    step: str = "10min"
+    place: dict = field(default_factory=dict)     # tz, lat, lon, pressure, temperature,
+    algorithm: str = "auto"                       # no_refraction, sun_tolerance
+    curvature: object = None
+    refraction_k: float | None = None
+    soft: bool = False
+    self_shadow: bool = True
+    read: ReadOptions = field(default_factory=ReadOptions)
+    run: RunOptions = field(default_factory=RunOptions)
+
+
+@dataclass
+class HorizonConfig:
+    """A ``horizon`` run: the horizon angle toward one azimuth of every cell."""
+
+    dem: str
+    output: str
+    azimuth: float
+    method: str = "scan"
+    sample_spacing: int = 1
+    curvature: object = None
+    refraction_k: float | None = None
+    read: ReadOptions = field(default_factory=ReadOptions)
+    run: RunOptions = field(default_factory=RunOptions)
+
+
+def inputs_and_output(files, output, pattern):
+    """rio-style paths: ``DEM... OUTPUT``, or every path a DEM with -o/--output or
+    --output-pattern."""
+    from ..io import is_gdal_name    # a DEM the local disk cannot tell about (/vsizip/, URLs)
+    files = list(files)
+    if output is not None or pattern is not None:
+        if output is not None and pattern is not None:
+            raise UsageProblem("give -o/--output or --output-pattern, not both")
+        given = "--output-pattern" if pattern is not None else "-o/--output"
+        last = files[-1]
+        if len(files) > 1 and not (os.path.exists(last) or is_gdal_name(last)):
+            # `shadow dem.tif out.tif --output-pattern 'x_{index}.tif'`: out.tif is no DEM
+            raise UsageProblem(f"{last} does not exist: give OUTPUT or {given}, not both "
+                               f"(with {given} every path is a DEM)")
+        return files, output
+    if len(files) < 2:
+        raise UsageProblem("give OUTPUT or --output-pattern (one of them)")
+    return files[:-1], files[-1]
+
+
+def parse_window_size(text):
+    """--window-size ROWS[xCOLS] as (rows, cols) (also an int or a pair); a malformed or too
+    small size is a usage error. (``tiling.plan`` itself takes any window shape.)"""
+    if text is None:
+        return None
+    if isinstance(text, int):
+        text = f"{text}x{text}"
+    elif isinstance(text, (tuple, list)):
+        text = "x".join(str(int(v)) for v in text)
+    m = re.fullmatch(r"\s*(\d+)\s*(?:[xX,]\s*(\d+))?\s*", str(text))
+    if not m:
+        raise UsageProblem(f"--window-size must be ROWS or ROWSxCOLS (e.g. 2048x2048), got "
+                           f"{text!r}")
+    rows = int(m.group(1))
+    cols = int(m.group(2)) if m.group(2) else rows
+    if min(rows, cols) < MIN_WINDOW_SIDE:
+        raise UsageProblem(f"--window-size {str(text).strip()}: "
+                           f"windows must be at least {MIN_WINDOW_SIDE} cells on each side "
+                           f"(e.g. {MIN_WINDOW_SIDE}x{MIN_WINDOW_SIDE}; 1024x1024 or more is "
+                           "faster)")
+    return rows, cols
+
+
+# which algorithm each algorithm option belongs to, and its command-line flag
+OPTION_OWNERS = {"nextv": "smap", "better_nextv": "smap", "method": "horizon",
+                 "sample_spacing": "horizon", "exact_steps": "sweep", "pyramid": "brute"}
+OPTION_FLAGS = {"nextv": "--nextv", "better_nextv": "--better-nextv", "method": "--horizon-method",
+                "sample_spacing": "--sample-spacing", "exact_steps": "--exact-steps",
+                "pyramid": "--no-pyramid"}
+
+
+def algorithm_for(algorithm: str, **given) -> str:
+    """``algorithm``, or for ``auto`` given options of one exact algorithm that has no
+    approximate mode (smap's ``--nextv``, brute's ``--no-pyramid``), that algorithm: auto has no
+    options of its own, and while SMap was the default ``--nextv quad`` alone ran it. Options of
+    the approximate methods (sweep, the horizon's hull or sample spacing) still need their
+    algorithm named: an approximate mask is never chosen for the user."""
+    owners = {OPTION_OWNERS[k] for k, v in given.items() if v is not None}
+    if algorithm == "auto" and len(owners) == 1 and owners <= {"smap", "brute"}:
+        return owners.pop()
+    return algorithm
+
+
+def algorithm_options(algorithm: str, **given) -> dict:
+    """The options given for ``algorithm``; an option of another algorithm is a usage error
+    (``--sample-spacing 4 --algorithm brute`` would otherwise be silently ignored)."""
+    out = {}
+    for name, value in given.items():
+        if value is None:
+            continue
+        if OPTION_OWNERS[name] != algorithm:
+            raise UsageProblem(f"{OPTION_FLAGS[name]} applies to --algorithm "
+                               f"{OPTION_OWNERS[name]}, not {algorithm}")
+        out[name] = value
+    return out
+
+
+def apply_scale(d, scale):
+    """gdaldem's -s: ground spacing = the transform's pixel size times ``scale``."""
+    from ..geometry import Grid, orientation
+    if d.transform is None:
+        raise UsageProblem("--scale needs a georeferenced DEM; use --pixel-size")
+    cs, rs = orientation(d.transform)
+    rows, cols = d.shape
+    d.grid = Grid.uniform(rows, cols, abs(d.transform.a) * scale, abs(d.transform.e) * scale,
+                          cs, rs, f"--scale {scale:g} x transform units")

@@ -1,0 +1,239 @@
+"""A lighting run on this machine: the whole DEM in memory, or in windows read and written
+through GDAL (each with its halo toward the sun), or on Dask (``run.dask``) when a scheduler is
+given. Both take the run's inputs, read options, sun request and ``Outputs``, and return what
+``run.shade`` puts in the report.
+"""
+
+from __future__ import annotations
+
+import contextlib
+
+from ..errors import HillshadeError
+from .config import apply_scale
+
+
+def bounded_gdal_cache():
+    """GDAL's block cache held to ``tiling.GDAL_CACHE_MB`` (its default, 5 % of the machine's
+    memory, would break --max-memory on its own)."""
+    import rasterio
+    from ..tiling import GDAL_CACHE_MB
+    return rasterio.Env(GDAL_CACHEMAX=GDAL_CACHE_MB)
+
+
+def needs_windows(path, read_opts, limit, per_cell) -> bool:
+    """Whether shading ``path`` whole would need more than ``limit`` bytes (a DEM whose size
+    cannot be told without reading it is read whole, as before)."""
+    from ..io import STDIN
+    from ..tiling import window_budget
+    if path == STDIN:
+        return False      # standard input is read whole (once)
+    try:
+        src = read_opts.source(path)
+    except HillshadeError:
+        return False      # read whole: read_dem says what is wrong with it
+    try:
+        budget = window_budget(limit, per_cell)[0]
+    except HillshadeError:
+        return True   # too small even for a window: the windowed run says what would do
+    rows, cols = src.shape
+    return rows * cols > budget
+
+
+def in_memory(inputs, read_opts, scale, req, out, timer, algorithm, options, ran_on,
+                     curvature, refraction_k, soft, self_shadow, ambient, quiet, **_):
+    import numpy as np
+
+    from ..shading import Shader, render
+
+    from ..earth import dem_body
+    from ..preview import relief_rgb, shade_of
+    from .report import product_stats
+    from .outputs import sun_tags
+    from .report import progress
+
+    kind = out.kind
+    with timer("read"):
+        d = read_opts.read(inputs[0])
+        if scale is not None:
+            apply_scale(d, scale)
+    with timer("prepare"):   # solar positions; numba compilation on a first run; GPU upload
+        suns, sun_info = req.suns(d)
+        out.plan(suns, inputs)
+        zmin, zmax = d.height_range()
+        shader = Shader(d.heights, d.grid, algorithm, options, ran_on,
+                        "auto" if curvature is None else curvature, refraction_k,
+                        dem_body(d, req.lat), (zmin, zmax), survey=d.survey())
+        day = [s for s in suns if not s.night]
+        if day:
+            shader.warm_up(day[0].azimuth, day[0].elevation, soft=soft,
+                           incidence=self_shadow or kind != "shadow",
+                           field=any(s.fieldwise for s in day))
+    records, algo_stats = [], {}
+    share, st = None, None
+    with out.writer(d, len(suns)) as writer:
+        for i, sun in enumerate(progress(suns, quiet, "hillshade-rt")):
+            t0 = timer.seconds.get("compute", 0.0)
+            with timer("compute"):
+                arr = render(shader, sun, kind, soft=soft, self_shadow=self_shadow,
+                             ambient=ambient, stats=algo_stats)
+            seconds = timer.seconds["compute"] - t0
+            with timer("compute"):      # the product's statistics (counts over the raster)
+                st = product_stats(kind, soft, arr)
+            if out.preview:
+                sh = shade_of(kind, soft, arr, ambient)
+                share = sh / len(suns) if share is None else share + sh / len(suns)
+            if soft:
+                arr = np.where(np.isnan(arr), np.float32(out.nodata), arr).astype(np.float32)
+            with timer("write"):
+                if writer is not None:
+                    writer.write(i + 1, arr, description=out.description(sun), tags=sun_tags(sun))
+                else:
+                    with out.file_writer(d, i, sun) as w:
+                        w.write(1, arr, description=out.description(sun))
+            records.append(out.record(sun, i, st, seconds, shader.field_ok(sun, soft)))
+        if writer is not None:
+            with timer("write"):     # the close compresses the last blocks
+                writer.finish()
+    return {"dem": d, "suns": suns, "sun_info": sun_info, "records": records, "stats": st,
+            "algo_stats": algo_stats, "zrange": (zmin, zmax), "curvature": shader.report(),
+            "gpu": shader.gpu_report(),
+            "relief": lambda az, el: relief_rgb(d.heights, d.grid, az, el, shade=share),
+            "processing": {"mode": "in memory", "cells": int(d.heights.size)}}
+
+
+def tiled(inputs, read_opts, scale, req, out, timer, algorithm, options, ran_on,
+                 curvature, refraction_k, soft, self_shadow, ambient, quiet, *, limit,
+                 window_shape, scheduler, per_cell):
+    import math
+
+    import numpy as np
+
+    from ..earth import dem_body
+    from ..geometry import Grid
+    from ..earth import curvature_report
+    from ..preview import every_nth, relief_rgb, shade_of
+    from .report import merge_stats, product_stats
+    from .outputs import sun_tags
+    from ..tiling import (MIN_WINDOW_CELLS, Job, MemoryTooSmall, Tally, WindowCache, block_stats,
+                         format_size, marched_per_cell, memory_needed, window_budget)
+
+    kind = out.kind
+    with timer("read"):
+        src = read_opts.source(inputs)
+        if scale is not None:
+            apply_scale(src, scale)
+    rows, cols = src.shape
+    tally = Tally()
+    with timer("prepare"):   # one pass for the height ranges; solar positions; compilation
+        bstats = block_stats(src, preview_side=2048 if out.preview else None)
+        tally.stats_pass_bytes = rows * cols * src.itemsize
+        zrange = (bstats.zmin, bstats.zmax)
+        suns, sun_info = req.suns(src)
+        out.plan(suns, inputs, src.tiles)
+        dx, dy = src.grid.centre_spacing()
+        job = Job(src, algorithm, options, ran_on, "auto" if curvature is None else curvature,
+                  refraction_k, dem_body(src, req.lat), zrange, math.hypot(cols * dx, rows * dy),
+                  kind, soft, self_shadow, ambient)
+        # a limit too small: measured now, after the preparation (the process has grown), the
+        # error says the smallest --max-memory that would do: room for the largest window the
+        # plan needs, or for the whole DEM where it could be shaded in memory
+        try:
+            budget, mem = window_budget(limit, per_cell)
+            small = None
+        except HillshadeError as exc:
+            budget, mem, small = 0, None, exc
+        try:
+            plans = [job.pieces(s, bstats, budget, window_shape, in_order=scheduler is None)
+                     for s in suns]
+        except MemoryTooSmall as exc:
+            small, cells = small or exc, exc.cells
+        else:
+            cells = max((p.cells for ps in plans for p in ps), default=0)
+        if small is not None:
+            least = memory_needed(per_cell, max(cells, MIN_WINDOW_CELLS))
+            if len(inputs) == 1 and window_shape is None and scheduler is None:
+                least = min(least, memory_needed(per_cell, rows * cols))
+            said = str(small).split("; give")[0].replace(": raise --max-memory", "")
+            raise HillshadeError(f"{said}; give at least --max-memory {format_size(least, up=True)}")
+        day = [s for s in suns if not s.night]
+        if day:
+            job.warm_up(day[0])
+    n = bstats.stride
+    share = (np.zeros(bstats.preview.shape, np.float32) if out.preview else None)
+    records, algo_stats, used = [], {}, set()
+    st = None
+    if scheduler is not None:
+        from .dask import run_on_dask
+        with timer("compute"):
+            records, st, extra = run_on_dask(scheduler, job, suns, plans, out, share, n, quiet,
+                                             algo_stats, used, tally)
+    else:
+        from tqdm import tqdm
+        total = sum(len(p) for p in plans)
+        bar = tqdm(total=total, desc="hillshade-rt", unit="window", leave=False,
+                   disable=True if quiet or total < 2 else None)
+        with out.writer(src, len(suns)) as writer, src.reader() as rd, bar:
+            cache = WindowCache(rd)
+            carry = job.carrier(plans)
+            for i, (sun, pieces) in enumerate(zip(suns, plans)):
+                t0 = timer.seconds.get("compute", 0.0)
+                with (out.file_writer(src, i, sun) if writer is None
+                      else contextlib.nullcontext(writer)) as w:
+                    band = 1 if writer is None else i + 1
+                    st = None
+                    for p in pieces:
+                        with timer("compute"):
+                            z = cache.get(p.window)
+                            arr = job.light(z, p, algo_stats, used, carry)
+                        tally.add(p)
+                        with timer("compute"):      # the window's statistics
+                            st = merge_stats(st, product_stats(kind, soft, arr))
+                        if share is not None:
+                            sub, (a, b) = every_nth(shade_of(kind, soft, arr, ambient),
+                                                    p.region[0], p.region[2], n)
+                            share[a:a + sub.shape[0], b:b + sub.shape[1]] += sub / len(suns)
+                        if soft:
+                            arr = np.where(np.isnan(arr), np.float32(out.nodata), arr).astype(
+                                np.float32)
+                        with timer("write"):
+                            w.write(band, arr, window=p.region)
+                        bar.update(1)
+                    w.describe(band, out.description(sun),
+                               sun_tags(sun) if writer is not None else None)
+                    if writer is None:      # this sun's file: closed and published now
+                        with timer("write"):
+                            w.finish()
+                out.finish(i, sun, src)
+                records.append(out.record(sun, i, st, timer.seconds.get("compute", 0.0) - t0,
+                                          marched_per_cell(plans[i])))
+            tally.bytes_read = rd.bytes_read
+            tally.bytes_carried = cache.carried_bytes
+            tally.carry = carry
+            if writer is not None:
+                with timer("write"):     # the close compresses the last blocks
+                    writer.finish()
+        extra = {}
+    curv = curvature_report(job.curvature, used, job.body, job.k)
+    processing = {"mode": "tiled" if scheduler is None else "dask", "cells": rows * cols,
+                  "memory": mem, "window_shape_requested": list(window_shape) if window_shape
+                  else None, **tally.as_dict(src.itemsize), **extra}
+    if src.tiles:
+        from ..io import input_label
+        processing["mosaic"] = [{"path": input_label(t["path"]), "window": list(t["window"])}
+                                for t in src.tiles]
+
+    def relief(az, el):
+        pv = bstats.preview
+        g = Grid(pv.shape[0], pv.shape[1], src.grid.dx[::n] * n, src.grid.dy[::n] * n,
+                 src.grid.col_sign, src.grid.row_sign, src.grid.method)
+        return relief_rgb(pv, g, az, el, shade=share)
+    return {"dem": src, "suns": suns, "sun_info": sun_info, "records": records, "stats": st,
+            "algo_stats": algo_stats, "zrange": zrange, "curvature": curv, "gpu": None,
+            "relief": relief, "processing": processing}
+
+
+def mean_stats(records, last):
+    fr = [r["shadow_fraction"] for r in records if r["shadow_fraction"] is not None]
+    out = dict(last)
+    out["shadow_fraction"] = (sum(fr) / len(fr)) if fr else None
+    return out

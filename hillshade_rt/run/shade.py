@@ -1,0 +1,135 @@
+"""The ``shadow`` / ``hillshade`` run: one DEM (or a mosaic of several), one or more suns, one
+output per sun (bands of OUTPUT, or files of --output-pattern). In memory when the run fits
+--max-memory, else in windows (``run.local.tiled``), on Dask workers with a scheduler. The command
+line and ``api.shade`` both call :func:`shade` with a :class:`~.config.ShadeConfig`; it returns the
+report (what ``--report`` writes).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+
+from ..errors import HillshadeError, UsageProblem
+from .config import ShadeConfig, inputs_and_output, parse_window_size
+
+# each product's type and nodata: (kind, soft) -> (dtype, nodata)
+PRODUCT_TYPES = {("shadow", False): ("uint8", 255), ("shadow", True): ("float32", -9999.0),
+                 ("classes", False): ("uint8", 255), ("hillshade", False): ("uint8", 0),
+                 ("hillshade", True): ("uint8", 0)}
+
+
+def shade(cfg: ShadeConfig) -> dict:
+    """Run ``cfg``; returns the report. Bad input raises ``HillshadeError`` (``UsageProblem``
+    for a bad combination of options) before anything is written."""
+    import numba
+
+    from ..io import check_output_format, input_label, output_driver, write_json, write_png
+    from ..shading import choose_backend
+    from ..sun import SunRequest
+    from ..tiling import bytes_per_cell, default_max_memory, parse_size
+    from ..writes import Claims, reset
+    from .local import bounded_gdal_cache, in_memory, mean_stats, needs_windows, tiled
+    from .notes import compile_note, note_to_show
+    from .outputs import OutputPattern, Outputs
+    from .report import Timer, build_report, shown_paths, summary_line
+
+    cfg.check()
+    kind, soft, algorithm, options = cfg.kind, cfg.soft, cfg.algorithm, cfg.options
+    ro = cfg.run
+    timer = Timer()
+    try:     # a bad sun is the command line's fault (exit status 2)
+        req = SunRequest.from_options(**cfg.sun, default_sun=cfg.default_sun)
+    except UsageProblem:
+        raise
+    except HillshadeError as exc:
+        raise UsageProblem(str(exc)) from None
+    inputs, output = inputs_and_output(cfg.files, cfg.output, cfg.output_pattern)
+    pattern = cfg.output_pattern
+    reset()
+    wshape = parse_window_size(cfg.window_size)
+    try:
+        limit = (parse_size(cfg.max_memory) if cfg.max_memory is not None
+                 else default_max_memory())
+    except HillshadeError as exc:
+        raise UsageProblem(f"--max-memory: {exc}") from None
+    claims = Claims(inputs, ro.overwrite)   # every path written: no input, no two the same
+    if output is not None:
+        claims.claim(output, "OUTPUT")
+    for extra, what in ((ro.report_path, "--report"), (ro.preview, "--preview")):
+        if extra is not None:
+            claims.claim(extra, what)
+    if pattern is not None:
+        pattern = OutputPattern(pattern)
+    if ro.threads is not None:
+        numba.set_num_threads(min(ro.threads, numba.config.NUMBA_NUM_THREADS))
+    ran_on = choose_backend(ro.backend, algorithm, options)
+    per_cell = bytes_per_cell(algorithm, kind, soft, cfg.self_shadow)
+    with timer("read"):     # (opens the DEM for its size: part of reading it)
+        windowed = (cfg.scheduler is not None or wshape is not None or len(inputs) > 1
+                    or needs_windows(inputs[0], cfg.read, limit, per_cell))
+    dtype, nodata = PRODUCT_TYPES[kind, soft]
+    out = Outputs(kind, soft, algorithm, dtype, nodata, output, pattern, claims, cfg.cog,
+                  ro.preview is not None, cfg.ambient, ro.fmt)
+    # Dask's parts are put together by GDAL (no 16-bit encoding of soft shadows on the way)
+    out.via_vrt = cfg.scheduler is not None
+    if output is not None:   # the format can hold the product (before any work)
+        check_output_format(output, output_driver(output, ro.fmt, cfg.cog), dtype,
+                            len(req.times) if req.from_time else 1,
+                            out.continuous and not out.via_vrt)
+    if not ro.quiet:
+        note = compile_note(algorithm, ran_on, cfg.self_shadow or kind != "shadow")
+        if note:
+            ro.say("compile", note)
+    try:
+        with (bounded_gdal_cache() if windowed else contextlib.nullcontext()):
+            run = (tiled if windowed else in_memory)(
+                inputs, cfg.read, cfg.scale, req, out, timer, algorithm, options, ran_on,
+                cfg.curvature, cfg.refraction_k, soft, cfg.self_shadow, cfg.ambient, ro.quiet,
+                limit=limit, window_shape=wshape, scheduler=cfg.scheduler, per_cell=per_cell)
+    finally:
+        out.cleanup()
+    d, suns, records = run["dem"], run["suns"], run["records"]
+    if ro.preview is not None:
+        with timer("write"):
+            day = [s for s in suns if not s.night]
+            s0 = day[0] if day else suns[0]
+            write_png(ro.preview, run["relief"](s0.azimuth, s0.elevation), ro.overwrite)
+    seconds = dict(timer.seconds, total=timer.total())
+    first = suns[0]
+    rep = build_report(dem=d, output=output or pattern.pattern, azimuth=first.azimuth,
+                       elevation=first.elevation, algorithm=algorithm, backend=ran_on,
+                       backend_requested=ro.backend, threads=numba.get_num_threads(),
+                       seconds=seconds, stats=mean_stats(records, run["stats"]),
+                       height_range=run["zrange"], options=options,
+                       algorithm_stats=run["algo_stats"], gpu=run.get("gpu"))
+    rep["sun"] = records[0] if len(records) == 1 else None
+    rep["sun_source"] = "time" if req.from_time else "given"
+    if run["sun_info"] is not None:
+        rep.update(run["sun_info"])
+    if len(records) > 1 or req.from_time:
+        rep["times"] = records
+    rep["night_count"] = sum(1 for s in suns if s.night)
+    rep["product"] = {"kind": kind, "soft": soft, "self_shadow": cfg.self_shadow,
+                      "dtype": dtype, "nodata": nodata, "bands": len(suns) if output else 1,
+                      "cog": cfg.cog}
+    if kind == "hillshade":
+        rep["product"].update(ambient=cfg.ambient, scale=cfg.scale)
+    rep["curvature"] = run["curvature"]
+    rep["inputs"] = [input_label(p) for p in inputs]
+    rep["processing"] = run["processing"]
+    if ro.preview is not None:
+        rep["preview"] = os.path.abspath(ro.preview)
+    if ro.report_path is not None:
+        write_json(ro.report_path, rep, ro.overwrite)
+    if not ro.quiet:
+        # the outputs named as the user gave them (as every command does), a pattern's files
+        ro.say("summary", summary_line(rep, output if output is not None
+                                       else shown_paths(pattern.planned) or pattern.pattern))
+        note = note_to_show(run["algo_stats"], algorithm, options, cfg.algorithm_explicit)
+        if note:
+            ro.say("note", note)
+        if rep["night_count"]:
+            ro.say("note", f"the sun is below the horizon at {rep['night_count']} of "
+                           f"{len(suns)} time(s): all shadow there")
+    return rep

@@ -1,0 +1,118 @@
+"""The ``sun-hours`` run: hours of direct sun per cell of a DEM over a day (or a range of days),
+like WhiteboxTools' TimeInDaylight or GRASS r.sun's insolation time: the sun every step, each lit
+sample counting for its interval. Returns the report."""
+
+from __future__ import annotations
+
+import os
+
+from .. import __version__
+from ..errors import HillshadeError, UsageProblem
+from .config import SunHoursConfig
+
+
+def sun_hours(cfg: SunHoursConfig) -> dict:
+    import numba
+    import numpy as np
+
+    from ..shading import Shader, render
+
+    from ..earth import dem_body
+    from ..io import (check_output_format, input_label, output_driver, write_json, write_png,
+                      write_raster)
+    from ..preview import relief_rgb
+    from ..shading import choose_backend
+    from ..sun import SUN_RADIUS_DEG, SunRequest, day_samples, parse_date, parse_step
+    from ..writes import Claims
+    from .notes import compile_note
+    from .report import Timer, progress
+
+    ro, output, soft, self_shadow = cfg.run, cfg.output, cfg.soft, cfg.self_shadow
+    algorithm, step = cfg.algorithm, cfg.step
+    timer = Timer()
+    claims = Claims([cfg.dem], ro.overwrite)
+    for path, what in ((output, "OUTPUT"), (ro.report_path, "--report"),
+                       (ro.preview, "--preview")):
+        if path is not None:
+            claims.claim(path, what)
+    check_output_format(output, output_driver(output, ro.fmt), "float32", 1, False)
+    try:    # the command line alone decides these: a bad one is a usage error (exit 2)
+        first = parse_date(cfg.date, "--date")
+        last = parse_date(cfg.end_date, "--end-date") if cfg.end_date is not None else first
+        parse_step(step)
+        req = SunRequest.at_place([], **cfg.place)
+    except HillshadeError as exc:
+        raise UsageProblem(str(exc)) from None
+    if last < first:
+        raise UsageProblem("--end-date is before --date")
+    if ro.threads is not None:
+        numba.set_num_threads(min(ro.threads, numba.config.NUMBA_NUM_THREADS))
+    ran_on = choose_backend(ro.backend, algorithm, {})
+    if not ro.quiet:
+        note = compile_note(algorithm, ran_on, self_shadow)
+        if note:
+            ro.say("compile", note)
+    with timer("read"):
+        d = cfg.read.read(cfg.dem)
+    with timer("prepare"):
+        site = req.site(d, "sun-hours computes the Earth's sun only (light a DEM of another "
+                           "body with shadow or hillshade, which take the sun's direction)")
+        try:
+            req.times, weights = day_samples(first, last, step, req.tz, site.lon)
+        except HillshadeError as exc:   # too many samples for the dates and the step
+            raise UsageProblem(str(exc)) from None
+        suns, sun_info = req.suns(d, site)
+        zmin, zmax = d.height_range()
+        shader = Shader(d.heights, d.grid, algorithm, {}, ran_on,
+                        "auto" if cfg.curvature is None else cfg.curvature, cfg.refraction_k,
+                        dem_body(d, req.lat), (zmin, zmax), survey=d.survey())
+
+        def dark(s):
+            top = max([r.elevation for r in s.tiles] if s.tiles else [s.elevation])
+            return top + (SUN_RADIUS_DEG if soft else 0.0) <= 0.0
+        work = [(s, w) for s, w in zip(suns, weights) if not dark(s)]
+        if work:
+            shader.warm_up(work[0][0].azimuth, max(work[0][0].elevation, 1.0), soft=soft,
+                           incidence=self_shadow, field=any(s.fieldwise for s, _ in work))
+        hours = np.where(np.isnan(d.heights), np.float32(np.nan), np.float32(0.0))
+    algo_stats: dict = {}
+    with timer("compute"):
+        for s, w in progress(work, ro.quiet, "hillshade-rt sun-hours", unit="sun"):
+            hours += np.float32(w) * render(shader, s, "sun", soft=soft, self_shadow=self_shadow,
+                                            stats=algo_stats)
+    days = (last - first).days + 1
+    tags = {"HILLSHADE_RT_VERSION": __version__, "UNITS": "hours of direct sun",
+            "DATE_FIRST": first.isoformat(), "DATE_LAST": last.isoformat(), "DAYS": days,
+            "STEP": step, "ALGORITHM": algorithm, "SOFT": soft, "SELF_SHADOW": self_shadow,
+            "DAY": f"midnight to midnight, {req.tz.key}" if req.tz is not None
+            else f"local mean solar time at longitude {site.lon:.4f}"}
+    with timer("write"):
+        write_raster(output, np.where(np.isnan(hours), np.float32(-9999.0), hours), d,
+                     nodata=-9999.0, description="hours of direct sun", tags=tags,
+                     overwrite=ro.overwrite, fmt=ro.fmt)
+        if ro.preview is not None:
+            top = float(np.nanmax(hours)) if np.isfinite(hours).any() else 0.0
+            write_png(ro.preview, relief_rgb(d.heights, d.grid,
+                                             warm=hours / top if top > 0 else np.zeros_like(hours)),
+                      ro.overwrite)
+    valid = hours[~np.isnan(hours)]
+    rep = {"input": input_label(d.path), "output": os.path.abspath(output),
+           "shape": list(d.shape), "algorithm": algorithm, "backend": ran_on,
+           "dates": [first.isoformat(), last.isoformat()], "days": days, "step": step,
+           "samples": len(suns), "samples_with_sun": len(work), "day_definition": tags["DAY"],
+           "soft": soft, "self_shadow": self_shadow,
+           "hours": {"min": float(valid.min()) if valid.size else None,
+                     "mean": float(valid.mean()) if valid.size else None,
+                     "max": float(valid.max()) if valid.size else None},
+           "curvature": shader.report(), "algorithm_stats": algo_stats,
+           "seconds": dict(timer.seconds, total=timer.total()), "version": __version__}
+    rep.update(sun_info or {})
+    if ro.report_path is not None:
+        write_json(ro.report_path, rep, ro.overwrite)
+    if not ro.quiet:
+        h = rep["hours"]
+        ro.say("summary", f"hillshade-rt: {output}: {d.shape[1]}x{d.shape[0]}, {days} day(s) from "
+                          f"{first.isoformat()}, {len(work)} of {len(suns)} samples with the sun "
+                          f"up; sun hours {h['min']:.2f} .. {h['max']:.2f} (mean "
+                          f"{h['mean']:.2f}); compute {timer.seconds['compute']:.2f} s")
+    return rep
