@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from hillshade_rt import Grid, shadow_mask
-from conftest import box_terrain, fractal_terrain, reference_mask
+from hillshade_rt.testing import box_terrain, fractal_terrain, reference_mask
 
 H = 10.0
 EL = 30.0  # h / tan(30 deg) = 17.32 cells at 1 m: never near an integer

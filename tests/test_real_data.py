@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from hillshade_rt import read_dem, shadow_mask
-from conftest import data_path, reference_mask
+from hillshade_rt.testing import data_path, reference_mask
 
 # (file, shadow cells, valid cells) at azimuth 203.7, elevation 10, brute
 STORED = [
