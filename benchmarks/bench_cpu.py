@@ -1,6 +1,6 @@
 """CPU benchmarks: every algorithm on real DEMs and fractal terrains at high, mid and low sun.
 
-The fractal here is tests/conftest.fractal_terrain, labelled "smooth (facets)": a few noise
+The fractal here is hillshade_rt.testing.smooth_facets, labelled "smooth (facets)": a few noise
 octaves upsampled bilinearly, far smoother than any real DEM. Rough terrain (spectral fractals,
 more real DEMs, 18 suns, the peers) is in bench_real.py (``make bench-real``).
 
@@ -16,24 +16,14 @@ after one warm-up (compilation excluded). Ratios are measured within this one ru
 import argparse
 import os
 import platform
-import statistics
-import sys
-import time
 
 import numba
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "tests"))
-
-from hillshade_rt import read_dem  # noqa: E402
-from hillshade_rt.algorithms import ALGORITHMS  # noqa: E402
-from hillshade_rt.geometry import Grid, sun_rays  # noqa: E402
-from conftest import fractal_terrain  # noqa: E402
-
-REAL = [os.path.join(HERE, "..", "examples", "bigtujunga_srtm30m_utm11n_1197x643.tif"),
-        os.path.join(HERE, "..", "tests", "data", "everest_srtm3_voids_crop200.tif"),
-        os.path.join(HERE, "..", "tests", "data", "jacksboro_fault_srtm3_mpl_403x344.tif")]
+from hillshade_rt import read_dem
+from hillshade_rt.algorithms import ALGORITHMS
+from hillshade_rt.geometry import Grid, sun_rays
+from hillshade_rt.testing import SMALL_REAL_DEMS, median_seconds, real_dems, smooth_facets
 
 
 def _status_kb(key):
@@ -56,25 +46,16 @@ def peak_extra_bytes(fn):
         return None
 
 
-def timed(fn, repeat):
-    times = []
-    for _ in range(repeat):
-        t = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t)
-    return statistics.median(times)
-
-
 def cases(sizes):
-    for p in REAL:
+    for p, _ in real_dems(SMALL_REAL_DEMS):
         d = read_dem(p)
         yield os.path.basename(p), d.heights, d.grid
     for n in sizes:
         # 1.5 km relief on 30 m cells, float32 like every DEM the tool reads
-        z = fractal_terrain(n, n, seed=n, relief=1500.0, octaves=6).astype(np.float32)
+        z = smooth_facets(n)
         yield f"smooth (facets) fractal {n}²", z, Grid.uniform(n, n, 30.0)
     n = sizes[0] if sizes else 512
-    z = fractal_terrain(n, n, seed=n + 1, relief=1500.0, octaves=6).astype(np.float32)
+    z = smooth_facets(n, seed=n + 1)
     z[z < np.percentile(z, 50)] = np.nan   # islands in a nodata sea (half the cells are voids)
     yield f"smooth (facets) islands {n}² (half nodata)", z, Grid.uniform(n, n, 30.0)
 
@@ -100,15 +81,15 @@ def main():
     for name, z, grid in cases(sizes):
         zmax = float(np.nanmax(z))
         thr = float(np.nanmean(z))
-        floor = timed(lambda: np.greater(z, thr), a.repeat)
+        floor = median_seconds(lambda: np.greater(z, thr), a.repeat)
         for el in els:
             rays = sun_rays(grid, a.azimuth, el)
             t_brute = None
             for alg, fn in ALGORITHMS.items():
                 fn(z, rays, zmax)  # warm-up / compile
-                t = timed(lambda: fn(z, rays, zmax), a.repeat)
+                t = median_seconds(lambda: fn(z, rays, zmax), a.repeat)
                 numba.set_num_threads(1)
-                t1 = timed(lambda: fn(z, rays, zmax), 1)
+                t1 = median_seconds(lambda: fn(z, rays, zmax), 1)
                 numba.set_num_threads(nthreads)
                 mem = peak_extra_bytes(lambda: fn(z, rays, zmax))
                 mem = "–" if mem is None else f"{mem / z.size:.2f}"

@@ -19,10 +19,7 @@ import time
 
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, HERE)
-
-import terrain  # noqa: E402
+from hillshade_rt.testing import spectral, tiled
 
 
 def floor(src: str, dst: str) -> float:
@@ -57,8 +54,7 @@ def main(argv=None):
     from rasterio.transform import from_origin
     with tempfile.TemporaryDirectory(dir=os.environ.get("TMPDIR", "/tmp")) as tmp:
         src = os.path.join(tmp, "dem.tif")
-        z = terrain.tiled(terrain.spectral(min(a.size, 4096), 3.2, seed=5, relief=2000.0),
-                          a.size)
+        z = tiled(spectral(min(a.size, 4096), 3.2, seed=5, relief=2000.0), a.size)
         with rasterio.open(src, "w", driver="GTiff", width=a.size, height=a.size, count=1,
                            dtype="float32", crs="EPSG:32611", tiled=True,
                            transform=from_origin(400000, 3800000, 30, 30)) as w:

@@ -27,15 +27,12 @@ import time
 import numba
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, HERE)
-
-import terrain  # noqa: E402
-from hillshade_rt import read_dem  # noqa: E402
-from hillshade_rt.shading import Shader  # noqa: E402
-from hillshade_rt.earth import dem_body  # noqa: E402
-from hillshade_rt.geometry import Grid  # noqa: E402
-from hillshade_rt.sun import SunOver  # noqa: E402
+from hillshade_rt import read_dem
+from hillshade_rt.earth import dem_body
+from hillshade_rt.shading import Shader
+from hillshade_rt.geometry import Grid
+from hillshade_rt.sun import SunOver
+from hillshade_rt.testing import real_dems, spectral, tiled
 
 
 def timed(fns: dict, repeat: int) -> dict:
@@ -67,8 +64,8 @@ def main(argv=None):
     print("### Curvature on (the default) vs off, auto, az 290\n")
     print("| terrain | el | flat s | curved s | curved ÷ flat |")
     print("|---|---|---|---|---|")
-    cases = [(label, read_dem(path)) for path, label in terrain.REAL_DEMS]
-    spec = terrain.spectral(2048, 3.2, seed=7, relief=2000.0)
+    cases = [(label, read_dem(path)) for path, label in real_dems()]
+    spec = spectral(2048, 3.2, seed=7, relief=2000.0)
     for label, d in cases + [("spectral β 3.2 2048², 30 m", None)]:
         z, grid = (spec, Grid.uniform(2048, 2048, 30.0)) if d is None else (d.heights, d.grid)
         body = dem_body(d) if d is not None else None
@@ -83,7 +80,7 @@ def main(argv=None):
     print("|---|---|---|---|---|")
     first = {}
     for n in (int(x) for x in a.sizes.split(",")):
-        z = terrain.tiled(spec, n)
+        z = tiled(spec, n)
         grid = Grid.uniform(n, n, 30.0)
         for az in (203.7, 290.0):
             t = timed({"x": cast(z, grid, False, az, 8.0)}, a.repeat)["x"]
@@ -135,7 +132,7 @@ def main(argv=None):
     print("\n### Geographic vs the same heights on one uniform spacing (Everest SRTM 3″ tile)\n")
     print("| az | el | geographic s | uniform s | geographic ÷ uniform |")
     print("|---|---|---|---|---|")
-    d = read_dem(terrain.REAL_DEMS[1][0])
+    d = read_dem(real_dems()[1][0])
     i = d.grid.rows // 2
     uni = Grid.uniform(d.grid.rows, d.grid.cols, float(d.grid.dx[i]), float(d.grid.dy[i]),
                        d.grid.col_sign, d.grid.row_sign)

@@ -24,14 +24,10 @@ import time
 
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "tests"))
-
-from hillshade_rt import gpu, read_dem  # noqa: E402
-from hillshade_rt.algorithms import ALGORITHMS  # noqa: E402
-from hillshade_rt.geometry import Grid, sun_rays  # noqa: E402
-from conftest import fractal_terrain  # noqa: E402
-from bench_cpu import REAL  # noqa: E402
+from hillshade_rt import gpu, read_dem
+from hillshade_rt.algorithms import ALGORITHMS
+from hillshade_rt.geometry import Grid, sun_rays
+from hillshade_rt.testing import SMALL_REAL_DEMS, fractal_terrain, real_dems
 
 EXACT = ("auto", "brute", "smap", "horizon")
 
@@ -108,7 +104,7 @@ def main():
         z = fractal_terrain(n, n, 7, 800.0, 6)
         bench_dem(f"fractal {n}", z, Grid.uniform(n, n, 30.0), algs, els, a.repeat, a.cpu_max,
                   rows)
-    for path in REAL:
+    for path, _ in real_dems(SMALL_REAL_DEMS):
         d = read_dem(path)
         bench_dem(os.path.basename(path).split("_")[0], d.heights, d.grid, algs, els, a.repeat,
                   a.cpu_max, rows)

@@ -16,87 +16,30 @@ measured in the same run, and the share of valid cells whose mask differs from `
 """
 
 import argparse
-import math
 import os
 import platform
 import sys
-import tempfile
 
 import numba
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(HERE, "..", "tests"))
+from hillshade_rt import read_dem
+from hillshade_rt.algorithms import brute, horizon, smap, sweep
+from hillshade_rt.geometry import Grid, sun_rays
+from hillshade_rt.testing import (median_seconds, peer_doshade, peer_topocalc, peer_whitebox,
+                                  real_dems, smooth_facets)
 
-from hillshade_rt import read_dem  # noqa: E402
-from hillshade_rt.algorithms import brute, horizon, smap, sweep  # noqa: E402
-from hillshade_rt.geometry import Grid, sun_rays  # noqa: E402
-from conftest import fractal_terrain  # noqa: E402
-from bench_cpu import timed as _timed  # noqa: E402
-
-EXAMPLE = os.path.join(HERE, "..", "examples", "bigtujunga_srtm30m_utm11n_1197x643.tif")
+EXAMPLE = real_dems(["bigtujunga_srtm30m_utm11n_1197x643.tif"])[0][0]
 CELL = 30.0
 
 
 def timed(fn, repeat):
-    """bench_cpu's median timer, after one warm-up call (compilation, first-touch)."""
-    fn()
-    return _timed(fn, repeat)
+    """The median of ``repeat`` runs, after one warm-up call (compilation, first-touch)."""
+    return median_seconds(fn, repeat, warm_up=True)
 
 
-# --- peers: each returns (name, callable giving a 0/1 shadow mask) or (name, reason skipped) ----
-
-def peer_doshade(z, cell, az, el):
-    try:
-        from insolation import insolf
-    except ImportError as e:
-        return "insolation doshade", f"not installed ({e})"
-    # Corripio's sun vector in array axes (x east, y down the rows), from zenith angle and azimuth
-    sv = insolf.normalvector(90.0 - el, az)
-    zz = np.nan_to_num(z, nan=-1e30).astype(np.float64)   # doshade has no nodata
-    return "insolation doshade", lambda: 1 - insolf.doshade(zz, cell, sv)
-
-
-def peer_whitebox(z, cell, az, el):
-    try:
-        import rasterio
-        import whitebox_workflows as wbw
-    except ImportError as e:
-        return "whitebox-workflows horizon_angle", f"not installed ({e})"
-    tmp = tempfile.mkdtemp()
-    path = os.path.join(tmp, "dem.tif")
-    prof = dict(driver="GTiff", width=z.shape[1], height=z.shape[0], count=1, dtype="float32",
-                nodata=-9999.0, crs="EPSG:32611",
-                transform=rasterio.transform.from_origin(0, z.shape[0] * cell, cell, cell))
-    with rasterio.open(path, "w", **prof) as ds:
-        ds.write(np.where(np.isnan(z), -9999.0, z).astype(np.float32), 1)
-    wbe = wbw.WbEnvironment()
-    wbe.verbose = False
-    dem = wbe.read_raster(path)
-    maxd = float(math.hypot(*z.shape) * cell)
-
-    def run():
-        h = wbe.horizon_angle(dem, azimuth=az, max_dist=maxd).to_numpy()
-        return (h > el).astype(np.uint8)
-    return "whitebox-workflows horizon_angle", run
-
-
-def peer_topocalc(z, cell, az, el):
-    try:
-        from topocalc.horizon import horizon as tc_horizon
-    except ImportError as e:
-        return "topocalc horizon", f"not installed ({e})"
-    zz = np.nan_to_num(z, nan=0.0).astype(np.float64)
-    # topocalc: azimuth 0 = south, +90 = east (IPW convention); returns cos of the zenith angle of
-    # the horizon, i.e. sin(horizon angle)
-    tc_az = ((180.0 - az) + 180.0) % 360.0 - 180.0
-
-    def run():
-        hcos = tc_horizon(tc_az, zz, cell)
-        return (hcos > math.sin(math.radians(el))).astype(np.uint8)
-    return "topocalc horizon", run
-
-
+# peers (hillshade_rt.testing): each returns (name, callable giving a 0/1 shadow mask) or
+# (name, reason skipped)
 PEERS = {"doshade": peer_doshade, "whitebox": peer_whitebox, "topocalc": peer_topocalc}
 
 OURS = {
@@ -111,7 +54,7 @@ def cases(sizes):
     d = read_dem(EXAMPLE)
     yield os.path.basename(EXAMPLE), d.heights, d.grid, float(d.grid.dx[0])
     for n in sizes:
-        z = fractal_terrain(n, n, seed=n, relief=1500.0, octaves=6).astype(np.float32)
+        z = smooth_facets(n)
         yield f"fractal {n}²", z, Grid.uniform(n, n, CELL), CELL
 
 

@@ -1,8 +1,8 @@
 """Benchmarks that look like Earth: every algorithm and the peers on real DEMs and spectral fractals.
 
-Terrains (benchmarks/terrain.py): the real DEMs of the repo (UTM, geographic SRTM, NZTM with sea,
+Terrains (hillshade_rt.testing): the real DEMs of the repo (UTM, geographic SRTM, NZTM with sea,
 the Moon), power-law fractals (2-D power spectrum ~ k^-beta, beta 2.4 and 3.2, 2 km relief on
-30 m cells) at each --sizes, and the old smooth facet fractal (tests/conftest.fractal_terrain)
+30 m cells) at each --sizes, and the old smooth facet fractal (testing.smooth_facets)
 as a labelled "smooth (facets)" case. Suns: every --azimuths x --elevations, flat Earth.
 
 Compute stage only: each algorithm is called on the arrays and rays directly (no reading, no
@@ -41,15 +41,11 @@ import time
 import numba
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, HERE)
-sys.path.insert(0, os.path.join(HERE, "..", "tests"))
-
-import terrain  # noqa: E402
-from hillshade_rt import read_dem  # noqa: E402
-from hillshade_rt.algorithms import auto, bounds, brute, horizon, smap, sweep  # noqa: E402
-from hillshade_rt.geometry import Grid, sun_rays  # noqa: E402
-from bench_peers import peer_doshade, peer_whitebox  # noqa: E402
+from hillshade_rt import read_dem
+from hillshade_rt.algorithms import auto, bounds, brute, horizon, smap, sweep
+from hillshade_rt.geometry import Grid, sun_rays
+from hillshade_rt.testing import (peer_doshade, peer_whitebox, real_dems, roughness,
+                                  smooth_facets, spectral, tiled)
 
 AZIMUTHS = "20,120,203.7,250,290,330"
 ELEVATIONS = "3,8,20"
@@ -76,9 +72,9 @@ def warm_up(azimuths, elevations, log):
     azimuth (the octant frames are views with their own strides) on a uniform grid and on a
     geographic one (per-row spacing), and the peers' own compilation."""
     t0 = time.perf_counter()
-    small = terrain.spectral(96, 3.0, seed=7)
+    small = spectral(96, 3.0, seed=7)
     small[40:44, 50:60] = np.nan
-    geo = read_dem(terrain.REAL_DEMS[-1][0])    # Jacksboro: EPSG:4326, per-row spacing
+    geo = read_dem(real_dems()[-1][0])    # Jacksboro: EPSG:4326, per-row spacing
     grids = [(small, Grid.uniform(96, 96, CELL)),
              (np.ascontiguousarray(geo.heights[:80, :90]), None)]
     # a geographic grid for the crop: the same per-row spacing as the file's first 80 rows
@@ -102,24 +98,23 @@ def warm_up(azimuths, elevations, log):
 def cases(a):
     """(label, heights, grid, kind) for every benchmark terrain."""
     if a.real:
-        for path, label in terrain.REAL_DEMS:
+        for path, label in real_dems():
             d = read_dem(path)
             yield f"{label} ({os.path.basename(path)})", d.heights, d.grid, "real"
     for n in a.sizes:
         for beta in a.betas:
             if a.tile_from and a.tile_from < n:
                 # the same surface as the tile_from² case, repeated
-                z = terrain.tiled(terrain.spectral(a.tile_from, beta,
-                                                   seed=int(10 * beta) + a.tile_from,
-                                                   relief=RELIEF), n)
+                z = tiled(spectral(a.tile_from, beta, seed=int(10 * beta) + a.tile_from,
+                                   relief=RELIEF), n)
                 label = f"spectral β {beta:g} {a.tile_from}² tiled to {n}²"
             else:
-                z = terrain.spectral(n, beta, seed=int(10 * beta) + n, relief=RELIEF)
+                z = spectral(n, beta, seed=int(10 * beta) + n, relief=RELIEF)
                 label = f"spectral β {beta:g} {n}²"
             yield label, z, Grid.uniform(n, n, CELL), "spectral"
     if a.smooth:
         n = a.sizes[0] if a.sizes else 1024
-        yield (f"smooth (facets) {n}², conftest.fractal_terrain", terrain.smooth(n),
+        yield (f"smooth (facets) {n}², testing.smooth_facets", smooth_facets(n),
                Grid.uniform(n, n, CELL), "smooth")
 
 
@@ -225,7 +220,7 @@ def main(argv=None):
         nvalid = max(1, int(valid.sum()))
         mpix = z.size / 1e6
         i = grid.rows // 2
-        slope = terrain.roughness(z, float(math.sqrt(grid.dx[i] * grid.dy[i])))["mean_slope"]
+        slope = roughness(z, float(math.sqrt(grid.dx[i] * grid.dy[i])))["mean_slope"]
         cell = square_cell(grid)
         for el in els:
             for az in azs:

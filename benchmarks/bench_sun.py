@@ -19,15 +19,14 @@ import subprocess
 import sys
 import tempfile
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-DEM = os.path.join(HERE, "..", "examples", "bigtujunga_srtm30m_utm11n_1197x643.tif")
+from hillshade_rt.testing import median_seconds, real_dems
+
+DEM = real_dems(["bigtujunga_srtm30m_utm11n_1197x643.tif"])[0][0]
 
 
 def median_time(fn, repeat):
-    """bench_cpu's median of ``repeat`` runs, after one warm-up run."""
-    from bench_cpu import timed
-    fn()
-    return timed(fn, repeat)
+    """The median of ``repeat`` runs, after one warm-up run."""
+    return median_seconds(fn, repeat, warm_up=True)
 
 
 def main():

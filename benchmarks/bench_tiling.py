@@ -1,7 +1,7 @@
 """Throughput in memory vs in windows vs on a Dask LocalCluster of 2 workers, same DEM, same sun.
 
 Each figure is a whole command-line run (read, statistics pass, compute, write), the median of
---repeat runs after a warm-up, on a synthetic DEM (``bigdem.terrain``, 1 m cells, ~520 m of
+--repeat runs after a warm-up, on a synthetic DEM (``hillshade_rt.testing.ridges``, 1 m cells, ~520 m of
 relief) of --size x --size cells. The windowed run gets --max-memory so that its windows hold
 about a quarter of the DEM each (what the planner makes of that is reported: windows, window
 cells beyond the output, and for SMap the elements coloured beyond the output: its tables are
@@ -21,8 +21,6 @@ import sys
 import tempfile
 import time
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, HERE)
 BIN = os.path.join(os.path.dirname(sys.executable), "hillshade-rt")
 
 
@@ -40,12 +38,12 @@ def main():
     ap.add_argument("--algorithm", default="smap")
     ap.add_argument("--elevations", default="20,12")
     args = ap.parse_args()
-    from bigdem import make_dem
+    from hillshade_rt.testing import write_ridges_dem
     from hillshade_rt.tiling import GDAL_CACHE_MB, bytes_per_cell, format_size
 
     work = tempfile.mkdtemp(prefix="hillshade-bench-tiling-")
     dem = os.path.join(work, "dem.tif")
-    make_dem(dem, args.size)
+    write_ridges_dem(dem, args.size)
     cells = args.size ** 2
     # room for the process (~0.3 GB), GDAL's cache, and windows of about a quarter of the DEM
     limit = int(0.35e9) + (GDAL_CACHE_MB << 20) + cells * bytes_per_cell(args.algorithm) // 4

@@ -13,26 +13,20 @@ from __future__ import annotations
 
 import os
 import statistics
-import sys
 import tempfile
 import time
 
 import numpy as np
 import rasterio
 
-sys.path.insert(0, os.path.join(os.path.dirname(__file__), ".."))
+from hillshade_rt import io as hio
+from hillshade_rt.earth import dem_body
+from hillshade_rt.shading import Shader, render
+from hillshade_rt.geometry import Grid
+from hillshade_rt.sun import SunOver
+from hillshade_rt.testing import real_dems, spectral_f64
 
-from hillshade_rt import io as hio  # noqa: E402
-from hillshade_rt.shading import Shader, render  # noqa: E402
-from hillshade_rt.earth import dem_body  # noqa: E402
-from hillshade_rt.geometry import Grid  # noqa: E402
-from hillshade_rt.sun import SunOver  # noqa: E402
-
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from terrain import fractal  # noqa: E402  (power-law fractal, benchmarks/terrain.py)
-
-EXAMPLE = os.path.join(os.path.dirname(__file__), "..", "examples",
-                       "bigtujunga_srtm30m_utm11n_1197x643.tif")
+EXAMPLE = real_dems(["bigtujunga_srtm30m_utm11n_1197x643.tif"])[0][0]
 REPEAT = 5
 
 
@@ -58,7 +52,7 @@ def products(dem):
 def main():
     d = hio.read_dem(EXAMPLE)
     n = 4000
-    z = fractal(n)
+    z = spectral_f64(n)   # power-law fractal
     f = hio.Dem(heights=z, grid=Grid.uniform(n, n, 30.0, 30.0, 1, -1, "bench"), path="fractal",
                 kind="bench", transform=d.transform, crs=d.crs)
     folder = tempfile.mkdtemp(prefix="bench-writes-", dir=os.path.dirname(EXAMPLE))

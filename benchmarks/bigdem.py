@@ -20,31 +20,9 @@ import time
 
 import numpy as np
 
-HERE = os.path.dirname(os.path.abspath(__file__))
+from hillshade_rt.testing import write_ridges_dem
+
 BIN = os.path.join(os.path.dirname(sys.executable), "hillshade-rt")
-
-
-def terrain(r0, r1, cols):
-    """Heights of rows r0:r1 (1 m cells)."""
-    y = np.arange(r0, r1, dtype=np.float64)[:, None]
-    x = np.arange(cols, dtype=np.float64)[None, :]
-    z = (400.0 + 150.0 * np.sin(x / 900.0) * np.cos(y / 1300.0)
-         + 80.0 * np.sin((x + 0.7 * y) / 430.0) + 30.0 * np.sin(x / 97.0) * np.sin(y / 131.0)
-         + 12.0 * np.sin(x / 23.0 + y / 37.0))
-    return z.astype(np.float32)
-
-
-def make_dem(path, n):
-    import rasterio
-    from affine import Affine
-    prof = dict(driver="GTiff", width=n, height=n, count=1, dtype="float32", crs="EPSG:32611",
-                transform=Affine(1, 0, 300000, 0, -1, 3900000), tiled=True, blockxsize=512,
-                blockysize=512, BIGTIFF="YES")
-    with rasterio.open(path, "w", **prof) as dst:
-        from rasterio.windows import Window
-        for r0 in range(0, n, 512):
-            r1 = min(n, r0 + 512)
-            dst.write(terrain(r0, r1, n), 1, window=Window(0, r0, n, r1 - r0))
 
 
 def run_measured(args):
@@ -92,7 +70,7 @@ def main():
     dem = os.path.join(work, f"synthetic_{args.size}.tif")
     if not os.path.exists(dem):
         t = time.perf_counter()
-        make_dem(dem, args.size)
+        write_ridges_dem(dem, args.size)
         print(f"wrote {dem} ({format_size(os.path.getsize(dem))}) in {time.perf_counter() - t:.0f} s")
     out, rep = os.path.join(work, "mask.tif"), os.path.join(work, "mask.json")
     cmd = [BIN, "shadow", dem, out, "--azimuth", str(args.azimuth), "--elevation",

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from conftest import box_terrain, data_path, fractal_terrain, reference_mask
+from hillshade_rt.testing import box_terrain, data_path, fractal_terrain, reference_mask
 from hillshade_rt.algorithms import brute, horizon, smap, sweep
 from hillshade_rt.algorithms.frames import frame_of
 from hillshade_rt.geometry import Grid, sun_rays

@@ -9,8 +9,7 @@ from affine import Affine
 from rasterio.crs import CRS
 
 import hillshade_rt as hr
-from conftest import fractal_terrain, read_band, write_geotiff
-from test_tiling import _split
+from hillshade_rt.testing import fractal_terrain, read_band, split_geotiff, write_geotiff
 
 UTM = CRS.from_epsg(32611)
 
@@ -20,7 +19,8 @@ def tiles(tmp_path):
     z = fractal_terrain(200, 240, 8, relief=250.0)
     tr = Affine(5, 0, 400000, 0, -5, 3800000)
     whole = write_geotiff(tmp_path / "whole.tif", z, tr, UTM)
-    return whole, _split(tmp_path, z, tr, [(0, 100), (100, 200)], [(0, 120), (120, 240)])
+    return whole, split_geotiff(tmp_path, z, tr, UTM, [(0, 100), (100, 200)],
+                                [(0, 120), (120, 240)])
 
 
 def test_shade_in_memory_windows_and_dask_client(tmp_path, tiles):

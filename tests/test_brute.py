@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from conftest import box_terrain, fractal_terrain, reference_mask
+from hillshade_rt.testing import box_terrain, fractal_terrain, reference_mask
 import hillshade_rt
 from hillshade_rt import Grid
 

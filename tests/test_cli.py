@@ -11,7 +11,7 @@ from affine import Affine
 from rasterio.crs import CRS
 
 from hillshade_rt.cli import cli
-from conftest import data_path, fractal_terrain, read_band, write_geotiff
+from hillshade_rt.testing import data_path, fractal_terrain, read_band, write_geotiff
 
 LIDAR = data_path("lidar_dem_1m_utm15n_400x400.tif")
 REPORT_KEYS = {"input", "output", "shape", "spacing_m", "crs", "sun", "algorithm", "backend",

@@ -16,7 +16,7 @@ from hillshade_rt.cli import cli
 from hillshade_rt.errors import HillshadeError
 from hillshade_rt.sun import SunRequest
 from hillshade_rt.sun import day_samples, iso, parse_step, parse_time, time_range, zone
-from conftest import data_path, read_band, write_geotiff
+from hillshade_rt.testing import data_path, read_band, write_geotiff
 
 UTC = dt.timezone.utc
 LIDAR = data_path("lidar_dem_1m_utm15n_400x400.tif")

@@ -11,7 +11,7 @@ from rasterio.crs import CRS
 
 from hillshade_rt.cli import cli
 from hillshade_rt.geometry import WGS84_A, WGS84_B, grid_from_transform, radius_in_azimuth
-from conftest import data_path, fractal_terrain, write_geotiff
+from hillshade_rt.testing import fractal_terrain, write_geotiff
 
 UTM32N = CRS.from_epsg(32632)
 
@@ -118,7 +118,7 @@ def test_global_lunar_grid_shadows_exact_in_border_rows():
     on a global lunar-like grid, border rows included (a check skipping them cannot see the
     pole rows' spacing)."""
     from hillshade_rt.arrays import shadow_mask
-    from conftest import reference_mask
+    from hillshade_rt.testing import reference_mask
     rows = 36
     tr, cell, lat = _global_eqc(rows)
     z = (fractal_terrain(rows, 2 * rows, 11, relief=12000.0)

@@ -5,7 +5,7 @@ import os
 
 from hillshade_rt.algorithms import _jitcache
 from hillshade_rt.cli import cli
-from conftest import data_path
+from hillshade_rt.testing import data_path
 
 LIDAR = data_path("lidar_dem_1m_utm15n_400x400.tif")
 SUN = ["--azimuth", "203.7", "--elevation", "12"]

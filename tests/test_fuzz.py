@@ -42,7 +42,7 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
-from conftest import fractal_terrain
+from hillshade_rt.testing import fractal_terrain
 
 pytestmark = pytest.mark.filterwarnings("ignore")
 

@@ -19,7 +19,7 @@ from hillshade_rt import gpu
 from hillshade_rt.algorithms import ALGORITHMS, GPU_ALGORITHMS, horizon
 from hillshade_rt.errors import HillshadeError
 from hillshade_rt.geometry import Grid, sun_rays
-from conftest import box_terrain, fractal_terrain, read_band, write_geotiff
+from hillshade_rt.testing import box_terrain, fractal_terrain, read_band, write_geotiff
 
 AZIMUTHS = (0.0, 45.0, 90.0, 135.0, 163.0, 203.7, 270.0, 315.0)
 

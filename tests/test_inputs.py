@@ -21,7 +21,7 @@ import hillshade_rt as hr
 from hillshade_rt.cli import cli
 from hillshade_rt.errors import HillshadeError
 from hillshade_rt.io import read_dem
-from conftest import fractal_terrain, read_band, write_geotiff
+from hillshade_rt.testing import fractal_terrain, read_band, write_geotiff
 
 UTM = CRS.from_epsg(32632)
 TR = Affine(10, 0, 500000, 0, -10, 5200000)

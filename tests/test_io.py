@@ -9,7 +9,7 @@ from rasterio.crs import CRS
 
 from hillshade_rt import HillshadeError, read_dem, shadow_mask
 from hillshade_rt.io import parse_pixel_size, parse_raw_shape
-from conftest import box_terrain, data_path, fractal_terrain, read_band, write_geotiff
+from hillshade_rt.testing import box_terrain, data_path, fractal_terrain, write_geotiff
 
 UTM = CRS.from_epsg(32611)
 

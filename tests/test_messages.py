@@ -13,7 +13,7 @@ import hillshade_rt as hr
 from hillshade_rt.cli import cli
 from hillshade_rt.errors import HillshadeError
 from hillshade_rt.run import report
-from conftest import data_path, fractal_terrain, write_geotiff
+from hillshade_rt.testing import data_path, fractal_terrain, write_geotiff
 
 LIDAR = data_path("lidar_dem_1m_utm15n_400x400.tif")
 SRTM = data_path("jacksboro_fault_srtm3_mpl_403x344.tif")       # geographic (EPSG:4326)

@@ -11,22 +11,17 @@ from __future__ import annotations
 
 import math
 import os
-import sys
 
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
-
-from conftest import data_path, reference_mask
-
-sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "benchmarks"))
-import terrain  # noqa: E402
 
 from hillshade_rt import read_dem
 from hillshade_rt.algorithms import auto, bounds, brute, smap
 from hillshade_rt.algorithms.frames import uniform_rays
 from hillshade_rt.algorithms.pyramid import MaxPyramid, _levels
 from hillshade_rt.geometry import Grid, curvature_per_m2, sun_rays
+from hillshade_rt.testing import data_path, reference_mask, spectral
 
 SETTINGS = settings(max_examples=int(os.environ.get("HILLSHADE_PYRAMID_EXAMPLES", "400")),
                     deadline=None, derandomize=True, database=None,
@@ -39,8 +34,8 @@ def _terrain(kind: str, rows: int, cols: int, seed: int, relief: float) -> np.nd
         z = rng.random((rows, cols)) * relief
     elif kind == "spectral":
         n = max(rows, cols)
-        z = terrain.spectral(n, float(rng.choice([2.0, 2.4, 3.2])), seed=seed,
-                             relief=relief)[:rows, :cols]
+        z = spectral(n, float(rng.choice([2.0, 2.4, 3.2])), seed=seed,
+                     relief=relief)[:rows, :cols]
     elif kind == "plateaus":   # flat tops and cliffs: ties between the ray and the terrain
         z = np.round(rng.random((rows, cols)) * 4) * (relief / 4)
     else:                      # steps of integer heights on integer spacing: exact ties

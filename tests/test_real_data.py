@@ -7,7 +7,7 @@ import functools
 import numpy as np
 import pytest
 
-from conftest import data_path, reference_mask
+from hillshade_rt.testing import data_path, reference_mask
 import hillshade_rt
 from hillshade_rt import read_dem
 

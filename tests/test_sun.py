@@ -17,7 +17,7 @@ from hillshade_rt.errors import HillshadeError
 from hillshade_rt.geometry import Grid, curvature_per_m2, grid_from_transform, sun_rays
 from hillshade_rt.sun import (Atmosphere, Region, SunOver, disk_fraction, parse_step, parse_time,
                               solar_position, zone)
-from conftest import fractal_terrain, read_band, write_geotiff
+from hillshade_rt.testing import fractal_terrain, read_band, write_geotiff
 
 # a 3 km square of 30 m cells near the SPA report's site (Golden, Colorado), UTM 13N
 GOLDEN = Affine(30.0, 0, 476000.0, 0, -30.0, 4400000.0)

@@ -21,7 +21,7 @@ import pytest
 import hillshade_rt
 from hillshade_rt.algorithms import ALGORITHMS, brute, horizon, sweep
 from hillshade_rt.geometry import Grid, grid_from_transform, sun_rays
-from conftest import fractal_terrain
+from hillshade_rt.testing import fractal_terrain
 
 ALGOS = ("brute", "smap", "horizon", "sweep")
 

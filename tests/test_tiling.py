@@ -17,7 +17,8 @@ from hillshade_rt.earth import dem_body
 from hillshade_rt.errors import HillshadeError
 from hillshade_rt.io import read_dem
 from hillshade_rt.sun import SunOver
-from conftest import data_path, fractal_terrain, read_band, write_geotiff
+from hillshade_rt.testing import (data_path, fractal_terrain, read_band, split_geotiff,
+                                  write_geotiff)
 
 LIDAR = data_path("lidar_dem_1m_utm15n_400x400.tif")
 EVEREST = data_path("everest_srtm3_voids_crop200.tif")
@@ -239,16 +240,6 @@ def test_cli_memory_too_small_is_one_line_and_no_output(tmp_path, runner):
     assert r.exit_code == 2 and "--max-memory" in r.stderr
 
 
-def _split(tmp_path, z, transform, cuts_r, cuts_c, nodata=None):
-    paths = []
-    for i, (r0, r1) in enumerate(cuts_r):
-        for j, (c0, c1) in enumerate(cuts_c):
-            t = transform @ Affine.translation(c0, r0)
-            paths.append(write_geotiff(tmp_path / f"tile_{i}{j}.tif", z[r0:r1, c0:c1], t, UTM,
-                                       nodata))
-    return paths
-
-
 def test_mosaic_of_tiles_is_one_surface(tmp_path, runner):
     """A ridge in one tile shadows the next: the mosaic equals the whole DEM, a tile alone does
     not (the classic tile-edge error)."""
@@ -256,7 +247,8 @@ def test_mosaic_of_tiles_is_one_surface(tmp_path, runner):
     z[140:150, 170:178] = 400.0     # a tower near the tiles' corner
     tr = Affine(5, 0, 400000, 0, -5, 3800000)
     whole = write_geotiff(tmp_path / "whole.tif", z, tr, UTM)
-    tiles = _split(tmp_path, z, tr, [(0, 150), (150, 300)], [(0, 175), (175, 360)])
+    tiles = split_geotiff(tmp_path, z, tr, UTM, [(0, 150), (150, 300)],
+                          [(0, 175), (175, 360)])
     a, b, one = tmp_path / "a.tif", tmp_path / "b.tif", tmp_path / "one.tif"
     sun = ["--azimuth", "291", "--elevation", "7"]
     assert _run(runner, ["shadow", whole, str(a)] + sun).exit_code == 0
@@ -283,7 +275,8 @@ def test_mosaic_one_output_per_tile(tmp_path, runner, extra):
     z[120:128, 140:146] = 500.0
     tr = Affine(5, 0, 400000, 0, -5, 3800000)
     whole = write_geotiff(tmp_path / "whole.tif", z, tr, UTM)
-    tiles = _split(tmp_path, z, tr, [(0, 125), (125, 260)], [(0, 143), (143, 300)])
+    tiles = split_geotiff(tmp_path, z, tr, UTM, [(0, 125), (125, 260)],
+                          [(0, 143), (143, 300)])
     sun = ["--time", "2026-03-02T07:20-08:00", "--time", "2026-03-02T17:05-08:00"]
     ref = tmp_path / "ref.tif"
     assert _run(runner, ["shadow", whole, str(ref)] + sun).exit_code == 0

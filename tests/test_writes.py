@@ -23,7 +23,7 @@ from rasterio.crs import CRS
 from hillshade_rt import writes
 from hillshade_rt.cli import cli
 from hillshade_rt.errors import HillshadeError
-from conftest import data_path, fractal_terrain, read_band, write_geotiff
+from hillshade_rt.testing import data_path, fractal_terrain, read_band, write_geotiff
 
 LIDAR = data_path("lidar_dem_1m_utm15n_400x400.tif")
 SUN = ["--azimuth", "203.7", "--elevation", "12"]
