@@ -85,13 +85,16 @@ def main():
     print(f"{args.size} x {args.size} float32 ({format_size(args.size ** 2 * 4)}), "
           f"--max-memory {args.max_memory}: peak RSS {format_size(peak)} "
           f"({100 * peak / limit:.0f} % of the limit) -> {'OK' if peak <= limit else 'OVER'}")
-    print(f"  mode {proc['mode']}, {proc['windows']} windows, largest {proc['largest_window']}, "
-          f"halo cells {100 * proc['halo_cells_fraction']:.1f} %, read beyond the output "
-          f"{100 * proc['bytes_read_beyond_output_fraction']:.1f} %, carried "
-          f"{format_size(proc['bytes_carried'])}"
-          + (f", SMap cells coloured beyond the output "
-             f"{100 * proc['smap_coloured_beyond_output_fraction']:.1f} %"
-             if "smap_coloured_beyond_output_fraction" in proc else ""))
+    if "windows" not in proc:       # it fitted in memory (a small --size)
+        print(f"  mode {proc['mode']}: the DEM fitted in --max-memory, no windows")
+    else:
+        print(f"  mode {proc['mode']}, {proc['windows']} windows, largest "
+              f"{proc['largest_window']}, halo cells {100 * proc['halo_cells_fraction']:.1f} %, "
+              f"read beyond the output {100 * proc['bytes_read_beyond_output_fraction']:.1f} %, "
+              f"carried {format_size(proc['bytes_carried'])}"
+              + (f", SMap cells coloured beyond the output "
+                 f"{100 * proc['smap_coloured_beyond_output_fraction']:.1f} %"
+                 if "smap_coloured_beyond_output_fraction" in proc else ""))
     print(f"  wall {secs:.1f} s; stages {json.dumps({k: round(v, 1) for k, v in doc['seconds'].items()})}; "
           f"{doc['mpix_per_s']:.1f} Mpix/s in compute")
     # compare a crop with an in-memory run that holds every cell able to shadow it
