@@ -4,7 +4,9 @@ DEM's valid cells and height range (``auto``'s survey, ``sweep``, ``bounds``, th
 read's nodata-to-NaN pass that finds them on the way (``clean_heights``)."""
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
+
+from ._jitcache import njit
 
 
 @njit(parallel=True, cache=True)
@@ -48,6 +50,12 @@ def valid_range(z):
     return n.sum(), lo.min() if rows else np.inf, hi.max() if rows else -np.inf
 
 
+def z_range(z):
+    """(lowest, highest valid height, whether there are voids) in one pass, no temporaries."""
+    n, lo, hi = valid_range(z)
+    return float(lo), float(hi), bool(n < z.size)
+
+
 @njit(cache=True)
 def _clean_line(line, nd, use_nodata):
     nan = np.float32(np.nan)
@@ -76,6 +84,12 @@ def clean_heights(z, nodata, use_nodata):
     for r in prange(rows):
         n[r], lo[r], hi[r] = _clean_line(z[r], nd, use_nodata)
     return n.sum(), lo.min() if rows else np.inf, hi.max() if rows else -np.inf
+
+
+def z_range(z):
+    """(lowest, highest valid height, whether there are voids) in one pass, no temporaries."""
+    n, lo, hi = valid_range(z)
+    return float(lo), float(hi), bool(n < z.size)
 
 
 @njit(parallel=True, cache=True)
