@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .algorithms import REGISTRY, lookup
 from .errors import HillshadeError
 from .geometry import (REFRACTION_K, WGS84_A, WGS84_B, Grid, SunRays, curvature_per_m2,
                        radius_in_azimuth, sun_rays)
@@ -186,10 +187,7 @@ class Shader:
                  halo_ready: bool = False, local_range: tuple[float, float] | None = None,
                  carry=None, place=None, sun_field: bool = True,
                  survey: tuple[int, float, float] | None = None):
-        from .algorithms import ALGORITHMS
-        if algorithm not in ALGORITHMS:
-            raise HillshadeError(f"unknown algorithm {algorithm!r}; choose one of "
-                                 f"{', '.join(ALGORITHMS)}")
+        lookup(algorithm)       # an unknown name: a HillshadeError listing the known ones
         self.z, self.grid = z, grid
         self.algorithm, self.options, self.backend = algorithm, dict(options or {}), backend
         if zrange is None:
@@ -359,7 +357,7 @@ class Shader:
 
     def cast(self, region: Region, stats: dict | None = None) -> np.ndarray:
         """uint8 cast-shadow mask of ``region`` (1 shadow, 0 lit, 255 void)."""
-        from .algorithms import ALGORITHMS, auto, brute
+        from .algorithms import auto, brute
         from .algorithms.frames import uniform_rays
         sub = self.z[region.rows, region.cols]
         if region.elevation <= 0:     # night
@@ -397,7 +395,7 @@ class Shader:
         elif self.backend == "gpu":
             out = self._gpu_dem(z, whole).shadow_mask(rays, algorithm, zmax, stats, **options)
         else:
-            out = ALGORITHMS[algorithm](z, rays, zmax, stats, **options)
+            out = REGISTRY[algorithm].cpu(z, rays, zmax, stats, **options)
         curved_natively = by_brute or algorithm in ("brute", "bounds") or (
             algorithm == "horizon" and options.get("method", "scan") == "scan")
         if rays.curved and not curved_natively:
@@ -494,7 +492,8 @@ KINDS = ("shadow", "classes", "hillshade", "sun")
 def field_method(algorithm: str, options: dict, soft: bool) -> bool:
     """Whether this method marches each cell with its own sun when the sun varies across the
     raster (``Shader.field_ok``; ``tiling.Job.pieces`` plans such windows)."""
-    return (not soft and algorithm in ("auto", "brute", "bounds")
+    spec = REGISTRY.get(algorithm)
+    return (not soft and spec is not None and spec.field_march
             and options.get("pyramid", True) is not False)
 
 

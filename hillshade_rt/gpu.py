@@ -277,14 +277,14 @@ class GpuDem:
                     stats: dict | None = None, **options) -> np.ndarray:
         """The mask for one sun (``geometry.sun_rays``) by ``algorithm``; the heights stay on the
         device for the next call."""
-        from .algorithms import GPU_ALGORITHMS, gpu_unsupported
+        from .algorithms import REGISTRY, gpu_unsupported
         why = gpu_unsupported(algorithm, options)
         if why:
             raise HillshadeError(why)
         if not np.isfinite(self.zmax):     # nothing but voids
             return np.full(self.shape, 255, np.uint8)
-        return GPU_ALGORITHMS[algorithm](self, rays, self.zmax if zmax is None else zmax, stats,
-                                         **options)
+        return REGISTRY[algorithm].gpu(self, rays, self.zmax if zmax is None else zmax, stats,
+                                       **options)
 
     def report(self) -> dict:
         """What the run report shows of the GPU."""

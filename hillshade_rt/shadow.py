@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .algorithms import ALGORITHMS
+from .algorithms import REGISTRY, lookup
 from .errors import HillshadeError
 from .geometry import Grid, heights_and_grid, sun_rays
 
@@ -27,7 +27,7 @@ def warm_up(algorithm: str, grid: Grid | None = None, azimuth: float = 203.7,
         z[0, 0] = 1.0    # a non-flat DEM, so that no kernel is skipped
         GpuDem(z).shadow_mask(rays, algorithm, None, None, **options)
     else:
-        ALGORITHMS[algorithm](z, rays, 0.0, None, **options)
+        REGISTRY[algorithm].cpu(z, rays, 0.0, None, **options)
 
 
 def shadow_mask(heights: np.ndarray, azimuth: float, elevation: float,
@@ -41,9 +41,9 @@ def shadow_mask(heights: np.ndarray, azimuth: float, elevation: float,
     azimuth, elevation: degrees (clockwise from north; above the horizon, 0 < E <= 90).
     spacing: ground metres per cell, ``d``, ``(dx, dy)`` or a :class:`Grid` (per-row spacing,
     orientation) such as ``read_dem(...).grid``.
-    algorithm: one of ``ALGORITHMS``: ``auto`` (default: the fastest exact method), ``bounds``,
-    ``brute`` (exact reference), ``smap`` (exact),
-    ``horizon`` (exact with its default ``method="scan"``), ``sweep`` (approximate).
+    algorithm: one of ``algorithms.REGISTRY``: ``auto`` (default: the fastest exact method),
+    ``bounds``, ``brute`` (exact reference), ``smap`` (exact), ``horizon`` (exact with its
+    default ``method="scan"``), ``sweep`` (approximate).
     stats: optional dict that receives the algorithm's figures (e.g. smap's ``black_fraction``);
     on the GPU also ``stats["gpu"]`` (device, kernel and transfer times, bytes moved).
     backend: ``"cpu"``, ``"gpu"`` or ``"auto"`` (the GPU when numba-cuda finds a CUDA device and
@@ -53,11 +53,7 @@ def shadow_mask(heights: np.ndarray, azimuth: float, elevation: float,
     ``sample_spacing``; sweep: ``exact_steps``).
     """
     z, spacing = heights_and_grid(heights, spacing)
-    try:
-        kernel = ALGORITHMS[algorithm]
-    except KeyError:
-        raise HillshadeError(
-            f"unknown algorithm {algorithm!r}; choose one of {', '.join(ALGORITHMS)}") from None
+    spec = lookup(algorithm)
     rays = sun_rays(spacing, azimuth, elevation)
     if choose_backend(backend, algorithm, options) == "gpu":
         from .gpu import GpuDem
@@ -69,7 +65,7 @@ def shadow_mask(heights: np.ndarray, azimuth: float, elevation: float,
     zmax = float(np.nanmax(z)) if np.isfinite(z).any() else np.nan
     if np.isnan(zmax):
         return np.full(z.shape, 255, dtype=np.uint8)
-    return kernel(z, rays, zmax, stats, **options)
+    return spec.cpu(z, rays, zmax, stats, **options)
 
 
 def choose_backend(backend: str, algorithm: str, options: dict) -> str:

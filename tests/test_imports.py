@@ -5,7 +5,8 @@ Every module of ``hillshade_rt`` is parsed with ``ast`` (not imported): every ``
 resolved. ``from pkg import name`` is an import of ``pkg.name`` when that is a module, else of
 ``pkg``; importing ``a.b.c`` also imports the packages ``a`` and ``a.b``, except those the
 importing module lies in itself (they are already being imported). Dynamic imports
-(``importlib.import_module``: the package's lazy public names) are not seen.
+(``importlib.import_module``: the package's lazy public names, the registry's ``FunctionRef``)
+are not seen; ``test_registry_refs_point_into_algorithms`` checks the registry's.
 """
 
 from __future__ import annotations
@@ -180,6 +181,24 @@ def test_algorithms_and_gpu_use_no_private_names_of_other_modules():
            if _in_algorithms(name) or name == "hillshade_rt.gpu"
            for use in private_uses(name, path, known)]
     assert not bad
+
+
+def test_registry_refs_point_into_algorithms():
+    """The registry's lazy references (imported at their first call) name functions of modules
+    in algorithms/: the one import the walk cannot see stays inside the package, downward."""
+    from hillshade_rt.algorithms import REGISTRY
+    known = modules()
+    for spec in REGISTRY.values():
+        for ref in filter(None, (spec.cpu, spec.gpu)):
+            assert f"{ALGORITHMS}.{ref.module}" in known, ref
+            assert callable(ref.load()), ref
+
+
+def test_registry_imports_no_algorithm():
+    """Importing the registry imports no algorithm (no numpy, no numba): the command line
+    builds its options from it before any of that is loaded."""
+    edges = graph()
+    assert edges[ALGORITHMS] <= {"hillshade_rt.errors"}
 
 
 def test_no_cycles_in_package():
