@@ -15,7 +15,7 @@ message; nothing is left half-written.
     >>> rep["processing"]["windows"], rep["processing"]["bytes_read_beyond_output_fraction"]
 
 For arrays already in memory use :func:`~hillshade_rt.shadow_mask` or
-:class:`~hillshade_rt.engine.Shader` instead.
+:class:`~hillshade_rt.shading.Shader` instead.
 """
 
 from __future__ import annotations
@@ -72,7 +72,8 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
     Returns the report (what ``--report`` writes; also written to ``report`` when given)."""
     from .run import ReadOptions, RunOptions, ShadeConfig
     from .run import shade as run_shade
-    from .run.config import OPTION_OWNERS, PRODUCTS, algorithm_for, algorithm_options as owned
+    from .algorithms import algorithm_for, options_for
+    from .run.config import PRODUCTS
     from .sun import DEFAULT_TOLERANCE
     from .writes import virtual_outputs
     if product not in PRODUCTS:
@@ -86,14 +87,11 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
         raise HillshadeError("no DEM given")
     if output is None and output_pattern is None:
         raise HillshadeError("give output or output_pattern")
-    bad = set(algorithm_options or {}) - set(OPTION_OWNERS)
-    if bad:
-        raise HillshadeError(f"unknown algorithm option(s) {', '.join(sorted(bad))} (known: "
-                             f"{', '.join(sorted(OPTION_OWNERS))})")
     if scale is not None and product != "hillshade":
         raise HillshadeError("scale applies to product='hillshade'")
-    algorithm = algorithm_for(algorithm, **(algorithm_options or {}))
-    options = owned(algorithm, **(algorithm_options or {}))
+    given = dict(algorithm_options or {})
+    algorithm = algorithm_for(algorithm, given)
+    options = options_for(algorithm, given)
     sun = dict(azimuth=azimuth, elevation=elevation,
                time=tuple(str(_iso(t)) for t in ([times] if isinstance(times, (str, _dt.datetime))
                                                  else times)),

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .algorithms import ALGORITHMS
+from .algorithms import lookup
 from .errors import HillshadeError
 from .geometry import Grid, check_elevation, heights_and_grid, normalize_azimuth
 from .shading import choose_backend
@@ -45,7 +45,7 @@ def shadow_mask(heights, azimuth: float, elevation: float,
     azimuth, elevation: degrees (clockwise from north; above the horizon, 0 < E <= 90).
     spacing: required for an array: ground metres per cell, ``d``, ``(dx, dy)`` or a
     :class:`Grid` (per-row spacing, orientation) such as ``read_dem(...).grid``.
-    algorithm: one of ``ALGORITHMS``: ``auto`` (default: the fastest exact method), ``bounds``,
+    algorithm: one of ``algorithms.REGISTRY``: ``auto`` (default: the fastest exact method), ``bounds``,
     ``brute`` (exact reference), ``smap`` (exact),
     ``horizon`` (exact with its default ``method="scan"``), ``sweep`` (approximate).
     stats: optional dict that receives the algorithm's figures (e.g. smap's ``black_fraction``);
@@ -62,9 +62,7 @@ def shadow_mask(heights, azimuth: float, elevation: float,
     from .shading import Shader, render
     from .sun import SunOver
     z, grid, body = _dem_parts(heights, spacing, body)
-    if algorithm not in ALGORITHMS:
-        raise HillshadeError(
-            f"unknown algorithm {algorithm!r}; choose one of {', '.join(ALGORITHMS)}")
+    lookup(algorithm)     # an unknown name: the error lists the known ones
     azimuth, elevation = normalize_azimuth(azimuth), check_elevation(elevation)
     ran_on = choose_backend(backend, algorithm, options)
     if not np.isfinite(z).any():

@@ -1,16 +1,11 @@
-"""The CUDA backend: finding a GPU, building the CUDA kernels, keeping a DEM on the device.
+"""The CUDA backend's device runtime: finding a GPU, choosing the backend, keeping a DEM on the
+device (:class:`GpuDem`).
 
-Kernels are written next to their CPU versions in ``algorithms/<name>.py`` as plain functions
-decorated with :func:`kernel`. Nothing CUDA is imported until a GPU kernel is first launched: the
-package works without numba-cuda, and ``--backend gpu`` then fails with one line saying so.
-
-**One source for both backends.** A CUDA kernel calls the same ``njit`` functions as the CPU
-kernel (the per-ray math of ``raymath``, the per-cell bodies of each algorithm). :func:`device`
-compiles such a function again with ``numba.cuda.jit(device=True)`` from its plain source
-(``.py_func``), after pointing every ``njit`` function it calls at its own device version. One
-substitution is made on the way: ``raymath.madd`` (``a + b*c``) becomes libdevice's
-``dadd_rn(a, dmul_rn(b, c))``, which the CUDA compiler never fuses into an FMA, so the GPU rounds
-every sample like the CPU and the masks agree bit for bit.
+The kernels themselves are written next to their CPU versions in ``algorithms/<name>.py``, with
+the one-source machinery of ``algorithms/_cuda.py`` (:func:`kernel`, :func:`device`: the same
+``njit`` bodies compiled for the GPU, ``raymath.madd`` never fused into an FMA). This module
+sits above the algorithms: it imports them (the registry, the pyramid, the frames), they never
+import it. Nothing CUDA is imported until a GPU is looked for or a kernel first launched.
 
 **numba's CUDA simulator.** With ``NUMBA_ENABLE_CUDASIM=1`` the kernels run as Python on the CPU,
 thread by thread (slow: small grids only). The tests use it; ``--backend gpu`` runs on it when it
@@ -22,53 +17,17 @@ from __future__ import annotations
 import contextlib
 import os
 import time
-import types
 
 import numpy as np
 
+from .algorithms._cuda import INSTALL_HINT, grid_2d, kernel, numba_cuda, simulator_enabled
 from .errors import HillshadeError
 
-INSTALL_HINT = "pip install 'hillshade-rt[gpu]'"
 PINNED_MIN_BYTES = 1 << 20   # transfers at least this large go through page-locked host memory
-BLOCK_2D = (32, 8)           # threads per block of the per-cell kernels (x: along DEM rows)
-
-
-class _NotLoaded:
-    """Stands for ``numba.cuda`` in the algorithm modules, where kernels are only written; the
-    kernels that :func:`kernel` builds see the real module."""
-
-    def __getattr__(self, name):
-        raise RuntimeError("CUDA kernels run only through hillshade_rt.gpu.kernel")
-
-
-cuda = _NotLoaded()
 
 
 # ------------------------------------------------------------------------------------------
 # finding a GPU
-
-def simulator_enabled() -> bool:
-    return os.environ.get("NUMBA_ENABLE_CUDASIM", "0") not in ("", "0")
-
-
-def _numba_cuda():
-    """``numba.cuda`` (numba-cuda's, or the simulator) or a HillshadeError naming what is
-    missing. Without the numba-cuda package nothing is imported (numba's own deprecated CUDA
-    target is refused anyway, and importing it costs a third of a second of every run)."""
-    import importlib.util
-    if not simulator_enabled() and importlib.util.find_spec("numba_cuda") is None:
-        raise HillshadeError(f"no GPU backend: numba-cuda is not installed ({INSTALL_HINT})")
-    try:
-        from numba import cuda as nc
-    except ImportError:
-        raise HillshadeError(f"no GPU backend: numba-cuda is not installed ({INSTALL_HINT})") \
-            from None
-    if not simulator_enabled() and getattr(nc, "implementation", "") != "NVIDIA":
-        raise HillshadeError(
-            f"no GPU backend: numba-cuda is not installed, and numba's own deprecated CUDA target "
-            f"is not used ({INSTALL_HINT})")
-    return nc
-
 
 def _no_driver_here() -> bool:
     """True on Linux when no NVIDIA driver is loaded (no /dev/nvidiactl, /dev/dxg of WSL or
@@ -84,7 +43,7 @@ def _no_driver_here() -> bool:
 def _runtime():
     """The module whose arrays, streams and events ``GpuDem`` uses (numba.cuda; a test that
     compiles the kernels without a GPU puts a stand-in here)."""
-    return _numba_cuda()
+    return numba_cuda()
 
 
 def _first_line(exc: BaseException) -> str:
@@ -108,7 +67,7 @@ def status() -> tuple[bool, str]:
             if importlib.util.find_spec("numba_cuda") is not None:
                 raise HillshadeError("no usable CUDA GPU: no NVIDIA driver on this machine "
                                      "(no /dev/nvidiactl)")
-        nc = _numba_cuda()
+        nc = numba_cuda()
         if simulator_enabled():
             res = (True, "numba CUDA simulator (NUMBA_ENABLE_CUDASIM=1)")
         else:
@@ -152,76 +111,6 @@ def resolve_backend(backend: str) -> str:
 
 
 # ------------------------------------------------------------------------------------------
-# one source, two targets
-
-_DEVICE: dict = {}
-
-
-def _madd_gpu():
-    from numba.cuda import libdevice
-
-    def madd(a, b, c):
-        return libdevice.dadd_rn(a, libdevice.dmul_rn(b, c))
-    return madd
-
-
-def _retarget(pyfunc):
-    """A copy of ``pyfunc`` whose global names point at device versions of the njit functions it
-    calls, and ``cuda`` at numba.cuda."""
-    from numba.core.registry import CPUDispatcher
-
-    nc = _numba_cuda()
-    g = dict(pyfunc.__globals__)
-    for name in pyfunc.__code__.co_names:
-        obj = g.get(name)
-        if isinstance(obj, CPUDispatcher):
-            g[name] = device(obj)
-        elif isinstance(obj, _NotLoaded):
-            g[name] = nc
-    return types.FunctionType(pyfunc.__code__, g, pyfunc.__name__, pyfunc.__defaults__,
-                              pyfunc.__closure__)
-
-
-def device(fn):
-    """The CUDA device function of the ``njit`` function ``fn`` (built once)."""
-    key = id(fn)
-    if key not in _DEVICE:
-        from .algorithms import raymath
-        nc = _numba_cuda()
-        if fn is raymath.madd and not simulator_enabled():
-            _DEVICE[key] = nc.jit(device=True)(_madd_gpu())
-        else:
-            _DEVICE[key] = nc.jit(device=True)(_retarget(fn.py_func))
-    return _DEVICE[key]
-
-
-class kernel:
-    """Decorator for a CUDA kernel written as a plain function next to its CPU twin; compiled
-    (for the device this process uses) on its first launch: ``k[grid, block, stream](*args)``."""
-
-    def __init__(self, fn):
-        self.py_func = fn
-        self.__doc__ = fn.__doc__
-        self.__name__ = fn.__name__
-        self._compiled = None
-
-    def build(self):
-        if self._compiled is None:
-            nc = _numba_cuda()
-            self._compiled = nc.jit(_retarget(self.py_func))
-        return self._compiled
-
-    def __getitem__(self, config):
-        return self.build()[config]
-
-
-def grid_2d(rows: int, cols: int, block=BLOCK_2D):
-    """(blocks, threads) covering a rows x cols grid; x runs along a row (coalesced)."""
-    bx, by = block
-    return ((cols + bx - 1) // bx, (rows + by - 1) // by), block
-
-
-# ------------------------------------------------------------------------------------------
 # the DEM on the device
 
 class GpuDem:
@@ -240,8 +129,8 @@ class GpuDem:
         if z.dtype != np.float32 or z.ndim != 2:
             raise TypeError("heights must be a 2-D float32 array")
         if zrange is None:
-            from .algorithms.sweep import _z_range
-            zrange = _z_range(z)
+            from .algorithms.counts import z_range
+            zrange = z_range(z)
         self.zmin, self.zmax, self.void = float(zrange[0]), float(zrange[1]), bool(zrange[2])
         self.shape = z.shape
         self.simulator = simulator_enabled()
@@ -388,14 +277,14 @@ class GpuDem:
                     stats: dict | None = None, **options) -> np.ndarray:
         """The mask for one sun (``geometry.sun_rays``) by ``algorithm``; the heights stay on the
         device for the next call."""
-        from .algorithms import GPU_ALGORITHMS, gpu_unsupported
+        from .algorithms import REGISTRY, gpu_unsupported
         why = gpu_unsupported(algorithm, options)
         if why:
             raise HillshadeError(why)
         if not np.isfinite(self.zmax):     # nothing but voids
             return np.full(self.shape, 255, np.uint8)
-        return GPU_ALGORITHMS[algorithm](self, rays, self.zmax if zmax is None else zmax, stats,
-                                         **options)
+        return REGISTRY[algorithm].gpu(self, rays, self.zmax if zmax is None else zmax, stats,
+                                       **options)
 
     def report(self) -> dict:
         """What the run report shows of the GPU."""

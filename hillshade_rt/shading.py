@@ -24,6 +24,7 @@ import math
 
 import numpy as np
 
+from .algorithms import REGISTRY, lookup
 from .errors import HillshadeError
 from .earth import Body, curvature_coefficient, curvature_report, refraction_for
 from .geometry import Grid, SunRays, sun_rays
@@ -100,8 +101,7 @@ def warm_up(algorithm: str, grid: Grid | None = None, azimuth: float = 203.7,
         z[0, 0] = 1.0    # a non-flat DEM, so that no kernel is skipped
         GpuDem(z).shadow_mask(rays, algorithm, None, None, **options)
     else:
-        from .algorithms import ALGORITHMS
-        ALGORITHMS[algorithm](z, rays, 0.0, None, **options)
+        REGISTRY[algorithm].cpu(z, rays, 0.0, None, **options)
 
 
 def choose_backend(backend: str, algorithm: str, options: dict) -> str:
@@ -139,10 +139,7 @@ class Shader:
                  halo_ready: bool = False, local_range: tuple[float, float] | None = None,
                  carry=None, place=None, sun_field: bool = True,
                  survey: tuple[int, float, float] | None = None):
-        from .algorithms import ALGORITHMS
-        if algorithm not in ALGORITHMS:
-            raise HillshadeError(f"unknown algorithm {algorithm!r}; choose one of "
-                                 f"{', '.join(ALGORITHMS)}")
+        lookup(algorithm)       # an unknown name: a HillshadeError listing the known ones
         self.z, self.grid = z, grid
         self.algorithm, self.options, self.backend = algorithm, dict(options or {}), backend
         if zrange is None:
@@ -311,7 +308,7 @@ class Shader:
 
     def cast(self, region: Region, stats: dict | None = None) -> np.ndarray:
         """uint8 cast-shadow mask of ``region`` (1 shadow, 0 lit, 255 void)."""
-        from .algorithms import ALGORITHMS, auto, brute
+        from .algorithms import auto, brute
         from .algorithms.frames import uniform_rays
         sub = self.z[region.rows, region.cols]
         if region.elevation <= 0:     # night
@@ -349,7 +346,7 @@ class Shader:
         elif self.backend == "gpu":
             out = self._gpu_dem(z, whole).shadow_mask(rays, algorithm, zmax, stats, **options)
         else:
-            out = ALGORITHMS[algorithm](z, rays, zmax, stats, **options)
+            out = REGISTRY[algorithm].cpu(z, rays, zmax, stats, **options)
         curved_natively = by_brute or algorithm in ("brute", "bounds") or (
             algorithm == "horizon" and options.get("method", "scan") == "scan")
         if rays.curved and not curved_natively:
@@ -446,7 +443,8 @@ KINDS = ("shadow", "classes", "hillshade", "sun")
 def field_method(algorithm: str, options: dict, soft: bool) -> bool:
     """Whether this method marches each cell with its own sun when the sun varies across the
     raster (``Shader.field_ok``; ``tiling.Job.pieces`` plans such windows)."""
-    return (not soft and algorithm in ("auto", "brute", "bounds")
+    spec = REGISTRY.get(algorithm)
+    return (not soft and spec is not None and spec.field_march
             and options.get("pyramid", True) is not False)
 
 

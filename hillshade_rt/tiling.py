@@ -38,6 +38,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from numba import njit, prange
 
+from .algorithms import REGISTRY
 from .errors import HillshadeError
 from .geometry import Grid
 from .errors import UsageProblem
@@ -51,8 +52,8 @@ READ_CHUNK = 32 << 20     # bytes of source values read at once (bounded scratch
 GDAL_CACHE_MB = 64        # GDAL's block cache during a tiled run (its default is 5 % of RAM)
 
 # bytes per window cell while it is lit (heights, the carried previous window, the algorithm's
-# tables, the mask, the region's copies): an upper bound measured by benchmarks/bigdem.py
-_BYTES_ALGORITHM = {"auto": 13, "bounds": 13, "brute": 13, "smap": 15, "horizon": 19, "sweep": 12}
+# tables, the mask, the region's copies): an upper bound measured by benchmarks/bigdem.py; the
+# algorithm's share is its registry entry's (AlgorithmSpec.bytes_per_cell), the product's here
 _BYTES_PRODUCT = {"shadow": 0, "classes": 6, "hillshade": 22, "sun": 9}
 _BYTES_SOFT = 20
 
@@ -60,7 +61,8 @@ _BYTES_SOFT = 20
 def bytes_per_cell(algorithm: str, kind: str = "shadow", soft: bool = False,
                    self_shadow: bool = False) -> int:
     """Working memory per window cell of one run (an upper bound)."""
-    n = _BYTES_ALGORITHM.get(algorithm, 20) + _BYTES_PRODUCT.get(kind, 22)
+    spec = REGISTRY.get(algorithm)
+    n = (spec.bytes_per_cell if spec is not None else 20) + _BYTES_PRODUCT.get(kind, 22)
     if soft:
         n += _BYTES_SOFT
     if self_shadow and kind == "shadow":

@@ -18,12 +18,14 @@ import time
 def main() -> int:
     import numpy as np
 
+    from .algorithms import REGISTRY
     from .algorithms._jitcache import cache_dir, cached
     from .shading import Shader
     from .earth import Body
     from .geometry import Grid
 
-    todo = [m for m in ("bounds", "brute", "pyramid", "relief", "counts") if not cached(m)]
+    # the default's kernels, the Horn normals and the read's nodata pass
+    todo = [m for m in REGISTRY["auto"].kernel_modules + ("relief", "counts") if not cached(m)]
     if not todo:
         return 0
     print(f"hillshade-rt: compiling the {', '.join(todo)} kernels once (cached in "

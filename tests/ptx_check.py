@@ -26,7 +26,7 @@ def main() -> int:
     from numba import cuda
 
     from hillshade_rt import gpu
-    from hillshade_rt.algorithms import GPU_ALGORITHMS, horizon
+    from hillshade_rt.algorithms import GPU_ALGORITHMS, _cuda, horizon
     from hillshade_rt.geometry import Grid, sun_rays
 
     # device functions are compiled for "the current device": make that an H100 without a GPU
@@ -68,13 +68,13 @@ def main() -> int:
             sig = tuple(numba.typeof(a.view(np.ndarray) if isinstance(a, HostArray) else a)
                         for a in args)
             if (self.__name__, sig) not in compiled:
-                ptx, _ = cuda.compile_ptx(gpu._retarget(self.py_func), sig, cc=CC)
+                ptx, _ = cuda.compile_ptx(_cuda.retarget(self.py_func), sig, cc=CC)
                 compiled[(self.__name__, sig)] = ptx
         return run
 
     gpu._STATUS[:] = [(True, "PTX check (no device)")]
     gpu._runtime = lambda: runtime
-    gpu.kernel.__getitem__ = launch
+    _cuda.kernel.__getitem__ = launch
 
     z = np.random.default_rng(1).random((12, 14), dtype=np.float32) * 50
     z[3, 4] = np.nan

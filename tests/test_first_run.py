@@ -56,3 +56,18 @@ def test_warm_step_compiles_what_a_first_run_needs(monkeypatch, capsys):
     monkeypatch.setattr(_jitcache, "cached", lambda m: True)
     calls.clear()
     assert warm.main() == 0 and calls == [] and capsys.readouterr().err == ""
+
+
+def test_a_kernel_module_imported_alone_caches_in_this_versions_folder(tmp_path):
+    """Kernel modules take ``njit`` from ``_jitcache``: one imported straight (``io.py`` imports
+    ``counts`` alone, the registry imports none) still caches in this version's digest folder,
+    and numba's setting is the user's again afterwards."""
+    import subprocess
+    import sys
+    code = ("import numba, hillshade_rt.algorithms.counts as c, hillshade_rt.algorithms._jitcache "
+            "as j; print(c.valid_range._cache._cache_path.startswith(j.cache_dir() + '/'), "
+            "j.cache_dir().startswith(numba.config.CACHE_DIR), numba.config.CACHE_DIR)")
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
+    assert p.returncode == 0, p.stderr
+    assert p.stdout.split() == ["True", "True", str(tmp_path)]

@@ -108,12 +108,12 @@ def test_bounds_in_narrow_strips_equal_the_plain_march(case, nstrips):
     if not np.isfinite(z).any():
         return
     rays = sun_rays(grid, az, el, curv)
-    real = bounds._strips
+    real = bounds.strip_count
     try:
-        bounds._strips = lambda P, s, K: max(1, min(nstrips, P // max(12, int(np.ceil(K * s)) + 8)))
+        bounds.strip_count = lambda P, s, K: max(1, min(nstrips, P // max(12, int(np.ceil(K * s)) + 8)))
         np.testing.assert_array_equal(bounds.shadow_mask(z, rays), _plain(z, rays))
     finally:
-        bounds._strips = real
+        bounds.strip_count = real
 
 
 @pytest.mark.parametrize("az", [163.0, 203.7, 290.0, 20.0])

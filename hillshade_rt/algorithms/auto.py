@@ -111,7 +111,7 @@ def choose(shape: tuple[int, int], valid_fraction: float, zrange: tuple[float, f
     steps = reach(shape, zrange, rays)
     uniform = uniform_rays(rays)
     threads = max(1, numba.get_num_threads())
-    strips = bounds._strips(P, abs(float(rays.step_other[mid])), bounds.EXACT_STEPS)
+    strips = bounds.strip_count(P, abs(float(rays.step_other[mid])), bounds.EXACT_STEPS)
     ns_bounds = bounds_ns(uniform, valid_fraction) / min(1.0, strips / threads)
     ns_brute = brute_ns(steps, valid_fraction)
     rate_bounds, rate_brute = 1000.0 / ns_bounds, 1000.0 / ns_brute

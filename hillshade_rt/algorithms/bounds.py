@@ -54,14 +54,16 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
 from ..geometry import SunRays
 from . import brute
+from ._jitcache import njit
+from .counts import z_range
 from .field import lattice_scale, ray_of
 from .frames import Frame, frame_of, reach, steps_over
-from .sweep import _load_lines, _store_lines, _z_range, strip_bounds, wave_block, wave_steps
-from .sweep import _strips as sweep_strips
+from .sweep import load_lines, store_lines, strip_bounds, wave_block, wave_steps
+from .sweep import strip_count as sweep_strips
 
 BINS = 2           # bins per segment between two cell centres (a power of two; 4 bins left
                    # half as many cells undecided and took 20 % longer)
@@ -676,7 +678,7 @@ def _strip_block(z, ZB, SU, SL, RO, v_top, nb, p0, p1, L, P, pad, s_c, M, spread
     # segment p0 - 1, a segment of the strip behind, which has not reached those lines yet
     # (with two strips of 85 positions, 7 cells of a column differed from the plain march).
     # Both strips compute that segment of a line from the same values: the same bounds.
-    _load_lines(z, ZL, v_top, nb, max(p0 - 1, 0), p1, dom_col, flip_line, flip_pos)
+    load_lines(z, ZL, v_top, nb, max(p0 - 1, 0), p1, dom_col, flip_line, flip_pos)
     use = fld[0]
     if use:                           # a sun per cell: the heights less the field's potential
         _less_potential(ZB, v_top, nb, max(p0 - 1, 0), p1, fld[16], fld[17])
@@ -727,7 +729,7 @@ def _strip_block(z, ZB, SU, SL, RO, v_top, nb, p0, p1, L, P, pad, s_c, M, spread
         else:
             _decide_positions(ZB, SU, SL, R, v, p0, p1, P, s_arr, rise_arr, curv_arr, ok_arr, K,
                               pad, margin, s_c, RO[row, p0:p1], W, D, PF)
-    _store_lines(out, RO, v_top, nb, p0, p1, dom_col, flip_line, flip_pos)
+    store_lines(out, RO, v_top, nb, p0, p1, dom_col, flip_line, flip_pos)
 
 
 @njit(parallel=True, cache=True)
@@ -880,8 +882,8 @@ def _pyramid_for_open(out: np.ndarray, pyramid, steps: float):
 MIN_STRIP = 64     # fewest positions per strip: a 400-column tile still takes two threads
 
 
-def _strips(P: int, s: float, K: int) -> int:
-    """The sweep's strips (``sweep._strips``), wider by the bins' reach on the next line, and
+def strip_count(P: int, s: float, K: int) -> int:
+    """The sweep's strips (``sweep.strip_count``), wider by the bins' reach on the next line, and
     as narrow as ``MIN_STRIP`` (the sweep's 256 left small tiles to one thread: 1.6x slower)."""
     return sweep_strips(P, s, K, 8, MIN_STRIP)
 
@@ -896,7 +898,7 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None,
     if z.dtype != np.float32 or z.ndim != 2:
         raise TypeError("heights must be a 2-D float32 array")
     out = np.empty(z.shape, np.uint8)
-    zmin, zhi = (_z_range(z)[:2] if zrange is None else (float(zrange[0]), float(zrange[1])))
+    zmin, zhi = (z_range(z)[:2] if zrange is None else (float(zrange[0]), float(zrange[1])))
     if not math.isfinite(zmin):      # nothing but voids
         out[...] = 255
         return out
@@ -919,7 +921,7 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None,
             s, rise, curv = np.full(L, s_lo), np.full(L, r_lo), np.full(L, c_lo)
             ok, per_line = np.ones(L, np.bool_), True
         _bounds_sweep(z, L, P, f.dom_col, f.flip_line, f.flip_pos, s_lo, s_hi, d_up, d_lo, s,
-                      rise, curv, ok, per_line, K, margin, _strips(P, s_hi, K), out,
+                      rise, curv, ok, per_line, K, margin, strip_count(P, s_hi, K), out,
                       _field_args())
     else:
         out[...] = np.where(np.isnan(z), np.uint8(255), np.uint8(UNDECIDED))
@@ -942,7 +944,7 @@ def shadow_mask_field(z: np.ndarray, grid, vec: np.ndarray, curv_coef: float = 0
     if z.dtype != np.float32 or z.ndim != 2:
         raise TypeError("heights must be a 2-D float32 array")
     out = np.empty(z.shape, np.uint8)
-    zmin, zhi = (_z_range(z)[:2] if zrange is None else (float(zrange[0]), float(zrange[1])))
+    zmin, zhi = (z_range(z)[:2] if zrange is None else (float(zrange[0]), float(zrange[1])))
     if not math.isfinite(zmin):
         out[...] = 255
         return out
@@ -964,9 +966,9 @@ def shadow_mask_field(z: np.ndarray, grid, vec: np.ndarray, curv_coef: float = 0
         d_up, d_lo, margin = _drops(zmin - ph_hi, zmax - ph_lo, L, K, r_lo, r_hi, c_lo, c_hi)
         one = np.zeros(1)
         _bounds_sweep(z, L, P, f.dom_col, f.flip_line, f.flip_pos, s_lo, s_hi, d_up, d_lo, one,
-                      one, one, np.ones(1, np.bool_), False, K, margin, _strips(P, s_hi, K), out,
-                      _field_args(vec, grid, curv_coef, f, L,
-                                  (A, B, s_lo, s_hi, r_lo, r_hi, c_lo, c_hi), place))
+                      one, one, np.ones(1, np.bool_), False, K, margin, strip_count(P, s_hi, K),
+                      out, _field_args(vec, grid, curv_coef, f, L,
+                                       (A, B, s_lo, s_hi, r_lo, r_hi, c_lo, c_hi), place))
     else:
         out[...] = np.where(np.isnan(z), np.uint8(255), np.uint8(UNDECIDED))
     left = field.refine(z, grid, vec, curv_coef, zmax, out, UNDECIDED,

@@ -16,10 +16,11 @@ void skip it, so a void casts no shadow).
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
 from ..geometry import SunRays
-from ..gpu import cuda, kernel
+from ._cuda import cuda, kernel
+from ._jitcache import njit
 from .counts import any_code
 from .pyramid import pyramid_args, ray_is_blocked_pyramid
 from .raymath import ray_is_blocked

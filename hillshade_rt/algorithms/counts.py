@@ -4,7 +4,9 @@ DEM's valid cells and height range (``auto``'s survey, ``sweep``, ``bounds``, th
 read's nodata-to-NaN pass that finds them on the way (``clean_heights``)."""
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
+
+from ._jitcache import njit
 
 
 @njit(parallel=True, cache=True)
@@ -46,6 +48,12 @@ def valid_range(z):
                 c = max(c, h)
         n[r], lo[r], hi[r] = a, b, c
     return n.sum(), lo.min() if rows else np.inf, hi.max() if rows else -np.inf
+
+
+def z_range(z):
+    """(lowest, highest valid height, whether there are voids) in one pass, no temporaries."""
+    n, lo, hi = valid_range(z)
+    return float(lo), float(hi), bool(n < z.size)
 
 
 @njit(cache=True)

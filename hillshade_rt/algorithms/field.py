@@ -11,7 +11,7 @@ smooth to second order between lattice nodes (the tiles' one vector per tile is 
 A cell whose own sun is at or below the horizon is in shadow (night), as for one vector.
 
 ``cell_ray`` is a plain njit function without allocation, shared by the CPU kernel and the CUDA
-kernel (``gpu.device``).
+kernel (``_cuda.device``).
 """
 
 from __future__ import annotations
@@ -19,9 +19,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
-from ..gpu import cuda, kernel
+from ._cuda import cuda, kernel
+from ._jitcache import njit
 from .counts import any_code
 from .frames import dem_index
 from .pyramid import pyramid_args, ray_is_blocked_pyramid

@@ -20,10 +20,10 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
 from ..geometry import SunRays
-from ..gpu import cuda, kernel
+from ._cuda import cuda, kernel
+from ._jitcache import njit
 
 
 @dataclass(frozen=True)

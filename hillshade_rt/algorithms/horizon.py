@@ -31,11 +31,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
 from ..geometry import SunRays
+from ._cuda import cuda, kernel
+from ._jitcache import njit
 from .frames import frame_of, uniform_rays
-from ..gpu import cuda, kernel
 from .pyramid import climb, pyramid_args, samples_left
 from .raymath import line_position, madd, ray_origin, ray_sample, terrain_on_line
 

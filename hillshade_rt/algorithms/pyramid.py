@@ -30,8 +30,9 @@ plain march plus one pyramid read per step.
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
+from ._jitcache import njit
 from .raymath import line_position, madd, ray_origin, terrain_on_line
 
 MAX_LEVELS = 15

@@ -18,7 +18,8 @@ interpolated between the two nearest cell centres. Outside the raster there is n
 import math
 
 import numpy as np
-from numba import njit
+
+from ._jitcache import njit
 
 # A position within EDGE_EPS of the first or last cell centre of a line counts as on it: this
 # absorbs the rounding of ``start + k * step`` without changing the model.

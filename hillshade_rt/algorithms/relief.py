@@ -14,7 +14,9 @@ raster's corners (gdaldem's ``-compute_edges`` extrapolates likewise). A void ce
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
+
+from ._jitcache import njit
 
 
 @njit(cache=True, inline="always")

@@ -48,12 +48,13 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
 from ..errors import HillshadeError
 from ..geometry import Grid, SunRays, heights_and_grid, sun_rays
+from ._cuda import cuda, kernel
+from ._jitcache import njit
 from .frames import Frame, frame_of, reach, uniform_rays
-from ..gpu import cuda, kernel
 from .pyramid import NO_PYRAMID, climb, pyramid_args, samples_left
 from .raymath import line_position, madd, ray_origin, terrain_on_line
 

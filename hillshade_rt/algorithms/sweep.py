@@ -74,13 +74,14 @@ import math
 
 import numba
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
 from ..geometry import SunRays
 from . import brute
-from .counts import valid_range
+from ._cuda import cuda, kernel
+from ._jitcache import njit
+from .counts import z_range
 from .frames import frame_of, uniform_rays
-from ..gpu import cuda, kernel
 from .raymath import line_position, madd, terrain_on_line
 
 EXACT_STEPS = 8   # samples marched exactly before the stored values are used
@@ -266,7 +267,7 @@ def _dem_index(i, n, flip):
 @njit(cache=True)
 def _line_slots(v, nb, R, L, flip_line):
     """Ring row and DEM column of canonical lines v, v-1, ..., v-nb+1 (lines that are DEM
-    columns), worked out once per block for ``_load_lines`` and ``_store_lines``."""
+    columns), worked out once per block for ``load_lines`` and ``store_lines``."""
     rows = np.empty(nb, np.int64)
     cols = np.empty(nb, np.int64)
     for i in range(nb):
@@ -276,12 +277,12 @@ def _line_slots(v, nb, R, L, flip_line):
 
 
 @njit(cache=True)
-def _load_lines(z, ring, v, nb, p0, p1, dom_col, flip_line, flip_pos):
+def load_lines(z, ring, v, nb, p0, p1, dom_col, flip_line, flip_pos):
     """Copy canonical lines v, v-1, ..., v-nb+1 at positions [p0, p1) of the DEM-shaped array
     ``z`` into the ring rows ``(v - i) % R`` of ``ring``. Lines that are DEM columns go position
     by position, so that each DEM row is touched once per block, contiguously. ``z`` is only
     read (the caller's heights may be read-only: a memory map, ``setflags(write=False)``); its
-    twin ``_store_lines`` writes the mask, so that no kernel has a store into ``z``."""
+    twin ``store_lines`` writes the mask, so that no kernel has a store into ``z``."""
     R = ring.shape[0]
     if dom_col:
         P, L = z.shape
@@ -304,8 +305,8 @@ def _load_lines(z, ring, v, nb, p0, p1, dom_col, flip_line, flip_pos):
 
 
 @njit(cache=True)
-def _store_lines(out, ring, v, nb, p0, p1, dom_col, flip_line, flip_pos):
-    """The inverse of ``_load_lines``: ring rows of lines v, ..., v-nb+1 at positions [p0, p1)
+def store_lines(out, ring, v, nb, p0, p1, dom_col, flip_line, flip_pos):
+    """The inverse of ``load_lines``: ring rows of lines v, ..., v-nb+1 at positions [p0, p1)
     into the DEM-shaped array ``out`` (the mask)."""
     R = ring.shape[0]
     if dom_col:
@@ -337,7 +338,7 @@ def _strip_block(z, Z, RZ, RS, RO, void, zfloor, zmax, T, d, fr, v_top, nb, p0, 
     ZL, VE, ring, wring = RZ[0], RZ[1], RS[0], RS[1]
     R = ring.shape[0]
     # one position more on the near side for the void edges (same values as the next strip's)
-    _load_lines(z, ZL, v_top, nb, max(0, p0 - 1), p1, dom_col, flip_line, flip_pos)
+    load_lines(z, ZL, v_top, nb, max(0, p0 - 1), p1, dom_col, flip_line, flip_pos)
     if void:
         for i in range(nb):
             row = (v_top - i) % R
@@ -355,7 +356,7 @@ def _strip_block(z, Z, RZ, RS, RO, void, zfloor, zmax, T, d, fr, v_top, nb, p0, 
             ring[row, p] = S
             wring[row, p] = w
             RO[row, p] = _decide(S, lo, hi, ZL[row, p])
-    _store_lines(out, RO, v_top, nb, p0, p1, dom_col, flip_line, flip_pos)
+    store_lines(out, RO, v_top, nb, p0, p1, dom_col, flip_line, flip_pos)
 
 
 @njit(cache=True)
@@ -556,13 +557,7 @@ def _trusted_floor(s_arr, rise_arr, per_line, K, zmin, zmax, shift, rtol):
     return out
 
 
-def _z_range(z):
-    """(lowest, highest valid height, whether there are voids) in one pass, no temporaries."""
-    n, lo, hi = valid_range(z)
-    return float(lo), float(hi), bool(n < z.size)
-
-
-def _strips(P: int, s: float, K: int, slack: int = 2, min_strip: int = MIN_STRIP) -> int:
+def strip_count(P: int, s: float, K: int, slack: int = 2, min_strip: int = MIN_STRIP) -> int:
     """How many strips the wavefront cuts a line of P positions into: one per thread, each at
     least ``min_strip`` positions and wider than the K-th sample's reach (plus ``slack``)."""
     return max(1, min(numba.get_num_threads(),
@@ -579,7 +574,7 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None,
         out[...] = np.where(np.isnan(z), 255, 0)
         return out
     K = np.int64(max(1, int(exact_steps)))
-    zmin, zhi, void = _z_range(z)
+    zmin, zhi, void = z_range(z)
     if not math.isfinite(zmin):   # nothing but voids
         out[...] = 255
         return out
@@ -588,8 +583,8 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None,
     if uniform_rays(rays):
         f = frame_of(rays)
         _sweep_uniform(z, f.view(z), f.dom_col, f.flip_line, f.flip_pos, f.s, f.rise, K,
-                       _strips(z.shape[0] if f.dom_col else z.shape[1], f.s, int(K)), void, zfloor,
-                       zmax, out)
+                       strip_count(z.shape[0] if f.dom_col else z.shape[1], f.s, int(K)), void,
+                       zfloor, zmax, out)
     else:
         f, s, rise, per_line = _per_cell_rays(rays)
         hmin = _trusted_floor(s, rise, per_line, K, float(zmin), zmax, DRIFT_CELLS, DRIFT_RISE)
@@ -605,7 +600,7 @@ def shadow_mask_gpu(g, rays: SunRays, zmax: float, stats: dict | None = None,
     """``shadow_mask`` on the GPU (``g``: a ``gpu.GpuDem``): the per-cell form of the sweep, K
     lines per launch from the sun's edge, then brute's exact kernel on the unsure cells. Same
     codes as the CPU's line passes (the line pass equals ``_march_cell`` cell by cell)."""
-    from ..gpu import grid_2d
+    from ._cuda import grid_2d
     rows, cols = g.shape
     if not math.isfinite(float(rays.rise[0])) or not math.isfinite(g.zmin):
         return brute.shadow_mask_gpu(g, rays, zmax)   # sun at the zenith, or nothing but voids

@@ -149,14 +149,10 @@ def physics_options(f):
 
 
 def algorithm_option(f):
-    return click.option(
-        "--algorithm", type=click.Choice(["auto", "bounds", "brute", "smap", "horizon", "sweep"]),
-        default="auto", show_default=True,
-        help="auto: the fastest exact method for this DEM, sun and backend (bounds or brute; "
-             "the report says which ran and why); bounds: exact, guaranteed horizon bounds + "
-             "pyramid march; brute: exact reference march (over a max-height pyramid unless "
-             "--no-pyramid); smap, horizon: exact (the seeds' methods); sweep: approximate "
-             "(see docs/algorithms.md).")(f)
+    """``--algorithm``: the registry's algorithms and their one-line summaries."""
+    from ..algorithms import REGISTRY, algorithm_help
+    return click.option("--algorithm", type=click.Choice(list(REGISTRY)), default="auto",
+                        show_default=True, help=algorithm_help())(f)
 
 
 def run_options(f):
@@ -195,35 +191,15 @@ def run_options(f):
     ])
 
 
-# the algorithms' own options (each belongs to one algorithm: run.config.OPTION_OWNERS)
+# the algorithms' own options, generated from the registry (each belongs to one algorithm)
 def algorithm_flags(f):
-    return _stack(f, [
-        click.option("--nextv", type=click.Choice(["scan", "binary", "quad"]), default=None,
-                     help="smap: how NextV is built (same result; default scan)."),
-        click.option("--better-nextv", is_flag=True, default=None,
-                     help="smap: skip silhouettes hidden by nearer ones (paper's section 9)."),
-        click.option("--horizon-method", type=click.Choice(["scan", "hull"]), default=None,
-                     help="horizon: exact per-cell scan (default) or the faster convex-hull "
-                          "approximation."),
-        click.option("--sample-spacing", type=click.IntRange(min=1), default=None,
-                     help="horizon scan: use every N-th sample only (faster, approximate; "
-                          "default 1)."),
-        click.option("--exact-steps", type=click.IntRange(min=1), default=None,
-                     help="sweep: samples marched exactly before stored values are reused "
-                          "(default 8)."),
-        click.option("--no-pyramid", "no_pyramid", is_flag=True, default=None,
-                     help="brute: the plain march, every sample taken (same mask; the "
-                          "benchmarks' reference)."),
-    ])
-
-
-def pop_algorithm_options(kw: dict) -> dict:
-    """The algorithm options of ``algorithm_flags``, popped from ``kw``, under the keywords the
-    algorithms take."""
-    no_pyramid = kw.pop("no_pyramid")
-    return dict(nextv=kw.pop("nextv"), better_nextv=kw.pop("better_nextv"),
-                method=kw.pop("horizon_method"), sample_spacing=kw.pop("sample_spacing"),
-                exact_steps=kw.pop("exact_steps"), pyramid=False if no_pyramid else None)
+    from ..algorithms import OPTIONS
+    for _, opt in reversed(list(OPTIONS.values())):      # the first listed shows first
+        kind = {"choice": dict(type=click.Choice(opt.choices)),
+                "int": dict(type=click.IntRange(min=opt.min)),
+                "flag": dict(is_flag=True)}[opt.kind]
+        f = click.option(opt.flag, opt.param, default=None, help=opt.help, **kind)(f)
+    return f
 
 
 READ_KEYS = ("band", "nodata", "z_factor", "pixel_size", "raw_shape", "raw_dtype",

@@ -7,8 +7,8 @@ import click
 
 from .errors import errors_to_click, say
 from .options import (SUN_KEYS, algorithm_flags, algorithm_option, dem_options, finite, given,
-                      physics_options, pop_algorithm_options, run_options, sun_options,
-                      to_read_options, to_run_options)
+                      physics_options, run_options, sun_options, to_read_options,
+                      to_run_options)
 
 
 def _config(files, kind, algorithm, options, kw, **more):
@@ -46,11 +46,11 @@ def shadow(files, algorithm, curvature, refraction_k, soft, self_shadow, classes
     --azimuth/--elevation, or --time (repeatable) or --start/--end/--step at the DEM's
     place (one band per time). --soft writes the visible fraction of the sun's disk (float32,
     1 = fully lit, -9999 nodata); --classes writes 0 lit / 1 self-shadow / 2 cast / 255."""
+    from ..algorithms import algorithm_for, options_for, options_from_cli
     from ..run import shade
-    from ..run.config import algorithm_for, algorithm_options
-    flags = pop_algorithm_options(kw)
-    algorithm = algorithm_for(algorithm, **flags)
-    options = algorithm_options(algorithm, **flags)
+    flags = options_from_cli(kw)
+    algorithm = algorithm_for(algorithm, flags)
+    options = options_for(algorithm, flags)
     shade(_config(files, "classes" if classes else "shadow", algorithm, options, kw,
                   curvature=curvature, refraction_k=refraction_k, soft=soft,
                   self_shadow=self_shadow or classes))

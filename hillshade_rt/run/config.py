@@ -202,40 +202,6 @@ def parse_window_size(text):
     return rows, cols
 
 
-# which algorithm each algorithm option belongs to, and its command-line flag
-OPTION_OWNERS = {"nextv": "smap", "better_nextv": "smap", "method": "horizon",
-                 "sample_spacing": "horizon", "exact_steps": "sweep", "pyramid": "brute"}
-OPTION_FLAGS = {"nextv": "--nextv", "better_nextv": "--better-nextv", "method": "--horizon-method",
-                "sample_spacing": "--sample-spacing", "exact_steps": "--exact-steps",
-                "pyramid": "--no-pyramid"}
-
-
-def algorithm_for(algorithm: str, **given) -> str:
-    """``algorithm``, or for ``auto`` given options of one exact algorithm that has no
-    approximate mode (smap's ``--nextv``, brute's ``--no-pyramid``), that algorithm: auto has no
-    options of its own, and while SMap was the default ``--nextv quad`` alone ran it. Options of
-    the approximate methods (sweep, the horizon's hull or sample spacing) still need their
-    algorithm named: an approximate mask is never chosen for the user."""
-    owners = {OPTION_OWNERS[k] for k, v in given.items() if v is not None}
-    if algorithm == "auto" and len(owners) == 1 and owners <= {"smap", "brute"}:
-        return owners.pop()
-    return algorithm
-
-
-def algorithm_options(algorithm: str, **given) -> dict:
-    """The options given for ``algorithm``; an option of another algorithm is a usage error
-    (``--sample-spacing 4 --algorithm brute`` would otherwise be silently ignored)."""
-    out = {}
-    for name, value in given.items():
-        if value is None:
-            continue
-        if OPTION_OWNERS[name] != algorithm:
-            raise UsageProblem(f"{OPTION_FLAGS[name]} applies to --algorithm "
-                               f"{OPTION_OWNERS[name]}, not {algorithm}")
-        out[name] = value
-    return out
-
-
 def apply_scale(d, scale):
     """gdaldem's -s: ground spacing = the transform's pixel size times ``scale``."""
     from ..geometry import Grid, orientation

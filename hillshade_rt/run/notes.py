@@ -13,10 +13,11 @@ def compile_note(algorithm: str, backend: str, relief: bool = False) -> str | No
     terminal only, like the progress bar: logs and pipelines keep their one summary line.)"""
     if backend != "cpu":
         return None
+    from ..algorithms import lookup
     from ..algorithms._jitcache import cache_dir, cached
-    # what each algorithm runs: auto either exact method; both march over the pyramid
-    names = {"auto": ["bounds", "brute", "pyramid"], "bounds": ["bounds", "brute", "pyramid"],
-             "brute": ["brute", "pyramid"]}.get(algorithm, [algorithm])
+    # the modules whose kernels the algorithm runs (the registry's: auto, bounds, brute also
+    # march over the pyramid)
+    names = list(lookup(algorithm).kernel_modules)
     missing = [m for m in names + (["relief"] if relief else []) if not cached(m)]
     if not missing:
         return None
