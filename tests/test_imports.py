@@ -206,3 +206,58 @@ def test_no_cycles_in_package():
     were, 31 of them, all went through gpu.py and the algorithm modules that imported its
     ``cuda``/``kernel``: ``algorithms/_cuda.py`` ended them.)"""
     assert cycles() == []
+
+
+# the layers, top to bottom (docs/architecture.md): a module imports only modules of its own
+# layer or of the layers below (its own layer: the cycle test keeps that one-way)
+LAYERS = [
+    ("hillshade_rt.__main__",),
+    ("hillshade_rt.cli",),
+    ("hillshade_rt.api",),
+    ("hillshade_rt.run",),
+    ("hillshade_rt.warm", "hillshade_rt.testing"),
+    ("hillshade_rt.arrays", "hillshade_rt.tiling"),
+    ("hillshade_rt.shading",),
+    ("hillshade_rt.io", "hillshade_rt.writes", "hillshade_rt.earth", "hillshade_rt.gpu",
+     "hillshade_rt.preview"),
+    ("hillshade_rt.algorithms",),
+    ("hillshade_rt.sun",),
+    ("hillshade_rt.geometry",),
+    ("hillshade_rt.errors", "hillshade_rt._preload", "hillshade_rt"),
+]
+
+
+def layer_of(module: str) -> int:
+    """The index in ``LAYERS`` of ``module`` (0 the top): the longest prefix listed."""
+    best, depth = None, -1
+    for i, prefixes in enumerate(LAYERS):
+        for p in prefixes:
+            if (module == p or module.startswith(p + ".")) and p.count(".") > depth:
+                best, depth = i, p.count(".")
+    assert best is not None, f"{module} is in no layer: add it to LAYERS"
+    return best
+
+
+def test_every_import_goes_down_the_layers():
+    """Following the command line to a kernel crosses each layer once, downward: no module
+    imports a module of a layer above its own (deferred imports included)."""
+    edges = graph()
+    up = sorted(f"{m} -> {t}" for m, ts in edges.items() for t in ts
+                if layer_of(t) < layer_of(m))
+    assert not up
+
+
+def test_no_click_below_the_command_line():
+    """Only cli/ imports click: the library (api, run, ...) raises HillshadeError and
+    UsageProblem, and the command line turns them into its messages and exit statuses."""
+    bad = []
+    for name, path in modules().items():
+        if name == "hillshade_rt.cli" or name.startswith("hillshade_rt.cli."):
+            continue
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for node in ast.walk(tree):
+            names = ([a.name for a in node.names] if isinstance(node, ast.Import) else
+                     [node.module or ""] if isinstance(node, ast.ImportFrom) and not node.level
+                     else [])
+            bad += [f"{name}:{node.lineno}" for n in names if n.split(".")[0] == "click"]
+    assert not bad
