@@ -98,7 +98,7 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
         raise HillshadeError(f"unknown algorithm option(s) {', '.join(sorted(bad))} (known: "
                              f"{', '.join(sorted(_cli._OPTION_OWNERS))})")
     algorithm = _cli._algorithm_for(algorithm, **(algorithm_options or {}))
-    from .writes import virtual_outputs
+    from .io.write import virtual_outputs
     token = virtual_outputs.set(True)    # /vsimem/ outputs are fine from Python
     try:
         if product == "hillshade":

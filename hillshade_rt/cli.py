@@ -30,7 +30,7 @@ def _signal_name(signum: int) -> str:
 
 def _complete_note() -> str:
     """What this run has written whole, for a message about a failed or interrupted run."""
-    from .writes import completed, is_virtual
+    from .io.write import completed, is_virtual
     # what is still there: scratch files published and removed again (a mosaic cut into its
     # tiles, Dask's parts) are no outputs
     names = [p for p in completed if is_virtual(p) or os.path.lexists(p)]
@@ -48,7 +48,7 @@ class _OneLineErrors(click.Group):
         import signal
         import threading
 
-        from . import writes
+        from .io import write as writes
         writes.reset()
         previous = {}
         if threading.current_thread() is threading.main_thread():
@@ -72,7 +72,7 @@ class _OneLineErrors(click.Group):
         except SystemExit:
             raise
         except BaseException as exc:   # noqa: BLE001 -- every way out is one line
-            from .writes import caught
+            from .io.write import caught
             if caught or isinstance(exc, (KeyboardInterrupt, click.exceptions.Abort)):
                 signum = caught[0] if caught else 2
                 done = _complete_note()
@@ -463,7 +463,7 @@ def _light(files, kind, algorithm, options, curvature, refraction_k, soft, self_
 
     from .io import write_json, write_png
     from .report import Timer, build_report, shown_paths, summary_line
-    from .writes import Claims, reset
+    from .io.write import Claims, reset
     from .runner import OutputPattern
     from .shadow import choose_backend
     from .tiling import bytes_per_cell, default_max_memory, parse_size
@@ -634,7 +634,7 @@ def _source(paths, read_opts):
     """``tiling.open_source`` with the DEM options of the command line (as ``_read``). A DEM
     from standard input is read whole only: with windows or a mosaic, a usage error."""
     from .io import parse_pixel_size, parse_raw_shape
-    from .tiling import open_source
+    from .io import open_windowed as open_source
     return open_source(paths, band=read_opts["band"], nodata=read_opts["nodata"],
                        pixel_size=parse_pixel_size(read_opts["pixel_size"]),
                        z_factor=read_opts["z_factor"],
@@ -713,7 +713,7 @@ class _Outputs:
     def target(self, i) -> str:
         """Where sun ``i``'s file is written: its output, or a scratch mosaic to be cut."""
         if self.paths[i] is None:
-            from .writes import temp_beside
+            from .io.write import temp_beside
             self.paths[i] = temp_beside(self.tile_paths[i][0], ".scratch.tif")
             self._scratch.append(self.paths[i])
         return self.paths[i]
@@ -725,7 +725,7 @@ class _Outputs:
             return
         from .io import copy_vrt, input_label
         from .runner import sun_tags
-        from .tiling import VrtSource, vrt_xml
+        from .io.vrt import VrtSource, vrt_xml
         scratch = self.paths[i]
         dtype = {"uint8": "Byte", "float32": "Float32"}[self.dtype]
         for t, path in zip(self.tiles, self.tile_paths[i]):
@@ -1009,7 +1009,7 @@ def sun_hours(dem, output, date_, end_date, step, tz, lat, lon, pressure, temper
     from .preview import relief_rgb
     from .report import Timer
     from .runner import SunRequest, progress
-    from .writes import Claims
+    from .io.write import Claims
     from .shadow import choose_backend
     from .sun import SUN_RADIUS_DEG, day_samples, parse_date, parse_step
 
@@ -1200,7 +1200,7 @@ def horizon(dem, output, azimuth, method, sample_spacing, curvature, refraction_
     from .io import check_output_format, output_driver, write_png, write_raster
     from .preview import relief_rgb
     from .report import Timer
-    from .writes import Claims
+    from .io.write import Claims
 
     timer = Timer()
     az = normalize_azimuth(azimuth)
@@ -1273,7 +1273,7 @@ def horizon(dem, output, azimuth, method, sample_spacing, curvature, refraction_
 def info(dem, as_json, preview, overwrite, **read_opts):
     """Print what hillshade-rt understood of DEM: size, spacing, CRS, nodata, heights."""
     if preview is not None:
-        from .writes import Claims
+        from .io.write import Claims
         Claims([dem], overwrite).claim(preview, "--preview")
     d = _read(dem, **read_opts)
     if preview is not None:
