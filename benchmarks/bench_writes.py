@@ -1,8 +1,8 @@
 """What the checked writes of issue 16 cost (``make bench-writes``).
 
-Every output goes through ``writes.atomic_path``: a temporary file, GDAL's errors collected
+Every output goes through ``io.write.atomic_path``: a temporary file, GDAL's errors collected
 (``gdal_checked``: rasterio's log and GDAL's stderr read through a pipe), ``fsync``, a
-no-clobber publish. This times ``io.write_raster`` against a bare ``rasterio.open(...).write()``
+no-clobber publish. This times ``io.raster.write_raster`` against a bare ``rasterio.open(...).write()``
 of the same array with the same creation options, in one run, on the shadow masks and soft
 shadows of the bundled real DEM (Big Tujunga, SRTM 30 m) and of a power-law fractal, and one
 multi-band series written window by window (the tiled path's many small writes). Also PNG
@@ -64,7 +64,7 @@ def main():
             for pname, arr, nodata, resampling in (("mask uint8", mask, 255, "nearest"),
                                                    ("soft float32", soft, -9999.0, "average")):
                 out = os.path.join(folder, "o.tif")
-                prof = hio._profile(dem, str(arr.dtype), nodata)
+                prof = hio.gtiff_profile(dem, str(arr.dtype), nodata)
                 if arr.dtype == np.float32:
                     prof["predictor"] = 3
 
@@ -87,7 +87,7 @@ def main():
         windows = [(r, min(r + 512, n), c, min(c + 512, n)) for r in range(0, n, 512)
                    for c in range(0, n, 512)]
         out = os.path.join(folder, "s.tif")
-        prof = hio._profile(f, "uint8", 255)
+        prof = hio.gtiff_profile(f, "uint8", 255)
         prof.update(count=8, interleave="band")
 
         def plain_series():

@@ -48,8 +48,9 @@ def crop_reference(dem, crop, azimuth, elevation, pad):
         a0, a1 = max(0, r0 - pad), min(ds.height, r1 + pad)
         b0, b1 = max(0, c0 - pad), min(ds.width, c1 + pad)
         z = ds.read(1, window=Window(b0, a0, b1 - b0, a1 - a0))
-    from hillshade_rt.tiling import open_source, window_grid
-    g = window_grid(open_source(dem).grid, (a0, a1, b0, b1))   # the DEM's own spacing (UTM)
+    from hillshade_rt.io import open_dem
+    from hillshade_rt.tiling import window_grid
+    g = window_grid(open_dem(dem).grid, (a0, a1, b0, b1))   # the DEM's own spacing (UTM)
     sh = Shader(z, g, "smap", {}, "cpu", False)
     m = render(sh, SunOver(None, azimuth, elevation), "shadow")
     return m[r0 - a0:r1 - a0, c0 - b0:c1 - b0]

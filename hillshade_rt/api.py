@@ -75,7 +75,7 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
     from .algorithms import algorithm_for, options_for
     from .run.config import PRODUCTS
     from .sun import DEFAULT_TOLERANCE
-    from .writes import virtual_outputs
+    from .io.write import virtual_outputs
     if product not in PRODUCTS:
         raise HillshadeError(f"product must be one of {', '.join(PRODUCTS)}, got {product!r}")
     unknown = set(more) - set(_PASSED)

@@ -359,7 +359,7 @@ OTHER_BODY_ADVICE = ("the solar position from --time is for the Earth: give "
 
 def dem_site(dem, lat: float | None = None, lon: float | None = None,
              other_body: str | None = None) -> Site:
-    """The :class:`Site` of a :class:`~hillshade_rt.io.Dem` or a ``tiling.Source`` (anything with
+    """The :class:`Site` of a :class:`~hillshade_rt.io.Dem` or an ``io.DemSource`` (anything with
     ``crs``, ``transform``, ``shape``, ``path`` and ``centre_height()``). ``other_body``: what the
     error says after "not the Earth; " for a DEM on another body (default: the lighting
     commands' advice, --azimuth/--elevation)."""

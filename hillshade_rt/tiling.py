@@ -1,8 +1,9 @@
 """Rasters larger than memory: windows read and written through rasterio, each with only the halo
 toward the sun that can shadow it.
 
-A :class:`Source` is a DEM opened for windowed reads: one file GDAL reads, several files (or a VRT)
-shaded as one mosaic, or a raw grid (memory-mapped). Nothing reads it whole.
+The DEM is an ``io.DemSource`` (``io.open_dem``) read through its windowed reader: one file GDAL
+reads, several files (or a VRT) shaded as one mosaic, or a raw grid (memory-mapped). Nothing
+reads it whole.
 
 1. **Statistics pass.** One streaming pass over the DEM gives the lowest and highest height of
    every ``STAT_BLOCK`` x ``STAT_BLOCK`` block (and the raster's range).
@@ -21,7 +22,7 @@ shaded as one mosaic, or a raw grid (memory-mapped). Nothing reads it whole.
    not read again.
 4. Each window is lit by the same code as an in-memory run (``engine.Shader`` with the whole
    raster's height range and extent, so Earth curvature decides alike), and its region written
-   into the output, a GeoTIFF written through a temporary file (``io.BandWriter``).
+   into the output, a GeoTIFF written through a temporary file (``io.raster.BandWriter``).
 
 Because a window holds every cell whose terrain can shadow its region, the exact algorithms give
 the region exactly what a run on the whole raster gives it (tests compare them cell for cell).
@@ -41,14 +42,11 @@ from numba import njit, prange
 from .algorithms import REGISTRY
 from .errors import HillshadeError
 from .geometry import Grid
-from .errors import UsageProblem
-from .io import (STDIN, STDIN_NAME, check_band, check_input_path, check_transform,
-                 check_z_factor, gdal_path, grid_of, heights_into, open_raster, read_error)
+from .io.source import READ_CHUNK, DemSource, Reader
 from .preview import every_nth
 
 STAT_BLOCK = 256          # cells per side of the blocks whose height range bounds the halos
 ALIGN = 256               # output regions are multiples of the output's block size
-READ_CHUNK = 32 << 20     # bytes of source values read at once (bounded scratch)
 GDAL_CACHE_MB = 64        # GDAL's block cache during a tiled run (its default is 5 % of RAM)
 
 # bytes per window cell while it is lit (heights, the carried previous window, the algorithm's
@@ -179,334 +177,6 @@ def window_budget(max_memory: int, per_cell: int) -> tuple[int, dict]:
 
 
 # ---------------------------------------------------------------------------------------------
-# sources
-
-@dataclass
-class Source:
-    """A DEM opened for windowed reads (never read whole).
-
-    ``name`` is what GDAL opens (an absolute path, a /vsi path, or the VRT document of a mosaic);
-    ``paths`` the files as given (messages name them); ``raw`` the numpy dtype of a raw grid
-    (read through a memory map) or None; ``tiles``: a mosaic's inputs (``path`` as given,
-    ``name`` what GDAL opens, ``band``, ``window`` in the mosaic, ``transform``)."""
-
-    name: str
-    paths: list[str]
-    shape: tuple[int, int]
-    transform: object
-    crs: object
-    nodata: float | None
-    band: int
-    dtype: str
-    driver: str
-    grid: Grid = None          # type: ignore[assignment]
-    z_factor: float = 1.0
-    raw: str | None = None
-    tiles: list[dict] = field(default_factory=list)   # a mosaic's inputs: path, window
-
-    @property
-    def path(self) -> str:
-        return self.paths[0] if len(self.paths) == 1 else f"mosaic of {len(self.paths)} files"
-
-    @property
-    def kind(self) -> str:
-        return "raw" if self.raw else ("mosaic" if len(self.paths) > 1 else "gdal")
-
-    @property
-    def source_dtype(self) -> str:
-        return self.dtype
-
-    def crs_string(self) -> str | None:
-        if self.crs is None:
-            return None
-        epsg = self.crs.to_epsg()
-        return f"EPSG:{epsg}" if epsg else self.crs.to_wkt()
-
-    @property
-    def itemsize(self) -> int:
-        return np.dtype(self.dtype).itemsize
-
-    @contextlib.contextmanager
-    def reader(self):
-        """An open :class:`Reader` (one per process or task)."""
-        r = Reader(self)
-        try:
-            yield r
-        finally:
-            r.close()
-
-    def centre_height(self) -> tuple[float, str]:
-        """The height at the centre, as ``sun.dem_site`` takes it, read from the centre only."""
-        from .sun import centre_height_of
-        rows, cols = self.shape
-        r, c = rows // 2, cols // 2
-        r0, c0 = max(0, r - 128), max(0, c - 128)
-        r1, c1 = min(rows, r + 129), min(cols, c + 129)
-        z = np.empty((r1 - r0, c1 - c0), np.float32)
-        with self.reader() as rd:
-            rd.read((r0, r1, c0, c1), z)
-        if not np.isfinite(z).any():
-            return 0.0, "sea level (no valid cell within 128 cells of the centre)"
-        return centre_height_of(z, r - r0, c - c0)
-
-
-class Reader:
-    """Windowed reads of a :class:`Source` into float32 heights (NaN voids, z-factor applied)."""
-
-    def __init__(self, source: Source):
-        self.source = source
-        self.bytes_read = 0
-        self._ds = None
-        self._mm = None
-        if source.raw is not None:
-            self._mm = np.memmap(source.paths[0], dtype=np.dtype(source.raw), mode="r",
-                                 shape=source.shape)
-        else:
-            self._stack = contextlib.ExitStack()
-            try:
-                self._ds = open_raster(source.path, self._stack, name=source.name)
-            except BaseException:
-                self._stack.close()
-                raise
-
-    def close(self):
-        if self._ds is not None:
-            self._stack.close()
-            self._ds = None
-        self._mm = None
-
-    def read(self, bounds: tuple[int, int, int, int], out: np.ndarray) -> None:
-        """Heights of rows r0:r1, columns c0:c1 into ``out`` (float32, that shape; may be a view),
-        a band of rows at a time (bounded scratch)."""
-        r0, r1, c0, c1 = bounds
-        if r1 <= r0 or c1 <= c0:
-            return
-        src = self.source
-        step = max(1, READ_CHUNK // max(1, (c1 - c0) * src.itemsize))
-        for a in range(r0, r1, step):
-            b = min(r1, a + step)
-            if self._mm is not None:
-                data = np.asarray(self._mm[a:b, c0:c1])
-            else:
-                from rasterio.windows import Window
-                try:
-                    data = self._ds.read(src.band, window=Window(c0, a, c1 - c0, b - a))
-                except Exception as exc:  # noqa: BLE001 -- GDAL read errors of many kinds
-                    if src.tiles:   # which tile? each one under the window, read on its own
-                        raise _bad_tile(src, (a, b, c0, c1)) or read_error(src.path, exc) \
-                            from None
-                    raise read_error(src.path, exc, src.name) from None
-            self.bytes_read += data.nbytes
-            heights_into(data, src.nodata, out[a - r0:b - r0], src.z_factor)
-
-
-def _bad_tile(src: Source, bounds) -> HillshadeError | None:
-    """The error of the first tile of the mosaic ``src`` under ``bounds`` (r0, r1, c0, c1) that
-    cannot be opened or read there on its own (None if every one can)."""
-    from rasterio.windows import Window
-    r0, r1, c0, c1 = bounds
-    for t in src.tiles:
-        tr0, tr1, tc0, tc1 = t["window"]
-        a, b, c, d = max(r0, tr0), min(r1, tr1), max(c0, tc0), min(c1, tc1)
-        if a >= b or c >= d:
-            continue
-        try:
-            with contextlib.ExitStack() as stack:
-                ds = open_raster(t["path"], stack, name=t.get("name"))
-                ds.read(t.get("band", 1), window=Window(c - tc0, a - tr0, d - c, b - a))
-        except HillshadeError as exc:
-            return exc
-        except Exception as exc:  # noqa: BLE001 -- GDAL read errors of many kinds
-            return read_error(t["path"], exc, t.get("name"))
-    return None
-
-
-def dataset_name(path: str) -> str:
-    """What GDAL opens for the input ``path`` in a VRT or on another process: a local file's
-    absolute path, else :func:`io.gdal_path` (``/vsizip/…``; rasterio URLs converted)."""
-    if os.path.exists(path) and not path.startswith("/vsi"):
-        return os.path.abspath(path)
-    return gdal_path(path)
-
-
-def open_source(paths, *, band: int = 1, nodata: float | None = None,
-                pixel_size: tuple[float, float] | None = None, z_factor: float = 1.0,
-                raw_shape=None, raw_dtype=None, raw_byteorder=None) -> Source:
-    """A :class:`Source` for one DEM path or several (a mosaic); the same options and checks as
-    ``io.read_dem``."""
-    from .io import RAW_EXTS
-    paths = [os.fspath(p) for p in ([paths] if isinstance(paths, (str, os.PathLike)) else paths)]
-    if not paths:
-        raise HillshadeError("no DEM given")
-    if STDIN in paths:    # the command line's own fault: a usage error
-        raise UsageProblem(f"{STDIN_NAME}: a DEM from standard input ('-') is read whole, in "
-                             "memory: not in windows (--window-size, --max-memory, --scheduler) "
-                             "nor as a tile of a mosaic")
-    for p in paths:
-        check_input_path(p)
-    check_z_factor(z_factor)
-    if band < 1:
-        raise HillshadeError(f"--band must be 1 or more, got {band}")
-    raw = raw_shape is not None or raw_dtype is not None or raw_byteorder is not None or \
-        os.path.splitext(paths[0])[1].lower() in RAW_EXTS
-    if raw:
-        if len(paths) > 1:
-            raise HillshadeError("several raw grids cannot be shaded as one mosaic; give one, or "
-                                 "GeoTIFFs")
-        src = _raw_source(paths[0], raw_shape, raw_dtype, raw_byteorder, nodata)
-    elif len(paths) == 1:
-        src = _gdal_source(paths[0], band, nodata)
-    else:
-        src = _mosaic_source(paths, band, nodata)
-    src.z_factor = float(z_factor)
-    src.grid = grid_of(src.path, src.transform, src.crs, src.shape, pixel_size)
-    return src
-
-
-def _open_meta(path: str, band: int):
-    """What a windowed run needs to know of ``path`` (opened, not read); errors name it."""
-    name = dataset_name(path)
-    with contextlib.ExitStack() as stack:
-        ds = open_raster(path, stack, name=name)
-        georef = check_band(ds, path, band)
-        return dict(shape=(ds.height, ds.width), transform=ds.transform if georef else None,
-                    crs=ds.crs, nodata=ds.nodatavals[band - 1],
-                    dtype=ds.dtypes[band - 1], driver=ds.driver, name=name)
-
-
-def _gdal_source(path: str, band: int, nodata: float | None) -> Source:
-    m = _open_meta(path, band)
-    if np.dtype(m["dtype"]).kind not in "iuf":
-        raise HillshadeError(f"{path}: pixel type {m['dtype']} is not a height")
-    return Source(m["name"], [path], m["shape"], m["transform"], m["crs"],
-                  m["nodata"] if nodata is None else nodata, band, m["dtype"], m["driver"])
-
-
-def _raw_source(path, shape, dtype, byteorder, nodata) -> Source:
-    from .io import RAW_DTYPES
-    if dtype is None:
-        raise HillshadeError(f"{path}: raw input needs --raw-dtype ({', '.join(RAW_DTYPES)})")
-    if shape is None:
-        raise HillshadeError(f"{path}: raw input needs --raw-shape ROWSxCOLS")
-    if not os.path.isfile(path):
-        raise HillshadeError(f"{path}: a raw grid is read from a local file only (GDAL reads it "
-                             "from elsewhere given an ENVI .hdr or a VRT)")
-    dt = np.dtype(dtype).newbyteorder("<" if (byteorder or "little") == "little" else ">")
-    size = os.path.getsize(path)
-    if shape[0] * shape[1] * dt.itemsize != size:
-        raise HillshadeError(
-            f"{path}: --raw-shape {shape[0]}x{shape[1]} needs {shape[0] * shape[1] * dt.itemsize} "
-            f"bytes of {dtype}, the file holds {size}")
-    return Source(path, [path], tuple(shape), None, None, nodata, 1, dt.str, "raw", raw=dt.str)
-
-
-def _mosaic_source(paths: list[str], band: int, nodata: float | None) -> Source:
-    """Several rasters on one grid (same CRS and cell size, cells aligned) as one surface: a VRT
-    document in memory, float32 with NaN where no input has a valid cell."""
-    metas = [_open_meta(p, band) for p in paths]
-    first = metas[0]
-    t0 = first["transform"]
-    if t0 is None:
-        raise HillshadeError(f"{paths[0]}: a mosaic needs georeferenced inputs")
-    for p, m in zip(paths, metas):     # rotated, degenerate: named before any arithmetic
-        if m["transform"] is not None:
-            check_transform(p, m["transform"])
-    offs = []
-    for p, m in zip(paths, metas):
-        t = m["transform"]
-        if t is None or m["crs"] != first["crs"]:
-            raise HillshadeError(f"{p}: its CRS differs from {paths[0]}'s; a mosaic needs one CRS "
-                                 "(reproject with gdalwarp first)")
-        if not (math.isclose(t.a, t0.a, rel_tol=1e-9) and math.isclose(t.e, t0.e, rel_tol=1e-9)
-                and t.b == 0 and t.d == 0):
-            raise HillshadeError(f"{p}: its cell size ({t.a:g}, {t.e:g}) differs from "
-                                 f"{paths[0]}'s ({t0.a:g}, {t0.e:g}); a mosaic needs one cell size")
-        fx, fy = (t.c - t0.c) / t0.a, (t.f - t0.f) / t0.e
-        if abs(fx - round(fx)) > 1e-6 or abs(fy - round(fy)) > 1e-6:
-            raise HillshadeError(f"{p}: its cells are not aligned with {paths[0]}'s (offset "
-                                 f"{fx:.3f}, {fy:.3f} cells); a mosaic needs aligned grids")
-        if np.dtype(m["dtype"]).kind not in "iuf":
-            raise HillshadeError(f"{p}: pixel type {m['dtype']} is not a height")
-        offs.append((int(round(fy)), int(round(fx))))
-    r_min = min(o[0] for o in offs)
-    c_min = min(o[1] for o in offs)
-    rows = max(o[0] + m["shape"][0] for o, m in zip(offs, metas)) - r_min
-    cols = max(o[1] + m["shape"][1] for o, m in zip(offs, metas)) - c_min
-    if rows * cols > 10 * sum(m["shape"][0] * m["shape"][1] for m in metas) + (1 << 20):
-        raise HillshadeError("the inputs lie far apart (their bounding box is more than ten times "
-                             "their area): shade them separately")
-    from affine import Affine
-    transform = t0 @ Affine.translation(c_min, r_min)
-    tiles, sources = [], []
-    for p, o, m in zip(paths, offs, metas):
-        r0, c0 = o[0] - r_min, o[1] - c_min
-        tiles.append({"path": p, "window": (r0, r0 + m["shape"][0], c0, c0 + m["shape"][1]),
-                      "transform": m["transform"], "name": m["name"], "band": band})
-        nd = m["nodata"] if nodata is None else nodata
-        sources.append(VrtSource(m["name"], band, (r0, c0), m["shape"], nd))
-    doc = vrt_xml((rows, cols), transform, first["crs"], [sources], "Float32", math.nan)
-    return Source(doc, paths, (rows, cols), transform, first["crs"], math.nan, 1, "float32",
-                  "VRT (mosaic)", tiles=tiles)
-
-
-@dataclass
-class VrtSource:
-    path: str
-    band: int
-    offset: tuple[int, int]      # (row, col) in the VRT
-    shape: tuple[int, int]
-    nodata: float | None = None
-    src_offset: tuple[int, int] = (0, 0)   # (row, col) of the part taken from the source
-
-
-def _metadata_xml(md: dict | None) -> str:
-    from xml.sax.saxutils import escape, quoteattr
-    if not md:
-        return ""
-    return ("<Metadata>" + "".join(f"<MDI key={quoteattr(str(k))}>{escape(str(v))}</MDI>"
-                                   for k, v in md.items()) + "</Metadata>")
-
-
-def vrt_xml(shape, transform, crs, bands: list[list[VrtSource]], dtype: str = "Float32",
-            nodata: float | None = None, descriptions: list[str] | None = None,
-            metadata: dict | None = None, band_metadata: list[dict] | None = None) -> str:
-    """A GDAL VRT document: ``bands`` lists, per VRT band, the rasters placed in it (a source's
-    nodata cells are left to the band's nodata); descriptions and metadata (tags) per band and
-    for the dataset, which a copy of the VRT carries over."""
-    from xml.sax.saxutils import escape
-    rows, cols = shape
-    out = [f'<VRTDataset rasterXSize="{cols}" rasterYSize="{rows}">', _metadata_xml(metadata)]
-    if crs is not None:
-        out.append(f"<SRS>{escape(crs.to_wkt())}</SRS>")
-    if transform is not None:
-        gt = transform.to_gdal()
-        out.append("<GeoTransform>" + ", ".join(repr(float(v)) for v in gt) + "</GeoTransform>")
-    for i, sources in enumerate(bands, start=1):
-        out.append(f'<VRTRasterBand dataType="{dtype}" band="{i}">')
-        if nodata is not None:
-            out.append(f"<NoDataValue>{'nan' if math.isnan(nodata) else repr(nodata)}</NoDataValue>")
-        if descriptions and descriptions[i - 1]:
-            out.append(f"<Description>{escape(descriptions[i - 1])}</Description>")
-        if band_metadata:
-            out.append(_metadata_xml(band_metadata[i - 1]))
-        for s in sources:
-            r, c = s.offset
-            h, w = s.shape
-            out.append("<ComplexSource>")
-            out.append(f'<SourceFilename relativeToVRT="0">{escape(s.path)}</SourceFilename>')
-            out.append(f"<SourceBand>{s.band}</SourceBand>")
-            sr, sc = s.src_offset
-            out.append(f'<SrcRect xOff="{sc}" yOff="{sr}" xSize="{w}" ySize="{h}"/>')
-            out.append(f'<DstRect xOff="{c}" yOff="{r}" xSize="{w}" ySize="{h}"/>')
-            if s.nodata is not None:
-                out.append(f"<NODATA>{'nan' if math.isnan(s.nodata) else repr(s.nodata)}</NODATA>")
-            out.append("</ComplexSource>")
-        out.append("</VRTRasterBand>")
-    out.append("</VRTDataset>")
-    return "".join(out)
-
-
-# ---------------------------------------------------------------------------------------------
 # statistics pass
 
 @njit(parallel=True, cache=True)
@@ -564,7 +234,7 @@ class BlockStats:
         return float(lo.min()), float(hi.max())
 
 
-def block_stats(source: Source, block: int = STAT_BLOCK,
+def block_stats(source: DemSource, block: int = STAT_BLOCK,
                 preview_side: int | None = None) -> BlockStats:
     """One pass over ``source`` in bands of ``block`` rows (bounded memory)."""
     rows, cols = source.shape
@@ -860,7 +530,7 @@ class Job:
     ``zrange`` and ``extent_m`` are the whole raster's, so that every window decides Earth
     curvature as a run on the whole raster would."""
 
-    source: Source
+    source: DemSource
     algorithm: str = "auto"
     options: dict = field(default_factory=dict)
     backend: str = "cpu"

@@ -122,9 +122,8 @@ def test_hgt_by_extension(tmp_path):
     assert d.transform.f == pytest.approx(47 + 0.5 / 1200)
     assert 60.0 < d.grid.dx[600] < 66.0 and 92.0 < d.grid.dy[600] < 93.0  # 3" at 46.5 N
     # the raw reader's own georeferencing gives the same geometry
-    from hillshade_rt.io import _read_raw
-
-    raw = _read_raw(str(p), None, None, None, None, None)
+    raw = read_dem(str(p), raw_byteorder="big")     # any raw_* option: the raw reader
+    assert raw.kind == "raw" and d.kind == "gdal"
     np.testing.assert_allclose(raw.grid.dx, d.grid.dx, rtol=1e-9)
     np.testing.assert_array_equal(np.isnan(raw.heights), np.isnan(d.heights))
 

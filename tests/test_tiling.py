@@ -15,7 +15,7 @@ from hillshade_rt.cli import cli
 from hillshade_rt.shading import Shader, render
 from hillshade_rt.earth import dem_body
 from hillshade_rt.errors import HillshadeError
-from hillshade_rt.io import read_dem
+from hillshade_rt.io import open_dem, read_dem
 from hillshade_rt.sun import SunOver
 from hillshade_rt.testing import (data_path, fractal_terrain, read_band, split_geotiff,
                                   write_geotiff)
@@ -28,7 +28,7 @@ UTM = CRS.from_epsg(32611)
 def _tiled(path, azimuth, elevation, algorithm, window_shape, kind="shadow", soft=False,
            curvature="auto", options=None, sun=None):
     """The product of a tiled run, put together from its windows (API level)."""
-    src = tiling.open_source(path)
+    src = open_dem(path)
     stats = tiling.block_stats(src)
     rows, cols = src.shape
     dx, dy = src.grid.centre_spacing()
@@ -125,7 +125,7 @@ def test_halo_is_on_the_sun_side_only_and_as_long_as_the_physics_says(tmp_path):
     z = np.zeros((600, 600), np.float32)
     z[400:404, 300:304] = 60.0
     p = write_geotiff(tmp_path / "t.tif", z, Affine(1, 0, 500000, 0, -1, 4000000), UTM)
-    src = tiling.open_source(p)
+    src = open_dem(p)
     stats = tiling.block_stats(src, block=32)
     az, el = 163.0, 30.0
     east, south = math.sin(math.radians(az)), -math.cos(math.radians(az))
@@ -150,7 +150,7 @@ def test_halo_is_on_the_sun_side_only_and_as_long_as_the_physics_says(tmp_path):
 def test_window_order_follows_the_sun_and_the_plan_fits_the_budget(tmp_path):
     z = fractal_terrain(700, 900, 5, relief=80.0)
     p = write_geotiff(tmp_path / "f.tif", z, Affine(2, 0, 500000, 0, -2, 4000000), UTM)
-    src = tiling.open_source(p)
+    src = open_dem(p)
     stats = tiling.block_stats(src)
     budget = 250_000
     pieces = tiling.plan(src.shape, src.grid, 250.0, 10.0, 0.0, stats, budget, align=64)

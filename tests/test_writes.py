@@ -20,7 +20,7 @@ import rasterio
 from affine import Affine
 from rasterio.crs import CRS
 
-from hillshade_rt import writes
+from hillshade_rt.io import write as writes
 from hillshade_rt.cli import cli
 from hillshade_rt.errors import HillshadeError
 from hillshade_rt.testing import data_path, fractal_terrain, read_band, write_geotiff
@@ -625,7 +625,7 @@ def test_signal_held_back_while_stderr_is_redirected_restores_stderr(monkeypatch
     """A signal deferred while gdal_checked redirects stderr stops the run as the redirection
     ends; stderr must be the process's again before the interrupt propagates, or the run's
     one-line message goes into the pipe (found in issue 18: exit 130 with stderr empty)."""
-    from hillshade_rt import writes
+    from hillshade_rt.io import write as writes
     from hillshade_rt.errors import Interrupted
     before = os.readlink("/proc/self/fd/2") if os.path.exists("/proc/self/fd/2") else None
     real = writes._StderrCapture._start

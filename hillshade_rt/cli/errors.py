@@ -24,7 +24,7 @@ def _signal_name(signum: int) -> str:
 
 def _complete_note() -> str:
     """What this run has written whole, for a message about a failed or interrupted run."""
-    from ..writes import completed, is_virtual
+    from ..io.write import completed, is_virtual
     # what is still there: scratch files published and removed again (a mosaic cut into its
     # tiles, Dask's parts) are no outputs
     names = [p for p in completed if is_virtual(p) or os.path.lexists(p)]
@@ -42,7 +42,7 @@ class OneLineErrors(click.Group):
         import signal
         import threading
 
-        from .. import writes
+        from ..io import write as writes
         writes.reset()
         previous = {}
         if threading.current_thread() is threading.main_thread():
@@ -66,7 +66,7 @@ class OneLineErrors(click.Group):
         except SystemExit:
             raise
         except BaseException as exc:   # noqa: BLE001 -- every way out is one line
-            from ..writes import caught
+            from ..io.write import caught
             if caught or isinstance(exc, (KeyboardInterrupt, click.exceptions.Abort)):
                 signum = caught[0] if caught else 2
                 done = _complete_note()

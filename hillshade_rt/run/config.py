@@ -42,24 +42,25 @@ class ReadOptions:
     raw_dtype: str | None = None
     raw_byteorder: str | None = None
 
-    def kwargs(self) -> dict:
-        """The keywords of ``io.read_dem`` and ``tiling.open_source``."""
-        from ..io import parse_pixel_size, parse_raw_shape
-        return dict(band=self.band, nodata=self.nodata, z_factor=self.z_factor,
-                    pixel_size=parse_pixel_size(self.pixel_size),
-                    raw_shape=parse_raw_shape(self.raw_shape), raw_dtype=self.raw_dtype,
-                    raw_byteorder=self.raw_byteorder)
+    def options(self):
+        """As ``io.DemOptions`` (the texts parsed)."""
+        from ..io.source import DemOptions
+        return DemOptions.parse(band=self.band, nodata=self.nodata, z_factor=self.z_factor,
+                                pixel_size=self.pixel_size, raw_shape=self.raw_shape,
+                                raw_dtype=self.raw_dtype, raw_byteorder=self.raw_byteorder)
+
+    def open(self, paths, windows: bool = False):
+        """The DEM (or the mosaic of tiles) at ``paths`` opened and checked, not read
+        (``io.open_dem``): ``.read()`` it whole or ``.reader()`` it in windows. ``windows``: it
+        will be read in windows (standard input, read whole only, is refused before it is
+        read)."""
+        from ..io.source import open_dem
+        return open_dem(paths, self.options(), windows=windows)
 
     def read(self, path):
         """The whole DEM at ``path`` (``io.read_dem``)."""
-        from ..io import read_dem
-        return read_dem(path, **self.kwargs())
-
-    def source(self, paths):
-        """A DEM (or a mosaic of tiles) to read in windows (``tiling.open_source``). A DEM from
-        standard input is read whole only: with windows or a mosaic, a usage error."""
-        from ..tiling import open_source
-        return open_source(paths, **self.kwargs())
+        with self.open(path) as src:
+            return src.read()
 
 
 def say_nothing(kind: str, message: str) -> None:

@@ -116,7 +116,8 @@ def run_on_dask(scheduler, job, suns, plans, out, share, stride, quiet, algo_sta
     from .report import merge_stats
     from .outputs import sun_tags
     from ..io import copy_vrt
-    from ..tiling import VrtSource, marched_per_cell, vrt_xml
+    from ..io.vrt import VrtSource, vrt_xml
+    from ..tiling import marched_per_cell
 
     client, cluster = client_for(scheduler)
     dest = out.output or (out.tile_paths[0][0] if out.tile_paths else out.paths[0])

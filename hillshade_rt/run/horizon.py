@@ -21,7 +21,7 @@ def horizon(cfg: HorizonConfig) -> dict:
     from ..io import check_output_format, input_label, output_driver, write_png, write_raster
     from ..preview import relief_rgb
     from ..shading import choose_backend, warm_up
-    from ..writes import Claims
+    from ..io.write import Claims
     from .notes import compile_note
     from .report import Timer
 

@@ -10,7 +10,7 @@ def describe(dem: str, read: ReadOptions, preview: str | None = None,
              overwrite: bool = False) -> tuple[dict, object]:
     """(the description, the DEM read)."""
     if preview is not None:
-        from ..writes import Claims
+        from ..io.write import Claims
         Claims([dem], overwrite).claim(preview, "--preview")
     d = read.read(dem)
     if preview is not None:

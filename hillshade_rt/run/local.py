@@ -20,17 +20,13 @@ def bounded_gdal_cache():
     return rasterio.Env(GDAL_CACHEMAX=GDAL_CACHE_MB)
 
 
-def needs_windows(path, read_opts, limit, per_cell) -> bool:
-    """Whether shading ``path`` whole would need more than ``limit`` bytes (a DEM whose size
-    cannot be told without reading it is read whole, as before)."""
-    from ..io import STDIN
+def needs_windows(src, limit, per_cell) -> bool:
+    """Whether shading the opened DEM ``src`` whole would need more than ``limit`` bytes (a
+    DEM that can be read whole only, from standard input or a TIFF only tifffile reads, is
+    read whole, as before)."""
     from ..tiling import window_budget
-    if path == STDIN:
-        return False      # standard input is read whole (once)
-    try:
-        src = read_opts.source(path)
-    except HillshadeError:
-        return False      # read whole: read_dem says what is wrong with it
+    if src.whole_only is not None:
+        return False
     try:
         budget = window_budget(limit, per_cell)[0]
     except HillshadeError:
@@ -40,7 +36,8 @@ def needs_windows(path, read_opts, limit, per_cell) -> bool:
 
 
 def in_memory(inputs, read_opts, scale, req, out, timer, algorithm, options, ran_on,
-                     curvature, refraction_k, soft, self_shadow, ambient, quiet, **_):
+              curvature, refraction_k, soft, self_shadow, ambient, quiet, *, source=None, **_):
+    """``source``: the DEM already opened (``ReadOptions.open``; read here, not opened again)."""
     import numpy as np
 
     from ..shading import Shader, render
@@ -53,7 +50,7 @@ def in_memory(inputs, read_opts, scale, req, out, timer, algorithm, options, ran
 
     kind = out.kind
     with timer("read"):
-        d = read_opts.read(inputs[0])
+        d = source.read() if source is not None else read_opts.read(inputs[0])
         if scale is not None:
             apply_scale(d, scale)
     with timer("prepare"):   # solar positions; numba compilation on a first run; GPU upload
@@ -102,8 +99,9 @@ def in_memory(inputs, read_opts, scale, req, out, timer, algorithm, options, ran
 
 
 def tiled(inputs, read_opts, scale, req, out, timer, algorithm, options, ran_on,
-                 curvature, refraction_k, soft, self_shadow, ambient, quiet, *, limit,
-                 window_shape, scheduler, per_cell):
+          curvature, refraction_k, soft, self_shadow, ambient, quiet, *, limit,
+          window_shape, scheduler, per_cell, source=None):
+    """``source``: the DEM already opened for windows (else opened here)."""
     import math
 
     import numpy as np
@@ -119,7 +117,7 @@ def tiled(inputs, read_opts, scale, req, out, timer, algorithm, options, ran_on,
 
     kind = out.kind
     with timer("read"):
-        src = read_opts.source(inputs)
+        src = source if source is not None else read_opts.open(inputs, windows=True)
         if scale is not None:
             apply_scale(src, scale)
     rows, cols = src.shape

@@ -160,7 +160,7 @@ class Outputs:
     def target(self, i) -> str:
         """Where sun ``i``'s file is written: its output, or a scratch mosaic to be cut."""
         if self.paths[i] is None:
-            from ..writes import temp_beside
+            from ..io.write import temp_beside
             self.paths[i] = temp_beside(self.tile_paths[i][0], ".scratch.tif")
             self._scratch.append(self.paths[i])
         return self.paths[i]
@@ -171,7 +171,7 @@ class Outputs:
         if self.tile_paths is None:
             return
         from ..io import copy_vrt, input_label
-        from ..tiling import VrtSource, vrt_xml
+        from ..io.vrt import VrtSource, vrt_xml
         scratch = self.paths[i]
         dtype = {"uint8": "Byte", "float32": "Float32"}[self.dtype]
         for t, path in zip(self.tiles, self.tile_paths[i]):

@@ -24,15 +24,13 @@ def shade(cfg: ShadeConfig) -> dict:
     for a bad combination of options) before anything is written."""
     import numba
 
-    from ..io import check_output_format, input_label, output_driver, write_json, write_png
+    from ..io.write import Claims, reset
     from ..shading import choose_backend
     from ..sun import SunRequest
     from ..tiling import bytes_per_cell, default_max_memory, parse_size
-    from ..writes import Claims, reset
-    from .local import bounded_gdal_cache, in_memory, mean_stats, needs_windows, tiled
-    from .notes import compile_note, note_to_show
-    from .outputs import OutputPattern, Outputs
-    from .report import Timer, build_report, shown_paths, summary_line
+    from .local import needs_windows
+    from .outputs import OutputPattern
+    from .report import Timer
 
     cfg.check()
     kind, soft, algorithm, options = cfg.kind, cfg.soft, cfg.algorithm, cfg.options
@@ -65,9 +63,27 @@ def shade(cfg: ShadeConfig) -> dict:
         numba.set_num_threads(min(ro.threads, numba.config.NUMBA_NUM_THREADS))
     ran_on = choose_backend(ro.backend, algorithm, options)
     per_cell = bytes_per_cell(algorithm, kind, soft, cfg.self_shadow)
-    with timer("read"):     # (opens the DEM for its size: part of reading it)
-        windowed = (cfg.scheduler is not None or wshape is not None or len(inputs) > 1
-                    or needs_windows(inputs[0], cfg.read, limit, per_cell))
+    forced = cfg.scheduler is not None or wshape is not None or len(inputs) > 1
+    with timer("read"):     # opened (not read) once, for its size and then its values
+        src = cfg.read.open(inputs, windows=forced)
+    with src:
+        return _shade(cfg, src, forced or needs_windows(src, limit, per_cell), inputs, output,
+                      req, pattern, wshape, limit, claims, ran_on, per_cell, timer)
+
+
+def _shade(cfg, src, windowed, inputs, output, req, pattern, wshape, limit, claims, ran_on,
+           per_cell, timer):
+    """``shade`` once the DEM is open: in memory or in windows, then the report."""
+    import numba
+
+    from ..io import check_output_format, input_label, output_driver, write_json, write_png
+    from .local import bounded_gdal_cache, in_memory, mean_stats, tiled
+    from .notes import compile_note, note_to_show
+    from .outputs import Outputs
+    from .report import build_report, shown_paths, summary_line
+
+    kind, soft, algorithm, options = cfg.kind, cfg.soft, cfg.algorithm, cfg.options
+    ro = cfg.run
     dtype, nodata = PRODUCT_TYPES[kind, soft]
     out = Outputs(kind, soft, algorithm, dtype, nodata, output, pattern, claims, cfg.cog,
                   ro.preview is not None, cfg.ambient, ro.fmt)
@@ -86,7 +102,8 @@ def shade(cfg: ShadeConfig) -> dict:
             run = (tiled if windowed else in_memory)(
                 inputs, cfg.read, cfg.scale, req, out, timer, algorithm, options, ran_on,
                 cfg.curvature, cfg.refraction_k, soft, cfg.self_shadow, cfg.ambient, ro.quiet,
-                limit=limit, window_shape=wshape, scheduler=cfg.scheduler, per_cell=per_cell)
+                limit=limit, window_shape=wshape, scheduler=cfg.scheduler, per_cell=per_cell,
+                source=src)
     finally:
         out.cleanup()
     d, suns, records = run["dem"], run["suns"], run["records"]

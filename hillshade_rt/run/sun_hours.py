@@ -23,7 +23,7 @@ def sun_hours(cfg: SunHoursConfig) -> dict:
     from ..preview import relief_rgb
     from ..shading import choose_backend
     from ..sun import SUN_RADIUS_DEG, SunRequest, day_samples, parse_date, parse_step
-    from ..writes import Claims
+    from ..io.write import Claims
     from .notes import compile_note
     from .report import Timer, progress
 

@@ -23,6 +23,7 @@ import contextlib
 import contextvars
 import ctypes
 import errno
+import json
 import logging
 import os
 import signal
@@ -30,7 +31,7 @@ import sys
 import tempfile
 import threading
 
-from .errors import HillshadeError, Interrupted, UsageProblem
+from ..errors import HillshadeError, Interrupted, UsageProblem
 
 # what this process has published since the last reset() (final paths, in order)
 completed: list[str] = []
@@ -313,6 +314,17 @@ def atomic_path(path: str, suffix: str = "", overwrite: bool = False, sidecars: 
             with contextlib.suppress(OSError):
                 os.remove(p)
         raise
+
+
+def write_json(path: str, obj: dict, overwrite: bool = False) -> None:
+    """Write ``obj`` as JSON (temporary file, checked close, then rename)."""
+    text = json.dumps(obj, indent=2) + "\n"
+    with atomic_path(path, overwrite=overwrite) as tmp:
+        try:
+            with open(tmp, "w", encoding="utf-8") as fh:
+                fh.write(text)
+        except OSError as exc:
+            raise os_error(path, exc) from None
 
 
 # --------------------------------------------------------------------------------------------
