@@ -173,13 +173,11 @@ def private_uses(name: str, path: pathlib.Path, known) -> list[str]:
     return bad
 
 
-def test_algorithms_and_gpu_use_no_private_names_of_other_modules():
-    """A name with a leading underscore is its module's own: algorithms/ and gpu.py neither
-    import one from another module nor read one off it."""
+def test_no_module_uses_private_names_of_another():
+    """A name with a leading underscore is its module's own: no module of the package imports
+    one from another module nor reads one off it."""
     known = modules()
-    bad = [use for name, path in known.items()
-           if _in_algorithms(name) or name == "hillshade_rt.gpu"
-           for use in private_uses(name, path, known)]
+    bad = [use for name, path in known.items() for use in private_uses(name, path, known)]
     assert not bad
 
 

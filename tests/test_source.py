@@ -17,7 +17,7 @@ from rasterio.crs import CRS
 from hillshade_rt.cli import cli
 from hillshade_rt.errors import HillshadeError, UsageProblem
 from hillshade_rt.io import DemOptions, open_dem, read_dem
-from conftest import fractal_terrain, write_geotiff
+from hillshade_rt.testing import fractal_terrain, write_geotiff
 
 UTM = CRS.from_epsg(32611)
 TR = Affine(10, 0, 500000, 0, -10, 4100000)

@@ -46,7 +46,7 @@ class OneLineErrors(click.Group):
         writes.reset()
         previous = {}
         if threading.current_thread() is threading.main_thread():
-            for s in writes._SIGNALS:
+            for s in writes.SIGNALS:
                 with contextlib.suppress(OSError, ValueError):
                     previous[s] = signal.signal(s, writes.on_signal)
         try:

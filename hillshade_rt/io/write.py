@@ -39,7 +39,7 @@ completed: list[str] = []
 # /vsimem/ outputs: for the Python API (api.shade sets it); the command line writes local files
 virtual_outputs = contextvars.ContextVar("virtual_outputs", default=False)
 
-_SIGNALS = tuple(s for s in (getattr(signal, "SIGINT", None), getattr(signal, "SIGTERM", None),
+SIGNALS = tuple(s for s in (getattr(signal, "SIGINT", None), getattr(signal, "SIGTERM", None),
                              getattr(signal, "SIGHUP", None)) if s is not None)
 
 
