@@ -124,7 +124,7 @@ class Shader:
     the highest cell or leaves the raster). refraction_k: terrestrial refraction coefficient
     (default 0.13 on the Earth, 0 elsewhere).
 
-    A window of a larger raster (``tiling``): ``zrange`` and ``extent_m`` are the whole raster's
+    A window of a larger raster (``run.plan``): ``zrange`` and ``extent_m`` are the whole raster's
     (so that curvature "auto" decides as for the whole), and ``halo_ready`` says that ``z``
     already holds the halo of every region asked for: each region is computed on all of ``z``.
     ``local_range``: bounds of the window's heights (known from the statistics pass; else
@@ -161,7 +161,7 @@ class Shader:
         self.local_range = local_range
         self.carry, self.place = carry, place
         # suns that vary across the raster: every cell's own sun (algorithms.field) instead of
-        # one per tile, in memory and in windows alike (``tiling.Job.pieces``); False: tiles
+        # one per tile, in memory and in windows alike (``run.plan.Job.pieces``); False: tiles
         self.sun_field = sun_field
         self._gpu = None
         self._pyramid = None     # the maximum-height pyramid of the whole raster, built once
@@ -319,7 +319,7 @@ class Shader:
         zmax = self.local_range[1] if whole else float(np.nanmax(z))
         algorithm = self.choose(z, whole, rays, stats)
         options = dict(self.options)
-        # a carrier is only given for smap on the CPU (tiling.Job.carrier); it needs one ray
+        # a carrier is only given for smap on the CPU (run.plan.Job.carrier); it needs one ray
         carried = self.carry is not None and whole and uniform_rays(rays)
         by_brute = (not carried and self.backend == "cpu" and z.size > sub.size
                     and (auto.tile_by_brute(z.size, sub.size, (self.zmin, zmax), rays)
@@ -365,7 +365,7 @@ class Shader:
 
     def field_place(self):
         """(r0, c0, rows, cols): where ``z`` lies in the raster the sun's lattice spans (a
-        window of a larger raster, ``tiling``), for ``algorithms.field``."""
+        window of a larger raster, ``run.plan``), for ``algorithms.field``."""
         if self.place is None:
             return (0, 0, *self.z.shape)
         (r0, _, c0, _), shape = self.place
@@ -442,7 +442,7 @@ KINDS = ("shadow", "classes", "hillshade", "sun")
 
 def field_method(algorithm: str, options: dict, soft: bool) -> bool:
     """Whether this method marches each cell with its own sun when the sun varies across the
-    raster (``Shader.field_ok``; ``tiling.Job.pieces`` plans such windows)."""
+    raster (``Shader.field_ok``; ``run.plan.Job.pieces`` plans such windows)."""
     spec = REGISTRY.get(algorithm)
     return (not soft and spec is not None and spec.field_march
             and options.get("pyramid", True) is not False)

@@ -217,7 +217,7 @@ def test_lookup_names_the_known_algorithms():
 
 def test_planner_and_engine_read_the_registry():
     from hillshade_rt.shading import field_method
-    from hillshade_rt.tiling import bytes_per_cell
+    from hillshade_rt.run.plan import bytes_per_cell
     assert {n: bytes_per_cell(n) for n in REGISTRY} == {
         "auto": 13, "bounds": 13, "brute": 13, "smap": 15, "horizon": 19, "sweep": 12}
     assert bytes_per_cell("nonesuch") == 20

@@ -10,7 +10,7 @@ import pytest
 from affine import Affine
 from rasterio.crs import CRS
 
-from hillshade_rt import tiling
+from hillshade_rt.run import plan as tiling
 from hillshade_rt.cli import cli
 from hillshade_rt.shading import Shader, render
 from hillshade_rt.earth import dem_body

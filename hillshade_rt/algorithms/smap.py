@@ -796,7 +796,7 @@ def canonical_place(frame: Frame, window, shape) -> tuple[int, tuple[int, int]]:
 
 
 class BandCarry:
-    """SMap tables carried from window to window of a tiled run (``tiling``), so that the lines
+    """SMap tables carried from window to window of a tiled run (``run.plan``), so that the lines
     two windows share are coloured and scanned once.
 
     The planner orders the windows of a band of positions away from the sun, each spanning the

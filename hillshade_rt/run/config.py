@@ -182,7 +182,7 @@ def inputs_and_output(files, output, pattern):
 
 def parse_window_size(text):
     """--window-size ROWS[xCOLS] as (rows, cols) (also an int or a pair); a malformed or too
-    small size is a usage error. (``tiling.plan`` itself takes any window shape.)"""
+    small size is a usage error. (``run.plan.plan`` itself takes any window shape.)"""
     if text is None:
         return None
     if isinstance(text, int):

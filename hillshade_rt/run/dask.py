@@ -1,7 +1,7 @@
 """Windows and times as Dask tasks (``--scheduler``; needs ``pip install 'hillshade-rt[dask]'``).
 
-Each task gets the small :class:`~hillshade_rt.tiling.Job` and one
-:class:`~hillshade_rt.tiling.Piece`; it opens the DEM itself (the path, or a mosaic's VRT
+Each task gets the small :class:`~hillshade_rt.run.plan.Job` and one
+:class:`~hillshade_rt.run.plan.Piece`; it opens the DEM itself (the path, or a mosaic's VRT
 document, must be readable by the workers), reads the piece's window with its halo, lights it and
 writes its region to a GeoTIFF of its own in a folder beside the output. Nothing large passes
 through the scheduler: a task returns counts, timings and a few preview cells. When every task is
@@ -69,7 +69,7 @@ def shade_piece(job, piece, path: str, nodata, stride: int | None = None) -> dic
     from ..io import DEFLATE_LEVEL, atomic_path, gdal_checked
     from ..preview import every_nth, shade_of
     from .report import product_stats
-    from ..tiling import GDAL_CACHE_MB
+    from .plan import GDAL_CACHE_MB
     import warnings
 
     t0 = time.perf_counter()
@@ -117,7 +117,7 @@ def run_on_dask(scheduler, job, suns, plans, out, share, stride, quiet, algo_sta
     from .outputs import sun_tags
     from ..io import copy_vrt
     from ..io.vrt import VrtSource, vrt_xml
-    from ..tiling import marched_per_cell
+    from .plan import marched_per_cell
 
     client, cluster = client_for(scheduler)
     dest = out.output or (out.tile_paths[0][0] if out.tile_paths else out.paths[0])

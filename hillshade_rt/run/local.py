@@ -13,10 +13,10 @@ from .config import apply_scale
 
 
 def bounded_gdal_cache():
-    """GDAL's block cache held to ``tiling.GDAL_CACHE_MB`` (its default, 5 % of the machine's
+    """GDAL's block cache held to ``run.plan.GDAL_CACHE_MB`` (its default, 5 % of the machine's
     memory, would break --max-memory on its own)."""
     import rasterio
-    from ..tiling import GDAL_CACHE_MB
+    from .plan import GDAL_CACHE_MB
     return rasterio.Env(GDAL_CACHEMAX=GDAL_CACHE_MB)
 
 
@@ -24,7 +24,7 @@ def needs_windows(src, limit, per_cell) -> bool:
     """Whether shading the opened DEM ``src`` whole would need more than ``limit`` bytes (a
     DEM that can be read whole only, from standard input or a TIFF only tifffile reads, is
     read whole, as before)."""
-    from ..tiling import window_budget
+    from .plan import window_budget
     if src.whole_only is not None:
         return False
     try:
@@ -112,7 +112,7 @@ def tiled(inputs, read_opts, scale, req, out, timer, algorithm, options, ran_on,
     from ..preview import every_nth, relief_rgb, shade_of
     from .report import merge_stats, product_stats
     from .outputs import sun_tags
-    from ..tiling import (MIN_WINDOW_CELLS, Job, MemoryTooSmall, Tally, WindowCache, block_stats,
+    from .plan import (MIN_WINDOW_CELLS, Job, MemoryTooSmall, Tally, WindowCache, block_stats,
                          format_size, marched_per_cell, memory_needed, window_budget)
 
     kind = out.kind

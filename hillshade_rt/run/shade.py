@@ -27,7 +27,7 @@ def shade(cfg: ShadeConfig) -> dict:
     from ..io.write import Claims, reset
     from ..shading import choose_backend
     from ..sun import SunRequest
-    from ..tiling import bytes_per_cell, default_max_memory, parse_size
+    from .plan import bytes_per_cell, default_max_memory, parse_size
     from .local import needs_windows
     from .outputs import OutputPattern
     from .report import Timer

@@ -39,11 +39,11 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from numba import njit, prange
 
-from .algorithms import REGISTRY
-from .errors import HillshadeError
-from .geometry import Grid
-from .io.source import READ_CHUNK, DemSource, Reader
-from .preview import every_nth
+from ..algorithms import REGISTRY
+from ..errors import HillshadeError
+from ..geometry import Grid
+from ..io.source import READ_CHUNK, DemSource, Reader
+from ..preview import every_nth
 
 STAT_BLOCK = 256          # cells per side of the blocks whose height range bounds the halos
 ALIGN = 256               # output regions are multiples of the output's block size
@@ -103,7 +103,7 @@ def format_size(n: float, up: bool = False) -> str:
 
 
 class MemoryTooSmall(HillshadeError):
-    """--max-memory leaves no room for a window of ``cells`` cells (``tiling.plan``): the caller
+    """--max-memory leaves no room for a window of ``cells`` cells (``plan``): the caller
     knows the bytes per cell and says the smallest memory that would do (``memory_needed``)."""
 
     def __init__(self, message: str, cells: int):
@@ -312,7 +312,7 @@ def window_for(bounds, shape, grid: Grid, azimuth: float, elevation: float, curv
                stats: BlockStats, margin: int = 1) -> tuple[int, int, int, int]:
     """The window of region ``bounds``: the region, its halo toward the sun (from the block
     ranges, tightened until it stops shrinking) and ``margin`` cells all round."""
-    from .shading import halo_bounds, reach_m
+    from ..shading import halo_bounds, reach_m
     low, _ = stats.range_over(bounds)
     if not math.isfinite(low):          # voids only: nothing to shade, nothing to read around
         return halo_bounds(bounds, shape, grid, azimuth, 0.0, margin)
@@ -367,7 +367,7 @@ def plan(shape, grid: Grid, azimuth: float, elevation: float, curv: float, stats
     need the lower edge of the sun's disk). ``night``: nothing casts; windows have no halo.
     ``azimuths``: the lowest and highest azimuth of the cells' rays (a sun per cell): each
     window then holds the halos of both and of ``azimuth``, so every ray in between."""
-    from .shading import halo_bounds, reach_m
+    from ..shading import halo_bounds, reach_m
     rows, cols = shape
     b = bounds or (0, rows, 0, cols)
     br, bc = b[1] - b[0], b[3] - b[2]
@@ -546,11 +546,11 @@ class Job:
 
     @property
     def k(self) -> float:
-        from .earth import refraction_for
+        from ..earth import refraction_for
         return refraction_for(self.body, self.refraction_k)
 
     def curv(self, azimuth: float, elevation: float) -> float:
-        from .earth import curvature_coefficient
+        from ..earth import curvature_coefficient
         return curvature_coefficient(self.curvature, self.body, self.k, self.extent_m,
                                      self.zrange, azimuth, elevation)
 
@@ -563,7 +563,7 @@ class Job:
     def carrier(self, plans=()):
         """A fresh carrier of tables for a run of windows (None when nothing is carried), its
         buffer sized for the largest window of ``plans`` (lists of pieces)."""
-        from .algorithms.smap import BandCarry
+        from ..algorithms.smap import BandCarry
         if not self.carries:
             return None
         most = max(((p.window[1] - p.window[0] + 2) * (p.window[3] - p.window[2] + 2)
@@ -571,7 +571,7 @@ class Job:
         return BandCarry(most)
 
     def shader(self, z: np.ndarray, window, local_range=None, carry=None):
-        from .shading import Shader
+        from ..shading import Shader
         return Shader(z, window_grid(self.source.grid, window), self.algorithm, self.options,
                       self.backend, self.curvature, self.refraction_k, self.body, self.zrange,
                       extent_m=self.extent_m, halo_ready=True, local_range=local_range,
@@ -582,8 +582,8 @@ class Job:
         """The product over ``piece.region`` from its window's heights ``z``. ``carry``: the
         run's ``carrier()``, for windows lit in plan order (a fresh one otherwise: SMap then
         still masks the region only)."""
-        from .shading import render_region
-        from .sun import Region
+        from ..shading import render_region
+        from ..sun import Region
         sh = self.shader(z, piece.window, piece.zrange,
                          carry if carry is not None else self.carrier())
         rows, cols = piece.inner()
@@ -600,8 +600,8 @@ class Job:
         """The pieces of one sun (per-tile suns: each tile's, cut further to fit).
         ``in_order``: the windows are lit one after the other in this order (SMap tables are
         carried along strips); False for independent tasks (Dask), which carry nothing."""
-        from .shading import field_method
-        from .sun import SUN_RADIUS_DEG
+        from ..shading import field_method
+        from ..sun import SUN_RADIUS_DEG
         out = []
         shape = self.source.shape
         # a sun per cell, as ``Shader.field_ok`` decides in memory
@@ -630,7 +630,7 @@ class Job:
 
     def warm_up(self, sun) -> None:
         """Compile (or load from numba's cache) what the windows will run."""
-        from .shading import Shader
+        from ..shading import Shader
         z = np.zeros((4, 4), np.float32)     # the kernels' argument types; the grid's spacing
         sh = Shader(z, self.source.grid, self.algorithm, self.options, self.backend,
                     self.curvature, self.refraction_k, self.body, self.zrange,
