@@ -164,7 +164,7 @@ def test_series_bands_and_pattern(tmp_path, runner):
     assert r.exit_code == 0, r.output
     with rasterio.open(out) as ds:
         # equal steps in elapsed time across the daylight-saving change: 00:30 +01:00 to
-        # 04:00 +02:00 is 2.5 hours, so three times, none after --end (tests/test_dst.py)
+        # 04:00 +02:00 is 2.5 hours, so three times, none after --end (tests/run/test_times.py)
         assert ds.count == 3
         assert ds.descriptions == ("2026-03-29T00:30+01:00", "2026-03-29T01:30+01:00",
                                    "2026-03-29T03:30+02:00")

@@ -65,7 +65,7 @@ docs/algorithms.md. The bound (under 0.5 % of the cells, wrong cells within abou
 sun) holds on per-row grids too: on a global lunar grid (equirectangular and lon/lat on the
 1737.4 km sphere, 0.5 deg, +-88 deg, 9 suns) 0 wrong cells (before the per-row checks: 0.57 %,
 2.97 % at the worst sun, 5.5 % at |lat| >= 80, up to 24.8 deg), on WGS84 60-85 N 0.006 %, worst
-sun 0.055 %, 0.60 deg (before: 0.17 %, 1.34 %, 3.93 deg); tests/test_sweep_edges.py.
+sun 0.055 %, 0.60 deg (before: 0.17 %, 1.34 %, 3.93 deg); tests/algorithms/test_sweep.py.
 """
 
 from __future__ import annotations

@@ -19,7 +19,7 @@ logging's last resort (as tifffile's are in a real run), and anything written to
 descriptor 2 (GDAL's own messages) counted as stderr too.
 
 In the suite: a few hundred examples, derandomized (reproducible). A long run:
-``HILLSHADE_FUZZ_EXAMPLES=3000 pytest tests/test_fuzz.py`` (the number is shared among the tests).
+``HILLSHADE_FUZZ_EXAMPLES=3000 pytest tests/cli/test_fuzz.py`` (the number is shared among the tests).
 ``HILLSHADE_FUZZ_COLLECT=dir`` records every violation (JSON lines, with the input files)
 instead of failing at the first one, to survey a long run.
 """
@@ -163,7 +163,7 @@ def real_raster(draw, driver=None):
     data = raster_bytes(driver, rows, cols, dtype, geo, nodata, seed, voids, bands, compress)
     ext = ".tif" if driver == "GTiff" else ".png"
     recipe = (f"{driver} {rows}x{cols} {dtype} geo={geo} nodata={nodata} voids={voids} "
-              f"bands={bands} compress={compress} (tests/test_fuzz.py::raster_bytes seed {seed})")
+              f"bands={bands} compress={compress} (tests/cli/test_fuzz.py::raster_bytes seed {seed})")
     return data, recipe, (rows, cols), geo not in ("none",), ext
 
 

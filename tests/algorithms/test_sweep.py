@@ -21,7 +21,7 @@ import pytest
 import hillshade_rt
 from hillshade_rt.algorithms import ALGORITHMS, brute, horizon, sweep
 from hillshade_rt.geometry import Grid, grid_from_transform, sun_rays
-from hillshade_rt.testing import fractal_terrain
+from hillshade_rt.testing import fractal_terrain, repo_root
 
 ALGOS = ("brute", "smap", "horizon", "sweep")
 
@@ -105,7 +105,7 @@ def test_read_only_sweep_kernels_are_cached(tmp_path):
         "st = {n: getattr(sweep, n).stats for n in ('_sweep_uniform', '_sweep_lines')}\n"
         "print(json.dumps({n: [len(s.cache_hits), len(s.cache_misses)] for n, s in st.items()}))\n")
     env = dict(os.environ, NUMBA_ENABLE_CUDASIM="1")
-    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    root = repo_root()
     env["PYTHONPATH"] = root + os.pathsep + env.get("PYTHONPATH", "")
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
                          cwd=root, timeout=600)

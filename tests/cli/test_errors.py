@@ -13,7 +13,7 @@ import hillshade_rt as hr
 from hillshade_rt.cli import cli
 from hillshade_rt.errors import HillshadeError
 from hillshade_rt.run import report
-from hillshade_rt.testing import data_path, fractal_terrain, write_geotiff
+from hillshade_rt.testing import data_path, fractal_terrain, write_geotiff, repo_root
 
 LIDAR = data_path("lidar_dem_1m_utm15n_400x400.tif")
 SRTM = data_path("jacksboro_fault_srtm3_mpl_403x344.tif")       # geographic (EPSG:4326)
@@ -171,7 +171,7 @@ def test_sun_hours_on_the_moon_does_not_advise_options_it_lacks(tmp_path, runner
 
 
 def test_docs_say_infinite_heights_are_nodata(tmp_path, runner):
-    text = open(os.path.join(os.path.dirname(__file__), "..", "docs", "usage.md"),
+    text = open(os.path.join(repo_root(), "docs", "usage.md"),
                 encoding="utf-8").read()
     assert "±inf heights are always nodata" in text
     z = fractal_terrain(20, 20, 1).astype(np.float32)

@@ -21,7 +21,7 @@ from hillshade_rt.algorithms import auto, bounds, brute, smap
 from hillshade_rt.algorithms.frames import uniform_rays
 from hillshade_rt.algorithms.pyramid import MaxPyramid, _levels
 from hillshade_rt.geometry import Grid, curvature_per_m2, sun_rays
-from hillshade_rt.testing import data_path, reference_mask, spectral
+from hillshade_rt.testing import data_path, reference_mask, spectral, repo_root
 
 SETTINGS = settings(max_examples=int(os.environ.get("HILLSHADE_PYRAMID_EXAMPLES", "400")),
                     deadline=None, derandomize=True, database=None,
@@ -134,7 +134,7 @@ def test_against_the_plain_python_model(az, el):
 @pytest.mark.parametrize("curved", [False, True])
 def test_real_dems(name, az, el, curved):
     path = data_path(name) if os.path.exists(data_path(name)) else os.path.join(
-        os.path.dirname(__file__), "..", "examples", name)
+        repo_root(), "examples", name)
     d = read_dem(path)
     z = np.ascontiguousarray(d.heights[:300, :400])
     grid = Grid(z.shape[0], z.shape[1], d.grid.dx[:300].copy(), d.grid.dy[:300].copy(),
