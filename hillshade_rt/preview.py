@@ -51,15 +51,3 @@ def every_nth(arr: np.ndarray, r0: int, c0: int, n: int):
     every-``n``-th grid: ``(sub, (row, col))``. Windows put their parts of a preview together."""
     rs, cs = (-r0) % n, (-c0) % n
     return arr[rs::n, cs::n], ((r0 + rs) // n, (c0 + cs) // n)
-
-
-def shade_of(kind, soft, arr, ambient):
-    """0..1 'in shadow' per cell of one product, for the preview."""
-    if kind == "hillshade":
-        base = 1.0 + np.rint(254.0 * ambient)
-        return ((arr > 0) & (arr <= base)).astype(np.float32)
-    if soft:
-        return np.nan_to_num(1.0 - arr, nan=0.0).astype(np.float32)
-    if kind == "classes":
-        return ((arr == 1) | (arr == 2)).astype(np.float32)
-    return (arr == 1).astype(np.float32)

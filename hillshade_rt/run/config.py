@@ -115,10 +115,10 @@ class ShadeConfig:
     def check(self) -> None:
         """The combinations no run can take (before the sun is looked at, as before)."""
         import math
+        from ..products import product
         if self.kind not in PRODUCTS:
             raise HillshadeError(f"product must be one of {', '.join(PRODUCTS)}, got {self.kind!r}")
-        if self.kind == "classes" and self.soft:
-            raise UsageProblem("--classes and --soft do not go together (classes are hard)")
+        product(self.kind, self.soft)     # classes are hard only
         if self.scale is not None:
             if not (math.isfinite(self.scale) and self.scale > 0):
                 raise UsageProblem(f"--scale must be a positive number, got {self.scale}")

@@ -67,8 +67,8 @@ def shade_piece(job, piece, path: str, nodata, stride: int | None = None) -> dic
     from rasterio.errors import NotGeoreferencedWarning
 
     from ..io import DEFLATE_LEVEL, atomic_path, gdal_checked
-    from ..preview import every_nth, shade_of
-    from .report import product_stats
+    from ..preview import every_nth
+    from ..products import product
     from .plan import GDAL_CACHE_MB
     import warnings
 
@@ -83,10 +83,11 @@ def shade_piece(job, piece, path: str, nodata, stride: int | None = None) -> dic
     with _LOCK:
         arr = job.light(z, piece, stats, used)
     del z
-    st = product_stats(job.kind, job.soft, arr)
+    prod = product(job.kind, job.soft)
+    st = prod.stats(arr)
     shade = None
     if stride:
-        sub, at = every_nth(shade_of(job.kind, job.soft, arr, job.ambient), piece.region[0],
+        sub, at = every_nth(prod.shade(arr, job.ambient), piece.region[0],
                             piece.region[2], stride)
         shade = (sub.copy(), at)
     if job.soft:
@@ -113,7 +114,7 @@ def run_on_dask(scheduler, job, suns, plans, out, share, stride, quiet, algo_sta
     report figures). ``out`` is the command's output description (bands or files)."""
     from tqdm import tqdm
 
-    from .report import merge_stats
+    from ..products import merge_stats
     from .outputs import sun_tags
     from ..io import copy_vrt
     from ..io.vrt import VrtSource, vrt_xml

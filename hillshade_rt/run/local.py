@@ -43,8 +43,7 @@ def in_memory(inputs, read_opts, scale, req, out, timer, algorithm, options, ran
     from ..shading import Shader, render
 
     from ..earth import dem_body
-    from ..preview import relief_rgb, shade_of
-    from .report import product_stats
+    from ..preview import relief_rgb
     from .outputs import sun_tags
     from .report import progress
 
@@ -75,9 +74,9 @@ def in_memory(inputs, read_opts, scale, req, out, timer, algorithm, options, ran
                              ambient=ambient, stats=algo_stats)
             seconds = timer.seconds["compute"] - t0
             with timer("compute"):      # the product's statistics (counts over the raster)
-                st = product_stats(kind, soft, arr)
+                st = out.product.stats(arr)
             if out.preview:
-                sh = shade_of(kind, soft, arr, ambient)
+                sh = out.product.shade(arr, ambient)
                 share = sh / len(suns) if share is None else share + sh / len(suns)
             if soft:
                 arr = np.where(np.isnan(arr), np.float32(out.nodata), arr).astype(np.float32)
@@ -109,8 +108,8 @@ def tiled(inputs, read_opts, scale, req, out, timer, algorithm, options, ran_on,
     from ..earth import dem_body
     from ..geometry import Grid
     from ..earth import curvature_report
-    from ..preview import every_nth, relief_rgb, shade_of
-    from .report import merge_stats, product_stats
+    from ..preview import every_nth, relief_rgb
+    from ..products import merge_stats
     from .outputs import sun_tags
     from .plan import (MIN_WINDOW_CELLS, Job, MemoryTooSmall, Tally, WindowCache, block_stats,
                          format_size, marched_per_cell, memory_needed, window_budget)
@@ -185,9 +184,9 @@ def tiled(inputs, read_opts, scale, req, out, timer, algorithm, options, ran_on,
                             arr = job.light(z, p, algo_stats, used, carry)
                         tally.add(p)
                         with timer("compute"):      # the window's statistics
-                            st = merge_stats(st, product_stats(kind, soft, arr))
+                            st = merge_stats(st, out.product.stats(arr))
                         if share is not None:
-                            sub, (a, b) = every_nth(shade_of(kind, soft, arr, ambient),
+                            sub, (a, b) = every_nth(out.product.shade(arr, ambient),
                                                     p.region[0], p.region[2], n)
                             share[a:a + sub.shape[0], b:b + sub.shape[1]] += sub / len(suns)
                         if soft:

@@ -100,30 +100,23 @@ def label(sun: SunOver) -> str:
     return f"sun az {sun.azimuth:g} el {sun.elevation:g}"
 
 
-# the VALUES tag of each product (kind, soft)
-VALUES = {("shadow", False): "1=shadow 0=lit 255=nodata",
-          ("shadow", True): "visible fraction of the solar disk 0..1, -9999=nodata",
-          ("classes", False): "0=lit 1=self-shadow 2=cast shadow 255=nodata",
-          ("hillshade", False): "1..255 shaded relief with cast shadows, 0=nodata",
-          ("hillshade", True): "1..255 shaded relief with soft shadows, 0=nodata"}
-
-
 class Outputs:
     """Where a lighting run's products go: bands of OUTPUT or files of a pattern; their type,
     nodata, tags and descriptions."""
 
-    def __init__(self, kind, soft, algorithm, dtype, nodata, output, pattern, claims, cog,
-                 preview, ambient, fmt=None):
-        self.kind, self.soft, self.dtype, self.nodata = kind, soft, dtype, nodata
+    def __init__(self, product, algorithm, output, pattern, claims, cog, preview, ambient,
+                 fmt=None):
+        self.product = product          # a products.Product
+        self.kind, self.soft = product.kind, product.soft
+        self.dtype, self.nodata = product.dtype, product.nodata
         self.output, self.pattern, self.cog = output, pattern, cog
         self.claims, self.overwrite, self.fmt = claims, claims.overwrite, fmt
         self.preview, self.ambient = preview, ambient
         self.base_tags = {"HILLSHADE_RT_VERSION": __version__, "ALGORITHM": algorithm,
-                          "VALUES": VALUES[kind, soft]}
-        self.what = {"shadow": "visible fraction of the sun" if soft else "cast shadow",
-                     "classes": "shadow classes", "hillshade": "shaded relief"}[kind]
-        self.resampling = "average" if (soft or kind == "hillshade") else "nearest"
-        self.continuous = self.resampling == "average"   # lossy formats and 16-bit PNG allowed
+                          "VALUES": product.values}
+        self.what = product.what
+        self.resampling = product.resampling
+        self.continuous = product.continuous   # lossy formats and 16-bit PNG allowed
         self.via_vrt = False    # outputs assembled by GDAL from parts (Dask)
         self.paths = None
         self.tiles = self.tile_paths = None

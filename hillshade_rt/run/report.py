@@ -7,8 +7,6 @@ import os
 import time
 from contextlib import contextmanager
 
-import numpy as np
-
 from .. import __version__
 
 
@@ -29,61 +27,6 @@ class Timer:
 
     def total(self) -> float:
         return time.perf_counter() - self._t0
-
-
-def mask_stats(mask: np.ndarray) -> dict:
-    """Counts of shadow / lit / nodata cells of a uint8 mask (1 / 0 / 255)."""
-    from ..algorithms.counts import code_counts
-    counts = code_counts(mask)
-    shadow, lit, nodata = int(counts[1]), int(counts[0]), int(counts[255])
-    valid = shadow + lit
-    return {"shadow_cells": shadow, "lit_cells": lit, "nodata_cells": nodata,
-            "shadow_fraction": (shadow / valid) if valid else None}
-
-
-def product_stats(kind: str, soft: bool, arr: np.ndarray) -> dict:
-    """Cell counts of one product: shadow (cast or self) / lit / nodata, as ``mask_stats``."""
-    if kind == "shadow" and not soft:
-        return mask_stats(arr)
-    if kind == "classes":
-        from ..algorithms.counts import code_counts
-        counts = code_counts(arr)
-        shadow, lit, nodata = int(counts[1] + counts[2]), int(counts[0]), int(counts[255])
-        valid = shadow + lit
-        return {"shadow_cells": shadow, "lit_cells": lit, "nodata_cells": nodata,
-                "shadow_fraction": (shadow / valid) if valid else None,
-                "self_shadow_cells": int(counts[1]), "cast_shadow_cells": int(counts[2])}
-    if kind == "hillshade":
-        nodata = int(np.count_nonzero(arr == 0))
-        return {"shadow_cells": 0, "lit_cells": int(arr.size - nodata), "nodata_cells": nodata,
-                "shadow_fraction": None}
-    valid = ~np.isnan(arr)
-    n = int(np.count_nonzero(valid))
-    mean = float(np.mean(arr[valid], dtype=np.float64)) if n else None
-    return {"shadow_cells": None, "lit_cells": None, "nodata_cells": int(arr.size - n),
-            "valid_cells": n, "shadow_fraction": (1.0 - mean) if mean is not None else None}
-
-
-def merge_stats(a: dict | None, b: dict) -> dict:
-    """The ``product_stats`` of two parts of one product taken together."""
-    if a is None:
-        return dict(b)
-    out = {}
-    for k in ("shadow_cells", "lit_cells", "nodata_cells", "valid_cells", "self_shadow_cells",
-              "cast_shadow_cells"):
-        if k in a or k in b:
-            va, vb = a.get(k), b.get(k)
-            out[k] = None if va is None or vb is None else va + vb
-    if out.get("shadow_cells") is not None:
-        valid = out["shadow_cells"] + out["lit_cells"]
-        out["shadow_fraction"] = out["shadow_cells"] / valid if valid else None
-    else:   # float products: the shadow fraction is 1 - the mean, weighted by valid cells
-        na, nb = a.get("valid_cells") or 0, b.get("valid_cells") or 0
-        fa, fb = a.get("shadow_fraction"), b.get("shadow_fraction")
-        parts = [(n, f) for n, f in ((na, fa), (nb, fb)) if n and f is not None]
-        out["shadow_fraction"] = (sum(n * f for n, f in parts) / sum(n for n, _ in parts)
-                                  if parts else None)
-    return out
 
 
 def build_report(*, dem, output: str, azimuth: float, elevation: float, algorithm: str,

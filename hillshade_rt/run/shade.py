@@ -13,12 +13,6 @@ import os
 from ..errors import HillshadeError, UsageProblem
 from .config import ShadeConfig, inputs_and_output, parse_window_size
 
-# each product's type and nodata: (kind, soft) -> (dtype, nodata)
-PRODUCT_TYPES = {("shadow", False): ("uint8", 255), ("shadow", True): ("float32", -9999.0),
-                 ("classes", False): ("uint8", 255), ("hillshade", False): ("uint8", 0),
-                 ("hillshade", True): ("uint8", 0)}
-
-
 def shade(cfg: ShadeConfig) -> dict:
     """Run ``cfg``; returns the report. Bad input raises ``HillshadeError`` (``UsageProblem``
     for a bad combination of options) before anything is written."""
@@ -77,6 +71,7 @@ def _shade(cfg, src, windowed, inputs, output, req, pattern, wshape, limit, clai
     import numba
 
     from ..io import check_output_format, input_label, output_driver, write_json, write_png
+    from ..products import product
     from .local import bounded_gdal_cache, in_memory, mean_stats, tiled
     from .notes import compile_note, note_to_show
     from .outputs import Outputs
@@ -84,9 +79,10 @@ def _shade(cfg, src, windowed, inputs, output, req, pattern, wshape, limit, clai
 
     kind, soft, algorithm, options = cfg.kind, cfg.soft, cfg.algorithm, cfg.options
     ro = cfg.run
-    dtype, nodata = PRODUCT_TYPES[kind, soft]
-    out = Outputs(kind, soft, algorithm, dtype, nodata, output, pattern, claims, cfg.cog,
-                  ro.preview is not None, cfg.ambient, ro.fmt)
+    prod = product(kind, soft)
+    dtype, nodata = prod.dtype, prod.nodata
+    out = Outputs(prod, algorithm, output, pattern, claims, cfg.cog, ro.preview is not None,
+                  cfg.ambient, ro.fmt)
     # Dask's parts are put together by GDAL (no 16-bit encoding of soft shadows on the way)
     out.via_vrt = cfg.scheduler is not None
     if output is not None:   # the format can hold the product (before any work)
