@@ -12,8 +12,11 @@ from .options import (backend_option, dem_options, finite, format_option, to_rea
 @click.command()
 @click.argument("dem", type=click.Path(dir_okay=False))
 @click.argument("output", type=click.Path(dir_okay=False))
-@click.option("--azimuth", type=float, required=True, callback=finite,
-              help="Azimuth along which to look, degrees clockwise from north.")
+@click.option("--azimuth", type=float, default=None, callback=finite,
+              help="Azimuth along which to look, degrees clockwise from north (one band).")
+@click.option("--directions", type=click.IntRange(8, 360), default=None, metavar="N",
+              help="N equally spaced azimuths clockwise from north, 0 first (8..360): one band "
+                   "per direction, its description the azimuth.")
 @click.option("--method", type=click.Choice(["scan", "hull"]), default="scan", show_default=True,
               help="scan: exact per-cell march; hull: convex-hull approximation, much faster.")
 @click.option("--sample-spacing", type=click.IntRange(min=1), default=1, show_default=True,
@@ -33,9 +36,10 @@ from .options import (backend_option, dem_options, finite, format_option, to_rea
 @format_option
 @dem_options
 @errors_to_click
-def horizon(dem, output, azimuth, method, sample_spacing, curvature, refraction_k, preview,
-            backend, threads, overwrite, quiet, fmt, **read_opts):
-    """Write the horizon angle toward AZIMUTH of every cell of DEM to OUTPUT.
+def horizon(dem, output, azimuth, directions, method, sample_spacing, curvature, refraction_k,
+            preview, backend, threads, overwrite, quiet, fmt, **read_opts):
+    """Write the horizon angle toward --azimuth (or toward each of --directions N azimuths, one
+    band each) of every cell of DEM to OUTPUT.
 
     Float32 degrees above the horizontal (negative: the cell looks down on everything ahead;
     -90: no terrain ahead inside the raster); nodata -9999. A cell is lit by a sun at this
@@ -44,4 +48,5 @@ def horizon(dem, output, azimuth, method, sample_spacing, curvature, refraction_
     kw = dict(preview=preview, backend=backend, threads=threads, overwrite=overwrite,
               quiet=quiet, fmt=fmt, **read_opts)
     run_horizon(HorizonConfig(dem, output, azimuth, method, sample_spacing, curvature,
-                              refraction_k, to_read_options(kw), to_run_options(kw, say)))
+                              refraction_k, to_read_options(kw), to_run_options(kw, say),
+                              directions=directions))

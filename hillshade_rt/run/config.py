@@ -151,13 +151,27 @@ class HorizonConfig:
 
     dem: str
     output: str
-    azimuth: float
+    azimuth: float | None = None
     method: str = "scan"
     sample_spacing: int = 1
     curvature: object = None
     refraction_k: float | None = None
     read: ReadOptions = field(default_factory=ReadOptions)
     run: RunOptions = field(default_factory=RunOptions)
+    directions: int | None = None     # N azimuths clockwise from north, 0 first: N bands
+
+    def azimuths(self) -> list[float]:
+        """The azimuths of the bands: ``azimuth``, or the ``directions`` ones; exactly one of
+        the two (a usage error otherwise)."""
+        from ..geometry import normalize_azimuth
+        if (self.azimuth is None) == (self.directions is None):
+            raise UsageProblem("give --azimuth A (one direction) or --directions N, one of them")
+        if self.directions is not None:
+            n = int(self.directions)
+            if not 8 <= n <= 360:
+                raise UsageProblem(f"--directions must be between 8 and 360, got {n}")
+            return [360.0 * i / n for i in range(n)]
+        return [normalize_azimuth(self.azimuth)]
 
 
 def inputs_and_output(files, output, pattern):

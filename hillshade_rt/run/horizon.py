@@ -17,8 +17,9 @@ def horizon(cfg: HorizonConfig) -> dict:
     from ..algorithms import horizon as hz
     from ..shading import Shader
     from ..earth import dem_body
-    from ..geometry import Grid, normalize_azimuth, sun_rays
-    from ..io import check_output_format, input_label, output_driver, write_png, write_raster
+    from ..geometry import Grid, sun_rays
+    from ..io import (BandWriter, check_output_format, input_label, output_driver, write_png,
+                      write_raster)
     from ..preview import relief_rgb
     from ..shading import choose_backend, warm_up
     from ..io.write import Claims
@@ -27,12 +28,14 @@ def horizon(cfg: HorizonConfig) -> dict:
 
     ro, output, method, sample_spacing = cfg.run, cfg.output, cfg.method, cfg.sample_spacing
     timer = Timer()
-    az = normalize_azimuth(cfg.azimuth)
+    azimuths = cfg.azimuths()
+    az = azimuths[0]
+    many = cfg.directions is not None
     claims = Claims([cfg.dem], ro.overwrite)
     claims.claim(output, "OUTPUT")
     if ro.preview is not None:
         claims.claim(ro.preview, "--preview")
-    check_output_format(output, output_driver(output, ro.fmt), "float32", 1, False)
+    check_output_format(output, output_driver(output, ro.fmt), "float32", len(azimuths), False)
     if method == "hull" and sample_spacing != 1:
         raise UsageProblem("--sample-spacing applies to --method scan only")
     if ro.threads is not None:
@@ -52,9 +55,9 @@ def horizon(cfg: HorizonConfig) -> dict:
                         dem_body(d))
         if shader.curvature == "auto":   # the hull has no curvature: off unless asked for
             shader.curvature = shader.extent_m > 1000.0 and method == "scan"
-        rays = shader.rays(d.grid, az, 45.0)
         small = sun_rays(Grid.uniform(4, 4, *d.grid.centre_spacing(), d.grid.col_sign,
                                       d.grid.row_sign), az, 45.0)
+        gpu_dem = None
         if ran_on == "gpu":
             from ..gpu import GpuDem
             hz.horizon_angles_gpu(GpuDem(np.eye(4, dtype=np.float32)), small, method,
@@ -64,32 +67,69 @@ def horizon(cfg: HorizonConfig) -> dict:
             warm_up("horizon", d.grid, az, 45.0, method=method, sample_spacing=sample_spacing)
             hz.horizon_angles(np.zeros((4, 4), np.float32), small, method=method,
                               sample_spacing=sample_spacing)
-    with timer("compute"):
-        if ran_on == "gpu":
-            beta = hz.horizon_angles_gpu(gpu_dem, rays, method, sample_spacing)
-        else:
-            beta = hz.horizon_angles(d.heights, rays, method=method,
-                                     sample_spacing=sample_spacing, stats=stats)
+
+    def angles(a):
+        """The horizon angles toward azimuth ``a`` (float32 degrees, NaN on voids)."""
+        rays = shader.rays(d.grid, a, 45.0)
+        with timer("compute"):
+            if gpu_dem is not None:
+                return hz.horizon_angles_gpu(gpu_dem, rays, method, sample_spacing), rays
+            return hz.horizon_angles(d.heights, rays, method=method,
+                                     sample_spacing=sample_spacing, stats=stats), rays
+
+    curved = False
+    tags = {"HILLSHADE_RT_VERSION": __version__, "METHOD": method,
+            "SAMPLE_SPACING": sample_spacing, "UNITS": "degrees above the horizontal",
+            "NODATA": "-9999 (a void)", "NO_TERRAIN_AHEAD": "-90"}
+    shade = None
+    if not many:
+        beta, rays = angles(az)
+        curved = bool(rays.curved)
         shade = (np.clip(np.nan_to_num(beta, nan=0.0) / 30.0, 0.0, 1.0)
                  if ro.preview else None)
         beta[np.isnan(beta)] = -9999.0
-    tags = {"HILLSHADE_RT_VERSION": __version__, "AZIMUTH": az, "METHOD": method,
-            "SAMPLE_SPACING": sample_spacing, "UNITS": "degrees above the horizontal",
-            "EARTH_CURVATURE": (f"on, R {shader.body.radius(az):.0f} m, k {shader.k:g}"
-                                if rays.curved else "off")}
-    with timer("write"):
-        write_raster(output, beta, d, nodata=-9999.0, description="horizon angle", tags=tags,
-                     overwrite=ro.overwrite, fmt=ro.fmt)
-        if ro.preview is not None:
+        tags = {"HILLSHADE_RT_VERSION": __version__, "AZIMUTH": az, "METHOD": method,
+                "SAMPLE_SPACING": sample_spacing, "UNITS": "degrees above the horizontal",
+                "EARTH_CURVATURE": (f"on, R {shader.body.radius(az):.0f} m, k {shader.k:g}"
+                                    if curved else "off")}
+        with timer("write"):
+            write_raster(output, beta, d, nodata=-9999.0, description="horizon angle",
+                         tags=tags, overwrite=ro.overwrite, fmt=ro.fmt)
+    else:
+        # one band per direction, written as it is made (N bands never all in memory)
+        on = shader.curvature_for(az, 45.0) > 0     # the same for every direction
+        tags.update(DIRECTIONS=len(azimuths), AZIMUTHS=",".join(f"{a:g}" for a in azimuths),
+                    AZIMUTH_CONVENTION="degrees clockwise from north (grid north), band i at "
+                                       "i * 360 / N",
+                    EARTH_CURVATURE=f"on, k {shader.k:g}" if on else "off")
+        with BandWriter(output, d, len(azimuths), "float32", -9999.0, tags,
+                        overview_resampling="average", overwrite=ro.overwrite,
+                        fmt=ro.fmt) as w:
+            for i, a in enumerate(azimuths):
+                beta, rays = angles(a)
+                curved = curved or bool(rays.curved)
+                if ro.preview and i == 0:
+                    shade = np.clip(np.nan_to_num(beta, nan=0.0) / 30.0, 0.0, 1.0)
+                beta[np.isnan(beta)] = -9999.0
+                with timer("write"):
+                    w.write(i + 1, beta, description=f"horizon angle toward azimuth {a:g}",
+                            tags={"AZIMUTH": f"{a:g}"})
+            with timer("write"):
+                w.finish()
+    if ro.preview is not None:
+        with timer("write"):
             write_png(ro.preview, relief_rgb(d.heights, d.grid, az, 45.0, shade=shade),
                       ro.overwrite)
     rows, cols = d.shape
     rep = {"input": input_label(d.path), "output": os.path.abspath(output), "shape": [rows, cols],
-           "azimuth": az, "method": method, "sample_spacing": sample_spacing, "backend": ran_on,
-           "curvature": bool(rays.curved), "algorithm_stats": stats,
-           "seconds": dict(timer.seconds, total=timer.total()), "version": __version__}
+           "azimuth": az if not many else None, "azimuths": azimuths, "method": method,
+           "sample_spacing": sample_spacing, "backend": ran_on, "curvature": curved,
+           "algorithm_stats": stats, "seconds": dict(timer.seconds, total=timer.total()),
+           "version": __version__}
     if not ro.quiet:
-        ro.say("summary", f"hillshade-rt: {output}: {cols}x{rows}, horizon toward az {az:g} "
+        toward = (f"toward az {az:g}" if not many else
+                  f"toward {len(azimuths)} directions ({360.0 / len(azimuths):g} deg apart)")
+        ro.say("summary", f"hillshade-rt: {output}: {cols}x{rows}, horizon {toward} "
                           f"({method}, {ran_on}), compute {timer.seconds['compute']:.3f} s")
         if stats.get("note"):
             ro.say("note", stats["note"])
