@@ -52,8 +52,9 @@ PER_ROW_SPACING = ("the ground spacing varies per row (a geographic CRS, or a "
 @njit(cache=True)
 def _scan_cell(z, pyr, off, widths, nlev, r, c, dom_col, sd, so, sp, zmax, rise, cv, decide,
                floor, cap):
-    """Max of (T_k - h0 - k*k*cv) / k over the samples k = sp, 2sp, ... (-inf if none); ``cv``
-    is the Earth-curvature term (the terrain k steps away sits k*k*cv lower; 0 when flat).
+    """(max of (T_k - h0 - k*k*cv) / k over the samples k = sp, 2sp, ... (-inf if none), the k
+    of that maximum (0 if none)); ``cv`` is the Earth-curvature term (the terrain k steps away
+    sits k*k*cv lower; 0 when flat).
 
     decide: stop as soon as the result is known relative to ``rise`` (mask mode). ``floor``:
     start the maximum there (the answer is then max(β, floor): soft shadows need no horizon
@@ -64,6 +65,7 @@ def _scan_cell(z, pyr, off, widths, nlev, r, c, dom_col, sd, so, sp, zmax, rise,
     line0, other0, n_dom, n_oth = ray_origin(z, r, c, dom_col)
     h0 = float(z[np.int64(r), np.int64(c)])
     best = floor
+    kbest = 0
     k = sp
     lev = 0
     while True:
@@ -95,31 +97,37 @@ def _scan_cell(z, pyr, off, widths, nlev, r, c, dom_col, sd, so, sp, zmax, rise,
             lift = madd(lift, -float(k * k), cv)
         if lift > best * k:   # NaN (void) compares false: skipped
             best = lift / k
+            kbest = k
             if decide and best > rise:
                 break
             if best > cap:
                 break
         k += sp
-    return best
+    return best, kbest
 
 
 @njit(cache=True, inline="always")
 def _scan_write(z, pyr, off, widths, nlev, r, c, dom_col, step_dom, step_other, rise, step_m,
-                curv, sp, zmax, want_mask, mask, beta, floor_tan, cap_tan):
+                curv, sp, zmax, want_mask, mask, beta, floor_tan, cap_tan, want_dist, dist):
     """Cell (r, c) of the scan: its mask code (want_mask) or its angle β in degrees (at least
-    atan(floor_tan); above atan(cap_tan) only known to be above it). The per-cell body of both
-    backends."""
+    atan(floor_tan); above atan(cap_tan) only known to be above it), and with ``want_dist`` the
+    ground distance (m) to the sample of the maximum, the horizon point (NaN on a void or with
+    nothing ahead). The per-cell body of both backends."""
     if math.isnan(z[r, c]):
         if want_mask:
             mask[r, c] = 255
         else:
             beta[r, c] = np.nan
+        if want_dist:
+            dist[r, c] = np.nan
         return
     ri = rise[r]
     sm = step_m[r]
-    t = _scan_cell(z, pyr, off, widths, nlev if sp == 1 else np.int64(0), r, c, dom_col[r] != 0,
-                   np.int64(step_dom[r]), step_other[r], sp, zmax, ri, curv[r], want_mask,
-                   floor_tan * sm, cap_tan * sm)
+    t, kb = _scan_cell(z, pyr, off, widths, nlev if sp == 1 else np.int64(0), r, c,
+                       dom_col[r] != 0, np.int64(step_dom[r]), step_other[r], sp, zmax, ri,
+                       curv[r], want_mask, floor_tan * sm, cap_tan * sm)
+    if want_dist:
+        dist[r, c] = kb * sm if kb > 0 else np.nan
     if want_mask:
         mask[r, c] = 1 if t > ri else 0
     else:
@@ -134,22 +142,24 @@ def _scan_write(z, pyr, off, widths, nlev, r, c, dom_col, step_dom, step_other, 
 
 @njit(parallel=True, cache=True)
 def _scan_kernel(z, pyr, off, widths, nlev, dom_col, step_dom, step_other, rise, step_m, curv, sp,
-                 zmax, want_mask, mask, beta, floor_tan, cap_tan):
+                 zmax, want_mask, mask, beta, floor_tan, cap_tan, want_dist, dist):
     rows, cols = z.shape
     for r in prange(rows):
         for c in range(cols):
             _scan_write(z, pyr, off, widths, nlev, r, c, dom_col, step_dom, step_other, rise,
-                        step_m, curv, sp, zmax, want_mask, mask, beta, floor_tan, cap_tan)
+                        step_m, curv, sp, zmax, want_mask, mask, beta, floor_tan, cap_tan,
+                        want_dist, dist)
 
 
 @kernel
 def _scan_gpu(z, pyr, off, widths, nlev, dom_col, step_dom, step_other, rise, step_m, curv, sp,
-              zmax, want_mask, mask, beta, floor_tan, cap_tan):
+              zmax, want_mask, mask, beta, floor_tan, cap_tan, want_dist, dist):
     """CUDA twin of ``_scan_kernel``: one thread per cell."""
     c, r = cuda.grid(2)
     if r < z.shape[0] and c < z.shape[1]:
         _scan_write(z, pyr, off, widths, nlev, r, c, dom_col, step_dom, step_other, rise,
-                    step_m, curv, sp, zmax, want_mask, mask, beta, floor_tan, cap_tan)
+                    step_m, curv, sp, zmax, want_mask, mask, beta, floor_tan, cap_tan,
+                    want_dist, dist)
 
 
 @njit(cache=True)
@@ -273,14 +283,21 @@ def _tan_deg(a: float | None, default: float) -> float:
 
 def horizon_angles(z: np.ndarray, rays: SunRays, method: str = "scan", sample_spacing: int = 1,
                    zmax: float | None = None, stats: dict | None = None, pyramid=True,
-                   floor_deg: float | None = None, cap_deg: float | None = None) -> np.ndarray:
+                   floor_deg: float | None = None, cap_deg: float | None = None,
+                   distance: np.ndarray | None = None) -> np.ndarray:
     """β in degrees (float32, NaN on voids, -90 where no terrain lies ahead in the raster).
+    ``distance``: a DEM-shaped float32 array that receives the ground distance in metres to
+    each cell's horizon point (the sample of the maximum; NaN on voids and with nothing ahead;
+    the scan only).
 
     The scan marches over the maximum-height pyramid (``pyramid``: True, a ``MaxPyramid`` to
     reuse, or False for the plain scan: same angles). ``floor_deg`` / ``cap_deg`` (soft
     shadows): β below the floor comes back as the floor, β above the cap as some angle above it
     (the march stops there)."""
     hull = _check(method, sample_spacing, rays)
+    if distance is not None and method != "scan":
+        from ..errors import HillshadeError
+        raise HillshadeError("the distance to the horizon comes from the scan method only")
     if zmax is None:
         zmax = float(np.nanmax(z))
     if hull:
@@ -297,7 +314,8 @@ def horizon_angles(z: np.ndarray, rays: SunRays, method: str = "scan", sample_sp
     _scan_kernel(z, *pyramid_args(z, pyramid), rays.dom_col, rays.step_dom, rays.step_other,
                  rays.rise, rays.step_m, rays.curv, np.int64(sample_spacing), float(zmax), False,
                  np.empty((1, 1), np.uint8), beta, _tan_deg(floor_deg, -np.inf),
-                 _tan_deg(cap_deg, np.inf))
+                 _tan_deg(cap_deg, np.inf), distance is not None,
+                 np.empty((1, 1), np.float32) if distance is None else distance)
     return beta
 
 
@@ -319,20 +337,26 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None, stats: 
     out = np.empty(z.shape, np.uint8)
     _scan_kernel(z, *pyramid_args(z, pyramid), rays.dom_col, rays.step_dom, rays.step_other, rays.rise,
                  rays.step_m, rays.curv, np.int64(sample_spacing), float(zmax), True, out,
-                 np.empty((1, 1), np.float32), -np.inf, np.inf)
+                 np.empty((1, 1), np.float32), -np.inf, np.inf, False,
+                 np.empty((1, 1), np.float32))
     return out
 
 
-def _scan_gpu_run(g, rays, sample_spacing, zmax, want_mask, floor_deg=None, cap_deg=None):
+def _scan_gpu_run(g, rays, sample_spacing, zmax, want_mask, floor_deg=None, cap_deg=None,
+                  distance=None):
     rows, cols = g.shape
     dom_col, step_dom, step_other, rise, step_m, curv = g.rays(rays)
     dummy = g.empty((1, 1), np.float32 if want_mask else np.uint8)
     out = g.empty((rows, cols), np.uint8 if want_mask else np.float32)
     args = (out, dummy) if want_mask else (dummy, out)
+    dist = g.empty((rows, cols) if distance is not None else (1, 1), np.float32)
     with g.timed():
         g.launch(_scan_gpu, rows, cols, g.z, *g.pyramid_args(True), dom_col, step_dom,
                  step_other, rise, step_m, curv, np.int64(sample_spacing), float(zmax),
-                 want_mask, *args, _tan_deg(floor_deg, -np.inf), _tan_deg(cap_deg, np.inf))
+                 want_mask, *args, _tan_deg(floor_deg, -np.inf), _tan_deg(cap_deg, np.inf),
+                 distance is not None, dist)
+    if distance is not None:
+        distance[...] = g.download(dist)
     return g.download(out)
 
 
@@ -353,7 +377,9 @@ def shadow_mask_gpu(g, rays: SunRays, zmax: float, stats: dict | None = None, me
 
 def horizon_angles_gpu(g, rays: SunRays, method: str = "scan", sample_spacing: int = 1,
                        stats: dict | None = None, floor_deg: float | None = None,
-                       cap_deg: float | None = None) -> np.ndarray:
-    """``horizon_angles`` on the GPU (float32 degrees, NaN on voids, -90 nothing ahead)."""
+                       cap_deg: float | None = None,
+                       distance: np.ndarray | None = None) -> np.ndarray:
+    """``horizon_angles`` on the GPU (float32 degrees, NaN on voids, -90 nothing ahead;
+    ``distance`` as for ``horizon_angles``)."""
     _gpu_method(method, sample_spacing, rays)
-    return _scan_gpu_run(g, rays, sample_spacing, g.zmax, False, floor_deg, cap_deg)
+    return _scan_gpu_run(g, rays, sample_spacing, g.zmax, False, floor_deg, cap_deg, distance)

@@ -17,6 +17,10 @@ from .options import (backend_option, dem_options, finite, format_option, to_rea
 @click.option("--directions", type=click.IntRange(8, 360), default=None, metavar="N",
               help="N equally spaced azimuths clockwise from north, 0 first (8..360): one band "
                    "per direction, its description the azimuth.")
+@click.option("--distance", "distance", type=click.Path(dir_okay=False), default=None,
+              metavar="DIST.tif",
+              help="Also write the ground distance in metres to each cell's horizon point "
+                   "(the same bands; -9999 on voids and where nothing lies ahead; the scan).")
 @click.option("--method", type=click.Choice(["scan", "hull"]), default="scan", show_default=True,
               help="scan: exact per-cell march; hull: convex-hull approximation, much faster.")
 @click.option("--sample-spacing", type=click.IntRange(min=1), default=1, show_default=True,
@@ -36,8 +40,8 @@ from .options import (backend_option, dem_options, finite, format_option, to_rea
 @format_option
 @dem_options
 @errors_to_click
-def horizon(dem, output, azimuth, directions, method, sample_spacing, curvature, refraction_k,
-            preview, backend, threads, overwrite, quiet, fmt, **read_opts):
+def horizon(dem, output, azimuth, directions, distance, method, sample_spacing, curvature,
+            refraction_k, preview, backend, threads, overwrite, quiet, fmt, **read_opts):
     """Write the horizon angle toward --azimuth (or toward each of --directions N azimuths, one
     band each) of every cell of DEM to OUTPUT.
 
@@ -49,4 +53,4 @@ def horizon(dem, output, azimuth, directions, method, sample_spacing, curvature,
               quiet=quiet, fmt=fmt, **read_opts)
     run_horizon(HorizonConfig(dem, output, azimuth, method, sample_spacing, curvature,
                               refraction_k, to_read_options(kw), to_run_options(kw, say),
-                              directions=directions))
+                              directions=directions, distance=distance))

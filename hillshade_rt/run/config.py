@@ -159,6 +159,7 @@ class HorizonConfig:
     read: ReadOptions = field(default_factory=ReadOptions)
     run: RunOptions = field(default_factory=RunOptions)
     directions: int | None = None     # N azimuths clockwise from north, 0 first: N bands
+    distance: str | None = None       # a second raster: metres to each cell's horizon point
 
     def azimuths(self) -> list[float]:
         """The azimuths of the bands: ``azimuth``, or the ``directions`` ones; exactly one of

@@ -3,6 +3,7 @@ degrees above the horizontal, -9999 nodata). Returns the report."""
 
 from __future__ import annotations
 
+import contextlib
 import os
 
 from .. import __version__
@@ -35,9 +36,15 @@ def horizon(cfg: HorizonConfig) -> dict:
     claims.claim(output, "OUTPUT")
     if ro.preview is not None:
         claims.claim(ro.preview, "--preview")
-    check_output_format(output, output_driver(output, ro.fmt), "float32", len(azimuths), False)
+    if cfg.distance is not None:
+        claims.claim(cfg.distance, "--distance")
+    for path in [output] + ([cfg.distance] if cfg.distance is not None else []):
+        check_output_format(path, output_driver(path, ro.fmt), "float32", len(azimuths), False)
     if method == "hull" and sample_spacing != 1:
         raise UsageProblem("--sample-spacing applies to --method scan only")
+    if method == "hull" and cfg.distance is not None:
+        raise UsageProblem("--distance comes from --method scan only (the hull keeps no "
+                           "horizon point)")
     if ro.threads is not None:
         numba.set_num_threads(min(ro.threads, numba.config.NUMBA_NUM_THREADS))
     ran_on = choose_backend(ro.backend, "horizon", {"method": method})
@@ -69,13 +76,24 @@ def horizon(cfg: HorizonConfig) -> dict:
                               sample_spacing=sample_spacing)
 
     def angles(a):
-        """The horizon angles toward azimuth ``a`` (float32 degrees, NaN on voids)."""
+        """(the horizon angles toward azimuth ``a``: float32 degrees, NaN on voids; the
+        distances to the horizon points, -9999 where there is none, or None; the rays)."""
         rays = shader.rays(d.grid, a, 45.0)
+        dist = None if cfg.distance is None else np.empty(d.shape, np.float32)
         with timer("compute"):
             if gpu_dem is not None:
-                return hz.horizon_angles_gpu(gpu_dem, rays, method, sample_spacing), rays
-            return hz.horizon_angles(d.heights, rays, method=method,
-                                     sample_spacing=sample_spacing, stats=stats), rays
+                beta = hz.horizon_angles_gpu(gpu_dem, rays, method, sample_spacing,
+                                             distance=dist)
+            else:
+                beta = hz.horizon_angles(d.heights, rays, method=method,
+                                         sample_spacing=sample_spacing, stats=stats,
+                                         distance=dist)
+            if dist is not None:
+                dist[np.isnan(dist)] = -9999.0
+        return beta, dist, rays
+
+    dist_tags = {"HILLSHADE_RT_VERSION": __version__, "UNITS": "metres (ground distance along "
+                 "the ray to the horizon point)", "NODATA": "-9999 (a void, or nothing ahead)"}
 
     curved = False
     tags = {"HILLSHADE_RT_VERSION": __version__, "METHOD": method,
@@ -83,7 +101,7 @@ def horizon(cfg: HorizonConfig) -> dict:
             "NODATA": "-9999 (a void)", "NO_TERRAIN_AHEAD": "-90"}
     shade = None
     if not many:
-        beta, rays = angles(az)
+        beta, dist, rays = angles(az)
         curved = bool(rays.curved)
         shade = (np.clip(np.nan_to_num(beta, nan=0.0) / 30.0, 0.0, 1.0)
                  if ro.preview else None)
@@ -95,6 +113,11 @@ def horizon(cfg: HorizonConfig) -> dict:
         with timer("write"):
             write_raster(output, beta, d, nodata=-9999.0, description="horizon angle",
                          tags=tags, overwrite=ro.overwrite, fmt=ro.fmt)
+            if dist is not None:
+                write_raster(cfg.distance, dist, d, nodata=-9999.0,
+                             description="distance to the horizon point",
+                             tags={**dist_tags, "AZIMUTH": az}, overwrite=ro.overwrite,
+                             fmt=ro.fmt)
     else:
         # one band per direction, written as it is made (N bands never all in memory)
         on = shader.curvature_for(az, 45.0) > 0     # the same for every direction
@@ -102,11 +125,16 @@ def horizon(cfg: HorizonConfig) -> dict:
                     AZIMUTH_CONVENTION="degrees clockwise from north (grid north), band i at "
                                        "i * 360 / N",
                     EARTH_CURVATURE=f"on, k {shader.k:g}" if on else "off")
+        dist_tags.update({k: tags[k] for k in ("DIRECTIONS", "AZIMUTHS", "AZIMUTH_CONVENTION")})
         with BandWriter(output, d, len(azimuths), "float32", -9999.0, tags,
                         overview_resampling="average", overwrite=ro.overwrite,
-                        fmt=ro.fmt) as w:
+                        fmt=ro.fmt) as w, (
+                contextlib.nullcontext() if cfg.distance is None else
+                BandWriter(cfg.distance, d, len(azimuths), "float32", -9999.0, dist_tags,
+                           overview_resampling="average", overwrite=ro.overwrite,
+                           fmt=ro.fmt)) as wd:
             for i, a in enumerate(azimuths):
-                beta, rays = angles(a)
+                beta, dist, rays = angles(a)
                 curved = curved or bool(rays.curved)
                 if ro.preview and i == 0:
                     shade = np.clip(np.nan_to_num(beta, nan=0.0) / 30.0, 0.0, 1.0)
@@ -114,14 +142,21 @@ def horizon(cfg: HorizonConfig) -> dict:
                 with timer("write"):
                     w.write(i + 1, beta, description=f"horizon angle toward azimuth {a:g}",
                             tags={"AZIMUTH": f"{a:g}"})
+                    if wd is not None:
+                        wd.write(i + 1, dist, description=f"distance to the horizon point "
+                                                          f"toward azimuth {a:g}",
+                                 tags={"AZIMUTH": f"{a:g}"})
             with timer("write"):
                 w.finish()
+                if wd is not None:
+                    wd.finish()
     if ro.preview is not None:
         with timer("write"):
             write_png(ro.preview, relief_rgb(d.heights, d.grid, az, 45.0, shade=shade),
                       ro.overwrite)
     rows, cols = d.shape
     rep = {"input": input_label(d.path), "output": os.path.abspath(output), "shape": [rows, cols],
+           "distance": None if cfg.distance is None else os.path.abspath(cfg.distance),
            "azimuth": az if not many else None, "azimuths": azimuths, "method": method,
            "sample_spacing": sample_spacing, "backend": ran_on, "curvature": curved,
            "algorithm_stats": stats, "seconds": dict(timer.seconds, total=timer.total()),

@@ -86,3 +86,52 @@ def test_bad_directions_are_one_line_and_write_nothing(tmp_path, runner, args, c
     r = runner.invoke(cli, ["horizon", SRTM, str(out)] + args)
     assert r.exit_code == code and words in r.stderr and len(r.stderr.splitlines()) == 1
     assert not out.exists() and list(tmp_path.iterdir()) == []
+
+
+def test_distance_is_the_nearest_sample_of_the_maximum(tmp_path, runner):
+    """--distance: toward north on an axis the samples are the cells above; an independent
+    plain-Python scan finds each cell's maximum (the nearest of equal ones) and its distance,
+    which the file must hold, with the angle the file gives; -9999 where nothing lies ahead."""
+    rng = np.random.default_rng(5)
+    rows, cols, d = 40, 12, 25.0
+    z = (rng.random((rows, cols)) * 80.0).astype(np.float32)
+    z[7, 3] = np.nan
+    dem = write_geotiff(tmp_path / "r.tif", z, Affine(d, 0, 500000, 0, -d, 4000000),
+                        CRS.from_epsg(32633))
+    out, dist = tmp_path / "h.tif", tmp_path / "d.tif"
+    r = runner.invoke(cli, ["horizon", dem, str(out), "--azimuth", "0", "--distance", str(dist),
+                            "--pixel-size", str(d)] + FLAT)
+    assert r.exit_code == 0, r.output
+    beta, got = read_band(out), read_band(dist)
+    for i in range(rows):
+        for j in range(cols):
+            if np.isnan(z[i, j]):
+                assert got[i, j] == -9999.0 and beta[i, j] == -9999.0
+                continue
+            best, kbest = -np.inf, 0
+            for k in range(1, i + 1):
+                t = z[i - k, j]
+                if not np.isnan(t) and (float(t) - float(z[i, j])) / k > best:
+                    best, kbest = (float(t) - float(z[i, j])) / k, k
+            if kbest == 0:
+                assert got[i, j] == -9999.0 and beta[i, j] == -90.0
+            else:
+                assert got[i, j] == pytest.approx(kbest * d, rel=1e-6), (i, j)
+                assert beta[i, j] == pytest.approx(math.degrees(math.atan(best / d)), abs=1e-4)
+    # the hull keeps no horizon point
+    r = runner.invoke(cli, ["horizon", dem, str(tmp_path / "h2.tif"), "--azimuth", "0",
+                            "--method", "hull", "--distance", str(tmp_path / "d2.tif")])
+    assert r.exit_code == 2 and "--method scan only" in r.stderr
+
+
+def test_distance_bands_follow_the_directions(tmp_path, runner):
+    out, dist = tmp_path / "h.tif", tmp_path / "d.tif"
+    r = runner.invoke(cli, ["horizon", SRTM, str(out), "--directions", "8", "--distance",
+                            str(dist)])
+    assert r.exit_code == 0, r.output
+    with rasterio.open(dist) as ds:
+        assert ds.count == 8 and ds.descriptions[2].endswith("toward azimuth 90")
+        d3 = ds.read(3)
+    b3 = read_band(out, 3)
+    assert np.array_equal(d3 == -9999.0, (b3 == -9999.0) | (b3 == -90.0))
+    assert (d3[d3 != -9999.0] > 0).all()
