@@ -383,3 +383,82 @@ def horizon_angles_gpu(g, rays: SunRays, method: str = "scan", sample_spacing: i
     ``distance`` as for ``horizon_angles``)."""
     _gpu_method(method, sample_spacing, rays)
     return _scan_gpu_run(g, rays, sample_spacing, g.zmax, False, floor_deg, cap_deg, distance)
+
+
+# ---------------------------------------------------------------------------------------------
+# horizon profiles at points (``hillshade-rt profile``)
+
+@njit(cache=True)
+def _profile_ray(z, r0, c0, h0, dom_col, sd, so, step_m, cv, zmax):
+    """(tangent of the horizon angle, ground distance to the horizon point) of the ray from the
+    point (row ``r0``, column ``c0``: fractional) at height ``h0`` along one direction (the
+    rays of its row: dominant axis, step, step of the other index, metres per step, curvature
+    per step²). The samples are where the ray crosses the grid lines of its dominant axis, at
+    t = |line - origin| steps (t = 1, 2, ... from a cell centre: the scan's samples), the
+    terrain interpolated on the line as the model does; (-inf, NaN) when nothing lies ahead."""
+    rows, cols = z.shape
+    if dom_col:
+        o_dom, o_oth, n_dom, n_oth = c0, r0, cols, rows
+    else:
+        o_dom, o_oth, n_dom, n_oth = r0, c0, rows, cols
+    if sd > 0:
+        line = np.int64(math.floor(o_dom)) + 1
+    else:
+        line = np.int64(math.ceil(o_dom)) - 1
+    best = -np.inf
+    tbest = 0.0
+    while 0 <= line < n_dom:
+        t = abs(line - o_dom)
+        pos = line_position(madd(o_oth, t, so), n_oth)
+        if pos < 0.0:
+            break
+        if zmax - h0 <= best * t:          # no later sample can raise the maximum
+            break
+        v = terrain_on_line(z, dom_col, line, pos)
+        lift = v - h0
+        if cv != 0.0:
+            lift = madd(lift, -t * t, cv)
+        if lift > best * t:                  # NaN (void) compares false: skipped
+            best = lift / t
+            tbest = t
+        line += sd
+    if best == -np.inf:
+        return -np.inf, np.nan
+    return best / step_m, tbest * step_m
+
+
+@njit(parallel=True, cache=True)
+def _profile_kernel(z, rr, cc, hh, dom_col, sd, so, step_m, cv, zmax, tan_out, dist_out):
+    """Every point (rows of ``rr``, ``cc``, ``hh``) along every direction (columns of the ray
+    arrays, one ray per point and direction)."""
+    n, m = tan_out.shape
+    for i in prange(n):
+        for j in range(m):
+            tan_out[i, j], dist_out[i, j] = _profile_ray(
+                z, rr[i], cc[i], hh[i], dom_col[i, j] != 0, np.int64(sd[i, j]), so[i, j],
+                step_m[i, j], cv[i, j], zmax)
+
+
+def profile(z: np.ndarray, rows: np.ndarray, cols: np.ndarray, heights: np.ndarray,
+            rays_of: list[SunRays], zmax: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(angles in degrees, distances in metres), each (points, directions): the horizon of each
+    point (fractional ``rows``, ``cols``; the observer at ``heights``) along the rays of each
+    direction (``rays_of``: one ``SunRays`` per direction, each point taking the rays of its
+    nearest row). -90 and NaN where nothing lies ahead inside the raster."""
+    n, m = len(rows), len(rays_of)
+    idx = np.clip(np.rint(rows).astype(np.int64), 0, z.shape[0] - 1)
+    fields = [np.empty((n, m)) for _ in range(5)]
+    for j, rays in enumerate(rays_of):
+        for f, a in zip(fields, (rays.dom_col, rays.step_dom, rays.step_other, rays.step_m,
+                                 rays.curv)):
+            f[:, j] = a[idx]
+    tan_out, dist_out = np.empty((n, m)), np.empty((n, m))
+    if zmax is None:
+        zmax = float(np.nanmax(z))
+    _profile_kernel(z, np.asarray(rows, np.float64), np.asarray(cols, np.float64),
+                    np.asarray(heights, np.float64), fields[0].astype(np.int8),
+                    fields[1].astype(np.int64), fields[2], fields[3], fields[4], float(zmax),
+                    tan_out, dist_out)
+    with np.errstate(invalid="ignore"):
+        angles = np.where(np.isneginf(tan_out), -90.0, np.degrees(np.arctan(tan_out)))
+    return angles, dist_out

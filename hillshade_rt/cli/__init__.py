@@ -19,6 +19,7 @@ from .. import __version__
 from .errors import OneLineErrors
 from .horizon import horizon
 from .info import info
+from .profile import profile
 from .shadow import hillshade, shadow
 from .sun_hours import sun_hours
 
@@ -29,7 +30,7 @@ def cli():
     """Terrain cast-shadow masks from digital elevation models."""
 
 
-for _command in (shadow, hillshade, sun_hours, horizon, info):
+for _command in (shadow, hillshade, sun_hours, horizon, profile, info):
     cli.add_command(_command)
 
 

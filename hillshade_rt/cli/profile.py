@@ -1,0 +1,51 @@
+"""``hillshade-rt profile``: options -> ``run.profile.ProfileConfig`` -> ``run.profile``."""
+
+from __future__ import annotations
+
+import click
+
+from .errors import errors_to_click, say
+from .options import dem_options, to_read_options, to_run_options
+
+
+@click.command()
+@click.argument("dem", type=click.Path(dir_okay=False))
+@click.option("--at", "at", multiple=True, metavar="LON,LAT",
+              help="A point in degrees (WGS84 longitude, latitude); repeatable.")
+@click.option("--at-xy", "at_xy", multiple=True, metavar="X,Y",
+              help="A point in the DEM's CRS; repeatable.")
+@click.option("--points", type=click.Path(dir_okay=False), default=None, metavar="FILE",
+              help="Points from a CSV (columns lon,lat or x,y; id or name optional) or a "
+                   "GeoJSON file of Point features.")
+@click.option("--height-above-ground", type=float, default=0.0, show_default=True,
+              metavar="H", help="The observer's height above the terrain at the point, metres "
+                                "(a panel, a mast).")
+@click.option("--step", type=float, default=1.0, show_default=True, metavar="DEG",
+              help="Degrees between azimuths, clockwise from north, north first.")
+@click.option("--format", "fmt", type=click.Choice(["csv", "json", "pvlib", "pvgis", "grass",
+                                                    "geojson"]),
+              default="csv", show_default=True,
+              help="csv/json/geojson: any number of points; pvlib (a Series CSV), pvgis "
+                   "(userhorizon), grass (r.horizon's azimuths, counter-clockwise from east): "
+                   "one point. Each file states its convention.")
+@click.option("-o", "--output", default=None, type=click.Path(dir_okay=False),
+              help="Write here (default: standard output).")
+@click.option("--earth-curvature/--no-earth-curvature", "curvature", default=None,
+              help="Let the terrain fall away by d^2(1-k)/2R along each ray (default: on when "
+                   "the raster is more than 1 km across).")
+@click.option("--refraction-coefficient", "refraction_k", type=float, default=None,
+              help="Terrestrial refraction k (default 0.13 on the Earth, 0 on other bodies).")
+@click.option("--overwrite", is_flag=True, help="Replace the output if it exists.")
+@click.option("-q", "--quiet", is_flag=True, help="No summary line on stderr.")
+@dem_options
+@errors_to_click
+def profile(dem, at, at_xy, points, height_above_ground, step, fmt, output, curvature,
+            refraction_k, overwrite, quiet, **read_opts):
+    """Write the horizon profile of points on DEM: the horizon elevation (and the distance to
+    it) every --step degrees of azimuth, for PV siting (pvlib, PVGIS), GRASS, GIS (GeoJSON)."""
+    from ..run.profile import ProfileConfig, parse_pair, profile as run_profile
+    kw = dict(overwrite=overwrite, quiet=quiet, **read_opts)
+    run_profile(ProfileConfig(dem, [parse_pair(a, "--at") for a in at],
+                              [parse_pair(a, "--at-xy") for a in at_xy], points,
+                              height_above_ground, step, fmt, output, curvature, refraction_k,
+                              to_read_options(kw), to_run_options(kw, say)))

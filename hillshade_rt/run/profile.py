@@ -1,0 +1,338 @@
+"""The ``profile`` run: the horizon of points, every ``step`` degrees of azimuth, for PV siting and
+for anyone who wants the skyline of a place, in the formats the tools around it read.
+
+A point is given in lon/lat (``--at``, a CSV's ``lon``/``lat`` columns, GeoJSON) or in the DEM's
+CRS (``--at-xy``, a CSV's ``x``/``y``); the observer stands ``height_above_ground`` metres above
+the terrain interpolated bilinearly at the point (not snapped to a cell). Each direction's ray is
+sampled as the model samples a cell's (where it crosses the grid lines of its dominant axis,
+interpolated on the line; the rays of the point's nearest row): at a cell centre with no height
+above the ground, the profile is the ``horizon`` raster's value there (a test checks it). A point
+within 1e-6 cells of a centre is that centre. Between centres the first crossing can be close to
+the observer: with no height above the ground, the ground's own slope there is part of the
+horizon, as for a person standing on it.
+
+Formats, each saying its convention in its header (``FORMATS``):
+
+* ``csv``: one row per point and azimuth (point, x, y, lon, lat, azimuth, horizon, distance);
+* ``json``: the same, one object per point, with the convention and the DEM;
+* ``pvlib``: ``azimuth,horizon`` rows that ``pandas.read_csv(f, index_col=0, comment="#")
+  .squeeze()`` turns into the Series pvlib's horizon functions take (azimuth clockwise from north
+  in [0, 360), elevation degrees); one point;
+* ``pvgis``: PVGIS's ``userhorizon``: the elevations, comma-separated, at equally spaced
+  azimuths clockwise from north starting at north; one point;
+* ``grass``: GRASS r.horizon's point output: ``azimuth,horizon_height`` with the azimuth
+  counter-clockwise from east (r.horizon's default), degrees; one point;
+* ``geojson``: one Point feature per point (the profile in its properties) and its horizon line
+  as a 3-D LineString (lon, lat, height of each horizon point).
+"""
+
+from __future__ import annotations
+
+import csv
+import io as _io
+import json
+import math
+import os
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .. import __version__
+from ..errors import HillshadeError, UsageProblem
+from .config import ReadOptions, RunOptions
+
+FORMATS = ("csv", "json", "pvlib", "pvgis", "grass", "geojson")
+ONE_POINT = ("pvlib", "pvgis", "grass")
+CONVENTION = ("azimuth in degrees clockwise from north (grid north of the DEM), 0 = north; "
+              "horizon elevation in degrees above the observer's horizontal (negative: the "
+              "observer looks down); -90 and no distance: no terrain ahead inside the DEM; "
+              "distance in metres along the ground to the horizon point")
+
+
+@dataclass
+class ProfileConfig:
+    dem: str
+    at: list = field(default_factory=list)        # (lon, lat) pairs
+    at_xy: list = field(default_factory=list)     # (x, y) pairs in the DEM's CRS
+    points: str | None = None                     # a CSV or GeoJSON file of points
+    height_above_ground: float = 0.0
+    step: float = 1.0
+    fmt: str = "csv"
+    output: str | None = None                     # None: standard output
+    curvature: object = None
+    refraction_k: float | None = None
+    read: ReadOptions = field(default_factory=ReadOptions)
+    run: RunOptions = field(default_factory=RunOptions)
+
+
+def parse_pair(text: str, what: str) -> tuple[float, float]:
+    """'A,B' as two finite floats (a usage error otherwise)."""
+    parts = str(text).replace(" ", "").split(",")
+    try:
+        a, b = (float(p) for p in parts)
+    except ValueError:
+        raise UsageProblem(f"{what} must be two numbers A,B, got {text!r}") from None
+    if not (math.isfinite(a) and math.isfinite(b)):
+        raise UsageProblem(f"{what} must be finite numbers, got {text!r}")
+    return a, b
+
+
+def read_points(path: str) -> list[dict]:
+    """Points of a CSV (columns lon,lat or x,y; an optional id or name) or a GeoJSON file
+    (Point features, lon/lat as GeoJSON says): dicts with id and lon/lat or x/y."""
+    try:
+        with open(path, encoding="utf-8-sig") as fh:
+            text = fh.read()
+    except OSError as exc:
+        raise HillshadeError(f"{path}: {exc.strerror or exc}") from None
+    if path.lower().endswith((".geojson", ".json")):
+        try:
+            doc = json.loads(text)
+            feats = doc["features"] if doc.get("type") == "FeatureCollection" else [doc]
+            out = []
+            for i, f in enumerate(feats):
+                g = f.get("geometry") or {}
+                if g.get("type") != "Point":
+                    continue
+                lon, lat = (float(v) for v in g["coordinates"][:2])
+                pid = (f.get("properties") or {}).get("id", (f.get("properties") or {}).get(
+                    "name", i))
+                out.append({"id": str(pid), "lon": lon, "lat": lat})
+        except (ValueError, KeyError, TypeError, AttributeError) as exc:
+            raise HillshadeError(f"{path}: not a GeoJSON file of points ({exc})") from None
+        if not out:
+            raise HillshadeError(f"{path}: no Point feature")
+        return out
+    rows = list(csv.DictReader(_io.StringIO(text)))
+    if not rows:
+        raise HillshadeError(f"{path}: no points (a CSV with a header: lon,lat or x,y)")
+    keys = {k.strip().lower(): k for k in rows[0] if k is not None}
+    if {"lon", "lat"} <= set(keys):
+        a, b, ka, kb = "lon", "lat", keys["lon"], keys["lat"]
+    elif {"x", "y"} <= set(keys):
+        a, b, ka, kb = "x", "y", keys["x"], keys["y"]
+    else:
+        raise HillshadeError(f"{path}: no coordinates: the CSV needs columns lon,lat (degrees) "
+                             "or x,y (the DEM's CRS)")
+    kid = keys.get("id", keys.get("name"))
+    out = []
+    for i, r in enumerate(rows):
+        try:
+            va, vb = float(r[ka]), float(r[kb])
+        except (TypeError, ValueError):
+            raise HillshadeError(f"{path}: row {i + 2}: {r[ka]!r}, {r[kb]!r} are not "
+                                 "numbers") from None
+        out.append({"id": str(r[kid]) if kid else str(i), a: va, b: vb})
+    return out
+
+
+def _locate(points, src):
+    """Each point's x, y (the DEM's CRS), lon, lat, and fractional row and column (cell centres
+    at whole numbers)."""
+    from pyproj import CRS as PCRS, Transformer
+    if src.transform is None:
+        raise HillshadeError(f"{src.path}: the DEM has no georeferencing: points cannot be "
+                             "placed on it")
+    crs = PCRS.from_user_input(src.crs.to_wkt()) if src.crs is not None else None
+    need_crs = any("lon" in p for p in points)
+    if crs is None and need_crs:
+        raise HillshadeError(f"{src.path}: the DEM has no CRS: give points in its coordinates "
+                             "(--at-xy, or x,y columns)")
+    to_xy = Transformer.from_crs("EPSG:4326", crs, always_xy=True) if crs is not None else None
+    to_ll = Transformer.from_crs(crs, "EPSG:4326", always_xy=True) if crs is not None else None
+    inv = ~src.transform
+    for p in points:
+        if "lon" in p:
+            p["x"], p["y"] = (float(v) for v in to_xy.transform(p["lon"], p["lat"]))
+        elif to_ll is not None:
+            p["lon"], p["lat"] = (float(v) for v in to_ll.transform(p["x"], p["y"]))
+        else:
+            p["lon"] = p["lat"] = None
+        col, row = inv @ (p["x"], p["y"])
+        # within rounding of a cell centre (a centre's coordinates through the transform and
+        # back), the point is that centre: a crossing 1e-9 steps away would read the ground's
+        # own slope there as the horizon
+        p["col"], p["row"] = (_snap(col - 0.5), _snap(row - 0.5))
+    return points
+
+
+def _snap(v: float, eps: float = 1e-6) -> float:
+    """``v``, or the whole number within ``eps`` of it."""
+    w = round(v)
+    return float(w) if abs(v - w) <= eps else float(v)
+
+
+def _bilinear(z, r, c):
+    rows, cols = z.shape
+    r0, c0 = min(int(math.floor(r)), rows - 2), min(int(math.floor(c)), cols - 2)
+    r0, c0 = max(r0, 0), max(c0, 0)
+    fr, fc = r - r0, c - c0
+    q = z[r0:r0 + 2, c0:c0 + 2].astype(np.float64)
+    if rows == 1 or cols == 1:
+        return float(z[int(round(r)), int(round(c))])
+    top = q[0, 0] + fc * (q[0, 1] - q[0, 0])
+    bot = q[1, 0] + fc * (q[1, 1] - q[1, 0])
+    return float(top + fr * (bot - top))
+
+
+def profile(cfg: ProfileConfig) -> dict:
+    """Compute and write the profiles; returns the document (what ``json`` writes)."""
+    from ..algorithms import horizon as hz
+    from ..earth import dem_body
+    from ..io.write import Claims, atomic_path, os_error
+    from ..shading import Shader
+
+    if cfg.fmt not in FORMATS:
+        raise UsageProblem(f"--format must be one of {', '.join(FORMATS)}, got {cfg.fmt!r}")
+    if not (math.isfinite(cfg.step) and 0.0 < cfg.step <= 90.0):
+        raise UsageProblem(f"--step must be a number of degrees in (0, 90], got {cfg.step}")
+    if not math.isfinite(cfg.height_above_ground):
+        raise UsageProblem("--height-above-ground must be a finite number of metres")
+    points = ([{"id": str(i), "lon": a, "lat": b} for i, (a, b) in enumerate(cfg.at)]
+              + [{"id": str(len(cfg.at) + i), "x": a, "y": b}
+                 for i, (a, b) in enumerate(cfg.at_xy)])
+    if cfg.points is not None:
+        points += read_points(cfg.points)
+    if not points:
+        raise UsageProblem("give a point: --at LON,LAT, --at-xy X,Y or --points FILE")
+    if cfg.fmt in ONE_POINT and len(points) != 1:
+        raise UsageProblem(f"--format {cfg.fmt} holds one point's profile; {len(points)} given "
+                           "(use csv, json or geojson for several)")
+    if cfg.output is not None:
+        Claims([cfg.dem] + ([cfg.points] if cfg.points else []), cfg.run.overwrite).claim(
+            cfg.output, "-o/--output")
+    d = cfg.read.read(cfg.dem)
+    points = _locate(points, d)
+    rows, cols = d.shape
+    for p in points:
+        if not (-1e-9 <= p["row"] <= rows - 1 + 1e-9 and -1e-9 <= p["col"] <= cols - 1 + 1e-9):
+            raise HillshadeError(f"point {p['id']} ({p['x']:.6g}, {p['y']:.6g}) is outside the "
+                                 "DEM's cell centres")
+        p["row"] = min(max(p["row"], 0.0), rows - 1.0)
+        p["col"] = min(max(p["col"], 0.0), cols - 1.0)
+        g = _bilinear(d.heights, p["row"], p["col"])
+        if not math.isfinite(g):
+            raise HillshadeError(f"point {p['id']} lies on nodata: no ground height there")
+        p["ground"] = g
+        p["observer"] = g + float(cfg.height_above_ground)
+    n = int(round(360.0 / cfg.step))
+    azimuths = ([360.0 * i / n for i in range(n)] if abs(n * cfg.step - 360.0) < 1e-9
+                else list(np.arange(0.0, 360.0, cfg.step)))
+    shader = Shader(d.heights, d.grid, "horizon", {}, "cpu",
+                    "auto" if cfg.curvature is None else cfg.curvature, cfg.refraction_k,
+                    dem_body(d))
+    if shader.curvature == "auto":     # as the horizon command: on for a raster over 1 km
+        shader.curvature = shader.extent_m > 1000.0
+    rays = [shader.rays(d.grid, a, 45.0) for a in azimuths]
+    ang, dist = hz.profile(d.heights, np.array([p["row"] for p in points]),
+                           np.array([p["col"] for p in points]),
+                           np.array([p["observer"] for p in points]), rays,
+                           max(float(np.nanmax(d.heights)), max(p["observer"] for p in points)))
+    doc = {"dem": os.path.abspath(d.path) if os.path.exists(d.path) else d.path,
+           "crs": d.crs_string(), "convention": CONVENTION, "azimuth_step": cfg.step,
+           "height_above_ground_m": cfg.height_above_ground,
+           "earth_curvature": bool(shader.curvature), "version": __version__, "points": []}
+    for i, p in enumerate(points):
+        line = _horizon_line(d, p, azimuths, ang[i], dist[i], rays)
+        doc["points"].append({"id": p["id"], "x": p["x"], "y": p["y"], "lon": p["lon"],
+                              "lat": p["lat"], "ground_m": p["ground"],
+                              "observer_m": p["observer"], "azimuth": azimuths,
+                              "horizon_deg": [round(float(v), 6) for v in ang[i]],
+                              "distance_m": [None if not math.isfinite(v) else round(float(v), 3)
+                                             for v in dist[i]],
+                              "line": line})
+    text = render(doc, cfg.fmt)
+    if cfg.output is None:
+        import sys
+        sys.stdout.write(text)
+    else:
+        with atomic_path(cfg.output, overwrite=cfg.run.overwrite) as tmp:
+            try:
+                with open(tmp, "w", encoding="utf-8", newline="") as fh:
+                    fh.write(text)
+            except OSError as exc:
+                raise os_error(cfg.output, exc) from None
+    if not cfg.run.quiet and cfg.output is not None:
+        cfg.run.say("summary", f"hillshade-rt: {cfg.output}: {len(points)} point(s) x "
+                               f"{len(azimuths)} azimuths ({cfg.fmt})")
+    return doc
+
+
+def _horizon_line(d, p, azimuths, ang, dist, rays):
+    """The horizon points of ``p`` (lon, lat, height; x, y where lon/lat are unknown), one per
+    azimuth with terrain ahead: where the ray meets the horizon, in the DEM's CRS."""
+    from pyproj import CRS as PCRS, Transformer
+    r = int(min(max(round(p["row"]), 0), d.shape[0] - 1))
+    to_ll = (Transformer.from_crs(PCRS.from_user_input(d.crs.to_wkt()), "EPSG:4326",
+                                  always_xy=True) if d.crs is not None else None)
+    out = []
+    for j, _ in enumerate(azimuths):
+        if not math.isfinite(dist[j]):
+            continue
+        ry = rays[j]
+        t = dist[j] / float(ry.step_m[r])
+        if ry.dom_col[r]:
+            col = p["col"] + t * int(ry.step_dom[r])
+            row = p["row"] + t * float(ry.step_other[r])
+        else:
+            row = p["row"] + t * int(ry.step_dom[r])
+            col = p["col"] + t * float(ry.step_other[r])
+        x, y = d.transform @ (col + 0.5, row + 0.5)
+        h = p["observer"] + math.tan(math.radians(ang[j])) * dist[j]
+        if to_ll is not None:
+            x, y = to_ll.transform(x, y)
+        out.append([round(float(x), 9), round(float(y), 9), round(h, 3)])
+    return out
+
+
+def render(doc: dict, fmt: str) -> str:
+    """The document in ``fmt`` (``FORMATS``)."""
+    pts = doc["points"]
+    if fmt == "json":
+        return json.dumps({**doc, "points": [{k: v for k, v in p.items() if k != "line"}
+                                             for p in pts]}, indent=1) + "\n"
+    if fmt == "geojson":
+        feats = []
+        for p in pts:
+            props = {k: p[k] for k in ("id", "x", "y", "ground_m", "observer_m", "azimuth",
+                                       "horizon_deg", "distance_m")}
+            props["convention"] = doc["convention"]
+            feats.append({"type": "Feature", "properties": props,
+                          "geometry": {"type": "Point", "coordinates": [p["lon"], p["lat"]]}})
+            feats.append({"type": "Feature",
+                          "properties": {"id": p["id"], "kind": "horizon line",
+                                         "coordinates": "lon, lat, height of the horizon point "
+                                                        "(m, the DEM's vertical datum)"},
+                          "geometry": {"type": "LineString", "coordinates": p["line"]}})
+        return json.dumps({"type": "FeatureCollection", "features": feats}, indent=1) + "\n"
+    head = (f"# hillshade-rt {doc['version']} horizon profile of {doc['dem']}; "
+            f"height above ground {doc['height_above_ground_m']:g} m; earth curvature "
+            f"{'on' if doc['earth_curvature'] else 'off'}\n")
+    if fmt == "csv":
+        buf = _io.StringIO()
+        buf.write(head + f"# {doc['convention']}\n")
+        w = csv.writer(buf, lineterminator="\n")
+        w.writerow(["point", "x", "y", "lon", "lat", "azimuth_deg", "horizon_deg",
+                    "distance_m"])
+        for p in pts:
+            for a, h, dd in zip(p["azimuth"], p["horizon_deg"], p["distance_m"]):
+                w.writerow([p["id"], p["x"], p["y"], p["lon"], p["lat"], f"{a:g}", h,
+                            "" if dd is None else dd])
+        return buf.getvalue()
+    p = pts[0]
+    if fmt == "pvlib":
+        lines = [head.rstrip("\n"), "# pvlib: azimuth degrees clockwise from north in [0, 360), "
+                 "horizon elevation degrees; pandas.read_csv(f, index_col=0, comment='#')"
+                 ".squeeze()", "azimuth,horizon_elevation"]
+        lines += [f"{a:g},{h}" for a, h in zip(p["azimuth"], p["horizon_deg"])]
+        return "\n".join(lines) + "\n"
+    if fmt == "pvgis":
+        return (head + "# PVGIS userhorizon: horizon elevations in degrees at equally spaced "
+                "azimuths clockwise from north, starting at north\n"
+                + ",".join(str(h) for h in p["horizon_deg"]) + "\n")
+    # grass: r.horizon's convention, azimuth counter-clockwise from east, from east
+    pairs = sorted(((90.0 - a) % 360.0, h) for a, h in zip(p["azimuth"], p["horizon_deg"]))
+    lines = [head.rstrip("\n"), "# GRASS r.horizon: azimuth degrees counter-clockwise from east "
+             "(0 = east, 90 = north), horizon height degrees", "azimuth,horizon_height"]
+    lines += [f"{a:g},{h}" for a, h in pairs]
+    return "\n".join(lines) + "\n"

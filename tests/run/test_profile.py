@@ -1,0 +1,133 @@
+"""``hillshade-rt profile`` (issue 20, item 2): horizon profiles at points, in the formats the
+tools around PV siting and GIS read, each round-tripped."""
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+from affine import Affine
+from rasterio.crs import CRS
+
+from hillshade_rt.cli import cli
+from hillshade_rt.io import read_dem
+from hillshade_rt.testing import data_path, fractal_terrain, read_band, write_geotiff
+
+SRTM = data_path("jacksboro_fault_srtm3_mpl_403x344.tif")      # geographic (EPSG:4326)
+
+
+@pytest.fixture
+def utm_dem(tmp_path):
+    z = fractal_terrain(120, 140, 9, relief=600.0)
+    z[5, 5] = np.nan
+    return write_geotiff(tmp_path / "dem.tif", z, Affine(30, 0, 500000, 0, -30, 4000000),
+                         CRS.from_epsg(32633)), z
+
+
+def _json(runner, args):
+    r = runner.invoke(cli, ["profile"] + args + ["--format", "json"])
+    assert r.exit_code == 0, r.output
+    return json.loads(r.stdout)
+
+
+@pytest.mark.parametrize("dem_kind", ["utm", "geographic"])
+def test_profile_at_cell_centres_is_the_horizon_raster(tmp_path, runner, utm_dem, dem_kind):
+    """At a cell centre with the observer on the ground, the profile is the horizon raster's
+    value there, every 10 degrees (projected and geographic DEMs, curvature by default)."""
+    dem = utm_dem[0] if dem_kind == "utm" else SRTM
+    d = read_dem(dem)
+    cells = [(17, 23), (60, 70), (100, 9)]
+    xy = [d.transform @ (c + 0.5, r + 0.5) for r, c in cells]
+    doc = _json(runner, [dem, "--step", "10"] + sum((["--at-xy", f"{x!r},{y!r}"]
+                                                     for x, y in xy), []))
+    out = tmp_path / "h.tif"
+    r = runner.invoke(cli, ["horizon", dem, str(out), "--directions", "36"])
+    assert r.exit_code == 0, r.output
+    bands = np.stack([read_band(out, b) for b in range(1, 37)])
+    for p, (row, col) in zip(doc["points"], cells):
+        assert p["azimuth"] == [10.0 * i for i in range(36)]
+        np.testing.assert_allclose(p["horizon_deg"], bands[:, row, col], atol=2e-5)
+
+
+def test_observer_above_the_ground_sees_a_lower_horizon(runner, utm_dem):
+    dem = utm_dem[0]
+    base = _json(runner, [dem, "--at-xy", "502015.5,3998123.25", "--step", "15"])
+    up = _json(runner, [dem, "--at-xy", "502015.5,3998123.25", "--step", "15",
+                        "--height-above-ground", "25"])
+    a, b = np.array(base["points"][0]["horizon_deg"]), np.array(up["points"][0]["horizon_deg"])
+    assert (b <= a + 1e-9).all() and (b < a).any()
+    assert up["points"][0]["observer_m"] == pytest.approx(base["points"][0]["ground_m"] + 25)
+
+
+def test_formats_round_trip(tmp_path, runner):
+    """pvlib's CSV becomes a Series (azimuth clockwise from north, degrees); PVGIS's list is
+    the same values from north; GRASS's azimuths are counter-clockwise from east; GeoJSON has
+    the point and its 3-D horizon line; every one carries the values of the JSON."""
+    args = [SRTM, "--at=-84.25,36.45", "--step", "7.5"]
+    ref = _json(runner, args)["points"][0]
+    h = np.array(ref["horizon_deg"])
+    files = {}
+    for fmt in ("pvlib", "pvgis", "grass", "geojson", "csv"):
+        files[fmt] = tmp_path / f"p.{fmt}"
+        r = runner.invoke(cli, ["profile"] + args + ["--format", fmt, "-o", str(files[fmt])])
+        assert r.exit_code == 0, r.output
+    s = pd.read_csv(files["pvlib"], index_col=0, comment="#").squeeze()
+    assert isinstance(s, pd.Series) and list(s.index) == [7.5 * i for i in range(48)]
+    np.testing.assert_allclose(s.to_numpy(), h, atol=1e-6)
+    lines = [ln for ln in files["pvgis"].read_text().splitlines() if not ln.startswith("#")]
+    np.testing.assert_allclose([float(v) for v in lines[0].split(",")], h, atol=1e-6)
+    g = pd.read_csv(files["grass"], comment="#")
+    assert list(g.columns) == ["azimuth", "horizon_height"]
+    east_ccw = dict(zip(g["azimuth"], g["horizon_height"]))
+    assert east_ccw[90.0] == pytest.approx(h[0])            # north
+    assert east_ccw[0.0] == pytest.approx(h[12])            # east = 90 clockwise from north
+    assert east_ccw[180.0] == pytest.approx(h[36])          # west = 270
+    gj = json.loads(files["geojson"].read_text())
+    pt, line = gj["features"]
+    assert pt["geometry"]["coordinates"] == pytest.approx([-84.25, 36.45], abs=1e-9)
+    np.testing.assert_allclose(pt["properties"]["horizon_deg"], h)
+    assert line["geometry"]["type"] == "LineString"
+    assert len(line["geometry"]["coordinates"]) == sum(v is not None for v in ref["distance_m"])
+    assert all(len(c) == 3 for c in line["geometry"]["coordinates"])
+    c = pd.read_csv(files["csv"], comment="#")
+    np.testing.assert_allclose(c["horizon_deg"].to_numpy(), h, atol=1e-6)
+
+
+def test_points_from_csv_and_geojson(tmp_path, runner):
+    pts = tmp_path / "p.csv"
+    pts.write_text("name,lon,lat\nA,-84.25,36.45\nB,-84.2,36.5\n")
+    doc = _json(runner, [SRTM, "--points", str(pts), "--step", "30"])
+    assert [p["id"] for p in doc["points"]] == ["A", "B"]
+    gj = tmp_path / "p.geojson"
+    gj.write_text(json.dumps({"type": "FeatureCollection", "features": [
+        {"type": "Feature", "properties": {"id": "A"},
+         "geometry": {"type": "Point", "coordinates": [-84.25, 36.45]}}]}))
+    doc2 = _json(runner, [SRTM, "--points", str(gj), "--step", "30"])
+    assert doc2["points"][0]["horizon_deg"] == doc["points"][0]["horizon_deg"]
+
+
+@pytest.mark.parametrize("args, code, words", [
+    (["--at=-90,10"], 1, "outside the DEM"),
+    (["--at", "nonsense"], 2, "two numbers"),
+    (["--at=-84.25,36.45", "--at=-84.2,36.5", "--format", "pvlib"], 2, "one point"),
+    (["--at=-84.25,36.45", "--format", "shp"], 2, "Invalid value for '--format'"),
+    (["--at=-84.25,36.45", "--step", "0"], 2, "--step"),
+    ([], 2, "give a point"),
+])
+def test_bad_points_are_one_line_errors(tmp_path, runner, args, code, words):
+    out = tmp_path / "o.csv"
+    r = runner.invoke(cli, ["profile", SRTM, "-o", str(out)] + args)
+    assert r.exit_code == code and words in r.stderr, r.stderr
+    assert len(r.stderr.splitlines()) == 1 and not out.exists()
+
+
+def test_point_on_nodata_and_csv_without_coordinates(tmp_path, runner, utm_dem):
+    dem, z = utm_dem
+    d = read_dem(dem)
+    x, y = d.transform @ (5.5, 5.5)             # the void's centre
+    r = runner.invoke(cli, ["profile", dem, "--at-xy", f"{x},{y}"])
+    assert r.exit_code == 1 and "nodata" in r.stderr
+    bad = tmp_path / "p.csv"
+    bad.write_text("a,b\n1,2\n")
+    r = runner.invoke(cli, ["profile", dem, "--points", str(bad)])
+    assert r.exit_code == 1 and "lon,lat" in r.stderr and len(r.stderr.splitlines()) == 1
