@@ -232,8 +232,14 @@ def profile(cfg: ProfileConfig) -> dict:
            "crs": d.crs_string(), "convention": CONVENTION, "azimuth_step": cfg.step,
            "height_above_ground_m": cfg.height_above_ground,
            "earth_curvature": bool(shader.curvature), "version": __version__, "points": []}
+    to_ll = None
+    if d.crs is not None and cfg.fmt == "geojson":
+        from pyproj import CRS as PCRS, Transformer
+        to_ll = Transformer.from_crs(PCRS.from_user_input(d.crs.to_wkt()), "EPSG:4326",
+                                     always_xy=True)
     for i, p in enumerate(points):
-        line = _horizon_line(d, p, azimuths, ang[i], dist[i], rays)
+        line = (_horizon_line(d, p, azimuths, ang[i], dist[i], rays, to_ll)
+                if cfg.fmt == "geojson" else [])
         doc["points"].append({"id": p["id"], "x": p["x"], "y": p["y"], "lon": p["lon"],
                               "lat": p["lat"], "ground_m": p["ground"],
                               "observer_m": p["observer"], "azimuth": azimuths,
@@ -258,31 +264,28 @@ def profile(cfg: ProfileConfig) -> dict:
     return doc
 
 
-def _horizon_line(d, p, azimuths, ang, dist, rays):
+def _horizon_line(d, p, azimuths, ang, dist, rays, to_ll):
     """The horizon points of ``p`` (lon, lat, height; x, y where lon/lat are unknown), one per
-    azimuth with terrain ahead: where the ray meets the horizon, in the DEM's CRS."""
-    from pyproj import CRS as PCRS, Transformer
+    azimuth with terrain ahead: where the ray meets the horizon, in the DEM's CRS (vectorised:
+    one transform per point)."""
     r = int(min(max(round(p["row"]), 0), d.shape[0] - 1))
-    to_ll = (Transformer.from_crs(PCRS.from_user_input(d.crs.to_wkt()), "EPSG:4326",
-                                  always_xy=True) if d.crs is not None else None)
-    out = []
-    for j, _ in enumerate(azimuths):
-        if not math.isfinite(dist[j]):
-            continue
-        ry = rays[j]
-        t = dist[j] / float(ry.step_m[r])
-        if ry.dom_col[r]:
-            col = p["col"] + t * int(ry.step_dom[r])
-            row = p["row"] + t * float(ry.step_other[r])
-        else:
-            row = p["row"] + t * int(ry.step_dom[r])
-            col = p["col"] + t * float(ry.step_other[r])
-        x, y = d.transform @ (col + 0.5, row + 0.5)
-        h = p["observer"] + math.tan(math.radians(ang[j])) * dist[j]
-        if to_ll is not None:
-            x, y = to_ll.transform(x, y)
-        out.append([round(float(x), 9), round(float(y), 9), round(h, 3)])
-    return out
+    ok = np.isfinite(dist)
+    if not ok.any():
+        return []
+    dom = np.array([ry.dom_col[r] for ry in rays])[ok] != 0
+    sd = np.array([ry.step_dom[r] for ry in rays], np.float64)[ok]
+    so = np.array([ry.step_other[r] for ry in rays])[ok]
+    t = dist[ok] / np.array([ry.step_m[r] for ry in rays])[ok]
+    col = p["col"] + t * np.where(dom, sd, so)
+    row = p["row"] + t * np.where(dom, so, sd)
+    tr = d.transform
+    x = tr.c + tr.a * (col + 0.5) + tr.b * (row + 0.5)
+    y = tr.f + tr.d * (col + 0.5) + tr.e * (row + 0.5)
+    h = p["observer"] + np.tan(np.radians(ang[ok])) * dist[ok]
+    if to_ll is not None:
+        x, y = to_ll.transform(x, y)
+    return [[round(float(a), 9), round(float(b), 9), round(float(c), 3)]
+            for a, b, c in zip(x, y, h)]
 
 
 def render(doc: dict, fmt: str) -> str:
