@@ -21,6 +21,7 @@ from .horizon import horizon
 from .info import info
 from .profile import profile
 from .shadow import hillshade, shadow
+from .skyview import skyview
 from .sun_hours import sun_hours
 
 
@@ -30,7 +31,7 @@ def cli():
     """Terrain cast-shadow masks from digital elevation models."""
 
 
-for _command in (shadow, hillshade, sun_hours, horizon, profile, info):
+for _command in (shadow, hillshade, sun_hours, horizon, profile, skyview, info):
     cli.add_command(_command)
 
 

@@ -1,0 +1,42 @@
+"""``hillshade-rt skyview``: options -> ``run.skyview.SkyviewConfig`` -> ``run.skyview``."""
+
+from __future__ import annotations
+
+import click
+
+from .errors import errors_to_click, say
+from .options import (backend_option, dem_options, format_option, to_read_options,
+                      to_run_options)
+
+
+@click.command()
+@click.argument("dem", type=click.Path(dir_okay=False))
+@click.argument("output", type=click.Path(dir_okay=False))
+@click.option("--directions", type=click.IntRange(4, 360), default=32, show_default=True,
+              metavar="N", help="Equally spaced azimuths, clockwise from north (4..360).")
+@click.option("--definition", type=click.Choice(["zaksek", "dozier"]), default="zaksek",
+              show_default=True,
+              help="zaksek: 1 - mean sin of the horizon elevation (RVT, HORAYZON); dozier: "
+                   "the cosine-weighted sky seen by the tilted surface (Dozier & Frew 1990).")
+@click.option("--earth-curvature/--no-earth-curvature", "curvature", default=None,
+              help="Let the terrain fall away by d^2(1-k)/2R along each ray (default: on when "
+                   "the raster is more than 1 km across).")
+@click.option("--refraction-coefficient", "refraction_k", type=float, default=None,
+              help="Terrestrial refraction k (default 0.13 on the Earth, 0 on other bodies).")
+@backend_option
+@click.option("--threads", type=click.IntRange(min=1), default=None,
+              help="CPU threads (default: all cores).")
+@click.option("--overwrite", is_flag=True, help="Replace OUTPUT if it exists.")
+@click.option("-q", "--quiet", is_flag=True, help="No summary line on stderr.")
+@format_option
+@dem_options
+@errors_to_click
+def skyview(dem, output, directions, definition, curvature, refraction_k, backend, threads,
+            overwrite, quiet, fmt, **read_opts):
+    """Write the sky view factor of every cell of DEM to OUTPUT (float32 0..1, -9999 nodata)
+    from its exact horizon in --directions azimuths."""
+    from ..run.skyview import SkyviewConfig, skyview as run_skyview
+    kw = dict(backend=backend, threads=threads, overwrite=overwrite, quiet=quiet, fmt=fmt,
+              **read_opts)
+    run_skyview(SkyviewConfig(dem, output, directions, definition, curvature, refraction_k,
+                              to_read_options(kw), to_run_options(kw, say)))
