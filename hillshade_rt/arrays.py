@@ -109,3 +109,59 @@ def is_shadowed(heights, points, azimuth: float, elevation: float,
     from .algorithms.smap import SMap
     z, grid, _ = _dem_parts(heights, spacing, None)
     return SMap(z, azimuth, elevation, grid).is_shadowed(points)
+
+
+def sky_view(heights, spacing: float | tuple[float, float] | Grid | None = None,
+             directions: int = 32, definition: str = "zaksek", *, curvature="auto",
+             refraction_k: float | None = None, body=None) -> np.ndarray:
+    """Sky view factor of every cell (float32 0..1, NaN on voids) from its exact horizon in
+    ``directions`` azimuths, as ``hillshade-rt skyview``: ``definition`` "zaksek" (1 - mean sin
+    of the horizon elevation clipped at the horizontal) or "dozier" (cosine-weighted, from the
+    tilted surface). ``heights``, ``spacing``, ``curvature``, ``body`` as for
+    :func:`horizon_angles`."""
+    from .algorithms.skyview import DEFINITIONS, sky_view as _sky_view
+    if definition not in DEFINITIONS:
+        raise HillshadeError(f"definition must be one of {', '.join(DEFINITIONS)}, got "
+                             f"{definition!r}")
+    z, grid, body = _dem_parts(heights, spacing, body)
+    n = int(directions)
+    if n < 1:
+        raise HillshadeError(f"directions must be 1 or more, got {directions}")
+    return _sky_view(z, grid, [360.0 * i / n for i in range(n)],
+                     lambda a: horizon_angles(z, a, grid, curvature=curvature,
+                                              refraction_k=refraction_k, body=body,
+                                              backend="cpu"), definition)
+
+
+def horizon_profile(heights, rows, cols, spacing: float | tuple[float, float] | Grid | None = None,
+                    height_above_ground=0.0, step: float = 1.0, *, curvature="auto",
+                    refraction_k: float | None = None, body=None):
+    """Horizon profiles of points in array coordinates (fractional ``rows``, ``cols``: cell
+    centres at whole numbers), the observer ``height_above_ground`` above the terrain
+    interpolated bilinearly there, every ``step`` degrees clockwise from north: (azimuths,
+    angles in degrees (points x azimuths; -90: nothing ahead), distances in metres (NaN:
+    nothing ahead)), as ``hillshade-rt profile``. ``heights``, ``spacing``, ``curvature``,
+    ``body`` as for :func:`horizon_angles`; a point outside the cell centres or on nodata is
+    an error."""
+    from .algorithms import horizon as hz
+    from .shading import Shader
+    z, grid, body = _dem_parts(heights, spacing, body)
+    rr = np.atleast_1d(np.asarray(rows, np.float64))
+    cc = np.atleast_1d(np.asarray(cols, np.float64))
+    if rr.shape != cc.shape:
+        raise HillshadeError("rows and cols must have the same length")
+    ground = np.array([hz.bilinear(z, r, c) for r, c in zip(rr, cc)], np.float64)
+    if not np.isfinite(ground).all():
+        raise HillshadeError("a point lies outside the cell centres or on nodata")
+    obs = ground + np.broadcast_to(np.asarray(height_above_ground, np.float64), ground.shape)
+    n = int(round(360.0 / step))
+    if not (0.0 < step <= 90.0):
+        raise HillshadeError(f"step must be in (0, 90] degrees, got {step}")
+    azimuths = ([360.0 * i / n for i in range(n)] if abs(n * step - 360.0) < 1e-9
+                else list(np.arange(0.0, 360.0, step)))
+    shader = Shader(z, grid, "horizon", {}, "cpu", curvature, refraction_k, body, (0.0, 0.0))
+    if shader.curvature == "auto":
+        shader.curvature = shader.extent_m > 1000.0
+    rays = [shader.rays(grid, a, 45.0) for a in azimuths]
+    ang, dist = hz.profile(z, rr, cc, obs, rays, max(float(np.nanmax(z)), float(obs.max())))
+    return np.array(azimuths), ang, dist

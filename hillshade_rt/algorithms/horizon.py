@@ -462,3 +462,20 @@ def profile(z: np.ndarray, rows: np.ndarray, cols: np.ndarray, heights: np.ndarr
     with np.errstate(invalid="ignore"):
         angles = np.where(np.isneginf(tan_out), -90.0, np.degrees(np.arctan(tan_out)))
     return angles, dist_out
+
+
+def bilinear(z: np.ndarray, r: float, c: float) -> float:
+    """The height at fractional (row ``r``, column ``c``; cell centres at whole numbers),
+    bilinear between the four centres around it (NaN beside a void or outside the centres)."""
+    rows, cols = z.shape
+    if not (0.0 <= r <= rows - 1 and 0.0 <= c <= cols - 1):
+        return math.nan
+    r0 = min(int(math.floor(r)), max(rows - 2, 0))
+    c0 = min(int(math.floor(c)), max(cols - 2, 0))
+    fr, fc = r - r0, c - c0
+    q = z[r0:r0 + 2, c0:c0 + 2].astype(np.float64)
+    if q.shape != (2, 2):
+        return float(z[int(round(r)), int(round(c))])
+    top = q[0, 0] + fc * (q[0, 1] - q[0, 0])
+    bot = q[1, 0] + fc * (q[1, 1] - q[1, 0])
+    return float(top + fr * (bot - top))

@@ -162,19 +162,6 @@ def _snap(v: float, eps: float = 1e-6) -> float:
     return float(w) if abs(v - w) <= eps else float(v)
 
 
-def _bilinear(z, r, c):
-    rows, cols = z.shape
-    r0, c0 = min(int(math.floor(r)), rows - 2), min(int(math.floor(c)), cols - 2)
-    r0, c0 = max(r0, 0), max(c0, 0)
-    fr, fc = r - r0, c - c0
-    q = z[r0:r0 + 2, c0:c0 + 2].astype(np.float64)
-    if rows == 1 or cols == 1:
-        return float(z[int(round(r)), int(round(c))])
-    top = q[0, 0] + fc * (q[0, 1] - q[0, 0])
-    bot = q[1, 0] + fc * (q[1, 1] - q[1, 0])
-    return float(top + fr * (bot - top))
-
-
 def profile(cfg: ProfileConfig) -> dict:
     """Compute and write the profiles; returns the document (what ``json`` writes)."""
     from ..algorithms import horizon as hz
@@ -210,7 +197,7 @@ def profile(cfg: ProfileConfig) -> dict:
                                  "DEM's cell centres")
         p["row"] = min(max(p["row"], 0.0), rows - 1.0)
         p["col"] = min(max(p["col"], 0.0), cols - 1.0)
-        g = _bilinear(d.heights, p["row"], p["col"])
+        g = hz.bilinear(d.heights, p["row"], p["col"])
         if not math.isfinite(g):
             raise HillshadeError(f"point {p['id']} lies on nodata: no ground height there")
         p["ground"] = g

@@ -30,7 +30,7 @@ from .. import __version__
 from ..errors import UsageProblem
 from .config import ReadOptions, RunOptions
 
-DEFINITIONS = ("zaksek", "dozier")
+from ..algorithms.skyview import DEFINITIONS  # (the definitions, once)
 
 
 @dataclass
@@ -43,27 +43,6 @@ class SkyviewConfig:
     refraction_k: float | None = None
     read: ReadOptions = field(default_factory=ReadOptions)
     run: RunOptions = field(default_factory=RunOptions)
-
-
-def sky_view(z, grid, azimuths, angles_of, definition: str) -> np.ndarray:
-    """The sky view factor (float32, NaN on voids) from ``angles_of(azimuth)`` (horizon
-    elevation in degrees per cell, NaN on voids, -90 with nothing ahead) at each azimuth."""
-    from ..algorithms.relief import incidence
-    acc = np.zeros(z.shape, np.float64)
-    cos_s = incidence(z, grid, 0.0, 90.0).astype(np.float64) if definition == "dozier" else None
-    for a in azimuths:
-        g = np.radians(np.maximum(angles_of(a).astype(np.float64), 0.0))   # NaN stays NaN
-        if definition == "zaksek":
-            acc += np.sin(g)
-        else:
-            # sin S cos(φ - A): the normal's horizontal part along φ (incidence of a sun on
-            # the horizon at azimuth φ)
-            sc = incidence(z, grid, a, 0.0).astype(np.float64)
-            h = np.pi / 2.0 - g
-            acc += cos_s * np.cos(g) ** 2 + sc * (h - np.sin(h) * np.cos(h))
-    n = len(azimuths)
-    out = (1.0 - acc / n) if definition == "zaksek" else acc / n
-    return out.astype(np.float32)
 
 
 def skyview(cfg: SkyviewConfig) -> dict:
@@ -108,6 +87,7 @@ def skyview(cfg: SkyviewConfig) -> dict:
             return hz.horizon_angles_gpu(gpu_dem, rays)
         return hz.horizon_angles(d.heights, rays)
 
+    from ..algorithms.skyview import sky_view
     with timer("compute"):
         svf = sky_view(d.heights, d.grid, azimuths, angles_of, cfg.definition)
     tags = {"HILLSHADE_RT_VERSION": __version__, "DEFINITION": cfg.definition,
