@@ -7,7 +7,7 @@ import numpy as np
 
 from .algorithms import lookup
 from .errors import HillshadeError
-from .geometry import Grid, check_elevation, heights_and_grid, normalize_azimuth
+from .geometry import Grid, check_elevation, equal_azimuths, heights_and_grid, normalize_azimuth
 from .shading import choose_backend
 
 
@@ -85,14 +85,11 @@ def horizon_angles(heights, azimuth: float,
     ``hillshade-rt horizon``: curvature "auto" is on for the scan of a raster more than 1 km
     across; ``heights``, ``spacing`` and ``body`` as for :func:`shadow_mask`."""
     from .algorithms import horizon as hz
-    from .shading import Shader
+    from .shading import horizon_shader
     z, grid, body = _dem_parts(heights, spacing, body)
     azimuth = normalize_azimuth(azimuth)
     ran_on = choose_backend(backend, "horizon", {"method": method})
-    shader = Shader(z, grid, "horizon", {}, ran_on, curvature, refraction_k, body,
-                    (0.0, 0.0))
-    if shader.curvature == "auto":   # the hull has no curvature: off unless asked for
-        shader.curvature = shader.extent_m > 1000.0 and method == "scan"
+    shader = horizon_shader(z, grid, ran_on, curvature, refraction_k, body, method)
     rays = shader.rays(grid, azimuth, 45.0)
     if ran_on == "gpu":
         from .gpu import GpuDem
@@ -144,7 +141,7 @@ def horizon_profile(heights, rows, cols, spacing: float | tuple[float, float] | 
     ``body`` as for :func:`horizon_angles`; a point outside the cell centres or on nodata is
     an error."""
     from .algorithms import horizon as hz
-    from .shading import Shader
+    from .shading import horizon_shader
     z, grid, body = _dem_parts(heights, spacing, body)
     rr = np.atleast_1d(np.asarray(rows, np.float64))
     cc = np.atleast_1d(np.asarray(cols, np.float64))
@@ -154,14 +151,10 @@ def horizon_profile(heights, rows, cols, spacing: float | tuple[float, float] | 
     if not np.isfinite(ground).all():
         raise HillshadeError("a point lies outside the cell centres or on nodata")
     obs = ground + np.broadcast_to(np.asarray(height_above_ground, np.float64), ground.shape)
-    n = int(round(360.0 / step))
     if not (0.0 < step <= 90.0):
         raise HillshadeError(f"step must be in (0, 90] degrees, got {step}")
-    azimuths = ([360.0 * i / n for i in range(n)] if abs(n * step - 360.0) < 1e-9
-                else list(np.arange(0.0, 360.0, step)))
-    shader = Shader(z, grid, "horizon", {}, "cpu", curvature, refraction_k, body, (0.0, 0.0))
-    if shader.curvature == "auto":
-        shader.curvature = shader.extent_m > 1000.0
+    azimuths = equal_azimuths(step)
+    shader = horizon_shader(z, grid, "cpu", curvature, refraction_k, body)
     rays = [shader.rays(grid, a, 45.0) for a in azimuths]
     ang, dist = hz.profile(z, rr, cc, obs, rays, max(float(np.nanmax(z)), float(obs.max())))
     return np.array(azimuths), ang, dist

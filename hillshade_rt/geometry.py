@@ -82,6 +82,15 @@ def normalize_azimuth(azimuth: float) -> float:
     return 0.0 if a == 360.0 else a
 
 
+def equal_azimuths(step: float) -> list[float]:
+    """Azimuths every ``step`` degrees clockwise from north, north first, below 360 (exactly
+    i * 360 / n when ``step`` divides 360)."""
+    n = int(round(360.0 / step))
+    if n >= 1 and abs(n * step - 360.0) < 1e-9:
+        return [360.0 * i / n for i in range(n)]
+    return [float(a) for a in np.arange(0.0, 360.0, step)]
+
+
 def check_elevation(elevation: float, what: str = "sun elevation") -> float:
     """Sun elevation in degrees: must be > 0 and <= 90. ``what`` names it in the error (e.g. the
     option it came from)."""

@@ -519,3 +519,16 @@ def render_region(shader, region, kind, soft, self_shadow, ambient, stats, cast=
     if self_shadow:
         light[away] = 0.0
     return light
+
+
+def horizon_shader(z: np.ndarray, grid: Grid, backend: str = "cpu", curvature="auto",
+                   refraction_k: float | None = None, body: Body | None = None,
+                   method: str = "scan") -> Shader:
+    """A :class:`Shader` for the horizon products (horizon, profile, skyview), curvature
+    "auto" (or None) resolved as they do: on for a raster more than 1 km across (their rays run
+    to its edge whatever the sun), off for the hull, which has none."""
+    sh = Shader(z, grid, "horizon", {}, backend, "auto" if curvature is None else curvature,
+                refraction_k, body, (0.0, 0.0))
+    if sh.curvature == "auto":
+        sh.curvature = sh.extent_m > 1000.0 and method == "scan"
+    return sh

@@ -5,7 +5,8 @@ from __future__ import annotations
 import click
 
 from .errors import errors_to_click, say
-from .options import (backend_option, dem_options, finite, format_option, to_read_options,
+from .options import (backend_option, dem_options, finite, format_option, horizon_physics_options,
+                      overwrite_option, quiet_option, threads_option, to_read_options,
                       to_run_options)
 
 
@@ -25,18 +26,13 @@ from .options import (backend_option, dem_options, finite, format_option, to_rea
               help="scan: exact per-cell march; hull: convex-hull approximation, much faster.")
 @click.option("--sample-spacing", type=click.IntRange(min=1), default=1, show_default=True,
               help="scan: use every N-th sample only (the paper's sp; faster, approximate).")
-@click.option("--earth-curvature/--no-earth-curvature", "curvature", default=None,
-              help="Let the terrain fall away by d^2(1-k)/2R along each ray (default: on when "
-                   "the raster is more than 1 km across).")
-@click.option("--refraction-coefficient", "refraction_k", type=float, default=None,
-              help="Terrestrial refraction k (default 0.13 on the Earth, 0 on other bodies).")
+@horizon_physics_options
 @click.option("--preview", type=click.Path(dir_okay=False), default=None,
               help="Also write a quick-look PNG (relief, high horizons tinted).")
 @backend_option
-@click.option("--threads", type=click.IntRange(min=1), default=None,
-              help="CPU threads (default: all cores).")
-@click.option("--overwrite", is_flag=True, help="Replace OUTPUT if it exists.")
-@click.option("-q", "--quiet", is_flag=True, help="No summary line on stderr.")
+@threads_option
+@overwrite_option()
+@quiet_option()
 @format_option
 @dem_options
 @errors_to_click

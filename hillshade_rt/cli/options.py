@@ -134,14 +134,44 @@ def sun_options(f):
     ])
 
 
-def physics_options(f):
-    return _stack(f, [
+def _curvature_options(when: str):
+    """--earth-curvature and --refraction-coefficient, on by default ``when``."""
+    return [
         click.option("--earth-curvature/--no-earth-curvature", "curvature", default=None,
                      help="Let the terrain fall away by d^2(1-k)/2R along each ray (default: on "
-                          "when rays can be longer than 1 km)."),
+                          f"when {when})."),
         click.option("--refraction-coefficient", "refraction_k", type=float, default=None,
                      help="Terrestrial refraction k for --earth-curvature (default 0.13 on the "
                           "Earth, 0 on other bodies)."),
+    ]
+
+
+def horizon_physics_options(f):
+    """Earth curvature and refraction of the horizon products (horizon, profile, skyview):
+    curvature on by default when the raster is more than 1 km across."""
+    return _stack(f, _curvature_options("the raster is more than 1 km across"))
+
+
+def threads_option(f):
+    return click.option("--threads", type=click.IntRange(min=1), default=None,
+                        help="CPU threads (default: all cores).")(f)
+
+
+def overwrite_option(what: str = "Replace OUTPUT if it exists."):
+    def deco(f):
+        return click.option("--overwrite", is_flag=True, help=what)(f)
+    return deco
+
+
+def quiet_option(what: str = "No summary line on stderr."):
+    def deco(f):
+        return click.option("-q", "--quiet", is_flag=True, help=what)(f)
+    return deco
+
+
+def physics_options(f):
+    """Curvature, refraction and soft shadows of the lighting commands."""
+    return _stack(f, _curvature_options("rays can be longer than 1 km") + [
         click.option("--soft", is_flag=True,
                      help="The sun as a disk of 0.533 deg: the visible fraction of the disk "
                           "(0..1, from the exact horizon angle) instead of hard shadows."),

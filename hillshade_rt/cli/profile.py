@@ -5,7 +5,8 @@ from __future__ import annotations
 import click
 
 from .errors import errors_to_click, say
-from .options import dem_options, to_read_options, to_run_options
+from .options import (dem_options, horizon_physics_options, overwrite_option, quiet_option,
+                      to_read_options, to_run_options)
 
 
 @click.command()
@@ -30,13 +31,9 @@ from .options import dem_options, to_read_options, to_run_options
                    "one point. Each file states its convention.")
 @click.option("-o", "--output", default=None, type=click.Path(dir_okay=False),
               help="Write here (default: standard output).")
-@click.option("--earth-curvature/--no-earth-curvature", "curvature", default=None,
-              help="Let the terrain fall away by d^2(1-k)/2R along each ray (default: on when "
-                   "the raster is more than 1 km across).")
-@click.option("--refraction-coefficient", "refraction_k", type=float, default=None,
-              help="Terrestrial refraction k (default 0.13 on the Earth, 0 on other bodies).")
-@click.option("--overwrite", is_flag=True, help="Replace the output if it exists.")
-@click.option("-q", "--quiet", is_flag=True, help="No summary line on stderr.")
+@horizon_physics_options
+@overwrite_option("Replace the output if it exists.")
+@quiet_option()
 @dem_options
 @errors_to_click
 def profile(dem, at, at_xy, points, height_above_ground, step, fmt, output, curvature,

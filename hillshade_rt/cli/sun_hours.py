@@ -6,7 +6,8 @@ import click
 
 from .errors import errors_to_click, say
 from .options import (PLACE_KEYS, algorithm_option, backend_option, dem_options, format_option,
-                      physics_options, place_options, to_read_options, to_run_options)
+                      overwrite_option, physics_options, place_options, quiet_option,
+                      threads_option, to_read_options, to_run_options)
 
 
 @click.command("sun-hours")
@@ -25,12 +26,11 @@ from .options import (PLACE_KEYS, algorithm_option, backend_option, dem_options,
 @click.option("--preview", type=click.Path(dir_okay=False), default=None,
               help="Also write a quick-look PNG (relief tinted by sun hours).")
 @backend_option
-@click.option("--threads", type=click.IntRange(min=1), default=None,
-              help="CPU threads (default: all cores).")
+@threads_option
 @click.option("--report", "report_path", type=click.Path(dir_okay=False), default=None,
               help="Write a JSON report here.")
-@click.option("--overwrite", is_flag=True, help="Replace outputs if they exist.")
-@click.option("-q", "--quiet", is_flag=True, help="No progress bar or summary on stderr.")
+@overwrite_option("Replace outputs if they exist.")
+@quiet_option("No progress bar or summary on stderr.")
 @format_option
 @dem_options
 @errors_to_click

@@ -16,7 +16,7 @@ def horizon(cfg: HorizonConfig) -> dict:
     import numpy as np
 
     from ..algorithms import horizon as hz
-    from ..shading import Shader
+    from ..shading import horizon_shader
     from ..earth import dem_body
     from ..geometry import Grid, sun_rays
     from ..io import (BandWriter, check_output_format, input_label, output_driver, write_png,
@@ -57,11 +57,8 @@ def horizon(cfg: HorizonConfig) -> dict:
     stats: dict = {}
     with timer("prepare"):  # numba compilation on a first run
         # the elevation does not enter the angles; curvature "auto" looks at the raster's size
-        shader = Shader(d.heights, d.grid, "horizon", {}, ran_on,
-                        "auto" if cfg.curvature is None else cfg.curvature, cfg.refraction_k,
-                        dem_body(d))
-        if shader.curvature == "auto":   # the hull has no curvature: off unless asked for
-            shader.curvature = shader.extent_m > 1000.0 and method == "scan"
+        shader = horizon_shader(d.heights, d.grid, ran_on, cfg.curvature, cfg.refraction_k,
+                                dem_body(d), method)
         small = sun_rays(Grid.uniform(4, 4, *d.grid.centre_spacing(), d.grid.col_sign,
                                       d.grid.row_sign), az, 45.0)
         gpu_dem = None

@@ -167,7 +167,8 @@ def profile(cfg: ProfileConfig) -> dict:
     from ..algorithms import horizon as hz
     from ..earth import dem_body
     from ..io.write import Claims, atomic_path, os_error
-    from ..shading import Shader
+    from ..geometry import equal_azimuths
+    from ..shading import horizon_shader
 
     if cfg.fmt not in FORMATS:
         raise UsageProblem(f"--format must be one of {', '.join(FORMATS)}, got {cfg.fmt!r}")
@@ -202,14 +203,9 @@ def profile(cfg: ProfileConfig) -> dict:
             raise HillshadeError(f"point {p['id']} lies on nodata: no ground height there")
         p["ground"] = g
         p["observer"] = g + float(cfg.height_above_ground)
-    n = int(round(360.0 / cfg.step))
-    azimuths = ([360.0 * i / n for i in range(n)] if abs(n * cfg.step - 360.0) < 1e-9
-                else list(np.arange(0.0, 360.0, cfg.step)))
-    shader = Shader(d.heights, d.grid, "horizon", {}, "cpu",
-                    "auto" if cfg.curvature is None else cfg.curvature, cfg.refraction_k,
-                    dem_body(d))
-    if shader.curvature == "auto":     # as the horizon command: on for a raster over 1 km
-        shader.curvature = shader.extent_m > 1000.0
+    azimuths = equal_azimuths(cfg.step)
+    shader = horizon_shader(d.heights, d.grid, "cpu", cfg.curvature, cfg.refraction_k,
+                            dem_body(d))
     rays = [shader.rays(d.grid, a, 45.0) for a in azimuths]
     ang, dist = hz.profile(d.heights, np.array([p["row"] for p in points]),
                            np.array([p["col"] for p in points]),

@@ -52,7 +52,7 @@ def skyview(cfg: SkyviewConfig) -> dict:
     from ..earth import dem_body
     from ..io import check_output_format, input_label, output_driver, write_raster
     from ..io.write import Claims
-    from ..shading import Shader, choose_backend
+    from ..shading import choose_backend, horizon_shader
     from .report import Timer
 
     ro = cfg.run
@@ -69,11 +69,8 @@ def skyview(cfg: SkyviewConfig) -> dict:
     ran_on = choose_backend(ro.backend, "horizon", {"method": "scan"})
     with timer("read"):
         d = cfg.read.read(cfg.dem)
-    shader = Shader(d.heights, d.grid, "horizon", {}, ran_on,
-                    "auto" if cfg.curvature is None else cfg.curvature, cfg.refraction_k,
-                    dem_body(d))
-    if shader.curvature == "auto":
-        shader.curvature = shader.extent_m > 1000.0
+    shader = horizon_shader(d.heights, d.grid, ran_on, cfg.curvature, cfg.refraction_k,
+                            dem_body(d))
     gpu_dem = None
     if ran_on == "gpu":
         from ..gpu import GpuDem
