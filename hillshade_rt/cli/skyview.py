@@ -19,6 +19,9 @@ from .options import (backend_option, dem_options, format_option, horizon_physic
               show_default=True,
               help="zaksek: 1 - mean sin of the horizon elevation (RVT, HORAYZON); dozier: "
                    "the cosine-weighted sky seen by the tilted surface (Dozier & Frew 1990).")
+@click.option("--terrain-configuration", is_flag=True,
+              help="Write 1 - Vd instead (with --definition dozier): the share of the tilted "
+                   "surface's hemisphere that is terrain, for reflected light.")
 @horizon_physics_options
 @backend_option
 @threads_option
@@ -27,12 +30,13 @@ from .options import (backend_option, dem_options, format_option, horizon_physic
 @format_option
 @dem_options
 @errors_to_click
-def skyview(dem, output, directions, definition, curvature, refraction_k, backend, threads,
-            overwrite, quiet, fmt, **read_opts):
+def skyview(dem, output, directions, definition, terrain_configuration, curvature, refraction_k,
+            backend, threads, overwrite, quiet, fmt, **read_opts):
     """Write the sky view factor of every cell of DEM to OUTPUT (float32 0..1, -9999 nodata)
     from its exact horizon in --directions azimuths."""
     from ..run.skyview import SkyviewConfig, skyview as run_skyview
     kw = dict(backend=backend, threads=threads, overwrite=overwrite, quiet=quiet, fmt=fmt,
               **read_opts)
-    run_skyview(SkyviewConfig(dem, output, directions, definition, curvature, refraction_k,
-                              to_read_options(kw), to_run_options(kw, say)))
+    run_skyview(SkyviewConfig(dem, output, directions, definition, terrain_configuration,
+                              curvature, refraction_k, to_read_options(kw),
+                              to_run_options(kw, say)))

@@ -8,8 +8,9 @@
   from the tilted surface, (1/2π) ∫ [cos S sin² H + sin S cos(φ - A) (H - sin H cos H)] dφ, H the
   horizon's zenith angle (π/2 - γ), S and A the cell's slope and aspect (Horn's normals, as the
   hillshade's): a plane of slope S gives (1 + cos S)/2, the rest, (1 - cos S)/2, being the
-  terrain it faces. (Issue 20's ``--terrain-configuration``, ``--openness`` and
-  ``--max-distance`` are not built yet.)
+  terrain it faces: ``terrain_configuration`` writes that share, 1 - Vd (the view factor of
+  the terrain, for reflected light). (Issue 20's ``--openness`` and ``--max-distance`` are not
+  built yet.)
 
 Each direction is the ``horizon`` scan (exact on the model, curvature as for ``horizon``),
 accumulated as it is made (one direction's angles in memory at a time). At the raster's edge
@@ -39,6 +40,7 @@ class SkyviewConfig:
     output: str
     directions: int = 32
     definition: str = "zaksek"
+    terrain_configuration: bool = False   # 1 - Vd (Dozier's): the terrain a tilted cell sees
     curvature: object = None
     refraction_k: float | None = None
     read: ReadOptions = field(default_factory=ReadOptions)
@@ -59,6 +61,9 @@ def skyview(cfg: SkyviewConfig) -> dict:
     if cfg.definition not in DEFINITIONS:
         raise UsageProblem(f"--definition must be one of {', '.join(DEFINITIONS)}, got "
                            f"{cfg.definition!r}")
+    if cfg.terrain_configuration and cfg.definition != "dozier":
+        raise UsageProblem("--terrain-configuration is 1 - Dozier's view factor: give "
+                           "--definition dozier")
     if not 4 <= int(cfg.directions) <= 360:
         raise UsageProblem(f"--directions must be between 4 and 360, got {cfg.directions}")
     timer = Timer()
@@ -87,13 +92,18 @@ def skyview(cfg: SkyviewConfig) -> dict:
     from ..algorithms.skyview import sky_view
     with timer("compute"):
         svf = sky_view(d.heights, d.grid, azimuths, angles_of, cfg.definition)
+        if cfg.terrain_configuration:     # the rest of the surface's hemisphere: terrain
+            svf = (1.0 - svf).astype(np.float32)
+    what = ("terrain configuration factor (1 - Vd, dozier)" if cfg.terrain_configuration
+            else f"sky view factor ({cfg.definition})")
     tags = {"HILLSHADE_RT_VERSION": __version__, "DEFINITION": cfg.definition,
-            "DIRECTIONS": n, "UNITS": "sky view factor 0..1",
+            "PRODUCT": what,
+            "DIRECTIONS": n, "UNITS": "fraction 0..1",
             "EDGE": "no terrain beyond the raster: border cells see open sky outward",
             "EARTH_CURVATURE": "on" if shader.curvature else "off"}
     with timer("write"):
         write_raster(cfg.output, np.where(np.isnan(svf), np.float32(-9999.0), svf), d,
-                     nodata=-9999.0, description=f"sky view factor ({cfg.definition})",
+                     nodata=-9999.0, description=what,
                      tags=tags, overview_resampling="average", overwrite=ro.overwrite,
                      fmt=ro.fmt)
     rows, cols = d.shape
@@ -105,8 +115,8 @@ def skyview(cfg: SkyviewConfig) -> dict:
                    "mean": float(valid.mean()) if valid.size else None},
            "seconds": dict(timer.seconds, total=timer.total()), "version": __version__}
     if not ro.quiet:
-        ro.say("summary", f"hillshade-rt: {cfg.output}: {cols}x{rows}, sky view factor "
-                          f"({cfg.definition}, {n} directions), mean "
+        ro.say("summary", f"hillshade-rt: {cfg.output}: {cols}x{rows}, {what}, "
+                          f"{n} directions, mean "
                           f"{rep['svf']['mean'] if valid.size else math.nan:.3f}; compute "
                           f"{timer.seconds['compute']:.2f} s")
     return rep

@@ -53,6 +53,21 @@ def test_planes_give_the_closed_forms(tmp_path, runner, definition):
         assert want == pytest.approx(cont, abs=2e-3)
 
 
+def test_terrain_configuration_is_the_rest_of_the_tilted_hemisphere(tmp_path, runner):
+    """1 - Vd: on a plane of slope S, (1 - cos S)/2 in the continuous limit, the Dozier sum's
+    complement over the same directions cell for cell; it needs --definition dozier."""
+    out = tmp_path / "ct.tif"
+    dem = _plane(tmp_path, 30.0)
+    r = runner.invoke(cli, ["skyview", dem, str(out), "--directions", "36", "--definition",
+                            "dozier", "--terrain-configuration", "--pixel-size", "10"] + FLAT)
+    assert r.exit_code == 0, r.output
+    ct = read_band(out)[1:-1, 1:-1]
+    np.testing.assert_allclose(ct, 1.0 - _expected(30.0, 36, "dozier"), atol=2e-5)
+    assert ct.mean() == pytest.approx((1 - math.cos(math.radians(30.0))) / 2, abs=2e-3)
+    r = runner.invoke(cli, ["skyview", dem, str(tmp_path / "x.tif"), "--terrain-configuration"])
+    assert r.exit_code == 2 and "--definition dozier" in r.stderr
+
+
 def test_pits_see_less_sky_than_peaks_on_real_terrain(tmp_path, runner):
     """On a real DEM: values in (0, 1], and the cells lowest in their 5x5 neighbourhood (valley
     floors) see less sky than the highest (summits), by both definitions."""
