@@ -117,6 +117,7 @@ def sky_view(heights, spacing: float | tuple[float, float] | Grid | None = None,
     tilted surface). ``heights``, ``spacing``, ``curvature``, ``body`` as for
     :func:`horizon_angles`."""
     from .algorithms.skyview import DEFINITIONS, sky_view as _sky_view
+    from .shading import horizon_shader
     if definition not in DEFINITIONS:
         raise HillshadeError(f"definition must be one of {', '.join(DEFINITIONS)}, got "
                              f"{definition!r}")
@@ -124,10 +125,12 @@ def sky_view(heights, spacing: float | tuple[float, float] | Grid | None = None,
     n = int(directions)
     if n < 1:
         raise HillshadeError(f"directions must be 1 or more, got {directions}")
-    return _sky_view(z, grid, [360.0 * i / n for i in range(n)],
-                     lambda a: horizon_angles(z, a, grid, curvature=curvature,
-                                              refraction_k=refraction_k, body=body,
-                                              backend="cpu"), definition)
+    from .algorithms import horizon as hz
+    shader = horizon_shader(z, grid, "cpu", curvature, refraction_k, body)
+    pyramid = shader.pyramid(z, True)           # one for every direction
+    return _sky_view(z, grid, equal_azimuths(360.0 / n),
+                     lambda a: hz.horizon_angles(z, shader.rays(grid, a, 45.0),
+                                                 pyramid=pyramid), definition)
 
 
 def horizon_profile(heights, rows, cols, spacing: float | tuple[float, float] | Grid | None = None,
@@ -141,7 +144,6 @@ def horizon_profile(heights, rows, cols, spacing: float | tuple[float, float] | 
     ``body`` as for :func:`horizon_angles`; a point outside the cell centres or on nodata is
     an error."""
     from .algorithms import horizon as hz
-    from .shading import horizon_shader
     z, grid, body = _dem_parts(heights, spacing, body)
     rr = np.atleast_1d(np.asarray(rows, np.float64))
     cc = np.atleast_1d(np.asarray(cols, np.float64))
@@ -151,10 +153,25 @@ def horizon_profile(heights, rows, cols, spacing: float | tuple[float, float] | 
     if not np.isfinite(ground).all():
         raise HillshadeError("a point lies outside the cell centres or on nodata")
     obs = ground + np.broadcast_to(np.asarray(height_above_ground, np.float64), ground.shape)
+    azimuths, ang, dist, _ = observer_profiles(z, grid, rr, cc, obs, step, curvature=curvature,
+                                               refraction_k=refraction_k, body=body)
+    return np.array(azimuths), ang, dist
+
+
+def observer_profiles(z: np.ndarray, grid: Grid, rows: np.ndarray, cols: np.ndarray,
+                      observer: np.ndarray, step: float, *, curvature="auto",
+                      refraction_k: float | None = None, body=None):
+    """The core of :func:`horizon_profile` and ``hillshade-rt profile``, for observers already
+    placed (float32 heights ``z`` on ``grid``; fractional ``rows``, ``cols``; ``observer``
+    heights): (azimuths every ``step`` degrees, angles, distances, whether the rays are
+    curved)."""
+    from .algorithms import horizon as hz
+    from .shading import horizon_shader
     if not (0.0 < step <= 90.0):
         raise HillshadeError(f"step must be in (0, 90] degrees, got {step}")
     azimuths = equal_azimuths(step)
     shader = horizon_shader(z, grid, "cpu", curvature, refraction_k, body)
     rays = [shader.rays(grid, a, 45.0) for a in azimuths]
-    ang, dist = hz.profile(z, rr, cc, obs, rays, max(float(np.nanmax(z)), float(obs.max())))
-    return np.array(azimuths), ang, dist
+    ang, dist = hz.profile(z, rows, cols, observer, rays,
+                           max(float(np.nanmax(z)), float(np.max(observer))))
+    return azimuths, ang, dist, bool(shader.curvature)

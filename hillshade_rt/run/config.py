@@ -164,14 +164,14 @@ class HorizonConfig:
     def azimuths(self) -> list[float]:
         """The azimuths of the bands: ``azimuth``, or the ``directions`` ones; exactly one of
         the two (a usage error otherwise)."""
-        from ..geometry import normalize_azimuth
+        from ..geometry import equal_azimuths, normalize_azimuth
         if (self.azimuth is None) == (self.directions is None):
             raise UsageProblem("give --azimuth A (one direction) or --directions N, one of them")
         if self.directions is not None:
             n = int(self.directions)
             if not 8 <= n <= 360:
                 raise UsageProblem(f"--directions must be between 8 and 360, got {n}")
-            return [360.0 * i / n for i in range(n)]
+            return equal_azimuths(360.0 / n)
         return [normalize_azimuth(self.azimuth)]
 
 

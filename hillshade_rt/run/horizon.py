@@ -72,9 +72,12 @@ def horizon(cfg: HorizonConfig) -> dict:
             hz.horizon_angles(np.zeros((4, 4), np.float32), small, method=method,
                               sample_spacing=sample_spacing)
 
+    # one pyramid for every direction (built at the first march)
+    pyramid = None if gpu_dem is not None else shader.pyramid(d.heights, True)
+
     def angles(a):
         """(the horizon angles toward azimuth ``a``: float32 degrees, NaN on voids; the
-        distances to the horizon points, -9999 where there is none, or None; the rays)."""
+        distances to the horizon points, -9999 where there is none, or None)."""
         rays = shader.rays(d.grid, a, 45.0)
         dist = None if cfg.distance is None else np.empty(d.shape, np.float32)
         with timer("compute"):
@@ -84,27 +87,23 @@ def horizon(cfg: HorizonConfig) -> dict:
             else:
                 beta = hz.horizon_angles(d.heights, rays, method=method,
                                          sample_spacing=sample_spacing, stats=stats,
-                                         distance=dist)
+                                         pyramid=pyramid, distance=dist)
             if dist is not None:
                 dist[np.isnan(dist)] = -9999.0
-        return beta, dist, rays
+        return beta, dist
 
+    curved = shader.curvature_for(az, 45.0) > 0     # the same for every direction
+    base = {"HILLSHADE_RT_VERSION": __version__, "METHOD": method,
+            "SAMPLE_SPACING": sample_spacing, "UNITS": "degrees above the horizontal"}
     dist_tags = {"HILLSHADE_RT_VERSION": __version__, "UNITS": "metres (ground distance along "
                  "the ray to the horizon point)", "NODATA": "-9999 (a void, or nothing ahead)"}
-
-    curved = False
-    tags = {"HILLSHADE_RT_VERSION": __version__, "METHOD": method,
-            "SAMPLE_SPACING": sample_spacing, "UNITS": "degrees above the horizontal",
-            "NODATA": "-9999 (a void)", "NO_TERRAIN_AHEAD": "-90"}
     shade = None
     if not many:
-        beta, dist, rays = angles(az)
-        curved = bool(rays.curved)
+        beta, dist = angles(az)
         shade = (np.clip(np.nan_to_num(beta, nan=0.0) / 30.0, 0.0, 1.0)
                  if ro.preview else None)
         beta[np.isnan(beta)] = -9999.0
-        tags = {"HILLSHADE_RT_VERSION": __version__, "AZIMUTH": az, "METHOD": method,
-                "SAMPLE_SPACING": sample_spacing, "UNITS": "degrees above the horizontal",
+        tags = {**base, "AZIMUTH": az,
                 "EARTH_CURVATURE": (f"on, R {shader.body.radius(az):.0f} m, k {shader.k:g}"
                                     if curved else "off")}
         with timer("write"):
@@ -117,12 +116,12 @@ def horizon(cfg: HorizonConfig) -> dict:
                              fmt=ro.fmt)
     else:
         # one band per direction, written as it is made (N bands never all in memory)
-        on = shader.curvature_for(az, 45.0) > 0     # the same for every direction
-        tags.update(DIRECTIONS=len(azimuths), AZIMUTHS=",".join(f"{a:g}" for a in azimuths),
-                    AZIMUTH_CONVENTION="degrees clockwise from north (grid north), band i at "
-                                       "i * 360 / N",
-                    EARTH_CURVATURE=f"on, k {shader.k:g}" if on else "off")
-        dist_tags.update({k: tags[k] for k in ("DIRECTIONS", "AZIMUTHS", "AZIMUTH_CONVENTION")})
+        series = {"DIRECTIONS": len(azimuths), "AZIMUTHS": ",".join(f"{a:g}" for a in azimuths),
+                  "AZIMUTH_CONVENTION": "degrees clockwise from north (grid north), band i at "
+                                        "i * 360 / N"}
+        tags = {**base, "NODATA": "-9999 (a void)", "NO_TERRAIN_AHEAD": "-90", **series,
+                "EARTH_CURVATURE": f"on, k {shader.k:g}" if curved else "off"}
+        dist_tags.update(series)
         with BandWriter(output, d, len(azimuths), "float32", -9999.0, tags,
                         overview_resampling="average", overwrite=ro.overwrite,
                         fmt=ro.fmt) as w, (
@@ -131,8 +130,7 @@ def horizon(cfg: HorizonConfig) -> dict:
                            overview_resampling="average", overwrite=ro.overwrite,
                            fmt=ro.fmt)) as wd:
             for i, a in enumerate(azimuths):
-                beta, dist, rays = angles(a)
-                curved = curved or bool(rays.curved)
+                beta, dist = angles(a)
                 if ro.preview and i == 0:
                     shade = np.clip(np.nan_to_num(beta, nan=0.0) / 30.0, 0.0, 1.0)
                 beta[np.isnan(beta)] = -9999.0

@@ -127,8 +127,8 @@ def read_points(path: str) -> list[dict]:
 
 
 def _locate(points, src):
-    """Each point's x, y (the DEM's CRS), lon, lat, and fractional row and column (cell centres
-    at whole numbers)."""
+    """(the points with their x, y (the DEM's CRS), lon, lat, and fractional row and column
+    (cell centres at whole numbers); the transformer from the DEM's CRS to lon/lat, or None)."""
     from pyproj import CRS as PCRS, Transformer
     if src.transform is None:
         raise HillshadeError(f"{src.path}: the DEM has no georeferencing: points cannot be "
@@ -153,7 +153,7 @@ def _locate(points, src):
         # back), the point is that centre: a crossing 1e-9 steps away would read the ground's
         # own slope there as the horizon
         p["col"], p["row"] = (_snap(col - 0.5), _snap(row - 0.5))
-    return points
+    return points, to_ll
 
 
 def _snap(v: float, eps: float = 1e-6) -> float:
@@ -166,9 +166,8 @@ def profile(cfg: ProfileConfig) -> dict:
     """Compute and write the profiles; returns the document (what ``json`` writes)."""
     from ..algorithms import horizon as hz
     from ..earth import dem_body
+    from ..arrays import observer_profiles
     from ..io.write import Claims, atomic_path, os_error
-    from ..geometry import equal_azimuths
-    from ..shading import horizon_shader
 
     if cfg.fmt not in FORMATS:
         raise UsageProblem(f"--format must be one of {', '.join(FORMATS)}, got {cfg.fmt!r}")
@@ -190,7 +189,7 @@ def profile(cfg: ProfileConfig) -> dict:
         Claims([cfg.dem] + ([cfg.points] if cfg.points else []), cfg.run.overwrite).claim(
             cfg.output, "-o/--output")
     d = cfg.read.read(cfg.dem)
-    points = _locate(points, d)
+    points, to_ll = _locate(points, d)
     rows, cols = d.shape
     for p in points:
         if not (-1e-9 <= p["row"] <= rows - 1 + 1e-9 and -1e-9 <= p["col"] <= cols - 1 + 1e-9):
@@ -203,25 +202,16 @@ def profile(cfg: ProfileConfig) -> dict:
             raise HillshadeError(f"point {p['id']} lies on nodata: no ground height there")
         p["ground"] = g
         p["observer"] = g + float(cfg.height_above_ground)
-    azimuths = equal_azimuths(cfg.step)
-    shader = horizon_shader(d.heights, d.grid, "cpu", cfg.curvature, cfg.refraction_k,
-                            dem_body(d))
-    rays = [shader.rays(d.grid, a, 45.0) for a in azimuths]
-    ang, dist = hz.profile(d.heights, np.array([p["row"] for p in points]),
-                           np.array([p["col"] for p in points]),
-                           np.array([p["observer"] for p in points]), rays,
-                           max(float(np.nanmax(d.heights)), max(p["observer"] for p in points)))
+    azimuths, ang, dist, curved = observer_profiles(
+        d.heights, d.grid, np.array([p["row"] for p in points]),
+        np.array([p["col"] for p in points]), np.array([p["observer"] for p in points]),
+        cfg.step, curvature=cfg.curvature, refraction_k=cfg.refraction_k, body=dem_body(d))
     doc = {"dem": os.path.abspath(d.path) if os.path.exists(d.path) else d.path,
            "crs": d.crs_string(), "convention": CONVENTION, "azimuth_step": cfg.step,
            "height_above_ground_m": cfg.height_above_ground,
-           "earth_curvature": bool(shader.curvature), "version": __version__, "points": []}
-    to_ll = None
-    if d.crs is not None and cfg.fmt == "geojson":
-        from pyproj import CRS as PCRS, Transformer
-        to_ll = Transformer.from_crs(PCRS.from_user_input(d.crs.to_wkt()), "EPSG:4326",
-                                     always_xy=True)
+           "earth_curvature": curved, "version": __version__, "points": []}
     for i, p in enumerate(points):
-        line = (_horizon_line(d, p, azimuths, ang[i], dist[i], rays, to_ll)
+        line = (_horizon_line(d, p, azimuths, ang[i], dist[i], to_ll)
                 if cfg.fmt == "geojson" else [])
         doc["points"].append({"id": p["id"], "x": p["x"], "y": p["y"], "lon": p["lon"],
                               "lat": p["lat"], "ground_m": p["ground"],
@@ -247,20 +237,19 @@ def profile(cfg: ProfileConfig) -> dict:
     return doc
 
 
-def _horizon_line(d, p, azimuths, ang, dist, rays, to_ll):
+def _horizon_line(d, p, azimuths, ang, dist, to_ll):
     """The horizon points of ``p`` (lon, lat, height; x, y where lon/lat are unknown), one per
-    azimuth with terrain ahead: where the ray meets the horizon, in the DEM's CRS (vectorised:
-    one transform per point)."""
-    r = int(min(max(round(p["row"]), 0), d.shape[0] - 1))
+    azimuth with terrain ahead: ``dist`` ground metres from the point toward each azimuth, in
+    pixels by the spacing of the point's nearest row (as its rays: ``geometry.sun_rays``), then
+    through the transform (vectorised: one transform per point)."""
     ok = np.isfinite(dist)
     if not ok.any():
         return []
-    dom = np.array([ry.dom_col[r] for ry in rays])[ok] != 0
-    sd = np.array([ry.step_dom[r] for ry in rays], np.float64)[ok]
-    so = np.array([ry.step_other[r] for ry in rays])[ok]
-    t = dist[ok] / np.array([ry.step_m[r] for ry in rays])[ok]
-    col = p["col"] + t * np.where(dom, sd, so)
-    row = p["row"] + t * np.where(dom, so, sd)
+    r = int(min(max(round(p["row"]), 0), d.shape[0] - 1))
+    g = d.grid
+    az = np.radians(np.asarray(azimuths, np.float64)[ok])
+    col = p["col"] + dist[ok] * np.sin(az) * g.col_sign / g.dx[r]
+    row = p["row"] + dist[ok] * np.cos(az) * g.row_sign / g.dy[r]
     tr = d.transform
     x = tr.c + tr.a * (col + 0.5) + tr.b * (row + 0.5)
     y = tr.f + tr.d * (col + 0.5) + tr.e * (row + 0.5)

@@ -52,6 +52,7 @@ def skyview(cfg: SkyviewConfig) -> dict:
 
     from ..algorithms import horizon as hz
     from ..earth import dem_body
+    from ..geometry import equal_azimuths
     from ..io import check_output_format, input_label, output_driver, write_raster
     from ..io.write import Claims
     from ..shading import choose_backend, horizon_shader
@@ -81,13 +82,15 @@ def skyview(cfg: SkyviewConfig) -> dict:
         from ..gpu import GpuDem
         gpu_dem = GpuDem(d.heights)
     n = int(cfg.directions)
-    azimuths = [360.0 * i / n for i in range(n)]
+    azimuths = equal_azimuths(360.0 / n)
+
+    pyramid = None if gpu_dem is not None else shader.pyramid(d.heights, True)  # one for all
 
     def angles_of(a):
         rays = shader.rays(d.grid, a, 45.0)
         if gpu_dem is not None:
             return hz.horizon_angles_gpu(gpu_dem, rays)
-        return hz.horizon_angles(d.heights, rays)
+        return hz.horizon_angles(d.heights, rays, pyramid=pyramid)
 
     from ..algorithms.skyview import sky_view
     with timer("compute"):
