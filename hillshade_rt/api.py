@@ -24,11 +24,10 @@ import datetime as _dt
 import os
 
 from .errors import HillshadeError
+from .run.config import PLACE_KEYS, READ_KEYS
 
 # keyword arguments passed on as the run's options of the same name
-_READ = ("band", "nodata", "z_factor", "pixel_size", "raw_shape", "raw_dtype", "raw_byteorder")
-_PLACE = ("tz", "lat", "lon", "pressure", "temperature", "no_refraction", "sun_tolerance")
-_PASSED = _PLACE + _READ + ("threads",)
+_PASSED = PLACE_KEYS + READ_KEYS + ("threads",)
 
 
 def _iso(t):
@@ -96,8 +95,8 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
                time=tuple(str(_iso(t)) for t in ([times] if isinstance(times, (str, _dt.datetime))
                                                  else times)),
                start=_iso(start), end=_iso(end), step=step,
-               **{k: more.get(k, d) for k, d in zip(_PLACE, (None,) * 5 + (False, DEFAULT_TOLERANCE))})
-    read = ReadOptions(**{k: more[k] for k in _READ if k in more})
+               **{k: more.get(k, d) for k, d in zip(PLACE_KEYS, (None,) * 5 + (False, DEFAULT_TOLERANCE))})
+    read = ReadOptions(**{k: more[k] for k in READ_KEYS if k in more})
     run = RunOptions(backend=backend, threads=more.get("threads"), report_path=report,
                      overwrite=overwrite, quiet=not progress, fmt=fmt, preview=preview,
                      say=_stderr)

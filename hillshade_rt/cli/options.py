@@ -9,6 +9,7 @@ import math
 import click
 
 from ..errors import HillshadeError
+from ..run.config import READ_KEYS
 
 
 def _stack(f, opts):
@@ -230,13 +231,6 @@ def algorithm_flags(f):
                 "flag": dict(is_flag=True)}[opt.kind]
         f = click.option(opt.flag, opt.param, default=None, help=opt.help, **kind)(f)
     return f
-
-
-READ_KEYS = ("band", "nodata", "z_factor", "pixel_size", "raw_shape", "raw_dtype",
-             "raw_byteorder")
-SUN_KEYS = ("azimuth", "elevation", "time", "start", "end", "step", "tz", "lat", "lon",
-            "pressure", "temperature", "no_refraction", "sun_tolerance")
-PLACE_KEYS = ("tz", "lat", "lon", "pressure", "temperature", "no_refraction", "sun_tolerance")
 
 
 def to_read_options(kw: dict):

@@ -6,7 +6,8 @@ from __future__ import annotations
 import click
 
 from .errors import errors_to_click, say
-from .options import (SUN_KEYS, algorithm_flags, algorithm_option, dem_options, finite, given,
+from ..run.config import SUN_KEYS
+from .options import (algorithm_flags, algorithm_option, dem_options, finite, given,
                       physics_options, run_options, sun_options, to_read_options,
                       to_run_options)
 

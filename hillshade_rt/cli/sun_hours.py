@@ -5,7 +5,8 @@ from __future__ import annotations
 import click
 
 from .errors import errors_to_click, say
-from .options import (PLACE_KEYS, algorithm_option, backend_option, dem_options, format_option,
+from ..run.config import PLACE_KEYS
+from .options import (algorithm_option, backend_option, dem_options, format_option,
                       overwrite_option, physics_options, place_options, quiet_option,
                       threads_option, to_read_options, to_run_options)
 

@@ -17,9 +17,13 @@ from typing import Callable
 
 from ..errors import HillshadeError, UsageProblem
 
-# the sun options of the lighting commands (``sun.SunRequest.from_options``' keywords)
-SUN_KEYS = ("azimuth", "elevation", "time", "start", "end", "step", "tz", "lat", "lon",
-            "pressure", "temperature", "no_refraction", "sun_tolerance")
+# the option names the command line and the API share, each set once: the sun's place and
+# atmosphere (``sun.SunRequest.at_place``), all the sun options of the lighting commands
+# (``SunRequest.from_options``), the DEM's read options (``ReadOptions``)
+PLACE_KEYS = ("tz", "lat", "lon", "pressure", "temperature", "no_refraction", "sun_tolerance")
+SUN_KEYS = ("azimuth", "elevation", "time", "start", "end", "step") + PLACE_KEYS
+READ_KEYS = ("band", "nodata", "z_factor", "pixel_size", "raw_shape", "raw_dtype",
+             "raw_byteorder")
 
 # the smallest --window-size side: smaller windows make the run slow for nothing (each window has
 # its halo and its own read; 1x1 windows of a 465x457 DEM are 212 k windows, minutes of work)
