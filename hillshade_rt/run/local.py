@@ -1,7 +1,7 @@
 """A lighting run on this machine: the whole DEM in memory, or in windows read and written
 through GDAL (each with its halo toward the sun), or on Dask (``run.dask``) when a scheduler is
-given. Both take the run's inputs, read options, sun request and ``Outputs``, and return what
-``run.shade`` puts in the report.
+given. Both take the run's inputs, the DEM opened once, the sun request and ``Outputs``, and
+return what ``run.shade`` puts in the report.
 """
 
 from __future__ import annotations
@@ -35,8 +35,8 @@ def needs_windows(src, limit, per_cell) -> bool:
     return rows * cols > budget
 
 
-def in_memory(inputs, read_opts, scale, req, out, timer, algorithm, options, ran_on,
-              curvature, refraction_k, soft, self_shadow, ambient, quiet, *, source=None, **_):
+def in_memory(inputs, source, scale, req, out, timer, algorithm, options, ran_on,
+              curvature, refraction_k, soft, self_shadow, ambient, quiet, **_):
     """``source``: the DEM already opened (``ReadOptions.open``; read here, not opened again)."""
     import numpy as np
 
@@ -49,7 +49,7 @@ def in_memory(inputs, read_opts, scale, req, out, timer, algorithm, options, ran
 
     kind = out.kind
     with timer("read"):
-        d = source.read() if source is not None else read_opts.read(inputs[0])
+        d = source.read()
         if scale is not None:
             apply_scale(d, scale)
     with timer("prepare"):   # solar positions; numba compilation on a first run; GPU upload
@@ -97,10 +97,10 @@ def in_memory(inputs, read_opts, scale, req, out, timer, algorithm, options, ran
             "processing": {"mode": "in memory", "cells": int(d.heights.size)}}
 
 
-def tiled(inputs, read_opts, scale, req, out, timer, algorithm, options, ran_on,
+def tiled(inputs, source, scale, req, out, timer, algorithm, options, ran_on,
           curvature, refraction_k, soft, self_shadow, ambient, quiet, *, limit,
-          window_shape, scheduler, per_cell, source=None):
-    """``source``: the DEM already opened for windows (else opened here)."""
+          window_shape, scheduler, per_cell):
+    """``source``: the DEM already opened for windows (``ReadOptions.open``)."""
     import math
 
     import numpy as np
@@ -116,7 +116,7 @@ def tiled(inputs, read_opts, scale, req, out, timer, algorithm, options, ran_on,
 
     kind = out.kind
     with timer("read"):
-        src = source if source is not None else read_opts.open(inputs, windows=True)
+        src = source
         if scale is not None:
             apply_scale(src, scale)
     rows, cols = src.shape

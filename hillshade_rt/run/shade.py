@@ -96,10 +96,9 @@ def _shade(cfg, src, windowed, inputs, output, req, pattern, wshape, limit, clai
     try:
         with (bounded_gdal_cache() if windowed else contextlib.nullcontext()):
             run = (tiled if windowed else in_memory)(
-                inputs, cfg.read, cfg.scale, req, out, timer, algorithm, options, ran_on,
+                inputs, src, cfg.scale, req, out, timer, algorithm, options, ran_on,
                 cfg.curvature, cfg.refraction_k, soft, cfg.self_shadow, cfg.ambient, ro.quiet,
-                limit=limit, window_shape=wshape, scheduler=cfg.scheduler, per_cell=per_cell,
-                source=src)
+                limit=limit, window_shape=wshape, scheduler=cfg.scheduler, per_cell=per_cell)
     finally:
         out.cleanup()
     d, suns, records = run["dem"], run["suns"], run["records"]
