@@ -5,7 +5,7 @@ line start without loading numpy, numba or GDAL, so that the command line can ta
 SIGTERM and SIGHUP before any of that work begins (``cli.errors.OneLineErrors.main``).
 """
 
-import importlib
+from ._lazy import lazy_names
 
 __version__ = "0.1.0"
 
@@ -18,13 +18,4 @@ _EXPORTS = {"HillshadeError": "errors", "Grid": "geometry", "sun_rays": "geometr
 __all__ = list(_EXPORTS) + ["__version__"]
 
 
-def __getattr__(name):
-    if name in _EXPORTS:
-        value = getattr(importlib.import_module(f".{_EXPORTS[name]}", __name__), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__():
-    return sorted(set(globals()) | set(_EXPORTS))
+__getattr__, __dir__ = lazy_names(__name__, _EXPORTS, globals())

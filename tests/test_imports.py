@@ -221,7 +221,7 @@ LAYERS = [
     ("hillshade_rt.algorithms",),
     ("hillshade_rt.sun",),
     ("hillshade_rt.geometry",),
-    ("hillshade_rt.errors", "hillshade_rt._preload", "hillshade_rt"),
+    ("hillshade_rt.errors", "hillshade_rt._preload", "hillshade_rt._lazy", "hillshade_rt"),
 ]
 
 

@@ -21,7 +21,7 @@ The names below are imported when first used (PEP 562): ``hillshade_rt.io.write`
 command line needs before it takes over the signals) loads without numpy or GDAL.
 """
 
-import importlib
+from .._lazy import lazy_names
 
 _EXPORTS = {
     # reading
@@ -45,13 +45,4 @@ _EXPORTS = {
 __all__ = list(_EXPORTS)
 
 
-def __getattr__(name):
-    if name in _EXPORTS:
-        value = getattr(importlib.import_module(f".{_EXPORTS[name]}", __name__), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-def __dir__():
-    return sorted(set(globals()) | set(_EXPORTS))
+__getattr__, __dir__ = lazy_names(__name__, _EXPORTS, globals())

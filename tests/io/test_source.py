@@ -168,7 +168,7 @@ def test_a_source_pickles_without_its_dataset(tmp_path):
         copy.close()
 
 
-_ALLOWED = {"errors", "geometry", "sun", "_preload", "algorithms", "io"}
+_ALLOWED = {"errors", "geometry", "sun", "_preload", "_lazy", "algorithms", "io"}
 
 
 def test_the_io_layer_imports_only_the_layers_below_it():
