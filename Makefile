@@ -7,7 +7,7 @@ OUTDIR ?= out
 EXAMPLE_DEM := examples/bigtujunga_srtm30m_utm11n_1197x643.tif
 EXAMPLE_OUT := $(OUTDIR)/bigtujunga_shadow.tif
 
-.PHONY: run test install install-test bench bench-sun bench-tiling bench-big bench-gpu bench-peers bench-writes bench-real bench-real-quick bench-fast gpu-check clean help
+.PHONY: run test install install-test bench bench-sun bench-tiling bench-big bench-gpu bench-peers bench-horizon bench-writes bench-real bench-real-quick bench-fast gpu-check clean help
 
 help:
 	@echo "make run    - set up .venv, shade the bundled example DEM, print where the mask went"
@@ -20,6 +20,7 @@ help:
 	@echo "make bench-gpu - install the CUDA backend (numba-cuda) and time every algorithm on the GPU"
 	@echo "make gpu-check - on a machine with a GPU: the GPU tests on the device, then make bench-gpu"
 	@echo "make bench-peers - install other shadow tools into .venv and time them against ours"
+	@echo "make bench-horizon - horizon/skyview in 32 directions vs one mask; SVF vs rvt-py, whitebox"
 	@echo "make bench-real - real DEMs and spectral fractals (1024-4096), 18 suns, with the peers"
 	@echo "make bench-real-quick - the same with 1024 and 6 suns (a few minutes on 2 cores)"
 	@echo "make bench-fast - the default's curvature cost, cost against size, geographic vs projected"
@@ -84,15 +85,23 @@ gpu-check: $(VENV)/.installed-gpu $(VENV)/.installed-test
 
 # Peers: insolation (doshade), whitebox-workflows, topocalc (needs numpy and cython at build time,
 # so it is built without isolation; if it does not build, the benchmark says it was skipped).
-# GRASS r.sunmask is a system package (Debian grass-core), not installed here.
+# GRASS r.sunmask is a system package (Debian grass-core), not installed here. rvt-py (the
+# Relief Visualization Toolbox's SVF) without its declared dependencies: they include GDAL's
+# Python bindings (a system build) and jupyter; rvt.vis needs only numpy and scipy.
 $(VENV)/.installed-peers: pyproject.toml | $(VENV)/.installed
 	$(BIN)/python -m pip install -q -e '.[peers]'
 	$(BIN)/python -m pip install -q wheel setuptools cython
 	-$(BIN)/python -m pip install -q --no-build-isolation topocalc
+	$(BIN)/python -m pip install -q --no-deps rvt_py
 	@touch $@
 
 bench-peers: $(VENV)/.installed-peers
 	$(BIN)/python benchmarks/bench_peers.py
+
+# Horizons in N directions and the sky view factor against one shadow mask, and the sky view
+# factor of rvt-py and whitebox-workflows against ours (issue 20)
+bench-horizon: $(VENV)/.installed-peers
+	$(BIN)/python benchmarks/bench_horizon.py
 
 # Benchmarks that look like Earth (issue 18): real DEMs (benchmarks/data/SOURCES.md), spectral
 # fractals (beta 2.4, 3.2), the smooth facet fractal labelled as such; peers in the same run.
