@@ -153,6 +153,16 @@ def horizon_physics_options(f):
     return _stack(f, _curvature_options("the raster is more than 1 km across"))
 
 
+def height_above_ground_option(what: str):
+    """``--height-above-ground H``: metres (finite, >= 0) above the ground the observer stands
+    (``what``: where, for this command)."""
+    def deco(f):
+        return click.option("--height-above-ground", type=click.FloatRange(min=0.0),
+                            default=0.0, show_default=True, metavar="H", callback=finite,
+                            help=what)(f)
+    return deco
+
+
 def threads_option(f):
     return click.option("--threads", type=click.IntRange(min=1), default=None,
                         help="CPU threads (default: all cores).")(f)
