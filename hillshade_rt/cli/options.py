@@ -147,6 +147,12 @@ def _curvature_options(when: str):
     ]
 
 
+def curvature_options(f):
+    """Earth curvature and refraction as the lighting commands decide them (on by default when
+    rays can be longer than 1 km), without --soft (``query``: the same rays as ``shadow``)."""
+    return _stack(f, _curvature_options("rays can be longer than 1 km"))
+
+
 def horizon_physics_options(f):
     """Earth curvature and refraction of the horizon products (horizon, profile, skyview):
     curvature on by default when the raster is more than 1 km across."""
