@@ -225,8 +225,10 @@ def sun_at_points(heights, rows, cols, azimuth, elevation,
     mask), ``curved`` (bool: the rays were curved), and per point ``ground_m``,
     ``observer_m``. ``pandas.DataFrame({k: v.ravel() for k, v in r.items() if v.ndim == 2})``
     makes one row per point and sun."""
+    import numba
+
     from .algorithms import horizon as hz
-    from .geometry import sun_rays
+    from .geometry import SunRays, ray_steps, sincos_deg, sun_rays
     from .shading import Shader
     z, grid, body = _dem_parts(heights, spacing, body)
     rr = np.atleast_1d(np.asarray(rows, np.float64))
@@ -261,16 +263,25 @@ def sun_at_points(heights, rows, cols, azimuth, elevation,
     obs = ground + lift
     # the curvature of each sun as the mask decides it (the whole raster's range and extent)
     shader = Shader(z, grid, "brute", {}, "cpu", curvature, refraction_k, body)
-    made: dict = {}
 
     def rays_of(a: float, e: float):
-        key = (float(a), float(e))
-        if key not in made:
-            c = shader.curvature_for(*key)
-            # the elevation does not enter the horizon (its rays' rise is not used): at night
-            # any will do
-            made[key] = sun_rays(grid, key[0], key[1] if 0.0 < key[1] <= 90.0 else 45.0, c)
-        return made[key]
+        """The rays of this sun (the elevation does not enter the horizon, its rays' rise is
+        not used: at night any will do)."""
+        return sun_rays(grid, a, e if 0.0 < e <= 90.0 else 45.0, shader.curvature_for(a, e))
+
+    def point_rays(row: int, a: np.ndarray, e: np.ndarray) -> list:
+        """The rays of the suns ``a``, ``e`` (one point's) from the cells of ``row`` (the row
+        ``horizon.profile`` takes them from: the point's nearest), as ``rays_of`` makes them
+        (``geometry.ray_steps``), each broadcast over the rows: one point's many suns without
+        a ``sun_rays`` of the whole grid for each."""
+        east, north = np.array([sincos_deg(v) for v in a]).T
+        dom, sd, so, sm = ray_steps(east, north, float(grid.dx[row]), float(grid.dy[row]),
+                                    grid.col_sign, grid.row_sign)
+        curv = np.array([shader.curvature_for(x, y) for x, y in zip(a, e)]) * sm * sm
+        rise = np.array([math.tan(math.radians(y)) if 0.0 < y < 90.0 else 1.0 for y in e]) * sm
+        cols = [np.broadcast_to(v[:, None], (v.size, grid.rows))
+                for v in (dom, sd, so, rise, sm, curv)]
+        return [SunRays(float(a[j]), float(e[j]), *(v[j] for v in cols)) for j in range(a.size)]
 
     # no early exit below an observer above the highest cell (the march's bound is the highest
     # of the terrain and the observers, as ``observer_profiles``)
@@ -283,11 +294,17 @@ def sun_at_points(heights, rows, cols, azimuth, elevation,
     else:
         ang, dist = np.empty(az.shape), np.empty(az.shape)
         curved = np.zeros(az.shape, bool)
-        for i in range(n):
-            rays = [rays_of(a, e) for a, e in zip(az[i], el[i])]
-            ang[i], dist[i] = (v[0] for v in hz.profile(z, rr[i:i + 1], cc[i:i + 1],
-                                                        obs[i:i + 1], rays, zmax))
-            curved[i] = [r.curved for r in rays]
+        near = np.clip(np.rint(rr), 0, z.shape[0] - 1).astype(np.int64)
+        threads = numba.get_num_threads()
+        try:    # one point per call: its rays in this thread (waking the others costs more)
+            numba.set_num_threads(1)
+            for i in range(n):
+                rays = point_rays(int(near[i]), az[i], el[i])
+                ang[i], dist[i] = (v[0] for v in hz.profile(z, rr[i:i + 1], cc[i:i + 1],
+                                                            obs[i:i + 1], rays, zmax))
+                curved[i] = [bool(r.curv[0] != 0.0) for r in rays]
+        finally:
+            numba.set_num_threads(threads)
     margin = el - ang
     return {"azimuth": az, "elevation": el, "horizon_deg": ang, "distance_m": dist,
             "margin_deg": margin, "lit": (el > 0.0) & (margin >= 0.0), "curved": curved,

@@ -206,23 +206,31 @@ def irradiance(points, site, times, res) -> tuple[np.ndarray, np.ndarray]:
     """(DNI, beam on a horizontal surface), points x times, W/m2: pvlib's Ineichen-Perez clear
     sky at each point (its longitude and latitude, else the site's; the observer's altitude)
     for the query's suns (apparent elevation ``res["elevation"]``), the beam counted where the
-    point is lit. 0 with the sun down."""
+    point is lit; 0 with the sun down. The steps of ``pvlib.location.Location.get_clearsky(...,
+    model="ineichen")`` given that solar position (Kasten-Young airmass from the apparent
+    zenith, pressure from the altitude, Linke turbidity from pvlib's monthly climatology),
+    over every point at once."""
+    import warnings
+
     import pandas as pd
-    from pvlib.location import Location
+    from pvlib import atmosphere, clearsky, irradiance as pvirr
 
     from ..sun import UTC
     index = pd.DatetimeIndex([t.astimezone(UTC) for t in times])
     el = res["elevation"]
-    dni = np.zeros(el.shape)
-    for i, p in enumerate(points):
-        lat = p["lat"] if p["lat"] is not None else site.lat
-        lon = p["lon"] if p["lon"] is not None else site.lon
-        zen = 90.0 - el[i]
-        pos = pd.DataFrame({"apparent_zenith": zen, "zenith": zen, "apparent_elevation": el[i]},
-                           index=index)
-        cs = Location(lat, lon, altitude=float(res["observer_m"][i])).get_clearsky(
-            index, model="ineichen", solar_position=pos)
-        dni[i] = np.where(el[i] > 0.0, np.nan_to_num(cs["dni"].to_numpy(np.float64)), 0.0)
+    alt = np.asarray(res["observer_m"], np.float64)[:, None]
+    with warnings.catch_warnings():    # pvlib's own use of pandas' deprecated names
+        warnings.filterwarnings("ignore", message=".*is deprecated.*")
+        dni_extra = np.asarray(pvirr.get_extra_radiation(index), np.float64)[None, :]
+        turbidity = np.array([np.asarray(clearsky.lookup_linke_turbidity(
+            index, p["lat"] if p["lat"] is not None else site.lat,
+            p["lon"] if p["lon"] is not None else site.lon), np.float64) for p in points])
+    zen = 90.0 - el
+    with np.errstate(all="ignore"):    # no airmass with the sun down (NaN: 0 below)
+        airmass = atmosphere.get_absolute_airmass(atmosphere.get_relative_airmass(zen),
+                                                  atmosphere.alt2pres(alt))
+        cs = clearsky.ineichen(zen, airmass, turbidity, altitude=alt, dni_extra=dni_extra)
+    dni = np.where(el > 0.0, np.nan_to_num(np.asarray(cs["dni"], np.float64)), 0.0)
     beam = dni * np.sin(np.radians(np.maximum(el, 0.0))) * res["lit"]
     return dni, beam
 
