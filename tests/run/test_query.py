@@ -318,3 +318,30 @@ def test_points_files_without_coordinates_or_on_nodata(tmp_path, runner):
     r = runner.invoke(cli, ["query", EVEREST, "--points", str(gj), "--azimuth", "1",
                             "--elevation", "9", "-o", str(out)])
     assert r.exit_code == 1 and "point hole lies on nodata" in r.stderr and not out.exists()
+
+
+def test_the_sun_at_a_point_is_the_masks_sun_for_that_cell():
+    """``run.query.sun_at``: per cell, the lattice interpolated as the per-cell march does it
+    (the same ray: dominant axis, step, direction); per tile, the tile's; else the one sun."""
+    from hillshade_rt.algorithms.field import cell_ray, lattice_vectors
+    from hillshade_rt.geometry import Grid, sun_rays
+    from hillshade_rt.run.query import sun_at
+    from hillshade_rt.sun import Region, SunOver
+    i, j = np.meshgrid(np.linspace(-0.5, 0.5, 9), np.linspace(-0.5, 0.5, 9), indexing="ij")
+    lat = lattice_vectors(203.7 + 3.0 * j + 0.5 * i, 12.0 + 1.5 * i)
+    tiles = [Region(slice(0, 50), slice(0, 80), 200.0, 11.0),
+             Region(slice(50, 100), slice(0, 80), 207.0, 13.0)]
+    field_sun = SunOver(None, 203.7, 12.0, deviation_deg=3.0, tiles=tiles, lattice=lat)
+    grid = Grid.uniform(100, 80, 30.0, 20.0)
+    for r, c in ((0, 0), (17, 61), (99, 79), (50, 3)):
+        a, e = sun_at(field_sun, (100, 80), r, c)
+        rays = sun_rays(grid, a, e)
+        night, dc, sd, so, ri, cv = cell_ray.py_func(r, c, lat, grid.dx, grid.dy, 1.0, -1.0,
+                                                     0.0, 0, 0, 100, 80)
+        assert not night and dc == rays.dom_col[r] and sd == rays.step_dom[r]
+        assert so == pytest.approx(rays.step_other[r], abs=1e-12)
+        assert ri == pytest.approx(rays.rise[r], rel=1e-12)
+    tiled = SunOver(None, 203.7, 12.0, deviation_deg=3.0, tiles=tiles)   # no lattice
+    assert sun_at(tiled, (100, 80), 61.2, 10.0) == (207.0, 13.0)
+    assert sun_at(tiled, (100, 80), 3.0, 79.0) == (200.0, 11.0)
+    assert sun_at(SunOver(None, 163.0, 9.0), (100, 80), 5.5, 6.25) == (163.0, 9.0)
