@@ -199,6 +199,7 @@ def test_formats_round_trip(tmp_path, runner):
             assert p[k] == [r[k] for r in part], k
 
 
+@pytest.mark.filterwarnings("ignore:.*dayofyear is deprecated")   # pvlib's own
 def test_irradiance_is_pvlibs_clear_sky_and_the_beam_needs_the_sun(tmp_path, runner):
     """DNI: pvlib's Ineichen clear sky at the point (its own solar position, its altitude), to
     0.2 %; the beam on a horizontal surface is DNI x sin(elevation) where lit, 0 where
