@@ -12,6 +12,7 @@ __version__ = "0.1.0"
 _EXPORTS = {"HillshadeError": "errors", "Grid": "geometry", "sun_rays": "geometry",
             "Dem": "io", "read_dem": "io", "shadow_mask": "arrays", "horizon_angles": "arrays",
             "is_shadowed": "arrays", "sky_view": "arrays", "horizon_profile": "arrays",
+            "sun_at_points": "arrays",
             "Shader": "shading", "render": "shading",
             "solar_position": "sun", "parse_time": "sun", "sun_over": "sun", "shade": "api"}
 

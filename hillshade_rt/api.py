@@ -53,7 +53,8 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
           backend: str = "auto", max_memory=None, window_size=None, cog: bool = False,
           fmt: str | None = None,
           client=None, overwrite: bool = False, report: str | None = None,
-          preview: str | None = None, progress: bool = False, **more) -> dict:
+          preview: str | None = None, progress: bool = False,
+          height_above_ground: float = 0.0, **more) -> dict:
     """Shade DEM file(s) into ``output`` (one band per sun) or ``output_pattern`` files.
 
     ``dems``: a path or a list of paths (tiles on one grid, shaded as one surface; with
@@ -62,6 +63,8 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
     ``azimuth``/``elevation``, or ``times`` (datetimes or ISO strings), or ``start``/``end``/
     ``step`` at the DEM's place. ``algorithm_options``: e.g. ``{"nextv": "quad"}``.
     ``fmt``: a GDAL driver name (default from the extension, as ``--format``).
+    ``height_above_ground``: metres above every cell its ray starts from, as
+    ``--height-above-ground`` (brute marches it; ``algorithm="auto"`` runs brute).
     ``max_memory`` (bytes or "2GB"), ``window_size`` ((rows, cols), an int, or "2048x2048"):
     windows as ``--max-memory``/``--window-size``. ``client``: a ``distributed.Client`` (or a
     scheduler address, or "local:N"): windows and times run as Dask tasks on it; the client is
@@ -108,7 +111,8 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
                       ambient=ambient if hill else 0.2, scale=scale if hill else None,
                       read=read, run=run, output=None if output is None else os.fspath(output),
                       output_pattern=output_pattern, max_memory=max_memory,
-                      window_size=window_size, cog=cog, scheduler=client)
+                      window_size=window_size, cog=cog, scheduler=client,
+                      height_above_ground=height_above_ground)
     token = virtual_outputs.set(True)    # /vsimem/ outputs are fine from Python
     try:
         return run_shade(cfg)

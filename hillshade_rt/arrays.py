@@ -3,6 +3,8 @@ function per operation."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .algorithms import lookup
@@ -175,3 +177,135 @@ def observer_profiles(z: np.ndarray, grid: Grid, rows: np.ndarray, cols: np.ndar
     ang, dist = hz.profile(z, rows, cols, observer, rays,
                            max(float(np.nanmax(z)), float(np.max(observer))))
     return azimuths, ang, dist, bool(shader.curvature)
+
+
+def ground_height(heights: np.ndarray, row: float, col: float) -> float:
+    """The terrain at fractional (``row``, ``col``; cell centres at whole numbers): bilinear
+    between the cell centres around it, only those with a weight (a cell centre is its own
+    height, a point on the line between two centres their interpolation, whatever lies beside
+    them); NaN outside the cell centres or where a centre it needs is nodata."""
+    z = heights
+    rows, cols = z.shape
+    if not (0.0 <= row <= rows - 1 and 0.0 <= col <= cols - 1):
+        return math.nan
+    r0, c0 = int(math.floor(row)), int(math.floor(col))
+    fr, fc = row - r0, col - c0
+
+    def along(r):
+        v = float(z[r, c0])
+        return v if fc == 0.0 else v + fc * (float(z[r, c0 + 1]) - v)
+    top = along(r0)
+    return top if fr == 0.0 else top + fr * (along(r0 + 1) - top)
+
+
+def sun_at_points(heights, rows, cols, azimuth, elevation,
+                  spacing: float | tuple[float, float] | Grid | None = None,
+                  height_above_ground=0.0, *, curvature="auto",
+                  refraction_k: float | None = None, body=None) -> dict:
+    """Whether the sun reaches observers at points, as ``hillshade-rt query``: for each point
+    (fractional ``rows``, ``cols`` in array coordinates, cell centres at whole numbers; the
+    observer ``height_above_ground`` metres (>= 0, one for all or one per point) above the
+    terrain interpolated bilinearly there) and each sun, the exact horizon toward the sun's
+    azimuth (the model's march from the point: ``algorithms.horizon.profile``) against the
+    sun's elevation.
+
+    ``azimuth``, ``elevation``: degrees (grid azimuth clockwise from north; elevation above the
+    horizontal, <= 0 is night); m suns shared by every point (scalars or 1-D), or one sun per
+    point and column (2-D, points x m). Curvature is decided for each sun as ``shadow_mask``
+    decides it (``curvature`` "auto": on when the rays can run longer than 1 km), so that at a
+    cell centre with no height above the ground ``lit`` is the shadow mask's value for that
+    cell (up to the rounding of the angle where the horizon is within ~1e-12 degrees of the
+    sun). ``heights``, ``spacing``, ``body`` as for :func:`shadow_mask`. A point outside the
+    cell centres or beside nodata is an error.
+
+    Returns a dict of numpy arrays, points x suns unless said: ``azimuth``, ``elevation`` (the
+    suns), ``horizon_deg`` (-90: no terrain ahead inside the raster), ``distance_m`` (ground
+    metres to the horizon point; NaN: none), ``margin_deg`` (elevation - horizon), ``lit``
+    (bool: the sun is up and margin >= 0: a ray that grazes the terrain is lit, as in the
+    mask), ``curved`` (bool: the rays were curved), and per point ``ground_m``,
+    ``observer_m``. ``pandas.DataFrame({k: v.ravel() for k, v in r.items() if v.ndim == 2})``
+    makes one row per point and sun."""
+    import numba
+
+    from .algorithms import horizon as hz
+    from .geometry import SunRays, ray_steps, sincos_deg, sun_rays
+    from .shading import Shader
+    z, grid, body = _dem_parts(heights, spacing, body)
+    rr = np.atleast_1d(np.asarray(rows, np.float64))
+    cc = np.atleast_1d(np.asarray(cols, np.float64))
+    if rr.ndim != 1 or rr.shape != cc.shape:
+        raise HillshadeError("rows and cols must be 1-D and of the same length")
+    n = rr.size
+    try:
+        az, el = np.broadcast_arrays(np.asarray(azimuth, np.float64),
+                                     np.asarray(elevation, np.float64))
+    except ValueError:
+        raise HillshadeError("azimuth and elevation must have the same shape") from None
+    shared = az.ndim <= 1
+    if shared:
+        az, el = np.atleast_1d(az), np.atleast_1d(el)
+    elif az.ndim != 2 or az.shape[0] != n:
+        raise HillshadeError(f"one sun per point and column: azimuth and elevation must be "
+                             f"{n} x m, got {az.shape}")
+    if not (np.isfinite(az).all() and np.isfinite(el).all()):
+        raise HillshadeError("azimuths and elevations must be finite numbers of degrees")
+    if (np.abs(el) > 90.0).any():
+        raise HillshadeError("elevations must be within [-90, 90] degrees")
+    az = np.mod(az, 360.0)
+    lift = np.broadcast_to(np.asarray(height_above_ground, np.float64), (n,))
+    if not (np.isfinite(lift).all() and (lift >= 0.0).all()):
+        raise HillshadeError("the height above the ground must be a number of metres >= 0")
+    ground = np.array([ground_height(z, r, c) for r, c in zip(rr, cc)], np.float64)
+    if not np.isfinite(ground).all():
+        bad = int(np.flatnonzero(~np.isfinite(ground))[0])
+        raise HillshadeError(f"point {bad} ({rr[bad]:g}, {cc[bad]:g}) lies outside the cell "
+                             "centres or on nodata")
+    obs = ground + lift
+    # the curvature of each sun as the mask decides it (the whole raster's range and extent)
+    shader = Shader(z, grid, "brute", {}, "cpu", curvature, refraction_k, body)
+
+    def rays_of(a: float, e: float):
+        """The rays of this sun (the elevation does not enter the horizon, its rays' rise is
+        not used: at night any will do)."""
+        return sun_rays(grid, a, e if 0.0 < e <= 90.0 else 45.0, shader.curvature_for(a, e))
+
+    def point_rays(row: int, a: np.ndarray, e: np.ndarray) -> list:
+        """The rays of the suns ``a``, ``e`` (one point's) from the cells of ``row`` (the row
+        ``horizon.profile`` takes them from: the point's nearest), as ``rays_of`` makes them
+        (``geometry.ray_steps``), each broadcast over the rows: one point's many suns without
+        a ``sun_rays`` of the whole grid for each."""
+        east, north = np.array([sincos_deg(v) for v in a]).T
+        dom, sd, so, sm = ray_steps(east, north, float(grid.dx[row]), float(grid.dy[row]),
+                                    grid.col_sign, grid.row_sign)
+        curv = np.array([shader.curvature_for(x, y) for x, y in zip(a, e)]) * sm * sm
+        rise = np.array([math.tan(math.radians(y)) if 0.0 < y < 90.0 else 1.0 for y in e]) * sm
+        cols = [np.broadcast_to(v[:, None], (v.size, grid.rows))
+                for v in (dom, sd, so, rise, sm, curv)]
+        return [SunRays(float(a[j]), float(e[j]), *(v[j] for v in cols)) for j in range(a.size)]
+
+    # no early exit below an observer above the highest cell (the march's bound is the highest
+    # of the terrain and the observers, as ``observer_profiles``)
+    zmax = max(float(np.nanmax(z)), float(np.max(obs)))
+    if shared:
+        rays = [rays_of(a, e) for a, e in zip(az, el)]
+        ang, dist = hz.profile(z, rr, cc, obs, rays, zmax)
+        az, el = (np.broadcast_to(a, (n, a.size)).copy() for a in (az, el))
+        curved = np.broadcast_to([r.curved for r in rays], az.shape).copy()
+    else:
+        ang, dist = np.empty(az.shape), np.empty(az.shape)
+        curved = np.zeros(az.shape, bool)
+        near = np.clip(np.rint(rr), 0, z.shape[0] - 1).astype(np.int64)
+        threads = numba.get_num_threads()
+        try:    # one point per call: its rays in this thread (waking the others costs more)
+            numba.set_num_threads(1)
+            for i in range(n):
+                rays = point_rays(int(near[i]), az[i], el[i])
+                ang[i], dist[i] = (v[0] for v in hz.profile(z, rr[i:i + 1], cc[i:i + 1],
+                                                            obs[i:i + 1], rays, zmax))
+                curved[i] = [bool(r.curv[0] != 0.0) for r in rays]
+        finally:
+            numba.set_num_threads(threads)
+    margin = el - ang
+    return {"azimuth": az, "elevation": el, "horizon_deg": ang, "distance_m": dist,
+            "margin_deg": margin, "lit": (el > 0.0) & (margin >= 0.0), "curved": curved,
+            "ground_m": ground, "observer_m": obs}

@@ -158,21 +158,33 @@ def sun_rays(grid: Grid, azimuth: float, elevation: float, curvature: float = 0.
     az = normalize_azimuth(azimuth)
     el = check_elevation(elevation)
     east, north = sincos_deg(az)
-    # pixels travelled per ground metre toward the sun, along columns and along rows
-    pc = east * grid.col_sign / grid.dx
-    pr = north * grid.row_sign / grid.dy
-    dom_col = np.abs(pc) >= np.abs(pr)
-    a_dom = np.where(dom_col, np.abs(pc), np.abs(pr))
-    step_dom = np.where(dom_col, np.sign(pc), np.sign(pr)).astype(np.int8)
-    step_other = np.where(dom_col, pr, pc) / a_dom
-    step_m = 1.0 / a_dom
+    dom_col, step_dom, step_other, step_m = ray_steps(east, north, grid.dx, grid.dy,
+                                                      grid.col_sign, grid.row_sign)
     tan_el = math.inf if el == 90.0 else math.tan(math.radians(el))
     rise = tan_el * step_m
     if not (math.isfinite(curvature) and curvature >= 0.0):
         raise HillshadeError(f"curvature coefficient must be >= 0, got {curvature}")
     curv = float(curvature) * step_m * step_m
-    return SunRays(az, el, dom_col.astype(np.int8), step_dom, step_other.astype(np.float64),
-                   rise.astype(np.float64), step_m.astype(np.float64), curv.astype(np.float64))
+    return SunRays(az, el, dom_col, step_dom, step_other, rise.astype(np.float64), step_m,
+                   curv.astype(np.float64))
+
+
+def ray_steps(east, north, dx, dy, col_sign: int = 1, row_sign: int = -1):
+    """(dom_col int8, step_dom int8, step_other, step_m float64) of the horizontal direction
+    (``east``, ``north``: a unit vector, ``sincos_deg`` of the azimuth) on cells of ``dx`` x
+    ``dy`` ground metres, as :class:`SunRays` holds them; every argument a number or an array
+    (numpy broadcasting): :func:`sun_rays` for the rows of a grid, or many directions on one
+    row's cells (``arrays.sun_at_points``: a sun per point)."""
+    # pixels travelled per ground metre toward the sun, along columns and along rows
+    pc = east * col_sign / dx
+    pr = north * row_sign / dy
+    dom_col = np.abs(pc) >= np.abs(pr)
+    a_dom = np.where(dom_col, np.abs(pc), np.abs(pr))
+    step_dom = np.where(dom_col, np.sign(pc), np.sign(pr)).astype(np.int8)
+    step_other = np.where(dom_col, pr, pc) / a_dom
+    step_m = 1.0 / a_dom
+    return (dom_col.astype(np.int8), step_dom, np.asarray(step_other, np.float64),
+            np.asarray(step_m, np.float64))
 
 
 # --------------------------------------------------------------------------------------------

@@ -130,7 +130,13 @@ class Shader:
     ``local_range``: bounds of the window's heights (known from the statistics pass; else
     computed); ``carry`` (a ``smap.BandCarry``, for ``smap`` on the CPU) and ``place`` (the window
     and the raster's shape) let SMap reuse the tables of the window before and mask only the
-    region."""
+    region.
+
+    ``lift``: metres above every cell its ray starts from (an observer, a panel above each
+    cell: ``--height-above-ground``; >= 0, 0 the ground itself). With a lift the cast shadows
+    are marched by an algorithm that takes one (``algorithms.for_lift``: ``auto`` runs brute,
+    an algorithm that cannot is an error); the halos toward the sun are shortened by it (a ray
+    that starts higher clears the terrain sooner); soft shadows take none yet (an error)."""
 
     def __init__(self, z: np.ndarray, grid: Grid, algorithm: str = "auto",
                  options: dict | None = None, backend: str = "cpu", curvature="auto",
@@ -138,8 +144,16 @@ class Shader:
                  zrange: tuple[float, float] | None = None, extent_m: float | None = None,
                  halo_ready: bool = False, local_range: tuple[float, float] | None = None,
                  carry=None, place=None, sun_field: bool = True,
-                 survey: tuple[int, float, float] | None = None):
+                 survey: tuple[int, float, float] | None = None, lift: float = 0.0):
+        from .algorithms import for_lift
         lookup(algorithm)       # an unknown name: a HillshadeError listing the known ones
+        lift = float(lift)
+        if not (math.isfinite(lift) and lift >= 0.0):
+            raise HillshadeError(f"the height above the ground must be a number of metres >= 0, "
+                                 f"got {lift}")
+        self.lift = lift
+        if lift > 0.0:
+            algorithm = for_lift(algorithm)
         self.z, self.grid = z, grid
         self.algorithm, self.options, self.backend = algorithm, dict(options or {}), backend
         if zrange is None:
@@ -205,7 +219,7 @@ class Shader:
                                           lattice=lattice_vectors(azimuth + gj, el + gi))
             for name in names:
                 sh = Shader(z, small, name, self.options, "cpu", self.curvature, self.k,
-                            self.body, (self.zmin, self.zmax), self.extent_m)
+                            self.body, (self.zmin, self.zmax), self.extent_m, lift=self.lift)
                 sh.cast(region, {})
                 if soft:
                     sh.visible_fraction(region)
@@ -246,7 +260,8 @@ class Shader:
             return region.rows, region.cols
         sub = self.z[r0:r1, c0:c1]
         low = float(np.nanmin(sub)) if np.isfinite(sub).any() else self.zmax
-        reach = reach_m(self.zmax - low, elevation, 0.0)
+        # the rays start at least ``lift`` above the region's lowest cell
+        reach = reach_m(self.zmax - (low + self.lift), elevation, 0.0)
         r0, r1, c0, c1 = halo_bounds((r0, r1, c0, c1), (rows, cols), self.grid, region.azimuth,
                                      reach)
         return slice(r0, r1), slice(c0, c1)
@@ -330,6 +345,8 @@ class Shader:
             pyr = False     # rays of a few steps: the plain march, no pyramid to build
         if self.backend == "cpu":   # every method marches some rays (refinements, fallbacks)
             options["pyramid"] = pyr
+        if self.lift > 0.0:         # brute (for_lift), which starts each ray that much higher
+            options["lift"] = self.lift
         if algorithm == "bounds" and whole and self.backend == "cpu":
             options["zrange"] = self.local_range     # known: saves bounds a pass
         if carried:
@@ -340,7 +357,7 @@ class Shader:
             # (brute, exact) rather than run the algorithm over the whole window
             out = np.zeros(z.shape, np.uint8)
             out[inner] = _TILE
-            brute.refine(z, rays, out, _TILE, zmax, pyr)
+            brute.refine(z, rays, out, _TILE, zmax, pyr, self.lift)
             if stats is not None:
                 stats["tiles_marched_by_brute"] = stats.get("tiles_marched_by_brute", 0) + 1
         elif self.backend == "gpu":
@@ -350,7 +367,8 @@ class Shader:
         curved_natively = by_brute or algorithm in ("brute", "bounds") or (
             algorithm == "horizon" and options.get("method", "scan") == "scan")
         if rays.curved and not curved_natively:
-            n = brute.refine(z, rays, out, 1, zmax, pyr if pyr is not False else True)
+            n = brute.refine(z, rays, out, 1, zmax, pyr if pyr is not False else True,
+                             self.lift)
             if stats is not None:
                 stats["curvature_refined_fraction"] = n / max(1, out.size)
         return out if out.shape == sub.shape else np.ascontiguousarray(out[inner])
@@ -382,7 +400,7 @@ class Shader:
         place = self.field_place()
         if self.backend == "gpu":
             out = field.shadow_mask_gpu(self._gpu_dem(self.z, True), self.grid, sun.lattice, c,
-                                        zmax, place)
+                                        zmax, place, self.lift)
         else:
             from .algorithms import bounds
             # the method for the centre's sun (auto: its estimate), with every cell's own ray
@@ -395,7 +413,7 @@ class Shader:
                                                place)
             else:
                 out = field.shadow_mask(self.z, self.grid, sun.lattice, c, zmax,
-                                        self.pyramid(self.z, True), place)
+                                        self.pyramid(self.z, True), place, self.lift)
         if stats is not None:
             stats["sun_field"] = stats.get("sun_field", 0) + 1
         return out
@@ -404,6 +422,9 @@ class Shader:
         """float32 visible fraction (0..1) of the solar disk over ``region`` (NaN on voids),
         from the exact horizon angle toward the sun against its elevation +- its radius."""
         from .algorithms import horizon as hz
+        if self.lift > 0.0:
+            raise HillshadeError("soft shadows from above the ground are not computed yet: "
+                                 "--soft and --height-above-ground do not go together")
         sub = self.z[region.rows, region.cols]
         if region.elevation + SUN_RADIUS_DEG <= 0:
             return np.where(np.isnan(sub), np.float32(np.nan), np.float32(0.0)).astype(np.float32)

@@ -250,14 +250,16 @@ def roughness(z: np.ndarray, cell: float) -> dict:
 
 # --- the reference ----------------------------------------------------------------------------
 
-def reference_mask(z, dx, dy, azimuth, elevation, col_sign=1, row_sign=-1) -> np.ndarray:
+def reference_mask(z, dx, dy, azimuth, elevation, col_sign=1, row_sign=-1,
+                   lift=0.0) -> np.ndarray:
     """The terrain model written out plainly, independently of hillshade_rt's kernels.
 
     dx, dy: scalars or one value per row. The ray from the centre of cell (r, c) travels a ground
     distance t toward the sun; it is sampled at every t where it crosses a grid line of its
     dominant pixel axis; the terrain there is interpolated between the two nearest cell centres
     on that line; strictly-below means shadow; outside the raster there is no terrain; NaN cells
-    are voids (never shadowed or lit: 255; a ray skips them).
+    are voids (never shadowed or lit: 255; a ray skips them). ``lift``: the ray starts that many
+    metres above the cell's centre (an observer above the ground; 0: on it).
     """
     z = np.asarray(z, dtype=np.float64)
     rows, cols = z.shape
@@ -297,7 +299,7 @@ def reference_mask(z, dx, dy, azimuth, elevation, col_sign=1, row_sign=-1) -> np
                 else:                        # on a row line: interpolate along columns
                     i = int(math.floor(pc)); f = pc - i
                     terrain = (1 - f) * z[int(pr), i] + f * z[int(pr), i + 1]
-                if terrain > z[r, c] + t * tan_e:
+                if terrain > (z[r, c] + lift) + t * tan_e:
                     out[r, c] = 1
                     break
                 k += 1

@@ -106,7 +106,9 @@ class AlgorithmSpec:
     (an upper bound measured by benchmarks/bigdem.py; the planner adds the product's).
     ``kernel_modules``: the modules whose CPU kernels a run compiles (``_jitcache.cached``: the
     first run's note). ``field_march``: it can march each cell with its own sun when the sun
-    varies across the raster (``engine.field_method``)."""
+    varies across the raster (``engine.field_method``). ``lift``: its ``shadow_mask`` (and
+    ``shadow_mask_gpu``, and the per-cell sun's march) take ``lift``, the metres above each cell
+    its ray starts from (``--height-above-ground``; :func:`for_lift`)."""
 
     name: str
     summary: str
@@ -119,6 +121,7 @@ class AlgorithmSpec:
     bytes_per_cell: int = 20
     kernel_modules: tuple[str, ...] = ()
     field_march: bool = False
+    lift: bool = False
 
     @property
     def implied_by_options(self) -> bool:
@@ -163,7 +166,7 @@ REGISTRY: dict[str, AlgorithmSpec] = {spec.name: spec for spec in (
             OptionSpec("pyramid", "--no-pyramid", "flag", default=True, flag_value=False,
                        help="brute: the plain march, every sample taken (same mask; the "
                             "benchmarks' reference)."),),
-        bytes_per_cell=13, kernel_modules=("brute", "pyramid"), field_march=True),
+        bytes_per_cell=13, kernel_modules=("brute", "pyramid"), field_march=True, lift=True),
     AlgorithmSpec(
         "smap", exact=True,
         summary="exact (a seed's method: Sakalauskas' shadow map)",
@@ -272,3 +275,20 @@ def options_for(algorithm: str, given: dict) -> dict:
             raise UsageProblem(f"{opt.flag} applies to --algorithm {owner.name}, not {algorithm}")
         out[keyword] = value
     return out
+
+
+def for_lift(algorithm: str) -> str:
+    """The algorithm that lights ``algorithm``'s cells from an observer above the ground
+    (``--height-above-ground`` > 0): one that takes a lift itself (``AlgorithmSpec.lift``:
+    brute, the exact reference march), ``auto``'s pick brute (the bounds take no lift);
+    any other named algorithm is a UsageProblem naming those that can (an explicit choice is
+    not swapped behind the user's back)."""
+    spec = lookup(algorithm)
+    can = [name for name, s in REGISTRY.items() if s.lift]
+    if spec.lift:
+        return algorithm
+    if algorithm == "auto":
+        return can[0]
+    raise UsageProblem(f"--height-above-ground: --algorithm {algorithm} cannot start the rays "
+                       f"above the ground; use --algorithm {' or '.join(can + ['auto'])} "
+                       f"(auto runs {can[0]} then)")

@@ -29,10 +29,11 @@ NODATA = np.uint8(255)
 
 
 @njit(cache=True, inline="always")
-def _brute_cell(z, pyr, off, widths, nlev, r, c, dc, sd, so, ri, cv, zmax, out, only):
-    """Decide cell (r, c) whose row's ray is (dc, sd, so, ri, cv) (or, with only >= 0, leave it
-    unless its code in ``out`` is ``only``), over the pyramid when ``nlev`` > 0. Returns 1 when it
-    decided the cell. The per-cell body of both backends."""
+def _brute_cell(z, pyr, off, widths, nlev, r, c, dc, sd, so, ri, cv, zmax, lift, out, only):
+    """Decide cell (r, c) whose row's ray is (dc, sd, so, ri, cv), leaving ``lift`` metres above
+    the cell (or, with only >= 0, leave it unless its code in ``out`` is ``only``), over the
+    pyramid when ``nlev`` > 0. Returns 1 when it decided the cell. The per-cell body of both
+    backends."""
     if only >= 0 and out[r, c] != only:
         return 0
     if math.isnan(z[r, c]):
@@ -40,16 +41,16 @@ def _brute_cell(z, pyr, off, widths, nlev, r, c, dc, sd, so, ri, cv, zmax, out, 
         return 1
     if nlev > 0:
         blocked = ray_is_blocked_pyramid(z, pyr, off, widths, nlev, r, c, dc, sd, so, ri, cv,
-                                         zmax)
+                                         zmax, lift)
     else:
-        blocked = ray_is_blocked(z, r, c, dc, sd, so, ri, cv, zmax)
+        blocked = ray_is_blocked(z, r, c, dc, sd, so, ri, cv, zmax, lift)
     out[r, c] = 1 if blocked else 0
     return 1
 
 
 @njit(parallel=True, cache=True)
-def _brute_cpu(z, pyr, off, widths, nlev, dom_col, step_dom, step_other, rise, curv, zmax, out,
-               only):
+def _brute_cpu(z, pyr, off, widths, nlev, dom_col, step_dom, step_other, rise, curv, zmax, lift,
+               out, only):
     """Every cell, or (only >= 0) just the cells whose code in ``out`` is ``only``. Returns how
     many cells it decided."""
     rows, cols = z.shape
@@ -63,29 +64,32 @@ def _brute_cpu(z, pyr, off, widths, nlev, dom_col, step_dom, step_other, rise, c
         for c in range(cols):
             if only >= 0 and out[r, c] != only:   # (also in _brute_cell) a vectorised skip
                 continue
-            n += _brute_cell(z, pyr, off, widths, nlev, r, c, dc, sd, so, ri, cv, zmax, out, only)
+            n += _brute_cell(z, pyr, off, widths, nlev, r, c, dc, sd, so, ri, cv, zmax, lift, out,
+                             only)
     return n
 
 
 @kernel
-def _brute_gpu(z, pyr, off, widths, nlev, dom_col, step_dom, step_other, rise, curv, zmax, out,
-               only, count):
+def _brute_gpu(z, pyr, off, widths, nlev, dom_col, step_dom, step_other, rise, curv, zmax, lift,
+               out, only, count):
     """CUDA twin of ``_brute_cpu``: one thread per cell; ``count[0]`` += cells decided when
     ``only`` >= 0 (refinement)."""
     c, r = cuda.grid(2)
     if r < z.shape[0] and c < z.shape[1]:
         if _brute_cell(z, pyr, off, widths, nlev, r, c, dom_col[r] != 0, np.int64(step_dom[r]),
-                       step_other[r], rise[r], curv[r], zmax, out, only) and only >= 0:
+                       step_other[r], rise[r], curv[r], zmax, lift, out, only) and only >= 0:
             cuda.atomic.add(count, 0, 1)
 
 
 def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None,
-                stats: dict | None = None, pyramid=True) -> np.ndarray:
+                stats: dict | None = None, pyramid=True, lift: float = 0.0) -> np.ndarray:
     """Shadow mask of float32 heights ``z`` (NaN = void) for the sun rays of each row.
 
     Returns uint8: 1 shadow, 0 lit, 255 void. ``pyramid``: True (default) marches over a new
     maximum-height pyramid of ``z``, a ``MaxPyramid`` reuses one, False is the plain march (same
-    mask). ``stats`` gets ``pyramid`` (whether the pyramid was used).
+    mask). ``lift``: metres above each cell its ray starts from (an observer, a panel above every
+    cell: ``--height-above-ground``; >= 0, 0 the cell itself). ``stats`` gets ``pyramid``
+    (whether the pyramid was used).
     """
     if z.dtype != np.float32 or z.ndim != 2:
         raise TypeError("heights must be a 2-D float32 array")
@@ -93,46 +97,47 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None,
         zmax = float(np.nanmax(z)) if np.isfinite(z).any() else -np.inf   # -inf: only voids
     out = np.empty(z.shape, dtype=np.uint8)
     _brute_cpu(z, *pyramid_args(z, pyramid), rays.dom_col, rays.step_dom, rays.step_other,
-               rays.rise, rays.curv, float(zmax), out, np.int64(-1))
+               rays.rise, rays.curv, float(zmax), float(lift), out, np.int64(-1))
     if stats is not None:
         stats["pyramid"] = pyramid is not False
     return out
 
 
 def refine(z: np.ndarray, rays: SunRays, out: np.ndarray, code: int, zmax: float,
-           pyramid=True) -> int:
+           pyramid=True, lift: float = 0.0) -> int:
     """Replace every ``code`` in ``out`` by brute's exact answer for that cell (for the algorithms
-    that flag the cells they are unsure of, and the curvature pass). ``pyramid`` as for
-    ``shadow_mask``. Returns how many cells were refined."""
+    that flag the cells they are unsure of, and the curvature pass). ``pyramid`` and ``lift`` as
+    for ``shadow_mask``. Returns how many cells were refined."""
     if not any_code(out, code):
         return 0
     return int(_brute_cpu(z, *pyramid_args(z, pyramid), rays.dom_col, rays.step_dom,
-                          rays.step_other, rays.rise, rays.curv, float(zmax), out,
+                          rays.step_other, rays.rise, rays.curv, float(zmax), float(lift), out,
                           np.int64(code)))
 
 
 def shadow_mask_gpu(g, rays: SunRays, zmax: float, stats: dict | None = None,
-                    pyramid=True) -> np.ndarray:
+                    pyramid=True, lift: float = 0.0) -> np.ndarray:
     """``shadow_mask`` on the GPU: ``g`` is a ``gpu.GpuDem`` (heights already on the device; its
-    pyramid is built and uploaded once, at the first sun that uses it)."""
+    pyramid is built and uploaded once, at the first sun that uses it); ``lift`` as for
+    ``shadow_mask``."""
     rows, cols = g.shape
     dom_col, step_dom, step_other, rise, _, curv = g.rays(rays)
     out = g.empty((rows, cols), np.uint8)
     with g.timed():
         g.launch(_brute_gpu, rows, cols, g.z, *g.pyramid_args(pyramid is not False), dom_col,
-                 step_dom, step_other, rise, curv, float(zmax), out, np.int64(-1),
+                 step_dom, step_other, rise, curv, float(zmax), float(lift), out, np.int64(-1),
                  g.empty(1, np.int64))
     if stats is not None:
         stats["pyramid"] = pyramid is not False
     return g.download(out)
 
 
-def refine_gpu(g, rays_d, out, code: int, zmax: float) -> int:
+def refine_gpu(g, rays_d, out, code: int, zmax: float, lift: float = 0.0) -> int:
     """``refine`` on the GPU (inside the caller's ``g.timed()``): ``rays_d`` from ``g.rays``,
     ``out`` a device mask. Returns how many cells were refined."""
     rows, cols = g.shape
     count = g.upload(np.zeros(1, np.int64))
     dom_col, step_dom, step_other, rise, _, curv = rays_d
     g.launch(_brute_gpu, rows, cols, g.z, *g.pyramid_args(True), dom_col, step_dom, step_other,
-             rise, curv, float(zmax), out, np.int64(code), count)
+             rise, curv, float(zmax), float(lift), out, np.int64(code), count)
     return int(g.download(count)[0])

@@ -98,9 +98,10 @@ def cell_ray(r, c, vec, dx, dy, col_sign, row_sign, curv_coef, r0, c0, rows, col
 
 @njit(cache=True, inline="always")
 def _field_cell(z, pyr, off, widths, nlev, r, c, vec, dx, dy, col_sign, row_sign, curv_coef,
-                r0, c0, rows, cols, zmax, out, only):
-    """Decide cell (r, c) with its own sun (with only >= 0: only if its code in ``out`` is
-    ``only``; returns 1 when it decided it): the per-cell body of both backends."""
+                r0, c0, rows, cols, zmax, lift, out, only):
+    """Decide cell (r, c) with its own sun, its ray leaving ``lift`` metres above it (with
+    only >= 0: only if its code in ``out`` is ``only``; returns 1 when it decided it): the
+    per-cell body of both backends."""
     if only >= 0 and out[r, c] != only:
         return 0
     if math.isnan(z[r, c]):
@@ -112,15 +113,15 @@ def _field_cell(z, pyr, off, widths, nlev, r, c, vec, dx, dy, col_sign, row_sign
         out[r, c] = 1
     elif nlev > 0:
         out[r, c] = 1 if ray_is_blocked_pyramid(z, pyr, off, widths, nlev, r, c, dc, sd, so, ri,
-                                                cv, zmax) else 0
+                                                cv, zmax, lift) else 0
     else:
-        out[r, c] = 1 if ray_is_blocked(z, r, c, dc, sd, so, ri, cv, zmax) else 0
+        out[r, c] = 1 if ray_is_blocked(z, r, c, dc, sd, so, ri, cv, zmax, lift) else 0
     return 1
 
 
 @njit(parallel=True, cache=True)
 def _field_cpu(z, pyr, off, widths, nlev, vec, dx, dy, col_sign, row_sign, curv_coef, r0, c0,
-               rows_l, cols_l, zmax, out, only):
+               rows_l, cols_l, zmax, lift, out, only):
     rows, cols = z.shape
     n = 0
     for r in prange(rows):
@@ -128,18 +129,18 @@ def _field_cpu(z, pyr, off, widths, nlev, vec, dx, dy, col_sign, row_sign, curv_
             if only >= 0 and out[r, c] != only:
                 continue
             n += _field_cell(z, pyr, off, widths, nlev, r, c, vec, dx, dy, col_sign, row_sign,
-                             curv_coef, r0, c0, rows_l, cols_l, zmax, out, only)
+                             curv_coef, r0, c0, rows_l, cols_l, zmax, lift, out, only)
     return n
 
 
 @kernel
 def _field_gpu(z, pyr, off, widths, nlev, vec, dx, dy, col_sign, row_sign, curv_coef, r0, c0,
-               rows_l, cols_l, zmax, out):
+               rows_l, cols_l, zmax, lift, out):
     c, r = cuda.grid(2)
     rows, cols = z.shape
     if r < rows and c < cols:
         _field_cell(z, pyr, off, widths, nlev, r, c, vec, dx, dy, col_sign, row_sign, curv_coef,
-                    r0, c0, rows_l, cols_l, zmax, out, -1)
+                    r0, c0, rows_l, cols_l, zmax, lift, out, -1)
 
 
 @njit(cache=True)
@@ -194,37 +195,39 @@ def sun_args(grid, vec: np.ndarray, curv_coef: float = 0.0, place=None) -> tuple
 
 
 def shadow_mask(z: np.ndarray, grid, vec: np.ndarray, curv_coef: float = 0.0,
-                zmax: float | None = None, pyramid=True, place=None) -> np.ndarray:
+                zmax: float | None = None, pyramid=True, place=None,
+                lift: float = 0.0) -> np.ndarray:
     """Cast-shadow mask (uint8 1 / 0 / 255) of ``z`` on ``grid`` with every cell's own sun from
-    the lattice ``vec`` (``lattice_vectors``); ``curv_coef``: (1 - k) / 2R or 0; ``pyramid`` as
-    for ``brute.shadow_mask``; ``place`` as for ``sun_args`` (a window of the raster)."""
+    the lattice ``vec`` (``lattice_vectors``); ``curv_coef``: (1 - k) / 2R or 0; ``pyramid`` and
+    ``lift`` as for ``brute.shadow_mask``; ``place`` as for ``sun_args`` (a window of the
+    raster)."""
     if z.dtype != np.float32 or z.ndim != 2:
         raise TypeError("heights must be a 2-D float32 array")
     if zmax is None:
         zmax = float(np.nanmax(z)) if np.isfinite(z).any() else -np.inf
     out = np.empty(z.shape, np.uint8)
     _field_cpu(z, *pyramid_args(z, pyramid), *sun_args(grid, vec, curv_coef, place), float(zmax),
-               out, np.int64(-1))
+               float(lift), out, np.int64(-1))
     return out
 
 
 def refine(z: np.ndarray, grid, vec: np.ndarray, curv_coef: float, zmax: float,
-           out: np.ndarray, code: int, pyramid=True, place=None) -> int:
-    """Replace every ``code`` in ``out`` by the exact answer with the cell's own sun; returns how
-    many cells were refined."""
+           out: np.ndarray, code: int, pyramid=True, place=None, lift: float = 0.0) -> int:
+    """Replace every ``code`` in ``out`` by the exact answer with the cell's own sun (``lift``
+    as for ``shadow_mask``); returns how many cells were refined."""
     if not any_code(out, code):
         return 0
     return int(_field_cpu(z, *pyramid_args(z, pyramid), *sun_args(grid, vec, curv_coef, place),
-                          float(zmax), out, np.int64(code)))
+                          float(zmax), float(lift), out, np.int64(code)))
 
 
 def shadow_mask_gpu(g, grid, vec: np.ndarray, curv_coef: float, zmax: float,
-                    place=None) -> np.ndarray:
-    """``shadow_mask`` on the GPU (``g``: a ``gpu.GpuDem``)."""
+                    place=None, lift: float = 0.0) -> np.ndarray:
+    """``shadow_mask`` on the GPU (``g``: a ``gpu.GpuDem``; ``lift`` as for ``shadow_mask``)."""
     rows, cols = g.shape
     out = g.empty((rows, cols), np.uint8)
     v, dx, dy, cs, rs, cc, r0, c0, nr, nc = sun_args(grid, vec, curv_coef, place)
     with g.timed():
         g.launch(_field_gpu, rows, cols, g.z, *g.pyramid_args(True), g.upload(v), g.upload(dx),
-                 g.upload(dy), cs, rs, cc, r0, c0, nr, nc, float(zmax), out)
+                 g.upload(dy), cs, rs, cc, r0, c0, nr, nc, float(zmax), float(lift), out)
     return g.download(out)

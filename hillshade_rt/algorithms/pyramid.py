@@ -183,11 +183,12 @@ def samples_left(lev, line, i0, pos, step_dom, step_other):
 
 @njit(cache=True)
 def ray_is_blocked_pyramid(z, pyr, off, widths, nlev, r, c, dom_col, step_dom, step_other, rise,
-                           curv, zmax):
+                           curv, zmax, lift):
     """``raymath.ray_is_blocked`` with the pyramid ``(pyr, off, widths, nlev)`` of ``z``: the same
-    answer, skipping every block lower than the ray (see the module's docstring)."""
+    answer (the ray starting ``lift`` metres above the cell), skipping every block lower than the
+    ray (see the module's docstring)."""
     line0, other0, n_dom, n_oth = ray_origin(z, r, c, dom_col)
-    h0 = float(z[np.int64(r), np.int64(c)])
+    h0 = float(z[np.int64(r), np.int64(c)]) + lift
     k = 1
     lev = 0
     while True:

@@ -101,8 +101,10 @@ def ray_sample(z, dom_col, line0, other0, n_dom, n_oth, k, step_dom, step_other)
 
 
 @njit(cache=True)
-def ray_is_blocked(z, r, c, dom_col, step_dom, step_other, rise, curv, zmax):
-    """True when the ray from the centre of cell (r, c) passes strictly below the terrain.
+def ray_is_blocked(z, r, c, dom_col, step_dom, step_other, rise, curv, zmax, lift):
+    """True when the ray from the centre of cell (r, c), ``lift`` metres above it (0: on the
+    ground; an observer above every cell: ``--height-above-ground``), passes strictly below the
+    terrain.
 
     Marches grid line by grid line toward the sun; stops when the ray leaves the raster or climbs
     to ``zmax`` (the highest cell), above which nothing can block it. Heights in float64, the k-th
@@ -110,7 +112,7 @@ def ray_is_blocked(z, r, c, dom_col, step_dom, step_other, rise, curv, zmax):
     Earth-curvature term, 0 for a flat Earth, and then adds exactly nothing).
     """
     line0, other0, n_dom, n_oth = ray_origin(z, r, c, dom_col)
-    h0 = float(z[np.int64(r), np.int64(c)])
+    h0 = float(z[np.int64(r), np.int64(c)]) + lift    # + 0.0 leaves the height as it is
     k = 1
     while True:
         hr = madd(h0, float(k), rise)

@@ -20,6 +20,7 @@ from .errors import OneLineErrors
 from .horizon import horizon
 from .info import info
 from .profile import profile
+from .query import query
 from .shadow import hillshade, shadow
 from .skyview import skyview
 from .sun_hours import sun_hours
@@ -31,7 +32,7 @@ def cli():
     """Terrain cast-shadow masks from digital elevation models."""
 
 
-for _command in (shadow, hillshade, sun_hours, horizon, profile, skyview, info):
+for _command in (shadow, hillshade, sun_hours, horizon, profile, query, skyview, info):
     cli.add_command(_command)
 
 

@@ -147,10 +147,26 @@ def _curvature_options(when: str):
     ]
 
 
+def curvature_options(f):
+    """Earth curvature and refraction as the lighting commands decide them (on by default when
+    rays can be longer than 1 km), without --soft (``query``: the same rays as ``shadow``)."""
+    return _stack(f, _curvature_options("rays can be longer than 1 km"))
+
+
 def horizon_physics_options(f):
     """Earth curvature and refraction of the horizon products (horizon, profile, skyview):
     curvature on by default when the raster is more than 1 km across."""
     return _stack(f, _curvature_options("the raster is more than 1 km across"))
+
+
+def height_above_ground_option(what: str):
+    """``--height-above-ground H``: metres (finite, >= 0) above the ground the observer stands
+    (``what``: where, for this command)."""
+    def deco(f):
+        return click.option("--height-above-ground", type=click.FloatRange(min=0.0),
+                            default=0.0, show_default=True, metavar="H", callback=finite,
+                            help=what)(f)
+    return deco
 
 
 def threads_option(f):

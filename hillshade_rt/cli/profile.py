@@ -5,8 +5,8 @@ from __future__ import annotations
 import click
 
 from .errors import errors_to_click, say
-from .options import (dem_options, horizon_physics_options, overwrite_option, quiet_option,
-                      to_read_options, to_run_options)
+from .options import (dem_options, height_above_ground_option, horizon_physics_options,
+                      overwrite_option, quiet_option, to_read_options, to_run_options)
 
 
 @click.command()
@@ -18,9 +18,8 @@ from .options import (dem_options, horizon_physics_options, overwrite_option, qu
 @click.option("--points", type=click.Path(dir_okay=False), default=None, metavar="FILE",
               help="Points from a CSV (columns lon,lat or x,y; id or name optional) or a "
                    "GeoJSON file of Point features.")
-@click.option("--height-above-ground", type=float, default=0.0, show_default=True,
-              metavar="H", help="The observer's height above the terrain at the point, metres "
-                                "(a panel, a mast).")
+@height_above_ground_option("The observer's height above the terrain at the point, metres "
+                            "(a panel, a mast).")
 @click.option("--step", type=float, default=1.0, show_default=True, metavar="DEG",
               help="Degrees between azimuths, clockwise from north, north first.")
 @click.option("--format", "fmt", type=click.Choice(["csv", "json", "pvlib", "pvgis", "grass",

@@ -8,8 +8,11 @@ import click
 from .errors import errors_to_click, say
 from ..run.config import SUN_KEYS
 from .options import (algorithm_flags, algorithm_option, dem_options, finite, given,
-                      physics_options, run_options, sun_options, to_read_options,
-                      to_run_options)
+                      height_above_ground_option, physics_options, run_options, sun_options,
+                      to_read_options, to_run_options)
+
+LIFT_HELP = ("Each cell's ray toward the sun starts this many metres above the cell (a person, "
+             "a panel above every cell); brute marches it (auto runs brute).")
 
 
 def _config(files, kind, algorithm, options, kw, **more):
@@ -36,10 +39,12 @@ def _config(files, kind, algorithm, options, kw, **more):
               help="Also shadow cells whose surface faces away from the sun (Horn normals).")
 @click.option("--classes", is_flag=True,
               help="Write classes: 0 lit, 1 self-shadow, 2 cast shadow, 255 nodata.")
+@height_above_ground_option(LIFT_HELP)
 @run_options
 @dem_options
 @errors_to_click
-def shadow(files, algorithm, curvature, refraction_k, soft, self_shadow, classes, **kw):
+def shadow(files, algorithm, curvature, refraction_k, soft, self_shadow, classes,
+           height_above_ground, **kw):
     """Write the cast-shadow mask of DEM to OUTPUT (GeoTIFF: 1 shadow, 0 lit, 255 nodata).
 
     Several DEMs (tiles on one grid) are shaded as one mosaic, so that a mountain in one tile
@@ -54,7 +59,7 @@ def shadow(files, algorithm, curvature, refraction_k, soft, self_shadow, classes
     options = options_for(algorithm, flags)
     shade(_config(files, "classes" if classes else "shadow", algorithm, options, kw,
                   curvature=curvature, refraction_k=refraction_k, soft=soft,
-                  self_shadow=self_shadow or classes))
+                  self_shadow=self_shadow or classes, height_above_ground=height_above_ground))
 
 
 @click.command()
@@ -69,10 +74,12 @@ def shadow(files, algorithm, curvature, refraction_k, soft, self_shadow, classes
                    "in degrees with heights in metres; default: ground metres from the CRS.")
 @algorithm_option
 @physics_options
+@height_above_ground_option(LIFT_HELP + " The relief's shading stays the ground's.")
 @run_options
 @dem_options
 @errors_to_click
-def hillshade(files, ambient, scale, algorithm, curvature, refraction_k, soft, **kw):
+def hillshade(files, ambient, scale, algorithm, curvature, refraction_k, soft,
+              height_above_ground, **kw):
     """Write 8-bit shaded relief with cast shadows of DEM to OUTPUT.
 
     Illumination = ambient + (1 - ambient) * max(0, L.N) in lit cells and ambient in shadow
@@ -81,4 +88,4 @@ def hillshade(files, ambient, scale, algorithm, curvature, refraction_k, soft, *
     from ..run import shade
     shade(_config(files, "hillshade", algorithm, {}, kw, default_sun=(315.0, 45.0),
                   curvature=curvature, refraction_k=refraction_k, soft=soft, self_shadow=True,
-                  ambient=ambient, scale=scale))
+                  ambient=ambient, scale=scale, height_above_ground=height_above_ground))

@@ -7,8 +7,9 @@ import click
 from .errors import errors_to_click, say
 from ..run.config import PLACE_KEYS
 from .options import (algorithm_option, backend_option, dem_options, format_option,
-                      overwrite_option, physics_options, place_options, quiet_option,
-                      threads_option, to_read_options, to_run_options)
+                      height_above_ground_option, overwrite_option, physics_options,
+                      place_options, quiet_option, threads_option, to_read_options,
+                      to_run_options)
 
 
 @click.command("sun-hours")
@@ -22,8 +23,12 @@ from .options import (algorithm_option, backend_option, dem_options, format_opti
 @place_options
 @algorithm_option
 @physics_options
-@click.option("--self-shadow/--no-self-shadow", default=True, show_default=True,
-              help="Count no direct sun on surfaces facing away from the sun.")
+@height_above_ground_option("The sun hours of a point this many metres above every cell (a "
+                            "person, a panel): its ray starts there; brute marches it (auto "
+                            "runs brute).")
+@click.option("--self-shadow/--no-self-shadow", default=None,
+              help="Count no direct sun on surfaces facing away from the sun (default: on, "
+                   "off with --height-above-ground > 0: the observer is not on the surface).")
 @click.option("--preview", type=click.Path(dir_okay=False), default=None,
               help="Also write a quick-look PNG (relief tinted by sun hours).")
 @backend_option
@@ -36,8 +41,9 @@ from .options import (algorithm_option, backend_option, dem_options, format_opti
 @dem_options
 @errors_to_click
 def sun_hours(dem, output, date_, end_date, step, tz, lat, lon, pressure, temperature,
-              no_refraction, sun_tolerance, algorithm, curvature, refraction_k, soft, self_shadow,
-              preview, backend, threads, report_path, overwrite, quiet, fmt, **read_opts):
+              no_refraction, sun_tolerance, algorithm, curvature, refraction_k, soft,
+              height_above_ground, self_shadow, preview, backend, threads, report_path,
+              overwrite, quiet, fmt, **read_opts):
     """Write the hours of direct sun per cell of DEM over a day (or a range of days) to OUTPUT
     (float32 hours, -9999 nodata), like WhiteboxTools' TimeInDaylight or GRASS r.sun's insolation
     time: the sun every --step, each lit sample counting for its interval."""
@@ -49,4 +55,5 @@ def sun_hours(dem, output, date_, end_date, step, tz, lat, lon, pressure, temper
     place = {k: kw.pop(k) for k in PLACE_KEYS}
     run_sun_hours(SunHoursConfig(dem, output, date_, end_date, step, place, algorithm, curvature,
                                  refraction_k, soft, self_shadow, to_read_options(kw),
-                                 to_run_options(kw, say)))
+                                 to_run_options(kw, say),
+                                 height_above_ground=height_above_ground))

@@ -115,14 +115,18 @@ class ShadeConfig:
     window_size: object = None
     cog: bool = False
     scheduler: object = None
+    height_above_ground: float = 0.0    # metres: each cell's ray starts this far above it
 
     def check(self) -> None:
-        """The combinations no run can take (before the sun is looked at, as before)."""
+        """The combinations no run can take (before the sun is looked at, as before). With a
+        height above the ground, ``algorithm`` becomes the one that marches it
+        (``algorithms.for_lift``: auto -> brute)."""
         import math
         from ..products import product
         if self.kind not in PRODUCTS:
             raise HillshadeError(f"product must be one of {', '.join(PRODUCTS)}, got {self.kind!r}")
         product(self.kind, self.soft)     # classes are hard only
+        self.algorithm = check_lift(self.height_above_ground, self.algorithm, self.soft)
         if self.scale is not None:
             if not (math.isfinite(self.scale) and self.scale > 0):
                 raise UsageProblem(f"--scale must be a positive number, got {self.scale}")
@@ -144,9 +148,40 @@ class SunHoursConfig:
     curvature: object = None
     refraction_k: float | None = None
     soft: bool = False
-    self_shadow: bool = True
+    self_shadow: bool | None = True   # None: on with the observer on the ground, off above it
     read: ReadOptions = field(default_factory=ReadOptions)
     run: RunOptions = field(default_factory=RunOptions)
+    height_above_ground: float = 0.0  # metres: each cell's ray starts this far above it
+
+    def check(self) -> None:
+        """The height above the ground (``check_lift``: ``algorithm`` becomes the one that
+        marches it) and what --self-shadow means then: not given (None), the surface's
+        orientation counts on the ground only (an observer above the ground does not stand on
+        the facet)."""
+        self.algorithm = check_lift(self.height_above_ground, self.algorithm, self.soft)
+        if self.self_shadow is None:
+            self.self_shadow = self.height_above_ground == 0.0
+
+
+def check_lift(height: float, algorithm: str, soft: bool) -> str:
+    """``--height-above-ground`` checked (metres, finite, >= 0) against the other options; the
+    algorithm that marches it (``algorithms.for_lift``; ``algorithm`` itself at 0)."""
+    import math
+    from ..algorithms import for_lift
+    try:
+        h = float(height)
+    except (TypeError, ValueError):
+        raise UsageProblem(f"--height-above-ground must be a number of metres, got "
+                           f"{height!r}") from None
+    if not (math.isfinite(h) and h >= 0.0):
+        raise UsageProblem(f"--height-above-ground must be a finite number of metres >= 0, "
+                           f"got {height}")
+    if h == 0.0:
+        return algorithm
+    if soft:
+        raise UsageProblem("--soft and --height-above-ground do not go together yet (soft "
+                           "shadows are computed from the ground)")
+    return for_lift(algorithm)
 
 
 @dataclass

@@ -36,8 +36,9 @@ def needs_windows(src, limit, per_cell) -> bool:
 
 
 def in_memory(inputs, source, scale, req, out, timer, algorithm, options, ran_on,
-              curvature, refraction_k, soft, self_shadow, ambient, quiet, **_):
-    """``source``: the DEM already opened (``ReadOptions.open``; read here, not opened again)."""
+              curvature, refraction_k, soft, self_shadow, ambient, quiet, *, lift=0.0, **_):
+    """``source``: the DEM already opened (``ReadOptions.open``; read here, not opened again).
+    ``lift``: --height-above-ground (``shading.Shader``)."""
     import numpy as np
 
     from ..shading import Shader, render
@@ -58,7 +59,7 @@ def in_memory(inputs, source, scale, req, out, timer, algorithm, options, ran_on
         zmin, zmax = d.height_range()
         shader = Shader(d.heights, d.grid, algorithm, options, ran_on,
                         "auto" if curvature is None else curvature, refraction_k,
-                        dem_body(d, req.lat), (zmin, zmax), survey=d.survey())
+                        dem_body(d, req.lat), (zmin, zmax), survey=d.survey(), lift=lift)
         day = [s for s in suns if not s.night]
         if day:
             shader.warm_up(day[0].azimuth, day[0].elevation, soft=soft,
@@ -99,8 +100,9 @@ def in_memory(inputs, source, scale, req, out, timer, algorithm, options, ran_on
 
 def tiled(inputs, source, scale, req, out, timer, algorithm, options, ran_on,
           curvature, refraction_k, soft, self_shadow, ambient, quiet, *, limit,
-          window_shape, scheduler, per_cell):
-    """``source``: the DEM already opened for windows (``ReadOptions.open``)."""
+          window_shape, scheduler, per_cell, lift=0.0):
+    """``source``: the DEM already opened for windows (``ReadOptions.open``). ``lift``:
+    --height-above-ground (``plan.Job``: the halos and the march)."""
     import math
 
     import numpy as np
@@ -130,7 +132,7 @@ def tiled(inputs, source, scale, req, out, timer, algorithm, options, ran_on,
         dx, dy = src.grid.centre_spacing()
         job = Job(src, algorithm, options, ran_on, "auto" if curvature is None else curvature,
                   refraction_k, dem_body(src, req.lat), zrange, math.hypot(cols * dx, rows * dy),
-                  kind, soft, self_shadow, ambient)
+                  kind, soft, self_shadow, ambient, lift)
         # a limit too small: measured now, after the preparation (the process has grown), the
         # error says the smallest --max-memory that would do: room for the largest window the
         # plan needs, or for the whole DEM where it could be shaded in memory

@@ -9,8 +9,9 @@ reads it whole.
    every ``STAT_BLOCK`` x ``STAT_BLOCK`` block (and the raster's range).
 2. **Plan** (:func:`plan`). A ray leaving a cell at height ``z0`` toward a sun at elevation E has
    risen above every height ``zhigh`` after ``reach = (zhigh - z0) / tan E`` ground metres (less
-   with Earth curvature: ``d tan E + c d^2 = zhigh - z0``), so no terrain farther than that toward
-   the sun can shadow the cell. A window is its output region plus that halo, **on the sun's side
+   with Earth curvature: ``d tan E + c d^2 = zhigh - z0``; with ``--height-above-ground H`` the
+   ray starts at ``z0 + H``: less again), so no terrain farther than that toward the sun can
+   shadow the cell. A window is its output region plus that halo, **on the sun's side
    only** (two cells either side of an axis the sun does not move along), plus one cell all round
    for the surface normals of self-shadow and relief. ``z0`` is the lowest height of the blocks
    under the region, ``zhigh`` the highest of the blocks under the region and its halo, tightened
@@ -309,9 +310,12 @@ def _cuts(lo: int, hi: int, size: int, align: int) -> list[tuple[int, int]]:
 
 
 def window_for(bounds, shape, grid: Grid, azimuth: float, elevation: float, curv: float,
-               stats: BlockStats, margin: int = 1) -> tuple[int, int, int, int]:
+               stats: BlockStats, margin: int = 1,
+               lift: float = 0.0) -> tuple[int, int, int, int]:
     """The window of region ``bounds``: the region, its halo toward the sun (from the block
-    ranges, tightened until it stops shrinking) and ``margin`` cells all round."""
+    ranges, tightened until it stops shrinking) and ``margin`` cells all round. ``lift``: the
+    rays start that many metres above their cells (``--height-above-ground``): they clear the
+    terrain sooner, the halo is shorter."""
     from ..shading import halo_bounds, reach_m
     low, _ = stats.range_over(bounds)
     if not math.isfinite(low):          # voids only: nothing to shade, nothing to read around
@@ -319,7 +323,7 @@ def window_for(bounds, shape, grid: Grid, azimuth: float, elevation: float, curv
     zhigh = stats.zmax
     win = None
     for _ in range(8):
-        reach = reach_m(zhigh - low, elevation, curv)
+        reach = reach_m(zhigh - (low + lift), elevation, curv)
         new = halo_bounds(bounds, shape, grid, azimuth, reach, margin)
         if new == win:
             break
@@ -352,7 +356,8 @@ def plan(shape, grid: Grid, azimuth: float, elevation: float, curv: float, stats
          budget_cells: int, window_shape: tuple[int, int] | None = None,
          bounds: tuple[int, int, int, int] | None = None, align: int = ALIGN,
          halo_elevation: float | None = None, night: bool = False,
-         carry: bool = False, azimuths: tuple[float, float] | None = None) -> list[Piece]:
+         carry: bool = False, azimuths: tuple[float, float] | None = None,
+         lift: float = 0.0) -> list[Piece]:
     """Cut ``bounds`` (default: the raster) into regions whose windows hold at most
     ``budget_cells`` cells (or regions of ``window_shape``), ordered from the sun's side so that
     each window's halo was read by the window before.
@@ -366,7 +371,8 @@ def plan(shape, grid: Grid, azimuth: float, elevation: float, curv: float, stats
     ``halo_elevation``: the elevation the halo is made for (default ``elevation``; soft shadows
     need the lower edge of the sun's disk). ``night``: nothing casts; windows have no halo.
     ``azimuths``: the lowest and highest azimuth of the cells' rays (a sun per cell): each
-    window then holds the halos of both and of ``azimuth``, so every ray in between."""
+    window then holds the halos of both and of ``azimuth``, so every ray in between.
+    ``lift``: the rays start that many metres above their cells (``window_for``)."""
     from ..shading import halo_bounds, reach_m
     rows, cols = shape
     b = bounds or (0, rows, 0, cols)
@@ -380,7 +386,7 @@ def plan(shape, grid: Grid, azimuth: float, elevation: float, curv: float, stats
         tr, tc = min(br, window_shape[0]), min(bc, window_shape[1])
     else:
         # halo sizes from the raster's whole range: an upper bound of every window's
-        reach = 0.0 if night else reach_m(stats.zmax - stats.zmin, hel, curv)
+        reach = 0.0 if night else reach_m(stats.zmax - (stats.zmin + lift), hel, curv)
         hr, hc = halo_cells(grid, azimuth, reach, (b[0], b[1]))
         for az in azimuths or ():
             hr_, hc_ = halo_cells(grid, az, reach, (b[0], b[1]), 2)
@@ -425,9 +431,10 @@ def plan(shape, grid: Grid, azimuth: float, elevation: float, curv: float, stats
              else [(r, c) for c in col_cuts for r in row_cuts])
     regions = [(r0, r1, c0, c1) for (r0, r1), (c0, c1) in order]
     wins = [halo_bounds(reg, shape, grid, azimuth, 0.0, 1) if night
-            else window_for(reg, shape, grid, azimuth, hel, curv, stats) for reg in regions]
+            else window_for(reg, shape, grid, azimuth, hel, curv, stats, lift=lift)
+            for reg in regions]
     if azimuths and not night:
-        wins = [_union([w] + [window_for(reg, shape, grid, az, hel, curv, stats, 2)
+        wins = [_union([w] + [window_for(reg, shape, grid, az, hel, curv, stats, 2, lift)
                               for az in azimuths]) for reg, w in zip(regions, wins)]
     if carry:
         inner = len(col_cuts) if cols_inner else len(row_cuts)
@@ -543,6 +550,7 @@ class Job:
     soft: bool = False
     self_shadow: bool = False
     ambient: float = 0.2
+    lift: float = 0.0             # --height-above-ground: the rays start this far up
 
     @property
     def k(self) -> float:
@@ -575,7 +583,7 @@ class Job:
         return Shader(z, window_grid(self.source.grid, window), self.algorithm, self.options,
                       self.backend, self.curvature, self.refraction_k, self.body, self.zrange,
                       extent_m=self.extent_m, halo_ready=True, local_range=local_range,
-                      carry=carry, place=(window, self.source.shape))
+                      carry=carry, place=(window, self.source.shape), lift=self.lift)
 
     def light(self, z: np.ndarray, piece: Piece, stats: dict | None = None,
               curvature_used: set | None = None, carry=None) -> np.ndarray:
@@ -624,7 +632,8 @@ class Job:
                     else 0.0 if night else self.curv(reg.azimuth, max(min(el, 90.0), 1e-6)))
             got = plan(shape, self.source.grid, reg.azimuth, el, curv, stats, budget_cells,
                        window_shape, (r0, r1, c0, c1), halo_elevation=hel, night=night,
-                       carry=in_order and self.carries and not self.soft, azimuths=azimuths)
+                       carry=in_order and self.carries and not self.soft, azimuths=azimuths,
+                       lift=self.lift)
             out += [replace(p, sun=sun) for p in got] if fieldwise else got
         return out
 
@@ -634,7 +643,7 @@ class Job:
         z = np.zeros((4, 4), np.float32)     # the kernels' argument types; the grid's spacing
         sh = Shader(z, self.source.grid, self.algorithm, self.options, self.backend,
                     self.curvature, self.refraction_k, self.body, self.zrange,
-                    extent_m=self.extent_m)
+                    extent_m=self.extent_m, lift=self.lift)
         sh.warm_up(sun.azimuth, max(sun.elevation, 1.0), soft=self.soft, field=sun.fieldwise,
                    incidence=self.self_shadow or self.kind != "shadow")
 

@@ -38,8 +38,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import __version__
-from ..errors import HillshadeError, UsageProblem
+from ..errors import UsageProblem
 from .config import ReadOptions, RunOptions
+from .points import gather, locate, on_ground, parse_pair, write_text
+
+__all__ = ["ProfileConfig", "parse_pair", "profile", "render"]
 
 FORMATS = ("csv", "json", "pvlib", "pvgis", "grass", "geojson")
 ONE_POINT = ("pvlib", "pvgis", "grass")
@@ -65,109 +68,11 @@ class ProfileConfig:
     run: RunOptions = field(default_factory=RunOptions)
 
 
-def parse_pair(text: str, what: str) -> tuple[float, float]:
-    """'A,B' as two finite floats (a usage error otherwise)."""
-    parts = str(text).replace(" ", "").split(",")
-    try:
-        a, b = (float(p) for p in parts)
-    except ValueError:
-        raise UsageProblem(f"{what} must be two numbers A,B, got {text!r}") from None
-    if not (math.isfinite(a) and math.isfinite(b)):
-        raise UsageProblem(f"{what} must be finite numbers, got {text!r}")
-    return a, b
-
-
-def read_points(path: str) -> list[dict]:
-    """Points of a CSV (columns lon,lat or x,y; an optional id or name) or a GeoJSON file
-    (Point features, lon/lat as GeoJSON says): dicts with id and lon/lat or x/y."""
-    try:
-        with open(path, encoding="utf-8-sig") as fh:
-            text = fh.read()
-    except OSError as exc:
-        raise HillshadeError(f"{path}: {exc.strerror or exc}") from None
-    if path.lower().endswith((".geojson", ".json")):
-        try:
-            doc = json.loads(text)
-            feats = doc["features"] if doc.get("type") == "FeatureCollection" else [doc]
-            out = []
-            for i, f in enumerate(feats):
-                g = f.get("geometry") or {}
-                if g.get("type") != "Point":
-                    continue
-                lon, lat = (float(v) for v in g["coordinates"][:2])
-                pid = (f.get("properties") or {}).get("id", (f.get("properties") or {}).get(
-                    "name", i))
-                out.append({"id": str(pid), "lon": lon, "lat": lat})
-        except (ValueError, KeyError, TypeError, AttributeError) as exc:
-            raise HillshadeError(f"{path}: not a GeoJSON file of points ({exc})") from None
-        if not out:
-            raise HillshadeError(f"{path}: no Point feature")
-        return out
-    rows = list(csv.DictReader(_io.StringIO(text)))
-    if not rows:
-        raise HillshadeError(f"{path}: no points (a CSV with a header: lon,lat or x,y)")
-    keys = {k.strip().lower(): k for k in rows[0] if k is not None}
-    if {"lon", "lat"} <= set(keys):
-        a, b, ka, kb = "lon", "lat", keys["lon"], keys["lat"]
-    elif {"x", "y"} <= set(keys):
-        a, b, ka, kb = "x", "y", keys["x"], keys["y"]
-    else:
-        raise HillshadeError(f"{path}: no coordinates: the CSV needs columns lon,lat (degrees) "
-                             "or x,y (the DEM's CRS)")
-    kid = keys.get("id", keys.get("name"))
-    out = []
-    for i, r in enumerate(rows):
-        try:
-            va, vb = float(r[ka]), float(r[kb])
-        except (TypeError, ValueError):
-            raise HillshadeError(f"{path}: row {i + 2}: {r[ka]!r}, {r[kb]!r} are not "
-                                 "numbers") from None
-        out.append({"id": str(r[kid]) if kid else str(i), a: va, b: vb})
-    return out
-
-
-def _locate(points, src):
-    """(the points with their x, y (the DEM's CRS), lon, lat, and fractional row and column
-    (cell centres at whole numbers); the transformer from the DEM's CRS to lon/lat, or None)."""
-    from pyproj import CRS as PCRS, Transformer
-    if src.transform is None:
-        raise HillshadeError(f"{src.path}: the DEM has no georeferencing: points cannot be "
-                             "placed on it")
-    crs = PCRS.from_user_input(src.crs.to_wkt()) if src.crs is not None else None
-    need_crs = any("lon" in p for p in points)
-    if crs is None and need_crs:
-        raise HillshadeError(f"{src.path}: the DEM has no CRS: give points in its coordinates "
-                             "(--at-xy, or x,y columns)")
-    to_xy = Transformer.from_crs("EPSG:4326", crs, always_xy=True) if crs is not None else None
-    to_ll = Transformer.from_crs(crs, "EPSG:4326", always_xy=True) if crs is not None else None
-    inv = ~src.transform
-    for p in points:
-        if "lon" in p:
-            p["x"], p["y"] = (float(v) for v in to_xy.transform(p["lon"], p["lat"]))
-        elif to_ll is not None:
-            p["lon"], p["lat"] = (float(v) for v in to_ll.transform(p["x"], p["y"]))
-        else:
-            p["lon"] = p["lat"] = None
-        col, row = inv @ (p["x"], p["y"])
-        # within rounding of a cell centre (a centre's coordinates through the transform and
-        # back), the point is that centre: a crossing 1e-9 steps away would read the ground's
-        # own slope there as the horizon
-        p["col"], p["row"] = (_snap(col - 0.5), _snap(row - 0.5))
-    return points, to_ll
-
-
-def _snap(v: float, eps: float = 1e-6) -> float:
-    """``v``, or the whole number within ``eps`` of it."""
-    w = round(v)
-    return float(w) if abs(v - w) <= eps else float(v)
-
-
 def profile(cfg: ProfileConfig) -> dict:
     """Compute and write the profiles; returns the document (what ``json`` writes)."""
-    from ..algorithms import horizon as hz
     from ..earth import dem_body
     from ..arrays import observer_profiles
-    from ..io.write import Claims, atomic_path, os_error
+    from ..io.write import Claims
 
     if cfg.fmt not in FORMATS:
         raise UsageProblem(f"--format must be one of {', '.join(FORMATS)}, got {cfg.fmt!r}")
@@ -175,13 +80,7 @@ def profile(cfg: ProfileConfig) -> dict:
         raise UsageProblem(f"--step must be a number of degrees in (0, 90], got {cfg.step}")
     if not math.isfinite(cfg.height_above_ground):
         raise UsageProblem("--height-above-ground must be a finite number of metres")
-    points = ([{"id": str(i), "lon": a, "lat": b} for i, (a, b) in enumerate(cfg.at)]
-              + [{"id": str(len(cfg.at) + i), "x": a, "y": b}
-                 for i, (a, b) in enumerate(cfg.at_xy)])
-    if cfg.points is not None:
-        points += read_points(cfg.points)
-    if not points:
-        raise UsageProblem("give a point: --at LON,LAT, --at-xy X,Y or --points FILE")
+    points = gather(cfg.at, cfg.at_xy, cfg.points)
     if cfg.fmt in ONE_POINT and len(points) != 1:
         raise UsageProblem(f"--format {cfg.fmt} holds one point's profile; {len(points)} given "
                            "(use csv, json or geojson for several)")
@@ -189,19 +88,8 @@ def profile(cfg: ProfileConfig) -> dict:
         Claims([cfg.dem] + ([cfg.points] if cfg.points else []), cfg.run.overwrite).claim(
             cfg.output, "-o/--output")
     d = cfg.read.read(cfg.dem)
-    points, to_ll = _locate(points, d)
-    rows, cols = d.shape
-    for p in points:
-        if not (-1e-9 <= p["row"] <= rows - 1 + 1e-9 and -1e-9 <= p["col"] <= cols - 1 + 1e-9):
-            raise HillshadeError(f"point {p['id']} ({p['x']:.6g}, {p['y']:.6g}) is outside the "
-                                 "DEM's cell centres")
-        p["row"] = min(max(p["row"], 0.0), rows - 1.0)
-        p["col"] = min(max(p["col"], 0.0), cols - 1.0)
-        g = hz.bilinear(d.heights, p["row"], p["col"])
-        if not math.isfinite(g):
-            raise HillshadeError(f"point {p['id']} lies on nodata: no ground height there")
-        p["ground"] = g
-        p["observer"] = g + float(cfg.height_above_ground)
+    points, to_ll = locate(points, d)
+    on_ground(points, d, cfg.height_above_ground)
     azimuths, ang, dist, curved = observer_profiles(
         d.heights, d.grid, np.array([p["row"] for p in points]),
         np.array([p["col"] for p in points]), np.array([p["observer"] for p in points]),
@@ -220,17 +108,7 @@ def profile(cfg: ProfileConfig) -> dict:
                               "distance_m": [None if not math.isfinite(v) else round(float(v), 3)
                                              for v in dist[i]],
                               "line": line})
-    text = render(doc, cfg.fmt)
-    if cfg.output is None:
-        import sys
-        sys.stdout.write(text)
-    else:
-        with atomic_path(cfg.output, overwrite=cfg.run.overwrite) as tmp:
-            try:
-                with open(tmp, "w", encoding="utf-8", newline="") as fh:
-                    fh.write(text)
-            except OSError as exc:
-                raise os_error(cfg.output, exc) from None
+    write_text(cfg.output, render(doc, cfg.fmt), cfg.run.overwrite)
     if not cfg.run.quiet and cfg.output is not None:
         cfg.run.say("summary", f"hillshade-rt: {cfg.output}: {len(points)} point(s) x "
                                f"{len(azimuths)} azimuths ({cfg.fmt})")

@@ -83,6 +83,8 @@ def _shade(cfg, src, windowed, inputs, output, req, pattern, wshape, limit, clai
     dtype, nodata = prod.dtype, prod.nodata
     out = Outputs(prod, algorithm, output, pattern, claims, cfg.cog, ro.preview is not None,
                   cfg.ambient, ro.fmt)
+    if cfg.height_above_ground:     # the observer's height, in every output's tags
+        out.base_tags["HEIGHT_ABOVE_GROUND_M"] = f"{float(cfg.height_above_ground):g}"
     # Dask's parts are put together by GDAL (no 16-bit encoding of soft shadows on the way)
     out.via_vrt = cfg.scheduler is not None
     if output is not None:   # the format can hold the product (before any work)
@@ -98,7 +100,8 @@ def _shade(cfg, src, windowed, inputs, output, req, pattern, wshape, limit, clai
             run = (tiled if windowed else in_memory)(
                 inputs, src, cfg.scale, req, out, timer, algorithm, options, ran_on,
                 cfg.curvature, cfg.refraction_k, soft, cfg.self_shadow, cfg.ambient, ro.quiet,
-                limit=limit, window_shape=wshape, scheduler=cfg.scheduler, per_cell=per_cell)
+                limit=limit, window_shape=wshape, scheduler=cfg.scheduler, per_cell=per_cell,
+                lift=cfg.height_above_ground)
     finally:
         out.cleanup()
     d, suns, records = run["dem"], run["suns"], run["records"]
@@ -128,6 +131,7 @@ def _shade(cfg, src, windowed, inputs, output, req, pattern, wshape, limit, clai
     if kind == "hillshade":
         rep["product"].update(ambient=cfg.ambient, scale=cfg.scale)
     rep["curvature"] = run["curvature"]
+    rep["height_above_ground_m"] = float(cfg.height_above_ground)
     rep["inputs"] = [input_label(p) for p in inputs]
     rep["processing"] = run["processing"]
     if ro.preview is not None:

@@ -27,8 +27,10 @@ def sun_hours(cfg: SunHoursConfig) -> dict:
     from .notes import compile_note
     from .report import Timer, progress
 
+    cfg.check()
     ro, output, soft, self_shadow = cfg.run, cfg.output, cfg.soft, cfg.self_shadow
     algorithm, step = cfg.algorithm, cfg.step
+    lift = float(cfg.height_above_ground)
     timer = Timer()
     claims = Claims([cfg.dem], ro.overwrite)
     for path, what in ((output, "OUTPUT"), (ro.report_path, "--report"),
@@ -65,7 +67,7 @@ def sun_hours(cfg: SunHoursConfig) -> dict:
         zmin, zmax = d.height_range()
         shader = Shader(d.heights, d.grid, algorithm, {}, ran_on,
                         "auto" if cfg.curvature is None else cfg.curvature, cfg.refraction_k,
-                        dem_body(d, req.lat), (zmin, zmax), survey=d.survey())
+                        dem_body(d, req.lat), (zmin, zmax), survey=d.survey(), lift=lift)
 
         def dark(s):
             top = max([r.elevation for r in s.tiles] if s.tiles else [s.elevation])
@@ -84,6 +86,7 @@ def sun_hours(cfg: SunHoursConfig) -> dict:
     tags = {"HILLSHADE_RT_VERSION": __version__, "UNITS": "hours of direct sun",
             "DATE_FIRST": first.isoformat(), "DATE_LAST": last.isoformat(), "DAYS": days,
             "STEP": step, "ALGORITHM": algorithm, "SOFT": soft, "SELF_SHADOW": self_shadow,
+            "HEIGHT_ABOVE_GROUND_M": lift,
             "DAY": f"midnight to midnight, {req.tz.key}" if req.tz is not None
             else f"local mean solar time at longitude {site.lon:.4f}"}
     with timer("write"):
@@ -100,7 +103,7 @@ def sun_hours(cfg: SunHoursConfig) -> dict:
            "shape": list(d.shape), "algorithm": algorithm, "backend": ran_on,
            "dates": [first.isoformat(), last.isoformat()], "days": days, "step": step,
            "samples": len(suns), "samples_with_sun": len(work), "day_definition": tags["DAY"],
-           "soft": soft, "self_shadow": self_shadow,
+           "soft": soft, "self_shadow": self_shadow, "height_above_ground_m": lift,
            "hours": {"min": float(valid.min()) if valid.size else None,
                      "mean": float(valid.mean()) if valid.size else None,
                      "max": float(valid.max()) if valid.size else None},

@@ -198,6 +198,6 @@ def test_strictly_below_means_shadow():
     from hillshade_rt.algorithms.raymath import ray_is_blocked
 
     z = np.array([[0.0, 0.5, 1.0, 1.5, 0.0]], np.float32)  # the ray from (0,0) rises 0.5 a column
-    assert not ray_is_blocked(z, 0, 0, True, 1, 0.0, 0.5, 0.0, 10.0)
+    assert not ray_is_blocked(z, 0, 0, True, 1, 0.0, 0.5, 0.0, 10.0, 0.0)
     z[0, 3] = np.nextafter(np.float32(1.5), np.float32(2.0))
-    assert ray_is_blocked(z, 0, 0, True, 1, 0.0, 0.5, 0.0, 10.0)
+    assert ray_is_blocked(z, 0, 0, True, 1, 0.0, 0.5, 0.0, 10.0, 0.0)

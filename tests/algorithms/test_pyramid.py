@@ -298,7 +298,7 @@ def test_per_cell_sun_is_each_cells_own_ray(az0, el0, curved):
                 continue
             night, dc, sd, so, ri, cv = field.cell_ray.py_func(
                 r, col, vec, grid.dx, grid.dy, 1.0, -1.0, c, 0, 0, 23, 31)
-            want = 1 if night else int(ray_is_blocked(z, r, col, dc, sd, so, ri, cv, zmax))
+            want = 1 if night else int(ray_is_blocked(z, r, col, dc, sd, so, ri, cv, zmax, 0.0))
             assert got[r, col] == want == plain[r, col], (r, col)
 
 

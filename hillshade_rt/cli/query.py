@@ -1,0 +1,54 @@
+"""``hillshade-rt query``: options -> ``run.query.QueryConfig`` -> ``run.query``."""
+
+from __future__ import annotations
+
+import click
+
+from .errors import errors_to_click, say
+from ..run.config import SUN_KEYS
+from .options import (curvature_options, dem_options, height_above_ground_option,
+                      overwrite_option, quiet_option, sun_options, to_read_options,
+                      to_run_options)
+
+
+@click.command()
+@click.argument("dem", type=click.Path(dir_okay=False))
+@click.option("--at", "at", multiple=True, metavar="LON,LAT",
+              help="A point in degrees (WGS84 longitude, latitude); repeatable.")
+@click.option("--at-xy", "at_xy", multiple=True, metavar="X,Y",
+              help="A point in the DEM's CRS; repeatable.")
+@click.option("--points", type=click.Path(dir_okay=False), default=None, metavar="FILE",
+              help="Points from a CSV (columns lon,lat or x,y; id or name optional) or a "
+                   "GeoJSON file of Point features.")
+@sun_options
+@height_above_ground_option("The observer's height above the terrain at the point, metres "
+                            "(a person, a panel).")
+@click.option("--irradiance", is_flag=True,
+              help="Also the clear-sky direct normal irradiance (pvlib, Ineichen) and the "
+                   "direct beam on a horizontal surface (DNI x sin(elevation) x lit); needs "
+                   "suns from times.")
+@click.option("--format", "fmt", type=click.Choice(["csv", "json", "geojson"]), default=None,
+              help="csv: one row per point and time; json: the same rows with the conventions; "
+                   "geojson: one Point feature per point with its series (default: from -o's "
+                   "extension, else csv).")
+@click.option("-o", "--output", default=None, type=click.Path(dir_okay=False),
+              help="Write here (default: standard output).")
+@curvature_options
+@overwrite_option("Replace the output if it exists.")
+@quiet_option()
+@dem_options
+@errors_to_click
+def query(dem, at, at_xy, points, height_above_ground, irradiance, fmt, output, curvature,
+          refraction_k, overwrite, quiet, **kw):
+    """Whether the sun reaches points on DEM: for each point and each sun, lit or shadowed, the
+    sun's azimuth and elevation, the horizon toward the sun, the margin between them (lit iff
+    the sun is up and the margin >= 0) and the observer's height. The sun: --azimuth/--elevation,
+    or --time (repeatable) or --start/--end/--step at the DEM's place (as `shadow`)."""
+    from ..run.points import parse_pair
+    from ..run.query import QueryConfig, query as run_query
+    sun = {k: kw.pop(k) for k in SUN_KEYS}
+    kw.update(overwrite=overwrite, quiet=quiet)
+    run_query(QueryConfig(dem, [parse_pair(a, "--at") for a in at],
+                          [parse_pair(a, "--at-xy") for a in at_xy], points, sun,
+                          height_above_ground, irradiance, fmt, output, curvature, refraction_k,
+                          to_read_options(kw), to_run_options(kw, say)))

@@ -1,0 +1,273 @@
+"""The ``query`` run: is the sun up and unblocked at these points, at these times? For each point
+and each sun, whether it is lit, the sun's azimuth and elevation, the horizon toward the sun's
+azimuth, the margin between them, the observer's height; with ``irradiance`` the clear-sky direct
+beam there.
+
+* **Points**: as ``profile`` takes them (``run.points``): ``--at LON,LAT``, ``--at-xy X,Y``,
+  ``--points`` CSV or GeoJSON; the observer stands ``height_above_ground`` metres above the
+  terrain interpolated bilinearly at the point. A point outside the DEM's cell centres or on
+  nodata is an error (one line, nothing written).
+* **Suns**: given (``--azimuth/--elevation``: the same for every point), or from times
+  (``--time``, ``--start/--end/--step``) at the DEM's place exactly as ``shadow --time`` computes
+  them: the SPA at the DEM's centre, or where the direction varies across the DEM, on its 9 x 9
+  lattice interpolated at the point (the sun the shadow mask gives that cell) or its tile's.
+* **Lit**: the exact horizon of the point toward the sun's azimuth (the model's march from the
+  point: ``arrays.sun_at_points``, with Earth curvature decided as the shadow mask decides it)
+  against the sun's elevation: lit iff the sun is up and horizon <= elevation (margin >= 0: a ray
+  that grazes the terrain is lit, as in the mask). At a cell centre with no height above the
+  ground this is the shadow mask's value of that cell (tests).
+* **Irradiance** (``--irradiance``, suns from times): pvlib's clear-sky model of Ineichen and
+  Perez (Linke turbidity from pvlib's monthly climatology, at the point's place and the
+  observer's altitude): ``dni_w_m2`` the direct normal irradiance, ``beam_horizontal_w_m2`` =
+  DNI x sin(elevation) x lit, the direct beam on a horizontal surface at the observer (no
+  diffuse part).
+
+Formats (``FORMATS``): ``csv`` (one row per point and sun, the conventions in ``#`` lines
+above the header), ``json`` (the same rows, with the conventions and the DEM), ``geojson`` (one
+Point feature per point, its series as properties).
+"""
+
+from __future__ import annotations
+
+import csv
+import io as _io
+import json
+import math
+import os
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .. import __version__
+from ..errors import HillshadeError, UsageProblem
+from .config import ReadOptions, RunOptions
+from .points import gather, locate, on_ground, write_text
+
+FORMATS = ("csv", "json", "geojson")
+CONVENTION = ("sun_azimuth_deg: degrees clockwise from the DEM's grid north (sun_true_azimuth_deg: "
+              "from true north, suns from times); sun_elevation_deg: degrees above the "
+              "horizontal (apparent, refracted, for suns from times unless --no-refraction); "
+              "horizon_deg: elevation of the terrain toward the sun's azimuth seen from the "
+              "observer, degrees (-90: no terrain ahead inside the DEM; negative: the observer "
+              "looks down), horizon_distance_m: ground metres to it; margin_deg = sun elevation - "
+              "horizon; lit (1/0; true/false in JSON) iff the sun is up and margin_deg >= 0 (a ray "
+              "that grazes the terrain is lit, as in the shadow mask); observer_m = ground_m "
+              "(bilinear between the cell centres) + height above ground; times in the zone of "
+              "--tz, else as given")
+IRRADIANCE = ("dni_w_m2: clear-sky direct normal irradiance (W/m2; pvlib ineichen, Linke "
+              "turbidity from pvlib's monthly climatology, at the point and the observer's "
+              "altitude); beam_horizontal_w_m2 = dni_w_m2 x sin(sun elevation) x lit: the direct "
+              "beam on a horizontal surface at the observer (no diffuse part)")
+COLUMNS = ("point", "x", "y", "lon", "lat", "time", "sun_azimuth_deg", "sun_true_azimuth_deg",
+           "sun_elevation_deg", "horizon_deg", "horizon_distance_m", "margin_deg", "lit",
+           "ground_m", "observer_m")
+IRRADIANCE_COLUMNS = ("dni_w_m2", "beam_horizontal_w_m2")
+
+
+@dataclass
+class QueryConfig:
+    dem: str
+    at: list = field(default_factory=list)        # (lon, lat) pairs
+    at_xy: list = field(default_factory=list)     # (x, y) pairs in the DEM's CRS
+    points: str | None = None                     # a CSV or GeoJSON file of points
+    sun: dict = field(default_factory=dict)       # run.config.SUN_KEYS
+    height_above_ground: float = 0.0
+    irradiance: bool = False
+    fmt: str | None = None                        # None: from the output's extension, else csv
+    output: str | None = None                     # None: standard output
+    curvature: object = None                      # None: "auto", as shadow
+    refraction_k: float | None = None
+    read: ReadOptions = field(default_factory=ReadOptions)
+    run: RunOptions = field(default_factory=RunOptions)
+
+
+def output_format(fmt: str | None, output: str | None) -> str:
+    """``fmt``, or the format of ``output``'s extension (.json, .geojson), else csv."""
+    if fmt is None:
+        ext = os.path.splitext(output or "")[1].lower()
+        fmt = {".json": "json", ".geojson": "geojson"}.get(ext, "csv")
+    if fmt not in FORMATS:
+        raise UsageProblem(f"--format must be one of {', '.join(FORMATS)}, got {fmt!r}")
+    return fmt
+
+
+def sun_at(sun, shape, row: float, col: float) -> tuple[float, float]:
+    """(grid azimuth, elevation) in degrees of ``sun`` (a ``sun.SunOver``) at (row, col) of a
+    raster of ``shape``: what the shadow mask gives that cell. Per cell (``fieldwise``): the
+    lattice's unit vectors interpolated there as ``algorithms.field`` interpolates them; per
+    tile: the tile's; else the one vector."""
+    if sun.fieldwise:
+        from ..algorithms.field import lattice_at, lattice_scale
+        n = sun.lattice.shape[0]
+        e, no, up = lattice_at(float(row), float(col), lattice_scale(n, shape[0]),
+                               lattice_scale(n, shape[1]), sun.lattice)
+        return (math.degrees(math.atan2(e, no)) % 360.0,
+                math.degrees(math.atan2(up, math.hypot(e, no))))
+    if sun.tiles:
+        r, c = int(round(row)), int(round(col))
+        for t in sun.tiles:
+            if t.rows.start <= r < t.rows.stop and t.cols.start <= c < t.cols.stop:
+                return t.azimuth, t.elevation
+    return sun.azimuth, sun.elevation
+
+
+def query(cfg: QueryConfig) -> dict:
+    """Answer ``cfg`` and write it; returns the document (what ``json`` writes). Bad input
+    raises ``HillshadeError`` (``UsageProblem`` for a bad command line) before anything is
+    written."""
+    from ..arrays import sun_at_points
+    from ..earth import dem_body
+    from ..io.write import Claims
+    from ..sun import SunRequest, iso
+    from .config import check_lift
+
+    fmt = output_format(cfg.fmt, cfg.output)
+    check_lift(cfg.height_above_ground, "brute", False)
+    lift = float(cfg.height_above_ground)
+    try:     # a bad sun is the command line's fault (exit status 2)
+        req = SunRequest.from_options(**cfg.sun)
+    except UsageProblem:
+        raise
+    except HillshadeError as exc:
+        raise UsageProblem(str(exc)) from None
+    if cfg.irradiance and not req.from_time:
+        raise UsageProblem("--irradiance needs suns from times (--time or --start/--end/--step): "
+                           "the clear-sky irradiance depends on the date and the place")
+    points = gather(cfg.at, cfg.at_xy, cfg.points)
+    if cfg.output is not None:
+        Claims([cfg.dem] + ([cfg.points] if cfg.points else []), cfg.run.overwrite).claim(
+            cfg.output, "-o/--output")
+    d = cfg.read.read(cfg.dem)
+    points, _ = locate(points, d)
+    on_ground(points, d, lift)
+    if fmt == "geojson" and any(p["lon"] is None for p in points):
+        raise HillshadeError(f"{d.path}: the DEM has no CRS, so the points have no longitude "
+                             "and latitude for GeoJSON: use --format csv or json")
+    site = req.site(d) if req.from_time else None
+    suns, sun_info = req.suns(d, site)
+    n, m = len(points), len(suns)
+    rows = np.array([p["row"] for p in points])
+    cols = np.array([p["col"] for p in points])
+    az = np.empty((n, m))
+    el = np.empty((n, m))
+    for j, s in enumerate(suns):
+        for i in range(n):
+            az[i, j], el[i, j] = sun_at(s, d.shape, rows[i], cols[i])
+    res = sun_at_points(d.heights, rows, cols, az, el, d.grid, lift,
+                        curvature="auto" if cfg.curvature is None else cfg.curvature,
+                        refraction_k=cfg.refraction_k, body=dem_body(d, req.lat))
+    true_az = None
+    if site is not None:     # from the grid's north back to true north, at each point
+        conv = (site.convergence(rows, cols) if site.convergence is not None
+                else np.full(n, site.north_offset))
+        true_az = np.mod(res["azimuth"] - np.asarray(conv, np.float64)[:, None], 360.0)
+    irr = irradiance(points, site, [s.time for s in suns], res) if cfg.irradiance else None
+    out_rows = []
+    for i, p in enumerate(points):
+        for j, s in enumerate(suns):
+            row = {"point": p["id"], "x": p["x"], "y": p["y"], "lon": p["lon"], "lat": p["lat"],
+                   "time": iso(s.time) if s.time is not None else None,
+                   "sun_azimuth_deg": float(res["azimuth"][i, j]),
+                   "sun_true_azimuth_deg": None if true_az is None else float(true_az[i, j]),
+                   "sun_elevation_deg": float(res["elevation"][i, j]),
+                   "horizon_deg": float(res["horizon_deg"][i, j]),
+                   "horizon_distance_m": _finite(res["distance_m"][i, j]),
+                   "margin_deg": float(res["margin_deg"][i, j]),
+                   "lit": bool(res["lit"][i, j]),
+                   "ground_m": float(res["ground_m"][i]),
+                   "observer_m": float(res["observer_m"][i])}
+            if irr is not None:
+                row["dni_w_m2"] = float(irr[0][i, j])
+                row["beam_horizontal_w_m2"] = float(irr[1][i, j])
+            out_rows.append(row)
+    doc = {"dem": os.path.abspath(d.path) if os.path.exists(d.path) else d.path,
+           "crs": d.crs_string(), "convention": CONVENTION,
+           "height_above_ground_m": lift, "earth_curvature": bool(res["curved"].any()),
+           "sun_source": "time" if req.from_time else "given",
+           "irradiance": IRRADIANCE if irr is not None else None,
+           "points": n, "suns": m, "version": __version__, "rows": out_rows}
+    if sun_info is not None:
+        doc["site"] = sun_info["site"]
+        doc["refraction"] = sun_info["refraction"]
+    write_text(cfg.output, render(doc, fmt), cfg.run.overwrite)
+    if not cfg.run.quiet and cfg.output is not None:
+        lit = sum(r["lit"] for r in out_rows)
+        cfg.run.say("summary", f"hillshade-rt: {cfg.output}: {n} point(s) x {m} sun(s), "
+                               f"{lit} of {n * m} lit ({fmt})")
+    return doc
+
+
+def _finite(v) -> float | None:
+    v = float(v)
+    return v if math.isfinite(v) else None
+
+
+def irradiance(points, site, times, res) -> tuple[np.ndarray, np.ndarray]:
+    """(DNI, beam on a horizontal surface), points x times, W/m2: pvlib's Ineichen-Perez clear
+    sky at each point (its longitude and latitude, else the site's; the observer's altitude)
+    for the query's suns (apparent elevation ``res["elevation"]``), the beam counted where the
+    point is lit; 0 with the sun down. The steps of ``pvlib.location.Location.get_clearsky(...,
+    model="ineichen")`` given that solar position (Kasten-Young airmass from the apparent
+    zenith, pressure from the altitude, Linke turbidity from pvlib's monthly climatology),
+    over every point at once."""
+    import warnings
+
+    import pandas as pd
+    from pvlib import atmosphere, clearsky, irradiance as pvirr
+
+    from ..sun import UTC
+    index = pd.DatetimeIndex([t.astimezone(UTC) for t in times])
+    el = res["elevation"]
+    alt = np.asarray(res["observer_m"], np.float64)[:, None]
+    with warnings.catch_warnings():    # pvlib's own use of pandas' deprecated names
+        warnings.filterwarnings("ignore", message=".*is deprecated.*")
+        dni_extra = np.asarray(pvirr.get_extra_radiation(index), np.float64)[None, :]
+        turbidity = np.array([np.asarray(clearsky.lookup_linke_turbidity(
+            index, p["lat"] if p["lat"] is not None else site.lat,
+            p["lon"] if p["lon"] is not None else site.lon), np.float64) for p in points])
+    zen = 90.0 - el
+    with np.errstate(all="ignore"):    # no airmass with the sun down (NaN: 0 below)
+        airmass = atmosphere.get_absolute_airmass(atmosphere.get_relative_airmass(zen),
+                                                  atmosphere.alt2pres(alt))
+        cs = clearsky.ineichen(zen, airmass, turbidity, altitude=alt, dni_extra=dni_extra)
+    dni = np.where(el > 0.0, np.nan_to_num(np.asarray(cs["dni"], np.float64)), 0.0)
+    beam = dni * np.sin(np.radians(np.maximum(el, 0.0))) * res["lit"]
+    return dni, beam
+
+
+def render(doc: dict, fmt: str) -> str:
+    """The document in ``fmt`` (``FORMATS``)."""
+    rows = doc["rows"]
+    cols = COLUMNS + (IRRADIANCE_COLUMNS if doc["irradiance"] else ())
+    if fmt == "json":
+        return json.dumps(doc, indent=1) + "\n"
+    if fmt == "geojson":
+        feats = []
+        series = [c for c in cols if c not in ("point", "x", "y", "lon", "lat", "ground_m",
+                                                "observer_m")]
+        for i in range(doc["points"]):
+            part = rows[i * doc["suns"]:(i + 1) * doc["suns"]]
+            p = part[0]
+            props = {"id": p["point"], "x": p["x"], "y": p["y"], "ground_m": p["ground_m"],
+                     "observer_m": p["observer_m"],
+                     "height_above_ground_m": doc["height_above_ground_m"]}
+            props.update({c: [r[c] for r in part] for c in series})
+            props["convention"] = doc["convention"]
+            if doc["irradiance"]:
+                props["irradiance"] = doc["irradiance"]
+            feats.append({"type": "Feature", "properties": props,
+                          "geometry": {"type": "Point", "coordinates": [p["lon"], p["lat"]]}})
+        return json.dumps({"type": "FeatureCollection", "features": feats}, indent=1) + "\n"
+    buf = _io.StringIO()
+    buf.write(f"# hillshade-rt {doc['version']} query of {doc['dem']}; height above ground "
+              f"{doc['height_above_ground_m']:g} m; earth curvature "
+              f"{'on' if doc['earth_curvature'] else 'off'}; sun "
+              f"{'from times (NREL SPA)' if doc['sun_source'] == 'time' else 'given'}\n")
+    buf.write(f"# {doc['convention']}\n")
+    if doc["irradiance"]:
+        buf.write(f"# {doc['irradiance']}\n")
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(cols)
+    for r in rows:
+        w.writerow(["" if r[c] is None else int(r[c]) if c == "lit" else r[c] for c in cols])
+    return buf.getvalue()
