@@ -309,3 +309,94 @@ def sun_at_points(heights, rows, cols, azimuth, elevation,
     return {"azimuth": az, "elevation": el, "horizon_deg": ang, "distance_m": dist,
             "margin_deg": margin, "lit": (el > 0.0) & (margin >= 0.0), "curved": curved,
             "ground_m": ground, "observer_m": obs}
+
+
+def irradiance(heights, times, spacing: float | tuple[float, float] | Grid | None = None, *,
+               lat: float | None = None, lon: float | None = None, weights=None,
+               mean: bool = False, altitude: float | None = None, clear_sky: str = "ineichen",
+               linke_turbidity: float | None = None, ghi=None, dni=None, dhi=None,
+               albedo: float = 0.2, perez: bool = False, soft: bool = False,
+               sky_view_directions: int = 32, algorithm: str = "auto", backend: str = "auto",
+               curvature="auto", refraction_k: float | None = None, body=None,
+               refraction: bool = True, pressure: float | None = None,
+               temperature: float = 12.0, sun_tolerance: float | None = None) -> dict:
+    """Beam, diffuse, reflected and global irradiance on every cell, as ``hillshade-rt
+    irradiance`` (formulas: ``hillshade_rt.irradiance``, docs/irradiance.md): a dict of float32
+    arrays under "beam", "diffuse", "reflected", "global" (NaN on voids).
+
+    ``times``: aware datetimes (or ISO 8601 strings with an offset). Without ``weights`` each
+    array is a (times, rows, cols) stack of W/m² at each time; with ``weights`` (hours per
+    time, e.g. from ``sun.day_samples``) the sums of W/m² times hours: Wh/m² (``mean``: divided
+    by the hours, W/m²). ``lat``/``lon``: the place (required for an array; a DEM from
+    ``read_dem`` has its own, per tile on large rasters); ``altitude``: metres (default the
+    centre cell's height). The open sky: pvlib's ``clear_sky`` model ("ineichen" with
+    ``linke_turbidity``, None: pvlib's climatological lookup; or "haurwitz"), or measured
+    ``ghi`` (W/m², one per time) with ``dni`` and ``dhi`` (else split by Erbs). ``perez``: the
+    Perez (1990) sky instead of the isotropic one; ``soft``: the visible fraction of the solar
+    disk instead of hard shadows; ``sky_view_directions``: azimuths of the sky view factor.
+    The sun: NREL SPA, apparent (``refraction``, at ``pressure`` hPa, default the standard
+    atmosphere at ``altitude``, and ``temperature`` C), one vector for an array, per tile where
+    it varies by more than ``sun_tolerance`` degrees across a georeferenced DEM.
+    ``heights``, ``spacing``, ``algorithm``, ``backend``, ``curvature``, ``body`` as for
+    :func:`shadow_mask`."""
+    import datetime as _dt
+    import math
+    from . import irradiance as ir
+    from .shading import Shader
+    from .sun import (DEFAULT_TOLERANCE, Atmosphere, Site, centre_height_of, dem_site,
+                      parse_time, sun_over)
+    z, grid, body = _dem_parts(heights, spacing, body)
+    lookup(algorithm)
+    ir.check_options(albedo, linke_turbidity, sky_view_directions)
+    times = [t if isinstance(t, _dt.datetime) else parse_time(str(t), None, "time")
+             for t in ([times] if isinstance(times, (str, _dt.datetime)) else times)]
+    if not times:
+        raise HillshadeError("no times given")
+    if any(t.tzinfo is None for t in times):
+        raise HillshadeError("times must be aware datetimes (with a zone or a UTC offset)")
+    if weights is not None:
+        weights = np.asarray(weights, np.float64)
+        if weights.shape != (len(times),) or not (np.isfinite(weights).all()
+                                                  and (weights >= 0).all()):
+            raise HillshadeError("weights: one number of hours >= 0 per time")
+    elif mean:
+        raise HillshadeError("mean needs weights (the hours each time stands for)")
+    if ghi is None and (dni is not None or dhi is not None):
+        raise HillshadeError("dni and dhi go with ghi")
+    if not np.isfinite(z).any():
+        raise HillshadeError("every height is nodata")
+    height = altitude if altitude is not None else centre_height_of(z)[0]
+    if hasattr(heights, "heights") and hasattr(heights, "crs"):
+        site = dem_site(heights, lat, lon)
+        if altitude is not None:
+            site.height = float(altitude)
+    else:
+        if lat is None or lon is None:
+            raise HillshadeError("give lat and lon (degrees) for heights without a CRS")
+        if not (-90.0 <= lat <= 90.0) or not math.isfinite(lon):
+            raise HillshadeError(f"lat must be within [-90, 90] and lon finite, got {lat}, {lon}")
+        site = Site(float(lat), float((lon + 180.0) % 360.0 - 180.0), float(height), "lat/lon")
+    suns = sun_over(site, z.shape, times, Atmosphere(refraction, pressure, temperature),
+                    DEFAULT_TOLERANCE if sun_tolerance is None else sun_tolerance)
+    zen = np.array([s.zenith for s in suns], np.float64)
+    if ghi is None:
+        sky = ir.clear_sky(times, zen, site.lat, site.lon, site.height, clear_sky,
+                           linke_turbidity)
+    else:
+        sky = ir.measured_sky(times, zen, *(None if v is None else np.asarray(v, np.float64)
+                                            for v in (ghi, dni, dhi)))
+        if sky.ghi.shape != (len(times),):
+            raise HillshadeError("ghi: one value per time")
+    if perez:
+        ir.with_perez(sky, times, zen)
+    ran_on = choose_backend(backend, algorithm, {})
+    vd = ir.dozier_view(z, grid, sky_view_directions, ran_on, curvature, refraction_k, body)
+    shader = Shader(z, grid, algorithm, {}, ran_on, curvature, refraction_k, body)
+    out = ir.accumulate(shader, suns, np.ones(len(times)) if weights is None else weights, sky,
+                        vd, albedo, soft=soft, perez=perez, per_time=weights is None)
+    if mean:
+        hours = float(weights.sum())
+        if hours <= 0:
+            raise HillshadeError("mean: the weights add up to no hours")
+        out = {k: (v / np.float32(hours)).astype(np.float32) for k, v in out.items()}
+    return out

@@ -214,7 +214,7 @@ LAYERS = [
     ("hillshade_rt.api",),
     ("hillshade_rt.run",),
     ("hillshade_rt.warm", "hillshade_rt.testing"),
-    ("hillshade_rt.arrays", "hillshade_rt.run.plan"),
+    ("hillshade_rt.arrays", "hillshade_rt.run.plan", "hillshade_rt.irradiance"),
     ("hillshade_rt.shading",),
     ("hillshade_rt.io", "hillshade_rt.earth", "hillshade_rt.gpu", "hillshade_rt.preview",
      "hillshade_rt.products"),

@@ -1,0 +1,447 @@
+"""Irradiance on terrain: the sun's beam, the sky's diffuse light and the light the terrain
+reflects, per cell of a DEM, summed over a period (``hillshade-rt irradiance``,
+``arrays.irradiance``; the user's page: docs/irradiance.md).
+
+Per sample time t (weight w_t hours), with DNI, DHI, GHI the open sky's irradiance (W/m²) at
+the DEM's place:
+
+* beam      = DNI · max(cos i, 0) · lit            i: incidence on the cell's tilted surface
+                                                   (Horn normals, ``algorithms.relief``), lit:
+                                                   1/0 from the exact cast-shadow mask, or the
+                                                   visible fraction of the solar disk (soft)
+* diffuse   = DHI · Vd                              isotropic sky; Vd: Dozier's sky view factor
+                                                   of the tilted surface, computed once
+            or Perez (1990), per time:
+              max(0, DHI · [(1 - F1) · Vd + F1 · max(cos i, 0) · lit / b
+                            + F2 · sin S · min(1, Vd / ((1 + cos S) / 2))])
+* reflected = GHI · albedo · (1 - Vd)               1 - Vd: the terrain's configuration factor
+* global    = beam + diffuse + reflected
+
+and the energy is the sum of w_t times each (Wh/m²). On an open plane of slope S, Vd is
+(1 + cos S) / 2 and 1 - Vd is (1 - cos S) / 2, so every band is pvlib's
+``get_total_irradiance`` (isotropic, or Perez) for that plane.
+
+The open sky's irradiance comes from pvlib's clear-sky models (Ineichen with a Linke turbidity,
+given or pvlib's climatological lookup; Haurwitz, GHI only, split by Erbs) or from a measured
+series (a CSV of time, ghi[, dni, dhi], interpolated linearly in time; GHI alone split by
+Erbs). The sun is the project's (``sun``: NREL SPA, apparent elevation unless refraction is
+off), the same suns as ``sun-hours``: its zenith at the DEM's centre feeds the clear-sky model.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import math
+import os
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import HillshadeError
+
+CLEAR_SKY_MODELS = ("ineichen", "haurwitz")
+SKY_MODELS = ("isotropic", "perez")
+BANDS = ("beam", "diffuse", "reflected", "global")
+
+# Perez, Ineichen, Seals, Michalsky & Stewart (1990), Solar Energy 44(5), table 6, "all sites
+# composite" (pvlib's default coefficients, 'allsitescomposite1990'): per sky-clearness bin
+# (epsilon below 1.065, 1.23, 1.5, 1.95, 2.8, 4.5, 6.2, above), f11 f12 f13 f21 f22 f23
+PEREZ_1990 = np.array([
+    [-0.0080, 0.5880, -0.0620, -0.0600, 0.0720, -0.0220],
+    [0.1300, 0.6830, -0.1510, -0.0190, 0.0660, -0.0290],
+    [0.3300, 0.4870, -0.2210, 0.0550, -0.0640, -0.0260],
+    [0.5680, 0.1870, -0.2950, 0.1090, -0.1520, -0.0140],
+    [0.8730, -0.3920, -0.3620, 0.2260, -0.4620, 0.0010],
+    [1.1320, -1.2370, -0.4120, 0.2880, -0.8230, 0.0560],
+    [1.0600, -1.6000, -0.3590, 0.2640, -1.1270, 0.1310],
+    [0.6780, -0.3270, -0.2500, 0.1560, -1.3770, 0.2510]])
+PEREZ_EPSILON_BINS = (1.065, 1.23, 1.5, 1.95, 2.8, 4.5, 6.2)
+PEREZ_KAPPA = 1.041          # for the zenith in radians
+COS_85 = math.cos(math.radians(85.0))
+
+
+def check_options(albedo: float, linke_turbidity: float | None = None,
+                  directions: int = 32) -> None:
+    """The numbers a run takes, checked (HillshadeError naming the option)."""
+    if not (math.isfinite(albedo) and 0.0 <= albedo <= 1.0):
+        raise HillshadeError(f"--albedo must be between 0 and 1, got {albedo:g}")
+    if linke_turbidity is not None and not (math.isfinite(linke_turbidity)
+                                            and 1.0 <= linke_turbidity <= 10.0):
+        raise HillshadeError(f"--linke-turbidity must be between 1 and 10 (clean, dry air ~2, "
+                             f"hazy ~5), got {linke_turbidity:g}")
+    if not 4 <= int(directions) <= 360:
+        raise HillshadeError(f"--skyview-directions must be between 4 and 360, got {directions}")
+
+
+# --------------------------------------------------------------------------------------------
+# sample times
+
+def period_samples(start: _dt.datetime, end: _dt.datetime, step: _dt.timedelta,
+                   limit: int = 2_000_000) -> tuple[list[_dt.datetime], list[float]]:
+    """The period ``start``..``end`` (aware datetimes) cut into intervals of ``step`` (elapsed
+    time; the last one shorter when the step does not divide the period), a sample at the middle
+    of each, its weight the interval in hours (as ``sun.day_samples`` cuts days). Each time is
+    shown in ``start``'s zone."""
+    u0, u1 = start.astimezone(_dt.timezone.utc), end.astimezone(_dt.timezone.utc)
+    if u1 <= u0:
+        raise HillshadeError(f"--end {end.isoformat()} is not after --start {start.isoformat()}")
+    if step <= _dt.timedelta(0):
+        raise HillshadeError("--step must be positive")
+    n = -((u0 - u1) // step)        # ceil
+    if n > limit:
+        raise HillshadeError(f"more than {limit} samples: use a longer --step")
+    times, weights = [], []
+    t = u0
+    while t < u1:
+        e = min(t + step, u1)
+        times.append((t + (e - t) / 2).astimezone(start.tzinfo))
+        weights.append((e - t).total_seconds() / 3600.0)
+        t = e
+    return times, weights
+
+
+def _index(times):
+    """A UTC pandas DatetimeIndex of aware datetimes (what pvlib takes)."""
+    import pandas as pd
+    return pd.DatetimeIndex([pd.Timestamp(t).tz_convert("UTC") for t in times])
+
+
+# --------------------------------------------------------------------------------------------
+# the open sky's irradiance at each sample
+
+@dataclass
+class Sky:
+    """The open sky's irradiance at each sample time (W/m², float64 over the samples) and what
+    it is; with Perez, the model's coefficients per sample."""
+
+    dni: np.ndarray
+    dhi: np.ndarray
+    ghi: np.ndarray
+    source: str                       # the clear-sky model, or the measured series
+    turbidity: str | None = None      # the Linke turbidity used (Ineichen)
+    split: str | None = None          # how DNI and DHI were had from GHI, when they were
+    f1: np.ndarray | None = None      # Perez's circumsolar coefficient (perez only)
+    f2: np.ndarray | None = None      # Perez's horizon-brightening coefficient
+    b: np.ndarray | None = None       # max(cos Z, cos 85°)
+    perez_on: np.ndarray | None = None   # the air mass is defined (the sun above the horizon)
+
+
+def _erbs(ghi, zenith, times):
+    from pvlib.irradiance import erbs
+    out = erbs(np.asarray(ghi, np.float64), np.asarray(zenith, np.float64),
+               _index(times).dayofyear.to_numpy())
+    return (np.nan_to_num(np.asarray(out["dni"], np.float64)),
+            np.nan_to_num(np.asarray(out["dhi"], np.float64)))
+
+
+ERBS = "DNI and DHI split from GHI by Erbs et al. (1982), pvlib.irradiance.erbs"
+
+
+def clear_sky(times, zenith, lat: float, lon: float, altitude: float, model: str = "ineichen",
+              linke_turbidity: float | None = None) -> Sky:
+    """pvlib's clear-sky irradiance at ``times`` (aware datetimes) for the sun's ``zenith``
+    (degrees, the project's SPA: the same suns as the shadows) at (lat, lon, altitude m).
+    Ineichen-Perez with ``linke_turbidity`` (None: pvlib's climatological monthly lookup,
+    shipped with pvlib, interpolated to the day), or Haurwitz (GHI only: DNI and DHI by Erbs)."""
+    import pandas as pd
+    from pvlib.location import Location
+    if model not in CLEAR_SKY_MODELS:
+        raise HillshadeError(f"--clear-sky must be one of {', '.join(CLEAR_SKY_MODELS)}, got "
+                             f"{model!r}")
+    zenith = np.asarray(zenith, np.float64)
+    idx = _index(times)
+    pos = pd.DataFrame({"apparent_zenith": zenith, "zenith": zenith,
+                        "apparent_elevation": 90.0 - zenith}, index=idx)
+    loc = Location(lat, lon, altitude=altitude)
+    if model == "haurwitz":
+        cs = loc.get_clearsky(idx, model="haurwitz", solar_position=pos)
+        ghi = np.nan_to_num(cs["ghi"].to_numpy(np.float64))
+        dni, dhi = _erbs(ghi, zenith, times)
+        return Sky(dni, dhi, ghi, "clear sky: Haurwitz (1945), pvlib", split=ERBS)
+    if linke_turbidity is None:
+        from pvlib.clearsky import lookup_linke_turbidity
+        try:
+            lt = np.asarray(lookup_linke_turbidity(idx, lat, lon), np.float64)
+        except Exception as exc:      # the table (an HDF5 file shipped with pvlib), h5py
+            raise HillshadeError(f"pvlib's Linke turbidity table could not be read ({exc}); "
+                                 "give --linke-turbidity") from None
+        what = (f"{float(np.mean(lt)):.2f} (pvlib's climatological monthly lookup at "
+                f"{lat:.4f}, {lon:.4f}, interpolated to the day; range "
+                f"{float(np.min(lt)):.2f}..{float(np.max(lt)):.2f})")
+    else:
+        lt = float(linke_turbidity)
+        what = f"{lt:g} (given)"
+    cs = loc.get_clearsky(idx, model="ineichen", solar_position=pos, linke_turbidity=lt)
+    return Sky(*(np.nan_to_num(cs[k].to_numpy(np.float64)) for k in ("dni", "dhi", "ghi")),
+               "clear sky: Ineichen & Perez (2002), pvlib", turbidity=what)
+
+
+def measured_sky(times, zenith, ghi, dni=None, dhi=None, source: str = "measured") -> Sky:
+    """A measured sky at the sample ``times``: GHI, with DNI and DHI (both) or split by Erbs
+    from GHI and the sun's ``zenith``. Negative values (pyranometers' night offsets) count as
+    0."""
+    ghi = np.maximum(np.asarray(ghi, np.float64), 0.0)
+    if (dni is None) != (dhi is None):
+        raise HillshadeError("give both dni and dhi, or neither (then they are split from ghi)")
+    if dni is None:
+        dni, dhi = _erbs(ghi, zenith, times)
+        return Sky(dni, dhi, ghi, source, split=ERBS)
+    dni = np.maximum(np.asarray(dni, np.float64), 0.0)
+    dhi = np.maximum(np.asarray(dhi, np.float64), 0.0)
+    if not (dni.shape == dhi.shape == ghi.shape):
+        raise HillshadeError("ghi, dni and dhi must have one value per time")
+    return Sky(dni, dhi, ghi, source)
+
+
+def read_series(path: str, tz=None):
+    """A measured series from a CSV file: a header row naming the columns ``time`` and ``ghi``
+    (and optionally ``dni`` and ``dhi``, both), then one row per time (ISO 8601, with a UTC
+    offset, or local times in zone ``tz``), strictly increasing; values in W/m². Returns
+    (unix seconds, ghi, dni or None, dhi or None)."""
+    import csv
+    from .sun import parse_time
+    name = os.path.basename(path)
+    try:
+        fh = open(path, newline="", encoding="utf-8-sig")
+    except FileNotFoundError:
+        raise HillshadeError(f"{path}: no such file") from None
+    except OSError as exc:
+        raise HillshadeError(f"{path}: cannot be read ({exc.strerror or exc})") from None
+    with fh:
+        rows = [r for r in csv.reader(fh)]
+    lines = [(i + 1, r) for i, r in enumerate(rows) if r and any(c.strip() for c in r)
+             and not r[0].lstrip().startswith("#")]
+    if not lines:
+        raise HillshadeError(f"{path}: empty (a header row with time and ghi columns, then "
+                             "one row per time)")
+    head_line, head = lines[0]
+    cols = [c.strip().lower() for c in head]
+    missing = [c for c in ("time", "ghi") if c not in cols]
+    if missing:
+        raise HillshadeError(f"{path}: no {' or '.join(missing)} column in its header (line "
+                             f"{head_line}: {', '.join(c.strip() for c in head)}); the columns "
+                             "are time, ghi and optionally dni and dhi")
+    if ("dni" in cols) != ("dhi" in cols):
+        raise HillshadeError(f"{path}: give both dni and dhi columns, or neither (then DNI and "
+                             "DHI are split from ghi)")
+    keys = ["ghi"] + (["dni", "dhi"] if "dni" in cols else [])
+    at = {c: cols.index(c) for c in ["time"] + keys}
+    unix, values = [], {k: [] for k in keys}
+    for n, r in lines[1:]:
+        if len(r) < len(cols):
+            raise HillshadeError(f"{name} line {n}: {len(r)} fields, the header has {len(cols)}")
+        t = parse_time(r[at["time"]], tz, f"{name} line {n}: time")
+        unix.append(t.timestamp())
+        for k in keys:
+            text = r[at[k]].strip()
+            try:
+                v = float(text)
+            except ValueError:
+                v = math.nan
+            if not math.isfinite(v):
+                raise HillshadeError(f"{name} line {n}: {k} {text!r} is not a number of W/m2")
+            values[k].append(v)
+    if len(unix) < 2:
+        raise HillshadeError(f"{path}: needs at least two rows of values (it is interpolated "
+                             "in time)")
+    u = np.array(unix, np.float64)
+    if not (np.diff(u) > 0).all():
+        k = int(np.argmin(np.diff(u) > 0))
+        raise HillshadeError(f"{path}: times must increase, but row {k + 2} is not after row "
+                             f"{k + 1}")
+    out = [np.array(values[k], np.float64) for k in keys]
+    return (u, out[0]) + ((out[1], out[2]) if len(out) == 3 else (None, None))
+
+
+def series_at(times, unix, *columns, path: str = "the series"):
+    """Each of ``columns`` (values at ``unix`` seconds) linearly interpolated at the sample
+    ``times``; a sample outside the series' first..last time is an error (nothing is
+    extrapolated)."""
+    from .sun import iso
+    ts = np.array([t.timestamp() for t in times], np.float64)
+    if ts.size and (ts.min() < unix[0] or ts.max() > unix[-1]):
+        show = times[0].tzinfo
+
+        def at(u):
+            return iso(_dt.datetime.fromtimestamp(u, _dt.timezone.utc).astimezone(show))
+        raise HillshadeError(f"{path} runs from {at(unix[0])} to {at(unix[-1])}, but the "
+                             f"period's samples run from {at(ts.min())} to {at(ts.max())}: "
+                             "give a series that covers the period")
+    return tuple(None if c is None else np.interp(ts, unix, c) for c in columns)
+
+
+def with_perez(sky: Sky, times, zenith) -> Sky:
+    """``sky`` with the Perez (1990) coefficients per sample: F1 (circumsolar), F2 (horizon
+    brightening) from the sky's clearness and brightness (pvlib's air mass, Kasten & Young
+    1989, and extraterrestrial irradiance), as ``pvlib.irradiance.perez`` computes them; where
+    the air mass is undefined (the sun below the horizon) the model gives no sky diffuse, as
+    pvlib's."""
+    from pvlib.atmosphere import get_relative_airmass
+    from pvlib.irradiance import get_extra_radiation
+    zenith = np.asarray(zenith, np.float64)
+    am = np.asarray(get_relative_airmass(zenith), np.float64)
+    extra = np.asarray(get_extra_radiation(_index(times)), np.float64)
+    z = np.radians(zenith)
+    on = np.isfinite(am) & (sky.dhi > 0)
+    dhi = np.where(on, sky.dhi, 1.0)
+    delta = np.where(on, sky.dhi * np.where(on, am, 0.0) / extra, 0.0)
+    kz3 = PEREZ_KAPPA * z ** 3
+    eps = ((dhi + np.where(on, sky.dni, 0.0)) / dhi + kz3) / (1.0 + kz3)
+    c = PEREZ_1990[np.digitize(eps, PEREZ_EPSILON_BINS)]
+    f1 = np.maximum(c[:, 0] + c[:, 1] * delta + c[:, 2] * z, 0.0)
+    f2 = c[:, 3] + c[:, 4] * delta + c[:, 5] * z
+    sky.f1, sky.f2 = np.where(on, f1, 0.0), np.where(on, f2, 0.0)
+    sky.b = np.maximum(np.cos(z), COS_85)
+    sky.perez_on = np.isfinite(am)
+    return sky
+
+
+# --------------------------------------------------------------------------------------------
+# the terrain: what does not change with the sun
+
+def dozier_view(z, grid, directions: int, backend: str = "cpu", curvature="auto",
+                refraction_k: float | None = None, body=None) -> np.ndarray:
+    """Dozier's sky view factor Vd of every cell's tilted surface (float32, NaN voids) from its
+    exact horizon in ``directions`` azimuths, as ``hillshade-rt skyview --definition dozier``
+    (curvature "auto": on for a raster more than 1 km across)."""
+    from .algorithms import horizon as hz
+    from .algorithms.skyview import sky_view
+    from .geometry import equal_azimuths
+    from .shading import horizon_shader
+    shader = horizon_shader(z, grid, backend, curvature, refraction_k, body)
+    if backend == "gpu":
+        from .gpu import GpuDem
+        g = GpuDem(z)
+
+        def angles_of(a):
+            return hz.horizon_angles_gpu(g, shader.rays(grid, a, 45.0))
+    else:
+        pyramid = shader.pyramid(z, True)      # one for every direction
+
+        def angles_of(a):
+            return hz.horizon_angles(z, shader.rays(grid, a, 45.0), pyramid=pyramid)
+    return sky_view(z, grid, equal_azimuths(360.0 / int(directions)), angles_of, "dozier")
+
+
+def slope_terms(z, grid) -> tuple[np.ndarray, np.ndarray]:
+    """(cos S, sin S) of every cell's slope S (Horn's normals, float64, NaN voids)."""
+    from .algorithms.relief import incidence
+    cos_s = incidence(z, grid, 0.0, 90.0).astype(np.float64)
+    return cos_s, np.sqrt(np.maximum(1.0 - cos_s * cos_s, 0.0))
+
+
+def cos_incidence(shader, sun) -> np.ndarray:
+    """cos i of the sun on every cell (float32, NaN voids), tile by tile where the sun is per
+    tile (each tile's own sun, as the shadows' incidence)."""
+    regions = sun.regions(shader.z.shape)
+    if len(regions) == 1:
+        return shader.incidence(regions[0])
+    out = np.empty(shader.z.shape, np.float32)
+    for r in regions:
+        out[r.rows, r.cols] = shader.incidence(r)
+    return out
+
+
+def is_dark(sun, soft: bool) -> bool:
+    """The sun (or its disk, with ``soft``) is below the horizon everywhere: nothing is lit."""
+    from .sun import SUN_RADIUS_DEG
+    top = max([r.elevation for r in sun.tiles] if sun.tiles else [sun.elevation])
+    return top + (SUN_RADIUS_DEG if soft else 0.0) <= 0.0
+
+
+# --------------------------------------------------------------------------------------------
+# the sums
+
+def accumulate(shader, suns, weights, sky: Sky, vd: np.ndarray, albedo: float, *,
+               soft: bool = False, perez: bool = False, per_time: bool = False,
+               stats: dict | None = None, timer=None, progress=None) -> dict:
+    """The four bands (``BANDS``, float32, NaN voids) over ``shader``'s DEM: with ``per_time``
+    each a (times, rows, cols) stack of W/m² at each sun, else the sums of W/m² times
+    ``weights`` (hours): Wh/m². ``suns``: ``sun.SunOver`` per sample (the shadows' and the
+    incidence's suns), ``sky`` the open sky at each, ``vd`` Dozier's sky view factor. The cast
+    shadows (``shading.render``) are computed only for samples with the sun up and light to
+    cast; ``timer`` (``run.report.Timer``-like) times them as "shadows" and the rest as
+    "irradiance"; ``progress`` wraps the loop (a progress bar)."""
+    import contextlib
+    from .shading import render
+    w = np.asarray(weights, np.float64)
+    n = len(suns)
+    if not (len(w) == n == len(sky.dni)):
+        raise HillshadeError("one weight and one sky value per sun")
+    if perez and sky.f1 is None:
+        raise HillshadeError("the sky has no Perez coefficients (with_perez)")
+
+    def timed(stage):
+        return timer(stage) if timer is not None else contextlib.nullcontext()
+    shape = shader.z.shape
+    void = np.isnan(shader.z)
+    vd64 = vd.astype(np.float64)
+    if perez:
+        cos_s, sin_s = slope_terms(shader.z, shader.grid)
+        # the horizon band's share left by the terrain, relative to the open plane's
+        horizon_share = np.minimum(vd64 / ((1.0 + cos_s) / 2.0), 1.0)
+    if per_time:
+        stacks = {k: np.empty((n,) + shape, np.float32) for k in BANDS}
+    else:
+        beam = np.zeros(shape, np.float64)
+        diffuse = np.zeros(shape, np.float64)
+    zero = np.where(void, np.float32(np.nan), np.float32(0.0))
+    counted = {"samples": n, "samples_with_shadows": 0}
+    for k in (progress(range(n)) if progress is not None else range(n)):
+        s = suns[k]
+        dni, dhi, ghi = float(sky.dni[k]), float(sky.dhi[k]), float(sky.ghi[k])
+        circ = perez and dhi > 0 and bool(sky.perez_on[k]) and sky.f1[k] > 0
+        direct = None
+        if (dni > 0 or circ) and not is_dark(s, soft):
+            with timed("shadows"):
+                lit = render(shader, s, "sun", soft=soft, stats=stats)
+            with timed("irradiance"):
+                direct = np.maximum(cos_incidence(shader, s), np.float32(0.0)) * lit
+            counted["samples_with_shadows"] += 1
+        with timed("irradiance"):
+            b_t = zero if direct is None else np.float32(dni) * direct
+            if perez:
+                if dhi > 0 and sky.perez_on[k]:
+                    d_t = (1.0 - sky.f1[k]) * vd64 + sky.f2[k] * sin_s * horizon_share
+                    if direct is not None and sky.f1[k] > 0:
+                        d_t += (sky.f1[k] / sky.b[k]) * direct
+                    d_t = np.maximum(dhi * d_t, 0.0)
+                else:
+                    d_t = zero
+            if per_time:
+                stacks["beam"][k] = b_t
+                stacks["diffuse"][k] = d_t if perez else np.float32(dhi) * vd
+                stacks["reflected"][k] = np.float32(ghi * albedo) * (1.0 - vd)
+                stacks["global"][k] = (stacks["beam"][k] + stacks["diffuse"][k]
+                                       + stacks["reflected"][k])
+            else:
+                if direct is not None:
+                    beam += w[k] * b_t
+                if perez and d_t is not zero:
+                    diffuse += w[k] * d_t
+    if stats is not None:
+        stats.update(counted)
+    if per_time:
+        return stacks
+    with timed("irradiance"):
+        if not perez:
+            diffuse = float(np.sum(w * sky.dhi)) * vd64
+        reflected = float(np.sum(w * sky.ghi)) * albedo * (1.0 - vd64)
+        beam[void] = np.nan
+        diffuse[void] = np.nan
+        bands = {"beam": beam, "diffuse": diffuse, "reflected": reflected,
+                 "global": beam + diffuse + reflected}
+        return {k: v.astype(np.float32) for k, v in bands.items()}
+
+
+def definitions(sky_model: str, directions: int, soft: bool) -> str:
+    """The bands' formulas, for the output's tags."""
+    lit = "visible fraction of the solar disk" if soft else "1 lit, 0 in cast shadow"
+    diffuse = (f"DHI * Vd (isotropic; Vd: Dozier sky view factor of the tilted surface, "
+               f"{directions} directions)" if sky_model == "isotropic" else
+               f"Perez 1990: max(0, DHI * ((1 - F1) Vd + F1 max(cos i, 0) lit / max(cos Z, "
+               f"cos 85) + F2 sin S min(1, Vd / ((1 + cos S) / 2)))), Vd: Dozier sky view "
+               f"factor of the tilted surface, {directions} directions")
+    return (f"beam = DNI * max(cos i, 0) * lit (i: incidence on the cell's surface, Horn "
+            f"normals; lit: {lit}); diffuse = {diffuse}; reflected = GHI * albedo * (1 - Vd); "
+            "global = beam + diffuse + reflected")
