@@ -129,7 +129,7 @@ class Sky:
 def _erbs(ghi, zenith, times):
     from pvlib.irradiance import erbs
     out = erbs(np.asarray(ghi, np.float64), np.asarray(zenith, np.float64),
-               _index(times).dayofyear.to_numpy())
+               _index(times).day_of_year.to_numpy())
     return (np.nan_to_num(np.asarray(out["dni"], np.float64)),
             np.nan_to_num(np.asarray(out["dhi"], np.float64)))
 

@@ -19,6 +19,7 @@ from .. import __version__
 from .errors import OneLineErrors
 from .horizon import horizon
 from .info import info
+from .irradiance import irradiance
 from .profile import profile
 from .query import query
 from .shadow import hillshade, shadow
@@ -34,6 +35,7 @@ def cli():
 
 for _command in (shadow, hillshade, sun_hours, horizon, profile, query, skyview, info):
     cli.add_command(_command)
+cli.add_command(irradiance)
 
 
 def main():

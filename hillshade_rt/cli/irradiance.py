@@ -1,0 +1,76 @@
+"""``hillshade-rt irradiance``: options -> ``run.irradiance.IrradianceConfig`` ->
+``run.irradiance``."""
+
+from __future__ import annotations
+
+import click
+
+from .errors import errors_to_click, say
+from ..run.config import PLACE_KEYS
+from .options import (algorithm_option, backend_option, dem_options, finite, format_option,
+                      overwrite_option, physics_options, place_options, quiet_option,
+                      threads_option, to_read_options, to_run_options)
+
+
+@click.command()
+@click.argument("dem", type=click.Path(dir_okay=False))
+@click.argument("output", type=click.Path(dir_okay=False))
+@click.option("--date", "date_", default=None, metavar="YYYY-MM-DD",
+              help="The day (or first day), midnight to midnight in --tz (else local mean "
+                   "solar time).")
+@click.option("--end-date", default=None, metavar="YYYY-MM-DD",
+              help="Last day of a range (included).")
+@click.option("--start", default=None, metavar="ISO8601",
+              help="Or the period from this time (with --end), e.g. 2026-06-21T06:00+02:00.")
+@click.option("--end", default=None, metavar="ISO8601", help="End of the period (with --start).")
+@click.option("--step", default="15min", show_default=True, metavar="DURATION",
+              help="Sampling interval; each sample (at its middle) stands for its interval.")
+@click.option("--clear-sky", type=click.Choice(["ineichen", "haurwitz"]), default=None,
+              help="pvlib's clear-sky model (default ineichen; haurwitz gives GHI only, split "
+                   "into DNI and DHI by Erbs).")
+@click.option("--linke-turbidity", type=float, default=None, callback=finite, metavar="T",
+              help="Linke turbidity for ineichen (default: pvlib's climatological monthly "
+                   "value at the place).")
+@click.option("--albedo", type=float, default=0.2, show_default=True, callback=finite,
+              help="Ground reflectance (0..1) of the terrain the cell sees.")
+@click.option("--ghi", "ghi", type=click.Path(dir_okay=False), default=None, metavar="FILE.csv",
+              help="A measured sky instead: CSV with columns time, ghi (and dni, dhi; else "
+                   "split by Erbs), W/m2, interpolated in time.")
+@click.option("--mean", is_flag=True, help="Mean W/m2 over the period instead of Wh/m2.")
+@click.option("--perez", is_flag=True,
+              help="Perez (1990) anisotropic sky (circumsolar part shadowed with the beam) "
+                   "instead of the isotropic one.")
+@click.option("--skyview-directions", type=click.IntRange(4, 360), default=32, show_default=True,
+              metavar="N", help="Azimuths of the sky view factor (computed once).")
+@place_options
+@algorithm_option
+@physics_options
+@click.option("--preview", type=click.Path(dir_okay=False), default=None,
+              help="Also write a quick-look PNG (relief tinted by the global band).")
+@backend_option
+@threads_option
+@click.option("--report", "report_path", type=click.Path(dir_okay=False), default=None,
+              help="Write a JSON report here.")
+@overwrite_option("Replace outputs if they exist.")
+@quiet_option("No progress bar or summary on stderr.")
+@format_option
+@dem_options
+@errors_to_click
+def irradiance(dem, output, date_, end_date, start, end, step, clear_sky, linke_turbidity,
+               albedo, ghi, mean, perez, skyview_directions, tz, lat, lon, pressure, temperature,
+               no_refraction, sun_tolerance, algorithm, curvature, refraction_k, soft, preview,
+               backend, threads, report_path, overwrite, quiet, fmt, **read_opts):
+    """Write the beam, diffuse, reflected and global irradiance on every cell of DEM over a
+    period to OUTPUT: 4 float32 bands, Wh/m2 (W/m2 with --mean), -9999 nodata. Beam: DNI on
+    the tilted surface, in cast shadow 0; diffuse: DHI times the sky view factor; reflected:
+    GHI times albedo times the terrain's view factor."""
+    from ..run.irradiance import IrradianceConfig, irradiance as run_irradiance
+    kw = dict(tz=tz, lat=lat, lon=lon, pressure=pressure, temperature=temperature,
+              no_refraction=no_refraction, sun_tolerance=sun_tolerance, preview=preview,
+              backend=backend, threads=threads, report_path=report_path, overwrite=overwrite,
+              quiet=quiet, fmt=fmt, **read_opts)
+    place = {k: kw.pop(k) for k in PLACE_KEYS}
+    run_irradiance(IrradianceConfig(
+        dem, output, date_, end_date, start, end, step, clear_sky, linke_turbidity, albedo, ghi,
+        mean, soft, perez, skyview_directions, place, algorithm, curvature, refraction_k,
+        to_read_options(kw), to_run_options(kw, say)))

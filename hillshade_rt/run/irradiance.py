@@ -1,0 +1,244 @@
+"""The ``irradiance`` run: beam, diffuse, reflected and global irradiance per cell of a DEM over
+a period (Wh/m², or the mean W/m²), four float32 bands; the formulas are
+``hillshade_rt.irradiance``'s (the user's page: docs/irradiance.md).
+
+The sun is sampled as ``sun-hours`` samples it (every step, each sample at the middle of its
+interval, weighted by the interval's hours; per tile on large rasters; nights skipped), the same
+suns light the cast shadows (``shading.render``) and feed the clear-sky model. The DEM is held
+in memory (no windows yet).
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+
+from .. import __version__
+from ..errors import HillshadeError, UsageProblem
+from .config import ReadOptions, RunOptions
+
+
+@dataclass
+class IrradianceConfig:
+    """An ``irradiance`` run. The period: ``date`` (and ``end_date``), or ``start`` and
+    ``end``; the open sky: ``clear_sky`` (None: ineichen) with ``linke_turbidity``, or the
+    measured series of the CSV file ``ghi``."""
+
+    dem: str
+    output: str
+    date: str | None = None
+    end_date: str | None = None
+    start: str | None = None
+    end: str | None = None
+    step: str = "15min"
+    clear_sky: str | None = None          # None: "ineichen" (and not with ``ghi``)
+    linke_turbidity: float | None = None  # None: pvlib's climatological lookup
+    albedo: float = 0.2
+    ghi: str | None = None                # a CSV: time, ghi[, dni, dhi]
+    mean: bool = False                    # mean W/m² over the period instead of Wh/m²
+    soft: bool = False
+    perez: bool = False
+    skyview_directions: int = 32
+    place: dict = field(default_factory=dict)    # PLACE_KEYS: tz, lat, lon, pressure, ...
+    algorithm: str = "auto"
+    curvature: object = None
+    refraction_k: float | None = None
+    read: ReadOptions = field(default_factory=ReadOptions)
+    run: RunOptions = field(default_factory=RunOptions)
+
+    def check(self):
+        """The options' combinations and values (UsageProblem: exit status 2)."""
+        from ..irradiance import CLEAR_SKY_MODELS, check_options
+        by_date = self.date is not None or self.end_date is not None
+        by_time = self.start is not None or self.end is not None
+        if by_date == by_time:
+            raise UsageProblem("give the period one way: --date [--end-date], or --start and "
+                               "--end")
+        if by_date and self.date is None:
+            raise UsageProblem("--end-date goes with --date")
+        if by_time and (self.start is None or self.end is None):
+            raise UsageProblem("--start and --end go together")
+        if self.clear_sky is not None and self.clear_sky not in CLEAR_SKY_MODELS:
+            raise UsageProblem(f"--clear-sky must be one of {', '.join(CLEAR_SKY_MODELS)}, got "
+                               f"{self.clear_sky!r}")
+        if self.ghi is not None and (self.clear_sky is not None
+                                     or self.linke_turbidity is not None):
+            raise UsageProblem("--ghi gives the sky measured: --clear-sky and "
+                               "--linke-turbidity do not go with it")
+        if self.linke_turbidity is not None and self.clear_sky == "haurwitz":
+            raise UsageProblem("--linke-turbidity is Ineichen's: Haurwitz takes none")
+        try:
+            check_options(self.albedo, self.linke_turbidity, self.skyview_directions)
+        except HillshadeError as exc:
+            raise UsageProblem(str(exc)) from None
+
+
+def irradiance(cfg: IrradianceConfig) -> dict:
+    import numba
+    import numpy as np
+
+    from .. import irradiance as ir
+    from ..earth import dem_body
+    from ..io import (BandWriter, check_output_format, input_label, output_driver, write_json,
+                      write_png)
+    from ..io.write import Claims
+    from ..preview import relief_rgb
+    from ..shading import Shader, choose_backend
+    from ..sun import SunRequest, day_samples, iso, parse_date, parse_step, parse_time
+    from .notes import compile_note
+    from .report import Timer, progress
+
+    ro, output = cfg.run, cfg.output
+    cfg.check()
+    timer = Timer()
+    claims = Claims([cfg.dem], ro.overwrite)
+    for path, what in ((output, "OUTPUT"), (ro.report_path, "--report"),
+                       (ro.preview, "--preview")):
+        if path is not None:
+            if cfg.ghi is not None and os.path.abspath(path) == os.path.abspath(cfg.ghi):
+                raise UsageProblem(f"{path}: {what} is also the --ghi series; give another path")
+            claims.claim(path, what)
+    check_output_format(output, output_driver(output, ro.fmt), "float32", len(ir.BANDS), True)
+    try:    # the command line alone decides these: a bad one is a usage error (exit 2)
+        step = parse_step(cfg.step)
+        req = SunRequest.at_place([], **cfg.place)
+        if cfg.date is not None:
+            first = parse_date(cfg.date, "--date")
+            last = parse_date(cfg.end_date, "--end-date") if cfg.end_date is not None else first
+            if last < first:
+                raise HillshadeError("--end-date is before --date")
+        else:
+            t0 = parse_time(cfg.start, req.tz, "--start")
+            t1 = parse_time(cfg.end, req.tz, "--end")
+            if req.tz is not None:     # shown in the zone of --tz
+                t0, t1 = t0.astimezone(req.tz), t1.astimezone(req.tz)
+            times, weights = ir.period_samples(t0, t1, step)
+    except HillshadeError as exc:
+        raise UsageProblem(str(exc)) from None
+    series = None
+    if cfg.ghi is not None:      # a bad file fails the run (exit 1) before the DEM is read
+        series = ir.read_series(cfg.ghi, req.tz)
+    if ro.threads is not None:
+        numba.set_num_threads(min(ro.threads, numba.config.NUMBA_NUM_THREADS))
+    ran_on = choose_backend(ro.backend, cfg.algorithm, {})
+    if not ro.quiet:
+        note = compile_note(cfg.algorithm, ran_on, True)
+        if note:
+            ro.say("compile", note)
+    with timer("read"):
+        d = cfg.read.read(cfg.dem)
+    if not np.isfinite(d.heights).any():
+        raise HillshadeError(f"{input_label(d.path)}: every height is nodata")
+    with timer("prepare"):
+        site = req.site(d, "irradiance computes the Earth's sun only")
+        if cfg.date is not None:
+            try:
+                times, weights = day_samples(first, last, cfg.step, req.tz, site.lon)
+            except HillshadeError as exc:   # too many samples for the dates and the step
+                raise UsageProblem(str(exc)) from None
+            day = (f"midnight to midnight, {req.tz.key}" if req.tz is not None
+                   else f"local mean solar time at longitude {site.lon:.4f}")
+            period = (f"{first.isoformat()}" + (f" to {last.isoformat()}" if last > first
+                                                  else "") + f" ({day})")
+        else:
+            period = f"{iso(t0)} to {iso(t1)}"
+        hours = float(np.sum(weights))
+        req.times = times
+        suns, sun_info = req.suns(d, site)
+        zen = np.array([s.zenith for s in suns], np.float64)
+        if series is None:
+            sky = ir.clear_sky(times, zen, site.lat, site.lon, site.height,
+                               cfg.clear_sky or "ineichen", cfg.linke_turbidity)
+        else:
+            unix, *cols = series
+            ghi, dni, dhi = ir.series_at(times, unix, *cols, path=cfg.ghi)
+            sky = ir.measured_sky(times, zen, ghi, dni, dhi,
+                                  f"measured: {os.path.basename(cfg.ghi)} (interpolated in "
+                                  "time)")
+        if cfg.perez:
+            ir.with_perez(sky, times, zen)
+        curvature = "auto" if cfg.curvature is None else cfg.curvature
+        body = dem_body(d, req.lat)
+        shader = Shader(d.heights, d.grid, cfg.algorithm, {}, ran_on, curvature,
+                        cfg.refraction_k, body, d.height_range(), survey=d.survey())
+        work = [s for s in suns if not ir.is_dark(s, cfg.soft)]
+        if work:
+            shader.warm_up(work[0].azimuth, max(work[0].elevation, 1.0), soft=cfg.soft,
+                           incidence=True, field=any(s.fieldwise for s in work))
+    with timer("sky view"):
+        vd = ir.dozier_view(d.heights, d.grid, cfg.skyview_directions, ran_on, curvature,
+                            cfg.refraction_k, body)
+    algo_stats: dict = {}
+    with timer("compute"):
+        bands = ir.accumulate(shader, suns, weights, sky, vd, cfg.albedo, soft=cfg.soft,
+                              perez=cfg.perez, stats=algo_stats, timer=timer,
+                              progress=lambda it: progress(it, ro.quiet,
+                                                           "hillshade-rt irradiance", "sun"))
+        if cfg.mean:
+            bands = {k: (v / np.float32(hours)).astype(np.float32) for k, v in bands.items()}
+    units = ("W/m2, mean over the period" if cfg.mean
+             else "Wh/m2, energy over the period")
+    sky_model = "perez" if cfg.perez else "isotropic"
+    tags = {"HILLSHADE_RT_VERSION": __version__, "UNITS": units, "PERIOD": period,
+            "PERIOD_HOURS": f"{hours:g}", "STEP": cfg.step, "SAMPLES": len(suns),
+            "SKY": sky.source, "SKY_MODEL": sky_model, "ALBEDO": f"{cfg.albedo:g}",
+            "SKYVIEW_DIRECTIONS": cfg.skyview_directions, "SOFT": cfg.soft,
+            "ALGORITHM": cfg.algorithm,
+            "DEFINITIONS": ir.definitions(sky_model, cfg.skyview_directions, cfg.soft),
+            "SUN": "NREL SPA (pvlib.spa) at the DEM's centre, per tile where it varies; "
+                   + ("apparent (refracted) elevation" if req.atmosphere.refraction
+                      else "true elevation (--no-refraction)"),
+            "EDGE": "no terrain beyond the raster: border cells see open sky outward"}
+    if cfg.ghi is None:
+        tags["CLEAR_SKY"] = cfg.clear_sky or "ineichen"
+        tags["TURBIDITY"] = sky.turbidity or "none (Haurwitz takes none)"
+    if sky.split:
+        tags["SPLIT"] = sky.split
+    unit = "W/m2" if cfg.mean else "Wh/m2"
+    with timer("write"):
+        with BandWriter(output, d, len(ir.BANDS), "float32", -9999.0, tags,
+                        overview_resampling="average", overwrite=ro.overwrite,
+                        fmt=ro.fmt) as w:
+            for i, k in enumerate(ir.BANDS, 1):
+                v = bands[k]
+                w.write(i, np.where(np.isnan(v), np.float32(-9999.0), v), k, {"UNITS": unit})
+        if ro.preview is not None:
+            g = bands["global"]
+            top = float(np.nanmax(g)) if np.isfinite(g).any() else 0.0
+            write_png(ro.preview, relief_rgb(d.heights, d.grid,
+                                             warm=g / top if top > 0 else np.zeros_like(g)),
+                      ro.overwrite)
+
+    def summary(v):
+        ok = v[~np.isnan(v)]
+        return ({"min": float(ok.min()), "mean": float(ok.mean()), "max": float(ok.max())}
+                if ok.size else {"min": None, "mean": None, "max": None})
+    sec = dict(timer.seconds, total=timer.total())
+    with_shadows = algo_stats.pop("samples_with_shadows", 0)
+    algo_stats.pop("samples", None)
+    rep = {"input": input_label(d.path), "output": os.path.abspath(output),
+           "shape": list(d.shape), "algorithm": cfg.algorithm, "backend": ran_on,
+           "period": period, "period_hours": hours, "step": cfg.step, "units": unit,
+           "samples": len(suns), "samples_with_sun": len(work),
+           "samples_with_shadows": with_shadows,
+           "sky": sky.source, "sky_model": sky_model, "turbidity": sky.turbidity,
+           "split": sky.split, "albedo": cfg.albedo,
+           "skyview_directions": cfg.skyview_directions, "soft": cfg.soft,
+           "sky_view": summary(vd),
+           "open_sky": {"dni_wh_m2": float(np.sum(np.asarray(weights) * sky.dni)),
+                        "dhi_wh_m2": float(np.sum(np.asarray(weights) * sky.dhi)),
+                        "ghi_wh_m2": float(np.sum(np.asarray(weights) * sky.ghi))},
+           "bands": {k: summary(bands[k]) for k in ir.BANDS},
+           "curvature": shader.report(), "algorithm_stats": algo_stats,
+           "seconds": sec, "version": __version__}
+    rep.update(sun_info or {})
+    if ro.report_path is not None:
+        write_json(ro.report_path, rep, ro.overwrite)
+    if not ro.quiet:
+        g = rep["bands"]["global"]
+        ro.say("summary", f"hillshade-rt: {output}: {d.shape[1]}x{d.shape[0]}, {period}, "
+                          f"{len(work)} of {len(suns)} samples with the sun up; global "
+                          f"{g['min']:.1f} .. {g['max']:.1f} {unit} (mean {g['mean']:.1f}); "
+                          f"shadows {sec.get('shadows', 0.0):.2f} s, sky view "
+                          f"{sec['sky view']:.2f} s, total {sec['total']:.2f} s")
+    return rep
