@@ -118,3 +118,50 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
         return run_shade(cfg)
     finally:
         virtual_outputs.reset(token)
+
+
+def irradiance(dem, output, *, date=None, end_date=None, start=None, end=None,
+               step: str = "15min", clear_sky: str | None = None,
+               linke_turbidity: float | None = None, albedo: float = 0.2, ghi=None,
+               mean: bool = False, soft: bool = False, perez: bool = False,
+               skyview_directions: int = 32, algorithm: str = "auto",
+               curvature: bool | None = None, refraction_k: float | None = None,
+               backend: str = "auto", fmt: str | None = None, overwrite: bool = False,
+               report: str | None = None, preview: str | None = None, progress: bool = False,
+               **more) -> dict:
+    """``hillshade-rt irradiance`` as a function: the beam, diffuse, reflected and global
+    irradiance on every cell of the DEM at ``dem`` over a period, written to ``output`` (4
+    float32 bands, Wh/m², or W/m² with ``mean``). The period: ``date`` (a date or
+    "YYYY-MM-DD") and ``end_date``, or ``start`` and ``end`` (datetimes or ISO strings). The
+    sky: ``clear_sky`` ("ineichen", the default, with ``linke_turbidity``; "haurwitz") or
+    ``ghi``, the path of a measured series (CSV: time, ghi[, dni, dhi]). Further keywords are
+    the command line's options of the same name (``tz``, ``lat``, ``lon``, ``band``,
+    ``nodata``, ``threads``, ...). Returns the report. For heights in memory:
+    :func:`hillshade_rt.arrays.irradiance`."""
+    from .run import ReadOptions, RunOptions
+    from .run.irradiance import IrradianceConfig, irradiance as run_irradiance
+    from .sun import DEFAULT_TOLERANCE
+    from .io.write import virtual_outputs
+    unknown = set(more) - set(_PASSED)
+    if unknown:
+        raise TypeError(f"irradiance() got unexpected keyword argument(s) "
+                        f"{', '.join(sorted(unknown))}")
+
+    def text(v):
+        return None if v is None else str(v.isoformat() if hasattr(v, "isoformat") else v)
+    place = {k: more.get(k, d) for k, d in zip(PLACE_KEYS, (None,) * 5 + (False,
+                                                                          DEFAULT_TOLERANCE))}
+    read = ReadOptions(**{k: more[k] for k in READ_KEYS if k in more})
+    run = RunOptions(backend=backend, threads=more.get("threads"), report_path=report,
+                     overwrite=overwrite, quiet=not progress, fmt=fmt, preview=preview,
+                     say=_stderr)
+    cfg = IrradianceConfig(os.fspath(dem), os.fspath(output), text(date), text(end_date),
+                           text(start), text(end), step, clear_sky, linke_turbidity, albedo,
+                           None if ghi is None else os.fspath(ghi), mean, soft, perez,
+                           skyview_directions, place, algorithm, curvature, refraction_k,
+                           read, run)
+    token = virtual_outputs.set(True)    # /vsimem/ outputs are fine from Python
+    try:
+        return run_irradiance(cfg)
+    finally:
+        virtual_outputs.reset(token)

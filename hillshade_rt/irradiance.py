@@ -230,7 +230,12 @@ def read_series(path: str, tz=None):
     for n, r in lines[1:]:
         if len(r) < len(cols):
             raise HillshadeError(f"{name} line {n}: {len(r)} fields, the header has {len(cols)}")
-        t = parse_time(r[at["time"]], tz, f"{name} line {n}: time")
+        where = f"{name} line {n}"
+        try:
+            t = parse_time(r[at["time"]], tz, f"{where}: time")
+        except HillshadeError as exc:       # (not every message names the option)
+            msg = str(exc)
+            raise HillshadeError(msg if msg.startswith(where) else f"{where}: {msg}") from None
         unix.append(t.timestamp())
         for k in keys:
             text = r[at[k]].strip()

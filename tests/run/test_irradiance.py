@@ -364,11 +364,16 @@ def test_bad_series_fail_the_run_with_one_line(tmp_path, runner):
                     "time,ghi"), 1, "give a series that covers the period"),
         (_write_csv(tmp_path / "e.csv", [("2026-06-21T00:00Z", 1, 1), ("2026-06-22T00:00Z", 2, 2)],
                     "time,ghi,dni"), 1, "both dni and dhi"),
+        (_write_csv(tmp_path / "f.csv", [("2026-06-21T00:00", 1), ("2026-06-22T00:00", 2)],
+                    "time,ghi"), 1, "f.csv line 2: time '2026-06-21T00:00' has no UTC offset"),
+        (_write_csv(tmp_path / "g.csv", [("2026-06-22T00:00Z", 1), ("2026-06-21T00:00Z", 2)],
+                    "time,ghi"), 1, "times must increase"),
     ]
     before = sorted(os.listdir(tmp_path))
-    for csv, code, words in cases:
+    for csv, code, words in cases:      # (local times without --tz: no offset to read them)
+        tz = [] if csv.name == "f.csv" else ["--tz", "UTC"]
         r = runner.invoke(cli, ["irradiance", dem, str(tmp_path / "o.tif"), "--date",
-                                "2026-06-21", "--tz", "UTC", "--ghi", str(csv)])
+                                "2026-06-21", "--ghi", str(csv)] + tz)
         _one_line(r, code, words)
     r = runner.invoke(cli, ["irradiance", dem, str(tmp_path / "o.tif"), "--date", "2026-06-21",
                             "--ghi", str(cases[0][0]), "--clear-sky", "haurwitz"])
@@ -422,3 +427,21 @@ def test_the_bundled_example_runs(tmp_path, runner):
     assert doc["samples_with_shadows"] == doc["samples_with_sun"] > 0
     assert png.stat().st_size > 0
     assert set(doc["seconds"]) >= {"sky view", "shadows", "irradiance", "write"}
+
+
+def test_api_run_is_the_command_line(tmp_path, runner):
+    """api.irradiance takes the command line's options as keywords (dates as date objects too)
+    and writes the same bands; bad values raise HillshadeError with the same words."""
+    from hillshade_rt import api
+    dem = _dem(tmp_path, fractal_terrain(30, 30, 4, relief=250.0))
+    _run(runner, [dem, tmp_path / "c.tif", "--date", "2026-06-21", "--tz", "America/Denver",
+                  "--step", "1h", "--perez", "--albedo", "0.3", "-q"])
+    rep = api.irradiance(dem, tmp_path / "a.tif", date=dt.date(2026, 6, 21),
+                         tz="America/Denver", step="1h", perez=True, albedo=0.3)
+    assert rep["sky_model"] == "perez" and rep["albedo"] == 0.3
+    for b in range(1, 5):
+        np.testing.assert_array_equal(read_band(tmp_path / "a.tif", b),
+                                      read_band(tmp_path / "c.tif", b))
+    with pytest.raises(HillshadeError, match="--albedo"):
+        api.irradiance(dem, tmp_path / "x.tif", date="2026-06-21", albedo=1.5)
+    assert not (tmp_path / "x.tif").exists()
