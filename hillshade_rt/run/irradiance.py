@@ -18,6 +18,11 @@ from ..errors import HillshadeError, UsageProblem
 from .config import ReadOptions, RunOptions
 
 
+# formats that cannot hold the four float32 bands (pictures; ASCII and Surfer grids, one band)
+ONE_BAND_FORMATS = ("PNG", "JPEG", "WEBP", "BMP", "GIF", "AAIGrid", "XYZ", "GSAG", "GSBG",
+                    "GS7BG")
+
+
 @dataclass
 class IrradianceConfig:
     """An ``irradiance`` run. The period: ``date`` (and ``end_date``), or ``start`` and
@@ -98,7 +103,12 @@ def irradiance(cfg: IrradianceConfig) -> dict:
             if cfg.ghi is not None and os.path.abspath(path) == os.path.abspath(cfg.ghi):
                 raise UsageProblem(f"{path}: {what} is also the --ghi series; give another path")
             claims.claim(path, what)
-    check_output_format(output, output_driver(output, ro.fmt), "float32", len(ir.BANDS), True)
+    driver = output_driver(output, ro.fmt)
+    if driver in ONE_BAND_FORMATS:
+        raise HillshadeError(f"{output}: {driver} holds one band of integers or one grid; "
+                             f"irradiance writes {len(ir.BANDS)} float32 bands "
+                             f"({', '.join(ir.BANDS)}): write a GeoTIFF (.tif)")
+    check_output_format(output, driver, "float32", len(ir.BANDS), True)
     try:    # the command line alone decides these: a bad one is a usage error (exit 2)
         step = parse_step(cfg.step)
         req = SunRequest.at_place([], **cfg.place)

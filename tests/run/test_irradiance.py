@@ -387,6 +387,16 @@ def test_bad_series_fail_the_run_with_one_line(tmp_path, runner):
     assert sorted(os.listdir(tmp_path)) == before
 
 
+def test_one_band_formats_are_refused_before_any_work(tmp_path, runner):
+    dem = _dem(tmp_path, fractal_terrain(20, 20, 1))
+    before = sorted(os.listdir(tmp_path))
+    for name in ("o.png", "o.jpg", "o.asc"):
+        r = runner.invoke(cli, ["irradiance", dem, str(tmp_path / name), "--date",
+                                "2026-06-21"])
+        _one_line(r, 1, "irradiance writes 4 float32 bands")
+    assert sorted(os.listdir(tmp_path)) == before
+
+
 def test_geographic_dem_flat_gets_the_open_sky(tmp_path, runner):
     """An EPSG:4326 DEM (3 arc-second cells at 46.5 N; per-row spacing): on its flat part the
     global band is the clear sky's GHI over the day (Ineichen's DHI is GHI - DNI cos Z), the
