@@ -197,6 +197,22 @@ def test_soft_beam_is_the_visible_fraction_of_the_disk():
     assert penumbra.sum() >= 3
 
 
+def test_gpu_backend_gives_the_cpu_bands():
+    """backend="gpu" (the cast shadows and Vd's horizon scans as CUDA kernels; numba's CUDA
+    simulator here, the device with NUMBA_ENABLE_CUDASIM=0): the CPU's bands, a void
+    included."""
+    z = fractal_terrain(14, 16, 3, relief=120.0)
+    z[5, 6] = np.nan
+    ts = [dt.datetime(2026, 6, 21, h, 20, tzinfo=dt.timezone.utc) for h in (15, 19, 23)]
+    kw = dict(lat=LAT, lon=LON, sky_view_directions=8, weights=[0.5, 1.0, 1.5], perez=True)
+    g = irradiance(z, ts, 10.0, backend="gpu", **kw)
+    c = irradiance(z, ts, 10.0, backend="cpu", **kw)
+    for k in BANDS:
+        np.testing.assert_allclose(g[k], c[k], rtol=1e-6, atol=1e-4, err_msg=k)
+        assert np.isnan(c[k][5, 6]) and np.isfinite(np.delete(c[k].ravel(), 5 * 16 + 6)).all()
+    assert np.nanmax(c["beam"]) > 500.0 and np.nanmin(c["beam"]) < 0.5 * np.nanmax(c["beam"])
+
+
 def test_array_api_checks_its_arguments():
     z = _plane(10.0, 200.0, n=8)
     t = dt.datetime(2026, 6, 21, 12, tzinfo=dt.timezone.utc)
