@@ -413,6 +413,23 @@ def test_one_band_formats_are_refused_before_any_work(tmp_path, runner):
     assert sorted(os.listdir(tmp_path)) == before
 
 
+def test_a_dem_off_the_earth_or_without_a_place_fails_with_one_line(tmp_path, runner):
+    moon = ('GEOGCS["Moon 2000",DATUM["D_Moon_2000",SPHEROID["Moon_2000_IAU_IAG",1737400.0,'
+            '0.0]],PRIMEM["Greenwich",0],UNIT["Decimal_Degree",0.0174532925199433]]')
+    dem = write_geotiff(tmp_path / "moon.tif", fractal_terrain(20, 20, 1),
+                        Affine(0.01, 0, 10.0, 0, -0.01, -80.0), CRS.from_wkt(moon))
+    plain = write_geotiff(tmp_path / "plain.tif", fractal_terrain(20, 20, 1))
+    before = sorted(os.listdir(tmp_path))
+    r = runner.invoke(cli, ["irradiance", dem, str(tmp_path / "o.tif"), "--date", "2026-06-21"])
+    _one_line(r, 1, "irradiance computes the Earth's sun only")
+    r = runner.invoke(cli, ["irradiance", plain, str(tmp_path / "o.tif"), "--date",
+                            "2026-06-21", "--pixel-size", "30"])
+    _one_line(r, 1, "give --lat and --lon")
+    assert sorted(os.listdir(tmp_path)) == before
+    _run(runner, [plain, tmp_path / "o.tif", "--date", "2026-06-21", "--pixel-size", "30",
+                  "--lat", "46.5", "--lon", "7.5", "--step", "2h", "-q"])
+
+
 def test_geographic_dem_flat_gets_the_open_sky(tmp_path, runner):
     """An EPSG:4326 DEM (3 arc-second cells at 46.5 N; per-row spacing): on its flat part the
     global band is the clear sky's GHI over the day (Ineichen's DHI is GHI - DNI cos Z), the
