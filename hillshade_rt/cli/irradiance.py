@@ -46,7 +46,8 @@ from .options import (algorithm_option, backend_option, dem_options, finite, for
 @algorithm_option
 @physics_options
 @click.option("--preview", type=click.Path(dir_okay=False), default=None,
-              help="Also write a quick-look PNG (relief tinted by the global band).")
+              help="Also write a quick-look PNG: the relief coloured by the global band "
+                   "(purple low, yellow high).")
 @backend_option
 @threads_option
 @click.option("--report", "report_path", type=click.Path(dir_okay=False), default=None,

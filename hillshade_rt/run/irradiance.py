@@ -87,7 +87,7 @@ def irradiance(cfg: IrradianceConfig) -> dict:
     from ..io import (BandWriter, check_output_format, input_label, output_driver, write_json,
                       write_png)
     from ..io.write import Claims
-    from ..preview import relief_rgb
+    from ..preview import relief_rgb, scaled
     from ..shading import Shader, choose_backend
     from ..sun import SunRequest, day_samples, iso, parse_date, parse_step, parse_time
     from .notes import compile_note
@@ -212,11 +212,8 @@ def irradiance(cfg: IrradianceConfig) -> dict:
             for i, k in enumerate(ir.BANDS, 1):
                 v = bands[k]
                 w.write(i, np.where(np.isnan(v), np.float32(-9999.0), v), k, {"UNITS": unit})
-        if ro.preview is not None:
-            g = bands["global"]
-            top = float(np.nanmax(g)) if np.isfinite(g).any() else 0.0
-            write_png(ro.preview, relief_rgb(d.heights, d.grid,
-                                             warm=g / top if top > 0 else np.zeros_like(g)),
+        if ro.preview is not None:     # the global band over the relief, 2nd..98th percentile
+            write_png(ro.preview, relief_rgb(d.heights, d.grid, ramp=scaled(bands["global"])),
                       ro.overwrite)
 
     def summary(v):
