@@ -461,54 +461,56 @@ def horizon_angles_gpu(g, rays: SunRays, method: str = "scan", sample_spacing: i
 # the scan in windows (rasters larger than memory: ``run.reach``)
 
 @njit(cache=True, inline="always")
-def _span_cell(zw, pyr, off, widths, nlev, wr0, wc0, h0, i, j, r, c, n_rows, n_cols, dom_col,
+def _span_cell(zw, pyr, off, widths, nlev, wr0, wc0, h0, i, j, r, c, n_rows, n_cols, q0, dom_col,
                step_dom, step_other, step_m, curv, sp, zmax, max_dist, best, kbest, nextk):
     """Carry on the march of region cell (i, j), the raster's cell (r, c), through the window
-    ``zw`` whose first row and column are ``wr0``, ``wc0`` (the rays: the raster's rows)."""
+    ``zw`` whose first row and column are ``wr0``, ``wc0`` (the rays: of the raster's rows from
+    ``q0`` on)."""
     k = nextk[i, j]
     if k == 0:
         return
-    dc = dom_col[r] != 0
+    q = r - q0
+    dc = dom_col[q] != 0
     if dc:
         line0, other0, n_dom, n_oth, wl0, wo0 = c, r, n_cols, n_rows, wc0, wr0
     else:
         line0, other0, n_dom, n_oth, wl0, wo0 = r, c, n_rows, n_cols, wr0, wc0
     b, kb, nk = _march(zw, pyr, off, widths, nlev if sp == 1 else np.int64(0), wl0, wo0, line0,
-                       other0, n_dom, n_oth, float(h0[i, j]), dc, np.int64(step_dom[r]),
-                       step_other[r], sp, zmax, 0.0, curv[r], False, best[i, j], kbest[i, j],
-                       k, last_step(max_dist, step_m[r]), np.inf)
+                       other0, n_dom, n_oth, float(h0[i, j]), dc, np.int64(step_dom[q]),
+                       step_other[q], sp, zmax, 0.0, curv[q], False, best[i, j], kbest[i, j],
+                       k, last_step(max_dist, step_m[q]), np.inf)
     best[i, j] = b
     kbest[i, j] = kb
     nextk[i, j] = nk
 
 
 @njit(parallel=True, cache=True)
-def _span_kernel(zw, pyr, off, widths, nlev, wr0, wc0, h0, r0, c0, n_rows, n_cols, dom_col,
+def _span_kernel(zw, pyr, off, widths, nlev, wr0, wc0, h0, r0, c0, n_rows, n_cols, q0, dom_col,
                  step_dom, step_other, step_m, curv, sp, zmax, max_dist, best, kbest, nextk):
     rows, cols = h0.shape
     for i in prange(rows):
         for j in range(cols):
             _span_cell(zw, pyr, off, widths, nlev, wr0, wc0, h0, i, j, r0 + i, c0 + j, n_rows,
-                       n_cols, dom_col, step_dom, step_other, step_m, curv, sp, zmax, max_dist,
-                       best, kbest, nextk)
+                       n_cols, q0, dom_col, step_dom, step_other, step_m, curv, sp, zmax,
+                       max_dist, best, kbest, nextk)
 
 
 @kernel
-def _span_gpu(zw, pyr, off, widths, nlev, wr0, wc0, h0, r0, c0, n_rows, n_cols, dom_col,
+def _span_gpu(zw, pyr, off, widths, nlev, wr0, wc0, h0, r0, c0, n_rows, n_cols, q0, dom_col,
               step_dom, step_other, step_m, curv, sp, zmax, max_dist, best, kbest, nextk):
     """CUDA twin of ``_span_kernel``: one thread per region cell."""
     j, i = cuda.grid(2)
     if i < h0.shape[0] and j < h0.shape[1]:
         _span_cell(zw, pyr, off, widths, nlev, wr0, wc0, h0, i, j, r0 + i, c0 + j, n_rows,
-                   n_cols, dom_col, step_dom, step_other, step_m, curv, sp, zmax, max_dist,
-                   best, kbest, nextk)
+                   n_cols, q0, dom_col, step_dom, step_other, step_m, curv, sp, zmax,
+                   max_dist, best, kbest, nextk)
 
 
 @njit(parallel=True, cache=True)
-def _span_angles(h0, r0, step_m, best, kbest, beta, want_dist, dist):
+def _span_angles(h0, i0, step_m, best, kbest, beta, want_dist, dist):
     rows, cols = h0.shape
     for i in prange(rows):
-        sm = step_m[r0 + i]
+        sm = step_m[i0 + i]
         for j in range(cols):
             if math.isnan(h0[i, j]):
                 beta[i, j] = np.nan
@@ -547,72 +549,83 @@ def window_pyramid(zw: np.ndarray, window, shape) -> tuple:
     return data, off, widths, nlev
 
 
+class ScanWindow:
+    """The heights ``zw`` of ``window`` (r0, r1, c0, c1) of a raster of ``shape`` made ready to
+    march through: its pyramid (``window_pyramid``; ``pyramid`` False: the plain march), and
+    with ``gpu`` (``gpu.GpuDem``, the class) both uploaded to the device once, for every
+    direction that marches through it."""
+
+    def __init__(self, zw: np.ndarray, window, shape, pyramid: bool = True, gpu=None):
+        self.zw, self.window = zw, tuple(int(v) for v in window)
+        self.pyr = window_pyramid(zw, window, shape) if pyramid else pyramid_args(zw, False)
+        self.g = self.dpyr = None
+        if gpu is not None:
+            self.g = gpu(zw)
+            self.dpyr = tuple(self.g.upload(a) for a in self.pyr[:3]) + (self.pyr[3],)
+
+
 class Marches:
     """The scan's rays toward one azimuth from the cells of a ``region`` (r0, r1, c0, c1) of
-    a raster of ``shape``, marched window after window: the same samples, decisions and bits
-    as ``horizon_angles`` over the whole raster, whatever windows they cross.
+    a raster of ``shape``, marched window after window (``ScanWindow``): the same samples,
+    decisions and bits as ``horizon_angles`` over the whole raster, whatever windows they cross.
 
-    ``h0``: the region's heights (float32, NaN voids); ``rays``: the raster's (one entry per
-    raster row); ``zmax``: the raster's highest height (as the march in memory takes it).
-    :meth:`march` carries every open ray through a window's heights as far as the window holds
-    its samples; a ray is closed once its march is over (``max_distance``, the raster's edge,
-    nothing left that could raise it); then :meth:`angles`."""
+    ``h0``: the region's heights (float32, NaN voids); ``rays``: the ``SunRays`` of the
+    raster's rows, or of the region's rows only (then they start at row r0); ``zmax``: the
+    raster's highest height (as the march in memory takes it). :meth:`march` carries every
+    open ray as far as a window holds its samples; a ray is closed once its march is over
+    (``max_distance``, the raster's edge, nothing left that could raise it); then
+    :meth:`angles`."""
 
     def __init__(self, h0: np.ndarray, region, rays: SunRays, shape, zmax: float,
-                 sample_spacing: int = 1, max_distance: float | None = None, gpu=None):
+                 sample_spacing: int = 1, max_distance: float | None = None):
         _check("scan", sample_spacing, rays)
         self.h0 = np.ascontiguousarray(h0, np.float32)
-        self.region, self.rays, self.shape = tuple(region), rays, tuple(shape)
+        self.region, self.rays, self.shape = tuple(int(v) for v in region), rays, tuple(shape)
+        r0, r1 = self.region[:2]
+        if len(rays.step_m) == self.shape[0]:
+            self.q0 = 0
+        elif len(rays.step_m) == r1 - r0:
+            self.q0 = r0
+        else:
+            raise ValueError("rays must be of the raster's rows or of the region's")
         self.zmax, self.sp = float(zmax), np.int64(sample_spacing)
         self.max_dist = _max_distance(max_distance)
         self.best = np.full(self.h0.shape, -np.inf)
         self.kbest = np.zeros(self.h0.shape, np.int64)
         self.nextk = np.where(np.isnan(self.h0), 0, self.sp).astype(np.int64)
-        self.gpu = gpu    # march on the device: ``gpu.GpuDem`` (the class) or None
 
     def open(self) -> np.ndarray:
         """Where the march goes on (a boolean per region cell)."""
         return self.nextk > 0
 
-    def march(self, zw: np.ndarray, window, pyramid=True) -> None:
-        """Carry every open ray through ``zw``, the heights of ``window`` (r0, r1, c0, c1) of the
-        raster (float32, NaN voids), over its maximum-height pyramid (``pyramid``: True, or the
-        arguments ``window_pyramid`` gave for ``zw``, or False: the plain march)."""
-        wr0, _, wc0, _ = window
+    def _args(self, sw: ScanWindow):
+        wr0, _, wc0, _ = sw.window
         r0, _, c0, _ = self.region
         rows, cols = self.shape
+        return (np.int64(wr0), np.int64(wc0), np.int64(r0), np.int64(c0), np.int64(rows),
+                np.int64(cols), np.int64(self.q0))
+
+    def march(self, sw: ScanWindow) -> None:
+        """Carry every open ray through the window ``sw``, as far as it holds its samples."""
+        wr0, wc0, r0, c0, rows, cols, q0 = self._args(sw)
         ry = self.rays
-        if pyramid is True:
-            pyr = window_pyramid(zw, window, self.shape)
-        elif isinstance(pyramid, tuple):
-            pyr = pyramid
-        else:
-            pyr = pyramid_args(zw, False)
-        if self.gpu is not None:
-            self._march_gpu(zw, wr0, wc0, pyr)
+        if sw.g is not None:
+            g = sw.g
+            dom_col, step_dom, step_other, _, step_m, curv = g.rays(ry)
+            state = [g.upload(a) for a in (self.h0, self.best, self.kbest, self.nextk)]
+            with g.timed():
+                g.launch(_span_gpu, self.h0.shape[0], self.h0.shape[1], g.z, *sw.dpyr, wr0,
+                         wc0, state[0], r0, c0, rows, cols, q0, dom_col, step_dom, step_other,
+                         step_m, curv, self.sp, self.zmax, self.max_dist, *state[1:])
+            self.best, self.kbest, self.nextk = (g.download(a) for a in state[1:])
             return
-        _span_kernel(zw, *pyr, np.int64(wr0), np.int64(wc0), self.h0,
-                     np.int64(r0), np.int64(c0), np.int64(rows), np.int64(cols), ry.dom_col,
+        _span_kernel(sw.zw, *sw.pyr, wr0, wc0, self.h0, r0, c0, rows, cols, q0, ry.dom_col,
                      ry.step_dom, ry.step_other, ry.step_m, ry.curv, self.sp, self.zmax,
                      self.max_dist, self.best, self.kbest, self.nextk)
 
-    def _march_gpu(self, zw, wr0, wc0, pyr):
-        g = self.gpu(zw)
-        pyr = tuple(g.upload(a) for a in pyr[:3]) + (pyr[3],)
-        r0, _, c0, _ = self.region
-        rows, cols = self.shape
-        dom_col, step_dom, step_other, _, step_m, curv = g.rays(self.rays)
-        state = [g.upload(a) for a in (self.h0, self.best, self.kbest, self.nextk)]
-        with g.timed():
-            g.launch(_span_gpu, self.h0.shape[0], self.h0.shape[1], g.z, *pyr,
-                     np.int64(wr0), np.int64(wc0), state[0], np.int64(r0), np.int64(c0),
-                     np.int64(rows), np.int64(cols), dom_col, step_dom, step_other, step_m,
-                     curv, self.sp, self.zmax, self.max_dist, *state[1:])
-        self.best, self.kbest, self.nextk = (g.download(a) for a in state[1:])
-
     def skip_to(self, k: int) -> None:
         """Open rays go on at their first sample past ``k`` (on their spacing): the caller knows
-        that no sample up to ``k`` could raise their maxima (``Marches.can_rise``)."""
+        that no sample up to ``k`` could raise their maxima (:meth:`can_rise`)."""
         o = self.nextk > 0
         n = self.nextk[o]
         ahead = n <= k
@@ -621,13 +634,11 @@ class Marches:
 
     def can_rise(self, highest: float, ka: int, kb: int) -> bool:
         """Whether terrain no higher than ``highest`` at samples ``ka``..``kb`` could raise the
-        maximum of any open ray: (highest - h0) > best * k for some such k, with the rounding
-        of the march (which subtracts the curvature term, >= 0, from the lift: only lower)."""
+        maximum of any open ray: highest - h0 > best * k for some such k, rounded as the march
+        rounds (which also takes the curvature term, >= 0, off the lift: only lower)."""
         o = self.nextk > 0
-        if not o.any():
+        if not o.any() or highest == -np.inf:      # nothing open, or voids only
             return False
-        if not math.isfinite(highest):
-            return highest > 0      # +inf: unknown; -inf: voids only
         best = self.best[o]
         h0 = self.h0[o].astype(np.float64)
         kw = np.where(best >= 0.0, float(ka), float(kb))
@@ -639,8 +650,8 @@ class Marches:
         ``distance`` (float32, the region's shape) receives the ground metres to the horizon
         point (NaN on voids and with nothing ahead)."""
         beta = np.empty(self.h0.shape, np.float32)
-        _span_angles(self.h0, np.int64(self.region[0]), self.rays.step_m, self.best, self.kbest,
-                     beta, distance is not None,
+        _span_angles(self.h0, np.int64(self.region[0] - self.q0), self.rays.step_m, self.best,
+                     self.kbest, beta, distance is not None,
                      np.empty((1, 1), np.float32) if distance is None else distance)
         return beta
 
