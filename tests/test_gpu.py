@@ -268,6 +268,25 @@ def test_cli_horizon_gpu(tmp_path, runner):
     np.testing.assert_array_equal(read_band(tmp_path / "cpu.tif"), read_band(tmp_path / "gpu.tif"))
 
 
+@pytest.mark.parametrize("command, args", [
+    # (163, not 203.7: numba's float() leaves a float32 a float32, so the model's b - a is float32
+    # on the CPU and the device but float64 in the simulator, which runs plain Python: at 203.7
+    # one cell of this tile differs by an ulp there, for the march in memory as well)
+    ("horizon", ["--azimuth", "163", "--max-distance", "200"]),
+    ("skyview", ["--directions", "6", "--openness", "negative"]),
+])
+def test_cli_horizon_windows_on_the_gpu(tmp_path, runner, command, args):
+    """The windowed run (run.reach) marching on the device gives the CPU's run in memory."""
+    from hillshade_rt.cli import cli
+    dem = _tile(tmp_path)
+    for name, extra in (("cpu", ["--backend", "cpu"]),
+                        ("gpu", ["--backend", "gpu", "--window-size", "64"])):
+        res = runner.invoke(cli, [command, dem, str(tmp_path / f"{name}.tif")] + args + extra)
+        assert res.exit_code == 0, res.output
+    assert "1 windows" in res.stderr
+    np.testing.assert_array_equal(read_band(tmp_path / "cpu.tif"), read_band(tmp_path / "gpu.tif"))
+
+
 def test_gpu_without_a_device_is_one_line(tmp_path):
     """No simulator and no visible device (CUDA_VISIBLE_DEVICES empty; here there is no driver
     either): one line naming what is missing, exit status 1, no output file."""

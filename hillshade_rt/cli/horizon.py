@@ -7,7 +7,8 @@ import click
 from .errors import errors_to_click, say
 from .options import (backend_option, dem_options, finite, format_option, horizon_physics_options,
                       max_distance_option, max_memory_option, overwrite_option, quiet_option,
-                      threads_option, to_read_options, to_run_options, window_size_option)
+                      scheduler_option, threads_option, to_read_options, to_run_options,
+                      window_size_option)
 
 
 @click.command()
@@ -34,6 +35,7 @@ from .options import (backend_option, dem_options, finite, format_option, horizo
 @threads_option
 @max_memory_option
 @window_size_option
+@scheduler_option
 @overwrite_option()
 @quiet_option()
 @format_option
@@ -41,7 +43,7 @@ from .options import (backend_option, dem_options, finite, format_option, horizo
 @errors_to_click
 def horizon(dem, output, azimuth, directions, distance, method, sample_spacing, max_distance,
             curvature, refraction_k, preview, backend, threads, max_memory, window_size,
-            overwrite, quiet, fmt, **read_opts):
+            scheduler, overwrite, quiet, fmt, **read_opts):
     """Write the horizon angle toward --azimuth (or toward each of --directions N azimuths, one
     band each) of every cell of DEM to OUTPUT.
 
@@ -56,4 +58,4 @@ def horizon(dem, output, azimuth, directions, distance, method, sample_spacing, 
                               refraction_k, to_read_options(kw), to_run_options(kw, say),
                               directions=directions, distance=distance,
                               max_distance=max_distance, max_memory=max_memory,
-                              window_size=window_size))
+                              window_size=window_size, scheduler=scheduler))

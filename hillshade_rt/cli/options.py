@@ -209,6 +209,13 @@ def max_distance_option(f):
                              "whole raster). Also bounds what windows read.")(f)
 
 
+def scheduler_option(f):
+    return click.option("--scheduler", metavar="ADDRESS", default=None,
+                        help="Run the windows as Dask tasks: a dask.distributed scheduler "
+                             "(tcp://host:8786) or 'local[:N]' (N worker processes here). Needs "
+                             "hillshade-rt[dask] and DEM paths the workers can read.")(f)
+
+
 def run_options(f):
     return _stack(f, [
         click.option("-o", "--output", default=None, type=click.Path(dir_okay=False),
@@ -233,10 +240,7 @@ def run_options(f):
         click.option("--cog", is_flag=True,
                      help="Write Cloud-Optimized GeoTIFF (512 px tiles, deflate, overviews)."),
         format_option,
-        click.option("--scheduler", metavar="ADDRESS", default=None,
-                     help="Run the windows as Dask tasks: a dask.distributed scheduler "
-                          "(tcp://host:8786) or 'local[:N]' (N worker processes here). Needs "
-                          "hillshade-rt[dask] and DEM paths the workers can read."),
+        scheduler_option,
     ])
 
 

@@ -7,7 +7,8 @@ import click
 from .errors import errors_to_click, say
 from .options import (backend_option, dem_options, format_option, horizon_physics_options,
                       max_distance_option, max_memory_option, overwrite_option, quiet_option,
-                      threads_option, to_read_options, to_run_options, window_size_option)
+                      scheduler_option, threads_option, to_read_options, to_run_options,
+                      window_size_option)
 
 
 @click.command()
@@ -33,14 +34,15 @@ from .options import (backend_option, dem_options, format_option, horizon_physic
 @threads_option
 @max_memory_option
 @window_size_option
+@scheduler_option
 @overwrite_option()
 @quiet_option()
 @format_option
 @dem_options
 @errors_to_click
 def skyview(dem, output, directions, definition, terrain_configuration, openness, max_distance,
-            curvature, refraction_k, backend, threads, max_memory, window_size, overwrite, quiet,
-            fmt, **read_opts):
+            curvature, refraction_k, backend, threads, max_memory, window_size, scheduler,
+            overwrite, quiet, fmt, **read_opts):
     """Write the sky view factor of every cell of DEM to OUTPUT (float32 0..1, -9999 nodata)
     from its exact horizon in --directions azimuths, or its openness (--openness, degrees).
     A DEM larger than --max-memory (or any, with --window-size) is computed in windows, with
@@ -52,4 +54,4 @@ def skyview(dem, output, directions, definition, terrain_configuration, openness
                               curvature, refraction_k, to_read_options(kw),
                               to_run_options(kw, say), openness=openness,
                               max_distance=max_distance, max_memory=max_memory,
-                              window_size=window_size))
+                              window_size=window_size, scheduler=scheduler))

@@ -167,6 +167,7 @@ class HorizonConfig:
     max_distance: float | None = None  # metres: terrain farther along a ray is ignored
     max_memory: object = None          # windows (run.reach) when the DEM needs more
     window_size: object = None         # windows of this many output cells, whatever the size
+    scheduler: object = None           # the windows as Dask tasks
 
     def azimuths(self) -> list[float]:
         """The azimuths of the bands: ``azimuth``, or the ``directions`` ones; exactly one of

@@ -85,10 +85,11 @@ def horizon(cfg: HorizonConfig) -> dict:
         note = compile_note("horizon", ran_on)
         if note:
             ro.say("compile", note)
+    forced = wshape is not None or cfg.scheduler is not None
     with timer("read"):    # opened (not read) once, for its size and then its values
-        src = cfg.read.open(cfg.dem, windows=wshape is not None)
+        src = cfg.read.open(cfg.dem, windows=forced)
     with src:
-        windowed = wshape is not None or needs_windows(src, limit, BYTES_PER_CELL)
+        windowed = forced or needs_windows(src, limit, BYTES_PER_CELL)
         if windowed and method == "hull":
             raise UsageProblem("--method hull runs in memory only (its hulls are as long as a "
                                "line): use --method scan for a DEM in windows")
@@ -161,7 +162,8 @@ def _report(cfg, src, azimuths, ran_on, curved, stats, timer, processing):
         toward = (f"toward az {azimuths[0]:g}" if not many else
                   f"toward {len(azimuths)} directions ({360.0 / len(azimuths):g} deg apart)")
         where = "" if processing["mode"] == "in memory" else (
-            f", {processing['regions']} windows")
+            f", {processing['regions']} windows" + (" on Dask" if processing["mode"] == "dask"
+                                                    else ""))
         ro.say("summary", f"hillshade-rt: {cfg.output}: {cols}x{rows}, horizon {toward} "
                           f"({cfg.method}, {ran_on}{where}), compute "
                           f"{timer.seconds.get('compute', 0.0):.3f} s")
@@ -301,10 +303,11 @@ def _in_windows(cfg, src, azimuths, ran_on, max_distance, timer, *, wshape, limi
     from ..preview import every_nth, relief_rgb
     from .local import bounded_gdal_cache
     from .plan import block_stats
-    from .reach import Figures
+    from .reach import Figures, Product, region_outputs
 
     ro = cfg.run
     az = azimuths[0]
+    product = Product("horizon", distance=cfg.distance is not None)
     with bounded_gdal_cache():
         with timer("prepare"):    # one pass: the block height ranges (and the preview)
             bstats = block_stats(src, preview_side=2048 if ro.preview else None)
@@ -316,39 +319,67 @@ def _in_windows(cfg, src, azimuths, ran_on, max_distance, timer, *, wshape, limi
                                 max_distance)
         n = bstats.stride
         share = np.zeros(bstats.preview.shape, np.float32) if ro.preview else None
-        fig = Figures()
-        w, wd = _writers(cfg, src, azimuths, tags, dist_tags)
-        from tqdm import tqdm
-        bar = tqdm(total=len(regs), desc="hillshade-rt", unit="window", leave=False,
-                   disable=True if ro.quiet or len(regs) < 2 else None)
-        with w, (contextlib.nullcontext() if wd is None else wd), src.reader() as rd, bar:
-            for reg in regs:
-                def on_direction(i, a, beta, dist, reg=reg):
-                    if share is not None and i == 0:
-                        sub, (p, q) = every_nth(np.clip(np.nan_to_num(beta, nan=0.0) / 30.0,
-                                                        0.0, 1.0), reg[0], reg[2], n)
-                        share[p:p + sub.shape[0], q:q + sub.shape[1]] = sub
-                    beta[np.isnan(beta)] = -9999.0
-                    text, dtext, btags = _band_text(cfg, a)
-                    with timer("write"):
-                        w.write(i + 1, beta, description=text, tags=btags, window=reg)
-                        if wd is not None:
-                            dist[np.isnan(dist)] = -9999.0
-                            wd.write(i + 1, dist, description=dtext, tags=btags, window=reg)
-                with timer("compute"):
-                    fig.add(job.region(rd, reg, on_direction, cfg.distance is not None))
-                bar.update(1)
-            with timer("write"):
-                w.finish()
-                if wd is not None:
-                    wd.finish()
+        extra = {}
+        if cfg.scheduler is not None:
+            from .reach import run_on_dask
+            with timer("compute"):
+                fig, _, extra = run_on_dask(cfg.scheduler, job, regs, product,
+                                            _vrt_outputs(cfg, src, azimuths, tags, dist_tags),
+                                            ro.quiet, share, n if ro.preview else None)
+        else:
+            fig = Figures()
+            w, wd = _writers(cfg, src, azimuths, tags, dist_tags)
+            from tqdm import tqdm
+            bar = tqdm(total=len(regs), desc="hillshade-rt", unit="window", leave=False,
+                       disable=True if ro.quiet or len(regs) < 2 else None)
+            with w, (contextlib.nullcontext() if wd is None else wd), src.reader() as rd, bar:
+                for reg in regs:
+                    def put(name, i, arr, reg=reg):
+                        a = azimuths[i]
+                        text, dtext, btags = _band_text(cfg, a)
+                        if name == "angles" and share is not None and i == 0:
+                            sub, (p, q) = every_nth(np.clip(np.nan_to_num(arr, nan=0.0) / 30.0,
+                                                            0.0, 1.0), reg[0], reg[2], n)
+                            share[p:p + sub.shape[0], q:q + sub.shape[1]] = sub
+                        arr[np.isnan(arr)] = -9999.0
+                        with timer("write"):
+                            if name == "angles":
+                                w.write(i + 1, arr, description=text, tags=btags, window=reg)
+                            else:
+                                wd.write(i + 1, arr, description=dtext, tags=btags, window=reg)
+                    with timer("compute"):
+                        fig.add(region_outputs(job, rd, reg, product, put))
+                    bar.update(1)
+                with timer("write"):
+                    w.finish()
+                    if wd is not None:
+                        wd.finish()
     if ro.preview is not None:
         pv = bstats.preview
         g = Grid(pv.shape[0], pv.shape[1], src.grid.dx[::n] * n, src.grid.dy[::n] * n,
                  src.grid.col_sign, src.grid.row_sign, src.grid.method)
         with timer("write"):
             write_png(ro.preview, relief_rgb(pv, g, az, 45.0, shade=share), ro.overwrite)
-    processing = {"mode": "windows", "cells": src.shape[0] * src.shape[1], "memory": mem,
+    processing = {"mode": "windows" if cfg.scheduler is None else "dask",
+                  "cells": src.shape[0] * src.shape[1], "memory": mem,
                   "window_shape_requested": list(wshape) if wshape else None,
-                  **fig.as_dict()}
+                  **fig.as_dict(), **extra}
     return _report(cfg, src, azimuths, ran_on, curved, {}, timer, processing)
+
+
+def _vrt_outputs(cfg, src, azimuths, tags, dist_tags) -> dict:
+    """The outputs of a run on Dask (``reach.VrtOutput``), as ``_writers`` writes them."""
+    from .reach import VrtOutput
+    ro = cfg.run
+    many = cfg.directions is not None
+    texts = [_band_text(cfg, a) for a in azimuths]
+    band_tags = [t[2] for t in texts] if many else None
+    common = dict(shape=src.shape, transform=src.transform, crs=src.crs,
+                  resampling="average" if many else "nearest", overwrite=ro.overwrite,
+                  fmt=ro.fmt, band_tags=band_tags)
+    out = {"angles": VrtOutput(cfg.output, descriptions=[t[0] for t in texts], tags=tags,
+                               **common)}
+    if cfg.distance is not None:
+        out["distance"] = VrtOutput(cfg.distance, descriptions=[t[1] for t in texts],
+                                    tags=dist_tags, **common)
+    return out

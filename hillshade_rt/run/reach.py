@@ -42,7 +42,9 @@ block maxima skip what cannot matter): exact, bounded in memory, more reading.
 
 from __future__ import annotations
 
+import contextlib
 import math
+import os
 from dataclasses import dataclass
 
 import numpy as np
@@ -323,3 +325,208 @@ def needs_windows(src, limit: int, per_cell: int) -> bool:
     from .local import needs_windows as too_large
     return too_large(src, limit, per_cell)
 
+
+
+# ---------------------------------------------------------------------------------------------
+# what a region makes: the horizon's bands, or a skyview definition's result
+
+@dataclass
+class Product:
+    """What the windows make of their regions' horizons (picklable): ``kind`` "horizon" (the
+    "angles" output, one band per direction, and with ``distance`` the "distance" output) or
+    "skyview" (the "result" output, one band: ``definition``'s, ``complement``: 1 - it)."""
+
+    kind: str = "horizon"
+    distance: bool = False
+    definition: str = "zaksek"
+    complement: bool = False
+
+    def outputs(self, n: int) -> dict:
+        """Output name -> bands."""
+        if self.kind == "horizon":
+            return {"angles": n, **({"distance": n} if self.distance else {})}
+        return {"result": 1}
+
+
+def region_outputs(job: HorizonJob, rd, region, product: Product, put) -> Figures:
+    """March ``region`` (``HorizonJob.region``) and hand each of its outputs to
+    ``put(name, band, array)`` (band 0-based; float32, NaN where nodata) as it is made."""
+    if product.kind == "horizon":
+        def on_direction(i, a, beta, dist):
+            put("angles", i, beta)
+            if dist is not None:
+                put("distance", i, dist)
+        return job.region(rd, region, on_direction, product.distance)
+    from ..algorithms.skyview import Sum
+    from .plan import window_grid
+    sums = []
+
+    def on_window(z, window, inner):
+        sums.append(Sum(product.definition, z, window_grid(job.source.grid, window), *inner))
+
+    def on_direction(i, a, beta, dist):
+        sums[0].add(a, beta)
+    fig = job.region(rd, region, on_direction, False, on_window)
+    out = sums[0].result()
+    if product.complement:
+        out = (1.0 - out).astype(np.float32)
+    put("result", 0, out)
+    return fig
+
+
+# ---------------------------------------------------------------------------------------------
+# regions as Dask tasks (--scheduler)
+
+_TASK_LOCK = None
+
+
+def _task_lock():
+    """One numba computation at a time per worker process (numba parallelises inside)."""
+    global _TASK_LOCK
+    if _TASK_LOCK is None:
+        import threading
+        _TASK_LOCK = threading.Lock()
+    return _TASK_LOCK
+
+
+def region_task(job: HorizonJob, region, product: Product, folder: str,
+                stride: int | None = None) -> dict:
+    """The Dask task: march ``region``, write each output's part (a GeoTIFF of the region's
+    shape, a band per direction, -9999 nodata) in ``folder``; returns the figures, the parts'
+    paths, the result's statistics (min, sum, count of valid cells) and, with ``stride``, the
+    every-``stride``-th cells of the first direction's preview shade."""
+    import warnings
+
+    import rasterio
+    from affine import Affine
+    from rasterio.errors import NotGeoreferencedWarning
+
+    from ..io import DEFLATE_LEVEL, atomic_path, gdal_checked
+    from ..preview import every_nth
+    from .plan import GDAL_CACHE_MB
+
+    r0, r1, c0, c1 = region
+    src = job.source
+    n = len(job.azimuths)
+    paths = {name: os.path.join(folder, f"{name}_r{r0}_c{c0}.tif")
+             for name in product.outputs(n)}
+    prof = dict(driver="GTiff", width=c1 - c0, height=r1 - r0, dtype="float32", nodata=-9999.0,
+                compress="deflate", zlevel=DEFLATE_LEVEL, predictor=3, tiled=True,
+                blockxsize=256, blockysize=256, interleave="band")
+    if src.crs is not None:
+        prof["crs"] = src.crs
+    if src.transform is not None:
+        prof["transform"] = src.transform @ Affine.translation(c0, r0)
+    stats = [math.inf, 0.0, 0]
+    shade = []
+    with contextlib.ExitStack() as stack:
+        stack.enter_context(warnings.catch_warnings())
+        warnings.simplefilter("ignore", NotGeoreferencedWarning)
+        dsts = {}
+        for name, count in product.outputs(n).items():
+            tmp = stack.enter_context(atomic_path(paths[name], ".tif"))
+            stack.enter_context(gdal_checked(paths[name]))
+            dsts[name] = stack.enter_context(rasterio.open(tmp, "w", count=count, **prof))
+
+        def put(name, band, arr):
+            if name == "result":
+                v = arr[~np.isnan(arr)]
+                if v.size:
+                    stats[0] = min(stats[0], float(v.min()))
+                    stats[1] += float(v.sum(dtype=np.float64))
+                    stats[2] += int(v.size)
+            if stride and name == "angles" and band == 0:
+                sub, at = every_nth(np.clip(np.nan_to_num(arr, nan=0.0) / 30.0, 0.0, 1.0), r0,
+                                    c0, stride)
+                shade.append((sub.copy(), at))
+            dsts[name].write(np.where(np.isnan(arr), np.float32(-9999.0), arr)[np.newaxis],
+                             [band + 1])
+        with rasterio.Env(GDAL_CACHEMAX=GDAL_CACHE_MB), src.reader() as rd, _task_lock():
+            fig = region_outputs(job, rd, region, product, put)
+    return {"figures": fig, "paths": paths, "stats": stats,
+            "shade": shade[0] if shade else None, "region": tuple(region)}
+
+
+def run_on_dask(scheduler, job: HorizonJob, regs, product: Product, outputs: dict,
+                quiet: bool, share=None, stride: int | None = None) -> tuple[Figures, list, dict]:
+    """Every region as a task; then each output (``outputs``: name -> a function of the VRT
+    document of its parts that writes it) assembled through a VRT. Returns (the figures, the
+    results' statistics per region, what the report says of the scheduler). The parts' folder
+    beside the first output is removed, also when the run fails."""
+    import shutil
+    import tempfile
+    from dataclasses import replace
+
+    from tqdm import tqdm
+
+    from ..io.vrt import VrtSource
+    from .dask import client_for
+
+    client, cluster = client_for(scheduler)
+    first = next(iter(outputs.values()))
+    folder = tempfile.mkdtemp(dir=os.path.dirname(os.path.abspath(first.path)),
+                              prefix="." + os.path.basename(first.path) + ".parts-")
+    futures = []
+    try:
+        workers = len(client.scheduler_info().get("workers", {}))
+        light = replace(job, stats=replace(job.stats, preview=None))    # nothing large
+        futures = [client.submit(region_task, light, reg, product, folder, stride, pure=False)
+                   for reg in regs]
+        from distributed import as_completed
+        fig, results = Figures(), []
+        bar = tqdm(total=len(futures), desc="hillshade-rt (dask)", unit="window", leave=False,
+                   disable=True if quiet or len(futures) < 2 else None)
+        with bar:
+            for f in as_completed(futures):
+                res = f.result()
+                fig.add(res["figures"])
+                results.append(res)
+                if share is not None and res["shade"] is not None:
+                    sub, (a, b) = res["shade"]
+                    share[a:a + sub.shape[0], b:b + sub.shape[1]] = sub
+                bar.update(1)
+        n = len(job.azimuths)
+        for name, out in outputs.items():
+            bands = [[VrtSource(res["paths"][name], i + 1, (res["region"][0], res["region"][2]),
+                                (res["region"][1] - res["region"][0],
+                                 res["region"][3] - res["region"][2]))
+                      for res in results] for i in range(product.outputs(n)[name])]
+            out.write(bands)
+        info = {"scheduler": scheduler if isinstance(scheduler, str) else str(client),
+                "workers": workers, "tasks": len(futures)}
+        return fig, [r["stats"] for r in results], info
+    except BaseException:
+        with contextlib.suppress(Exception):
+            client.cancel(futures)
+        raise
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+        if cluster is not None:
+            with contextlib.suppress(Exception):
+                client.close()
+                cluster.close()
+
+
+@dataclass
+class VrtOutput:
+    """One output of a Dask run: where it goes and how (``io.copy_vrt``), its bands'
+    descriptions and tags."""
+
+    path: str
+    shape: tuple
+    transform: object
+    crs: object
+    descriptions: list
+    tags: dict
+    band_tags: list | None = None
+    resampling: str = "nearest"
+    overwrite: bool = False
+    fmt: str | None = None
+
+    def write(self, bands) -> None:
+        from ..io import copy_vrt
+        from ..io.vrt import vrt_xml
+        doc = vrt_xml(self.shape, self.transform, self.crs, bands, "Float32", -9999.0,
+                      self.descriptions, {k: str(v) for k, v in self.tags.items()},
+                      self.band_tags)
+        copy_vrt(doc, self.path, "float32", False, self.resampling, self.overwrite, self.fmt)

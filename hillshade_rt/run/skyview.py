@@ -60,6 +60,7 @@ class SkyviewConfig:
     max_distance: float | None = None     # metres (Yokoyama's L, RVT's radius)
     max_memory: object = None
     window_size: object = None
+    scheduler: object = None              # the windows as Dask tasks
 
 
 def _check(cfg: SkyviewConfig) -> str:
@@ -113,10 +114,11 @@ def skyview(cfg: SkyviewConfig) -> dict:
     if ro.threads is not None:
         numba.set_num_threads(min(ro.threads, numba.config.NUMBA_NUM_THREADS))
     ran_on = choose_backend(ro.backend, "horizon", {"method": "scan"})
+    forced = wshape is not None or cfg.scheduler is not None
     with timer("read"):
-        src = cfg.read.open(cfg.dem, windows=wshape is not None)
+        src = cfg.read.open(cfg.dem, windows=forced)
     with src:
-        windowed = wshape is not None or needs_windows(src, limit, BYTES_PER_CELL)
+        windowed = forced or needs_windows(src, limit, BYTES_PER_CELL)
         run = _in_windows if windowed else _in_memory
         result, processing, curved = run(cfg, definition, src, ran_on, max_distance, timer,
                                           wshape=wshape, limit=limit)
@@ -210,17 +212,18 @@ def _in_memory(cfg, definition, src, ran_on, max_distance, timer, **_):
 
 
 def _in_windows(cfg, definition, src, ran_on, max_distance, timer, *, wshape, limit):
-    from ..algorithms.skyview import Sum, inverted
+    from ..algorithms.skyview import inverted
     from ..geometry import equal_azimuths
     from .horizon import horizon_job, prepare_windows
     from .local import bounded_gdal_cache
-    from .plan import block_stats, window_grid
-    from .reach import Figures
+    from .plan import block_stats
+    from .reach import Figures, Product, VrtOutput, region_outputs, run_on_dask
 
     ro = cfg.run
     n = int(cfg.directions)
     azimuths = equal_azimuths(360.0 / n)
-    st, fig = _Stats(), Figures()
+    product = Product("skyview", definition=definition, complement=cfg.terrain_configuration)
+    st, fig, extra = _Stats(), Figures(), {}
     with bounded_gdal_cache():
         with timer("prepare"):
             bstats = block_stats(src)
@@ -228,34 +231,37 @@ def _in_windows(cfg, definition, src, ran_on, max_distance, timer, *, wshape, li
                                   "scan", bstats, inverted(definition), 1, max_distance)
         regs, mem = prepare_windows(src, job, limit, wshape, timer)
         curved = bool(shader.curvature)
-        from tqdm import tqdm
-        bar = tqdm(total=len(regs), desc="hillshade-rt", unit="window", leave=False,
-                   disable=True if ro.quiet or len(regs) < 2 else None)
-        with _writer(cfg, src, definition, n, curved, max_distance) as w, \
-                src.reader() as rd, bar:
-            for reg in regs:
-                sums = []
-
-                def on_window(z, window, inner):
-                    sums.append(Sum(definition, z, window_grid(src.grid, window), *inner))
-
-                def on_direction(i, a, beta, dist):
-                    sums[0].add(a, beta)
-                with timer("compute"):
-                    fig.add(job.region(rd, reg, on_direction, False, on_window))
-                    out = sums[0].result()
-                    if cfg.terrain_configuration:
-                        out = (1.0 - out).astype(np.float32)
-                st.add(out)
+        if cfg.scheduler is not None:
+            out = VrtOutput(cfg.output, src.shape, src.transform, src.crs,
+                            [describe(cfg, definition)],
+                            _tags(cfg, definition, n, curved, max_distance),
+                            resampling="average", overwrite=ro.overwrite, fmt=ro.fmt)
+            with timer("compute"):
+                fig, parts, extra = run_on_dask(cfg.scheduler, job, regs, product,
+                                                {"result": out}, ro.quiet)
+            for lo, total, count in parts:
+                st.lo, st.total, st.count = min(st.lo, lo), st.total + total, st.count + count
+        else:
+            from tqdm import tqdm
+            bar = tqdm(total=len(regs), desc="hillshade-rt", unit="window", leave=False,
+                       disable=True if ro.quiet or len(regs) < 2 else None)
+            with _writer(cfg, src, definition, n, curved, max_distance) as w, \
+                    src.reader() as rd, bar:
+                for reg in regs:
+                    def put(name, band, out, reg=reg):
+                        st.add(out)
+                        with timer("write"):
+                            w.write(1, np.where(np.isnan(out), np.float32(-9999.0), out),
+                                    description=describe(cfg, definition), window=reg)
+                    with timer("compute"):
+                        fig.add(region_outputs(job, rd, reg, product, put))
+                    bar.update(1)
                 with timer("write"):
-                    w.write(1, np.where(np.isnan(out), np.float32(-9999.0), out),
-                            description=describe(cfg, definition), window=reg)
-                bar.update(1)
-            with timer("write"):
-                w.finish()
-    processing = {"mode": "windows", "cells": src.shape[0] * src.shape[1], "memory": mem,
+                    w.finish()
+    processing = {"mode": "windows" if cfg.scheduler is None else "dask",
+                  "cells": src.shape[0] * src.shape[1], "memory": mem,
                   "window_shape_requested": list(wshape) if wshape else None,
-                  **fig.as_dict()}
+                  **fig.as_dict(), **extra}
     return st, processing, curved
 
 
@@ -278,7 +284,8 @@ def _report(cfg, definition, src, ran_on, curved, st, processing, timer, max_dis
         mean = values["mean"]
         shown = f"{mean:.3f}" if mean is not None else "nan"
         where = "" if processing["mode"] == "in memory" else (
-            f", {processing['regions']} windows")
+            f", {processing['regions']} windows" + (" on Dask" if processing["mode"] == "dask"
+                                                    else ""))
         ro.say("summary", f"hillshade-rt: {cfg.output}: {cols}x{rows}, "
                           f"{describe(cfg, definition)}, {n} directions{where}, mean "
                           f"{shown}{' deg' if opn else ''}; compute "

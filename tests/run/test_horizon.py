@@ -244,3 +244,23 @@ def test_bad_reach_options_are_one_line_and_write_nothing(tmp_path, runner, args
     assert r.exit_code == code, r.output
     assert words in r.stderr and len(r.stderr.splitlines()) == 1, r.stderr
     assert not out.exists() and list(tmp_path.iterdir()) == []
+
+
+def test_windows_on_dask_give_the_same_files(tmp_path, runner):
+    """--scheduler local:2: the regions as Dask tasks, their parts put together through a VRT:
+    the bands, descriptions and tags of the run in memory (angles and distances), no parts
+    left behind."""
+    runs = {}
+    for name, extra in (("mem", []), ("dask", ["--window-size", "64", "--scheduler", "local:2"])):
+        out, dist = tmp_path / f"{name}.tif", tmp_path / f"{name}_d.tif"
+        r = runner.invoke(cli, ["horizon", EVEREST, str(out), "--directions", "8", "--distance",
+                                str(dist), "--max-distance", "4000"] + extra)
+        assert r.exit_code == 0, r.output
+        runs[name] = (_bands(out), _bands(dist))
+    assert "16 windows on Dask" in r.stderr
+    for i in range(2):
+        (a, ad, at), (b, bd, bt) = runs["mem"][i], runs["dask"][i]
+        np.testing.assert_array_equal(a, b)
+        assert ad == bd and at == bt
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["dask.tif", "dask_d.tif", "mem.tif",
+                                                          "mem_d.tif"]

@@ -244,3 +244,20 @@ def test_bad_openness_and_reach_options(tmp_path, runner, args, words):
                             str(out)] + args)
     assert r.exit_code == 2 and words in r.stderr and len(r.stderr.splitlines()) == 1, r.stderr
     assert not out.exists() and list(tmp_path.iterdir()) == []
+
+
+def test_windows_on_dask(tmp_path, runner):
+    """--scheduler local:2: Dozier's view factor from the regions as Dask tasks equals the run
+    in memory, bit for bit; the summary's mean too."""
+    path = data_path("everest_srtm3_voids_crop200.tif")
+    got, said = {}, {}
+    for name, extra in (("mem", []), ("dask", ["--window-size", "96", "--scheduler", "local:2"])):
+        out = tmp_path / f"{name}.tif"
+        r = runner.invoke(cli, ["skyview", path, str(out), "--directions", "8", "--definition",
+                                "dozier"] + extra)
+        assert r.exit_code == 0, r.output
+        got[name] = read_band(out)
+        said[name] = re.search(r"mean (\S+);", r.stderr).group(1)
+    assert "9 windows on Dask" in r.stderr
+    np.testing.assert_array_equal(got["mem"], got["dask"])
+    assert said["mem"] == said["dask"]
