@@ -38,6 +38,11 @@ every direction, and one continuation window), their pyramids, and the region's 
 outputs: ``BYTES_PER_REGION_CELL``. Reads: with M, each region reads its window once (the halo M
 all round); without M, each direction's open rays may read as far as the raster's edge (the
 block maxima skip what cannot matter): exact, bounded in memory, more reading.
+
+What a region makes (``Product``: the horizon's bands, or a skyview definition's result) is
+handed over as it is made (``region_outputs``): written into the outputs' windows in order, or,
+with ``--scheduler``, each region a Dask task (``region_task``) that writes its parts, put
+together through a VRT at the end (``run_on_dask``), as ``run.dask`` does for shadows.
 """
 
 from __future__ import annotations
@@ -198,7 +203,7 @@ class HorizonJob:
     invert: bool = False
     sample_spacing: int = 1
     max_distance: float = math.inf
-    window_cells: int = 0
+    window_cells: int = 0       # a window's cells at most (at least WINDOW_FACTOR x a region's)
     gpu: object = None          # gpu.GpuDem (the class) to march on the device
     pyramid: bool = True
 
@@ -318,12 +323,6 @@ def plan_regions(shape, limit: int | None, window_shape) -> tuple[list, dict]:
         budget, mem = window_budget(limit, BYTES_PER_REGION_CELL)
         rshape = region_shape(shape, budget)
     return regions(shape, rshape), mem
-
-
-def needs_windows(src, limit: int, per_cell: int) -> bool:
-    """Whether the DEM is too large for the run in memory (``per_cell`` bytes per cell)."""
-    from .local import needs_windows as too_large
-    return too_large(src, limit, per_cell)
 
 
 
