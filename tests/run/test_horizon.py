@@ -166,13 +166,13 @@ def test_windows_give_the_bits_of_the_run_in_memory(tmp_path, runner, dem, args)
     """--window-size 64: every band of the angles and of --distance equals the run in memory
     bit for bit, on a fractal (UTM) and a real DEM (geographic: per-row spacing; voids), toward
     a non-special azimuth and 8 directions, with and without a maximum distance (curvature on:
-    both rasters are more than 1 km across)."""
+    both rasters are more than 1 km across); the preview too."""
     path = _fractal_dem(tmp_path) if dem == "fractal" else EVEREST
     runs = {}
     for name, extra in (("mem", []), ("win", ["--window-size", "64"])):
         out, dist = tmp_path / f"{name}.tif", tmp_path / f"{name}_d.tif"
-        r = runner.invoke(cli, ["horizon", path, str(out), "--distance", str(dist)] + args
-                          + extra)
+        r = runner.invoke(cli, ["horizon", path, str(out), "--distance", str(dist),
+                                "--preview", str(tmp_path / f"{name}.png")] + args + extra)
         assert r.exit_code == 0, r.output
         assert bool(re.search(r", \d+ windows\)", r.stderr)) == (name == "win"), r.stderr
         runs[name] = (_bands(out), _bands(dist))
@@ -181,6 +181,7 @@ def test_windows_give_the_bits_of_the_run_in_memory(tmp_path, runner, dem, args)
     np.testing.assert_array_equal(runs["mem"][1][0], runs["win"][1][0])
     assert ad == bd and at == bt
     assert (a == -90).any() and (a > 5).any() and (a < -5).any()    # horizons of all kinds
+    np.testing.assert_array_equal(read_band(tmp_path / "mem.png"), read_band(tmp_path / "win.png"))
 
 
 def test_max_distance_on_the_command_line(tmp_path, runner):
