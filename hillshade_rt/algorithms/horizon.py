@@ -15,6 +15,10 @@ Two ways to get β:
 when even the highest cell of the DEM could not raise the maximum further, and, for a mask, as soon
 as the maximum exceeds α or can no longer reach it. ``sample_spacing`` = sp > 1 takes every sp-th
 sample only (the paper's ``sp``): faster, approximate (figures in docs/algorithms.md).
+``max_distance`` M (metres) ends each ray at its last sample within M of ground distance
+(k <= floor(M / step_m), the row's metres per step). One march (``_march``) serves the raster in
+memory and windows of it (``Marches``: a region's rays carried from window to window, state and
+all, for rasters larger than memory: ``run.reach``), with the same bits.
 
 ``hull`` (fast, O(N log N)): Dozier & Frew's idea as in topocalc: along one straight line in the sun
 direction the horizon of every point follows from the upper convex hull of the samples ahead of
