@@ -80,12 +80,13 @@ def horizon_angles(heights, azimuth: float,
                    spacing: float | tuple[float, float] | Grid | None = None,
                    method: str = "scan", sample_spacing: int = 1, backend: str = "auto", *,
                    curvature="auto", refraction_k: float | None = None,
-                   body=None) -> np.ndarray:
+                   body=None, max_distance: float | None = None) -> np.ndarray:
     """Horizon angle (degrees, float32) of every cell toward ``azimuth``: lit by a sun at that
     azimuth iff angle <= its elevation. NaN on voids, -90 where no terrain lies ahead.
     ``method="scan"`` is exact on the model; ``"hull"`` is the faster approximation. As
     ``hillshade-rt horizon``: curvature "auto" is on for the scan of a raster more than 1 km
-    across; ``heights``, ``spacing`` and ``body`` as for :func:`shadow_mask`."""
+    across; ``max_distance`` (metres, the scan): terrain farther along a ray is ignored;
+    ``heights``, ``spacing`` and ``body`` as for :func:`shadow_mask`."""
     from .algorithms import horizon as hz
     from .shading import horizon_shader
     z, grid, body = _dem_parts(heights, spacing, body)
@@ -95,8 +96,10 @@ def horizon_angles(heights, azimuth: float,
     rays = shader.rays(grid, azimuth, 45.0)
     if ran_on == "gpu":
         from .gpu import GpuDem
-        return hz.horizon_angles_gpu(GpuDem(z), rays, method, sample_spacing)
-    return hz.horizon_angles(z, rays, method=method, sample_spacing=sample_spacing)
+        return hz.horizon_angles_gpu(GpuDem(z), rays, method, sample_spacing,
+                                     max_distance=max_distance)
+    return hz.horizon_angles(z, rays, method=method, sample_spacing=sample_spacing,
+                             max_distance=max_distance)
 
 
 def is_shadowed(heights, points, azimuth: float, elevation: float,
@@ -112,27 +115,32 @@ def is_shadowed(heights, points, azimuth: float, elevation: float,
 
 def sky_view(heights, spacing: float | tuple[float, float] | Grid | None = None,
              directions: int = 32, definition: str = "zaksek", *, curvature="auto",
-             refraction_k: float | None = None, body=None) -> np.ndarray:
+             refraction_k: float | None = None, body=None, openness: str | None = None,
+             max_distance: float | None = None) -> np.ndarray:
     """Sky view factor of every cell (float32 0..1, NaN on voids) from its exact horizon in
     ``directions`` azimuths, as ``hillshade-rt skyview``: ``definition`` "zaksek" (1 - mean sin
     of the horizon elevation clipped at the horizontal) or "dozier" (cosine-weighted, from the
-    tilted surface). ``heights``, ``spacing``, ``curvature``, ``body`` as for
-    :func:`horizon_angles`."""
-    from .algorithms.skyview import DEFINITIONS, sky_view as _sky_view
+    tilted surface). ``openness`` "positive" or "negative": Yokoyama's openness instead
+    (float32 degrees; NaN where no direction has terrain ahead). ``max_distance``: metres,
+    terrain farther along a ray is ignored (Yokoyama's L). ``heights``, ``spacing``,
+    ``curvature``, ``body`` as for :func:`horizon_angles`."""
+    from .algorithms.skyview import definition_of, inverted, sky_view as _sky_view
     from .shading import horizon_shader
-    if definition not in DEFINITIONS:
-        raise HillshadeError(f"definition must be one of {', '.join(DEFINITIONS)}, got "
-                             f"{definition!r}")
+    name = definition_of(definition, openness)
+    if openness is not None and definition != "zaksek":
+        raise HillshadeError("openness is a product of its own: give it without definition")
     z, grid, body = _dem_parts(heights, spacing, body)
     n = int(directions)
     if n < 1:
         raise HillshadeError(f"directions must be 1 or more, got {directions}")
     from .algorithms import horizon as hz
     shader = horizon_shader(z, grid, "cpu", curvature, refraction_k, body)
-    pyramid = shader.pyramid(z, True)           # one for every direction
+    zm = np.negative(z) if inverted(name) else z    # negative openness: the horizons of -z
+    pyramid = shader.pyramid(zm, True)           # one for every direction
     return _sky_view(z, grid, equal_azimuths(360.0 / n),
-                     lambda a: hz.horizon_angles(z, shader.rays(grid, a, 45.0),
-                                                 pyramid=pyramid), definition)
+                     lambda a: hz.horizon_angles(zm, shader.rays(grid, a, 45.0),
+                                                 pyramid=pyramid, max_distance=max_distance),
+                     name)
 
 
 def horizon_profile(heights, rows, cols, spacing: float | tuple[float, float] | Grid | None = None,

@@ -306,6 +306,61 @@ def reference_mask(z, dx, dy, azimuth, elevation, col_sign=1, row_sign=-1,
     return out
 
 
+def reference_horizon(z, dx, dy, azimuth, col_sign=1, row_sign=-1, max_distance=None):
+    """The horizon scan written out plainly (as :func:`reference_mask`, independently of the
+    kernels): (β in degrees, the ground distance in metres to the horizon point), float64 per
+    cell: the highest angle atan((terrain - h0) / t) over the ray's samples at ground distances
+    t <= ``max_distance`` (the whole raster when None), the nearest of equal ones; -90 and NaN
+    where no valid terrain lies ahead; NaN and NaN on voids. No Earth curvature."""
+    z = np.asarray(z, dtype=np.float64)
+    rows, cols = z.shape
+    dxs = np.broadcast_to(np.asarray(dx, dtype=np.float64), (rows,))
+    dys = np.broadcast_to(np.asarray(dy, dtype=np.float64), (rows,))
+    a = math.radians(azimuth % 360.0)
+    east, north = math.sin(a), math.cos(a)
+    beta = np.full((rows, cols), np.nan)
+    dist = np.full((rows, cols), np.nan)
+
+    def near_int(x):
+        return abs(x - round(x)) < 1e-9
+
+    for r in range(rows):
+        vc = col_sign * east / dxs[r]
+        vr = row_sign * north / dys[r]
+        dom = max(abs(vc), abs(vr))
+        for c in range(cols):
+            if math.isnan(z[r, c]):
+                continue
+            best, where = -math.inf, math.nan
+            k = 1
+            while True:
+                t = k / dom
+                if max_distance is not None and t > max_distance * (1 + 1e-12):
+                    break
+                pc, pr = c + vc * t, r + vr * t
+                if near_int(pc):
+                    pc = round(pc)
+                if near_int(pr):
+                    pr = round(pr)
+                if not (0 <= pc <= cols - 1 and 0 <= pr <= rows - 1):
+                    break
+                if pc == int(pc) and pr == int(pr):
+                    terrain = z[int(pr), int(pc)]
+                elif pc == int(pc):
+                    i = int(math.floor(pr)); f = pr - i
+                    terrain = (1 - f) * z[i, int(pc)] + f * z[i + 1, int(pc)]
+                else:
+                    i = int(math.floor(pc)); f = pc - i
+                    terrain = (1 - f) * z[int(pr), i] + f * z[int(pr), i + 1]
+                v = (terrain - z[r, c]) / t
+                if not math.isnan(v) and v > best + 1e-12 * abs(v):
+                    best, where = v, t
+                k += 1
+            beta[r, c] = -90.0 if best == -math.inf else math.degrees(math.atan(best))
+            dist[r, c] = where
+    return beta, dist
+
+
 # --- files ------------------------------------------------------------------------------------
 
 def write_geotiff(path, z, transform=None, crs=None, nodata=None, count=1) -> str:

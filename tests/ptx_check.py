@@ -88,6 +88,10 @@ def main() -> int:
         for name in GPU_ALGORITHMS:
             g.shadow_mask(rays, name)
         horizon.horizon_angles_gpu(g, rays)
+        horizon.horizon_angles_gpu(g, rays, max_distance=250.0)
+        # the scan in windows (run.reach): a region's rays through a window on the device
+        m = horizon.Marches(z[2:6, 3:9], (2, 6, 3, 9), rays, z.shape, 50.0)
+        m.march(horizon.ScanWindow(z[0:8].copy(), (0, 8, 0, 14), z.shape, True, gpu.GpuDem))
     out = {}
     for (name, _), ptx in compiled.items():
         prev = out.get(name, {"ptx_bytes": 0, "fma": 0})

@@ -116,8 +116,40 @@ def test_horizon_angles_equal_cpu(dem):
         for sp in (1, 3):
             np.testing.assert_array_equal(horizon.horizon_angles_gpu(g, rays, "scan", sp),
                                           horizon.horizon_angles(z, rays, "scan", sp))
+        # a maximum distance (issue 20): the same last step per row on both
+        d_gpu, d_cpu = np.empty(z.shape, np.float32), np.empty(z.shape, np.float32)
+        got = horizon.horizon_angles_gpu(g, rays, distance=d_gpu, max_distance=95.0)
+        want = horizon.horizon_angles(z, rays, distance=d_cpu, max_distance=95.0)
+        np.testing.assert_array_equal(got, want)
+        np.testing.assert_array_equal(d_gpu, d_cpu)
+        assert (got != horizon.horizon_angles(z, rays)).any()
     with pytest.raises(HillshadeError, match="hull"):
         horizon.horizon_angles_gpu(g, rays, "hull")
+
+
+def test_horizon_windows_equal_cpu(dem):
+    """The scan in windows (run.reach): a region's rays carried through windows on the device
+    give the CPU's state and angles, which are the march in memory's."""
+    z, _ = dem
+    rows, cols = z.shape
+    grid = Grid.uniform(rows, cols, 30.0, 20.0)
+    wins = [(0, 10, 0, 12), (9, rows, 0, 12), (0, 10, 11, cols), (9, rows, 11, cols)]
+    for az in (163.0, 290.0):
+        rays = sun_rays(grid, az, 45.0, 1e-7)
+        out = {}
+        for name, dev in (("cpu", None), ("gpu", gpu.GpuDem)):
+            m = horizon.Marches(z[4:12, 5:15], (4, 12, 5, 15), rays, z.shape,
+                                float(np.nanmax(z)), max_distance=150.0)
+            for _ in range(6):
+                for w in wins:
+                    m.march(horizon.ScanWindow(np.ascontiguousarray(z[w[0]:w[1], w[2]:w[3]]),
+                                               w, z.shape, True, dev))
+            assert not m.open().any()
+            out[name] = (m.angles(), m.kbest.copy())
+        np.testing.assert_array_equal(out["gpu"][0], out["cpu"][0])
+        np.testing.assert_array_equal(out["gpu"][1], out["cpu"][1])
+        want = horizon.horizon_angles(z, rays, max_distance=150.0)[4:12, 5:15]
+        np.testing.assert_array_equal(out["cpu"][0], want)
 
 
 def test_dem_stays_on_the_device():
@@ -236,6 +268,25 @@ def test_cli_horizon_gpu(tmp_path, runner):
     np.testing.assert_array_equal(read_band(tmp_path / "cpu.tif"), read_band(tmp_path / "gpu.tif"))
 
 
+@pytest.mark.parametrize("command, args", [
+    # (163, not 203.7: numba's float() leaves a float32 a float32, so the model's b - a is float32
+    # on the CPU and the device but float64 in the simulator, which runs plain Python: at 203.7
+    # one cell of this tile differs by an ulp there, for the march in memory as well)
+    ("horizon", ["--azimuth", "163", "--max-distance", "200"]),
+    ("skyview", ["--directions", "6", "--openness", "negative"]),
+])
+def test_cli_horizon_windows_on_the_gpu(tmp_path, runner, command, args):
+    """The windowed run (run.reach) marching on the device gives the CPU's run in memory."""
+    from hillshade_rt.cli import cli
+    dem = _tile(tmp_path)
+    for name, extra in (("cpu", ["--backend", "cpu"]),
+                        ("gpu", ["--backend", "gpu", "--window-size", "64"])):
+        res = runner.invoke(cli, [command, dem, str(tmp_path / f"{name}.tif")] + args + extra)
+        assert res.exit_code == 0, res.output
+    assert "1 windows" in res.stderr
+    np.testing.assert_array_equal(read_band(tmp_path / "cpu.tif"), read_band(tmp_path / "gpu.tif"))
+
+
 def test_gpu_without_a_device_is_one_line(tmp_path):
     """No simulator and no visible device (CUDA_VISIBLE_DEVICES empty; here there is no driver
     either): one line naming what is missing, exit status 1, no output file."""
@@ -277,7 +328,7 @@ def test_kernels_compile_for_a_real_gpu():
     assert p.returncode == 0, p.stderr[-3000:]
     kernels = json.loads(p.stdout.strip().splitlines()[-1])
     assert set(kernels) == {"_brute_gpu", "_mask_gpu", "_colour_gpu", "_nextv_pass_gpu",
-                            "_scan_gpu", "_sweep_gpu", "canonical_copy_gpu"}
+                            "_scan_gpu", "_sweep_gpu", "canonical_copy_gpu", "_span_gpu"}
     assert all(k["ptx_bytes"] > 1000 for k in kernels.values())
     for name in ("_brute_gpu", "_mask_gpu", "_sweep_gpu", "_nextv_pass_gpu"):
         assert kernels[name]["fma"] == 0, name

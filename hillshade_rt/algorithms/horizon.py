@@ -15,6 +15,10 @@ Two ways to get β:
 when even the highest cell of the DEM could not raise the maximum further, and, for a mask, as soon
 as the maximum exceeds α or can no longer reach it. ``sample_spacing`` = sp > 1 takes every sp-th
 sample only (the paper's ``sp``): faster, approximate (figures in docs/algorithms.md).
+``max_distance`` M (metres) ends each ray at its last sample within M of ground distance
+(k <= floor(M / step_m), the row's metres per step). One march (``_march``) serves the raster in
+memory and windows of it (``Marches``: a region's rays carried from window to window, state and
+all, for rasters larger than memory: ``run.reach``), with the same bits.
 
 ``hull`` (fast, O(N log N)): Dozier & Frew's idea as in topocalc: along one straight line in the sun
 direction the horizon of every point follows from the upper convex hull of the samples ahead of
@@ -38,7 +42,7 @@ from ._cuda import cuda, kernel
 from ._jitcache import njit
 from .frames import frame_of, uniform_rays
 from .pyramid import climb, pyramid_args, samples_left
-from .raymath import line_position, madd, ray_origin, ray_sample, terrain_on_line
+from .raymath import line_position, madd, ray_origin, terrain_on_line
 
 METHODS = ("scan", "hull")
 
@@ -49,49 +53,78 @@ PER_ROW_SPACING = ("the ground spacing varies per row (a geographic CRS, or a "
                    "stereographic DEMs)")
 
 
-@njit(cache=True)
-def _scan_cell(z, pyr, off, widths, nlev, r, c, dom_col, sd, so, sp, zmax, rise, cv, decide,
-               floor, cap):
-    """(max of (T_k - h0 - k*k*cv) / k over the samples k = sp, 2sp, ... (-inf if none), the k
-    of that maximum (0 if none)); ``cv`` is the Earth-curvature term (the terrain k steps away
-    sits k*k*cv lower; 0 when flat).
+# no limit on the steps of a ray (--max-distance not given)
+NO_LIMIT = np.int64(1) << np.int64(62)
 
-    decide: stop as soon as the result is known relative to ``rise`` (mask mode). ``floor``:
-    start the maximum there (the answer is then max(β, floor): soft shadows need no horizon
-    below the sun's lower edge); ``cap``: stop once the maximum exceeds it (nor above its upper
-    edge). Over the maximum-height pyramid (``nlev`` > 0, sp = 1) a block is skipped while the
-    maximum is >= 0 and the block lies below h0 + max*k + k*k*cv, which only rises along the ray:
-    no sample in it could raise the maximum, so the result is the plain scan's."""
-    line0, other0, n_dom, n_oth = ray_origin(z, r, c, dom_col)
-    h0 = float(z[np.int64(r), np.int64(c)])
-    best = floor
-    kbest = 0
-    k = sp
+
+@njit(cache=True)
+def last_step(max_dist, step_m):
+    """The last sample k of a ray within ground distance ``max_dist`` (m) of its cell, the
+    samples being ``step_m`` metres apart: floor(max_dist / step_m), ``NO_LIMIT`` for inf."""
+    q = max_dist / step_m
+    if q >= 4.0e18:
+        return NO_LIMIT
+    return np.int64(math.floor(q))
+
+
+@njit(cache=True, inline="always")
+def _march(z, pyr, off, widths, nlev, wl0, wo0, line0, other0, n_dom, n_oth, h0, dom_col, sd,
+           so, sp, zmax, rise, cv, decide, best, kbest, k, kmax, cap):
+    """March samples k, k + sp, ... of the ray of one cell: (the maximum of
+    (T_k - h0 - k*k*cv) / k, starting at ``best``; the k of that maximum, starting at
+    ``kbest`` (0: none yet); the next sample to march, 0 when the march is over).
+
+    The cell is at ``line0`` (its grid line along the dominant axis) and ``other0`` (its
+    position on that line) in the raster's coordinates, which has ``n_dom`` lines of ``n_oth``
+    positions; ``h0`` its height. ``z`` holds the heights of a window of the raster whose first
+    line is ``wl0`` and first position ``wo0`` (0, 0 and ``z`` the raster: a march in memory);
+    the march stops at the first sample ``z`` does not hold, and says so by returning that
+    sample as the next one (a window that ends at the raster's edge ends the march there, as
+    the raster does). A sample is computed in the raster's coordinates (the same rounding
+    whatever the window) and read from the window: a window's march takes the same steps and
+    decisions as the march in memory, so the two give the same bits.
+
+    The march is over once ``k`` passes ``kmax`` (the last step within --max-distance), the ray
+    leaves the raster, or no later sample can raise the maximum (even the highest cell of the
+    raster, ``zmax``); ``decide`` (a mask): as soon as the result is known relative to ``rise``;
+    ``cap``: once the maximum exceeds it (soft shadows). Over the maximum-height pyramid of
+    ``z`` (``nlev`` > 0, sp = 1) a block is skipped while the maximum is >= 0 and the block lies
+    below h0 + max*k + k*k*cv, which only rises along the ray: no sample in it could raise the
+    maximum, so the result is the plain march's. ``cv`` is the Earth-curvature term (the terrain
+    k steps away sits k*k*cv lower; 0 when flat)."""
+    if dom_col:
+        wn_dom = np.int64(z.shape[1])
+        wn_oth = np.int64(z.shape[0])
+    else:
+        wn_dom = np.int64(z.shape[0])
+        wn_oth = np.int64(z.shape[1])
     lev = 0
     while True:
+        if k > kmax:
+            return best, kbest, 0
         if zmax - h0 <= best * k:           # no later sample can raise the maximum
-            break
+            return best, kbest, 0
         if decide and zmax - h0 <= rise * k:  # nothing ahead can reach the sun's elevation
-            break
+            return best, kbest, 0
+        line = line0 + k * sd
+        if line < 0 or line >= n_dom:
+            return best, kbest, 0
+        pos = line_position(madd(float(other0), float(k), so), n_oth)
+        if pos < 0.0:
+            return best, kbest, 0
+        wl = line - wl0
+        wpos = pos - wo0                     # exact: an integer off a larger number
+        wi = np.int64(math.floor(wpos))
+        if wl < 0 or wl >= wn_dom or wpos < 0.0 or wpos > wn_oth - 1:
+            return best, kbest, k            # beyond the window: the next window goes on
         if nlev > 0 and best >= 0.0:
-            line = line0 + k * sd
-            if line < 0 or line >= n_dom:
-                break
-            pos = line_position(madd(float(other0), float(k), so), n_oth)
-            if pos < 0.0:
-                break
             hr = h0 + best * k + k * k * cv
-            i0 = np.int64(math.floor(pos))
-            lev = climb(pyr, off, widths, nlev, lev, i0 if dom_col else line,
-                        line if dom_col else i0, hr)
+            lev = climb(pyr, off, widths, nlev, lev, wi if dom_col else wl,
+                        wl if dom_col else wi, hr)
             if lev > 0:        # no sample in the block can raise the maximum: past it
-                k += samples_left(lev, line, i0, pos, sd, so) + 1
+                k += samples_left(lev, wl, wi, wpos, sd, so) + 1
                 continue
-            t = terrain_on_line(z, dom_col, line, pos)
-        else:
-            inside, t = ray_sample(z, dom_col, line0, other0, n_dom, n_oth, k, sd, so)
-            if not inside:
-                break
+        t = terrain_on_line(z, dom_col, wl, wpos)
         lift = t - h0
         if cv != 0.0:   # t - h0 - k*k*cv, never fused on the GPU
             lift = madd(lift, -float(k * k), cv)
@@ -99,20 +132,47 @@ def _scan_cell(z, pyr, off, widths, nlev, r, c, dom_col, sd, so, sp, zmax, rise,
             best = lift / k
             kbest = k
             if decide and best > rise:
-                break
+                return best, kbest, 0
             if best > cap:
-                break
+                return best, kbest, 0
         k += sp
+
+
+@njit(cache=True)
+def _scan_cell(z, pyr, off, widths, nlev, r, c, dom_col, sd, so, sp, zmax, rise, cv, decide,
+               floor, cap, kmax):
+    """(max of (T_k - h0 - k*k*cv) / k over the samples k = sp, 2sp, ... up to ``kmax``
+    (-inf if none), the k of that maximum (0 if none)): ``_march`` over the whole raster
+    ``z`` from the cell (r, c). ``floor``: start the maximum there (the answer is then
+    max(β, floor): soft shadows need no horizon below the sun's lower edge)."""
+    line0, other0, n_dom, n_oth = ray_origin(z, r, c, dom_col)
+    h0 = float(z[np.int64(r), np.int64(c)])
+    best, kbest, _ = _march(z, pyr, off, widths, nlev, np.int64(0), np.int64(0), line0, other0,
+                            n_dom, n_oth, h0, dom_col, sd, so, sp, zmax, rise, cv, decide, floor,
+                            np.int64(0), sp, kmax, cap)
     return best, kbest
 
 
 @njit(cache=True, inline="always")
+def _angle(t, sm, floor_tan, cap_tan):
+    """β in degrees from the maximum ``t`` (per step of ``sm`` metres) of ``_march``: -90 with
+    nothing ahead (or nothing above the floor), 90 above the cap."""
+    if t == -np.inf or (floor_tan > -np.inf and t <= floor_tan * sm):
+        return -90.0      # nothing ahead, or nothing above the floor: all the disk
+    if t > cap_tan * sm:
+        return 90.0       # above the cap: none of the disk
+    return math.degrees(math.atan(t / sm))
+
+
+@njit(cache=True, inline="always")
 def _scan_write(z, pyr, off, widths, nlev, r, c, dom_col, step_dom, step_other, rise, step_m,
-                curv, sp, zmax, want_mask, mask, beta, floor_tan, cap_tan, want_dist, dist):
+                curv, sp, zmax, want_mask, mask, beta, floor_tan, cap_tan, want_dist, dist,
+                max_dist):
     """Cell (r, c) of the scan: its mask code (want_mask) or its angle β in degrees (at least
     atan(floor_tan); above atan(cap_tan) only known to be above it), and with ``want_dist`` the
     ground distance (m) to the sample of the maximum, the horizon point (NaN on a void or with
-    nothing ahead). The per-cell body of both backends."""
+    nothing ahead); samples up to ``max_dist`` metres away (inf: to the raster's edge). The
+    per-cell body of both backends."""
     if math.isnan(z[r, c]):
         if want_mask:
             mask[r, c] = 255
@@ -125,41 +185,36 @@ def _scan_write(z, pyr, off, widths, nlev, r, c, dom_col, step_dom, step_other, 
     sm = step_m[r]
     t, kb = _scan_cell(z, pyr, off, widths, nlev if sp == 1 else np.int64(0), r, c,
                        dom_col[r] != 0, np.int64(step_dom[r]), step_other[r], sp, zmax, ri,
-                       curv[r], want_mask, floor_tan * sm, cap_tan * sm)
+                       curv[r], want_mask, floor_tan * sm, cap_tan * sm,
+                       last_step(max_dist, sm))
     if want_dist:
         dist[r, c] = kb * sm if kb > 0 else np.nan
     if want_mask:
         mask[r, c] = 1 if t > ri else 0
     else:
-        fl = floor_tan * sm
-        if t == -np.inf or (floor_tan > -np.inf and t <= fl):
-            beta[r, c] = -90.0      # nothing ahead, or nothing above the floor: all the disk
-        elif t > cap_tan * sm:
-            beta[r, c] = 90.0       # above the cap: none of the disk
-        else:
-            beta[r, c] = math.degrees(math.atan(t / sm))
+        beta[r, c] = _angle(t, sm, floor_tan, cap_tan)
 
 
 @njit(parallel=True, cache=True)
 def _scan_kernel(z, pyr, off, widths, nlev, dom_col, step_dom, step_other, rise, step_m, curv, sp,
-                 zmax, want_mask, mask, beta, floor_tan, cap_tan, want_dist, dist):
+                 zmax, want_mask, mask, beta, floor_tan, cap_tan, want_dist, dist, max_dist):
     rows, cols = z.shape
     for r in prange(rows):
         for c in range(cols):
             _scan_write(z, pyr, off, widths, nlev, r, c, dom_col, step_dom, step_other, rise,
                         step_m, curv, sp, zmax, want_mask, mask, beta, floor_tan, cap_tan,
-                        want_dist, dist)
+                        want_dist, dist, max_dist)
 
 
 @kernel
 def _scan_gpu(z, pyr, off, widths, nlev, dom_col, step_dom, step_other, rise, step_m, curv, sp,
-              zmax, want_mask, mask, beta, floor_tan, cap_tan, want_dist, dist):
+              zmax, want_mask, mask, beta, floor_tan, cap_tan, want_dist, dist, max_dist):
     """CUDA twin of ``_scan_kernel``: one thread per cell."""
     c, r = cuda.grid(2)
     if r < z.shape[0] and c < z.shape[1]:
         _scan_write(z, pyr, off, widths, nlev, r, c, dom_col, step_dom, step_other, rise,
                     step_m, curv, sp, zmax, want_mask, mask, beta, floor_tan, cap_tan,
-                    want_dist, dist)
+                    want_dist, dist, max_dist)
 
 
 @njit(cache=True)
@@ -271,6 +326,21 @@ def _check(method, sample_spacing, rays):
     return method == "hull" and uniform_rays(rays) and not rays.curved
 
 
+def _max_distance(max_distance, method: str = "scan") -> float:
+    """--max-distance as the kernels take it: metres > 0, inf for none."""
+    from ..errors import HillshadeError
+    if max_distance is None:
+        return math.inf
+    m = float(max_distance)
+    if not m > 0.0:     # NaN too
+        raise HillshadeError(f"the maximum distance must be a positive number of metres, got "
+                         f"{max_distance}")
+    if method != "scan" and math.isfinite(m):
+        raise HillshadeError("a maximum distance applies to the scan method only (the hull "
+                             "keeps the whole line ahead)")
+    return m
+
+
 def _tan_deg(a: float | None, default: float) -> float:
     if a is None or not math.isfinite(a):
         return default
@@ -284,17 +354,21 @@ def _tan_deg(a: float | None, default: float) -> float:
 def horizon_angles(z: np.ndarray, rays: SunRays, method: str = "scan", sample_spacing: int = 1,
                    zmax: float | None = None, stats: dict | None = None, pyramid=True,
                    floor_deg: float | None = None, cap_deg: float | None = None,
-                   distance: np.ndarray | None = None) -> np.ndarray:
+                   distance: np.ndarray | None = None,
+                   max_distance: float | None = None) -> np.ndarray:
     """β in degrees (float32, NaN on voids, -90 where no terrain lies ahead in the raster).
     ``distance``: a DEM-shaped float32 array that receives the ground distance in metres to
     each cell's horizon point (the sample of the maximum; NaN on voids and with nothing ahead;
-    the scan only).
+    the scan only). ``max_distance``: metres; terrain farther from the cell along the ray
+    (its samples k with k * step_m > max_distance, step_m its row's metres per step) is
+    ignored (None: the whole raster; the scan only).
 
     The scan marches over the maximum-height pyramid (``pyramid``: True, a ``MaxPyramid`` to
     reuse, or False for the plain scan: same angles). ``floor_deg`` / ``cap_deg`` (soft
     shadows): β below the floor comes back as the floor, β above the cap as some angle above it
     (the march stops there)."""
     hull = _check(method, sample_spacing, rays)
+    max_dist = _max_distance(max_distance, method)
     if distance is not None and method != "scan":
         from ..errors import HillshadeError
         raise HillshadeError("the distance to the horizon comes from the scan method only")
@@ -315,7 +389,7 @@ def horizon_angles(z: np.ndarray, rays: SunRays, method: str = "scan", sample_sp
                  rays.rise, rays.step_m, rays.curv, np.int64(sample_spacing), float(zmax), False,
                  np.empty((1, 1), np.uint8), beta, _tan_deg(floor_deg, -np.inf),
                  _tan_deg(cap_deg, np.inf), distance is not None,
-                 np.empty((1, 1), np.float32) if distance is None else distance)
+                 np.empty((1, 1), np.float32) if distance is None else distance, max_dist)
     return beta
 
 
@@ -338,12 +412,12 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None, stats: 
     _scan_kernel(z, *pyramid_args(z, pyramid), rays.dom_col, rays.step_dom, rays.step_other, rays.rise,
                  rays.step_m, rays.curv, np.int64(sample_spacing), float(zmax), True, out,
                  np.empty((1, 1), np.float32), -np.inf, np.inf, False,
-                 np.empty((1, 1), np.float32))
+                 np.empty((1, 1), np.float32), math.inf)
     return out
 
 
 def _scan_gpu_run(g, rays, sample_spacing, zmax, want_mask, floor_deg=None, cap_deg=None,
-                  distance=None):
+                  distance=None, max_dist=math.inf):
     rows, cols = g.shape
     dom_col, step_dom, step_other, rise, step_m, curv = g.rays(rays)
     dummy = g.empty((1, 1), np.float32 if want_mask else np.uint8)
@@ -354,7 +428,7 @@ def _scan_gpu_run(g, rays, sample_spacing, zmax, want_mask, floor_deg=None, cap_
         g.launch(_scan_gpu, rows, cols, g.z, *g.pyramid_args(True), dom_col, step_dom,
                  step_other, rise, step_m, curv, np.int64(sample_spacing), float(zmax),
                  want_mask, *args, _tan_deg(floor_deg, -np.inf), _tan_deg(cap_deg, np.inf),
-                 distance is not None, dist)
+                 distance is not None, dist, float(max_dist))
     if distance is not None:
         distance[...] = g.download(dist)
     return g.download(out)
@@ -378,11 +452,212 @@ def shadow_mask_gpu(g, rays: SunRays, zmax: float, stats: dict | None = None, me
 def horizon_angles_gpu(g, rays: SunRays, method: str = "scan", sample_spacing: int = 1,
                        stats: dict | None = None, floor_deg: float | None = None,
                        cap_deg: float | None = None,
-                       distance: np.ndarray | None = None) -> np.ndarray:
+                       distance: np.ndarray | None = None,
+                       max_distance: float | None = None) -> np.ndarray:
     """``horizon_angles`` on the GPU (float32 degrees, NaN on voids, -90 nothing ahead;
-    ``distance`` as for ``horizon_angles``)."""
+    ``distance`` and ``max_distance`` as for ``horizon_angles``)."""
     _gpu_method(method, sample_spacing, rays)
-    return _scan_gpu_run(g, rays, sample_spacing, g.zmax, False, floor_deg, cap_deg, distance)
+    return _scan_gpu_run(g, rays, sample_spacing, g.zmax, False, floor_deg, cap_deg, distance,
+                         _max_distance(max_distance))
+
+
+# ---------------------------------------------------------------------------------------------
+# the scan in windows (rasters larger than memory: ``run.reach``)
+
+@njit(cache=True, inline="always")
+def _span_cell(zw, pyr, off, widths, nlev, wr0, wc0, h0, i, j, r, c, n_rows, n_cols, q0, dom_col,
+               step_dom, step_other, step_m, curv, sp, zmax, max_dist, best, kbest, nextk):
+    """Carry on the march of region cell (i, j), the raster's cell (r, c), through the window
+    ``zw`` whose first row and column are ``wr0``, ``wc0`` (the rays: of the raster's rows from
+    ``q0`` on)."""
+    k = nextk[i, j]
+    if k == 0:
+        return
+    q = r - q0
+    dc = dom_col[q] != 0
+    if dc:
+        line0, other0, n_dom, n_oth, wl0, wo0 = c, r, n_cols, n_rows, wc0, wr0
+    else:
+        line0, other0, n_dom, n_oth, wl0, wo0 = r, c, n_rows, n_cols, wr0, wc0
+    b, kb, nk = _march(zw, pyr, off, widths, nlev if sp == 1 else np.int64(0), wl0, wo0, line0,
+                       other0, n_dom, n_oth, float(h0[i, j]), dc, np.int64(step_dom[q]),
+                       step_other[q], sp, zmax, 0.0, curv[q], False, best[i, j], kbest[i, j],
+                       k, last_step(max_dist, step_m[q]), np.inf)
+    best[i, j] = b
+    kbest[i, j] = kb
+    nextk[i, j] = nk
+
+
+@njit(parallel=True, cache=True)
+def _span_kernel(zw, pyr, off, widths, nlev, wr0, wc0, h0, r0, c0, n_rows, n_cols, q0, dom_col,
+                 step_dom, step_other, step_m, curv, sp, zmax, max_dist, best, kbest, nextk):
+    rows, cols = h0.shape
+    for i in prange(rows):
+        for j in range(cols):
+            _span_cell(zw, pyr, off, widths, nlev, wr0, wc0, h0, i, j, r0 + i, c0 + j, n_rows,
+                       n_cols, q0, dom_col, step_dom, step_other, step_m, curv, sp, zmax,
+                       max_dist, best, kbest, nextk)
+
+
+@kernel
+def _span_gpu(zw, pyr, off, widths, nlev, wr0, wc0, h0, r0, c0, n_rows, n_cols, q0, dom_col,
+              step_dom, step_other, step_m, curv, sp, zmax, max_dist, best, kbest, nextk):
+    """CUDA twin of ``_span_kernel``: one thread per region cell."""
+    j, i = cuda.grid(2)
+    if i < h0.shape[0] and j < h0.shape[1]:
+        _span_cell(zw, pyr, off, widths, nlev, wr0, wc0, h0, i, j, r0 + i, c0 + j, n_rows,
+                   n_cols, q0, dom_col, step_dom, step_other, step_m, curv, sp, zmax,
+                   max_dist, best, kbest, nextk)
+
+
+@njit(parallel=True, cache=True)
+def _span_angles(h0, i0, step_m, best, kbest, beta, want_dist, dist):
+    rows, cols = h0.shape
+    for i in prange(rows):
+        sm = step_m[i0 + i]
+        for j in range(cols):
+            if math.isnan(h0[i, j]):
+                beta[i, j] = np.nan
+                if want_dist:
+                    dist[i, j] = np.nan
+                continue
+            beta[i, j] = _angle(best[i, j], sm, -np.inf, np.inf)
+            if want_dist:
+                kb = kbest[i, j]
+                dist[i, j] = kb * sm if kb > 0 else np.nan
+
+
+def window_pyramid(zw: np.ndarray, window, shape) -> tuple:
+    """The maximum-height pyramid of ``zw``, the heights of ``window`` (r0, r1, c0, c1) of a
+    raster of ``shape``, as the kernels take it (``pyramid.MaxPyramid.args``), with every block
+    cut short by the window's far edge (its last row or column, where the raster goes on) made
+    +inf: such a block stands for cells beyond the window that samples interpolate toward and
+    lines the march would skip, none of them in ``zw``; the march samples there (and stops at the
+    window's edge) instead."""
+    from .pyramid import MaxPyramid
+    data, off, widths, nlev = MaxPyramid(zw).args
+    rows, cols = zw.shape
+    cut_rows, cut_cols = window[1] < shape[0], window[3] < shape[1]
+    if not (cut_rows or cut_cols) or nlev == 0:
+        return data, off, widths, nlev
+    data = data.copy()
+    for lev in range(1, int(nlev) + 1):
+        size = 1 << lev
+        w = int(widths[lev])
+        h = (int(off[lev + 1]) - int(off[lev])) // w
+        blocks = data[int(off[lev]):int(off[lev + 1])].reshape(h, w)
+        if cut_rows:   # block i covers rows i*size ..= (i+1)*size
+            blocks[(np.arange(h) + 1) * size >= rows, :] = np.inf
+        if cut_cols:
+            blocks[:, (np.arange(w) + 1) * size >= cols] = np.inf
+    return data, off, widths, nlev
+
+
+class ScanWindow:
+    """The heights ``zw`` of ``window`` (r0, r1, c0, c1) of a raster of ``shape`` made ready to
+    march through: its pyramid (``window_pyramid``; ``pyramid`` False: the plain march), and
+    with ``gpu`` (``gpu.GpuDem``, the class) both uploaded to the device once, for every
+    direction that marches through it."""
+
+    def __init__(self, zw: np.ndarray, window, shape, pyramid: bool = True, gpu=None):
+        self.zw, self.window = zw, tuple(int(v) for v in window)
+        self.pyr = window_pyramid(zw, window, shape) if pyramid else pyramid_args(zw, False)
+        self.g = self.dpyr = None
+        if gpu is not None:
+            self.g = gpu(zw)
+            self.dpyr = tuple(self.g.upload(a) for a in self.pyr[:3]) + (self.pyr[3],)
+
+
+class Marches:
+    """The scan's rays toward one azimuth from the cells of a ``region`` (r0, r1, c0, c1) of
+    a raster of ``shape``, marched window after window (``ScanWindow``): the same samples,
+    decisions and bits as ``horizon_angles`` over the whole raster, whatever windows they cross.
+
+    ``h0``: the region's heights (float32, NaN voids); ``rays``: the ``SunRays`` of the
+    raster's rows, or of the region's rows only (then they start at row r0); ``zmax``: the
+    raster's highest height (as the march in memory takes it). :meth:`march` carries every
+    open ray as far as a window holds its samples; a ray is closed once its march is over
+    (``max_distance``, the raster's edge, nothing left that could raise it); then
+    :meth:`angles`."""
+
+    def __init__(self, h0: np.ndarray, region, rays: SunRays, shape, zmax: float,
+                 sample_spacing: int = 1, max_distance: float | None = None):
+        _check("scan", sample_spacing, rays)
+        self.h0 = np.ascontiguousarray(h0, np.float32)
+        self.region, self.rays, self.shape = tuple(int(v) for v in region), rays, tuple(shape)
+        r0, r1 = self.region[:2]
+        if len(rays.step_m) == self.shape[0]:
+            self.q0 = 0
+        elif len(rays.step_m) == r1 - r0:
+            self.q0 = r0
+        else:
+            raise ValueError("rays must be of the raster's rows or of the region's")
+        self.zmax, self.sp = float(zmax), np.int64(sample_spacing)
+        self.max_dist = _max_distance(max_distance)
+        self.best = np.full(self.h0.shape, -np.inf)
+        self.kbest = np.zeros(self.h0.shape, np.int64)
+        self.nextk = np.where(np.isnan(self.h0), 0, self.sp).astype(np.int64)
+
+    def open(self) -> np.ndarray:
+        """Where the march goes on (a boolean per region cell)."""
+        return self.nextk > 0
+
+    def _args(self, sw: ScanWindow):
+        wr0, _, wc0, _ = sw.window
+        r0, _, c0, _ = self.region
+        rows, cols = self.shape
+        return (np.int64(wr0), np.int64(wc0), np.int64(r0), np.int64(c0), np.int64(rows),
+                np.int64(cols), np.int64(self.q0))
+
+    def march(self, sw: ScanWindow) -> None:
+        """Carry every open ray through the window ``sw``, as far as it holds its samples."""
+        wr0, wc0, r0, c0, rows, cols, q0 = self._args(sw)
+        ry = self.rays
+        if sw.g is not None:
+            g = sw.g
+            dom_col, step_dom, step_other, _, step_m, curv = g.rays(ry)
+            state = [g.upload(a) for a in (self.h0, self.best, self.kbest, self.nextk)]
+            with g.timed():
+                g.launch(_span_gpu, self.h0.shape[0], self.h0.shape[1], g.z, *sw.dpyr, wr0,
+                         wc0, state[0], r0, c0, rows, cols, q0, dom_col, step_dom, step_other,
+                         step_m, curv, self.sp, self.zmax, self.max_dist, *state[1:])
+            self.best, self.kbest, self.nextk = (g.download(a) for a in state[1:])
+            return
+        _span_kernel(sw.zw, *sw.pyr, wr0, wc0, self.h0, r0, c0, rows, cols, q0, ry.dom_col,
+                     ry.step_dom, ry.step_other, ry.step_m, ry.curv, self.sp, self.zmax,
+                     self.max_dist, self.best, self.kbest, self.nextk)
+
+    def skip_to(self, k: int) -> None:
+        """Open rays go on at their first sample past ``k`` (on their spacing): the caller knows
+        that no sample up to ``k`` could raise their maxima (:meth:`can_rise`)."""
+        o = self.nextk > 0
+        n = self.nextk[o]
+        ahead = n <= k
+        n[ahead] += -(-(k + 1 - n[ahead]) // self.sp) * self.sp
+        self.nextk[o] = n
+
+    def can_rise(self, highest: float, ka: int, kb: int) -> bool:
+        """Whether terrain no higher than ``highest`` at samples ``ka``..``kb`` could raise the
+        maximum of any open ray: highest - h0 > best * k for some such k, rounded as the march
+        rounds (which also takes the curvature term, >= 0, off the lift: only lower)."""
+        o = self.nextk > 0
+        if not o.any() or highest == -np.inf:      # nothing open, or voids only
+            return False
+        best = self.best[o]
+        h0 = self.h0[o].astype(np.float64)
+        kw = np.where(best >= 0.0, float(ka), float(kb))
+        with np.errstate(invalid="ignore"):
+            return bool(np.any(~((highest - h0) <= best * kw)))
+
+    def angles(self, distance: np.ndarray | None = None) -> np.ndarray:
+        """β of the region's cells (float32 degrees, NaN on voids, -90 with nothing ahead);
+        ``distance`` (float32, the region's shape) receives the ground metres to the horizon
+        point (NaN on voids and with nothing ahead)."""
+        beta = np.empty(self.h0.shape, np.float32)
+        _span_angles(self.h0, np.int64(self.region[0] - self.q0), self.rays.step_m, self.best,
+                     self.kbest, beta, distance is not None,
+                     np.empty((1, 1), np.float32) if distance is None else distance)
+        return beta
 
 
 # ---------------------------------------------------------------------------------------------

@@ -1,30 +1,168 @@
-"""The sky view factor of every cell from its horizon angles in N directions (the definitions:
-``run.skyview``'s docstring): Zakšek's 1 - mean sin γ, and Dozier & Frew's cosine-weighted view
-from the tilted surface. Numpy over whole rasters, one direction's angles at a time."""
+"""What a cell's horizons in N directions add up to (the definitions: ``run.skyview``'s
+docstring and docs/skyview.md): Zakšek's sky view factor 1 - mean sin γ, Dozier & Frew's
+cosine-weighted view from the tilted surface, and Yokoyama's positive and negative openness.
+
+One function per definition adds one direction's horizon angles to a running sum, cell by cell
+(numba: the same scalar arithmetic whatever the array's shape, so a window of a raster gets the
+bits a run in memory gives its cells); :class:`Sum` holds the sums of a raster or of one window
+and says the result. One direction's angles are in memory at a time.
+"""
 
 from __future__ import annotations
 
-import numpy as np
+import math
 
-DEFINITIONS = ("zaksek", "dozier")
+import numpy as np
+from numba import prange
+
+from ._jitcache import njit
+
+DEFINITIONS = ("zaksek", "dozier")          # --definition: sky view factors (0..1)
+OPENNESS = ("positive", "negative")         # --openness: degrees
+
+
+def definition_of(definition: str = "zaksek", openness: str | None = None) -> str:
+    """The definition's name: ``definition`` (a sky view factor) or, with ``openness``,
+    "openness-positive" / "openness-negative"."""
+    from ..errors import HillshadeError
+    if openness is not None:
+        if openness not in OPENNESS:
+            raise HillshadeError(f"openness must be one of {', '.join(OPENNESS)}, got "
+                                 f"{openness!r}")
+        return f"openness-{openness}"
+    if definition not in DEFINITIONS:
+        raise HillshadeError(f"definition must be one of {', '.join(DEFINITIONS)}, got "
+                             f"{definition!r}")
+    return definition
+
+
+def inverted(definition: str) -> bool:
+    """Whether the definition wants the horizons of the inverted terrain (-z): negative
+    openness looks down, at the lowest terrain."""
+    return definition == "openness-negative"
+
+
+def units(definition: str) -> str:
+    return ("degrees (mean over the directions)" if definition.startswith("openness")
+            else "fraction 0..1")
+
+
+# -- one function per definition: one direction's angles (degrees, float32: NaN on voids, -90
+#    with nothing ahead) added to the sums ------------------------------------------------------
+
+@njit(parallel=True, cache=True)
+def zaksek(beta, acc):
+    """Zakšek et al. 2011 (RVT, HORAYZON's sky view factor): adds sin γ, γ the horizon clipped
+    at the horizontal (terrain below it hides no sky); the result is 1 - mean."""
+    rows, cols = beta.shape
+    for i in prange(rows):
+        for j in range(cols):
+            b = float(beta[i, j])
+            if math.isnan(b):
+                acc[i, j] = np.nan
+            elif b > 0.0:
+                acc[i, j] += math.sin(math.radians(b))
+
+
+@njit(parallel=True, cache=True)
+def dozier(beta, cos_s, sc, acc):
+    """Dozier & Frew 1990 (Dozier 2022's Vd): adds cos S sin² H + sin S cos(φ - A) (H - sin H
+    cos H), H = 90° - γ the horizon's zenith angle (γ clipped at the horizontal), ``cos_s`` the
+    cell's cos S, ``sc`` its sin S cos(φ - A) (the incidence of a sun on the horizon at the
+    direction's azimuth φ); the result is the mean."""
+    rows, cols = beta.shape
+    for i in prange(rows):
+        for j in range(cols):
+            b = float(beta[i, j])
+            if math.isnan(b):
+                acc[i, j] = np.nan
+                continue
+            g = math.radians(b) if b > 0.0 else 0.0
+            h = math.pi / 2.0 - g
+            acc[i, j] += cos_s[i, j] * math.cos(g) ** 2 + float(sc[i, j]) * (
+                h - math.sin(h) * math.cos(h))
+
+
+@njit(parallel=True, cache=True)
+def openness(beta, acc, count):
+    """Yokoyama, Shirasawa & Pike 2002: adds the horizon's zenith angle 90° - β (β not clipped:
+    a cell that looks down has a horizon below the horizontal) over the directions with terrain
+    ahead (within the maximum distance); the result is the mean over those. Negative openness
+    is the same sum over the horizons of the inverted terrain (90° - β(-z) = 90° + the angle
+    down to the lowest terrain)."""
+    rows, cols = beta.shape
+    for i in prange(rows):
+        for j in range(cols):
+            b = float(beta[i, j])
+            if b != -90.0 and not math.isnan(b):
+                acc[i, j] += 90.0 - b
+                count[i, j] += 1
+
+
+@njit(parallel=True, cache=True)
+def _mean(acc, count, out):
+    rows, cols = acc.shape
+    for i in prange(rows):
+        for j in range(cols):
+            out[i, j] = acc[i, j] / count[i, j] if count[i, j] > 0 else np.nan
+
+
+class Sum:
+    """The running sums of one definition over a raster or a window's region.
+
+    ``z`` and ``grid``: heights (and their grid) around the cells, ``rows``/``cols`` the cells'
+    place in ``z`` (the whole of it in memory; a window's region, with a cell of margin, in
+    windows): Dozier's definition takes the cells' slope and aspect from Horn's normals there.
+    :meth:`add` one direction's angles of the cells, then :meth:`result`."""
+
+    def __init__(self, definition: str, z: np.ndarray, grid, rows: slice = slice(None),
+                 cols: slice = slice(None)):
+        r0, r1, _ = rows.indices(z.shape[0])
+        c0, c1, _ = cols.indices(z.shape[1])
+        self.definition, self.z, self.grid, self.rows, self.cols = definition, z, grid, rows, cols
+        self.shape = (r1 - r0, c1 - c0)
+        self.acc = np.zeros(self.shape, np.float64)
+        self.count = np.zeros(self.shape, np.int32) if definition.startswith("openness") else None
+        self.cos_s = None
+        if definition == "dozier":
+            from .relief import incidence
+            self.cos_s = incidence(z, grid, 0.0, 90.0, rows, cols).astype(np.float64)
+        self.n = 0
+
+    def add(self, azimuth: float, beta: np.ndarray) -> None:
+        """The cells' horizon angles toward ``azimuth`` (float32 degrees, NaN on voids, -90
+        with nothing ahead; of -z for negative openness)."""
+        d = self.definition
+        if d == "zaksek":
+            zaksek(beta, self.acc)
+        elif d == "dozier":
+            from .relief import incidence
+            # sin S cos(φ - A): the normal's horizontal part along φ (incidence of a sun on
+            # the horizon at azimuth φ)
+            dozier(beta, self.cos_s, incidence(self.z, self.grid, azimuth, 0.0, self.rows,
+                                               self.cols), self.acc)
+        else:
+            openness(beta, self.acc, self.count)
+        self.n += 1
+
+    def result(self) -> np.ndarray:
+        """float32: the sky view factor (0..1) or the openness (degrees); NaN on voids and,
+        for openness, where no direction has terrain ahead."""
+        if self.count is not None:
+            out = np.empty(self.shape, np.float64)
+            _mean(self.acc, self.count, out)
+            return out.astype(np.float32)
+        out = self.acc / self.n
+        if self.definition == "zaksek":
+            out = 1.0 - out
+        return out.astype(np.float32)
 
 
 def sky_view(z, grid, azimuths, angles_of, definition: str) -> np.ndarray:
-    """The sky view factor (float32, NaN on voids) from ``angles_of(azimuth)`` (horizon
-    elevation in degrees per cell, NaN on voids, -90 with nothing ahead) at each azimuth."""
-    from .relief import incidence
-    acc = np.zeros(z.shape, np.float64)
-    cos_s = incidence(z, grid, 0.0, 90.0).astype(np.float64) if definition == "dozier" else None
+    """The definition's result over the whole raster ``z`` (float32, NaN on voids) from
+    ``angles_of(azimuth)`` (horizon elevation in degrees per cell, NaN on voids, -90 with
+    nothing ahead; of -z for negative openness) at each azimuth."""
+    s = Sum(definition, z, grid)
     for a in azimuths:
-        g = np.radians(np.maximum(angles_of(a).astype(np.float64), 0.0))   # NaN stays NaN
-        if definition == "zaksek":
-            acc += np.sin(g)
-        else:
-            # sin S cos(φ - A): the normal's horizontal part along φ (incidence of a sun on
-            # the horizon at azimuth φ)
-            sc = incidence(z, grid, a, 0.0).astype(np.float64)
-            h = np.pi / 2.0 - g
-            acc += cos_s * np.cos(g) ** 2 + sc * (h - np.sin(h) * np.cos(h))
-    n = len(azimuths)
-    out = (1.0 - acc / n) if definition == "zaksek" else acc / n
-    return out.astype(np.float32)
+        s.add(a, angles_of(a))
+    return s.result()

@@ -6,8 +6,9 @@ import click
 
 from .errors import errors_to_click, say
 from .options import (backend_option, dem_options, finite, format_option, horizon_physics_options,
-                      overwrite_option, quiet_option, threads_option, to_read_options,
-                      to_run_options)
+                      max_distance_option, max_memory_option, overwrite_option, quiet_option,
+                      scheduler_option, threads_option, to_read_options, to_run_options,
+                      window_size_option)
 
 
 @click.command()
@@ -26,27 +27,35 @@ from .options import (backend_option, dem_options, finite, format_option, horizo
               help="scan: exact per-cell march; hull: convex-hull approximation, much faster.")
 @click.option("--sample-spacing", type=click.IntRange(min=1), default=1, show_default=True,
               help="scan: use every N-th sample only (the paper's sp; faster, approximate).")
+@max_distance_option
 @horizon_physics_options
 @click.option("--preview", type=click.Path(dir_okay=False), default=None,
               help="Also write a quick-look PNG (relief, high horizons tinted).")
 @backend_option
 @threads_option
+@max_memory_option
+@window_size_option
+@scheduler_option
 @overwrite_option()
 @quiet_option()
 @format_option
 @dem_options
 @errors_to_click
-def horizon(dem, output, azimuth, directions, distance, method, sample_spacing, curvature,
-            refraction_k, preview, backend, threads, overwrite, quiet, fmt, **read_opts):
+def horizon(dem, output, azimuth, directions, distance, method, sample_spacing, max_distance,
+            curvature, refraction_k, preview, backend, threads, max_memory, window_size,
+            scheduler, overwrite, quiet, fmt, **read_opts):
     """Write the horizon angle toward --azimuth (or toward each of --directions N azimuths, one
     band each) of every cell of DEM to OUTPUT.
 
     Float32 degrees above the horizontal (negative: the cell looks down on everything ahead;
-    -90: no terrain ahead inside the raster); nodata -9999. A cell is lit by a sun at this
-    azimuth iff its angle <= the sun's elevation."""
+    -90: no terrain ahead inside the raster, or within --max-distance); nodata -9999. A cell is
+    lit by a sun at this azimuth iff its angle <= the sun's elevation. A DEM larger than
+    --max-memory (or any, with --window-size) is computed in windows, with the same result."""
     from ..run import HorizonConfig, horizon as run_horizon
     kw = dict(preview=preview, backend=backend, threads=threads, overwrite=overwrite,
               quiet=quiet, fmt=fmt, **read_opts)
     run_horizon(HorizonConfig(dem, output, azimuth, method, sample_spacing, curvature,
                               refraction_k, to_read_options(kw), to_run_options(kw, say),
-                              directions=directions, distance=distance))
+                              directions=directions, distance=distance,
+                              max_distance=max_distance, max_memory=max_memory,
+                              window_size=window_size, scheduler=scheduler))

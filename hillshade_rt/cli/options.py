@@ -202,6 +202,36 @@ def algorithm_option(f):
                         show_default=True, help=algorithm_help())(f)
 
 
+def max_memory_option(f):
+    return click.option("--max-memory", metavar="SIZE", default=None,
+                        help="Memory the run may use, e.g. 2GB or 512MiB; a DEM that needs more "
+                             "is computed in windows read and written through GDAL (default: "
+                             "half of this machine's memory).")(f)
+
+
+def window_size_option(f):
+    return click.option("--window-size", metavar="ROWS[xCOLS]", default=None,
+                        help="Compute in windows of this many output cells, whatever the DEM's "
+                             "size (each read with the halo it needs: toward the sun for "
+                             "shadows, the rays' reach for horizons).")(f)
+
+
+def max_distance_option(f):
+    """--max-distance of the horizon products (horizon, skyview)."""
+    return click.option("--max-distance", type=click.FloatRange(min=0.0, min_open=True),
+                        default=None, metavar="METRES", callback=finite,
+                        help="Ignore terrain farther than this ground distance along each ray "
+                             "(RVT's and xarray-spatial's radius, Yokoyama's L; default: the "
+                             "whole raster). Also bounds what windows read.")(f)
+
+
+def scheduler_option(f):
+    return click.option("--scheduler", metavar="ADDRESS", default=None,
+                        help="Run the windows as Dask tasks: a dask.distributed scheduler "
+                             "(tcp://host:8786) or 'local[:N]' (N worker processes here). Needs "
+                             "hillshade-rt[dask] and DEM paths the workers can read.")(f)
+
+
 def run_options(f):
     return _stack(f, [
         click.option("-o", "--output", default=None, type=click.Path(dir_okay=False),
@@ -221,20 +251,12 @@ def run_options(f):
         click.option("--overwrite", is_flag=True,
                      help="Replace outputs (and the report, the preview) if they exist."),
         click.option("-q", "--quiet", is_flag=True, help="No progress bar or summary on stderr."),
-        click.option("--max-memory", metavar="SIZE", default=None,
-                     help="Memory the run may use, e.g. 2GB or 512MiB; a DEM that needs more is "
-                          "shaded in windows read and written through GDAL (default: half of "
-                          "this machine's memory)."),
-        click.option("--window-size", metavar="ROWS[xCOLS]", default=None,
-                     help="Shade in windows of this many output cells (each read with its halo "
-                          "toward the sun), whatever the DEM's size."),
+        max_memory_option,
+        window_size_option,
         click.option("--cog", is_flag=True,
                      help="Write Cloud-Optimized GeoTIFF (512 px tiles, deflate, overviews)."),
         format_option,
-        click.option("--scheduler", metavar="ADDRESS", default=None,
-                     help="Run the windows as Dask tasks: a dask.distributed scheduler "
-                          "(tcp://host:8786) or 'local[:N]' (N worker processes here). Needs "
-                          "hillshade-rt[dask] and DEM paths the workers can read."),
+        scheduler_option,
     ])
 
 

@@ -6,8 +6,9 @@ import click
 
 from .errors import errors_to_click, say
 from .options import (backend_option, dem_options, format_option, horizon_physics_options,
-                      overwrite_option, quiet_option, threads_option, to_read_options,
-                      to_run_options)
+                      max_distance_option, max_memory_option, overwrite_option, quiet_option,
+                      scheduler_option, threads_option, to_read_options, to_run_options,
+                      window_size_option)
 
 
 @click.command()
@@ -22,21 +23,35 @@ from .options import (backend_option, dem_options, format_option, horizon_physic
 @click.option("--terrain-configuration", is_flag=True,
               help="Write 1 - Vd instead (with --definition dozier): the share of the tilted "
                    "surface's hemisphere that is terrain, for reflected light.")
+@click.option("--openness", type=click.Choice(["positive", "negative"]), default=None,
+              help="Write Yokoyama's openness instead (degrees): positive, the mean over the "
+                   "directions of 90 - the horizon's elevation (not clipped at the "
+                   "horizontal); negative, the same of the inverted terrain (90 + the angle "
+                   "down to the lowest terrain). Directions with nothing ahead are left out.")
+@max_distance_option
 @horizon_physics_options
 @backend_option
 @threads_option
+@max_memory_option
+@window_size_option
+@scheduler_option
 @overwrite_option()
 @quiet_option()
 @format_option
 @dem_options
 @errors_to_click
-def skyview(dem, output, directions, definition, terrain_configuration, curvature, refraction_k,
-            backend, threads, overwrite, quiet, fmt, **read_opts):
+def skyview(dem, output, directions, definition, terrain_configuration, openness, max_distance,
+            curvature, refraction_k, backend, threads, max_memory, window_size, scheduler,
+            overwrite, quiet, fmt, **read_opts):
     """Write the sky view factor of every cell of DEM to OUTPUT (float32 0..1, -9999 nodata)
-    from its exact horizon in --directions azimuths."""
+    from its exact horizon in --directions azimuths, or its openness (--openness, degrees).
+    A DEM larger than --max-memory (or any, with --window-size) is computed in windows, with
+    the same result."""
     from ..run.skyview import SkyviewConfig, skyview as run_skyview
     kw = dict(backend=backend, threads=threads, overwrite=overwrite, quiet=quiet, fmt=fmt,
               **read_opts)
     run_skyview(SkyviewConfig(dem, output, directions, definition, terrain_configuration,
                               curvature, refraction_k, to_read_options(kw),
-                              to_run_options(kw, say)))
+                              to_run_options(kw, say), openness=openness,
+                              max_distance=max_distance, max_memory=max_memory,
+                              window_size=window_size, scheduler=scheduler))

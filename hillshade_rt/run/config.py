@@ -199,6 +199,10 @@ class HorizonConfig:
     run: RunOptions = field(default_factory=RunOptions)
     directions: int | None = None     # N azimuths clockwise from north, 0 first: N bands
     distance: str | None = None       # a second raster: metres to each cell's horizon point
+    max_distance: float | None = None  # metres: terrain farther along a ray is ignored
+    max_memory: object = None          # windows (run.reach) when the DEM needs more
+    window_size: object = None         # windows of this many output cells, whatever the size
+    scheduler: object = None           # the windows as Dask tasks
 
     def azimuths(self) -> list[float]:
         """The azimuths of the bands: ``azimuth``, or the ``directions`` ones; exactly one of

@@ -1,37 +1,64 @@
-"""The ``horizon`` run: the horizon angle toward one azimuth of every cell of a DEM (float32
-degrees above the horizontal, -9999 nodata). Returns the report."""
+"""The ``horizon`` run: the horizon angle toward one azimuth (or N) of every cell of a DEM
+(float32 degrees above the horizontal, -9999 nodata), in memory or, for a DEM larger than
+``--max-memory`` or with ``--window-size``, in windows (``run.reach``: exact, the same bits).
+Returns the report."""
 
 from __future__ import annotations
 
 import contextlib
+import math
 import os
 
 from .. import __version__
-from ..errors import UsageProblem
-from .config import HorizonConfig
+from ..errors import HillshadeError, UsageProblem
+from .config import HorizonConfig, parse_window_size
+
+# bytes per cell of a run in memory: heights, the pyramid, one direction's angles and distances
+# and their copies on the way to the file
+BYTES_PER_CELL = 24
+
+
+def check_max_distance(max_distance) -> float:
+    """--max-distance as a number of metres (inf when not given); a usage error unless > 0."""
+    if max_distance is None:
+        return math.inf
+    try:
+        m = float(max_distance)
+    except (TypeError, ValueError):
+        m = math.nan
+    if not (m > 0.0 and math.isfinite(m)):
+        raise UsageProblem(f"--max-distance must be a positive number of metres, got "
+                           f"{max_distance}")
+    return m
+
+
+def memory_limit(max_memory) -> int:
+    """--max-memory in bytes (default: half of this machine's memory)."""
+    from .plan import default_max_memory, parse_size
+    try:
+        return parse_size(max_memory) if max_memory is not None else default_max_memory()
+    except HillshadeError as exc:
+        raise UsageProblem(f"--max-memory: {exc}") from None
+
+
+def distance_tag(max_distance: float) -> str:
+    return (f"{max_distance:g} m (ground distance along each ray)" if math.isfinite(max_distance)
+            else "none (to the raster's edge)")
 
 
 def horizon(cfg: HorizonConfig) -> dict:
     import numba
-    import numpy as np
 
-    from ..algorithms import horizon as hz
-    from ..shading import horizon_shader
-    from ..earth import dem_body
-    from ..geometry import Grid, sun_rays
-    from ..io import (BandWriter, check_output_format, input_label, output_driver, write_png,
-                      write_raster)
-    from ..preview import relief_rgb
-    from ..shading import choose_backend, warm_up
+    from ..io import check_output_format, output_driver
     from ..io.write import Claims
+    from ..shading import choose_backend
+    from .local import needs_windows
     from .notes import compile_note
     from .report import Timer
 
     ro, output, method, sample_spacing = cfg.run, cfg.output, cfg.method, cfg.sample_spacing
     timer = Timer()
     azimuths = cfg.azimuths()
-    az = azimuths[0]
-    many = cfg.directions is not None
     claims = Claims([cfg.dem], ro.overwrite)
     claims.claim(output, "OUTPUT")
     if ro.preview is not None:
@@ -45,6 +72,12 @@ def horizon(cfg: HorizonConfig) -> dict:
     if method == "hull" and cfg.distance is not None:
         raise UsageProblem("--distance comes from --method scan only (the hull keeps no "
                            "horizon point)")
+    max_distance = check_max_distance(cfg.max_distance)
+    if method == "hull" and math.isfinite(max_distance):
+        raise UsageProblem("--max-distance applies to --method scan only (the hull keeps the "
+                           "whole line ahead)")
+    wshape = parse_window_size(cfg.window_size)
+    limit = memory_limit(cfg.max_memory)
     if ro.threads is not None:
         numba.set_num_threads(min(ro.threads, numba.config.NUMBA_NUM_THREADS))
     ran_on = choose_backend(ro.backend, "horizon", {"method": method})
@@ -52,9 +85,110 @@ def horizon(cfg: HorizonConfig) -> dict:
         note = compile_note("horizon", ran_on)
         if note:
             ro.say("compile", note)
+    forced = wshape is not None or cfg.scheduler is not None
+    with timer("read"):    # opened (not read) once, for its size and then its values
+        src = cfg.read.open(cfg.dem, windows=forced)
+    with src:
+        windowed = forced or needs_windows(src, limit, BYTES_PER_CELL)
+        if windowed and method == "hull":
+            raise UsageProblem("--method hull runs in memory only (its hulls are as long as a "
+                               "line): use --method scan for a DEM in windows")
+        run = _in_windows if windowed else _in_memory
+        return run(cfg, src, azimuths, ran_on, max_distance, timer, wshape=wshape, limit=limit)
+
+
+def _tags(cfg, azimuths, curved, k, radius, max_distance):
+    """(the output's tags, the distance raster's tags, band tags per direction or None)."""
+    many = cfg.directions is not None
+    base = {"HILLSHADE_RT_VERSION": __version__, "METHOD": cfg.method,
+            "SAMPLE_SPACING": cfg.sample_spacing, "UNITS": "degrees above the horizontal",
+            "MAX_DISTANCE": distance_tag(max_distance)}
+    dist_tags = {"HILLSHADE_RT_VERSION": __version__, "UNITS": "metres (ground distance along "
+                 "the ray to the horizon point)", "NODATA": "-9999 (a void, or nothing ahead)",
+                 "MAX_DISTANCE": distance_tag(max_distance)}
+    if not many:
+        az = azimuths[0]
+        tags = {**base, "AZIMUTH": az,
+                "EARTH_CURVATURE": f"on, R {radius:.0f} m, k {k:g}" if curved else "off"}
+        return tags, {**dist_tags, "AZIMUTH": az}
+    series = {"DIRECTIONS": len(azimuths), "AZIMUTHS": ",".join(f"{a:g}" for a in azimuths),
+              "AZIMUTH_CONVENTION": "degrees clockwise from north (grid north), band i at "
+                                    "i * 360 / N"}
+    tags = {**base, "NODATA": "-9999 (a void)", "NO_TERRAIN_AHEAD": "-90", **series,
+            "EARTH_CURVATURE": f"on, k {k:g}" if curved else "off"}
+    return tags, {**dist_tags, **series}
+
+
+def _writers(cfg, dem, azimuths, tags, dist_tags):
+    """The BandWriters of OUTPUT and --distance (None without it): one band with the
+    dataset's tags, or N bands of averaged overviews."""
+    from ..io import BandWriter
+    ro = cfg.run
+    n = len(azimuths)
+    many = cfg.directions is not None
+    resampling = "average" if many else "nearest"
+    w = BandWriter(cfg.output, dem, n, "float32", -9999.0, tags, overview_resampling=resampling,
+                   overwrite=ro.overwrite, fmt=ro.fmt)
+    wd = (None if cfg.distance is None else
+          BandWriter(cfg.distance, dem, n, "float32", -9999.0, dist_tags,
+                     overview_resampling=resampling, overwrite=ro.overwrite, fmt=ro.fmt))
+    return w, wd
+
+
+def _band_text(cfg, a):
+    """(description of the angle band, of the distance band, band tags) toward ``a``."""
+    if cfg.directions is None:
+        return "horizon angle", "distance to the horizon point", None
+    return (f"horizon angle toward azimuth {a:g}",
+            f"distance to the horizon point toward azimuth {a:g}", {"AZIMUTH": f"{a:g}"})
+
+
+def _report(cfg, src, azimuths, ran_on, curved, stats, timer, processing):
+    ro = cfg.run
+    many = cfg.directions is not None
+    rows, cols = src.shape
+    from ..io import input_label
+    rep = {"input": input_label(src.path), "output": os.path.abspath(cfg.output),
+           "shape": [rows, cols],
+           "distance": None if cfg.distance is None else os.path.abspath(cfg.distance),
+           "azimuth": azimuths[0] if not many else None, "azimuths": azimuths,
+           "method": cfg.method, "sample_spacing": cfg.sample_spacing,
+           "max_distance": check_max_distance(cfg.max_distance)
+           if cfg.max_distance is not None else None,
+           "backend": ran_on, "curvature": curved, "algorithm_stats": stats,
+           "seconds": dict(timer.seconds, total=timer.total()), "processing": processing,
+           "version": __version__}
+    if not ro.quiet:
+        toward = (f"toward az {azimuths[0]:g}" if not many else
+                  f"toward {len(azimuths)} directions ({360.0 / len(azimuths):g} deg apart)")
+        where = "" if processing["mode"] == "in memory" else (
+            f", {processing['regions']} windows" + (" on Dask" if processing["mode"] == "dask"
+                                                    else ""))
+        ro.say("summary", f"hillshade-rt: {cfg.output}: {cols}x{rows}, horizon {toward} "
+                          f"({cfg.method}, {ran_on}{where}), compute "
+                          f"{timer.seconds.get('compute', 0.0):.3f} s")
+        if stats.get("note"):
+            ro.say("note", stats["note"])
+    return rep
+
+
+def _in_memory(cfg, src, azimuths, ran_on, max_distance, timer, **_):
+    import numpy as np
+
+    from ..algorithms import horizon as hz
+    from ..earth import dem_body
+    from ..geometry import Grid, sun_rays
+    from ..io import write_png
+    from ..preview import relief_rgb
+    from ..shading import horizon_shader, warm_up
+
+    ro, method, sample_spacing = cfg.run, cfg.method, cfg.sample_spacing
+    az = azimuths[0]
+    many = cfg.directions is not None
     with timer("read"):
-        d = cfg.read.read(cfg.dem)
+        d = src.read()
     stats: dict = {}
+    md = max_distance if math.isfinite(max_distance) else None
     with timer("prepare"):  # numba compilation on a first run
         # the elevation does not enter the angles; curvature "auto" looks at the raster's size
         shader = horizon_shader(d.heights, d.grid, ran_on, cfg.curvature, cfg.refraction_k,
@@ -83,84 +217,169 @@ def horizon(cfg: HorizonConfig) -> dict:
         with timer("compute"):
             if gpu_dem is not None:
                 beta = hz.horizon_angles_gpu(gpu_dem, rays, method, sample_spacing,
-                                             distance=dist)
+                                             distance=dist, max_distance=md)
             else:
                 beta = hz.horizon_angles(d.heights, rays, method=method,
                                          sample_spacing=sample_spacing, stats=stats,
-                                         pyramid=pyramid, distance=dist)
+                                         pyramid=pyramid, distance=dist, max_distance=md)
             if dist is not None:
                 dist[np.isnan(dist)] = -9999.0
         return beta, dist
 
     curved = shader.curvature_for(az, 45.0) > 0     # the same for every direction
-    base = {"HILLSHADE_RT_VERSION": __version__, "METHOD": method,
-            "SAMPLE_SPACING": sample_spacing, "UNITS": "degrees above the horizontal"}
-    dist_tags = {"HILLSHADE_RT_VERSION": __version__, "UNITS": "metres (ground distance along "
-                 "the ray to the horizon point)", "NODATA": "-9999 (a void, or nothing ahead)"}
+    tags, dist_tags = _tags(cfg, azimuths, curved, shader.k, shader.body.radius(az),
+                            max_distance)
     shade = None
-    if not many:
-        beta, dist = angles(az)
-        shade = (np.clip(np.nan_to_num(beta, nan=0.0) / 30.0, 0.0, 1.0)
-                 if ro.preview else None)
-        beta[np.isnan(beta)] = -9999.0
-        tags = {**base, "AZIMUTH": az,
-                "EARTH_CURVATURE": (f"on, R {shader.body.radius(az):.0f} m, k {shader.k:g}"
-                                    if curved else "off")}
-        with timer("write"):
-            write_raster(output, beta, d, nodata=-9999.0, description="horizon angle",
-                         tags=tags, overwrite=ro.overwrite, fmt=ro.fmt)
-            if dist is not None:
-                write_raster(cfg.distance, dist, d, nodata=-9999.0,
-                             description="distance to the horizon point",
-                             tags={**dist_tags, "AZIMUTH": az}, overwrite=ro.overwrite,
-                             fmt=ro.fmt)
-    else:
-        # one band per direction, written as it is made (N bands never all in memory)
-        series = {"DIRECTIONS": len(azimuths), "AZIMUTHS": ",".join(f"{a:g}" for a in azimuths),
-                  "AZIMUTH_CONVENTION": "degrees clockwise from north (grid north), band i at "
-                                        "i * 360 / N"}
-        tags = {**base, "NODATA": "-9999 (a void)", "NO_TERRAIN_AHEAD": "-90", **series,
-                "EARTH_CURVATURE": f"on, k {shader.k:g}" if curved else "off"}
-        dist_tags.update(series)
-        with BandWriter(output, d, len(azimuths), "float32", -9999.0, tags,
-                        overview_resampling="average", overwrite=ro.overwrite,
-                        fmt=ro.fmt) as w, (
-                contextlib.nullcontext() if cfg.distance is None else
-                BandWriter(cfg.distance, d, len(azimuths), "float32", -9999.0, dist_tags,
-                           overview_resampling="average", overwrite=ro.overwrite,
-                           fmt=ro.fmt)) as wd:
-            for i, a in enumerate(azimuths):
-                beta, dist = angles(a)
-                if ro.preview and i == 0:
-                    shade = np.clip(np.nan_to_num(beta, nan=0.0) / 30.0, 0.0, 1.0)
-                beta[np.isnan(beta)] = -9999.0
-                with timer("write"):
-                    w.write(i + 1, beta, description=f"horizon angle toward azimuth {a:g}",
-                            tags={"AZIMUTH": f"{a:g}"})
-                    if wd is not None:
-                        wd.write(i + 1, dist, description=f"distance to the horizon point "
-                                                          f"toward azimuth {a:g}",
-                                 tags={"AZIMUTH": f"{a:g}"})
+    # one band per direction, written as it is made (N bands never all in memory)
+    w, wd = _writers(cfg, d, azimuths, tags, dist_tags)
+    with w, (contextlib.nullcontext() if wd is None else wd):
+        for i, a in enumerate(azimuths):
+            beta, dist = angles(a)
+            if ro.preview and i == 0:
+                shade = np.clip(np.nan_to_num(beta, nan=0.0) / 30.0, 0.0, 1.0)
+            beta[np.isnan(beta)] = -9999.0
+            text, dtext, btags = _band_text(cfg, a)
             with timer("write"):
-                w.finish()
+                w.write(i + 1, beta, description=text, tags=btags)
                 if wd is not None:
-                    wd.finish()
+                    wd.write(i + 1, dist, description=dtext, tags=btags)
+        with timer("write"):
+            w.finish()
+            if wd is not None:
+                wd.finish()
     if ro.preview is not None:
         with timer("write"):
             write_png(ro.preview, relief_rgb(d.heights, d.grid, az, 45.0, shade=shade),
                       ro.overwrite)
-    rows, cols = d.shape
-    rep = {"input": input_label(d.path), "output": os.path.abspath(output), "shape": [rows, cols],
-           "distance": None if cfg.distance is None else os.path.abspath(cfg.distance),
-           "azimuth": az if not many else None, "azimuths": azimuths, "method": method,
-           "sample_spacing": sample_spacing, "backend": ran_on, "curvature": curved,
-           "algorithm_stats": stats, "seconds": dict(timer.seconds, total=timer.total()),
-           "version": __version__}
-    if not ro.quiet:
-        toward = (f"toward az {az:g}" if not many else
-                  f"toward {len(azimuths)} directions ({360.0 / len(azimuths):g} deg apart)")
-        ro.say("summary", f"hillshade-rt: {output}: {cols}x{rows}, horizon {toward} "
-                          f"({method}, {ran_on}), compute {timer.seconds['compute']:.3f} s")
-        if stats.get("note"):
-            ro.say("note", stats["note"])
-    return rep
+    return _report(cfg, d, azimuths, ran_on, curved, stats, timer,
+                   {"mode": "in memory", "cells": int(d.heights.size)})
+
+
+def horizon_job(src, azimuths, ran_on, curvature, refraction_k, method, bstats, invert=False,
+                sample_spacing=1, max_distance=math.inf):
+    """(the ``reach.HorizonJob`` of a windowed run, its horizon Shader): the rays and curvature
+    an in-memory run of the same DEM would use (its shader decides from the raster's shape and
+    spacing, never its heights)."""
+    import numpy as np
+
+    from ..earth import dem_body
+    from ..shading import horizon_shader
+    from .reach import HorizonJob
+    # the Shader looks at the raster's shape only: a zero-stride stand-in, no memory
+    shader = horizon_shader(np.broadcast_to(np.float32(0.0), src.shape), src.grid, ran_on,
+                            curvature, refraction_k, dem_body(src), method)
+    curvs = [shader.curvature_used_for(a, 45.0) for a in azimuths]
+    gpu = None
+    if ran_on == "gpu":
+        from ..gpu import GpuDem
+        gpu = GpuDem
+    return HorizonJob(src, list(azimuths), curvs, (bstats.zmin, bstats.zmax), bstats, invert,
+                      int(sample_spacing), float(max_distance), 0, gpu), shader
+
+
+def prepare_windows(src, job, limit, wshape, timer):
+    """The regions of a windowed run (``reach.plan_regions``) with the kernels compiled."""
+    import numpy as np
+
+    from ..algorithms.horizon import Marches, ScanWindow
+    from ..geometry import Grid, sun_rays
+    from .reach import plan_regions
+    regs, mem = plan_regions(src.shape, limit, wshape)
+    with timer("prepare"):     # compile (or load) the window kernels: a 4 x 4 march
+        z = np.zeros((4, 4), np.float32)
+        rays = sun_rays(Grid.uniform(4, 4, *src.grid.centre_spacing(), src.grid.col_sign,
+                                     src.grid.row_sign), 203.7, 45.0)
+        m = Marches(z, (0, 4, 0, 4), rays, (4, 4), 0.0, job.sample_spacing)
+        m.march(ScanWindow(z, (0, 4, 0, 4), (4, 4), job.pyramid, job.gpu))
+        m.angles(np.empty((4, 4), np.float32))
+    return regs, mem
+
+
+def _in_windows(cfg, src, azimuths, ran_on, max_distance, timer, *, wshape, limit):
+    import numpy as np
+
+    from ..geometry import Grid
+    from ..io import write_png
+    from ..preview import every_nth, relief_rgb
+    from .local import bounded_gdal_cache
+    from .plan import block_stats
+    from .reach import Figures, Product, region_outputs
+
+    ro = cfg.run
+    az = azimuths[0]
+    product = Product("horizon", distance=cfg.distance is not None)
+    with bounded_gdal_cache():
+        with timer("prepare"):    # one pass: the block height ranges (and the preview)
+            bstats = block_stats(src, preview_side=2048 if ro.preview else None)
+        job, shader = horizon_job(src, azimuths, ran_on, cfg.curvature, cfg.refraction_k,
+                                  cfg.method, bstats, False, cfg.sample_spacing, max_distance)
+        regs, mem = prepare_windows(src, job, limit, wshape, timer)
+        curved = job.curvatures[0] > 0
+        tags, dist_tags = _tags(cfg, azimuths, curved, shader.k, shader.body.radius(az),
+                                max_distance)
+        n = bstats.stride
+        share = np.zeros(bstats.preview.shape, np.float32) if ro.preview else None
+        extra = {}
+        if cfg.scheduler is not None:
+            from .reach import run_on_dask
+            with timer("compute"):
+                fig, _, extra = run_on_dask(cfg.scheduler, job, regs, product,
+                                            _vrt_outputs(cfg, src, azimuths, tags, dist_tags),
+                                            ro.quiet, share, n if ro.preview else None)
+        else:
+            fig = Figures()
+            w, wd = _writers(cfg, src, azimuths, tags, dist_tags)
+            from tqdm import tqdm
+            bar = tqdm(total=len(regs), desc="hillshade-rt", unit="window", leave=False,
+                       disable=True if ro.quiet or len(regs) < 2 else None)
+            with w, (contextlib.nullcontext() if wd is None else wd), src.reader() as rd, bar:
+                for reg in regs:
+                    def put(name, i, arr, reg=reg):
+                        a = azimuths[i]
+                        text, dtext, btags = _band_text(cfg, a)
+                        if name == "angles" and share is not None and i == 0:
+                            sub, (p, q) = every_nth(np.clip(np.nan_to_num(arr, nan=0.0) / 30.0,
+                                                            0.0, 1.0), reg[0], reg[2], n)
+                            share[p:p + sub.shape[0], q:q + sub.shape[1]] = sub
+                        arr[np.isnan(arr)] = -9999.0
+                        with timer("write"):
+                            if name == "angles":
+                                w.write(i + 1, arr, description=text, tags=btags, window=reg)
+                            else:
+                                wd.write(i + 1, arr, description=dtext, tags=btags, window=reg)
+                    with timer("compute"):
+                        fig.add(region_outputs(job, rd, reg, product, put))
+                    bar.update(1)
+                with timer("write"):
+                    w.finish()
+                    if wd is not None:
+                        wd.finish()
+    if ro.preview is not None:
+        pv = bstats.preview
+        g = Grid(pv.shape[0], pv.shape[1], src.grid.dx[::n] * n, src.grid.dy[::n] * n,
+                 src.grid.col_sign, src.grid.row_sign, src.grid.method)
+        with timer("write"):
+            write_png(ro.preview, relief_rgb(pv, g, az, 45.0, shade=share), ro.overwrite)
+    processing = {"mode": "windows" if cfg.scheduler is None else "dask",
+                  "cells": src.shape[0] * src.shape[1], "memory": mem,
+                  "window_shape_requested": list(wshape) if wshape else None,
+                  **fig.as_dict(), **extra}
+    return _report(cfg, src, azimuths, ran_on, curved, {}, timer, processing)
+
+
+def _vrt_outputs(cfg, src, azimuths, tags, dist_tags) -> dict:
+    """The outputs of a run on Dask (``reach.VrtOutput``), as ``_writers`` writes them."""
+    from .reach import VrtOutput
+    ro = cfg.run
+    many = cfg.directions is not None
+    texts = [_band_text(cfg, a) for a in azimuths]
+    band_tags = [t[2] for t in texts] if many else None
+    common = dict(shape=src.shape, transform=src.transform, crs=src.crs,
+                  resampling="average" if many else "nearest", overwrite=ro.overwrite,
+                  fmt=ro.fmt, band_tags=band_tags)
+    out = {"angles": VrtOutput(cfg.output, descriptions=[t[0] for t in texts], tags=tags,
+                               **common)}
+    if cfg.distance is not None:
+        out["distance"] = VrtOutput(cfg.distance, descriptions=[t[1] for t in texts],
+                                    tags=dist_tags, **common)
+    return out

@@ -1,4 +1,5 @@
-"""The ``skyview`` run: the sky view factor of every cell from its horizon in N directions.
+"""The ``skyview`` run: the sky view factor (or the openness) of every cell from its horizon in
+N directions.
 
 * ``zaksek`` (Zakšek, Oštir & Kokalj 2011; HORAYZON's "visible sky fraction"): 1 - mean over the
   directions of sin(γ), γ the horizon elevation clipped at the horizontal (the sky is the upper
@@ -9,14 +10,20 @@
   horizon's zenith angle (π/2 - γ), S and A the cell's slope and aspect (Horn's normals, as the
   hillshade's): a plane of slope S gives (1 + cos S)/2, the rest, (1 - cos S)/2, being the
   terrain it faces: ``terrain_configuration`` writes that share, 1 - Vd (the view factor of
-  the terrain, for reflected light). (Issue 20's ``--openness`` and ``--max-distance`` are not
-  built yet.)
+  the terrain, for reflected light).
+* ``--openness positive`` (Yokoyama, Shirasawa & Pike 2002): the mean over the directions of the
+  horizon's zenith angle 90° - β, β NOT clipped (a cell that looks down on everything ahead has
+  a horizon below the horizontal, an openness above 90°); ``negative``: the same of the inverted
+  terrain -z, 90° + the angle down to the lowest terrain ahead (high in valleys and pits).
+  Degrees. Yokoyama's L is ``--max-distance`` (default: the whole raster). Directions with no
+  terrain ahead (within L) are left out of the mean; a cell with none at all is nodata.
 
-Each direction is the ``horizon`` scan (exact on the model, curvature as for ``horizon``),
-accumulated as it is made (one direction's angles in memory at a time). At the raster's edge
-there is no terrain beyond it: a border cell sees open sky toward the outside (a larger DEM
-around the area of interest fixes that). Distances are ground metres throughout (per row on
-geographic DEMs).
+Each direction is the ``horizon`` scan (exact on the model, curvature as for ``horizon``,
+``--max-distance`` as there), accumulated as it is made (one direction's angles in memory at a
+time). At the raster's edge there is no terrain beyond it: a border cell sees open sky toward the
+outside (a larger DEM around the area of interest fixes that). Distances are ground metres
+throughout (per row on geographic DEMs). A DEM larger than ``--max-memory``, or any DEM with
+``--window-size``, is computed in windows (``run.reach``): the same bits.
 """
 
 from __future__ import annotations
@@ -29,9 +36,13 @@ import numpy as np
 
 from .. import __version__
 from ..errors import UsageProblem
-from .config import ReadOptions, RunOptions
+from .config import ReadOptions, RunOptions, parse_window_size
 
-from ..algorithms.skyview import DEFINITIONS  # (the definitions, once)
+from ..algorithms.skyview import DEFINITIONS, OPENNESS  # (the definitions, once)
+
+# bytes per cell of a run in memory: heights and pyramid (twice for negative openness: -z),
+# one direction's angles, the sums (Dozier: cos S and sin S cos(φ - A) too), the result
+BYTES_PER_CELL = 48
 
 
 @dataclass
@@ -45,81 +56,239 @@ class SkyviewConfig:
     refraction_k: float | None = None
     read: ReadOptions = field(default_factory=ReadOptions)
     run: RunOptions = field(default_factory=RunOptions)
+    openness: str | None = None           # "positive" / "negative": Yokoyama's, in degrees
+    max_distance: float | None = None     # metres (Yokoyama's L, RVT's radius)
+    max_memory: object = None
+    window_size: object = None
+    scheduler: object = None              # the windows as Dask tasks
 
 
-def skyview(cfg: SkyviewConfig) -> dict:
-    import numba
-
-    from ..algorithms import horizon as hz
-    from ..earth import dem_body
-    from ..geometry import equal_azimuths
-    from ..io import check_output_format, input_label, output_driver, write_raster
-    from ..io.write import Claims
-    from ..shading import choose_backend, horizon_shader
-    from .report import Timer
-
-    ro = cfg.run
+def _check(cfg: SkyviewConfig) -> str:
+    """The definition's name (``algorithms.skyview.definition_of``), the options checked."""
+    from ..algorithms.skyview import definition_of
     if cfg.definition not in DEFINITIONS:
         raise UsageProblem(f"--definition must be one of {', '.join(DEFINITIONS)}, got "
                            f"{cfg.definition!r}")
+    if cfg.openness is not None:
+        if cfg.openness not in OPENNESS:
+            raise UsageProblem(f"--openness must be one of {', '.join(OPENNESS)}, got "
+                               f"{cfg.openness!r}")
+        if cfg.definition != "zaksek" or cfg.terrain_configuration:
+            raise UsageProblem("--openness is a product of its own: give it without "
+                               "--definition and --terrain-configuration")
     if cfg.terrain_configuration and cfg.definition != "dozier":
         raise UsageProblem("--terrain-configuration is 1 - Dozier's view factor: give "
                            "--definition dozier")
     if not 4 <= int(cfg.directions) <= 360:
         raise UsageProblem(f"--directions must be between 4 and 360, got {cfg.directions}")
+    return definition_of(cfg.definition, cfg.openness)
+
+
+def describe(cfg: SkyviewConfig, definition: str) -> str:
+    """What the output holds, in words (its description and the summary's)."""
+    if definition.startswith("openness"):
+        return f"{cfg.openness} openness (Yokoyama)"
+    if cfg.terrain_configuration:
+        return "terrain configuration factor (1 - Vd, dozier)"
+    return f"sky view factor ({cfg.definition})"
+
+
+def skyview(cfg: SkyviewConfig) -> dict:
+    import numba
+
+    from ..io import check_output_format, output_driver
+    from ..io.write import Claims
+    from ..shading import choose_backend
+    from .horizon import check_max_distance, memory_limit
+    from .local import needs_windows
+    from .report import Timer
+
+    ro = cfg.run
+    definition = _check(cfg)
+    max_distance = check_max_distance(cfg.max_distance)
+    wshape = parse_window_size(cfg.window_size)
+    limit = memory_limit(cfg.max_memory)
     timer = Timer()
     Claims([cfg.dem], ro.overwrite).claim(cfg.output, "OUTPUT")
     check_output_format(cfg.output, output_driver(cfg.output, ro.fmt), "float32", 1, True)
     if ro.threads is not None:
         numba.set_num_threads(min(ro.threads, numba.config.NUMBA_NUM_THREADS))
     ran_on = choose_backend(ro.backend, "horizon", {"method": "scan"})
+    forced = wshape is not None or cfg.scheduler is not None
     with timer("read"):
-        d = cfg.read.read(cfg.dem)
+        src = cfg.read.open(cfg.dem, windows=forced)
+    with src:
+        windowed = forced or needs_windows(src, limit, BYTES_PER_CELL)
+        run = _in_windows if windowed else _in_memory
+        result, processing, curved = run(cfg, definition, src, ran_on, max_distance, timer,
+                                          wshape=wshape, limit=limit)
+    return _report(cfg, definition, src, ran_on, curved, result, processing, timer,
+                   max_distance)
+
+
+def _tags(cfg, definition, n, curved, max_distance):
+    from .horizon import distance_tag
+    from ..algorithms.skyview import units
+    opn = definition.startswith("openness")
+    return {"HILLSHADE_RT_VERSION": __version__,
+            "DEFINITION": definition if opn else cfg.definition,
+            "PRODUCT": describe(cfg, definition), "DIRECTIONS": n, "UNITS": units(definition),
+            "MAX_DISTANCE": distance_tag(max_distance),
+            "EDGE": ("no terrain beyond the raster: directions with no terrain ahead (within "
+                     "MAX_DISTANCE) are left out of the mean; none at all: nodata" if opn else
+                     "no terrain beyond the raster: border cells see open sky outward"),
+            "EARTH_CURVATURE": "on" if curved else "off"}
+
+
+def _writer(cfg, dem, definition, n, curved, max_distance):
+    from ..io import BandWriter
+    ro = cfg.run
+    return BandWriter(cfg.output, dem, 1, "float32", -9999.0,
+                      _tags(cfg, definition, n, curved, max_distance),
+                      overview_resampling="average", overwrite=ro.overwrite, fmt=ro.fmt)
+
+
+class _Stats:
+    """Minimum and mean of the valid results, window by window."""
+
+    def __init__(self):
+        self.lo, self.total, self.count = math.inf, 0.0, 0
+
+    def add(self, a: np.ndarray) -> None:
+        v = a[~np.isnan(a)]
+        if v.size:
+            self.lo = min(self.lo, float(v.min()))
+            self.total += float(v.sum(dtype=np.float64))
+            self.count += int(v.size)
+
+    def as_dict(self) -> dict:
+        return {"min": self.lo if self.count else None,
+                "mean": self.total / self.count if self.count else None}
+
+
+def _in_memory(cfg, definition, src, ran_on, max_distance, timer, **_):
+    from ..algorithms import horizon as hz
+    from ..algorithms.skyview import Sum, inverted
+    from ..earth import dem_body
+    from ..geometry import equal_azimuths
+    from ..shading import horizon_shader
+
+    with timer("read"):
+        d = src.read()
     shader = horizon_shader(d.heights, d.grid, ran_on, cfg.curvature, cfg.refraction_k,
                             dem_body(d))
+    z = d.heights
+    if inverted(definition):     # negative openness: the horizons of -z (a copy: -z whole)
+        z = np.negative(d.heights)
     gpu_dem = None
     if ran_on == "gpu":
         from ..gpu import GpuDem
-        gpu_dem = GpuDem(d.heights)
+        gpu_dem = GpuDem(z)
     n = int(cfg.directions)
     azimuths = equal_azimuths(360.0 / n)
-
-    pyramid = None if gpu_dem is not None else shader.pyramid(d.heights, True)  # one for all
+    md = max_distance if math.isfinite(max_distance) else None
+    pyramid = None if gpu_dem is not None else shader.pyramid(z, True)  # one for all
 
     def angles_of(a):
         rays = shader.rays(d.grid, a, 45.0)
         if gpu_dem is not None:
-            return hz.horizon_angles_gpu(gpu_dem, rays)
-        return hz.horizon_angles(d.heights, rays, pyramid=pyramid)
+            return hz.horizon_angles_gpu(gpu_dem, rays, max_distance=md)
+        return hz.horizon_angles(z, rays, pyramid=pyramid, max_distance=md)
 
-    from ..algorithms.skyview import sky_view
     with timer("compute"):
-        svf = sky_view(d.heights, d.grid, azimuths, angles_of, cfg.definition)
+        s = Sum(definition, d.heights, d.grid)
+        for a in azimuths:
+            s.add(a, angles_of(a))
+        out = s.result()
         if cfg.terrain_configuration:     # the rest of the surface's hemisphere: terrain
-            svf = (1.0 - svf).astype(np.float32)
-    what = ("terrain configuration factor (1 - Vd, dozier)" if cfg.terrain_configuration
-            else f"sky view factor ({cfg.definition})")
-    tags = {"HILLSHADE_RT_VERSION": __version__, "DEFINITION": cfg.definition,
-            "PRODUCT": what,
-            "DIRECTIONS": n, "UNITS": "fraction 0..1",
-            "EDGE": "no terrain beyond the raster: border cells see open sky outward",
-            "EARTH_CURVATURE": "on" if shader.curvature else "off"}
+            out = (1.0 - out).astype(np.float32)
+    st = _Stats()
+    st.add(out)
     with timer("write"):
-        write_raster(cfg.output, np.where(np.isnan(svf), np.float32(-9999.0), svf), d,
-                     nodata=-9999.0, description=what,
-                     tags=tags, overview_resampling="average", overwrite=ro.overwrite,
-                     fmt=ro.fmt)
-    rows, cols = d.shape
-    valid = svf[~np.isnan(svf)]
-    rep = {"input": input_label(d.path), "output": os.path.abspath(cfg.output),
-           "shape": [rows, cols], "definition": cfg.definition, "directions": n,
-           "backend": ran_on, "curvature": bool(shader.curvature),
-           "svf": {"min": float(valid.min()) if valid.size else None,
-                   "mean": float(valid.mean()) if valid.size else None},
+        with _writer(cfg, d, definition, n, bool(shader.curvature), max_distance) as w:
+            w.write(1, np.where(np.isnan(out), np.float32(-9999.0), out),
+                    description=describe(cfg, definition))
+    return st, {"mode": "in memory", "cells": int(d.heights.size)}, bool(shader.curvature)
+
+
+def _in_windows(cfg, definition, src, ran_on, max_distance, timer, *, wshape, limit):
+    from ..algorithms.skyview import inverted
+    from ..geometry import equal_azimuths
+    from .horizon import horizon_job, prepare_windows
+    from .local import bounded_gdal_cache
+    from .plan import block_stats
+    from .reach import Figures, Product, VrtOutput, region_outputs, run_on_dask
+
+    ro = cfg.run
+    n = int(cfg.directions)
+    azimuths = equal_azimuths(360.0 / n)
+    product = Product("skyview", definition=definition, complement=cfg.terrain_configuration)
+    st, fig, extra = _Stats(), Figures(), {}
+    with bounded_gdal_cache():
+        with timer("prepare"):
+            bstats = block_stats(src)
+        job, shader = horizon_job(src, azimuths, ran_on, cfg.curvature, cfg.refraction_k,
+                                  "scan", bstats, inverted(definition), 1, max_distance)
+        regs, mem = prepare_windows(src, job, limit, wshape, timer)
+        curved = bool(shader.curvature)
+        if cfg.scheduler is not None:
+            out = VrtOutput(cfg.output, src.shape, src.transform, src.crs,
+                            [describe(cfg, definition)],
+                            _tags(cfg, definition, n, curved, max_distance),
+                            resampling="average", overwrite=ro.overwrite, fmt=ro.fmt)
+            with timer("compute"):
+                fig, parts, extra = run_on_dask(cfg.scheduler, job, regs, product,
+                                                {"result": out}, ro.quiet)
+            for lo, total, count in parts:
+                st.lo, st.total, st.count = min(st.lo, lo), st.total + total, st.count + count
+        else:
+            from tqdm import tqdm
+            bar = tqdm(total=len(regs), desc="hillshade-rt", unit="window", leave=False,
+                       disable=True if ro.quiet or len(regs) < 2 else None)
+            with _writer(cfg, src, definition, n, curved, max_distance) as w, \
+                    src.reader() as rd, bar:
+                for reg in regs:
+                    def put(name, band, out, reg=reg):
+                        st.add(out)
+                        with timer("write"):
+                            w.write(1, np.where(np.isnan(out), np.float32(-9999.0), out),
+                                    description=describe(cfg, definition), window=reg)
+                    with timer("compute"):
+                        fig.add(region_outputs(job, rd, reg, product, put))
+                    bar.update(1)
+                with timer("write"):
+                    w.finish()
+    processing = {"mode": "windows" if cfg.scheduler is None else "dask",
+                  "cells": src.shape[0] * src.shape[1], "memory": mem,
+                  "window_shape_requested": list(wshape) if wshape else None,
+                  **fig.as_dict(), **extra}
+    return st, processing, curved
+
+
+def _report(cfg, definition, src, ran_on, curved, st, processing, timer, max_distance):
+    from ..io import input_label
+    ro = cfg.run
+    rows, cols = src.shape
+    n = int(cfg.directions)
+    opn = definition.startswith("openness")
+    values = st.as_dict()
+    rep = {"input": input_label(src.path), "output": os.path.abspath(cfg.output),
+           "shape": [rows, cols], "definition": definition if opn else cfg.definition,
+           "openness": cfg.openness, "directions": n,
+           "max_distance": max_distance if math.isfinite(max_distance) else None,
+           "backend": ran_on, "curvature": curved,
+           ("openness_deg" if opn else "svf"): values,
+           "processing": processing,
            "seconds": dict(timer.seconds, total=timer.total()), "version": __version__}
     if not ro.quiet:
-        ro.say("summary", f"hillshade-rt: {cfg.output}: {cols}x{rows}, {what}, "
-                          f"{n} directions, mean "
-                          f"{rep['svf']['mean'] if valid.size else math.nan:.3f}; compute "
-                          f"{timer.seconds['compute']:.2f} s")
+        mean = values["mean"]
+        shown = f"{mean:.3f}" if mean is not None else "nan"
+        where = "" if processing["mode"] == "in memory" else (
+            f", {processing['regions']} windows" + (" on Dask" if processing["mode"] == "dask"
+                                                    else ""))
+        ro.say("summary", f"hillshade-rt: {cfg.output}: {cols}x{rows}, "
+                          f"{describe(cfg, definition)}, {n} directions{where}, mean "
+                          f"{shown}{' deg' if opn else ''}; compute "
+                          f"{timer.seconds.get('compute', 0.0):.2f} s")
     return rep
+

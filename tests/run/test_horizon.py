@@ -2,6 +2,7 @@
 direction, clockwise from north, 0 first."""
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -135,3 +136,132 @@ def test_distance_bands_follow_the_directions(tmp_path, runner):
     b3 = read_band(out, 3)
     assert np.array_equal(d3 == -9999.0, (b3 == -9999.0) | (b3 == -90.0))
     assert (d3[d3 != -9999.0] > 0).all()
+
+
+# ---------------------------------------------------------------------------------------------
+# --max-distance and windows (issue 20, items 1 and 3)
+
+EVEREST = data_path("everest_srtm3_voids_crop200.tif")     # geographic, with voids
+
+
+def _fractal_dem(tmp_path, rows=150, cols=170, seed=11):
+    """A rough terrain with voids (inside and on the edge), 30 m cells in UTM."""
+    from hillshade_rt.testing import fractal_terrain
+    z = fractal_terrain(rows, cols, seed, relief=600.0, octaves=5) + 1000.0
+    z[40:46, 70:79] = np.nan
+    z[0, 12] = np.nan
+    return write_geotiff(tmp_path / "fractal.tif", z.astype(np.float32),
+                         Affine(30.0, 0, 500000, 0, -30.0, 4000000), CRS.from_epsg(32633))
+
+
+def _bands(path):
+    with rasterio.open(path) as ds:
+        return ds.read(), ds.descriptions, ds.tags()
+
+
+@pytest.mark.parametrize("dem", ["fractal", "everest"])
+@pytest.mark.parametrize("args", [["--azimuth", "203.7"], ["--directions", "8"],
+                                  ["--directions", "8", "--max-distance", "2500"]])
+def test_windows_give_the_bits_of_the_run_in_memory(tmp_path, runner, dem, args):
+    """--window-size 64: every band of the angles and of --distance equals the run in memory
+    bit for bit, on a fractal (UTM) and a real DEM (geographic: per-row spacing; voids), toward
+    a non-special azimuth and 8 directions, with and without a maximum distance (curvature on:
+    both rasters are more than 1 km across); the preview too."""
+    path = _fractal_dem(tmp_path) if dem == "fractal" else EVEREST
+    runs = {}
+    for name, extra in (("mem", []), ("win", ["--window-size", "64"])):
+        out, dist = tmp_path / f"{name}.tif", tmp_path / f"{name}_d.tif"
+        r = runner.invoke(cli, ["horizon", path, str(out), "--distance", str(dist),
+                                "--preview", str(tmp_path / f"{name}.png")] + args + extra)
+        assert r.exit_code == 0, r.output
+        assert bool(re.search(r", \d+ windows\)", r.stderr)) == (name == "win"), r.stderr
+        runs[name] = (_bands(out), _bands(dist))
+    (a, ad, at), (b, bd, bt) = runs["mem"][0], runs["win"][0]
+    np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(runs["mem"][1][0], runs["win"][1][0])
+    assert ad == bd and at == bt
+    assert (a == -90).any() and (a > 5).any() and (a < -5).any()    # horizons of all kinds
+    np.testing.assert_array_equal(read_band(tmp_path / "mem.png"), read_band(tmp_path / "win.png"))
+
+
+def test_max_distance_on_the_command_line(tmp_path, runner):
+    """Beyond the raster, M changes no bit; a short M keeps every horizon point within M and
+    changes the horizons of cells whose horizon lay farther; the tag says which M."""
+    path = _fractal_dem(tmp_path)
+    outs = {}
+    for m in (None, "1e6", "400"):
+        out, dist = tmp_path / f"h{m}.tif", tmp_path / f"d{m}.tif"
+        r = runner.invoke(cli, ["horizon", path, str(out), "--azimuth", "163", "--distance",
+                                str(dist)] + ([] if m is None else ["--max-distance", m]))
+        assert r.exit_code == 0, r.output
+        outs[m] = (read_band(out), read_band(dist), _bands(out)[2])
+    np.testing.assert_array_equal(outs[None][0], outs["1e6"][0])
+    np.testing.assert_array_equal(outs[None][1], outs["1e6"][1])
+    beta, dist, tags = outs["400"]
+    far = outs[None][1] > 400
+    assert far.sum() > 100 and (beta[far] != outs[None][0][far]).all()
+    near = (outs[None][1] <= 400) & (outs[None][1] > 0)
+    np.testing.assert_array_equal(beta[near], outs[None][0][near])
+    assert (dist[dist != -9999] <= 400).all()
+    assert tags["MAX_DISTANCE"].startswith("400 m") and outs[None][2]["MAX_DISTANCE"].startswith(
+        "none")
+
+
+def test_max_memory_switches_to_windows(tmp_path):
+    """A --max-memory the DEM does not fit runs in windows, within that memory, with the bits
+    of the run in memory."""
+    from hillshade_rt.run import HorizonConfig, horizon
+    from hillshade_rt.run import plan as tiling
+    from hillshade_rt.run.config import RunOptions
+    path = _fractal_dem(tmp_path, 400, 400)
+    reps = {}
+    for name in ("mem", "win"):
+        # room for the process, GDAL's cache and about 3 MB of windows: the DEM needs 3.8
+        limit = tiling.process_rss() + ((tiling.GDAL_CACHE_MB + 32 + 3) << 20)
+        reps[name] = horizon(HorizonConfig(path, str(tmp_path / f"{name}.tif"), directions=8,
+                                           max_memory=None if name == "mem" else str(limit),
+                                           run=RunOptions(quiet=True)))
+    doc = reps["win"]["processing"]
+    assert doc["mode"] == "windows" and doc["regions"] > 1
+    assert reps["mem"]["processing"]["mode"] == "in memory"
+    assert doc["largest_window"] * 6 <= doc["memory"]["window_bytes"]
+    np.testing.assert_array_equal(_bands(tmp_path / "mem.tif")[0], _bands(tmp_path / "win.tif")[0])
+
+
+@pytest.mark.parametrize("args, code, words", [
+    (["--max-distance", "0"], 2, "--max-distance"),
+    (["--max-distance", "-3"], 2, "--max-distance"),
+    (["--max-distance", "nan"], 2, "--max-distance"),
+    (["--max-distance", "inf"], 2, "--max-distance"),
+    (["--max-distance", "300", "--method", "hull"], 2, "--method scan only"),
+    (["--window-size", "64", "--method", "hull"], 2, "in memory only"),
+    (["--window-size", "8"], 2, "at least 64"),
+    (["--max-memory", "lots"], 2, "--max-memory"),
+    (["--max-memory", "20MB"], 1, "give at least --max-memory"),
+])
+def test_bad_reach_options_are_one_line_and_write_nothing(tmp_path, runner, args, code, words):
+    out = tmp_path / "h.tif"
+    r = runner.invoke(cli, ["horizon", SRTM, str(out), "--azimuth", "203.7"] + args)
+    assert r.exit_code == code, r.output
+    assert words in r.stderr and len(r.stderr.splitlines()) == 1, r.stderr
+    assert not out.exists() and list(tmp_path.iterdir()) == []
+
+
+def test_windows_on_dask_give_the_same_files(tmp_path, runner):
+    """--scheduler local:2: the regions as Dask tasks, their parts put together through a VRT:
+    the bands, descriptions and tags of the run in memory (angles and distances), no parts
+    left behind."""
+    runs = {}
+    for name, extra in (("mem", []), ("dask", ["--window-size", "64", "--scheduler", "local:2"])):
+        out, dist = tmp_path / f"{name}.tif", tmp_path / f"{name}_d.tif"
+        r = runner.invoke(cli, ["horizon", EVEREST, str(out), "--directions", "8", "--distance",
+                                str(dist), "--max-distance", "4000"] + extra)
+        assert r.exit_code == 0, r.output
+        runs[name] = (_bands(out), _bands(dist))
+    assert "16 windows on Dask" in r.stderr
+    for i in range(2):
+        (a, ad, at), (b, bd, bt) = runs["mem"][i], runs["dask"][i]
+        np.testing.assert_array_equal(a, b)
+        assert ad == bd and at == bt
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["dask.tif", "dask_d.tif", "mem.tif",
+                                                          "mem_d.tif"]

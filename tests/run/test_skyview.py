@@ -2,6 +2,7 @@
 definitions, checked on planes where both are known in closed form."""
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -98,3 +99,165 @@ def test_bad_options_are_usage_errors(tmp_path, runner, args, words):
     r = runner.invoke(cli, ["skyview", data_path("jacksboro_fault_srtm3_mpl_403x344.tif"),
                             str(out)] + args)
     assert r.exit_code == 2 and words in r.stderr and not out.exists()
+
+
+# ---------------------------------------------------------------------------------------------
+# --openness, --max-distance, windows (issue 20, items 1-3)
+
+def _openness(tmp_path, runner, dem, sign, extra=()):
+    out = tmp_path / f"o{sign}.tif"
+    r = runner.invoke(cli, ["skyview", dem, str(out), "--openness", sign, "--overwrite",
+                            "--pixel-size", "10"] + FLAT + list(extra))
+    assert r.exit_code == 0, r.output
+    return read_band(out)
+
+
+def test_openness_of_planes(tmp_path, runner):
+    """A flat plane: 90 degrees both ways, in every cell (a border cell's directions with
+    nothing ahead are left out, the rest see the horizontal). A plane of slope S: 90 in every
+    cell with terrain in every direction (the directions pair up: atan(tan S cos(φ - A)) is odd);
+    on the top (uphill) row only the directions that do not leave the raster count: positive
+    90 + mean atan(tan S |cos φ|) over cos φ <= 0, negative its mirror image about 90."""
+    n = 36
+    flat = _plane(tmp_path, 0.0)
+    for sign in ("positive", "negative"):
+        np.testing.assert_allclose(_openness(tmp_path, runner, flat, sign,
+                                             ["--directions", str(n)]), 90.0, atol=1e-5)
+    s = 25.0
+    dem = _plane(tmp_path, s)
+    pos = _openness(tmp_path, runner, dem, "positive", ["--directions", str(n)])
+    neg = _openness(tmp_path, runner, dem, "negative", ["--directions", str(n)])
+    np.testing.assert_allclose(pos[1:-1, 1:-1], 90.0, atol=1e-4)
+    np.testing.assert_allclose(neg[1:-1, 1:-1], 90.0, atol=1e-4)
+    phi = np.radians(360.0 * np.arange(n) / n)
+    kept = np.cos(phi) <= 1e-12                    # not north: terrain ahead of the top row
+    down = np.degrees(np.arctan(math.tan(math.radians(s)) * np.abs(np.cos(phi[kept]))))
+    np.testing.assert_allclose(pos[0, 1:-1], 90.0 + down.mean(), atol=1e-4)
+    np.testing.assert_allclose(neg[0, 1:-1], 90.0 - down.mean(), atol=1e-4)
+    assert 90.0 + down.mean() > 95.0
+
+
+def test_openness_of_a_valley(tmp_path, runner):
+    """A V-shaped valley running north-south, walls rising at S on both sides (z = tan S |x|):
+    from its floor the horizon toward φ is atan(tan S |sin φ|) exactly (linear interpolation is
+    exact on each wall), S straight across: positive openness the mean of 90 - that (below 90:
+    a valley), negative the mean of 90 + that."""
+    rows, cols, d, s, n = 50, 41, 10.0, 30.0, 16
+    t = math.tan(math.radians(s))
+    z = (t * d * np.abs(np.arange(cols) - 20.0))[None, :] + np.zeros((rows, 1))
+    dem = write_geotiff(tmp_path / "valley.tif", z.astype(np.float32),
+                        Affine(d, 0, 500000, 0, -d, 4000000), CRS.from_epsg(32633))
+    pos = _openness(tmp_path, runner, dem, "positive", ["--directions", str(n)])
+    neg = _openness(tmp_path, runner, dem, "negative", ["--directions", str(n)])
+    phi = np.radians(360.0 * np.arange(n) / n)
+    g = np.degrees(np.arctan(t * np.abs(np.sin(phi))))
+    floor = slice(18, 32)                  # rows far from the ends: terrain in every direction
+    np.testing.assert_allclose(pos[floor, 20], 90.0 - g.mean(), atol=1e-4)
+    np.testing.assert_allclose(neg[floor, 20], 90.0 + g.mean(), atol=1e-4)
+    h = tmp_path / "h.tif"
+    r = runner.invoke(cli, ["horizon", dem, str(h), "--directions", str(n), "--pixel-size",
+                            "10"] + FLAT)
+    assert r.exit_code == 0, r.output
+    np.testing.assert_allclose(read_band(h, n // 4 + 1)[floor, 20], s, atol=1e-4)   # east: S
+
+
+def test_openness_is_the_reference_horizons_mean(tmp_path):
+    """On rough terrain with voids, at 10 directions (36 degrees apart: most off the axes) and
+    within a maximum distance: the mean of 90 - β over the directions with terrain ahead, β
+    from the plain reference scan (of -z for negative openness), cell for cell."""
+    import hillshade_rt as hr
+    from hillshade_rt.testing import fractal_terrain, reference_horizon
+    z = fractal_terrain(28, 31, 5, relief=80.0, octaves=4)
+    z[9:11, 12:15] = np.nan
+    for sign, zz in (("positive", z), ("negative", -z)):
+        for m in (None, 70.0):
+            got = hr.sky_view(z, 10.0, directions=10, openness=sign, max_distance=m,
+                              curvature=False)
+            acc, cnt = np.zeros(z.shape), np.zeros(z.shape)
+            for a in 36.0 * np.arange(10):
+                b, _ = reference_horizon(zz, 10.0, 10.0, a, max_distance=m)
+                ok = b != -90.0
+                acc[ok] += 90.0 - b[ok]
+                cnt += ok
+            with np.errstate(invalid="ignore"):
+                want = np.where(cnt > 0, acc / cnt, np.nan)
+            np.testing.assert_allclose(got, want, atol=1e-4)
+            assert np.array_equal(np.isnan(got), np.isnan(z))
+    assert (got > 95).any() and (got < 85).any()
+
+
+def test_max_distance_in_skyview(tmp_path, runner):
+    """Beyond the raster M changes no bit; a shorter M sees less terrain: the sky view factor
+    only grows, somewhere strictly."""
+    dem = data_path("jacksboro_fault_srtm3_mpl_403x344.tif")
+    svf = {}
+    for m in (None, "1e7", "600"):
+        out = tmp_path / f"s{m}.tif"
+        r = runner.invoke(cli, ["skyview", dem, str(out), "--directions", "8"]
+                          + ([] if m is None else ["--max-distance", m]))
+        assert r.exit_code == 0, r.output
+        svf[m] = read_band(out)
+    np.testing.assert_array_equal(svf[None], svf["1e7"])
+    ok = svf[None] != -9999.0
+    assert (svf["600"][ok] >= svf[None][ok]).all() and (svf["600"][ok] > svf[None][ok]).any()
+
+
+@pytest.mark.parametrize("dem", ["fractal", "everest"])
+@pytest.mark.parametrize("args", [["--definition", "zaksek"],
+                                  ["--definition", "dozier", "--terrain-configuration"],
+                                  ["--openness", "positive"],
+                                  ["--openness", "negative", "--max-distance", "1500"]])
+def test_windows_give_the_bits_of_the_run_in_memory(tmp_path, runner, dem, args):
+    """--window-size 64: the sky view factor (both definitions) and the openness (both signs)
+    equal the run in memory bit for bit, on a fractal (UTM) and a real DEM (geographic: per-row
+    spacing; voids), 8 directions, curvature on (more than 1 km across)."""
+    if dem == "fractal":
+        from hillshade_rt.testing import fractal_terrain
+        z = fractal_terrain(140, 150, 4, relief=500.0, octaves=5) + 800.0
+        z[30:36, 60:66] = np.nan
+        path = write_geotiff(tmp_path / "f.tif", z.astype(np.float32),
+                             Affine(30.0, 0, 500000, 0, -30.0, 4000000), CRS.from_epsg(32633))
+    else:
+        path = data_path("everest_srtm3_voids_crop200.tif")
+    got = {}
+    for name, extra in (("mem", []), ("win", ["--window-size", "64"])):
+        out = tmp_path / f"{name}.tif"
+        r = runner.invoke(cli, ["skyview", path, str(out), "--directions", "8"] + args + extra)
+        assert r.exit_code == 0, r.output
+        assert bool(re.search(r", (9|16) windows, ", r.stderr)) == (name == "win"), r.stderr
+        got[name] = read_band(out)
+    np.testing.assert_array_equal(got["mem"], got["win"])
+    assert (got["mem"] == -9999.0).any() and np.unique(got["mem"]).size > 1000
+
+
+@pytest.mark.parametrize("args, words", [
+    (["--openness", "positive", "--definition", "dozier"], "--openness"),
+    (["--openness", "negative", "--terrain-configuration"], "--openness"),
+    (["--openness", "sideways"], "--openness"),
+    (["--max-distance", "0"], "--max-distance"),
+    (["--max-distance", "-1"], "--max-distance"),
+    (["--window-size", "10x10"], "at least 64"),
+])
+def test_bad_openness_and_reach_options(tmp_path, runner, args, words):
+    out = tmp_path / "s.tif"
+    r = runner.invoke(cli, ["skyview", data_path("jacksboro_fault_srtm3_mpl_403x344.tif"),
+                            str(out)] + args)
+    assert r.exit_code == 2 and words in r.stderr and len(r.stderr.splitlines()) == 1, r.stderr
+    assert not out.exists() and list(tmp_path.iterdir()) == []
+
+
+def test_windows_on_dask(tmp_path, runner):
+    """--scheduler local:2: Dozier's view factor from the regions as Dask tasks equals the run
+    in memory, bit for bit; the summary's mean too."""
+    path = data_path("everest_srtm3_voids_crop200.tif")
+    got, said = {}, {}
+    for name, extra in (("mem", []), ("dask", ["--window-size", "96", "--scheduler", "local:2"])):
+        out = tmp_path / f"{name}.tif"
+        r = runner.invoke(cli, ["skyview", path, str(out), "--directions", "8", "--definition",
+                                "dozier"] + extra)
+        assert r.exit_code == 0, r.output
+        got[name] = read_band(out)
+        said[name] = re.search(r"mean (\S+);", r.stderr).group(1)
+    assert "9 windows on Dask" in r.stderr
+    np.testing.assert_array_equal(got["mem"], got["dask"])
+    assert said["mem"] == said["dask"]
