@@ -124,7 +124,7 @@ def sky_view(heights, spacing: float | tuple[float, float] | Grid | None = None,
     (float32 degrees; NaN where no direction has terrain ahead). ``max_distance``: metres,
     terrain farther along a ray is ignored (Yokoyama's L). ``heights``, ``spacing``,
     ``curvature``, ``body`` as for :func:`horizon_angles`."""
-    from .algorithms.skyview import definition_of, inverted, sky_view as _sky_view
+    from .algorithms.skyview import definition_of, floor_deg, inverted, sky_view as _sky_view
     from .shading import horizon_shader
     name = definition_of(definition, openness)
     if openness is not None and definition != "zaksek":
@@ -139,7 +139,8 @@ def sky_view(heights, spacing: float | tuple[float, float] | Grid | None = None,
     pyramid = shader.pyramid(zm, True)           # one for every direction
     return _sky_view(z, grid, equal_azimuths(360.0 / n),
                      lambda a: hz.horizon_angles(zm, shader.rays(grid, a, 45.0),
-                                                 pyramid=pyramid, max_distance=max_distance),
+                                                 pyramid=pyramid, max_distance=max_distance,
+                                                 floor_deg=floor_deg(name)),
                      name)
 
 

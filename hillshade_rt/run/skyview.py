@@ -168,7 +168,7 @@ class _Stats:
 
 def _in_memory(cfg, definition, src, ran_on, max_distance, timer, **_):
     from ..algorithms import horizon as hz
-    from ..algorithms.skyview import Sum, inverted
+    from ..algorithms.skyview import Sum, floor_deg, inverted
     from ..earth import dem_body
     from ..geometry import equal_azimuths
     from ..shading import horizon_shader
@@ -188,12 +188,13 @@ def _in_memory(cfg, definition, src, ran_on, max_distance, timer, **_):
     azimuths = equal_azimuths(360.0 / n)
     md = max_distance if math.isfinite(max_distance) else None
     pyramid = None if gpu_dem is not None else shader.pyramid(z, True)  # one for all
+    floor = floor_deg(definition)
 
     def angles_of(a):
         rays = shader.rays(d.grid, a, 45.0)
         if gpu_dem is not None:
-            return hz.horizon_angles_gpu(gpu_dem, rays, max_distance=md)
-        return hz.horizon_angles(z, rays, pyramid=pyramid, max_distance=md)
+            return hz.horizon_angles_gpu(gpu_dem, rays, max_distance=md, floor_deg=floor)
+        return hz.horizon_angles(z, rays, pyramid=pyramid, max_distance=md, floor_deg=floor)
 
     with timer("compute"):
         s = Sum(definition, d.heights, d.grid)
