@@ -169,6 +169,13 @@ def height_above_ground_option(what: str):
     return deco
 
 
+def preview_option(what: str = "Also write a quick-look PNG."):
+    def deco(f):
+        return click.option("--preview", type=click.Path(dir_okay=False), default=None,
+                            help=what)(f)
+    return deco
+
+
 def threads_option(f):
     return click.option("--threads", type=click.IntRange(min=1), default=None,
                         help="CPU threads (default: all cores).")(f)

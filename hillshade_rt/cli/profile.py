@@ -6,7 +6,8 @@ import click
 
 from .errors import errors_to_click, say
 from .options import (dem_options, height_above_ground_option, horizon_physics_options,
-                      overwrite_option, quiet_option, to_read_options, to_run_options)
+                      overwrite_option, preview_option, quiet_option, to_read_options,
+                      to_run_options)
 
 
 @click.command()
@@ -31,16 +32,18 @@ from .options import (dem_options, height_above_ground_option, horizon_physics_o
 @click.option("-o", "--output", default=None, type=click.Path(dir_okay=False),
               help="Write here (default: standard output).")
 @horizon_physics_options
+@preview_option("Also write a PNG panorama of the first point's horizon (north at the left, "
+                "east a quarter across; sky above the line, terrain below).")
 @overwrite_option("Replace the output if it exists.")
 @quiet_option()
 @dem_options
 @errors_to_click
 def profile(dem, at, at_xy, points, height_above_ground, step, fmt, output, curvature,
-            refraction_k, overwrite, quiet, **read_opts):
+            refraction_k, preview, overwrite, quiet, **read_opts):
     """Write the horizon profile of points on DEM: the horizon elevation (and the distance to
     it) every --step degrees of azimuth, for PV siting (pvlib, PVGIS), GRASS, GIS (GeoJSON)."""
     from ..run.profile import ProfileConfig, parse_pair, profile as run_profile
-    kw = dict(overwrite=overwrite, quiet=quiet, **read_opts)
+    kw = dict(preview=preview, overwrite=overwrite, quiet=quiet, **read_opts)
     run_profile(ProfileConfig(dem, [parse_pair(a, "--at") for a in at],
                               [parse_pair(a, "--at-xy") for a in at_xy], points,
                               height_above_ground, step, fmt, output, curvature, refraction_k,

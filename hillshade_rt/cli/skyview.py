@@ -6,8 +6,8 @@ import click
 
 from .errors import errors_to_click, say
 from .options import (backend_option, dem_options, format_option, horizon_physics_options,
-                      max_distance_option, max_memory_option, overwrite_option, quiet_option,
-                      scheduler_option, threads_option, to_read_options, to_run_options,
+                      max_distance_option, max_memory_option, overwrite_option,
+                      preview_option, quiet_option, scheduler_option, threads_option, to_read_options, to_run_options,
                       window_size_option)
 
 
@@ -30,6 +30,8 @@ from .options import (backend_option, dem_options, format_option, horizon_physic
                    "down to the lowest terrain). Directions with nothing ahead are left out.")
 @max_distance_option
 @horizon_physics_options
+@preview_option("Also write a quick-look PNG: the relief coloured by the result (low purple, "
+                "high yellow).")
 @backend_option
 @threads_option
 @max_memory_option
@@ -41,14 +43,14 @@ from .options import (backend_option, dem_options, format_option, horizon_physic
 @dem_options
 @errors_to_click
 def skyview(dem, output, directions, definition, terrain_configuration, openness, max_distance,
-            curvature, refraction_k, backend, threads, max_memory, window_size, scheduler,
+            curvature, refraction_k, preview, backend, threads, max_memory, window_size, scheduler,
             overwrite, quiet, fmt, **read_opts):
     """Write the sky view factor of every cell of DEM to OUTPUT (float32 0..1, -9999 nodata)
     from its exact horizon in --directions azimuths, or its openness (--openness, degrees).
     A DEM larger than --max-memory (or any, with --window-size) is computed in windows, with
     the same result."""
     from ..run.skyview import SkyviewConfig, skyview as run_skyview
-    kw = dict(backend=backend, threads=threads, overwrite=overwrite, quiet=quiet, fmt=fmt,
+    kw = dict(preview=preview, backend=backend, threads=threads, overwrite=overwrite, quiet=quiet, fmt=fmt,
               **read_opts)
     run_skyview(SkyviewConfig(dem, output, directions, definition, terrain_configuration,
                               curvature, refraction_k, to_read_options(kw),

@@ -36,6 +36,7 @@ _EXPORTS = {
     "VrtSource": "vrt", "vrt_xml": "vrt",
     # writing
     "BandWriter": "raster", "write_raster": "raster", "write_png": "raster",
+    "read_decimated": "raster",
     "copy_vrt": "raster", "to_cog": "raster", "output_driver": "raster",
     "check_output_format": "raster", "gtiff_profile": "raster", "DEFLATE_LEVEL": "raster",
     "atomic_path": "write", "temp_beside": "write", "Claims": "write",

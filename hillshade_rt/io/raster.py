@@ -258,6 +258,15 @@ def to_cog(src: str, dst: str, resampling: str = "nearest", blocksize: int = 512
         rasterio.shutil.copy(src, dst, **opts)
 
 
+def read_decimated(path: str, shape: tuple[int, int], band: int = 1) -> np.ndarray:
+    """Band ``band`` of a raster just written, read at ``shape`` (GDAL's nearest, or its
+    overviews), float32 with NaN on nodata: the values of a product for its preview."""
+    import rasterio
+    with rasterio.open(path) as ds:
+        a = ds.read(band, out_shape=shape, masked=True)
+    return np.ma.filled(a.astype(np.float32), np.nan)
+
+
 def write_png(path: str, rgb: np.ndarray, overwrite: bool = False) -> None:
     """Write an (rows, cols, 3) uint8 picture as PNG (temporary file, checked, then rename)."""
     import rasterio

@@ -84,9 +84,11 @@ def profile(cfg: ProfileConfig) -> dict:
     if cfg.fmt in ONE_POINT and len(points) != 1:
         raise UsageProblem(f"--format {cfg.fmt} holds one point's profile; {len(points)} given "
                            "(use csv, json or geojson for several)")
+    claims = Claims([cfg.dem] + ([cfg.points] if cfg.points else []), cfg.run.overwrite)
     if cfg.output is not None:
-        Claims([cfg.dem] + ([cfg.points] if cfg.points else []), cfg.run.overwrite).claim(
-            cfg.output, "-o/--output")
+        claims.claim(cfg.output, "-o/--output")
+    if cfg.run.preview is not None:
+        claims.claim(cfg.run.preview, "--preview")
     d = cfg.read.read(cfg.dem)
     points, to_ll = locate(points, d)
     on_ground(points, d, cfg.height_above_ground)
@@ -109,6 +111,10 @@ def profile(cfg: ProfileConfig) -> dict:
                                              for v in dist[i]],
                               "line": line})
     write_text(cfg.output, render(doc, cfg.fmt), cfg.run.overwrite)
+    if cfg.run.preview is not None:     # the first point's horizon as its observer sees it
+        from ..io import write_png
+        from ..preview import panorama_rgb
+        write_png(cfg.run.preview, panorama_rgb(azimuths, ang[0]), cfg.run.overwrite)
     if not cfg.run.quiet and cfg.output is not None:
         cfg.run.say("summary", f"hillshade-rt: {cfg.output}: {len(points)} point(s) x "
                                f"{len(azimuths)} azimuths ({cfg.fmt})")

@@ -109,7 +109,10 @@ def skyview(cfg: SkyviewConfig) -> dict:
     wshape = parse_window_size(cfg.window_size)
     limit = memory_limit(cfg.max_memory)
     timer = Timer()
-    Claims([cfg.dem], ro.overwrite).claim(cfg.output, "OUTPUT")
+    claims = Claims([cfg.dem], ro.overwrite)
+    claims.claim(cfg.output, "OUTPUT")
+    if ro.preview is not None:
+        claims.claim(ro.preview, "--preview")
     check_output_format(cfg.output, output_driver(cfg.output, ro.fmt), "float32", 1, True)
     if ro.threads is not None:
         numba.set_num_threads(min(ro.threads, numba.config.NUMBA_NUM_THREADS))
@@ -120,8 +123,11 @@ def skyview(cfg: SkyviewConfig) -> dict:
     with src:
         windowed = forced or needs_windows(src, limit, BYTES_PER_CELL)
         run = _in_windows if windowed else _in_memory
-        result, processing, curved = run(cfg, definition, src, ran_on, max_distance, timer,
-                                          wshape=wshape, limit=limit)
+        result, processing, curved, relief = run(cfg, definition, src, ran_on, max_distance,
+                                                  timer, wshape=wshape, limit=limit)
+    if ro.preview is not None:
+        with timer("write"):
+            _preview(cfg, *relief)
     return _report(cfg, definition, src, ran_on, curved, result, processing, timer,
                    max_distance)
 
@@ -209,7 +215,8 @@ def _in_memory(cfg, definition, src, ran_on, max_distance, timer, **_):
         with _writer(cfg, d, definition, n, bool(shader.curvature), max_distance) as w:
             w.write(1, np.where(np.isnan(out), np.float32(-9999.0), out),
                     description=describe(cfg, definition))
-    return st, {"mode": "in memory", "cells": int(d.heights.size)}, bool(shader.curvature)
+    return (st, {"mode": "in memory", "cells": int(d.heights.size)}, bool(shader.curvature),
+            (d.heights, d.grid))
 
 
 def _in_windows(cfg, definition, src, ran_on, max_distance, timer, *, wshape, limit):
@@ -227,7 +234,7 @@ def _in_windows(cfg, definition, src, ran_on, max_distance, timer, *, wshape, li
     st, fig, extra = _Stats(), Figures(), {}
     with bounded_gdal_cache():
         with timer("prepare"):
-            bstats = block_stats(src)
+            bstats = block_stats(src, preview_side=2048 if ro.preview else None)
         job, shader = horizon_job(src, azimuths, ran_on, cfg.curvature, cfg.refraction_k,
                                   "scan", bstats, inverted(definition), 1, max_distance)
         regs, mem = prepare_windows(src, job, limit, wshape, timer)
@@ -263,7 +270,23 @@ def _in_windows(cfg, definition, src, ran_on, max_distance, timer, *, wshape, li
                   "cells": src.shape[0] * src.shape[1], "memory": mem,
                   "window_shape_requested": list(wshape) if wshape else None,
                   **fig.as_dict(), **extra}
-    return st, processing, curved
+    relief = None
+    if ro.preview is not None:     # the every-n-th heights of the statistics pass
+        from ..geometry import Grid
+        n, pv = bstats.stride, bstats.preview
+        relief = (pv, Grid(pv.shape[0], pv.shape[1], src.grid.dx[::n] * n,
+                           src.grid.dy[::n] * n, src.grid.col_sign, src.grid.row_sign,
+                           src.grid.method))
+    return st, processing, curved, relief
+
+
+def _preview(cfg, z, grid) -> None:
+    """--preview: the relief coloured by the product (read back from the output at the
+    relief's size; low purple, high yellow, stretched between the 2nd and 98th percentiles)."""
+    from ..io import read_decimated, write_png
+    from ..preview import relief_rgb, scaled
+    values = read_decimated(cfg.output, z.shape)
+    write_png(cfg.run.preview, relief_rgb(z, grid, ramp=scaled(values)), cfg.run.overwrite)
 
 
 def _report(cfg, definition, src, ran_on, curved, st, processing, timer, max_distance):
@@ -291,5 +314,7 @@ def _report(cfg, definition, src, ran_on, curved, st, processing, timer, max_dis
                           f"{describe(cfg, definition)}, {n} directions{where}, mean "
                           f"{shown}{' deg' if opn else ''}; compute "
                           f"{timer.seconds.get('compute', 0.0):.2f} s")
+    if ro.preview is not None:
+        rep["preview"] = os.path.abspath(ro.preview)
     return rep
 

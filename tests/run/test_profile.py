@@ -131,3 +131,24 @@ def test_point_on_nodata_and_csv_without_coordinates(tmp_path, runner, utm_dem):
     bad.write_text("a,b\n1,2\n")
     r = runner.invoke(cli, ["profile", dem, "--points", str(bad)])
     assert r.exit_code == 1 and "lon,lat" in r.stderr and len(r.stderr.splitlines()) == 1
+
+
+def test_preview_is_the_first_points_panorama(tmp_path, runner):
+    """--preview: a 720 x 200 panorama, north at the left edge; a wall to the east of the
+    observer stands above the horizontal a quarter of the way across and nowhere to the west."""
+    import rasterio
+    z = np.zeros((81, 81), np.float32)
+    z[:, 50:53] = 100.0                 # a wall 100 m high, 10 cells east of the centre
+    dem = write_geotiff(tmp_path / "wall.tif", z, Affine(10, 0, 500000, 0, -10, 4000000),
+                        CRS.from_epsg(32633))
+    x, y = 500000 + 40.5 * 10, 4000000 - 40.5 * 10
+    png = tmp_path / "p.png"
+    r = runner.invoke(cli, ["profile", dem, "--at-xy", f"{x},{y}", "--preview", str(png),
+                            "--no-earth-curvature", "-o", str(tmp_path / "p.csv")])
+    assert r.exit_code == 0, r.output
+    with rasterio.open(png) as ds:
+        pic = ds.read().astype(int)
+    assert pic.shape == (3, 200, 720)
+    ground = pic[2] < pic[0] + 20           # brown below the line, blue sky above
+    east, west = ground[:, 180], ground[:, 540]
+    assert east.sum() > west.sum() + 50     # atan(100 / 100 m) = 45 degrees up in the east

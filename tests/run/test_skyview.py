@@ -261,3 +261,26 @@ def test_windows_on_dask(tmp_path, runner):
     assert "9 windows on Dask" in r.stderr
     np.testing.assert_array_equal(got["mem"], got["dask"])
     assert said["mem"] == said["dask"]
+
+
+def test_preview_colours_the_relief_by_the_result_in_memory_and_in_windows(tmp_path, runner):
+    """--preview: a PNG of the DEM's size (under 2048 cells a side), the same picture in
+    memory and in windows; brighter where the sky view factor is higher (a pit's floor is
+    darker than the open plain around it)."""
+    import rasterio
+    z = np.full((90, 100), 500.0, np.float32)
+    z[30:60, 40:70] = 380.0          # a pit 120 m deep, 30 x 30 cells
+    path = write_geotiff(tmp_path / "pit.tif", z, Affine(10.0, 0, 500000, 0, -10.0, 4000000),
+                         CRS.from_epsg(32633))
+    pics = {}
+    for name, extra in (("mem", []), ("win", ["--window-size", "64"])):
+        png = tmp_path / f"{name}.png"
+        r = runner.invoke(cli, ["skyview", path, str(tmp_path / f"{name}.tif"), "--directions",
+                                "8", "--preview", str(png)] + extra + FLAT)
+        assert r.exit_code == 0, r.output
+        with rasterio.open(png) as ds:
+            pics[name] = ds.read()
+    assert pics["mem"].shape == (3, 90, 100)
+    np.testing.assert_array_equal(pics["mem"], pics["win"])
+    lum = pics["mem"].astype(int).sum(axis=0)
+    assert lum[45, 55] < lum[10, 10]        # the pit's centre sees less sky than the plain
