@@ -7,7 +7,7 @@ OUTDIR ?= out
 EXAMPLE_DEM := examples/bigtujunga_srtm30m_utm11n_1197x643.tif
 EXAMPLE_OUT := $(OUTDIR)/bigtujunga_shadow.tif
 
-.PHONY: run test install install-test bench bench-sun bench-tiling bench-big bench-gpu bench-peers bench-horizon bench-writes bench-real bench-real-quick bench-fast gpu-check clean help
+.PHONY: run test install install-test bench bench-sun bench-tiling bench-big bench-gpu bench-peers bench-horizon docs-pictures bench-writes bench-real bench-real-quick bench-fast gpu-check clean help
 
 help:
 	@echo "make run    - set up .venv, shade the bundled example DEM, print where the mask went"
@@ -24,6 +24,7 @@ help:
 	@echo "make bench-real - real DEMs and spectral fractals (1024-4096), 18 suns, with the peers"
 	@echo "make bench-real-quick - the same with 1024 and 6 suns (a few minutes on 2 cores)"
 	@echo "make bench-fast - the default's curvature cost, cost against size, geographic vs projected"
+	@echo "make docs-pictures - the pictures of docs/products.md, by the tool's --preview"
 	@echo "make clean  - remove .venv and outputs"
 
 $(BIN)/python:
@@ -97,6 +98,10 @@ $(VENV)/.installed-peers: pyproject.toml | $(VENV)/.installed
 
 bench-peers: $(VENV)/.installed-peers
 	$(BIN)/python benchmarks/bench_peers.py
+
+# docs/products.md's pictures (docs/img/), each made by the command's own --preview
+docs-pictures: $(VENV)/.installed
+	$(BIN)/python docs/pictures.py
 
 # Horizons in N directions and the sky view factor against one shadow mask, and the sky view
 # factor of rvt-py and whitebox-workflows against ours (issue 20)
