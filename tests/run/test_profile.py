@@ -152,3 +152,26 @@ def test_preview_is_the_first_points_panorama(tmp_path, runner):
     ground = pic[2] < pic[0] + 20           # brown below the line, blue sky above
     east, west = ground[:, 180], ground[:, 540]
     assert east.sum() > west.sum() + 50     # atan(100 / 100 m) = 45 degrees up in the east
+
+
+def test_box_profile_is_atan_of_height_over_distance_across_its_width(runner, tmp_path):
+    """A box 50 m high on flat ground, its near face D = 36 rows north of the observer: toward
+    azimuth φ within the box's angular width the first sample on the face's row is the
+    horizon, atan(h cos φ / (D dy)) (the ray crosses that row D dy / cos φ metres away);
+    beyond the width the ground is flat: 0."""
+    z = np.zeros((80, 100), np.float32)
+    z[20:25, 30:71] = 50.0
+    dem = write_geotiff(tmp_path / "box.tif", z, Affine(10, 0, 500000, 0, -10, 4000000),
+                        CRS.from_epsg(32633))
+    x, y = 500000 + 50.5 * 10, 4000000 - 60.5 * 10        # row 60, column 50
+    doc = _json(runner, [dem, "--at-xy", f"{x},{y}", "--step", "1", "--no-earth-curvature"])
+    got = np.array(doc["points"][0]["horizon_deg"])
+    az = np.array(doc["points"][0]["azimuth"])
+    phi = np.radians(((az + 180.0) % 360.0) - 180.0)
+    inside = (np.cos(phi) > 0) & (np.abs(np.tan(phi)) * 36 < 19.5)   # the face's row, in it
+    dy = float(read_dem(dem).grid.dy[60])   # ground metres per row (UTM's scale: 10 / 0.9996)
+    want = np.degrees(np.arctan(50.0 * np.cos(phi) / (36 * dy)))
+    np.testing.assert_allclose(got[inside], want[inside], atol=1e-5)
+    assert inside.sum() >= 55                               # about ±28 degrees
+    outside = np.abs(phi) > np.radians(35)                 # the box out of the rays' way
+    np.testing.assert_allclose(got[outside], 0.0, atol=1e-9)
