@@ -41,3 +41,22 @@ def test_horizon_profile_is_the_commands(runner):
                                atol=1e-3)
     with pytest.raises(hr.HillshadeError, match="outside"):
         hr.horizon_profile(d, [-3.0], [4.0])
+
+
+def test_flat_plane_horizon_is_zero_or_the_curvature_dip():
+    """A flat plane 6 km across: flat model, every horizon with terrain ahead is 0; with the
+    Earth's curvature (and refraction k = 0.13) the nearest sample is the horizon, the ground
+    there lying d²(1 - k)/2R below the observer: β = atan(-(1 - k) d / 2R), d = one step."""
+    import math
+    from hillshade_rt.arrays import horizon_angles
+    from hillshade_rt.earth import EARTH_MEAN_RADIUS
+    z = np.zeros((200, 200), np.float32)
+    az = 163.0
+    flat = horizon_angles(z, az, 30.0, curvature=False)
+    ahead = flat[2:-2, 2:-2]
+    np.testing.assert_array_equal(ahead, 0.0)
+    curved = horizon_angles(z, az, 30.0, curvature=True)
+    d = 30.0 / abs(math.cos(math.radians(az)))    # rows dominate at 163 degrees
+    want = math.degrees(math.atan(-(1 - 0.13) * d / (2 * EARTH_MEAN_RADIUS)))
+    np.testing.assert_allclose(curved[2:-2, 2:-2], want, rtol=1e-4)
+    assert want < 0
