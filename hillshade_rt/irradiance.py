@@ -305,10 +305,11 @@ def with_perez(sky: Sky, times, zenith) -> Sky:
 # the terrain: what does not change with the sun
 
 def dozier_view(z, grid, directions: int, backend: str = "cpu", curvature="auto",
-                refraction_k: float | None = None, body=None) -> np.ndarray:
+                refraction_k: float | None = None, body=None, lift: float = 0.0) -> np.ndarray:
     """Dozier's sky view factor Vd of every cell's tilted surface (float32, NaN voids) from its
     exact horizon in ``directions`` azimuths, as ``hillshade-rt skyview --definition dozier``
-    (curvature "auto": on for a raster more than 1 km across)."""
+    (curvature "auto": on for a raster more than 1 km across); the horizons seen from ``lift``
+    metres above each cell (--height-above-ground), the surface's slope and aspect the cell's."""
     from .algorithms import horizon as hz
     from .algorithms.skyview import sky_view
     from .geometry import equal_azimuths
@@ -319,13 +320,14 @@ def dozier_view(z, grid, directions: int, backend: str = "cpu", curvature="auto"
         g = GpuDem(z)
 
         def angles_of(a):     # floored at the horizontal, all Vd reads (algorithms.skyview)
-            return hz.horizon_angles_gpu(g, shader.rays(grid, a, 45.0), floor_deg=0.0)
+            return hz.horizon_angles_gpu(g, shader.rays(grid, a, 45.0), floor_deg=0.0,
+                                         lift=lift)
     else:
         pyramid = shader.pyramid(z, True)      # one for every direction
 
         def angles_of(a):
             return hz.horizon_angles(z, shader.rays(grid, a, 45.0), pyramid=pyramid,
-                                     floor_deg=0.0)
+                                     floor_deg=0.0, lift=lift)
     return sky_view(z, grid, equal_azimuths(360.0 / int(directions)), angles_of, "dozier")
 
 

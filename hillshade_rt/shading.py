@@ -136,7 +136,8 @@ class Shader:
     cell: ``--height-above-ground``; >= 0, 0 the ground itself). With a lift the cast shadows
     are marched by an algorithm that takes one (``algorithms.for_lift``: ``auto`` runs brute,
     an algorithm that cannot is an error); the halos toward the sun are shortened by it (a ray
-    that starts higher clears the terrain sooner); soft shadows take none yet (an error)."""
+    that starts higher clears the terrain sooner); soft shadows take it through the horizon
+    scan's own lift (:meth:`visible_fraction`)."""
 
     def __init__(self, z: np.ndarray, grid: Grid, algorithm: str = "auto",
                  options: dict | None = None, backend: str = "cpu", curvature="auto",
@@ -422,9 +423,6 @@ class Shader:
         """float32 visible fraction (0..1) of the solar disk over ``region`` (NaN on voids),
         from the exact horizon angle toward the sun against its elevation +- its radius."""
         from .algorithms import horizon as hz
-        if self.lift > 0.0:
-            raise HillshadeError("soft shadows from above the ground are not computed yet: "
-                                 "--soft and --height-above-ground do not go together")
         sub = self.z[region.rows, region.cols]
         if region.elevation + SUN_RADIUS_DEG <= 0:
             return np.where(np.isnan(sub), np.float32(np.nan), np.float32(0.0)).astype(np.float32)
@@ -434,10 +432,11 @@ class Shader:
         # its upper edge hidden (the scan starts at the one and stops at the other)
         lo, hi = region.elevation - SUN_RADIUS_DEG, region.elevation + SUN_RADIUS_DEG
         if self.backend == "gpu":
-            beta = hz.horizon_angles_gpu(self._gpu_dem(z, whole), rays, floor_deg=lo, cap_deg=hi)
+            beta = hz.horizon_angles_gpu(self._gpu_dem(z, whole), rays, floor_deg=lo, cap_deg=hi,
+                                         lift=self.lift)
         else:
             beta = hz.horizon_angles(z, rays, pyramid=self.pyramid(z, whole) or True,
-                                     floor_deg=lo, cap_deg=hi)
+                                     floor_deg=lo, cap_deg=hi, lift=self.lift)
         if beta.shape != sub.shape:
             beta = beta[inner]
         frac = disk_fraction(beta, region.elevation).astype(np.float32)

@@ -306,12 +306,14 @@ def reference_mask(z, dx, dy, azimuth, elevation, col_sign=1, row_sign=-1,
     return out
 
 
-def reference_horizon(z, dx, dy, azimuth, col_sign=1, row_sign=-1, max_distance=None):
+def reference_horizon(z, dx, dy, azimuth, col_sign=1, row_sign=-1, max_distance=None,
+                      lift=0.0):
     """The horizon scan written out plainly (as :func:`reference_mask`, independently of the
     kernels): (β in degrees, the ground distance in metres to the horizon point), float64 per
     cell: the highest angle atan((terrain - h0) / t) over the ray's samples at ground distances
     t <= ``max_distance`` (the whole raster when None), the nearest of equal ones; -90 and NaN
-    where no valid terrain lies ahead; NaN and NaN on voids. No Earth curvature."""
+    where no valid terrain lies ahead; NaN and NaN on voids. No Earth curvature. ``lift``: the
+    observer stands that many metres above each cell (h0 = z + lift)."""
     z = np.asarray(z, dtype=np.float64)
     rows, cols = z.shape
     dxs = np.broadcast_to(np.asarray(dx, dtype=np.float64), (rows,))
@@ -352,7 +354,7 @@ def reference_horizon(z, dx, dy, azimuth, col_sign=1, row_sign=-1, max_distance=
                 else:
                     i = int(math.floor(pc)); f = pc - i
                     terrain = (1 - f) * z[int(pr), i] + f * z[int(pr), i + 1]
-                v = (terrain - z[r, c]) / t
+                v = (terrain - (z[r, c] + lift)) / t
                 if not math.isnan(v) and v > best + 1e-12 * abs(v):
                     best, where = v, t
                 k += 1

@@ -140,13 +140,14 @@ def _march(z, pyr, off, widths, nlev, wl0, wo0, line0, other0, n_dom, n_oth, h0,
 
 @njit(cache=True)
 def _scan_cell(z, pyr, off, widths, nlev, r, c, dom_col, sd, so, sp, zmax, rise, cv, decide,
-               floor, cap, kmax):
+               floor, cap, kmax, lift):
     """(max of (T_k - h0 - k*k*cv) / k over the samples k = sp, 2sp, ... up to ``kmax``
     (-inf if none), the k of that maximum (0 if none)): ``_march`` over the whole raster
     ``z`` from the cell (r, c). ``floor``: start the maximum there (the answer is then
-    max(β, floor): soft shadows need no horizon below the sun's lower edge)."""
+    max(β, floor): soft shadows need no horizon below the sun's lower edge). ``lift``: the
+    observer stands that many metres above the cell (h0 = z[r, c] + lift; 0: the ground)."""
     line0, other0, n_dom, n_oth = ray_origin(z, r, c, dom_col)
-    h0 = float(z[np.int64(r), np.int64(c)])
+    h0 = float(z[np.int64(r), np.int64(c)]) + lift
     best, kbest, _ = _march(z, pyr, off, widths, nlev, np.int64(0), np.int64(0), line0, other0,
                             n_dom, n_oth, h0, dom_col, sd, so, sp, zmax, rise, cv, decide, floor,
                             np.int64(0), sp, kmax, cap)
@@ -167,12 +168,12 @@ def _angle(t, sm, floor_tan, cap_tan):
 @njit(cache=True, inline="always")
 def _scan_write(z, pyr, off, widths, nlev, r, c, dom_col, step_dom, step_other, rise, step_m,
                 curv, sp, zmax, want_mask, mask, beta, floor_tan, cap_tan, want_dist, dist,
-                max_dist):
+                max_dist, lift):
     """Cell (r, c) of the scan: its mask code (want_mask) or its angle β in degrees (at least
     atan(floor_tan); above atan(cap_tan) only known to be above it), and with ``want_dist`` the
     ground distance (m) to the sample of the maximum, the horizon point (NaN on a void or with
-    nothing ahead); samples up to ``max_dist`` metres away (inf: to the raster's edge). The
-    per-cell body of both backends."""
+    nothing ahead); samples up to ``max_dist`` metres away (inf: to the raster's edge); the
+    observer ``lift`` metres above the cell. The per-cell body of both backends."""
     if math.isnan(z[r, c]):
         if want_mask:
             mask[r, c] = 255
@@ -186,7 +187,7 @@ def _scan_write(z, pyr, off, widths, nlev, r, c, dom_col, step_dom, step_other, 
     t, kb = _scan_cell(z, pyr, off, widths, nlev if sp == 1 else np.int64(0), r, c,
                        dom_col[r] != 0, np.int64(step_dom[r]), step_other[r], sp, zmax, ri,
                        curv[r], want_mask, floor_tan * sm, cap_tan * sm,
-                       last_step(max_dist, sm))
+                       last_step(max_dist, sm), lift)
     if want_dist:
         dist[r, c] = kb * sm if kb > 0 else np.nan
     if want_mask:
@@ -197,24 +198,24 @@ def _scan_write(z, pyr, off, widths, nlev, r, c, dom_col, step_dom, step_other, 
 
 @njit(parallel=True, cache=True)
 def _scan_kernel(z, pyr, off, widths, nlev, dom_col, step_dom, step_other, rise, step_m, curv, sp,
-                 zmax, want_mask, mask, beta, floor_tan, cap_tan, want_dist, dist, max_dist):
+                 zmax, want_mask, mask, beta, floor_tan, cap_tan, want_dist, dist, max_dist, lift):
     rows, cols = z.shape
     for r in prange(rows):
         for c in range(cols):
             _scan_write(z, pyr, off, widths, nlev, r, c, dom_col, step_dom, step_other, rise,
                         step_m, curv, sp, zmax, want_mask, mask, beta, floor_tan, cap_tan,
-                        want_dist, dist, max_dist)
+                        want_dist, dist, max_dist, lift)
 
 
 @kernel
 def _scan_gpu(z, pyr, off, widths, nlev, dom_col, step_dom, step_other, rise, step_m, curv, sp,
-              zmax, want_mask, mask, beta, floor_tan, cap_tan, want_dist, dist, max_dist):
+              zmax, want_mask, mask, beta, floor_tan, cap_tan, want_dist, dist, max_dist, lift):
     """CUDA twin of ``_scan_kernel``: one thread per cell."""
     c, r = cuda.grid(2)
     if r < z.shape[0] and c < z.shape[1]:
         _scan_write(z, pyr, off, widths, nlev, r, c, dom_col, step_dom, step_other, rise,
                     step_m, curv, sp, zmax, want_mask, mask, beta, floor_tan, cap_tan,
-                    want_dist, dist, max_dist)
+                    want_dist, dist, max_dist, lift)
 
 
 @njit(cache=True)
@@ -234,10 +235,11 @@ def _hull_best(hv, ht, top, v, h0):
 
 
 @njit(parallel=True, cache=True)
-def _hull_kernel(Z, s, left, right):
+def _hull_kernel(Z, s, left, right, lift):
     """Per whole-offset line o, from the sun's edge: answer the cells it brackets, then add its
     sample on this line to the upper hull. left/right: tangent (per step) from the line below /
-    above each cell's offset."""
+    above each cell's offset, the observer ``lift`` metres above the cell (the tangent from a
+    point left of every hull point is unimodal whatever its height)."""
     L, P = Z.shape
     omin = int(math.floor(-s * (L - 1))) - 1
     omax = P
@@ -256,7 +258,7 @@ def _hull_kernel(Z, s, left, right):
             for c in (base, base + 1):
                 if c < 0 or c > P - 1:
                     continue
-                h0 = float(Z[v, c])
+                h0 = float(Z[v, c]) + lift
                 if math.isnan(h0):
                     continue
                 q = c - s * v
@@ -302,13 +304,14 @@ def _hull_combine(Z, s, left, right, out):
                 out[v, c] = (1.0 - w) * a + w * b
 
 
-def horizon_tangent(z: np.ndarray, rays: SunRays) -> np.ndarray:
-    """Hull path: tangent of β per step (float64, DEM-shaped), -inf where nothing is ahead."""
+def horizon_tangent(z: np.ndarray, rays: SunRays, lift: float = 0.0) -> np.ndarray:
+    """Hull path: tangent of β per step (float64, DEM-shaped), -inf where nothing is ahead;
+    the observer ``lift`` metres above each cell."""
     f = frame_of(rays)
     Z = f.view(z)
     left = np.full(z.shape, -np.inf)
     right = np.full(z.shape, -np.inf)
-    _hull_kernel(Z, f.s, f.view(left), f.view(right))
+    _hull_kernel(Z, f.s, f.view(left), f.view(right), float(lift))
     out = np.empty(z.shape)
     _hull_combine(Z, f.s, f.view(left), f.view(right), f.view(out))
     out[np.isnan(z)] = np.nan
@@ -341,6 +344,17 @@ def _max_distance(max_distance, method: str = "scan") -> float:
     return m
 
 
+def _lift(lift) -> float:
+    """The observer's height above each cell as the kernels take it: metres, finite (< 0: below
+    it, as negative openness marches the inverted terrain -z from -(z + H))."""
+    from ..errors import HillshadeError
+    h = float(lift)
+    if not math.isfinite(h):
+        raise HillshadeError(f"the height above the ground must be a finite number of metres, "
+                             f"got {lift}")
+    return h
+
+
 def _tan_deg(a: float | None, default: float) -> float:
     if a is None or not math.isfinite(a):
         return default
@@ -355,7 +369,7 @@ def horizon_angles(z: np.ndarray, rays: SunRays, method: str = "scan", sample_sp
                    zmax: float | None = None, stats: dict | None = None, pyramid=True,
                    floor_deg: float | None = None, cap_deg: float | None = None,
                    distance: np.ndarray | None = None,
-                   max_distance: float | None = None) -> np.ndarray:
+                   max_distance: float | None = None, lift: float = 0.0) -> np.ndarray:
     """β in degrees (float32, NaN on voids, -90 where no terrain lies ahead in the raster).
     ``distance``: a DEM-shaped float32 array that receives the ground distance in metres to
     each cell's horizon point (the sample of the maximum; NaN on voids and with nothing ahead;
@@ -366,8 +380,10 @@ def horizon_angles(z: np.ndarray, rays: SunRays, method: str = "scan", sample_sp
     The scan marches over the maximum-height pyramid (``pyramid``: True, a ``MaxPyramid`` to
     reuse, or False for the plain scan: same angles). ``floor_deg`` / ``cap_deg`` (soft
     shadows): β below the floor comes back as the floor, β above the cap as some angle above it
-    (the march stops there)."""
+    (the march stops there). ``lift``: the observer stands that many metres above each cell
+    (``--height-above-ground``; >= 0, 0 the ground: the same bits as without)."""
     hull = _check(method, sample_spacing, rays)
+    lift = _lift(lift)
     max_dist = _max_distance(max_distance, method)
     if distance is not None and method != "scan":
         from ..errors import HillshadeError
@@ -375,7 +391,7 @@ def horizon_angles(z: np.ndarray, rays: SunRays, method: str = "scan", sample_sp
     if zmax is None:
         zmax = float(np.nanmax(z))
     if hull:
-        t = horizon_tangent(z, rays)
+        t = horizon_tangent(z, rays, lift)
         step_m = float(rays.step_m[0])
         with np.errstate(invalid="ignore"):
             beta = np.degrees(np.arctan(t / step_m)).astype(np.float32)
@@ -389,7 +405,7 @@ def horizon_angles(z: np.ndarray, rays: SunRays, method: str = "scan", sample_sp
                  rays.rise, rays.step_m, rays.curv, np.int64(sample_spacing), float(zmax), False,
                  np.empty((1, 1), np.uint8), beta, _tan_deg(floor_deg, -np.inf),
                  _tan_deg(cap_deg, np.inf), distance is not None,
-                 np.empty((1, 1), np.float32) if distance is None else distance, max_dist)
+                 np.empty((1, 1), np.float32) if distance is None else distance, max_dist, lift)
     return beta
 
 
@@ -412,12 +428,12 @@ def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None, stats: 
     _scan_kernel(z, *pyramid_args(z, pyramid), rays.dom_col, rays.step_dom, rays.step_other, rays.rise,
                  rays.step_m, rays.curv, np.int64(sample_spacing), float(zmax), True, out,
                  np.empty((1, 1), np.float32), -np.inf, np.inf, False,
-                 np.empty((1, 1), np.float32), math.inf)
+                 np.empty((1, 1), np.float32), math.inf, 0.0)
     return out
 
 
 def _scan_gpu_run(g, rays, sample_spacing, zmax, want_mask, floor_deg=None, cap_deg=None,
-                  distance=None, max_dist=math.inf):
+                  distance=None, max_dist=math.inf, lift=0.0):
     rows, cols = g.shape
     dom_col, step_dom, step_other, rise, step_m, curv = g.rays(rays)
     dummy = g.empty((1, 1), np.float32 if want_mask else np.uint8)
@@ -428,7 +444,7 @@ def _scan_gpu_run(g, rays, sample_spacing, zmax, want_mask, floor_deg=None, cap_
         g.launch(_scan_gpu, rows, cols, g.z, *g.pyramid_args(True), dom_col, step_dom,
                  step_other, rise, step_m, curv, np.int64(sample_spacing), float(zmax),
                  want_mask, *args, _tan_deg(floor_deg, -np.inf), _tan_deg(cap_deg, np.inf),
-                 distance is not None, dist, float(max_dist))
+                 distance is not None, dist, float(max_dist), float(lift))
     if distance is not None:
         distance[...] = g.download(dist)
     return g.download(out)
@@ -453,12 +469,12 @@ def horizon_angles_gpu(g, rays: SunRays, method: str = "scan", sample_spacing: i
                        stats: dict | None = None, floor_deg: float | None = None,
                        cap_deg: float | None = None,
                        distance: np.ndarray | None = None,
-                       max_distance: float | None = None) -> np.ndarray:
+                       max_distance: float | None = None, lift: float = 0.0) -> np.ndarray:
     """``horizon_angles`` on the GPU (float32 degrees, NaN on voids, -90 nothing ahead;
-    ``distance`` and ``max_distance`` as for ``horizon_angles``)."""
+    ``distance``, ``max_distance`` and ``lift`` as for ``horizon_angles``)."""
     _gpu_method(method, sample_spacing, rays)
     return _scan_gpu_run(g, rays, sample_spacing, g.zmax, False, floor_deg, cap_deg, distance,
-                         _max_distance(max_distance))
+                         _max_distance(max_distance), _lift(lift))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -466,10 +482,10 @@ def horizon_angles_gpu(g, rays: SunRays, method: str = "scan", sample_spacing: i
 
 @njit(cache=True, inline="always")
 def _span_cell(zw, pyr, off, widths, nlev, wr0, wc0, h0, i, j, r, c, n_rows, n_cols, q0, dom_col,
-               step_dom, step_other, step_m, curv, sp, zmax, max_dist, best, kbest, nextk):
+               step_dom, step_other, step_m, curv, sp, zmax, max_dist, best, kbest, nextk, lift):
     """Carry on the march of region cell (i, j), the raster's cell (r, c), through the window
     ``zw`` whose first row and column are ``wr0``, ``wc0`` (the rays: of the raster's rows from
-    ``q0`` on)."""
+    ``q0`` on; the observer ``lift`` metres above the cell, as in ``_scan_cell``)."""
     k = nextk[i, j]
     if k == 0:
         return
@@ -480,7 +496,7 @@ def _span_cell(zw, pyr, off, widths, nlev, wr0, wc0, h0, i, j, r, c, n_rows, n_c
     else:
         line0, other0, n_dom, n_oth, wl0, wo0 = r, c, n_rows, n_cols, wr0, wc0
     b, kb, nk = _march(zw, pyr, off, widths, nlev if sp == 1 else np.int64(0), wl0, wo0, line0,
-                       other0, n_dom, n_oth, float(h0[i, j]), dc, np.int64(step_dom[q]),
+                       other0, n_dom, n_oth, float(h0[i, j]) + lift, dc, np.int64(step_dom[q]),
                        step_other[q], sp, zmax, 0.0, curv[q], False, best[i, j], kbest[i, j],
                        k, last_step(max_dist, step_m[q]), np.inf)
     best[i, j] = b
@@ -490,24 +506,25 @@ def _span_cell(zw, pyr, off, widths, nlev, wr0, wc0, h0, i, j, r, c, n_rows, n_c
 
 @njit(parallel=True, cache=True)
 def _span_kernel(zw, pyr, off, widths, nlev, wr0, wc0, h0, r0, c0, n_rows, n_cols, q0, dom_col,
-                 step_dom, step_other, step_m, curv, sp, zmax, max_dist, best, kbest, nextk):
+                 step_dom, step_other, step_m, curv, sp, zmax, max_dist, best, kbest, nextk,
+                 lift):
     rows, cols = h0.shape
     for i in prange(rows):
         for j in range(cols):
             _span_cell(zw, pyr, off, widths, nlev, wr0, wc0, h0, i, j, r0 + i, c0 + j, n_rows,
                        n_cols, q0, dom_col, step_dom, step_other, step_m, curv, sp, zmax,
-                       max_dist, best, kbest, nextk)
+                       max_dist, best, kbest, nextk, lift)
 
 
 @kernel
 def _span_gpu(zw, pyr, off, widths, nlev, wr0, wc0, h0, r0, c0, n_rows, n_cols, q0, dom_col,
-              step_dom, step_other, step_m, curv, sp, zmax, max_dist, best, kbest, nextk):
+              step_dom, step_other, step_m, curv, sp, zmax, max_dist, best, kbest, nextk, lift):
     """CUDA twin of ``_span_kernel``: one thread per region cell."""
     j, i = cuda.grid(2)
     if i < h0.shape[0] and j < h0.shape[1]:
         _span_cell(zw, pyr, off, widths, nlev, wr0, wc0, h0, i, j, r0 + i, c0 + j, n_rows,
                    n_cols, q0, dom_col, step_dom, step_other, step_m, curv, sp, zmax,
-                   max_dist, best, kbest, nextk)
+                   max_dist, best, kbest, nextk, lift)
 
 
 @njit(parallel=True, cache=True)
@@ -578,11 +595,14 @@ class Marches:
     raster's highest height (as the march in memory takes it). :meth:`march` carries every
     open ray as far as a window holds its samples; a ray is closed once its march is over
     (``max_distance``, the raster's edge, nothing left that could raise it); then
-    :meth:`angles`."""
+    :meth:`angles`. ``lift``: the observer stands that many metres above each cell (as for
+    ``horizon_angles``)."""
 
     def __init__(self, h0: np.ndarray, region, rays: SunRays, shape, zmax: float,
-                 sample_spacing: int = 1, max_distance: float | None = None):
+                 sample_spacing: int = 1, max_distance: float | None = None,
+                 lift: float = 0.0):
         _check("scan", sample_spacing, rays)
+        self.lift = _lift(lift)
         self.h0 = np.ascontiguousarray(h0, np.float32)
         self.region, self.rays, self.shape = tuple(int(v) for v in region), rays, tuple(shape)
         r0, r1 = self.region[:2]
@@ -620,12 +640,13 @@ class Marches:
             with g.timed():
                 g.launch(_span_gpu, self.h0.shape[0], self.h0.shape[1], g.z, *sw.dpyr, wr0,
                          wc0, state[0], r0, c0, rows, cols, q0, dom_col, step_dom, step_other,
-                         step_m, curv, self.sp, self.zmax, self.max_dist, *state[1:])
+                         step_m, curv, self.sp, self.zmax, self.max_dist, *state[1:],
+                         self.lift)
             self.best, self.kbest, self.nextk = (g.download(a) for a in state[1:])
             return
         _span_kernel(sw.zw, *sw.pyr, wr0, wc0, self.h0, r0, c0, rows, cols, q0, ry.dom_col,
                      ry.step_dom, ry.step_other, ry.step_m, ry.curv, self.sp, self.zmax,
-                     self.max_dist, self.best, self.kbest, self.nextk)
+                     self.max_dist, self.best, self.kbest, self.nextk, self.lift)
 
     def skip_to(self, k: int) -> None:
         """Open rays go on at their first sample past ``k`` (on their spacing): the caller knows
@@ -644,7 +665,7 @@ class Marches:
         if not o.any() or highest == -np.inf:      # nothing open, or voids only
             return False
         best = self.best[o]
-        h0 = self.h0[o].astype(np.float64)
+        h0 = self.h0[o].astype(np.float64) + self.lift     # as the march takes it
         kw = np.where(best >= 0.0, float(ka), float(kb))
         with np.errstate(invalid="ignore"):
             return bool(np.any(~((highest - h0) <= best * kw)))

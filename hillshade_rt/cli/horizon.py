@@ -5,7 +5,8 @@ from __future__ import annotations
 import click
 
 from .errors import errors_to_click, say
-from .options import (backend_option, dem_options, finite, format_option, horizon_physics_options,
+from .options import (backend_option, dem_options, finite, format_option,
+                      height_above_ground_option, horizon_physics_options,
                       max_distance_option, max_memory_option, overwrite_option, quiet_option,
                       scheduler_option, threads_option, to_read_options, to_run_options,
                       window_size_option)
@@ -29,6 +30,8 @@ from .options import (backend_option, dem_options, finite, format_option, horizo
               help="scan: use every N-th sample only (the paper's sp; faster, approximate).")
 @max_distance_option
 @horizon_physics_options
+@height_above_ground_option("The observer of every cell stands this many metres above it (a "
+                            "person, a panel): its horizon is seen from there.")
 @click.option("--preview", type=click.Path(dir_okay=False), default=None,
               help="Also write a quick-look PNG (relief, high horizons tinted).")
 @backend_option
@@ -42,7 +45,7 @@ from .options import (backend_option, dem_options, finite, format_option, horizo
 @dem_options
 @errors_to_click
 def horizon(dem, output, azimuth, directions, distance, method, sample_spacing, max_distance,
-            curvature, refraction_k, preview, backend, threads, max_memory, window_size,
+            curvature, refraction_k, height_above_ground, preview, backend, threads, max_memory, window_size,
             scheduler, overwrite, quiet, fmt, **read_opts):
     """Write the horizon angle toward --azimuth (or toward each of --directions N azimuths, one
     band each) of every cell of DEM to OUTPUT.
@@ -58,4 +61,5 @@ def horizon(dem, output, azimuth, directions, distance, method, sample_spacing, 
                               refraction_k, to_read_options(kw), to_run_options(kw, say),
                               directions=directions, distance=distance,
                               max_distance=max_distance, max_memory=max_memory,
-                              window_size=window_size, scheduler=scheduler))
+                              window_size=window_size, scheduler=scheduler,
+                              height_above_ground=height_above_ground))

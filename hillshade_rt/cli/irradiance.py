@@ -8,6 +8,7 @@ import click
 from .errors import errors_to_click, say
 from ..run.config import PLACE_KEYS
 from .options import (algorithm_option, backend_option, dem_options, finite, format_option,
+                      height_above_ground_option,
                       overwrite_option, physics_options, place_options, quiet_option,
                       threads_option, to_read_options, to_run_options)
 
@@ -45,6 +46,9 @@ from .options import (algorithm_option, backend_option, dem_options, finite, for
 @place_options
 @algorithm_option
 @physics_options
+@height_above_ground_option("The receiving surface of every cell stands this many metres "
+                            "above it (a panel): the beam's cast shadows and the sky view "
+                            "are seen from there; its tilt stays the cell's slope and aspect.")
 @click.option("--preview", type=click.Path(dir_okay=False), default=None,
               help="Also write a quick-look PNG: the relief coloured by the global band "
                    "(purple low, yellow high).")
@@ -59,7 +63,8 @@ from .options import (algorithm_option, backend_option, dem_options, finite, for
 @errors_to_click
 def irradiance(dem, output, date_, end_date, start, end, step, clear_sky, linke_turbidity,
                albedo, ghi, mean, perez, skyview_directions, tz, lat, lon, pressure, temperature,
-               no_refraction, sun_tolerance, algorithm, curvature, refraction_k, soft, preview,
+               no_refraction, sun_tolerance, algorithm, curvature, refraction_k, soft,
+               height_above_ground, preview,
                backend, threads, report_path, overwrite, quiet, fmt, **read_opts):
     """Write the beam, diffuse, reflected and global irradiance on every cell of DEM over a
     period to OUTPUT: 4 float32 bands, Wh/m2 (W/m2 with --mean), -9999 nodata. Beam: DNI on
@@ -74,4 +79,5 @@ def irradiance(dem, output, date_, end_date, start, end, step, clear_sky, linke_
     run_irradiance(IrradianceConfig(
         dem, output, date_, end_date, start, end, step, clear_sky, linke_turbidity, albedo, ghi,
         mean, soft, perez, skyview_directions, place, algorithm, curvature, refraction_k,
-        to_read_options(kw), to_run_options(kw, say)))
+        to_read_options(kw), to_run_options(kw, say),
+        height_above_ground=height_above_ground))

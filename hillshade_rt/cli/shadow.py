@@ -12,7 +12,8 @@ from .options import (algorithm_flags, algorithm_option, dem_options, finite, gi
                       to_read_options, to_run_options)
 
 LIFT_HELP = ("Each cell's ray toward the sun starts this many metres above the cell (a person, "
-             "a panel above every cell); brute marches it (auto runs brute).")
+             "a panel above every cell); brute marches it (auto runs brute), --soft the horizon "
+             "scan.")
 
 
 def _config(files, kind, algorithm, options, kw, **more):

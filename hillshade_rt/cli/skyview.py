@@ -5,7 +5,8 @@ from __future__ import annotations
 import click
 
 from .errors import errors_to_click, say
-from .options import (backend_option, dem_options, format_option, horizon_physics_options,
+from .options import (backend_option, dem_options, format_option,
+                      height_above_ground_option, horizon_physics_options,
                       max_distance_option, max_memory_option, overwrite_option,
                       preview_option, quiet_option, scheduler_option, threads_option, to_read_options, to_run_options,
                       window_size_option)
@@ -30,6 +31,9 @@ from .options import (backend_option, dem_options, format_option, horizon_physic
                    "down to the lowest terrain). Directions with nothing ahead are left out.")
 @max_distance_option
 @horizon_physics_options
+@height_above_ground_option("The observer of every cell stands this many metres above it (a "
+                            "person, a panel): the sky it sees from there (the surface's slope "
+                            "and aspect stay the cell's for --definition dozier).")
 @preview_option("Also write a quick-look PNG: the relief coloured by the result (low purple, "
                 "high yellow).")
 @backend_option
@@ -43,8 +47,8 @@ from .options import (backend_option, dem_options, format_option, horizon_physic
 @dem_options
 @errors_to_click
 def skyview(dem, output, directions, definition, terrain_configuration, openness, max_distance,
-            curvature, refraction_k, preview, backend, threads, max_memory, window_size, scheduler,
-            overwrite, quiet, fmt, **read_opts):
+            curvature, refraction_k, height_above_ground, preview, backend, threads, max_memory,
+            window_size, scheduler, overwrite, quiet, fmt, **read_opts):
     """Write the sky view factor of every cell of DEM to OUTPUT (float32 0..1, -9999 nodata)
     from its exact horizon in --directions azimuths, or its openness (--openness, degrees).
     A DEM larger than --max-memory (or any, with --window-size) is computed in windows, with
@@ -56,4 +60,5 @@ def skyview(dem, output, directions, definition, terrain_configuration, openness
                               curvature, refraction_k, to_read_options(kw),
                               to_run_options(kw, say), openness=openness,
                               max_distance=max_distance, max_memory=max_memory,
-                              window_size=window_size, scheduler=scheduler))
+                              window_size=window_size, scheduler=scheduler,
+                              height_above_ground=height_above_ground))

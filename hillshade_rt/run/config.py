@@ -165,7 +165,8 @@ class SunHoursConfig:
 
 def check_lift(height: float, algorithm: str, soft: bool) -> str:
     """``--height-above-ground`` checked (metres, finite, >= 0) against the other options; the
-    algorithm that marches it (``algorithms.for_lift``; ``algorithm`` itself at 0)."""
+    algorithm that marches it (``algorithms.for_lift``; ``algorithm`` itself at 0). ``soft``
+    takes it too (the horizon scan's lift: ``Shader.visible_fraction``)."""
     import math
     from ..algorithms import for_lift
     try:
@@ -178,9 +179,6 @@ def check_lift(height: float, algorithm: str, soft: bool) -> str:
                            f"got {height}")
     if h == 0.0:
         return algorithm
-    if soft:
-        raise UsageProblem("--soft and --height-above-ground do not go together yet (soft "
-                           "shadows are computed from the ground)")
     return for_lift(algorithm)
 
 
@@ -203,6 +201,7 @@ class HorizonConfig:
     max_memory: object = None          # windows (run.reach) when the DEM needs more
     window_size: object = None         # windows of this many output cells, whatever the size
     scheduler: object = None           # the windows as Dask tasks
+    height_above_ground: float = 0.0   # metres: the observer of every cell stands this high
 
     def azimuths(self) -> list[float]:
         """The azimuths of the bands: ``azimuth``, or the ``directions`` ones; exactly one of

@@ -32,6 +32,14 @@ def check_max_distance(max_distance) -> float:
     return m
 
 
+def check_height(height) -> float:
+    """--height-above-ground as metres (finite, >= 0; a usage error otherwise): the observer
+    of every cell stands that high above it (``run.config.check_lift``)."""
+    from .config import check_lift
+    check_lift(height, "brute", False)
+    return float(height)
+
+
 def memory_limit(max_memory) -> int:
     """--max-memory in bytes (default: half of this machine's memory)."""
     from .plan import default_max_memory, parse_size
@@ -73,6 +81,7 @@ def horizon(cfg: HorizonConfig) -> dict:
         raise UsageProblem("--distance comes from --method scan only (the hull keeps no "
                            "horizon point)")
     max_distance = check_max_distance(cfg.max_distance)
+    cfg.height_above_ground = check_height(cfg.height_above_ground)
     if method == "hull" and math.isfinite(max_distance):
         raise UsageProblem("--max-distance applies to --method scan only (the hull keeps the "
                            "whole line ahead)")
@@ -102,7 +111,8 @@ def _tags(cfg, azimuths, curved, k, radius, max_distance):
     many = cfg.directions is not None
     base = {"HILLSHADE_RT_VERSION": __version__, "METHOD": cfg.method,
             "SAMPLE_SPACING": cfg.sample_spacing, "UNITS": "degrees above the horizontal",
-            "MAX_DISTANCE": distance_tag(max_distance)}
+            "MAX_DISTANCE": distance_tag(max_distance),
+            "HEIGHT_ABOVE_GROUND_M": float(cfg.height_above_ground)}
     dist_tags = {"HILLSHADE_RT_VERSION": __version__, "UNITS": "metres (ground distance along "
                  "the ray to the horizon point)", "NODATA": "-9999 (a void, or nothing ahead)",
                  "MAX_DISTANCE": distance_tag(max_distance)}
@@ -153,6 +163,7 @@ def _report(cfg, src, azimuths, ran_on, curved, stats, timer, processing):
            "distance": None if cfg.distance is None else os.path.abspath(cfg.distance),
            "azimuth": azimuths[0] if not many else None, "azimuths": azimuths,
            "method": cfg.method, "sample_spacing": cfg.sample_spacing,
+           "height_above_ground_m": float(cfg.height_above_ground),
            "max_distance": check_max_distance(cfg.max_distance)
            if cfg.max_distance is not None else None,
            "backend": ran_on, "curvature": curved, "algorithm_stats": stats,
@@ -183,6 +194,7 @@ def _in_memory(cfg, src, azimuths, ran_on, max_distance, timer, **_):
     from ..shading import horizon_shader, warm_up
 
     ro, method, sample_spacing = cfg.run, cfg.method, cfg.sample_spacing
+    lift = float(cfg.height_above_ground)
     az = azimuths[0]
     many = cfg.directions is not None
     with timer("read"):
@@ -217,11 +229,12 @@ def _in_memory(cfg, src, azimuths, ran_on, max_distance, timer, **_):
         with timer("compute"):
             if gpu_dem is not None:
                 beta = hz.horizon_angles_gpu(gpu_dem, rays, method, sample_spacing,
-                                             distance=dist, max_distance=md)
+                                             distance=dist, max_distance=md, lift=lift)
             else:
                 beta = hz.horizon_angles(d.heights, rays, method=method,
                                          sample_spacing=sample_spacing, stats=stats,
-                                         pyramid=pyramid, distance=dist, max_distance=md)
+                                         pyramid=pyramid, distance=dist, max_distance=md,
+                                         lift=lift)
             if dist is not None:
                 dist[np.isnan(dist)] = -9999.0
         return beta, dist
@@ -256,10 +269,10 @@ def _in_memory(cfg, src, azimuths, ran_on, max_distance, timer, **_):
 
 
 def horizon_job(src, azimuths, ran_on, curvature, refraction_k, method, bstats, invert=False,
-                sample_spacing=1, max_distance=math.inf):
+                sample_spacing=1, max_distance=math.inf, height_above_ground=0.0):
     """(the ``reach.HorizonJob`` of a windowed run, its horizon Shader): the rays and curvature
     an in-memory run of the same DEM would use (its shader decides from the raster's shape and
-    spacing, never its heights)."""
+    spacing, never its heights); the observer ``height_above_ground`` metres above each cell."""
     import numpy as np
 
     from ..earth import dem_body
@@ -274,7 +287,8 @@ def horizon_job(src, azimuths, ran_on, curvature, refraction_k, method, bstats, 
         from ..gpu import GpuDem
         gpu = GpuDem
     return HorizonJob(src, list(azimuths), curvs, (bstats.zmin, bstats.zmax), bstats, invert,
-                      int(sample_spacing), float(max_distance), 0, gpu), shader
+                      int(sample_spacing), float(max_distance), 0, gpu,
+                      height_above_ground=float(height_above_ground)), shader
 
 
 def prepare_windows(src, job, limit, wshape, timer):
@@ -312,7 +326,8 @@ def _in_windows(cfg, src, azimuths, ran_on, max_distance, timer, *, wshape, limi
         with timer("prepare"):    # one pass: the block height ranges (and the preview)
             bstats = block_stats(src, preview_side=2048 if ro.preview else None)
         job, shader = horizon_job(src, azimuths, ran_on, cfg.curvature, cfg.refraction_k,
-                                  cfg.method, bstats, False, cfg.sample_spacing, max_distance)
+                                  cfg.method, bstats, False, cfg.sample_spacing, max_distance,
+                                  cfg.height_above_ground)
         regs, mem = prepare_windows(src, job, limit, wshape, timer)
         curved = job.curvatures[0] > 0
         tags, dist_tags = _tags(cfg, azimuths, curved, shader.k, shader.body.radius(az),

@@ -50,6 +50,7 @@ class IrradianceConfig:
     refraction_k: float | None = None
     read: ReadOptions = field(default_factory=ReadOptions)
     run: RunOptions = field(default_factory=RunOptions)
+    height_above_ground: float = 0.0      # metres: the receiving surface stands this high
 
     def check(self):
         """The options' combinations and values (UsageProblem: exit status 2)."""
@@ -72,6 +73,8 @@ class IrradianceConfig:
                                "--linke-turbidity do not go with it")
         if self.linke_turbidity is not None and self.clear_sky == "haurwitz":
             raise UsageProblem("--linke-turbidity is Ineichen's: Haurwitz takes none")
+        from .config import check_lift     # auto -> the algorithm that marches the lift
+        self.algorithm = check_lift(self.height_above_ground, self.algorithm, self.soft)
         try:
             check_options(self.albedo, self.linke_turbidity, self.skyview_directions)
         except HillshadeError as exc:
@@ -95,6 +98,7 @@ def irradiance(cfg: IrradianceConfig) -> dict:
 
     ro, output = cfg.run, cfg.output
     cfg.check()
+    lift = float(cfg.height_above_ground)
     timer = Timer()
     claims = Claims([cfg.dem], ro.overwrite)
     for path, what in ((output, "OUTPUT"), (ro.report_path, "--report"),
@@ -170,14 +174,15 @@ def irradiance(cfg: IrradianceConfig) -> dict:
         curvature = "auto" if cfg.curvature is None else cfg.curvature
         body = dem_body(d, req.lat)
         shader = Shader(d.heights, d.grid, cfg.algorithm, {}, ran_on, curvature,
-                        cfg.refraction_k, body, d.height_range(), survey=d.survey())
+                        cfg.refraction_k, body, d.height_range(), survey=d.survey(),
+                        lift=lift)
         work = [s for s in suns if not ir.is_dark(s, cfg.soft)]
         if work:
             shader.warm_up(work[0].azimuth, max(work[0].elevation, 1.0), soft=cfg.soft,
                            incidence=True, field=any(s.fieldwise for s in work))
     with timer("sky view"):
         vd = ir.dozier_view(d.heights, d.grid, cfg.skyview_directions, ran_on, curvature,
-                            cfg.refraction_k, body)
+                            cfg.refraction_k, body, lift)
     algo_stats: dict = {}
     with timer("compute"):
         bands = ir.accumulate(shader, suns, weights, sky, vd, cfg.albedo, soft=cfg.soft,
@@ -193,7 +198,7 @@ def irradiance(cfg: IrradianceConfig) -> dict:
             "PERIOD_HOURS": f"{hours:g}", "STEP": cfg.step, "SAMPLES": len(suns),
             "SKY": sky.source, "SKY_MODEL": sky_model, "ALBEDO": f"{cfg.albedo:g}",
             "SKYVIEW_DIRECTIONS": cfg.skyview_directions, "SOFT": cfg.soft,
-            "ALGORITHM": cfg.algorithm,
+            "ALGORITHM": cfg.algorithm, "HEIGHT_ABOVE_GROUND_M": lift,
             "DEFINITIONS": ir.definitions(sky_model, cfg.skyview_directions, cfg.soft),
             "SUN": "NREL SPA (pvlib.spa) at the DEM's centre, per tile where it varies; "
                    + ("apparent (refracted) elevation" if req.atmosphere.refraction
@@ -231,6 +236,7 @@ def irradiance(cfg: IrradianceConfig) -> dict:
            "sky": sky.source, "sky_model": sky_model, "turbidity": sky.turbidity,
            "split": sky.split, "albedo": cfg.albedo,
            "skyview_directions": cfg.skyview_directions, "soft": cfg.soft,
+           "height_above_ground_m": lift,
            "sky_view": summary(vd),
            "open_sky": {"dni_wh_m2": float(np.sum(np.asarray(weights) * sky.dni)),
                         "dhi_wh_m2": float(np.sum(np.asarray(weights) * sky.dhi)),

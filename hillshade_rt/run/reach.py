@@ -193,7 +193,9 @@ class HorizonJob:
     ``azimuths`` and ``curvatures`` (the curvature coefficient (1 - k)/2R of each direction's
     rays, 0 when flat: the in-memory run's ``Shader.curvature_used_for``) give the rays;
     ``zrange`` the raster's lowest and highest heights; ``invert``: march the inverted terrain
-    -z (negative openness); ``stats``: the statistics pass's block ranges."""
+    -z (negative openness); ``stats``: the statistics pass's block ranges;
+    ``height_above_ground``: the observer stands that many metres above each cell
+    (--height-above-ground; ``lift``: as the march takes it)."""
 
     source: object
     azimuths: list
@@ -206,6 +208,13 @@ class HorizonJob:
     window_cells: int = 0       # a window's cells at most (at least WINDOW_FACTOR x a region's)
     gpu: object = None          # gpu.GpuDem (the class) to march on the device
     pyramid: bool = True
+    height_above_ground: float = 0.0
+
+    @property
+    def lift(self) -> float:
+        """The observer's height over the terrain marched: H, or -H over the inverted -z (the
+        observer at z + H is at -(z + H) there)."""
+        return -self.height_above_ground if self.invert else self.height_above_ground
 
     @property
     def zmax(self) -> float:
@@ -281,7 +290,8 @@ class HorizonJob:
         h0 = np.ascontiguousarray(z0[inner])
         sw0 = ScanWindow(z0, w0, shape, self.pyramid, self.gpu)
         for i, a in enumerate(self.azimuths):
-            m = Marches(h0, region, reach[i].rays, shape, self.zmax, sp, self.max_distance)
+            m = Marches(h0, region, reach[i].rays, shape, self.zmax, sp, self.max_distance,
+                        self.lift)
             m.march(sw0)
             self._carry_on(rd, m, reach[i], cap, fig)
             dist = np.empty(h0.shape, np.float32) if want_distance else None

@@ -61,6 +61,7 @@ class SkyviewConfig:
     max_memory: object = None
     window_size: object = None
     scheduler: object = None              # the windows as Dask tasks
+    height_above_ground: float = 0.0      # metres: the observer of every cell stands this high
 
 
 def _check(cfg: SkyviewConfig) -> str:
@@ -99,13 +100,14 @@ def skyview(cfg: SkyviewConfig) -> dict:
     from ..io import check_output_format, output_driver
     from ..io.write import Claims
     from ..shading import choose_backend
-    from .horizon import check_max_distance, memory_limit
+    from .horizon import check_height, check_max_distance, memory_limit
     from .local import needs_windows
     from .report import Timer
 
     ro = cfg.run
     definition = _check(cfg)
     max_distance = check_max_distance(cfg.max_distance)
+    cfg.height_above_ground = check_height(cfg.height_above_ground)
     wshape = parse_window_size(cfg.window_size)
     limit = memory_limit(cfg.max_memory)
     timer = Timer()
@@ -140,6 +142,7 @@ def _tags(cfg, definition, n, curved, max_distance):
             "DEFINITION": definition if opn else cfg.definition,
             "PRODUCT": describe(cfg, definition), "DIRECTIONS": n, "UNITS": units(definition),
             "MAX_DISTANCE": distance_tag(max_distance),
+            "HEIGHT_ABOVE_GROUND_M": float(cfg.height_above_ground),
             "EDGE": ("no terrain beyond the raster: directions with no terrain ahead (within "
                      "MAX_DISTANCE) are left out of the mean; none at all: nodata" if opn else
                      "no terrain beyond the raster: border cells see open sky outward"),
@@ -195,12 +198,16 @@ def _in_memory(cfg, definition, src, ran_on, max_distance, timer, **_):
     md = max_distance if math.isfinite(max_distance) else None
     pyramid = None if gpu_dem is not None else shader.pyramid(z, True)  # one for all
     floor = floor_deg(definition)
+    # the observer at z + H; over the inverted -z (negative openness) at -(z + H)
+    lift = -cfg.height_above_ground if inverted(definition) else cfg.height_above_ground
 
     def angles_of(a):
         rays = shader.rays(d.grid, a, 45.0)
         if gpu_dem is not None:
-            return hz.horizon_angles_gpu(gpu_dem, rays, max_distance=md, floor_deg=floor)
-        return hz.horizon_angles(z, rays, pyramid=pyramid, max_distance=md, floor_deg=floor)
+            return hz.horizon_angles_gpu(gpu_dem, rays, max_distance=md, floor_deg=floor,
+                                         lift=lift)
+        return hz.horizon_angles(z, rays, pyramid=pyramid, max_distance=md, floor_deg=floor,
+                                 lift=lift)
 
     with timer("compute"):
         s = Sum(definition, d.heights, d.grid)
@@ -236,7 +243,8 @@ def _in_windows(cfg, definition, src, ran_on, max_distance, timer, *, wshape, li
         with timer("prepare"):
             bstats = block_stats(src, preview_side=2048 if ro.preview else None)
         job, shader = horizon_job(src, azimuths, ran_on, cfg.curvature, cfg.refraction_k,
-                                  "scan", bstats, inverted(definition), 1, max_distance)
+                                  "scan", bstats, inverted(definition), 1, max_distance,
+                                  cfg.height_above_ground)
         regs, mem = prepare_windows(src, job, limit, wshape, timer)
         curved = bool(shader.curvature)
         if cfg.scheduler is not None:
@@ -300,6 +308,7 @@ def _report(cfg, definition, src, ran_on, curved, st, processing, timer, max_dis
            "shape": [rows, cols], "definition": definition if opn else cfg.definition,
            "openness": cfg.openness, "directions": n,
            "max_distance": max_distance if math.isfinite(max_distance) else None,
+           "height_above_ground_m": float(cfg.height_above_ground),
            "backend": ran_on, "curvature": curved,
            ("openness_deg" if opn else "svf"): values,
            "processing": processing,

@@ -256,7 +256,6 @@ def test_sun_hours_from_higher_up_are_never_fewer(tmp_path, runner):
 @pytest.mark.parametrize("args, words", [
     (["--algorithm", "smap"], "--algorithm brute or auto"),
     (["--algorithm", "bounds"], "cannot start the rays above the ground"),
-    (["--soft"], "--soft and --height-above-ground"),
 ])
 def test_what_cannot_lift_is_a_usage_error(tmp_path, runner, args, words):
     out = tmp_path / "o.tif"
