@@ -6,8 +6,8 @@ import click
 
 from .errors import errors_to_click, say
 from .options import (backend_option, dem_options, finite, format_option,
-                      height_above_ground_option, horizon_physics_options,
-                      max_distance_option, max_memory_option, overwrite_option, quiet_option,
+                      height_above_ground_option, horizon_physics_options, max_distance_option,
+                      max_memory_option, overwrite_option, preview_option, quiet_option,
                       scheduler_option, threads_option, to_read_options, to_run_options,
                       window_size_option)
 
@@ -32,8 +32,7 @@ from .options import (backend_option, dem_options, finite, format_option,
 @horizon_physics_options
 @height_above_ground_option("The observer of every cell stands this many metres above it (a "
                             "person, a panel): its horizon is seen from there.")
-@click.option("--preview", type=click.Path(dir_okay=False), default=None,
-              help="Also write a quick-look PNG (relief, high horizons tinted).")
+@preview_option("Also write a quick-look PNG (relief, high horizons tinted).")
 @backend_option
 @threads_option
 @max_memory_option

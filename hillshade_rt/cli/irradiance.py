@@ -8,9 +8,9 @@ import click
 from .errors import errors_to_click, say
 from ..run.config import PLACE_KEYS
 from .options import (algorithm_option, backend_option, dem_options, finite, format_option,
-                      height_above_ground_option,
-                      overwrite_option, physics_options, place_options, quiet_option,
-                      threads_option, to_read_options, to_run_options)
+                      height_above_ground_option, overwrite_option, physics_options, place_options,
+                      preview_option, quiet_option, report_option, threads_option, to_read_options,
+                      to_run_options)
 
 
 @click.command()
@@ -49,13 +49,11 @@ from .options import (algorithm_option, backend_option, dem_options, finite, for
 @height_above_ground_option("The receiving surface of every cell stands this many metres "
                             "above it (a panel): the beam's cast shadows and the sky view "
                             "are seen from there; its tilt stays the cell's slope and aspect.")
-@click.option("--preview", type=click.Path(dir_okay=False), default=None,
-              help="Also write a quick-look PNG: the relief coloured by the global band "
-                   "(purple low, yellow high).")
+@preview_option("Also write a quick-look PNG: the relief coloured by the global band "
+                "(purple low, yellow high).")
 @backend_option
 @threads_option
-@click.option("--report", "report_path", type=click.Path(dir_okay=False), default=None,
-              help="Write a JSON report here.")
+@report_option
 @overwrite_option("Replace outputs if they exist.")
 @quiet_option("No progress bar or summary on stderr.")
 @format_option

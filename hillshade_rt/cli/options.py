@@ -176,6 +176,25 @@ def preview_option(what: str = "Also write a quick-look PNG."):
     return deco
 
 
+def point_options(f):
+    """Where the points of ``profile`` and ``query`` are: --at, --at-xy, --points."""
+    return _stack(f, [
+        click.option("--at", "at", multiple=True, metavar="LON,LAT",
+                     help="A point in degrees (WGS84 longitude, latitude); repeatable."),
+        click.option("--at-xy", "at_xy", multiple=True, metavar="X,Y",
+                     help="A point in the DEM's CRS; repeatable."),
+        click.option("--points", type=click.Path(dir_okay=False), default=None,
+                     metavar="FILE",
+                     help="Points from a CSV (columns lon,lat or x,y; id or name optional) or "
+                          "a GeoJSON file of Point features."),
+    ])
+
+
+def report_option(f):
+    return click.option("--report", "report_path", type=click.Path(dir_okay=False),
+                        default=None, help="Write a JSON report here.")(f)
+
+
 def threads_option(f):
     return click.option("--threads", type=click.IntRange(min=1), default=None,
                         help="CPU threads (default: all cores).")(f)
@@ -248,16 +267,12 @@ def run_options(f):
                           "'out_{time:%Y%m%dT%H%M}.tif' (fields: time, index, azimuth, elevation, "
                           "tile: the input's file name; with several input tiles, one file per "
                           "tile)."),
-        click.option("--preview", type=click.Path(dir_okay=False), default=None,
-                     help="Also write a quick-look PNG (shaded relief, shadows tinted)."),
+        preview_option("Also write a quick-look PNG (shaded relief, shadows tinted)."),
         backend_option,
-        click.option("--threads", type=click.IntRange(min=1), default=None,
-                     help="CPU threads (default: all cores)."),
-        click.option("--report", "report_path", type=click.Path(dir_okay=False), default=None,
-                     help="Write a JSON timing report here."),
-        click.option("--overwrite", is_flag=True,
-                     help="Replace outputs (and the report, the preview) if they exist."),
-        click.option("-q", "--quiet", is_flag=True, help="No progress bar or summary on stderr."),
+        threads_option,
+        report_option,
+        overwrite_option("Replace outputs (and the report, the preview) if they exist."),
+        quiet_option("No progress bar or summary on stderr."),
         max_memory_option,
         window_size_option,
         click.option("--cog", is_flag=True,

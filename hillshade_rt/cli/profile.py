@@ -6,19 +6,13 @@ import click
 
 from .errors import errors_to_click, say
 from .options import (dem_options, height_above_ground_option, horizon_physics_options,
-                      overwrite_option, preview_option, quiet_option, to_read_options,
+                      overwrite_option, point_options, preview_option, quiet_option, to_read_options,
                       to_run_options)
 
 
 @click.command()
 @click.argument("dem", type=click.Path(dir_okay=False))
-@click.option("--at", "at", multiple=True, metavar="LON,LAT",
-              help="A point in degrees (WGS84 longitude, latitude); repeatable.")
-@click.option("--at-xy", "at_xy", multiple=True, metavar="X,Y",
-              help="A point in the DEM's CRS; repeatable.")
-@click.option("--points", type=click.Path(dir_okay=False), default=None, metavar="FILE",
-              help="Points from a CSV (columns lon,lat or x,y; id or name optional) or a "
-                   "GeoJSON file of Point features.")
+@point_options
 @height_above_ground_option("The observer's height above the terrain at the point, metres "
                             "(a panel, a mast).")
 @click.option("--step", type=float, default=1.0, show_default=True, metavar="DEG",

@@ -7,19 +7,13 @@ import click
 from .errors import errors_to_click, say
 from ..run.config import SUN_KEYS
 from .options import (curvature_options, dem_options, height_above_ground_option,
-                      overwrite_option, quiet_option, sun_options, to_read_options,
-                      to_run_options)
+                      overwrite_option, point_options, quiet_option, sun_options,
+                      to_read_options, to_run_options)
 
 
 @click.command()
 @click.argument("dem", type=click.Path(dir_okay=False))
-@click.option("--at", "at", multiple=True, metavar="LON,LAT",
-              help="A point in degrees (WGS84 longitude, latitude); repeatable.")
-@click.option("--at-xy", "at_xy", multiple=True, metavar="X,Y",
-              help="A point in the DEM's CRS; repeatable.")
-@click.option("--points", type=click.Path(dir_okay=False), default=None, metavar="FILE",
-              help="Points from a CSV (columns lon,lat or x,y; id or name optional) or a "
-                   "GeoJSON file of Point features.")
+@point_options
 @sun_options
 @height_above_ground_option("The observer's height above the terrain at the point, metres "
                             "(a person, a panel).")

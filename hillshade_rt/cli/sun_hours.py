@@ -7,8 +7,8 @@ import click
 from .errors import errors_to_click, say
 from ..run.config import PLACE_KEYS
 from .options import (algorithm_option, backend_option, dem_options, format_option,
-                      height_above_ground_option, overwrite_option, physics_options,
-                      place_options, quiet_option, threads_option, to_read_options,
+                      height_above_ground_option, overwrite_option, physics_options, place_options,
+                      preview_option, quiet_option, report_option, threads_option, to_read_options,
                       to_run_options)
 
 
@@ -29,12 +29,10 @@ from .options import (algorithm_option, backend_option, dem_options, format_opti
 @click.option("--self-shadow/--no-self-shadow", default=None,
               help="Count no direct sun on surfaces facing away from the sun (default: on, "
                    "off with --height-above-ground > 0: the observer is not on the surface).")
-@click.option("--preview", type=click.Path(dir_okay=False), default=None,
-              help="Also write a quick-look PNG (relief tinted by sun hours).")
+@preview_option("Also write a quick-look PNG (relief tinted by sun hours).")
 @backend_option
 @threads_option
-@click.option("--report", "report_path", type=click.Path(dir_okay=False), default=None,
-              help="Write a JSON report here.")
+@report_option
 @overwrite_option("Replace outputs if they exist.")
 @quiet_option("No progress bar or summary on stderr.")
 @format_option
