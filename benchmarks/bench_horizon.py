@@ -165,6 +165,7 @@ def main(argv=None):
     ap.add_argument("--peers", default="rvt,whitebox")
     ap.add_argument("--only", default="", help="terrain labels containing these (comma list)")
     ap.add_argument("--skip-part1", action="store_true")
+    ap.add_argument("--skip-part2", action="store_true")
     ap.add_argument("--out", default=None)
     a = ap.parse_args(argv)
     names = [s for s in a.only.split(",") if s]
@@ -183,6 +184,11 @@ def main(argv=None):
                    f"{t_svf:.2f} | {t_svf / t_mask:.0f} |")
             lines.append(row)
             print(row, flush=True)
+    if a.skip_part2:
+        if a.out:
+            with open(a.out, "w") as fh:
+                fh.write("\n".join(lines) + "\n")
+        return 0
     head = ["", "| terrain | directions | radius cells | tool | s | × ours | "
             "Δ exact (radius) mean / p99 | Δ exact (no radius) mean / p99 |",
             "|---|---|---|---|---|---|---|---|"]
