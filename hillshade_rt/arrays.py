@@ -37,7 +37,7 @@ def shadow_mask(heights, azimuth: float, elevation: float,
                 spacing: float | tuple[float, float] | Grid | None = None,
                 algorithm: str = "auto", stats: dict | None = None, backend: str = "auto", *,
                 curvature="auto", refraction_k: float | None = None, body=None,
-                **options) -> np.ndarray:
+                height_above_ground: float = 0.0, **options) -> np.ndarray:
     """Cast-shadow mask of a DEM: uint8, 1 = shadow, 0 = lit, 255 = nodata; with the command
     line's defaults (the same mask as ``hillshade-rt shadow`` for the same DEM and sun).
 
@@ -57,7 +57,9 @@ def shadow_mask(heights, azimuth: float, elevation: float,
     :class:`hillshade_rt.gpu.GpuDem`.
     curvature: True, False or "auto" (the default, as the command line: on when rays can run
     longer than 1 km); refraction_k: terrestrial refraction (default 0.13 on the Earth); body:
-    an ``earth.Body`` (default: a DEM's from its CRS, an array's the Earth's mean sphere).
+    an ``earth.Body`` (default: a DEM's from its CRS, an array's the Earth's mean sphere);
+    height_above_ground: metres (>= 0) above every cell its ray starts from, as
+    ``--height-above-ground`` (``auto`` then runs brute; another algorithm is an error).
     options: passed to the algorithm (smap: ``nextv``, ``better_nextv``; horizon: ``method``,
     ``sample_spacing``; sweep: ``exact_steps``).
     """
@@ -69,7 +71,8 @@ def shadow_mask(heights, azimuth: float, elevation: float,
     ran_on = choose_backend(backend, algorithm, options)
     if not np.isfinite(z).any():
         return np.full(z.shape, 255, dtype=np.uint8)
-    shader = Shader(z, grid, algorithm, options, ran_on, curvature, refraction_k, body)
+    shader = Shader(z, grid, algorithm, options, ran_on, curvature, refraction_k, body,
+                    lift=height_above_ground)
     out = render(shader, SunOver(None, azimuth, elevation), "shadow", stats=stats)
     if stats is not None and ran_on == "gpu":
         stats["gpu"] = shader.gpu_report()
@@ -80,26 +83,38 @@ def horizon_angles(heights, azimuth: float,
                    spacing: float | tuple[float, float] | Grid | None = None,
                    method: str = "scan", sample_spacing: int = 1, backend: str = "auto", *,
                    curvature="auto", refraction_k: float | None = None,
-                   body=None, max_distance: float | None = None) -> np.ndarray:
+                   body=None, max_distance: float | None = None,
+                   height_above_ground: float = 0.0) -> np.ndarray:
     """Horizon angle (degrees, float32) of every cell toward ``azimuth``: lit by a sun at that
     azimuth iff angle <= its elevation. NaN on voids, -90 where no terrain lies ahead.
     ``method="scan"`` is exact on the model; ``"hull"`` is the faster approximation. As
     ``hillshade-rt horizon``: curvature "auto" is on for the scan of a raster more than 1 km
     across; ``max_distance`` (metres, the scan): terrain farther along a ray is ignored;
+    ``height_above_ground`` (metres, >= 0): the horizon seen from that high above each cell;
     ``heights``, ``spacing`` and ``body`` as for :func:`shadow_mask`."""
     from .algorithms import horizon as hz
     from .shading import horizon_shader
     z, grid, body = _dem_parts(heights, spacing, body)
     azimuth = normalize_azimuth(azimuth)
+    lift = _lift(height_above_ground)
     ran_on = choose_backend(backend, "horizon", {"method": method})
     shader = horizon_shader(z, grid, ran_on, curvature, refraction_k, body, method)
     rays = shader.rays(grid, azimuth, 45.0)
     if ran_on == "gpu":
         from .gpu import GpuDem
         return hz.horizon_angles_gpu(GpuDem(z), rays, method, sample_spacing,
-                                     max_distance=max_distance)
+                                     max_distance=max_distance, lift=lift)
     return hz.horizon_angles(z, rays, method=method, sample_spacing=sample_spacing,
-                             max_distance=max_distance)
+                             max_distance=max_distance, lift=lift)
+
+
+def _lift(height_above_ground) -> float:
+    """``height_above_ground`` checked: finite metres >= 0."""
+    h = float(height_above_ground)
+    if not (np.isfinite(h) and h >= 0.0):
+        raise HillshadeError(f"height_above_ground must be finite metres >= 0, got "
+                             f"{height_above_ground}")
+    return h
 
 
 def is_shadowed(heights, points, azimuth: float, elevation: float,
@@ -116,13 +131,15 @@ def is_shadowed(heights, points, azimuth: float, elevation: float,
 def sky_view(heights, spacing: float | tuple[float, float] | Grid | None = None,
              directions: int = 32, definition: str = "zaksek", *, curvature="auto",
              refraction_k: float | None = None, body=None, openness: str | None = None,
-             max_distance: float | None = None) -> np.ndarray:
+             max_distance: float | None = None,
+             height_above_ground: float = 0.0) -> np.ndarray:
     """Sky view factor of every cell (float32 0..1, NaN on voids) from its exact horizon in
     ``directions`` azimuths, as ``hillshade-rt skyview``: ``definition`` "zaksek" (1 - mean sin
     of the horizon elevation clipped at the horizontal) or "dozier" (cosine-weighted, from the
     tilted surface). ``openness`` "positive" or "negative": Yokoyama's openness instead
     (float32 degrees; NaN where no direction has terrain ahead). ``max_distance``: metres,
-    terrain farther along a ray is ignored (Yokoyama's L). ``heights``, ``spacing``,
+    terrain farther along a ray is ignored (Yokoyama's L). ``height_above_ground``: the
+    horizons seen from that many metres above each cell. ``heights``, ``spacing``,
     ``curvature``, ``body`` as for :func:`horizon_angles`."""
     from .algorithms.skyview import definition_of, floor_deg, inverted, sky_view as _sky_view
     from .shading import horizon_shader
@@ -137,10 +154,12 @@ def sky_view(heights, spacing: float | tuple[float, float] | Grid | None = None,
     shader = horizon_shader(z, grid, "cpu", curvature, refraction_k, body)
     zm = np.negative(z) if inverted(name) else z    # negative openness: the horizons of -z
     pyramid = shader.pyramid(zm, True)           # one for every direction
+    # the observer at z + H; over the inverted -z (negative openness) at -(z + H)
+    lift = -_lift(height_above_ground) if inverted(name) else _lift(height_above_ground)
     return _sky_view(z, grid, equal_azimuths(360.0 / n),
                      lambda a: hz.horizon_angles(zm, shader.rays(grid, a, 45.0),
                                                  pyramid=pyramid, max_distance=max_distance,
-                                                 floor_deg=floor_deg(name)),
+                                                 floor_deg=floor_deg(name), lift=lift),
                      name)
 
 

@@ -60,3 +60,39 @@ def test_flat_plane_horizon_is_zero_or_the_curvature_dip():
     want = math.degrees(math.atan(-(1 - 0.13) * d / (2 * EARTH_MEAN_RADIUS)))
     np.testing.assert_allclose(curved[2:-2, 2:-2], want, rtol=1e-4)
     assert want < 0
+
+
+def test_height_above_ground_in_the_array_api_is_the_commands(tmp_path, runner):
+    """shadow_mask, horizon_angles and sky_view take height_above_ground as the commands'
+    --height-above-ground (a DEM from read_dem, its grid and body), and a higher observer
+    sees no more shadow, no higher horizon, no less sky."""
+    from hillshade_rt.arrays import horizon_angles, shadow_mask, sky_view
+    from hillshade_rt.io import read_dem
+    dem = data_path("everest_srtm3_voids_crop200.tif")
+    d = read_dem(dem)
+    runs = {"shadow": (["--azimuth", "203.7", "--elevation", "12"],
+                       lambda h: shadow_mask(d, 203.7, 12.0, height_above_ground=h)),
+            "horizon": (["--azimuth", "163"],
+                        lambda h: horizon_angles(d, 163.0, height_above_ground=h)),
+            "skyview": (["--directions", "8"],
+                        lambda h: sky_view(d, directions=8, height_above_ground=h))}
+    got = {}
+    for cmd, (args, fn) in runs.items():
+        out = tmp_path / f"{cmd}.tif"
+        r = runner.invoke(cli, [cmd, dem, str(out), "--height-above-ground", "5"] + args)
+        assert r.exit_code == 0, r.output
+        a = fn(5.0)
+        b = read_band(out)
+        if a.dtype != np.uint8:
+            a = np.where(np.isnan(a), np.float32(-9999.0), a)
+        np.testing.assert_array_equal(a, b)
+        got[cmd] = (fn(0.0), a)
+    (m0, m5), (h0, h5), (s0, s5) = got["shadow"], got["horizon"], got["skyview"]
+    ok = m0 != 255
+    assert (m5[ok] <= m0[ok]).all() and (m5[ok] < m0[ok]).any()
+    ok = np.isfinite(h0) & (h0 > -90)
+    assert (h5[ok] <= h0[ok]).all()
+    ok = np.isfinite(s0)
+    assert (s5[ok] >= s0[ok]).all()
+    with pytest.raises(Exception, match="height_above_ground"):
+        horizon_angles(d, 10.0, height_above_ground=-1.0)
