@@ -428,3 +428,34 @@ def irradiance(heights, times, spacing: float | tuple[float, float] | Grid | Non
             raise HillshadeError("mean: the weights add up to no hours")
         out = {k: (v / np.float32(hours)).astype(np.float32) for k, v in out.items()}
     return out
+
+
+def point_light_mask(heights, x: float, y: float, z: float, *,
+                     height_above_ground: float = 0.0) -> np.ndarray:
+    """Cast-shadow mask (uint8: 1 shadow, 0 lit, 255 nodata) of a DEM from ``read_dem`` lit by
+    a point light at (``x``, ``y``) in the DEM's CRS and ``z`` metres above its datum (a lamp,
+    a mast's floodlight, a near sun: issue 21): each cell's ray runs straight to the light and
+    ends there (``algorithms.point``). A light inside the terrain is an error; one above a cell
+    lights it. ``heights`` may also be an array with the light given in array coordinates
+    (``x`` the fractional column, ``y`` the row, cell centres at whole numbers)."""
+    from .algorithms import point
+    from .algorithms.horizon import bilinear
+    if hasattr(heights, "heights") and hasattr(heights, "transform"):
+        z_arr, t = heights.heights, heights.transform
+        if t is None:
+            raise HillshadeError("the DEM has no geotransform: give the light in array "
+                                 "coordinates with the heights as an array")
+        col, row = ~t * (x, y)
+        col, row = col - 0.5, row - 0.5          # the transform's cell centres at +0.5
+    else:
+        z_arr = np.asarray(heights)
+        if z_arr.dtype != np.float32:
+            z_arr = z_arr.astype(np.float32)
+        col, row = float(x), float(y)
+    if not all(np.isfinite(v) for v in (row, col, z)):
+        raise HillshadeError("the light's position must be finite numbers")
+    ground = bilinear(z_arr, row, col)
+    if np.isfinite(ground) and z <= ground:
+        raise HillshadeError(f"the light is inside the terrain ({z:g} m at a ground of "
+                             f"{ground:g} m)")
+    return point.shadow_mask(z_arr, row, col, float(z), _lift(height_above_ground))

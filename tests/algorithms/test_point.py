@@ -1,0 +1,132 @@
+"""A point light (issue 21, item 1): the ray from each cell ends at the light."""
+
+import math
+
+import numpy as np
+import pytest
+
+from hillshade_rt.algorithms import brute, point
+from hillshade_rt.geometry import Grid, sun_rays
+from hillshade_rt.testing import fractal_terrain
+
+
+@pytest.mark.parametrize("row_l", [40.0, 17.3, 71.9])
+def test_a_wall_shadows_to_d_h_over_l_minus_h(row_l):
+    """A wall of height h along column 50 of flat ground, the light D = 20 columns east of it at
+    height L > h, at several rows (rays at non-special angles): every cell x columns west of
+    the wall whose ray runs along the columns is shadowed iff x < D h / (L - h), whatever its
+    row; nothing east of the wall is shadowed."""
+    h, L, D = 30.0, 80.0, 20.0
+    z = np.zeros((90, 100), np.float32)
+    z[:, 50] = h
+    m = point.shadow_mask(z, row_l, 50.0 + D, L)
+    reach = D * h / (L - h)                     # 12 columns
+    for r in range(90):
+        for c in range(0, 50):
+            x = 50 - c
+            if abs(r - row_l) > x + D:          # the ray runs along the rows: not this case
+                continue
+            assert m[r, c] == (1 if x < reach else 0), (r, c)
+    assert not m[:, 51:].any()
+    assert m[:, 50].sum() == 0                  # the wall's top is lit
+
+
+def test_a_light_right_above_lights_the_cell_and_beyond_the_light_nothing_shadows():
+    z = fractal_terrain(40, 40, 3, relief=50.0)
+    top = float(z.max()) + 10.0
+    m = point.shadow_mask(z, 20.0, 20.0, top)
+    assert m[20, 20] == 0
+    # a light on the ground far below every cell, in a pit: the terrain beyond it casts nothing
+    z2 = np.zeros((30, 30), np.float32)
+    z2[:, 25] = 100.0                         # a wall beyond the light (light at column 20)
+    m2 = point.shadow_mask(z2, 15.0, 20.0, 5.0)
+    assert not m2[:, :20].any()
+
+
+@pytest.mark.parametrize("az, el", [(163.0, 12.0), (203.7, 7.0), (290.0, 15.0)])
+def test_a_far_light_is_the_directional_sun(az, el):
+    """A light 10^9 m away along (az, el) from the raster's centre gives brute's mask for that
+    sun, cell for cell."""
+    z = fractal_terrain(120, 130, 5, relief=1500.0)
+    z[10:14, 20:25] = np.nan
+    dx = dy = 30.0
+    far = 1e9
+    rc, cc = 59.5, 64.5
+    e = far * math.sin(math.radians(az)) * math.cos(math.radians(el))
+    n = far * math.cos(math.radians(az)) * math.cos(math.radians(el))
+    m = point.shadow_mask(z, rc - n / dy, cc + e / dx, far * math.sin(math.radians(el)))
+    ref = brute.shadow_mask(z, sun_rays(Grid.uniform(120, 130, dx, dy), az, el, 0.0))
+    assert np.array_equal(m, ref)
+    assert 0.05 < (ref == 1).mean() < 0.95
+
+
+def _reference(z, row_l, col_l, height_l, lift=0.0):
+    """Plain Python: every crossing of the line from each centre to the light with the grid lines
+    of its dominant axis, strictly before the light, linear interpolation on the line."""
+    rows, cols = z.shape
+    out = np.zeros(z.shape, np.uint8)
+    for r in range(rows):
+        for c in range(cols):
+            if math.isnan(z[r, c]):
+                out[r, c] = 255
+                continue
+            h0 = float(z[r, c]) + lift
+            dr, dc = row_l - r, col_l - c
+            along_cols = abs(dc) >= abs(dr)
+            d = abs(dc) if along_cols else abs(dr)
+            k = 1
+            while k < d:
+                f = k / d
+                rr, cc = r + f * dr, c + f * dc
+                if along_cols:
+                    cc = round(cc)
+                    if not (0 <= cc < cols) or not (-1e-9 <= rr <= rows - 1 + 1e-9):
+                        break
+                    rr = min(max(rr, 0.0), rows - 1.0)
+                    i = min(int(math.floor(rr)), rows - 2)
+                    t = z[i, cc] + (rr - i) * (z[i + 1, cc] - z[i, cc])
+                else:
+                    rr = round(rr)
+                    if not (0 <= rr < rows) or not (-1e-9 <= cc <= cols - 1 + 1e-9):
+                        break
+                    cc = min(max(cc, 0.0), cols - 1.0)
+                    i = min(int(math.floor(cc)), cols - 2)
+                    t = z[rr, i] + (cc - i) * (z[rr, i + 1] - z[rr, i])
+                if t > h0 + f * (height_l - h0):
+                    out[r, c] = 1
+                    break
+                k += 1
+    return out
+
+
+@pytest.mark.parametrize("light", [(-7.3, 12.6, 900.0), (20.4, 33.1, 260.0), (55.0, 61.7, 600.0)])
+def test_equals_the_plain_python_reference(light):
+    """On a small fractal, lights inside and outside the raster, low and high: the kernel equals
+    an independent plain-Python march (all but rounding ties: none here)."""
+    z = fractal_terrain(44, 50, 11, relief=300.0)
+    z[30, 5] = np.nan
+    got = point.shadow_mask(z, *light)
+    ref = _reference(z, *light)
+    assert (got != ref).sum() == 0
+    assert 0.02 < (ref == 1).mean() < 0.98 or light[2] > 800
+
+
+def test_the_array_api_takes_the_light_in_the_dems_crs(tmp_path):
+    """arrays.point_light_mask: a DEM from read_dem and the light in its CRS give the kernel's
+    mask at the light's fractional cell; a light below the ground is an error."""
+    from affine import Affine
+    from rasterio.crs import CRS
+    from hillshade_rt.arrays import point_light_mask
+    from hillshade_rt.errors import HillshadeError
+    from hillshade_rt.io import read_dem
+    from hillshade_rt.testing import write_geotiff
+    z = fractal_terrain(60, 70, 4, relief=200.0)
+    path = write_geotiff(tmp_path / "d.tif", z, Affine(10, 0, 500000, 0, -10, 4000000),
+                         CRS.from_epsg(32633))
+    d = read_dem(path)
+    x, y = 500000 + 10 * (33.25 + 0.5), 4000000 - 10 * (21.5 + 0.5)
+    got = point_light_mask(d, x, y, 260.0)
+    assert np.array_equal(got, point.shadow_mask(d.heights, 21.5, 33.25, 260.0))
+    assert (got == 1).any() and (got == 0).any()
+    with pytest.raises(HillshadeError, match="inside the terrain"):
+        point_light_mask(d, x, y, float(np.nanmin(z)) - 1.0)
