@@ -445,7 +445,7 @@ def point_light_mask(heights, x: float, y: float, z: float, *,
         if t is None:
             raise HillshadeError("the DEM has no geotransform: give the light in array "
                                  "coordinates with the heights as an array")
-        col, row = ~t * (x, y)
+        col, row = ~t @ (x, y)
         col, row = col - 0.5, row - 0.5          # the transform's cell centres at +0.5
     else:
         z_arr = np.asarray(heights)

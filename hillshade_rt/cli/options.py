@@ -176,6 +176,17 @@ def preview_option(what: str = "Also write a quick-look PNG."):
     return deco
 
 
+def light_options(f):
+    """A point light instead of the sun (``shadow``): where it is."""
+    return _stack(f, [
+        click.option("--light-position", metavar="X,Y,Z", default=None,
+                     help="A point light at X,Y in the DEM's CRS and Z metres above the datum "
+                          "instead of the sun: every cell's ray runs to it and ends there."),
+        click.option("--light-lonlat", metavar="LON,LAT,Z", default=None,
+                     help="The same with the light's place in WGS84 degrees."),
+    ])
+
+
 def point_options(f):
     """Where the points of ``profile`` and ``query`` are: --at, --at-xy, --points."""
     return _stack(f, [

@@ -8,8 +8,8 @@ import click
 from .errors import errors_to_click, say
 from ..run.config import SUN_KEYS
 from .options import (algorithm_flags, algorithm_option, dem_options, finite, given,
-                      height_above_ground_option, physics_options, run_options, sun_options,
-                      to_read_options, to_run_options)
+                      height_above_ground_option, light_options, physics_options, run_options,
+                      sun_options, to_read_options, to_run_options)
 
 LIFT_HELP = ("Each cell's ray toward the sun starts this many metres above the cell (a person, "
              "a panel above every cell); brute marches it (auto runs brute), --soft the horizon "
@@ -41,11 +41,12 @@ def _config(files, kind, algorithm, options, kw, **more):
 @click.option("--classes", is_flag=True,
               help="Write classes: 0 lit, 1 self-shadow, 2 cast shadow, 255 nodata.")
 @height_above_ground_option(LIFT_HELP)
+@light_options
 @run_options
 @dem_options
 @errors_to_click
 def shadow(files, algorithm, curvature, refraction_k, soft, self_shadow, classes,
-           height_above_ground, **kw):
+           height_above_ground, light_position, light_lonlat, **kw):
     """Write the cast-shadow mask of DEM to OUTPUT (GeoTIFF: 1 shadow, 0 lit, 255 nodata).
 
     Several DEMs (tiles on one grid) are shaded as one mosaic, so that a mountain in one tile
@@ -55,12 +56,61 @@ def shadow(files, algorithm, curvature, refraction_k, soft, self_shadow, classes
     1 = fully lit, -9999 nodata); --classes writes 0 lit / 1 self-shadow / 2 cast / 255."""
     from ..algorithms import algorithm_for, options_for, options_from_cli
     from ..run import shade
+    if light_position is not None or light_lonlat is not None:
+        return _point_light(files, light_position, light_lonlat, height_above_ground, soft,
+                            self_shadow, classes, algorithm, curvature, kw)
     flags = options_from_cli(kw)
     algorithm = algorithm_for(algorithm, flags)
     options = options_for(algorithm, flags)
     shade(_config(files, "classes" if classes else "shadow", algorithm, options, kw,
                   curvature=curvature, refraction_k=refraction_k, soft=soft,
                   self_shadow=self_shadow or classes, height_above_ground=height_above_ground))
+
+
+def _point_light(files, position, lonlat, lift, soft, self_shadow, classes, algorithm, curvature,
+                 kw):
+    """``shadow --light-position/--light-lonlat``: -> ``run.light.LightConfig`` ->
+    ``run.light``; what a point light does not take yet is a usage error."""
+    from ..run.light import LightConfig, light_shadow, parse_triple
+    taken = [name for name, on in (
+        ("--azimuth/--elevation/--time/--start", any(kw.get(k) for k in
+                                                      ("azimuth", "elevation", "time", "start",
+                                                       "end", "step"))),
+        ("--soft", soft), ("--self-shadow", self_shadow), ("--classes", classes),
+        ("--window-size", kw.get("window_size")), ("--max-memory", kw.get("max_memory")),
+        ("--scheduler", kw.get("scheduler")), ("--output-pattern", kw.get("output_pattern")),
+        ("--cog", kw.get("cog")), ("--algorithm", given("algorithm")),
+        ("--earth-curvature", curvature is not None), ("--backend gpu", kw.get("backend") == "gpu"))
+        if on]
+    if taken:
+        raise click.UsageError(f"a point light does not take {', '.join(taken)} (yet: in memory, "
+                               "on the CPU, hard shadows)")
+    files = list(files)
+    output = kw.pop("output")
+    if output is None:
+        if len(files) != 2:
+            raise click.UsageError("a point light lights one DEM: give DEM OUTPUT")
+        dem, output = files
+    elif len(files) == 1:
+        dem = files[0]
+    else:
+        raise click.UsageError("a point light lights one DEM: give DEM OUTPUT")
+    for k in ("azimuth", "elevation", "time", "start", "end", "step", "output_pattern",
+              "max_memory", "window_size", "cog", "scheduler"):
+        kw.pop(k, None)
+    from ..run.config import PLACE_KEYS
+    for k in PLACE_KEYS:
+        kw.pop(k, None)
+    options_from_cli_kw = [k for k in list(kw) if k not in
+                           ("band", "nodata", "z_factor", "pixel_size", "raw_shape", "raw_dtype",
+                            "raw_byteorder", "backend", "threads", "report_path", "overwrite",
+                            "quiet", "fmt", "preview")]
+    for k in options_from_cli_kw:      # the algorithms' own flags: none applies here
+        kw.pop(k)
+    pos = parse_triple(position, "--light-position") if position is not None else None
+    ll = parse_triple(lonlat, "--light-lonlat") if lonlat is not None else None
+    light_shadow(LightConfig(dem, output, pos, ll, lift, to_read_options(kw),
+                             to_run_options(kw, say)))
 
 
 @click.command()

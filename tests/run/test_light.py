@@ -1,0 +1,67 @@
+"""``shadow --light-position / --light-lonlat`` (issue 21, item 1): the command writes the point
+light's mask of ``arrays.point_light_mask``; what it does not take yet is a usage error."""
+
+import json
+
+import numpy as np
+import pytest
+from affine import Affine
+from rasterio.crs import CRS
+
+from hillshade_rt.arrays import point_light_mask
+from hillshade_rt.cli import cli
+from hillshade_rt.io import read_dem
+from hillshade_rt.testing import fractal_terrain, read_band, write_geotiff
+
+
+@pytest.fixture
+def dem(tmp_path):
+    z = fractal_terrain(70, 80, 6, relief=300.0) + 200.0
+    z[3, 4] = np.nan
+    return write_geotiff(tmp_path / "d.tif", z, Affine(10, 0, 500000, 0, -10, 4000000),
+                         CRS.from_epsg(32633))
+
+
+def test_light_position_and_lonlat_write_the_api_mask(tmp_path, runner, dem):
+    d = read_dem(dem)
+    x, y, zl = 500000 + 10 * 31.3, 4000000 - 10 * 47.8, 650.0
+    out, rep = tmp_path / "m.tif", tmp_path / "r.json"
+    r = runner.invoke(cli, ["shadow", dem, str(out), "--light-position", f"{x},{y},{zl}",
+                            "--height-above-ground", "1.5", "--report", str(rep)])
+    assert r.exit_code == 0, r.output
+    want = point_light_mask(d, x, y, zl, height_above_ground=1.5)
+    assert np.array_equal(read_band(out), want)
+    assert (want == 1).any() and (want == 0).any() and (want == 255).sum() == 1
+    doc = json.loads(rep.read_text())
+    assert doc["light"]["z"] == zl and doc["height_above_ground_m"] == 1.5
+    from pyproj import Transformer
+    lon, lat = Transformer.from_crs("EPSG:32633", "EPSG:4326", always_xy=True).transform(x, y)
+    out2 = tmp_path / "m2.tif"
+    r = runner.invoke(cli, ["shadow", dem, "-o", str(out2), "--light-lonlat",
+                            f"{lon!r},{lat!r},{zl}", "--height-above-ground", "1.5"])
+    assert r.exit_code == 0, r.output
+    assert np.array_equal(read_band(out2), want)
+
+
+@pytest.mark.parametrize("extra, code, words", [
+    (["--azimuth", "163", "--elevation", "10"], 2, "--azimuth"),
+    (["--soft"], 2, "--soft"),
+    (["--window-size", "64"], 2, "--window-size"),
+    (["--algorithm", "smap"], 2, "--algorithm"),
+])
+def test_what_a_point_light_does_not_take_is_a_usage_error(tmp_path, runner, dem, extra, code,
+                                                           words):
+    out = tmp_path / "m.tif"
+    r = runner.invoke(cli, ["shadow", dem, str(out), "--light-position",
+                            "500300,3999500,900"] + extra)
+    assert r.exit_code == code and words in r.output and "Traceback" not in r.output
+    assert not out.exists()
+
+
+def test_a_light_inside_the_terrain_fails_and_writes_nothing(tmp_path, runner, dem):
+    out = tmp_path / "m.tif"
+    r = runner.invoke(cli, ["shadow", dem, str(out), "--light-position", "500300,3999500,10"])
+    assert r.exit_code == 1 and "inside the terrain" in r.output
+    assert not out.exists()
+    r = runner.invoke(cli, ["shadow", dem, str(out), "--light-position", "1,2"])
+    assert r.exit_code == 2 and "three numbers" in r.output
