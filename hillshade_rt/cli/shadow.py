@@ -70,47 +70,23 @@ def shadow(files, algorithm, curvature, refraction_k, soft, self_shadow, classes
 def _point_light(files, position, lonlat, lift, soft, self_shadow, classes, algorithm, curvature,
                  kw):
     """``shadow --light-position/--light-lonlat``: -> ``run.light.LightConfig`` ->
-    ``run.light``; what a point light does not take yet is a usage error."""
-    from ..run.light import LightConfig, light_shadow, parse_triple
-    taken = [name for name, on in (
-        ("--azimuth/--elevation/--time/--start", any(kw.get(k) for k in
-                                                      ("azimuth", "elevation", "time", "start",
-                                                       "end", "step"))),
-        ("--soft", soft), ("--self-shadow", self_shadow), ("--classes", classes),
-        ("--window-size", kw.get("window_size")), ("--max-memory", kw.get("max_memory")),
-        ("--scheduler", kw.get("scheduler")), ("--output-pattern", kw.get("output_pattern")),
-        ("--cog", kw.get("cog")), ("--algorithm", given("algorithm")),
-        ("--earth-curvature", curvature is not None), ("--backend gpu", kw.get("backend") == "gpu"))
-        if on]
-    if taken:
-        raise click.UsageError(f"a point light does not take {', '.join(taken)} (yet: in memory, "
-                               "on the CPU, hard shadows)")
-    files = list(files)
-    output = kw.pop("output")
-    if output is None:
-        if len(files) != 2:
-            raise click.UsageError("a point light lights one DEM: give DEM OUTPUT")
-        dem, output = files
-    elif len(files) == 1:
-        dem = files[0]
-    else:
-        raise click.UsageError("a point light lights one DEM: give DEM OUTPUT")
-    for k in ("azimuth", "elevation", "time", "start", "end", "step", "output_pattern",
-              "max_memory", "window_size", "cog", "scheduler"):
-        kw.pop(k, None)
+    ``run.light`` (which refuses what a point light does not take yet)."""
+    from ..algorithms import options_from_cli
     from ..run.config import PLACE_KEYS
-    for k in PLACE_KEYS:
-        kw.pop(k, None)
-    options_from_cli_kw = [k for k in list(kw) if k not in
-                           ("band", "nodata", "z_factor", "pixel_size", "raw_shape", "raw_dtype",
-                            "raw_byteorder", "backend", "threads", "report_path", "overwrite",
-                            "quiet", "fmt", "preview")]
-    for k in options_from_cli_kw:      # the algorithms' own flags: none applies here
-        kw.pop(k)
-    pos = parse_triple(position, "--light-position") if position is not None else None
-    ll = parse_triple(lonlat, "--light-lonlat") if lonlat is not None else None
-    light_shadow(LightConfig(dem, output, pos, ll, lift, to_read_options(kw),
-                             to_run_options(kw, say)))
+    from ..run.light import LightConfig, light_shadow
+    options_from_cli(kw)                       # the algorithms' own flags: none applies here
+    sun = {k: kw.pop(k) for k in SUN_KEYS}
+    refused = {"--azimuth/--elevation/--time/--start": any(
+                   sun[k] for k in SUN_KEYS if k not in PLACE_KEYS),
+               "--soft": soft, "--self-shadow": self_shadow, "--classes": classes,
+               "--algorithm": given("algorithm"), "--earth-curvature": curvature is not None,
+               "--backend gpu": kw.get("backend") == "gpu"}
+    for k, flag in (("window_size", "--window-size"), ("max_memory", "--max-memory"),
+                    ("scheduler", "--scheduler"), ("output_pattern", "--output-pattern"),
+                    ("cog", "--cog")):
+        refused[flag] = bool(kw.pop(k))
+    light_shadow(LightConfig(list(files), kw.pop("output"), position, lonlat, lift,
+                             to_read_options(kw), to_run_options(kw, say), refused))
 
 
 @click.command()

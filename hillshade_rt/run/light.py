@@ -16,13 +16,37 @@ from .config import ReadOptions, RunOptions
 
 @dataclass
 class LightConfig:
-    dem: str
-    output: str
-    position: tuple | None = None     # (x, y, z): the DEM's CRS, metres above the datum
-    lonlat: tuple | None = None       # (lon, lat, z): WGS84 degrees, metres above the datum
+    """``files``: DEM and OUTPUT (or the DEM alone with ``output``); ``position`` (x, y, z: the
+    DEM's CRS, metres above the datum) or ``lonlat`` (lon, lat, z: WGS84 degrees), as numbers
+    or the command line's 'A,B,C' texts; ``refused``: the options given with the light that it
+    does not take yet (name -> given), a usage error naming them."""
+
+    files: list
+    output: str | None = None
+    position: object = None
+    lonlat: object = None
     height_above_ground: float = 0.0
     read: ReadOptions = field(default_factory=ReadOptions)
     run: RunOptions = field(default_factory=RunOptions)
+    refused: dict = field(default_factory=dict)
+
+    def check(self) -> tuple:
+        """(dem, output, position, lonlat) checked: one light, one DEM, nothing refused."""
+        from .config import inputs_and_output
+        taken = [name for name, on in self.refused.items() if on]
+        if taken:
+            raise UsageProblem(f"a point light does not take {', '.join(taken)} (yet: in "
+                               "memory, on the CPU, hard shadows)")
+        if (self.position is None) == (self.lonlat is None):
+            raise UsageProblem("give --light-position X,Y,Z or --light-lonlat LON,LAT,Z, one "
+                               "of them")
+        inputs, output = inputs_and_output(self.files, self.output, None)
+        if len(inputs) != 1:
+            raise UsageProblem("a point light lights one DEM: give DEM OUTPUT")
+        pos = None if self.position is None else parse_triple(self.position,
+                                                               "--light-position")
+        ll = None if self.lonlat is None else parse_triple(self.lonlat, "--light-lonlat")
+        return inputs[0], output, pos, ll
 
 
 def parse_triple(text, what: str) -> tuple[float, float, float]:
@@ -41,7 +65,7 @@ def parse_triple(text, what: str) -> tuple[float, float, float]:
 
 
 def light_shadow(cfg: LightConfig) -> dict:
-    """Write the point light's cast-shadow mask of ``cfg.dem``; returns the report."""
+    """Write the point light's cast-shadow mask of the DEM; returns the report."""
     import numpy as np
 
     from ..arrays import point_light_mask
@@ -52,27 +76,26 @@ def light_shadow(cfg: LightConfig) -> dict:
     from .report import Timer
 
     ro = cfg.run
-    if (cfg.position is None) == (cfg.lonlat is None):
-        raise UsageProblem("give --light-position X,Y,Z or --light-lonlat LON,LAT,Z, one of them")
+    dem, output, position, lonlat = cfg.check()
     timer = Timer()
-    claims = Claims([cfg.dem], ro.overwrite)
-    claims.claim(cfg.output, "OUTPUT")
+    claims = Claims([dem], ro.overwrite)
+    claims.claim(output, "OUTPUT")
     for extra, what in ((ro.report_path, "--report"), (ro.preview, "--preview")):
         if extra is not None:
             claims.claim(extra, what)
-    check_output_format(cfg.output, output_driver(cfg.output, ro.fmt), "uint8", 1, False)
+    check_output_format(output, output_driver(output, ro.fmt), "uint8", 1, False)
     with timer("read"):
-        d = cfg.read.read(cfg.dem)
-    if cfg.lonlat is not None:
+        d = cfg.read.read(dem)
+    if lonlat is not None:
         if d.crs is None:
             raise HillshadeError("--light-lonlat needs a DEM with a CRS; give --light-position "
                                  "in the DEM's coordinates")
         from pyproj import Transformer
-        lon, lat, zl = cfg.lonlat
+        lon, lat, zl = lonlat
         x, y = Transformer.from_crs("EPSG:4326", d.crs.to_wkt(), always_xy=True).transform(lon,
                                                                                            lat)
     else:
-        x, y, zl = cfg.position
+        x, y, zl = position
     if d.transform is None:
         raise HillshadeError("the DEM has no geotransform: a light position needs one")
     with timer("compute"):
@@ -83,14 +106,14 @@ def light_shadow(cfg: LightConfig) -> dict:
             "LIGHT_CELL": f"row {row - 0.5:.3f} col {col - 0.5:.3f}",
             "HEIGHT_ABOVE_GROUND_M": f"{float(cfg.height_above_ground):g}"}
     with timer("write"):
-        write_raster(cfg.output, mask, d, nodata=255, description="cast shadow (point light)",
+        write_raster(output, mask, d, nodata=255, description="cast shadow (point light)",
                      tags=tags, overwrite=ro.overwrite, fmt=ro.fmt)
         if ro.preview is not None:
             write_png(ro.preview, relief_rgb(d.heights, d.grid,
                                              shade=np.where(mask == 1, 1.0, 0.0)), ro.overwrite)
     valid = mask != 255
     share = float((mask[valid] == 1).mean()) if valid.any() else 0.0
-    rep = {"input": input_label(d.path), "output": os.path.abspath(cfg.output),
+    rep = {"input": input_label(d.path), "output": os.path.abspath(output),
            "shape": list(d.shape), "light": {"x": x, "y": y, "z": zl, "row": row - 0.5,
                                              "col": col - 0.5},
            "height_above_ground_m": float(cfg.height_above_ground),
@@ -99,7 +122,7 @@ def light_shadow(cfg: LightConfig) -> dict:
     if ro.report_path is not None:
         write_json(ro.report_path, rep, ro.overwrite)
     if not ro.quiet:
-        ro.say("summary", f"hillshade-rt: {cfg.output}: {d.shape[1]}x{d.shape[0]}, point light "
+        ro.say("summary", f"hillshade-rt: {output}: {d.shape[1]}x{d.shape[0]}, point light "
                           f"at row {row - 0.5:.1f} col {col - 0.5:.1f} z {zl:g} m: "
                           f"{100 * share:.2f}% of valid cells in shadow; compute "
                           f"{timer.seconds['compute']:.2f} s")
