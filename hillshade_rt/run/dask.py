@@ -58,6 +58,44 @@ def client_for(scheduler):
                              ) from None
 
 
+class DaskSession:
+    """One run's tasks on ``scheduler``: the client (and the local cluster ``client_for``
+    started), a folder for the parts beside ``dest``, the futures the run submits
+    (``futures``). Leaving it on a failure or an interruption cancels them; leaving it in any
+    case removes the folder and closes a local cluster. Shared by the shadow runs and the
+    horizon runs (``run.reach``)."""
+
+    def __init__(self, scheduler, dest: str):
+        self.scheduler = scheduler
+        self.client, self.cluster = client_for(scheduler)
+        self.folder = tempfile.mkdtemp(dir=os.path.dirname(os.path.abspath(dest)),
+                                       prefix="." + os.path.basename(dest) + ".parts-")
+        self.futures: list = []
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, exc_type, exc, tb):
+        if exc_type is not None:
+            with contextlib.suppress(Exception):
+                self.client.cancel(self.futures)
+        shutil.rmtree(self.folder, ignore_errors=True)
+        if self.cluster is not None:
+            with contextlib.suppress(Exception):
+                self.client.close()
+                self.cluster.close()
+        return False
+
+    def workers(self) -> int:
+        return len(self.client.scheduler_info().get("workers", {}))
+
+    def info(self, workers: int) -> dict:
+        """What the report says of the scheduler."""
+        return {"scheduler": (self.scheduler if isinstance(self.scheduler, str)
+                              else str(self.client)),
+                "workers": workers, "tasks": len(self.futures)}
+
+
 def shade_piece(job, piece, path: str, nodata, stride: int | None = None) -> dict:
     """The task: read ``piece``'s window, light it, write its region to ``path`` (GeoTIFF).
     Returns the product's cell counts, the algorithm's figures, bytes read, seconds, and the
@@ -120,13 +158,10 @@ def run_on_dask(scheduler, job, suns, plans, out, share, stride, quiet, algo_sta
     from ..io.vrt import VrtSource, vrt_xml
     from .plan import marched_per_cell
 
-    client, cluster = client_for(scheduler)
     dest = out.output or (out.tile_paths[0][0] if out.tile_paths else out.paths[0])
-    folder = tempfile.mkdtemp(dir=os.path.dirname(os.path.abspath(dest)),
-                              prefix="." + os.path.basename(dest) + ".parts-")
-    futures = []
-    try:
-        workers = len(client.scheduler_info().get("workers", {}))
+    with DaskSession(scheduler, dest) as session:
+        client, folder, futures = session.client, session.folder, session.futures
+        workers = session.workers()
         keys = {}
         for i, pieces in enumerate(plans):
             for p in pieces:
@@ -179,16 +214,5 @@ def run_on_dask(scheduler, job, suns, plans, out, share, stride, quiet, algo_sta
         records = [out.record(s, i, per_sun[i]["stats"], per_sun[i]["seconds"],
                               marched_per_cell(plans[i]))
                    for i, s in enumerate(suns)]
-        info = {"scheduler": scheduler if isinstance(scheduler, str) else str(client),
-                "workers": workers, "tasks": len(futures)}
+        info = session.info(workers)
         return records, per_sun[-1]["stats"], info
-    except BaseException:
-        with contextlib.suppress(Exception):
-            client.cancel(futures)
-        raise
-    finally:
-        shutil.rmtree(folder, ignore_errors=True)
-        if cluster is not None:
-            with contextlib.suppress(Exception):
-                client.close()
-                cluster.close()

@@ -462,25 +462,21 @@ def run_on_dask(scheduler, job: HorizonJob, regs, product: Product, outputs: dic
     document of its parts that writes it) assembled through a VRT. Returns (the figures, the
     results' statistics per region, what the report says of the scheduler). The parts' folder
     beside the first output is removed, also when the run fails."""
-    import shutil
-    import tempfile
     from dataclasses import replace
 
     from tqdm import tqdm
 
     from ..io.vrt import VrtSource
-    from .dask import client_for
+    from .dask import DaskSession
 
-    client, cluster = client_for(scheduler)
     first = next(iter(outputs.values()))
-    folder = tempfile.mkdtemp(dir=os.path.dirname(os.path.abspath(first.path)),
-                              prefix="." + os.path.basename(first.path) + ".parts-")
-    futures = []
-    try:
-        workers = len(client.scheduler_info().get("workers", {}))
+    with DaskSession(scheduler, first.path) as session:
+        client, folder = session.client, session.folder
+        workers = session.workers()
         light = replace(job, stats=replace(job.stats, preview=None))    # nothing large
-        futures = [client.submit(region_task, light, reg, product, folder, stride, pure=False)
-                   for reg in regs]
+        futures = session.futures
+        futures += [client.submit(region_task, light, reg, product, folder, stride,
+                                  pure=False) for reg in regs]
         from distributed import as_completed
         fig, results = Figures(), []
         bar = tqdm(total=len(futures), desc="hillshade-rt (dask)", unit="window", leave=False,
@@ -501,19 +497,7 @@ def run_on_dask(scheduler, job: HorizonJob, regs, product: Product, outputs: dic
                                  res["region"][3] - res["region"][2]))
                       for res in results] for i in range(product.outputs(n)[name])]
             out.write(bands)
-        info = {"scheduler": scheduler if isinstance(scheduler, str) else str(client),
-                "workers": workers, "tasks": len(futures)}
-        return fig, [r["stats"] for r in results], info
-    except BaseException:
-        with contextlib.suppress(Exception):
-            client.cancel(futures)
-        raise
-    finally:
-        shutil.rmtree(folder, ignore_errors=True)
-        if cluster is not None:
-            with contextlib.suppress(Exception):
-                client.close()
-                cluster.close()
+        return fig, [r["stats"] for r in results], session.info(workers)
 
 
 @dataclass
