@@ -105,8 +105,7 @@ class Claims:
         check_output_path(path, self.overwrite)
         for p in self.inputs:
             if p != "-" and _same(path, p):
-                raise UsageProblem(f"{path}: {what} is also an input DEM ({p}); give another "
-                                   "path")
+                raise UsageProblem(f"{path}: {what} is also an input ({p}); give another path")
         for q, other in self.paths:
             if _same(path, q):
                 msg = (f"{path}: given twice as {what}" if other == what and path == q else

@@ -100,12 +100,10 @@ def irradiance(cfg: IrradianceConfig) -> dict:
     cfg.check()
     lift = float(cfg.height_above_ground)
     timer = Timer()
-    claims = Claims([cfg.dem], ro.overwrite)
+    claims = Claims([cfg.dem, cfg.ghi], ro.overwrite)     # (the --ghi series is an input)
     for path, what in ((output, "OUTPUT"), (ro.report_path, "--report"),
                        (ro.preview, "--preview")):
         if path is not None:
-            if cfg.ghi is not None and os.path.abspath(path) == os.path.abspath(cfg.ghi):
-                raise UsageProblem(f"{path}: {what} is also the --ghi series; give another path")
             claims.claim(path, what)
     driver = output_driver(output, ro.fmt)
     if driver in ONE_BAND_FORMATS:

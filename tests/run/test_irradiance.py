@@ -510,3 +510,17 @@ def test_api_run_is_the_command_line(tmp_path, runner):
     with pytest.raises(HillshadeError, match="--albedo"):
         api.irradiance(dem, tmp_path / "x.tif", date="2026-06-21", albedo=1.5)
     assert not (tmp_path / "x.tif").exists()
+
+
+def test_no_output_may_be_the_ghi_series(tmp_path, runner):
+    """The --ghi series is an input: naming it as OUTPUT or --report (also through another
+    spelling of its path) is a usage error, the series untouched."""
+    dem = _dem(tmp_path, fractal_terrain(20, 20, 1))
+    csv = _write_csv(tmp_path / "sky.csv", [("2026-06-21T12:00Z", 800.0, 700.0, 100.0)])
+    before = csv.read_bytes()
+    for args in (["-q", str(csv)], [str(tmp_path / "o.tif"), "--report",
+                                    str(tmp_path / "." / "sky.csv")]):
+        r = runner.invoke(cli, ["irradiance", dem] + args + ["--date", "2026-06-21",
+                                                             "--ghi", str(csv), "--overwrite"])
+        _one_line(r, 2, "is also an input")
+        assert csv.read_bytes() == before
