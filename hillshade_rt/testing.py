@@ -306,6 +306,48 @@ def reference_mask(z, dx, dy, azimuth, elevation, col_sign=1, row_sign=-1,
     return out
 
 
+def wall_terrain(az: float, h: float = 30.0, s0: float = 70.0, thick: float = 10.0,
+                 rows: int = 150, cols: int = 170):
+    """(float32 heights, bool wall) of a long wall of height ``h`` perpendicular to azimuth
+    ``az`` on flat ground at 0 (north-up cells): the cells whose distance along the azimuth
+    (x east = column, y north = -row, in cells) lies in [s0, s0 + thick]."""
+    a = math.radians(az)
+    r, c = np.mgrid[0:rows, 0:cols].astype(np.float64)
+    s = c * math.sin(a) - r * math.cos(a)
+    wall = (s >= s0) & (s <= s0 + thick)
+    return np.where(wall, np.float32(h), np.float32(0.0)), wall
+
+
+def wall_contacts(wall, rays, rows_of, cols_of) -> dict:
+    """{(row, col): d} for the ground cells (of ``rows_of`` x ``cols_of``) before a wall
+    (``wall_terrain``) whose ray (``rays``: rows dominant, southward, one ray for the raster)
+    meets it cleanly: its first sample whose two neighbouring centres are both wall cells lies
+    ``d`` ground metres away, and the sample before it touches no wall cell (a sample between
+    a wall cell and the ground would be part of the wall's face, lower and nearer). There the
+    model's horizon from H above the cell is atan((h - H) / d)."""
+    rows, cols = wall.shape
+    assert not rays.dom_col[0] and rays.step_dom[0] == 1       # along rows, southward
+    so, step_m = float(rays.step_other[0]), float(rays.step_m[0])
+    out = {}
+    for r in rows_of:
+        for c in cols_of:
+            if wall[r, c]:
+                continue
+            prev_out = True
+            for k in range(1, rows):
+                rr, p = r + k, c + k * so
+                if rr >= rows or not (0.0 <= p <= cols - 1):
+                    break                  # leaves the raster before the wall: no answer
+                i0 = int(math.floor(p))
+                both = [wall[rr, i0], wall[rr, min(i0 + 1, cols - 1)] if p > i0 else wall[rr, i0]]
+                if all(both):
+                    if prev_out:
+                        out[(r, c)] = k * step_m
+                    break
+                prev_out = not any(both)
+    return out
+
+
 def reference_horizon(z, dx, dy, azimuth, col_sign=1, row_sign=-1, max_distance=None,
                       lift=0.0):
     """The horizon scan written out plainly (as :func:`reference_mask`, independently of the

@@ -18,7 +18,7 @@ from hillshade_rt.cli import cli
 from hillshade_rt.geometry import Grid, sun_rays
 from hillshade_rt.io import read_dem
 from hillshade_rt.testing import (data_path, fractal_terrain, read_band, reference_mask,
-                                  write_geotiff)
+                                  wall_contacts, wall_terrain, write_geotiff)
 
 LIDAR = data_path("lidar_dem_1m_utm15n_400x400.tif")
 UTM = CRS.from_epsg(32615)
@@ -31,57 +31,17 @@ def _run(runner, args):
     return r
 
 
-def _wall(az=203.7, h=30.0, s0=70.0, thick=10.0, rows=150, cols=170):
-    """A long wall of height ``h`` perpendicular to the sun at ``az`` on flat ground (1 m
-    cells, north-up): the cells whose distance along the sun's direction lies in [s0, s0 +
-    thick] metres; and that distance of every cell."""
-    a = math.radians(az)
-    r, c = np.mgrid[0:rows, 0:cols].astype(np.float64)
-    s = c * math.sin(a) - r * math.cos(a)          # x east = c, y north = -r
-    wall = (s >= s0) & (s <= s0 + thick)
-    return np.where(wall, np.float32(h), np.float32(0.0)), wall
-
-
-def _wall_thresholds(wall, grid, az, el):
-    """{cell: d} for observers on the ground in front of the wall whose ray meets it cleanly:
-    its first sample (a crossing of a grid line of the ray's dominant axis) whose two
-    neighbouring centres are both wall cells lies ``d`` ground metres away, and the sample
-    before it has neither (a sample between a wall cell and the ground would be part of the
-    wall's face). There the model says: lit iff H >= h - d tan(el)."""
-    rows, cols = wall.shape
-    rays = sun_rays(grid, az, el)         # (the DEM's spacing: UTM's 1 m cell / its scale)
-    assert not rays.dom_col[0] and rays.step_dom[0] == 1      # along rows, southward
-    so, step_m = float(rays.step_other[0]), float(rays.step_m[0])
-    out = {}
-    for r in range(4, 60, 3):
-        for c in range(20, cols - 4, 3):
-            if wall[r, c]:
-                continue
-            prev_out = True
-            for k in range(1, rows):
-                rr, p = r + k, c + k * so
-                if rr >= rows or not (0.0 <= p <= cols - 1):
-                    break                  # leaves the raster before the wall: no answer
-                i0 = int(math.floor(p))
-                both = [wall[rr, i0], wall[rr, min(i0 + 1, cols - 1)] if p > i0 else wall[rr, i0]]
-                if all(both):
-                    if prev_out:
-                        out[(r, c)] = k * step_m
-                    break
-                prev_out = not any(both)
-    return out
-
-
 def test_a_wall_lights_an_observer_exactly_above_its_shadow_line(tmp_path, runner):
     """A wall h = 30 m perpendicular to the sun at 203.7 deg, 20 deg up: an observer on the
     ground d metres from the wall (along the ray, to the wall's first full sample) is lit
     exactly when H >= h - d tan(20 deg): checked on both sides of one cell's threshold
     (H +- 1 mm), and every other such cell on its side at those heights."""
     az, el, h = 203.7, 20.0, 30.0
-    z, wall = _wall(az, h)
+    z, wall = wall_terrain(az, h)
     dem = write_geotiff(tmp_path / "wall.tif", z, Affine(1, 0, 500000, 0, -1, 4000000), UTM)
     need = {cell: h - d * math.tan(math.radians(el)) for cell, d in
-            _wall_thresholds(wall, read_dem(dem).grid, az, el).items()}
+            wall_contacts(wall, sun_rays(read_dem(dem).grid, az, el), range(4, 60, 3),
+                          range(20, z.shape[1] - 4, 3)).items()}
     assert len(need) > 50 and min(need.values()) < 5 < max(need.values())
     target = sorted(need, key=lambda k: abs(need[k] - 12.0))[0]     # a cell 12 m short
     base = ["--azimuth", str(az), "--elevation", str(el)] + FLAT

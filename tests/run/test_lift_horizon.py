@@ -18,7 +18,7 @@ from hillshade_rt.cli import cli
 from hillshade_rt.geometry import Grid, sun_rays
 from hillshade_rt.io import read_dem
 from hillshade_rt.testing import (data_path, fractal_terrain, read_band, reference_horizon,
-                                  write_geotiff)
+                                  wall_contacts, wall_terrain, write_geotiff)
 
 LIDAR = data_path("lidar_dem_1m_utm15n_400x400.tif")
 UTM = CRS.from_epsg(32615)
@@ -43,47 +43,16 @@ def _fractal_dem(tmp_path, rows=150, cols=170, seed=5, relief=90.0):
                          UTM), z
 
 
-def _clean_wall_cells(wall, rays, rows, cols):
-    """{cell: d} for cells on the ground before the wall whose ray (rows dominant) meets it
-    cleanly: its first sample whose two neighbouring centres are both wall cells lies d ground
-    metres away and the sample before it touches no wall cell (a sample between a wall cell and
-    the ground would be part of the wall's face, lower and nearer)."""
-    assert not rays.dom_col[0] and rays.step_dom[0] == 1       # along rows, southward
-    so, step_m = float(rays.step_other[0]), float(rays.step_m[0])
-    out = {}
-    for r in range(3, 50, 2):
-        for c in range(15, cols - 15, 3):
-            if wall[r, c]:
-                continue
-            prev_out = True
-            for k in range(1, rows):
-                rr, p = r + k, c + k * so
-                if rr >= rows or not (0.0 <= p <= cols - 1):
-                    break
-                i0 = int(math.floor(p))
-                both = [wall[rr, i0], wall[rr, min(i0 + 1, cols - 1)] if p > i0 else wall[rr, i0]]
-                if all(both):
-                    if prev_out:
-                        out[(r, c)] = k * step_m
-                    break
-                prev_out = not any(both)
-    return out
-
-
 @pytest.mark.parametrize("az", [163.0, 203.7])
 def test_the_horizon_toward_a_wall_from_above_the_ground(tmp_path, runner, az):
     """Flat ground, a wall h = 30 m perpendicular to the azimuth: toward it, from H above a
     ground cell d metres before the wall (along the ray, to its first full sample), the horizon
     is atan((h - H) / d); the command says the same as the kernel, and tags the height."""
     h, rows, cols = 30.0, 150, 170
-    a = math.radians(az)
-    r, c = np.mgrid[0:rows, 0:cols].astype(np.float64)
-    s = c * math.sin(a) - r * math.cos(a)              # metres along the azimuth (1 m cells)
-    wall = (s >= 70.0) & (s <= 80.0)
-    z = np.where(wall, np.float32(h), np.float32(0.0))
+    z, wall = wall_terrain(az, h, 70.0, 10.0, rows, cols)    # metres along az (1 m cells)
     dem = write_geotiff(tmp_path / "w.tif", z, Affine(1.0, 0, 500000.0, 0, -1.0, 4000000.0), UTM)
     rays = sun_rays(read_dem(dem).grid, az, 45.0)    # (UTM's 1 m cell over its scale)
-    cells = _clean_wall_cells(wall, rays, rows, cols)
+    cells = wall_contacts(wall, rays, range(3, 50, 2), range(15, cols - 15, 3))
     assert len(cells) > 40
     for H in (0.0, 2.0, 12.5):
         beta = hz.horizon_angles(z, rays, lift=H)
