@@ -250,6 +250,40 @@ def roughness(z: np.ndarray, cell: float) -> dict:
 
 # --- the reference ----------------------------------------------------------------------------
 
+def _samples(z, r, c, vc, vr):
+    """The model's samples of the ray from the centre of cell (r, c) of float64 heights ``z``,
+    moving ``vc`` columns and ``vr`` rows per metre, written out plainly: (t, terrain) at every
+    ground distance t where it crosses a grid line of its dominant pixel axis, the terrain
+    interpolated between the two nearest cell centres on that line (NaN on a void), until it
+    leaves the raster. Shared by the plain references below."""
+    rows, cols = z.shape
+    dom = max(abs(vc), abs(vr))
+
+    def near_int(x):
+        return abs(x - round(x)) < 1e-9
+
+    k = 1
+    while True:
+        t = k / dom
+        pc, pr = c + vc * t, r + vr * t
+        if near_int(pc):
+            pc = round(pc)
+        if near_int(pr):
+            pr = round(pr)
+        if not (0 <= pc <= cols - 1 and 0 <= pr <= rows - 1):
+            return
+        if pc == int(pc) and pr == int(pr):
+            terrain = z[int(pr), int(pc)]
+        elif pc == int(pc):          # on a column line: interpolate along rows
+            i = int(math.floor(pr)); f = pr - i
+            terrain = (1 - f) * z[i, int(pc)] + f * z[i + 1, int(pc)]
+        else:                        # on a row line: interpolate along columns
+            i = int(math.floor(pc)); f = pc - i
+            terrain = (1 - f) * z[int(pr), i] + f * z[int(pr), i + 1]
+        yield t, terrain
+        k += 1
+
+
 def reference_mask(z, dx, dy, azimuth, elevation, col_sign=1, row_sign=-1,
                    lift=0.0) -> np.ndarray:
     """The terrain model written out plainly, independently of hillshade_rt's kernels.
@@ -269,40 +303,17 @@ def reference_mask(z, dx, dy, azimuth, elevation, col_sign=1, row_sign=-1,
     east, north = math.sin(a), math.cos(a)
     tan_e = math.tan(math.radians(elevation))
     out = np.zeros((rows, cols), np.uint8)
-
-    def near_int(x):
-        return abs(x - round(x)) < 1e-9
-
     for r in range(rows):
         vc = col_sign * east / dxs[r]    # columns per metre
         vr = row_sign * north / dys[r]   # rows per metre
-        dom = max(abs(vc), abs(vr))
         for c in range(cols):
             if math.isnan(z[r, c]):
                 out[r, c] = 255
                 continue
-            k = 1
-            while True:
-                t = k / dom
-                pc, pr = c + vc * t, r + vr * t
-                if near_int(pc):
-                    pc = round(pc)
-                if near_int(pr):
-                    pr = round(pr)
-                if not (0 <= pc <= cols - 1 and 0 <= pr <= rows - 1):
-                    break
-                if pc == int(pc) and pr == int(pr):
-                    terrain = z[int(pr), int(pc)]
-                elif pc == int(pc):          # on a column line: interpolate along rows
-                    i = int(math.floor(pr)); f = pr - i
-                    terrain = (1 - f) * z[i, int(pc)] + f * z[i + 1, int(pc)]
-                else:                        # on a row line: interpolate along columns
-                    i = int(math.floor(pc)); f = pc - i
-                    terrain = (1 - f) * z[int(pr), i] + f * z[int(pr), i + 1]
+            for t, terrain in _samples(z, r, c, vc, vr):
                 if terrain > (z[r, c] + lift) + t * tan_e:
                     out[r, c] = 1
                     break
-                k += 1
     return out
 
 
@@ -364,42 +375,19 @@ def reference_horizon(z, dx, dy, azimuth, col_sign=1, row_sign=-1, max_distance=
     east, north = math.sin(a), math.cos(a)
     beta = np.full((rows, cols), np.nan)
     dist = np.full((rows, cols), np.nan)
-
-    def near_int(x):
-        return abs(x - round(x)) < 1e-9
-
     for r in range(rows):
         vc = col_sign * east / dxs[r]
         vr = row_sign * north / dys[r]
-        dom = max(abs(vc), abs(vr))
         for c in range(cols):
             if math.isnan(z[r, c]):
                 continue
             best, where = -math.inf, math.nan
-            k = 1
-            while True:
-                t = k / dom
+            for t, terrain in _samples(z, r, c, vc, vr):
                 if max_distance is not None and t > max_distance * (1 + 1e-12):
                     break
-                pc, pr = c + vc * t, r + vr * t
-                if near_int(pc):
-                    pc = round(pc)
-                if near_int(pr):
-                    pr = round(pr)
-                if not (0 <= pc <= cols - 1 and 0 <= pr <= rows - 1):
-                    break
-                if pc == int(pc) and pr == int(pr):
-                    terrain = z[int(pr), int(pc)]
-                elif pc == int(pc):
-                    i = int(math.floor(pr)); f = pr - i
-                    terrain = (1 - f) * z[i, int(pc)] + f * z[i + 1, int(pc)]
-                else:
-                    i = int(math.floor(pc)); f = pc - i
-                    terrain = (1 - f) * z[int(pr), i] + f * z[int(pr), i + 1]
                 v = (terrain - (z[r, c] + lift)) / t
                 if not math.isnan(v) and v > best + 1e-12 * abs(v):
                     best, where = v, t
-                k += 1
             beta[r, c] = -90.0 if best == -math.inf else math.degrees(math.atan(best))
             dist[r, c] = where
     return beta, dist
