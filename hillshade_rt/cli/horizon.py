@@ -44,8 +44,8 @@ from .options import (backend_option, dem_options, finite, format_option,
 @dem_options
 @errors_to_click
 def horizon(dem, output, azimuth, directions, distance, method, sample_spacing, max_distance,
-            curvature, refraction_k, height_above_ground, preview, backend, threads, max_memory, window_size,
-            scheduler, overwrite, quiet, fmt, **read_opts):
+            curvature, refraction_k, height_above_ground, preview, backend, threads, max_memory,
+            window_size, scheduler, overwrite, quiet, fmt, **read_opts):
     """Write the horizon angle toward --azimuth (or toward each of --directions N azimuths, one
     band each) of every cell of DEM to OUTPUT.
 
