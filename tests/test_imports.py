@@ -219,7 +219,7 @@ LAYERS = [
     ("hillshade_rt.io", "hillshade_rt.earth", "hillshade_rt.gpu", "hillshade_rt.preview",
      "hillshade_rt.products"),
     ("hillshade_rt.algorithms",),
-    ("hillshade_rt.sun",),
+    ("hillshade_rt.sun", "hillshade_rt.ephemeris"),
     ("hillshade_rt.geometry",),
     ("hillshade_rt.errors", "hillshade_rt._preload", "hillshade_rt._lazy", "hillshade_rt"),
 ]
