@@ -514,3 +514,45 @@ def peer_topocalc(z, cell, az, el):
         hcos = tc_horizon(tc_az, zz, cell)
         return (hcos > math.sin(math.radians(el))).astype(np.uint8)
     return "topocalc horizon", run
+
+
+# --------------------------------------------------------------------------------------------
+# The Moon's sun, roughly (tests, benchmarks, the docs' pictures; never for science: a real
+# series comes from an ephemeris, docs/subsolar.md)
+
+MOON_R = 1737400.0
+SYNODIC_DAYS = 29.530589      # the subsolar longitude goes once round the Moon westward
+ECLIPSE_YEAR_DAYS = 346.62    # the subsolar latitude swings +-1.54 deg over an eclipse year
+MOON_SUBSOLAR_LAT_MAX = 1.54
+
+
+def toy_lunar_subsolar(n: int, step_h: float, start: str = "2027-01-01T00:00:00+00:00",
+                       lon0: float = 0.0, phase_deg: float = 0.0) -> list[tuple]:
+    """``n`` rows (ISO time, lat, lon) of a toy lunar subsolar series ``step_h`` hours apart:
+    the longitude falls 360 deg per synodic month, the latitude is
+    1.54 sin(2 pi t / eclipse year + phase). Right in kind (the sun circles the pole low over
+    the horizon), not in detail."""
+    import datetime as dt
+    t0 = dt.datetime.fromisoformat(start)
+    rows = []
+    for i in range(n):
+        days = i * step_h / 24.0
+        lon = ((lon0 - 360.0 * days / SYNODIC_DAYS + 180.0) % 360.0) - 180.0
+        lat = MOON_SUBSOLAR_LAT_MAX * math.sin(2 * math.pi * days / ECLIPSE_YEAR_DAYS
+                                               + math.radians(phase_deg))
+        rows.append(((t0 + dt.timedelta(hours=i * step_h)).isoformat(), lat, lon))
+    return rows
+
+
+def write_subsolar_csv(path, rows) -> str:
+    """``rows`` of (time, lat, lon[, distance_m]) as the plain subsolar CSV
+    (``ephemeris.read_subsolar``)."""
+    with open(path, "w") as fh:
+        fh.write("time,lat,lon" + (",distance_m" if rows and len(rows[0]) > 3 else "") + "\n")
+        for r in rows:
+            fh.write(",".join(str(v) for v in r) + "\n")
+    return str(path)
+
+
+LUNAR_SOUTH_POLAR_STEREO = ("+proj=stere +lat_0=-90 +lat_ts=-90 +lon_0=0 +k=1 +x_0=0 +y_0=0 "
+                            "+R=1737400 +units=m +no_defs")
