@@ -35,11 +35,13 @@ def _at(z, r, c):
     return float(z[r, c])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def horn_gradient(z, r, c, dx_r, dy_r, csign, rsign):
     """(dz/d(east), dz/d(north)) of the valid cell (r, c) by Horn's method, ``dx_r``, ``dy_r``
     the ground spacing of its row; neighbours off the raster or on voids filled as the module
-    says. The unit normal is (-ge, -gn, 1) / sqrt(1 + ge^2 + gn^2)."""
+    says. The unit normal is (-ge, -gn, 1) / sqrt(1 + ge^2 + gn^2). Inlined by numba: called
+    (a tuple returned) it made ``incidence`` 1.5x slower (3000², measured A/B in one process);
+    inlined, the same time as the body written in place, the same values bit for bit."""
     e = float(z[r, c])
     a0 = _at(z, r - 1, c - 1)
     b0 = _at(z, r - 1, c)
