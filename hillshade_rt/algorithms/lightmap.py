@@ -148,20 +148,45 @@ def _blocked_from(z, row0, col0, h0, row_l, col_l, height_l):
 
 
 @njit(cache=True)
-def _lit_points(z, rows, cols, heights, row_l, col_l, height_l, out):
+def _light_points(z, dx, dy, csign, rsign, rows, cols, heights, row_l, col_l, height_l, out):
     for i in range(rows.size):
-        out[i] = not _blocked_from(z, rows[i], cols[i], heights[i], row_l, col_l, height_l)
+        r, c = rows[i], cols[i]
+        ri = min(max(int(round(r)), 0), z.shape[0] - 1)     # the nearest cell: its normal
+        ci = min(max(int(round(c)), 0), z.shape[1] - 1)     # and its row's spacing
+        ve = (col_l - c) * dx[ri] * csign
+        vn = (row_l - r) * dy[ri] * rsign
+        vu = height_l - heights[i]
+        h = math.hypot(ve, vn)
+        out[i, 0] = math.degrees(math.atan2(ve, vn)) % 360.0
+        out[i, 1] = math.degrees(math.atan2(vu, h))
+        dist = math.sqrt(h * h + vu * vu)
+        out[i, 2] = dist
+        if math.isnan(z[ri, ci]) or dist == 0.0:
+            out[i, 3] = np.nan
+        else:
+            ge, gn = horn_gradient(z, ri, ci, dx[ri], dy[ri], csign, rsign)
+            out[i, 3] = (vu - ge * ve - gn * vn) / math.sqrt((1.0 + ge * ge + gn * gn)
+                                                             * dist * dist)
+        out[i, 4] = 0.0 if _blocked_from(z, r, c, heights[i], row_l, col_l, height_l) else 1.0
 
 
-def lit_at_points(z: np.ndarray, rows, cols, heights, row: float, col: float,
-                  height: float) -> np.ndarray:
-    """bool per point: whether the point light at (``row``, ``col``, ``height``) reaches the
-    points at fractional (``rows``, ``cols``) and absolute ``heights`` over ``z`` (2-D
-    float32). At a cell centre at its own height (+ the mask's lift) this is the point light's
-    mask (``point.shadow_mask``) of that cell, 0."""
-    rr = np.ascontiguousarray(rows, np.float64)
-    cc = np.ascontiguousarray(cols, np.float64)
-    hh = np.ascontiguousarray(heights, np.float64)
-    out = np.empty(rr.size, np.bool_)
-    _lit_points(z, rr, cc, hh, float(row), float(col), float(height), out)
-    return out
+def light_at_points(z: np.ndarray, grid, rows, cols, heights, row: float, col: float,
+                    height: float) -> dict:
+    """The point light at fractional (``row``, ``col``) and ``height`` seen from points at
+    fractional (``rows``, ``cols``) and absolute ``heights`` over ``z`` (2-D float32) on
+    ``grid``: per point ``azimuth`` (degrees clockwise from grid north), ``elevation`` (degrees
+    above the horizontal), ``distance`` (metres; the spacing of the nearest cell's row),
+    ``incidence`` (cos of the light's incidence on the surface of the nearest cell, its Horn
+    normal as the hillshade's; negative: it faces away; NaN on a void), ``lit`` (bool: no
+    terrain strictly above the straight line to the light where it crosses the grid lines: at
+    a cell centre the point light's mask of that cell, ``point.shadow_mask``)."""
+    rr = np.ascontiguousarray(rows, np.float64).ravel()
+    cc = np.ascontiguousarray(cols, np.float64).ravel()
+    hh = np.ascontiguousarray(heights, np.float64).ravel()
+    if not rr.size == cc.size == hh.size:
+        raise ValueError("rows, cols and heights must have the same length")
+    out = np.empty((rr.size, 5), np.float64)
+    _light_points(z, grid.dx, grid.dy, float(grid.col_sign), float(grid.row_sign), rr, cc, hh,
+                  float(row), float(col), float(height), out)
+    return {"azimuth": out[:, 0], "elevation": out[:, 1], "distance": out[:, 2],
+            "incidence": out[:, 3], "lit": out[:, 4] == 1.0}
