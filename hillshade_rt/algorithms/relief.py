@@ -35,6 +35,38 @@ def _at(z, r, c):
     return float(z[r, c])
 
 
+@njit(cache=True, inline="always")
+def horn_gradient(z, r, c, dx_r, dy_r, csign, rsign):
+    """(dz/d(east), dz/d(north)) of the valid cell (r, c) by Horn's method, ``dx_r``, ``dy_r``
+    the ground spacing of its row; neighbours off the raster or on voids filled as the module
+    says. The unit normal is (-ge, -gn, 1) / sqrt(1 + ge^2 + gn^2). Inlined by numba: called
+    (a tuple returned) it made ``incidence`` 1.5x slower (3000², measured A/B in one process);
+    inlined, the same time as the body written in place, the same values bit for bit."""
+    e = float(z[r, c])
+    a0 = _at(z, r - 1, c - 1)
+    b0 = _at(z, r - 1, c)
+    c_0 = _at(z, r - 1, c + 1)
+    d0 = _at(z, r, c - 1)
+    f0 = _at(z, r, c + 1)
+    g0 = _at(z, r + 1, c - 1)
+    h0 = _at(z, r + 1, c)
+    i0 = _at(z, r + 1, c + 1)
+    b = _fill(b0, e, h0)
+    d = _fill(d0, e, f0)
+    f = _fill(f0, e, d0)
+    h = _fill(h0, e, b0)
+    # a corner: its own height, else reflected through the centre, else on the plane
+    # through the centre and the two edge neighbours beside it
+    a = _fill(a0, e, i0) if not (math.isnan(a0) and math.isnan(i0)) else b + d - e
+    cc = _fill(c_0, e, g0) if not (math.isnan(c_0) and math.isnan(g0)) else b + f - e
+    g = _fill(g0, e, c_0) if not (math.isnan(g0) and math.isnan(c_0)) else h + d - e
+    ii = _fill(i0, e, a0) if not (math.isnan(i0) and math.isnan(a0)) else h + f - e
+    dz_dcol = ((cc + 2.0 * f + ii) - (a + 2.0 * d + g)) / (8.0 * dx_r)
+    dz_drow = ((g + 2.0 * h + ii) - (a + 2.0 * b + cc)) / (8.0 * dy_r)
+    # dz / d(east), dz / d(north): row_sign +1 when rows grow northward
+    return dz_dcol * csign, dz_drow * rsign
+
+
 @njit(parallel=True, cache=True)
 def _incidence(z, dx, dy, csign, rsign, r0, c0, lx, ly, lz, out):
     n_r, n_c = out.shape
@@ -42,32 +74,10 @@ def _incidence(z, dx, dy, csign, rsign, r0, c0, lx, ly, lz, out):
         r = r0 + i
         for j in range(n_c):
             c = c0 + j
-            e = float(z[r, c])
-            if math.isnan(e):
+            if math.isnan(z[r, c]):
                 out[i, j] = np.nan
                 continue
-            a0 = _at(z, r - 1, c - 1)
-            b0 = _at(z, r - 1, c)
-            c_0 = _at(z, r - 1, c + 1)
-            d0 = _at(z, r, c - 1)
-            f0 = _at(z, r, c + 1)
-            g0 = _at(z, r + 1, c - 1)
-            h0 = _at(z, r + 1, c)
-            i0 = _at(z, r + 1, c + 1)
-            b = _fill(b0, e, h0)
-            d = _fill(d0, e, f0)
-            f = _fill(f0, e, d0)
-            h = _fill(h0, e, b0)
-            # a corner: its own height, else reflected through the centre, else on the plane
-            # through the centre and the two edge neighbours beside it
-            a = _fill(a0, e, i0) if not (math.isnan(a0) and math.isnan(i0)) else b + d - e
-            cc = _fill(c_0, e, g0) if not (math.isnan(c_0) and math.isnan(g0)) else b + f - e
-            g = _fill(g0, e, c_0) if not (math.isnan(g0) and math.isnan(c_0)) else h + d - e
-            ii = _fill(i0, e, a0) if not (math.isnan(i0) and math.isnan(a0)) else h + f - e
-            dz_dcol = ((cc + 2.0 * f + ii) - (a + 2.0 * d + g)) / (8.0 * dx[r])
-            dz_drow = ((g + 2.0 * h + ii) - (a + 2.0 * b + cc)) / (8.0 * dy[r])
-            ge = dz_dcol * csign     # dz / d(east)
-            gn = dz_drow * rsign     # dz / d(north): row_sign +1 when rows grow northward
+            ge, gn = horn_gradient(z, r, c, dx[r], dy[r], csign, rsign)
             out[i, j] = (lz - ge * lx - gn * ly) / math.sqrt(1.0 + ge * ge + gn * gn)
 
 

@@ -187,6 +187,19 @@ def light_options(f):
     ])
 
 
+def lightmap_options(f):
+    """``hillshade`` with a point light: its falloff and the lightmap's bits."""
+    return _stack(f, [
+        click.option("--falloff", type=click.Choice(["none", "inverse-square"]), default=None,
+                     help="With a point light: none (default), or inverse-square: the direct "
+                          "light times min(1, (d_ref / d)^2), d the distance to the light, "
+                          "d_ref its height above the ground beneath it."),
+        click.option("--bits", type=click.Choice(["8", "16"]), default=None,
+                     help="With a point light: 8 (default, 1..255) or 16 (1..65535) bits per "
+                          "cell, e.g. 16-bit PNG lightmaps (-f PNG); 0 nodata."),
+    ])
+
+
 def point_options(f):
     """Where the points of ``profile`` and ``query`` are: --at, --at-xy, --points."""
     return _stack(f, [

@@ -7,7 +7,7 @@ import click
 from .errors import errors_to_click, say
 from ..run.config import SUN_KEYS
 from .options import (curvature_options, dem_options, height_above_ground_option,
-                      overwrite_option, point_options, quiet_option, sun_options,
+                      light_options, overwrite_option, point_options, quiet_option, sun_options,
                       to_read_options, to_run_options)
 
 
@@ -28,16 +28,19 @@ from .options import (curvature_options, dem_options, height_above_ground_option
 @click.option("-o", "--output", default=None, type=click.Path(dir_okay=False),
               help="Write here (default: standard output).")
 @curvature_options
+@light_options
 @overwrite_option("Replace the output if it exists.")
 @quiet_option()
 @dem_options
 @errors_to_click
 def query(dem, at, at_xy, points, height_above_ground, irradiance, fmt, output, curvature,
-          refraction_k, overwrite, quiet, **kw):
+          refraction_k, light_position, light_lonlat, overwrite, quiet, **kw):
     """Whether the sun reaches points on DEM: for each point and each sun, lit or shadowed, the
     sun's azimuth and elevation, the horizon toward the sun, the margin between them (lit iff
     the sun is up and the margin >= 0) and the observer's height. The sun: --azimuth/--elevation,
-    or --time (repeatable) or --start/--end/--step at the DEM's place (as `shadow`)."""
+    or --time (repeatable) or --start/--end/--step at the DEM's place (as `shadow`). With a
+    point light (--light-position/--light-lonlat) instead: whether it reaches each point, its
+    azimuth, elevation and distance, and its incidence on the surface there."""
     from ..run.points import parse_pair
     from ..run.query import QueryConfig, query as run_query
     sun = {k: kw.pop(k) for k in SUN_KEYS}
@@ -45,4 +48,5 @@ def query(dem, at, at_xy, points, height_above_ground, irradiance, fmt, output, 
     run_query(QueryConfig(dem, [parse_pair(a, "--at") for a in at],
                           [parse_pair(a, "--at-xy") for a in at_xy], points, sun,
                           height_above_ground, irradiance, fmt, output, curvature, refraction_k,
-                          to_read_options(kw), to_run_options(kw, say)))
+                          to_read_options(kw), to_run_options(kw, say),
+                          light_position=light_position, light_lonlat=light_lonlat))

@@ -8,7 +8,8 @@ import click
 from .errors import errors_to_click, say
 from ..run.config import SUN_KEYS
 from .options import (algorithm_flags, algorithm_option, dem_options, finite, given,
-                      height_above_ground_option, light_options, physics_options, run_options,
+                      height_above_ground_option, light_options, lightmap_options,
+                      physics_options, run_options,
                       sun_options, to_read_options, to_run_options)
 
 LIFT_HELP = ("Each cell's ray toward the sun starts this many metres above the cell (a person, "
@@ -89,6 +90,25 @@ def _point_light(files, position, lonlat, lift, soft, self_shadow, classes, algo
                              to_read_options(kw), to_run_options(kw, say), refused))
 
 
+def _lightmap_refused(kw, soft, curvature, refraction_k) -> dict:
+    """What ``hillshade`` with a point light does not take yet (name -> given), as
+    ``_point_light`` refuses them for ``shadow``; the sun's and the run's options popped from
+    ``kw``."""
+    from ..run.config import PLACE_KEYS
+    sun = {k: kw.pop(k) for k in SUN_KEYS}
+    refused = {"--azimuth/--elevation/--time/--start": any(
+                   sun[k] for k in SUN_KEYS if k not in PLACE_KEYS),
+               "--soft": soft, "--algorithm": given("algorithm"),
+               "--earth-curvature": curvature is not None,
+               "--refraction-k": refraction_k is not None,
+               "--backend gpu": kw.get("backend") == "gpu"}
+    for k, flag in (("window_size", "--window-size"), ("max_memory", "--max-memory"),
+                    ("scheduler", "--scheduler"), ("output_pattern", "--output-pattern"),
+                    ("cog", "--cog")):
+        refused[flag] = bool(kw.pop(k))
+    return refused
+
+
 @click.command()
 @click.argument("files", metavar="DEM... [OUTPUT]", nargs=-1, required=True,
                 type=click.Path(dir_okay=False))
@@ -102,17 +122,33 @@ def _point_light(files, position, lonlat, lift, soft, self_shadow, classes, algo
 @algorithm_option
 @physics_options
 @height_above_ground_option(LIFT_HELP + " The relief's shading stays the ground's.")
+@light_options
+@lightmap_options
 @run_options
 @dem_options
 @errors_to_click
 def hillshade(files, ambient, scale, algorithm, curvature, refraction_k, soft,
-              height_above_ground, **kw):
+              height_above_ground, light_position, light_lonlat, falloff, bits, **kw):
     """Write 8-bit shaded relief with cast shadows of DEM to OUTPUT.
 
     Illumination = ambient + (1 - ambient) * max(0, L.N) in lit cells and ambient in shadow
     (normals by Horn's method, like gdaldem); written as 1..255, 0 nodata. Sun as for `shadow`
-    (default --azimuth 315 --elevation 45, like gdaldem)."""
+    (default --azimuth 315 --elevation 45, like gdaldem). With a point light
+    (--light-position/--light-lonlat) L points from each cell to the light; --falloff,
+    --bits 16 and -f PNG make lightmaps."""
+    from ..errors import UsageProblem
     from ..run import shade
+    if light_position is not None or light_lonlat is not None:
+        from ..run.lightmap import LightmapConfig, lightmap
+        refused = _lightmap_refused(kw, soft, curvature, refraction_k)
+        lightmap(LightmapConfig(list(files), kw.pop("output"), light_position, light_lonlat,
+                                height_above_ground, to_read_options(kw),
+                                to_run_options(kw, say), refused, ambient=ambient, scale=scale,
+                                falloff=falloff or "none", bits=int(bits or 8)))
+        return
+    if falloff is not None or bits is not None:
+        raise UsageProblem("--falloff and --bits go with a point light (--light-position or "
+                           "--light-lonlat)")
     shade(_config(files, "hillshade", algorithm, {}, kw, default_sun=(315.0, 45.0),
                   curvature=curvature, refraction_k=refraction_k, soft=soft, self_shadow=True,
                   ambient=ambient, scale=scale, height_above_ground=height_above_ground))

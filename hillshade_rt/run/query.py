@@ -62,6 +62,19 @@ COLUMNS = ("point", "x", "y", "lon", "lat", "time", "sun_azimuth_deg", "sun_true
            "sun_elevation_deg", "horizon_deg", "horizon_distance_m", "margin_deg", "lit",
            "ground_m", "observer_m")
 IRRADIANCE_COLUMNS = ("dni_w_m2", "beam_horizontal_w_m2")
+LIGHT_CONVENTION = ("a point light (--light-position/--light-lonlat) instead of the sun: "
+                    "light_azimuth_deg: degrees clockwise from the DEM's grid north toward the "
+                    "light; light_elevation_deg: degrees above the horizontal seen from the "
+                    "observer; light_distance_m: straight-line metres from the observer to the "
+                    "light (the ground spacing of the point's row); incidence_cos: cos of the "
+                    "light's incidence on the surface of the point's nearest cell (its Horn "
+                    "normal, as hillshade's; <= 0: the surface faces away); lit (1/0; "
+                    "true/false in JSON) iff no terrain is strictly above the straight line "
+                    "from the observer to the light (as in shadow --light-position's mask; at a "
+                    "cell centre that mask's value); observer_m = ground_m (bilinear between "
+                    "the cell centres) + height above ground")
+LIGHT_COLUMNS = ("point", "x", "y", "lon", "lat", "light_azimuth_deg", "light_elevation_deg",
+                 "light_distance_m", "incidence_cos", "lit", "ground_m", "observer_m")
 
 
 @dataclass
@@ -79,6 +92,8 @@ class QueryConfig:
     refraction_k: float | None = None
     read: ReadOptions = field(default_factory=ReadOptions)
     run: RunOptions = field(default_factory=RunOptions)
+    light_position: object = None                 # a point light: X,Y,Z in the DEM's CRS
+    light_lonlat: object = None                   # or LON,LAT,Z (WGS84 degrees)
 
 
 def output_format(fmt: str | None, output: str | None) -> str:
@@ -121,6 +136,8 @@ def query(cfg: QueryConfig) -> dict:
     from ..sun import SunRequest, iso
     from .config import check_lift
 
+    if cfg.light_position is not None or cfg.light_lonlat is not None:
+        return light_query(cfg)
     fmt = output_format(cfg.fmt, cfg.output)
     check_lift(cfg.height_above_ground, "brute", False)
     lift = float(cfg.height_above_ground)
@@ -197,6 +214,75 @@ def query(cfg: QueryConfig) -> dict:
     return doc
 
 
+def light_query(cfg: QueryConfig) -> dict:
+    """``query --light-position/--light-lonlat``: for each point, the point light's direction,
+    distance, incidence on the surface and whether it reaches the observer
+    (``algorithms.lightmap.light_at_points``; the same line as the point light's mask). The
+    sun's options, --irradiance and the curvature options are usage errors; a light inside the
+    terrain is an error. Nothing is written on failure."""
+    from ..algorithms.lightmap import light_at_points
+    from ..arrays import ground_height
+    from ..io.write import Claims
+    from .config import PLACE_KEYS, SUN_KEYS, check_lift
+    from .light import parse_triple
+    from .lightmap import light_cell, light_xy
+
+    fmt = output_format(cfg.fmt, cfg.output)
+    if cfg.light_position is not None and cfg.light_lonlat is not None:
+        raise UsageProblem("give --light-position X,Y,Z or --light-lonlat LON,LAT,Z, one of them")
+    refused = (["--azimuth/--elevation/--time/--start"]
+               if any(cfg.sun.get(k) for k in SUN_KEYS if k not in PLACE_KEYS) else [])
+    refused += [flag for flag, on in (("--irradiance", cfg.irradiance),
+                                      ("--earth-curvature", cfg.curvature is not None),
+                                      ("--refraction-k", cfg.refraction_k is not None)) if on]
+    if refused:
+        raise UsageProblem(f"a point light does not take {', '.join(refused)}")
+    pos = (None if cfg.light_position is None
+           else parse_triple(cfg.light_position, "--light-position"))
+    ll = None if cfg.light_lonlat is None else parse_triple(cfg.light_lonlat, "--light-lonlat")
+    check_lift(cfg.height_above_ground, "brute", False)
+    lift = float(cfg.height_above_ground)
+    points = gather(cfg.at, cfg.at_xy, cfg.points)
+    if cfg.output is not None:
+        Claims([cfg.dem] + ([cfg.points] if cfg.points else []), cfg.run.overwrite).claim(
+            cfg.output, "-o/--output")
+    d = cfg.read.read(cfg.dem)
+    points, _ = locate(points, d)
+    on_ground(points, d, lift)
+    if fmt == "geojson" and any(p["lon"] is None for p in points):
+        raise HillshadeError(f"{d.path}: the DEM has no CRS, so the points have no longitude "
+                             "and latitude for GeoJSON: use --format csv or json")
+    x, y, zl = light_xy(d, pos, ll)
+    row_l, col_l = light_cell(d, x, y)
+    ground = ground_height(d.heights, row_l, col_l)
+    if math.isfinite(ground) and zl <= ground:
+        raise HillshadeError(f"the light is inside the terrain ({zl:g} m at a ground of "
+                             f"{ground:g} m)")
+    res = light_at_points(d.heights, d.grid, [p["row"] for p in points],
+                          [p["col"] for p in points], [p["observer"] for p in points], row_l,
+                          col_l, zl)
+    out_rows = [{"point": p["id"], "x": p["x"], "y": p["y"], "lon": p["lon"], "lat": p["lat"],
+                 "light_azimuth_deg": float(res["azimuth"][i]),
+                 "light_elevation_deg": float(res["elevation"][i]),
+                 "light_distance_m": float(res["distance"][i]),
+                 "incidence_cos": _finite(res["incidence"][i]),
+                 "lit": bool(res["lit"][i]), "ground_m": float(p["ground"]),
+                 "observer_m": float(p["observer"])} for i, p in enumerate(points)]
+    n = len(points)
+    doc = {"dem": os.path.abspath(d.path) if os.path.exists(d.path) else d.path,
+           "crs": d.crs_string(), "convention": LIGHT_CONVENTION, "columns": LIGHT_COLUMNS,
+           "light": {"x": x, "y": y, "z": zl, "row": row_l, "col": col_l},
+           "height_above_ground_m": lift, "earth_curvature": False, "sun_source": None,
+           "irradiance": None, "points": n, "suns": 1, "version": __version__,
+           "rows": out_rows}
+    write_text(cfg.output, render(doc, fmt), cfg.run.overwrite)
+    if not cfg.run.quiet and cfg.output is not None:
+        lit = sum(r["lit"] for r in out_rows)
+        cfg.run.say("summary", f"hillshade-rt: {cfg.output}: {n} point(s), point light at x "
+                               f"{x:.6g} y {y:.6g} z {zl:g} m, {lit} of {n} lit ({fmt})")
+    return doc
+
+
 def _finite(v) -> float | None:
     v = float(v)
     return v if math.isfinite(v) else None
@@ -238,7 +324,7 @@ def irradiance(points, site, times, res) -> tuple[np.ndarray, np.ndarray]:
 def render(doc: dict, fmt: str) -> str:
     """The document in ``fmt`` (``FORMATS``)."""
     rows = doc["rows"]
-    cols = COLUMNS + (IRRADIANCE_COLUMNS if doc["irradiance"] else ())
+    cols = doc.get("columns") or COLUMNS + (IRRADIANCE_COLUMNS if doc["irradiance"] else ())
     if fmt == "json":
         return json.dumps(doc, indent=1) + "\n"
     if fmt == "geojson":
@@ -259,10 +345,13 @@ def render(doc: dict, fmt: str) -> str:
                           "geometry": {"type": "Point", "coordinates": [p["lon"], p["lat"]]}})
         return json.dumps({"type": "FeatureCollection", "features": feats}, indent=1) + "\n"
     buf = _io.StringIO()
+    light = doc.get("light")
+    source = (f"point light at x {light['x']:.6f} y {light['y']:.6f} z {light['z']:g} m"
+              if light else "sun from times (NREL SPA)" if doc["sun_source"] == "time"
+              else "sun given")
     buf.write(f"# hillshade-rt {doc['version']} query of {doc['dem']}; height above ground "
               f"{doc['height_above_ground_m']:g} m; earth curvature "
-              f"{'on' if doc['earth_curvature'] else 'off'}; sun "
-              f"{'from times (NREL SPA)' if doc['sun_source'] == 'time' else 'given'}\n")
+              f"{'on' if doc['earth_curvature'] else 'off'}; {source}\n")
     buf.write(f"# {doc['convention']}\n")
     if doc["irradiance"]:
         buf.write(f"# {doc['irradiance']}\n")

@@ -13,6 +13,7 @@ from affine import Affine
 from rasterio.crs import CRS
 
 import hillshade_rt as hr
+from hillshade_rt.arrays import point_light_mask
 from hillshade_rt.cli import cli
 from hillshade_rt.io import read_dem
 from hillshade_rt.testing import data_path, fractal_terrain, read_band, write_geotiff
@@ -346,3 +347,83 @@ def test_the_sun_at_a_point_is_the_masks_sun_for_that_cell():
     assert sun_at(tiled, (100, 80), 61.2, 10.0) == (207.0, 13.0)
     assert sun_at(tiled, (100, 80), 3.0, 79.0) == (200.0, 11.0)
     assert sun_at(SunOver(None, 163.0, 9.0), (100, 80), 5.5, 6.25) == (163.0, 9.0)
+
+
+# --- a point light (issue 21, item 1): query --light-position / --light-lonlat ---------------
+
+@pytest.mark.parametrize("lift", [0.0, 1.5])
+def test_a_point_light_at_cell_centres_is_its_mask(tmp_path, runner, lift):
+    """400 cell centres of the lidar DEM: lit is the point light's mask of the same light (the
+    same observer above the ground), cell for cell; azimuth, elevation and distance are the
+    geometry of the light seen from the centre."""
+    d, cells = _cells(LIDAR, 400, seed=21)
+    x, y = (float(v) for v in d.transform @ (211.3 + 0.5, 143.8 + 0.5))   # col, row
+    zl = hr.arrays.ground_height(d.heights, 143.8, 211.3) + 8.0     # a lamp 8 m up
+    pts = _points_csv(tmp_path, d, cells)
+    doc = _query(runner, [LIDAR, "--points", pts, "--light-position", f"{x!r},{y!r},{zl!r}",
+                          "--height-above-ground", str(lift)])
+    mask = point_light_mask(d, x, y, zl, height_above_ground=lift)
+    assert doc["light"]["z"] == zl and doc["suns"] == 1 and len(doc["rows"]) == 400
+    lit = np.array([row["lit"] for row in doc["rows"]])
+    want = np.array([mask[r, c] == 0 for r, c in cells])
+    assert np.array_equal(lit, want) and lit.any() and not lit.all()
+    for row, (r, c) in zip(doc["rows"], cells):
+        ve = (211.3 - c) * d.grid.dx[r]
+        vn = -(143.8 - r) * d.grid.dy[r]
+        vu = zl - (float(d.heights[r, c]) + lift)
+        assert row["light_azimuth_deg"] == pytest.approx(math.degrees(math.atan2(ve, vn)) % 360)
+        assert row["light_elevation_deg"] == pytest.approx(
+            math.degrees(math.atan2(vu, math.hypot(ve, vn))))
+        assert row["light_distance_m"] == pytest.approx(math.sqrt(ve * ve + vn * vn + vu * vu))
+        assert row["observer_m"] == pytest.approx(float(d.heights[r, c]) + lift)
+
+
+def test_a_point_light_between_centres_and_its_incidence_on_a_plane(tmp_path, runner):
+    """A tilted plane with a wall: between centres the observer stands on the plane; the
+    incidence is the plane's Lambert cos; behind the wall the light is blocked."""
+    rows, cols, cell = 40, 50, 10.0
+    r, c = np.mgrid[0:rows, 0:cols].astype(np.float64)
+    a, b = 0.2, -0.1                                    # dz/d(east), dz/d(north)
+    z = (100.0 + a * cell * c - b * cell * r).astype(np.float32)
+    z[:, 30] += 200.0                                   # a wall along column 30
+    t = Affine(cell, 0, 0.0, 0, -cell, 0.0)
+    dem = write_geotiff(tmp_path / "p.tif", z, t, None)
+    row_l, col_l, zl = 17.3, 12.6, 190.0
+    lx, ly = t @ (col_l + 0.5, row_l + 0.5)
+    pts = [(5.25, 8.5), (21.7, 20.2), (10.4, 36.3)]     # (row, col); the last behind the wall
+    args = [dem, "--light-position", f"{lx},{ly},{zl}"]
+    for pr, pc in pts:
+        args += ["--at-xy", "{},{}".format(*(t @ (pc + 0.5, pr + 0.5)))]
+    doc = _query(runner, args)
+    got = doc["rows"]
+    assert [g["lit"] for g in got] == [True, True, False]
+    for g, (pr, pc) in zip(got[:2], pts[:2]):
+        ground = 100.0 + a * cell * pc - b * cell * pr
+        assert g["ground_m"] == pytest.approx(ground)
+        ve, vn, vu = (col_l - pc) * cell, -(row_l - pr) * cell, zl - ground
+        dist = math.sqrt(ve * ve + vn * vn + vu * vu)
+        assert g["light_distance_m"] == pytest.approx(dist)
+        want = (vu - a * ve - b * vn) / (math.sqrt(1 + a * a + b * b) * dist)
+        assert g["incidence_cos"] == pytest.approx(want, abs=1e-9)
+    # the CSV says it is a point light and has the light's columns
+    text = _query(runner, args, "csv")
+    assert "point light at x" in text.splitlines()[0]
+    assert "light_azimuth_deg,light_elevation_deg,light_distance_m,incidence_cos,lit" in text
+
+
+@pytest.mark.parametrize("extra, code, words", [
+    (["--light-position", "150,-150,10"], 1, "inside the terrain"),
+    (["--light-position", "150,-150,900", "--azimuth", "163", "--elevation", "20"], 2,
+     "--azimuth"),
+    (["--light-position", "150,-150,900", "--no-earth-curvature"], 2, "--earth-curvature"),
+    (["--light-position", "150,-150"], 2, "three numbers"),
+    (["--light-position", "150,-150,900", "--light-lonlat", "1,2,900"], 2, "one of them"),
+    (["--light-lonlat", "1,2,900"], 1, "CRS"),
+])
+def test_bad_point_light_queries_are_one_line_errors(tmp_path, runner, extra, code, words):
+    dem = write_geotiff(tmp_path / "f.tif", np.full((30, 30), 100.0, np.float32),
+                        Affine(10, 0, 0, 0, -10, 0), None)
+    out = tmp_path / "q.csv"
+    r = runner.invoke(cli, ["query", dem, "--at-xy", "50,-50", "-o", str(out)] + extra)
+    assert r.exit_code == code and words in r.output and "Traceback" not in r.output, r.output
+    assert not out.exists()
