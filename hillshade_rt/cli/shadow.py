@@ -79,8 +79,7 @@ def _point_light(files, position, lonlat, lift, soft, self_shadow, classes, algo
     refused = {"--azimuth/--elevation/--time/--start": any(
                    sun[k] for k in SUN_KEYS if k not in PLACE_KEYS),
                "--soft": soft, "--self-shadow": self_shadow, "--classes": classes,
-               "--algorithm": given("algorithm"), "--earth-curvature": curvature is not None,
-               "--backend gpu": kw.get("backend") == "gpu"}
+               "--algorithm": given("algorithm"), "--earth-curvature": curvature is not None}
     for k, flag in (("window_size", "--window-size"), ("max_memory", "--max-memory"),
                     ("scheduler", "--scheduler"), ("output_pattern", "--output-pattern"),
                     ("cog", "--cog")):

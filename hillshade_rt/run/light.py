@@ -98,8 +98,10 @@ def light_shadow(cfg: LightConfig) -> dict:
         x, y, zl = position
     if d.transform is None:
         raise HillshadeError("the DEM has no geotransform: a light position needs one")
+    st: dict = {}
     with timer("compute"):
-        mask = point_light_mask(d, x, y, zl, height_above_ground=cfg.height_above_ground)
+        mask = point_light_mask(d, x, y, zl, height_above_ground=cfg.height_above_ground,
+                                backend=ro.backend, stats=st)
     col, row = ~d.transform @ (x, y)
     tags = {"HILLSHADE_RT_VERSION": __version__, "VALUES": "1 shadow, 0 lit, 255 nodata",
             "LIGHT": f"point light at x={x:.6f} y={y:.6f} z={zl:g} m (the DEM's CRS)",
@@ -117,8 +119,11 @@ def light_shadow(cfg: LightConfig) -> dict:
            "shape": list(d.shape), "light": {"x": x, "y": y, "z": zl, "row": row - 0.5,
                                              "col": col - 0.5},
            "height_above_ground_m": float(cfg.height_above_ground),
-           "shadow_fraction": share, "backend": "cpu", "algorithm": "point (plain march)",
+           "shadow_fraction": share, "backend": st["backend"],
+           "algorithm": "point (pyramid march)",
            "seconds": dict(timer.seconds, total=timer.total()), "version": __version__}
+    if "gpu" in st:
+        rep["gpu"] = st["gpu"]
     if ro.report_path is not None:
         write_json(ro.report_path, rep, ro.overwrite)
     if not ro.quiet:

@@ -65,3 +65,20 @@ def test_a_light_inside_the_terrain_fails_and_writes_nothing(tmp_path, runner, d
     assert not out.exists()
     r = runner.invoke(cli, ["shadow", dem, str(out), "--light-position", "1,2"])
     assert r.exit_code == 2 and "three numbers" in r.output
+
+
+def test_backend_gpu_writes_the_cpu_mask(tmp_path, runner):
+    """--backend gpu (the CUDA kernel; numba's simulator in the tests) writes the CPU's mask and
+    says so in the report."""
+    z = fractal_terrain(18, 22, 3, relief=60.0) + 100.0
+    z[5, 6] = np.nan
+    dem = write_geotiff(tmp_path / "s.tif", z, Affine(10, 0, 500000, 0, -10, 4000000),
+                        CRS.from_epsg(32633))
+    x, y, zl = 500000 + 10 * 15.3, 4000000 - 10 * 4.8, 190.0
+    out, rep = tmp_path / "m.tif", tmp_path / "r.json"
+    r = runner.invoke(cli, ["shadow", dem, str(out), "--light-position", f"{x},{y},{zl}",
+                            "--backend", "gpu", "--report", str(rep)])
+    assert r.exit_code == 0, r.output
+    want = point_light_mask(read_dem(dem), x, y, zl, backend="cpu")
+    assert np.array_equal(read_band(out), want) and (want == 1).any() and (want == 0).any()
+    assert json.loads(rep.read_text())["backend"] == "gpu"
