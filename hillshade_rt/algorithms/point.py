@@ -48,35 +48,42 @@ from .raymath import line_position, madd, terrain_on_line
 
 
 @njit(cache=True)
-def point_is_blocked(z, pyr, off, widths, nlev, r, c, h0, row_l, col_l, height_l, zmax):
-    """True when the line from cell (r, c) at height ``h0`` to the light at (``row_l``,
+def point_is_blocked(z, pyr, off, widths, nlev, r, c, h0, row_l, col_l, height_l, zmax, org_r,
+                     org_c, rows, cols):
+    """True when the line from cell (r, c) of ``z`` at height ``h0`` to the light at (``row_l``,
     ``col_l``, ``height_l``) passes strictly below the terrain at one of its grid-line crossings
     before the light. Over the pyramid ``(pyr, off, widths, nlev)`` of ``z`` when ``nlev`` > 0
     (the same answer, skipping blocks lower than the ray; see the module's docstring); ``zmax``:
-    the highest cell (or more)."""
-    rows, cols = z.shape
-    r = np.int64(r)
-    c = np.int64(c)
-    drow = row_l - r
-    dcol = col_l - c
+    the highest cell of ``z`` (or more). ``z`` is the window at (``org_r``, ``org_c``) of a
+    raster of ``rows`` x ``cols`` (the whole raster: 0, 0 and z's shape), the light in the
+    raster's coordinates: the ray's arithmetic is the raster's, so a window gives its cells what
+    the whole raster gives them, bit for bit, as long as it holds every sample (``halo``)."""
+    rg = np.int64(r) + org_r
+    cg = np.int64(c) + org_c
+    drow = row_l - rg
+    dcol = col_l - cg
     if abs(dcol) >= abs(drow):
         dom_col = True
         d = abs(dcol)
         sd = np.int64(1) if dcol > 0 else np.int64(-1)
         so = drow / d if d > 0.0 else 0.0
-        line0 = c
-        other0 = r
+        line0 = cg
+        other0 = rg
         n_dom = np.int64(cols)
         n_oth = np.int64(rows)
+        org_line = org_c
+        org_oth = org_r
     else:
         dom_col = False
         d = abs(drow)
         sd = np.int64(1) if drow > 0 else np.int64(-1)
         so = dcol / d
-        line0 = r
-        other0 = c
+        line0 = rg
+        other0 = cg
         n_dom = np.int64(rows)
         n_oth = np.int64(cols)
+        org_line = org_r
+        org_oth = org_c
     if d == 0.0:
         return False
     rise = (height_l - h0) / d
@@ -94,10 +101,11 @@ def point_is_blocked(z, pyr, off, widths, nlev, r, c, h0, row_l, col_l, height_l
         hr = madd(h0, float(k), rise)
         if hr >= zmax and not descending:
             return False
-        line = line0 + k * sd
+        line = line0 + k * sd - org_line       # in z (a window: exact shifts by whole cells)
         pos = line_position(madd(float(other0), float(k), so), n_oth)
         if pos < 0.0:
             return False
+        pos -= org_oth
         i0 = np.int64(math.floor(pos))
         rr = i0 if dom_col else line
         cc = line if dom_col else i0
@@ -128,32 +136,36 @@ def point_is_blocked(z, pyr, off, widths, nlev, r, c, h0, row_l, col_l, height_l
 
 
 @njit(cache=True, inline="always")
-def _point_cell(z, pyr, off, widths, nlev, r, c, row_l, col_l, height_l, lift, zmax, out):
-    """Decide cell (r, c): the per-cell body of both backends."""
+def _point_cell(z, pyr, off, widths, nlev, r, c, row_l, col_l, height_l, lift, zmax, place,
+                out):
+    """Decide cell (r, c): the per-cell body of both backends. ``place``: (org_r, org_c, rows,
+    cols) of ``z`` in its raster."""
     h = z[r, c]
     if math.isnan(h):
         out[r, c] = 255
     elif point_is_blocked(z, pyr, off, widths, nlev, r, c, float(h) + lift, row_l, col_l,
-                          height_l, zmax):
+                          height_l, zmax, place[0], place[1], place[2], place[3]):
         out[r, c] = 1
     else:
         out[r, c] = 0
 
 
 @njit(parallel=True, cache=True)
-def _point_cpu(z, pyr, off, widths, nlev, row_l, col_l, height_l, lift, zmax, out):
+def _point_cpu(z, pyr, off, widths, nlev, row_l, col_l, height_l, lift, zmax, place, out):
     rows, cols = z.shape
     for r in prange(rows):
         for c in range(cols):
-            _point_cell(z, pyr, off, widths, nlev, r, c, row_l, col_l, height_l, lift, zmax, out)
+            _point_cell(z, pyr, off, widths, nlev, r, c, row_l, col_l, height_l, lift, zmax,
+                        place, out)
 
 
 @kernel
-def _point_gpu(z, pyr, off, widths, nlev, row_l, col_l, height_l, lift, zmax, out):
+def _point_gpu(z, pyr, off, widths, nlev, row_l, col_l, height_l, lift, zmax, place, out):
     """CUDA twin of ``_point_cpu``: one thread per cell."""
     c, r = cuda.grid(2)
     if r < z.shape[0] and c < z.shape[1]:
-        _point_cell(z, pyr, off, widths, nlev, r, c, row_l, col_l, height_l, lift, zmax, out)
+        _point_cell(z, pyr, off, widths, nlev, r, c, row_l, col_l, height_l, lift, zmax, place,
+                    out)
 
 
 def _zmax(z, zmax):
@@ -162,19 +174,41 @@ def _zmax(z, zmax):
     return float(zmax)
 
 
+def _place(z, origin, shape):
+    r0, c0 = origin
+    rows, cols = z.shape if shape is None else shape
+    return np.array([r0, c0, rows, cols], np.int64)
+
+
+def halo(region, row: float, col: float, shape) -> tuple[int, int, int, int]:
+    """The window (r0, r1, c0, c1) of a raster of ``shape`` that holds every sample of the rays
+    from the cells of ``region`` (r0, r1, c0, c1) to a light at (``row``, ``col``): the box
+    around the region and the light's cell, clipped to the raster, one cell more all round (the
+    interpolation's second cell, and a margin)."""
+    rows, cols = shape
+    r0, r1, c0, c1 = region
+    fr, fc = math.floor(row), math.floor(col)
+    return (max(0, min(r0, fr) - 1), min(rows, max(r1 - 1, fr) + 3),
+            max(0, min(c0, fc) - 1), min(cols, max(c1 - 1, fc) + 3))
+
+
 def shadow_mask(z: np.ndarray, row: float, col: float, height: float, lift: float = 0.0,
-                pyramid=True, zmax: float | None = None) -> np.ndarray:
+                pyramid=True, zmax: float | None = None, origin=(0, 0),
+                shape=None) -> np.ndarray:
     """uint8 mask (1 shadow, 0 lit, 255 void) of float32 heights ``z`` lit by a point light at
     fractional (``row``, ``col``; cell centres at whole numbers, anywhere, also off the raster)
     and ``height`` (the heights' units); every cell's ray starts ``lift`` above it.
     ``pyramid``: True (default) marches over a new maximum-height pyramid of ``z``, a
     ``pyramid.MaxPyramid`` reuses one, False is the plain march (the same mask). ``zmax``: the
-    highest height (default: computed), above which nothing blocks."""
+    highest height (default: computed), above which nothing blocks. ``z`` may be a window, at
+    ``origin`` (row, column), of a raster of ``shape``, holding the ``halo`` of the cells asked
+    for (the light in the raster's coordinates): its cells get the whole raster's answers, bit
+    for bit."""
     if z.dtype != np.float32 or z.ndim != 2:
         raise TypeError("heights must be a 2-D float32 array")
     out = np.empty(z.shape, np.uint8)
     _point_cpu(z, *pyramid_args(z, pyramid), float(row), float(col), float(height), float(lift),
-               _zmax(z, zmax), out)
+               _zmax(z, zmax), _place(z, origin, shape), out)
     return out
 
 
@@ -188,5 +222,6 @@ def shadow_mask_gpu(g, row: float, col: float, height: float, lift: float = 0.0,
     out = g.empty((rows, cols), np.uint8)
     with g.timed():
         g.launch(_point_gpu, rows, cols, g.z, *g.pyramid_args(pyramid is not False), float(row),
-                 float(col), float(height), float(lift), float(g.zmax), out)
+                 float(col), float(height), float(lift), float(g.zmax),
+                 g.upload(_place(g, (0, 0), None)), out)
     return g.download(out)

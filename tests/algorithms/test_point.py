@@ -197,3 +197,26 @@ def test_a_descending_ray_is_shadowed_by_a_wall_just_before_a_low_light(pyramid)
     west = m[64, :98]                          # the ground west of the wall, a ridge
     assert (west[np.arange(98) != 25] == 1).all() and west[25] == 0
     assert (m[:, 99:] == 0).all()
+
+
+def test_a_window_with_its_halo_gives_the_whole_rasters_cells():
+    """Each window of a raster, lit through ``halo`` (the box around it and the light, one cell
+    more) at its origin, gets the whole raster's mask bit for bit: lights inside, low, and off
+    the raster, with the pyramid and without."""
+    z = spectral(150, 2.4, seed=2, relief=90.0, cols=170)
+    z[70:73, 80:84] = np.nan
+    for light in ((71.3, 90.6, float(bilinear(z, 71.3, 90.6)) + 3.0), (-25.2, 200.7, 140.0),
+                  (160.4, -8.9, 60.0)):
+        whole = point.shadow_mask(z, *light)
+        for pyramid in (True, False):
+            got = np.full(z.shape, 7, np.uint8)
+            for r0 in range(0, 150, 64):
+                for c0 in range(0, 170, 48):
+                    region = (r0, min(150, r0 + 64), c0, min(170, c0 + 48))
+                    a, b, c, d = point.halo(region, light[0], light[1], z.shape)
+                    m = point.shadow_mask(np.ascontiguousarray(z[a:b, c:d]), *light,
+                                          pyramid=pyramid, origin=(a, c), shape=z.shape)
+                    got[region[0]:region[1], region[2]:region[3]] = \
+                        m[region[0] - a:region[1] - a, region[2] - c:region[3] - c]
+            assert np.array_equal(got, whole), (light, pyramid)
+        assert 0.05 < (whole == 1).mean() < 0.99
