@@ -404,6 +404,13 @@ def test_point_light_gpu_equals_cpu(pyramid):
             cpu = point.shadow_mask(z, *light, lift=lift, pyramid=pyramid)
             out = point.shadow_mask_gpu(g, *light, lift=lift, pyramid=pyramid)
             np.testing.assert_array_equal(out, cpu, err_msg=f"{light} lift {lift}")
+    for light in lights[1:3]:           # a window with its halo, the raster's arithmetic
+        h = point.halo((0, 8, 12, 23), light[0], light[1], z.shape)
+        w = np.ascontiguousarray(z[h[0]:h[1], h[2]:h[3]])
+        out = point.shadow_mask_gpu(gpu.GpuDem(w), *light, pyramid=pyramid, origin=(h[0], h[2]),
+                                    shape=z.shape)
+        np.testing.assert_array_equal(out, point.shadow_mask(w, *light, pyramid=pyramid,
+                                                             origin=(h[0], h[2]), shape=z.shape))
     stats = {}
     got = point_light_mask(z, 17.5, 4.2, lights[1][2], backend="gpu", stats=stats)
     np.testing.assert_array_equal(got, point.shadow_mask(z, 4.2, 17.5, lights[1][2]))

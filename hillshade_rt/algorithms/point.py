@@ -213,9 +213,9 @@ def shadow_mask(z: np.ndarray, row: float, col: float, height: float, lift: floa
 
 
 def shadow_mask_gpu(g, row: float, col: float, height: float, lift: float = 0.0,
-                    pyramid=True) -> np.ndarray:
+                    pyramid=True, origin=(0, 0), shape=None) -> np.ndarray:
     """``shadow_mask`` on the GPU: ``g`` a ``gpu.GpuDem`` (heights on the device; its pyramid
-    built and uploaded once, at its first use)."""
+    built and uploaded once, at its first use); ``origin``, ``shape`` as for ``shadow_mask``."""
     rows, cols = g.shape
     if not np.isfinite(g.zmax):          # nothing but voids
         return np.full(g.shape, 255, np.uint8)
@@ -223,5 +223,5 @@ def shadow_mask_gpu(g, row: float, col: float, height: float, lift: float = 0.0,
     with g.timed():
         g.launch(_point_gpu, rows, cols, g.z, *g.pyramid_args(pyramid is not False), float(row),
                  float(col), float(height), float(lift), float(g.zmax),
-                 g.upload(_place(g, (0, 0), None)), out)
+                 g.upload(_place(g, origin, shape)), out)
     return g.download(out)
