@@ -114,17 +114,21 @@ def point_is_blocked(z, pyr, off, widths, nlev, r, c, h0, row_l, col_l, height_l
         # last of them, at most klast)
         up = lev + 1 if lev < nlev else lev
         left = np.int64(0)
-        while up > 0:
-            left = samples_left(up, line, i0, pos, sd, so)
-            low = hr
-            if descending:
+        if descending:
+            while up > 0:
+                left = samples_left(up, line, i0, pos, sd, so)
                 kend = k + left
                 if kend > klast:
                     kend = klast
-                low = madd(h0, float(kend), rise)
-            if pyr[off[up] + (rr >> up) * widths[up] + (cc >> up)] < low:
-                break
-            up -= 1
+                if pyr[off[up] + (rr >> up) * widths[up] + (cc >> up)] < madd(h0, float(kend),
+                                                                              rise):
+                    break
+                up -= 1
+        else:
+            while up > 0 and not pyr[off[up] + (rr >> up) * widths[up] + (cc >> up)] < hr:
+                up -= 1
+            if up > 0:
+                left = samples_left(up, line, i0, pos, sd, so)
         lev = up
         if lev == 0:
             if terrain_on_line(z, dom_col, line, pos) > hr:
