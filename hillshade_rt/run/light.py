@@ -1,7 +1,11 @@
 """The ``shadow --light-position`` / ``--light-lonlat`` run: a DEM lit by a point light (issue
 21, item 1; ``algorithms.point``): each cell's ray runs straight to the light and ends there.
-In memory, on the CPU, hard shadows: the combinations not built yet (windows, Dask, the GPU,
---soft, --classes, --self-shadow, series) are usage errors that say so."""
+Hard shadows, exact (the march over the maximum-height pyramid), on the CPU or the GPU
+(``--backend``), in memory or in windows (``--window-size``, or a DEM larger than
+``--max-memory`` allows: each window read with its halo toward the light, ``_windows``). The
+combinations not built yet (a sun option, --soft, --classes, --self-shadow, --algorithm,
+--earth-curvature, Dask, --output-pattern, --cog, --preview in windows) are usage errors that
+say so."""
 
 from __future__ import annotations
 
@@ -37,8 +41,8 @@ class LightConfig:
         from .config import inputs_and_output
         taken = [name for name, on in self.refused.items() if on]
         if taken:
-            raise UsageProblem(f"a point light does not take {', '.join(taken)} (yet: in "
-                               "memory, on the CPU, hard shadows)")
+            raise UsageProblem(f"a point light does not take {', '.join(taken)} (yet: hard "
+                               "shadows, in memory or in windows, CPU or GPU)")
         if (self.position is None) == (self.lonlat is None):
             raise UsageProblem("give --light-position X,Y,Z or --light-lonlat LON,LAT,Z, one "
                                "of them")
