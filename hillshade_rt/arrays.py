@@ -431,13 +431,16 @@ def irradiance(heights, times, spacing: float | tuple[float, float] | Grid | Non
 
 
 def point_light_mask(heights, x: float, y: float, z: float, *,
-                     height_above_ground: float = 0.0) -> np.ndarray:
+                     height_above_ground: float = 0.0, backend: str = "auto",
+                     pyramid=True, stats: dict | None = None) -> np.ndarray:
     """Cast-shadow mask (uint8: 1 shadow, 0 lit, 255 nodata) of a DEM from ``read_dem`` lit by
     a point light at (``x``, ``y``) in the DEM's CRS and ``z`` metres above its datum (a lamp,
     a mast's floodlight, a near sun: issue 21): each cell's ray runs straight to the light and
     ends there (``algorithms.point``). A light inside the terrain is an error; one above a cell
     lights it. ``heights`` may also be an array with the light given in array coordinates
-    (``x`` the fractional column, ``y`` the row, cell centres at whole numbers)."""
+    (``x`` the fractional column, ``y`` the row, cell centres at whole numbers). ``backend``
+    as for :func:`shadow_mask` (``auto``: the GPU when there is one); ``pyramid`` False marches
+    without the maximum-height pyramid (the same mask); ``stats`` gets ``backend``."""
     from .algorithms import point
     from .algorithms.horizon import bilinear
     if hasattr(heights, "heights") and hasattr(heights, "transform"):
@@ -458,4 +461,16 @@ def point_light_mask(heights, x: float, y: float, z: float, *,
     if np.isfinite(ground) and z <= ground:
         raise HillshadeError(f"the light is inside the terrain ({z:g} m at a ground of "
                              f"{ground:g} m)")
-    return point.shadow_mask(z_arr, row, col, float(z), _lift(height_above_ground))
+    lift = _lift(height_above_ground)
+    from .gpu import resolve_backend
+    ran_on = resolve_backend(backend)
+    if stats is not None:
+        stats["backend"] = ran_on
+    if ran_on == "gpu":
+        from .gpu import GpuDem
+        g = GpuDem(z_arr)
+        out = point.shadow_mask_gpu(g, row, col, float(z), lift, pyramid)
+        if stats is not None:
+            stats["gpu"] = g.report()
+        return out
+    return point.shadow_mask(z_arr, row, col, float(z), lift, pyramid)

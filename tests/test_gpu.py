@@ -328,9 +328,10 @@ def test_kernels_compile_for_a_real_gpu():
     assert p.returncode == 0, p.stderr[-3000:]
     kernels = json.loads(p.stdout.strip().splitlines()[-1])
     assert set(kernels) == {"_brute_gpu", "_mask_gpu", "_colour_gpu", "_nextv_pass_gpu",
-                            "_scan_gpu", "_sweep_gpu", "canonical_copy_gpu", "_span_gpu"}
+                            "_scan_gpu", "_sweep_gpu", "canonical_copy_gpu", "_span_gpu",
+                            "_point_gpu"}
     assert all(k["ptx_bytes"] > 1000 for k in kernels.values())
-    for name in ("_brute_gpu", "_mask_gpu", "_sweep_gpu", "_nextv_pass_gpu"):
+    for name in ("_brute_gpu", "_mask_gpu", "_sweep_gpu", "_nextv_pass_gpu", "_point_gpu"):
         assert kernels[name]["fma"] == 0, name
 
 
@@ -384,3 +385,33 @@ def test_pyramid_march_on_the_gpu_equals_the_plain_march():
                                           ref)
             np.testing.assert_array_equal(g.shadow_mask(rays, "auto"), ref)
     assert g._pyramid is not None and g.pyramid_args() is g.pyramid_args()   # uploaded once
+
+
+@pytest.mark.parametrize("pyramid", [True, False])
+def test_point_light_gpu_equals_cpu(pyramid):
+    """The point light's CUDA kernel (one per-cell body with the CPU's): the same mask on a small
+    DEM with voids, for lights high, low (descending rays), off the raster, with a lift; and
+    arrays.point_light_mask(backend="gpu") is that kernel."""
+    from hillshade_rt.algorithms import point
+    from hillshade_rt.algorithms.horizon import bilinear
+    from hillshade_rt.arrays import point_light_mask
+    z = _terrain(19, 23, seed=8)
+    g = gpu.GpuDem(z)
+    lights = [(9.3, 11.6, 400.0), (4.2, 17.5, float(bilinear(z, 4.2, 17.5)) + 3.0),
+              (-6.1, 30.7, 120.0), (25.4, -3.3, 60.0)]
+    for light in lights:
+        for lift in (0.0, 2.0):
+            cpu = point.shadow_mask(z, *light, lift=lift, pyramid=pyramid)
+            out = point.shadow_mask_gpu(g, *light, lift=lift, pyramid=pyramid)
+            np.testing.assert_array_equal(out, cpu, err_msg=f"{light} lift {lift}")
+    for light in lights[1:3]:           # a window with its halo, the raster's arithmetic
+        h = point.halo((0, 8, 12, 23), light[0], light[1], z.shape)
+        w = np.ascontiguousarray(z[h[0]:h[1], h[2]:h[3]])
+        out = point.shadow_mask_gpu(gpu.GpuDem(w), *light, pyramid=pyramid, origin=(h[0], h[2]),
+                                    shape=z.shape)
+        np.testing.assert_array_equal(out, point.shadow_mask(w, *light, pyramid=pyramid,
+                                                             origin=(h[0], h[2]), shape=z.shape))
+    stats = {}
+    got = point_light_mask(z, 17.5, 4.2, lights[1][2], backend="gpu", stats=stats)
+    np.testing.assert_array_equal(got, point.shadow_mask(z, 4.2, 17.5, lights[1][2]))
+    assert stats["backend"] == "gpu" and (got == 1).any() and (got == 0).any()

@@ -80,14 +80,13 @@ def _point_light(files, position, lonlat, lift, soft, self_shadow, classes, algo
     refused = {"--azimuth/--elevation/--time/--start": any(
                    sun[k] for k in SUN_KEYS if k not in PLACE_KEYS),
                "--soft": soft, "--self-shadow": self_shadow, "--classes": classes,
-               "--algorithm": given("algorithm"), "--earth-curvature": curvature is not None,
-               "--backend gpu": kw.get("backend") == "gpu"}
-    for k, flag in (("window_size", "--window-size"), ("max_memory", "--max-memory"),
-                    ("scheduler", "--scheduler"), ("output_pattern", "--output-pattern"),
+               "--algorithm": given("algorithm"), "--earth-curvature": curvature is not None}
+    for k, flag in (("scheduler", "--scheduler"), ("output_pattern", "--output-pattern"),
                     ("cog", "--cog")):
         refused[flag] = bool(kw.pop(k))
-    light_shadow(LightConfig(list(files), kw.pop("output"), position, lonlat, lift,
-                             to_read_options(kw), to_run_options(kw, say), refused))
+    window_size, max_memory = kw.pop("window_size"), kw.pop("max_memory")
+    light_shadow(LightConfig(list(files), kw.pop("output"), position, lonlat, lift, window_size,
+                             max_memory, to_read_options(kw), to_run_options(kw, say), refused))
 
 
 def _lightmap_refused(kw, soft, curvature, refraction_k) -> dict:

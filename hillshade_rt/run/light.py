@@ -1,7 +1,11 @@
 """The ``shadow --light-position`` / ``--light-lonlat`` run: a DEM lit by a point light (issue
 21, item 1; ``algorithms.point``): each cell's ray runs straight to the light and ends there.
-In memory, on the CPU, hard shadows: the combinations not built yet (windows, Dask, the GPU,
---soft, --classes, --self-shadow, series) are usage errors that say so."""
+Hard shadows, exact (the march over the maximum-height pyramid), on the CPU or the GPU
+(``--backend``), in memory or in windows (``--window-size``, or a DEM larger than
+``--max-memory`` allows: each window read with its halo toward the light, ``_windows``). The
+combinations not built yet (a sun option, --soft, --classes, --self-shadow, --algorithm,
+--earth-curvature, Dask, --output-pattern, --cog, --preview in windows) are usage errors that
+say so."""
 
 from __future__ import annotations
 
@@ -26,6 +30,8 @@ class LightConfig:
     position: object = None
     lonlat: object = None
     height_above_ground: float = 0.0
+    window_size: object = None
+    max_memory: object = None
     read: ReadOptions = field(default_factory=ReadOptions)
     run: RunOptions = field(default_factory=RunOptions)
     refused: dict = field(default_factory=dict)
@@ -35,8 +41,8 @@ class LightConfig:
         from .config import inputs_and_output
         taken = [name for name, on in self.refused.items() if on]
         if taken:
-            raise UsageProblem(f"a point light does not take {', '.join(taken)} (yet: in "
-                               "memory, on the CPU, hard shadows)")
+            raise UsageProblem(f"a point light does not take {', '.join(taken)} (yet: hard "
+                               "shadows, in memory or in windows, CPU or GPU)")
         if (self.position is None) == (self.lonlat is None):
             raise UsageProblem("give --light-position X,Y,Z or --light-lonlat LON,LAT,Z, one "
                                "of them")
@@ -65,7 +71,8 @@ def parse_triple(text, what: str) -> tuple[float, float, float]:
 
 
 def light_shadow(cfg: LightConfig) -> dict:
-    """Write the point light's cast-shadow mask of the DEM; returns the report."""
+    """Write the point light's cast-shadow mask of the DEM; returns the report. In memory, or
+    in windows (``--window-size``, or a DEM larger than ``--max-memory`` allows; ``_windows``)."""
     import numpy as np
 
     from ..arrays import point_light_mask
@@ -73,10 +80,20 @@ def light_shadow(cfg: LightConfig) -> dict:
         write_raster
     from ..io.write import Claims
     from ..preview import relief_rgb
+    from .config import parse_window_size
+    from .local import needs_windows
+    from .plan import bytes_per_cell, default_max_memory, parse_size
     from .report import Timer
 
     ro = cfg.run
     dem, output, position, lonlat = cfg.check()
+    wshape = parse_window_size(cfg.window_size)
+    try:
+        limit = (parse_size(cfg.max_memory) if cfg.max_memory is not None
+                 else default_max_memory())
+    except HillshadeError as exc:
+        raise UsageProblem(f"--max-memory: {exc}") from None
+    per_cell = bytes_per_cell("brute")
     timer = Timer()
     claims = Claims([dem], ro.overwrite)
     claims.claim(output, "OUTPUT")
@@ -85,45 +102,131 @@ def light_shadow(cfg: LightConfig) -> dict:
             claims.claim(extra, what)
     check_output_format(output, output_driver(output, ro.fmt), "uint8", 1, False)
     with timer("read"):
-        d = cfg.read.read(dem)
-    if lonlat is not None:
-        if d.crs is None:
-            raise HillshadeError("--light-lonlat needs a DEM with a CRS; give --light-position "
-                                 "in the DEM's coordinates")
-        from pyproj import Transformer
-        lon, lat, zl = lonlat
-        x, y = Transformer.from_crs("EPSG:4326", d.crs.to_wkt(), always_xy=True).transform(lon,
-                                                                                           lat)
-    else:
-        x, y, zl = position
-    if d.transform is None:
-        raise HillshadeError("the DEM has no geotransform: a light position needs one")
-    with timer("compute"):
-        mask = point_light_mask(d, x, y, zl, height_above_ground=cfg.height_above_ground)
-    col, row = ~d.transform @ (x, y)
-    tags = {"HILLSHADE_RT_VERSION": __version__, "VALUES": "1 shadow, 0 lit, 255 nodata",
-            "LIGHT": f"point light at x={x:.6f} y={y:.6f} z={zl:g} m (the DEM's CRS)",
-            "LIGHT_CELL": f"row {row - 0.5:.3f} col {col - 0.5:.3f}",
-            "HEIGHT_ABOVE_GROUND_M": f"{float(cfg.height_above_ground):g}"}
-    with timer("write"):
-        write_raster(output, mask, d, nodata=255, description="cast shadow (point light)",
-                     tags=tags, overwrite=ro.overwrite, fmt=ro.fmt)
-        if ro.preview is not None:
-            write_png(ro.preview, relief_rgb(d.heights, d.grid,
-                                             shade=np.where(mask == 1, 1.0, 0.0)), ro.overwrite)
-    valid = mask != 255
-    share = float((mask[valid] == 1).mean()) if valid.any() else 0.0
-    rep = {"input": input_label(d.path), "output": os.path.abspath(output),
-           "shape": list(d.shape), "light": {"x": x, "y": y, "z": zl, "row": row - 0.5,
-                                             "col": col - 0.5},
+        src = cfg.read.open(dem, windows=wshape is not None)
+    with src:
+        windowed = wshape is not None or needs_windows(src, limit, per_cell)
+        if windowed and ro.preview is not None:
+            raise UsageProblem("a point light in windows does not take --preview (yet)")
+        if lonlat is not None:
+            if src.crs is None:
+                raise HillshadeError("--light-lonlat needs a DEM with a CRS; give "
+                                     "--light-position in the DEM's coordinates")
+            from pyproj import Transformer
+            lon, lat, zl = lonlat
+            x, y = Transformer.from_crs("EPSG:4326", src.crs.to_wkt(),
+                                        always_xy=True).transform(lon, lat)
+        else:
+            x, y, zl = position
+        if src.transform is None:
+            raise HillshadeError("the DEM has no geotransform: a light position needs one")
+        col, row = ~src.transform @ (x, y)
+        row, col = row - 0.5, col - 0.5            # the transform's cell centres at +0.5
+        tags = {"HILLSHADE_RT_VERSION": __version__, "VALUES": "1 shadow, 0 lit, 255 nodata",
+                "LIGHT": f"point light at x={x:.6f} y={y:.6f} z={zl:g} m (the DEM's CRS)",
+                "LIGHT_CELL": f"row {row:.3f} col {col:.3f}",
+                "HEIGHT_ABOVE_GROUND_M": f"{float(cfg.height_above_ground):g}"}
+        st: dict = {}
+        if windowed:
+            shadowed, valid, processing = _windows(src, row, col, zl, cfg.height_above_ground,
+                                                   wshape, limit, per_cell, output, tags, ro,
+                                                   timer, st)
+        else:
+            with timer("read"):
+                d = src.read()
+            with timer("compute"):
+                mask = point_light_mask(d, x, y, zl, height_above_ground=cfg.height_above_ground,
+                                        backend=ro.backend, stats=st)
+            with timer("write"):
+                write_raster(output, mask, d, nodata=255, description="cast shadow (point light)",
+                             tags=tags, overwrite=ro.overwrite, fmt=ro.fmt)
+                if ro.preview is not None:
+                    write_png(ro.preview, relief_rgb(d.heights, d.grid,
+                                                     shade=np.where(mask == 1, 1.0, 0.0)),
+                              ro.overwrite)
+            shadowed, valid = int((mask == 1).sum()), int((mask != 255).sum())
+            processing = {"mode": "memory"}
+        shape, path = src.shape, src.path
+    share = shadowed / valid if valid else 0.0
+    rep = {"input": input_label(path), "output": os.path.abspath(output),
+           "shape": list(shape), "light": {"x": x, "y": y, "z": zl, "row": row, "col": col},
            "height_above_ground_m": float(cfg.height_above_ground),
-           "shadow_fraction": share, "backend": "cpu", "algorithm": "point (plain march)",
+           "shadow_fraction": share, "backend": st.get("backend", "cpu"),
+           "algorithm": "point (pyramid march)", "processing": processing,
            "seconds": dict(timer.seconds, total=timer.total()), "version": __version__}
+    if "gpu" in st:
+        rep["gpu"] = st["gpu"]
     if ro.report_path is not None:
         write_json(ro.report_path, rep, ro.overwrite)
     if not ro.quiet:
-        ro.say("summary", f"hillshade-rt: {output}: {d.shape[1]}x{d.shape[0]}, point light "
-                          f"at row {row - 0.5:.1f} col {col - 0.5:.1f} z {zl:g} m: "
+        ro.say("summary", f"hillshade-rt: {output}: {shape[1]}x{shape[0]}, point light "
+                          f"at row {row:.1f} col {col:.1f} z {zl:g} m: "
                           f"{100 * share:.2f}% of valid cells in shadow; compute "
-                          f"{timer.seconds['compute']:.2f} s")
+                          f"{timer.seconds.get('compute', 0.0):.2f} s")
     return rep
+
+
+def _windows(src, row, col, zl, lift, wshape, limit, per_cell, output, tags, ro, timer, st):
+    """The mask in windows of ``src`` (an open ``io.DemSource``), each read with its halo: the box
+    of the window and the light's cell (``algorithms.point.halo``), lit with the raster's ray
+    arithmetic (the same cells as in memory, bit for bit) and its region written by
+    ``io.raster.BandWriter``. Windows of ``wshape``, else squares a quarter of what
+    ``--max-memory`` allows (the halo reaches to the light: it may be larger). Returns
+    (shadowed cells, valid cells, the report's processing)."""
+    import numpy as np
+
+    from ..algorithms import point
+    from ..algorithms.horizon import bilinear
+    from ..gpu import GpuDem, resolve_backend
+    from ..io.raster import BandWriter
+    from .plan import window_budget
+
+    lift = float(lift)
+    if not (math.isfinite(lift) and lift >= 0.0):
+        raise HillshadeError(f"height_above_ground must be finite metres >= 0, got {lift}")
+    rows, cols = src.shape
+    if wshape is None:
+        side = max(64, int(math.sqrt(window_budget(limit, per_cell)[0] / 4)))
+        wshape = (side, side)
+    ran_on = resolve_backend(ro.backend)
+    st["backend"] = ran_on
+    shadowed = valid = windows = 0
+    largest = 0
+    with src.reader() as rd, BandWriter(output, src, 1, "uint8", 255, tags,
+                                        overwrite=ro.overwrite, fmt=ro.fmt) as w:
+        fr, fc = math.floor(row), math.floor(col)        # the light inside the terrain?
+        a, b = max(0, fr - 1), min(rows, fr + 3)
+        c, d = max(0, fc - 1), min(cols, fc + 3)
+        if a < b and c < d:
+            near = np.empty((b - a, d - c), np.float32)
+            rd.read((a, b, c, d), near)
+            ground = bilinear(near, row - a, col - c) if 0 <= row <= rows - 1 and \
+                0 <= col <= cols - 1 else math.nan
+            if np.isfinite(ground) and zl <= ground:
+                raise HillshadeError(f"the light is inside the terrain ({zl:g} m at a ground "
+                                     f"of {ground:g} m)")
+        for r0 in range(0, rows, wshape[0]):
+            for c0 in range(0, cols, wshape[1]):
+                region = (r0, min(rows, r0 + wshape[0]), c0, min(cols, c0 + wshape[1]))
+                h = point.halo(region, row, col, (rows, cols))
+                with timer("read"):
+                    z = np.empty((h[1] - h[0], h[3] - h[2]), np.float32)
+                    rd.read(h, z)
+                largest = max(largest, z.size)
+                with timer("compute"):
+                    if ran_on == "gpu":     # the window's heights only: a DEM on the device
+                        m = point.shadow_mask_gpu(GpuDem(z), row, col, zl, lift,
+                                                  origin=(h[0], h[2]), shape=(rows, cols))
+                    else:
+                        m = point.shadow_mask(z, row, col, zl, lift, origin=(h[0], h[2]),
+                                              shape=(rows, cols))
+                    part = np.ascontiguousarray(m[region[0] - h[0]:region[1] - h[0],
+                                                  region[2] - h[2]:region[3] - h[2]])
+                    shadowed += int((part == 1).sum())
+                    valid += int((part != 255).sum())
+                with timer("write"):
+                    w.write(1, part, window=region)
+                windows += 1
+        w.describe(1, "cast shadow (point light)")
+    return shadowed, valid, {"mode": "tiled", "windows": windows,
+                             "window_shape": list(wshape), "largest_halo_cells": largest,
+                             "bytes_read": rd.bytes_read}

@@ -7,7 +7,9 @@ import pytest
 
 from hillshade_rt.algorithms import brute, point
 from hillshade_rt.geometry import Grid, sun_rays
-from hillshade_rt.testing import fractal_terrain
+from hillshade_rt.algorithms.horizon import bilinear
+from hillshade_rt.algorithms.pyramid import MaxPyramid
+from hillshade_rt.testing import fractal_terrain, spectral
 
 
 @pytest.mark.parametrize("row_l", [40.0, 17.3, 71.9])
@@ -108,6 +110,9 @@ def test_equals_the_plain_python_reference(light):
     got = point.shadow_mask(z, *light)
     ref = _reference(z, *light)
     assert (got != ref).sum() == 0
+    assert np.array_equal(point.shadow_mask(z, *light, pyramid=False), ref)
+    assert np.array_equal(point.shadow_mask(z, *light, lift=2.5),
+                          _reference(z, *light, lift=2.5))
     assert 0.02 < (ref == 1).mean() < 0.98 or light[2] > 800
 
 
@@ -130,3 +135,88 @@ def test_the_array_api_takes_the_light_in_the_dems_crs(tmp_path):
     assert (got == 1).any() and (got == 0).any()
     with pytest.raises(HillshadeError, match="inside the terrain"):
         point_light_mask(d, x, y, float(np.nanmin(z)) - 1.0)
+
+
+def _lights(z):
+    """Lights over spectral terrain ``z``: a high lamp, low lamps a few metres over the ground
+    (below many cells: rays that descend), lights off the raster (high, and low: below the
+    highest cells), and far lights along non-special azimuths (163, 203.7, 290 deg)."""
+    rows, cols = z.shape
+    zmax = float(np.nanmax(z))
+    out = [(97.3, 121.6, zmax + 150.0)]
+    for r, c in ((60.2, 150.7), (181.5, 33.4), (128.0, 64.0)):
+        out.append((r, c, float(bilinear(z, r, c)) + 4.0))
+    out += [(-40.3, 260.9, zmax + 60.0), (250.4, -30.2, 0.5 * zmax), (-3.7, 100.2, 0.3 * zmax)]
+    for az, dist, height in ((163.0, 300.0, 0.8 * zmax), (203.7, 170.0, 1.3 * zmax),
+                             (290.0, 420.0, 0.6 * zmax)):
+        a = math.radians(az)
+        out.append((rows / 2 - dist * math.cos(a), cols / 2 + dist * math.sin(a), height))
+    return out
+
+
+@pytest.mark.parametrize("lift", [0.0, 3.0])
+def test_the_pyramid_march_is_the_plain_march(lift):
+    """The march over the pyramid gives the plain march's mask cell for cell (rough and smooth
+    fractals with voids; every light of ``_lights``), also with a MaxPyramid reused."""
+    shadowed = []
+    for z in (spectral(200, 2.4, seed=4, relief=120.0, cols=230),
+              fractal_terrain(200, 230, 8, relief=150.0, octaves=6)):
+        z[40:44, 70:75] = np.nan
+        z[0, 17] = np.nan
+        pyr = MaxPyramid(z)
+        for light in _lights(z):
+            plain = point.shadow_mask(z, *light, lift=lift, pyramid=False)
+            assert np.array_equal(point.shadow_mask(z, *light, lift=lift), plain), light
+            assert np.array_equal(point.shadow_mask(z, *light, lift=lift, pyramid=pyr), plain)
+            shadowed.append(float((plain == 1).mean()))
+    assert sum(0.05 < s < 0.95 for s in shadowed) >= len(shadowed) // 2   # not all trivial
+
+
+def test_the_pyramid_march_equals_the_reference_with_lights_low_and_off_the_raster():
+    z = spectral(48, 2.4, seed=9, relief=40.0, cols=56)
+    z[20, 30] = np.nan
+    for light in ((20.4, 11.2, float(bilinear(z, 20.4, 11.2)) + 2.0), (-9.5, 70.3, 20.0),
+                  (60.1, -4.4, 35.0)):
+        assert np.array_equal(point.shadow_mask(z, *light), _reference(z, *light)), light
+
+
+@pytest.mark.parametrize("pyramid", [True, False])
+def test_a_descending_ray_is_shadowed_by_a_wall_just_before_a_low_light(pyramid):
+    """Flat ground at 0, a wall 3.5 high along column 98, a lamp 2 m high at (64, 100), a ridge
+    60 high along column 20 (rows 0-63) and another along column 25 (rows 64-127; no ray from
+    one ridge crosses the other). From the ridges the rays descend to the lamp: at the wall the
+    ray from column c is 2 + 58 * 2 / (100 - c) high, 3.45 from column 20 (shadowed), 3.55 from
+    column 25 (lit). A march that compared a block with the ray at its first sample (right for
+    rising rays) skips the wall from column 20."""
+    z = np.zeros((128, 128), np.float32)
+    z[:, 98] = 3.5
+    z[:64, 20] = 60.0
+    z[64:, 25] = 60.0
+    m = point.shadow_mask(z, 64.0, 100.0, 2.0, pyramid=pyramid)
+    assert (m[:64, 20] == 1).all() and (m[64:, 25] == 0).all()
+    west = m[64, :98]                          # the ground west of the wall, a ridge
+    assert (west[np.arange(98) != 25] == 1).all() and west[25] == 0
+    assert (m[:, 99:] == 0).all()
+
+
+def test_a_window_with_its_halo_gives_the_whole_rasters_cells():
+    """Each window of a raster, lit through ``halo`` (the box around it and the light, one cell
+    more) at its origin, gets the whole raster's mask bit for bit: lights inside, low, and off
+    the raster, with the pyramid and without."""
+    z = spectral(150, 2.4, seed=2, relief=90.0, cols=170)
+    z[70:73, 80:84] = np.nan
+    for light in ((71.3, 90.6, float(bilinear(z, 71.3, 90.6)) + 3.0), (-25.2, 200.7, 140.0),
+                  (160.4, -8.9, 60.0)):
+        whole = point.shadow_mask(z, *light)
+        for pyramid in (True, False):
+            got = np.full(z.shape, 7, np.uint8)
+            for r0 in range(0, 150, 64):
+                for c0 in range(0, 170, 48):
+                    region = (r0, min(150, r0 + 64), c0, min(170, c0 + 48))
+                    a, b, c, d = point.halo(region, light[0], light[1], z.shape)
+                    m = point.shadow_mask(np.ascontiguousarray(z[a:b, c:d]), *light,
+                                          pyramid=pyramid, origin=(a, c), shape=z.shape)
+                    got[region[0]:region[1], region[2]:region[3]] = \
+                        m[region[0] - a:region[1] - a, region[2] - c:region[3] - c]
+            assert np.array_equal(got, whole), (light, pyramid)
+        assert 0.05 < (whole == 1).mean() < 0.99

@@ -46,7 +46,7 @@ def test_light_position_and_lonlat_write_the_api_mask(tmp_path, runner, dem):
 @pytest.mark.parametrize("extra, code, words", [
     (["--azimuth", "163", "--elevation", "10"], 2, "--azimuth"),
     (["--soft"], 2, "--soft"),
-    (["--window-size", "64"], 2, "--window-size"),
+    (["--scheduler", "synchronous"], 2, "--scheduler"),
     (["--algorithm", "smap"], 2, "--algorithm"),
 ])
 def test_what_a_point_light_does_not_take_is_a_usage_error(tmp_path, runner, dem, extra, code,
@@ -65,3 +65,54 @@ def test_a_light_inside_the_terrain_fails_and_writes_nothing(tmp_path, runner, d
     assert not out.exists()
     r = runner.invoke(cli, ["shadow", dem, str(out), "--light-position", "1,2"])
     assert r.exit_code == 2 and "three numbers" in r.output
+
+
+def test_backend_gpu_writes_the_cpu_mask(tmp_path, runner):
+    """--backend gpu (the CUDA kernel; numba's simulator in the tests) writes the CPU's mask and
+    says so in the report."""
+    z = fractal_terrain(18, 22, 3, relief=60.0) + 100.0
+    z[5, 6] = np.nan
+    dem = write_geotiff(tmp_path / "s.tif", z, Affine(10, 0, 500000, 0, -10, 4000000),
+                        CRS.from_epsg(32633))
+    x, y, zl = 500000 + 10 * 15.3, 4000000 - 10 * 4.8, 190.0
+    out, rep = tmp_path / "m.tif", tmp_path / "r.json"
+    r = runner.invoke(cli, ["shadow", dem, str(out), "--light-position", f"{x},{y},{zl}",
+                            "--backend", "gpu", "--report", str(rep)])
+    assert r.exit_code == 0, r.output
+    want = point_light_mask(read_dem(dem), x, y, zl, backend="cpu")
+    assert np.array_equal(read_band(out), want) and (want == 1).any() and (want == 0).any()
+    assert json.loads(rep.read_text())["backend"] == "gpu"
+
+
+@pytest.mark.parametrize("light", [(41.3, 57.8, 30.0), (-30.2, 190.6, 400.0),
+                                   (140.7, -12.4, 250.0)])
+def test_windows_write_the_in_memory_mask(tmp_path, runner, light):
+    """--window-size: windows read with their halo toward the light (inside the raster, low; off
+    it, high and low) write the in-memory mask cell for cell."""
+    z = fractal_terrain(150, 170, 12, relief=300.0) + 100.0
+    z[60:63, 20:24] = np.nan
+    dem = write_geotiff(tmp_path / "w.tif", z, Affine(10, 0, 500000, 0, -10, 4000000),
+                        CRS.from_epsg(32633))
+    row, col, zl = light
+    if 0 <= row < 150 and 0 <= col < 170:
+        from hillshade_rt.algorithms.horizon import bilinear
+        zl += bilinear(z, row, col)
+    x, y = 500000 + 10 * (col + 0.5), 4000000 - 10 * (row + 0.5)
+    out, rep = tmp_path / "m.tif", tmp_path / "r.json"
+    r = runner.invoke(cli, ["shadow", dem, str(out), "--light-position", f"{x},{y},{zl}",
+                            "--window-size", "64x72", "--height-above-ground", "1",
+                            "--report", str(rep)])
+    assert r.exit_code == 0, r.output
+    want = point_light_mask(read_dem(dem), x, y, zl, height_above_ground=1.0)
+    assert np.array_equal(read_band(out), want)
+    assert 0.02 < (want == 1).mean() < 0.98
+    proc = json.loads(rep.read_text())["processing"]
+    assert proc["mode"] == "tiled" and proc["windows"] == 9
+
+
+def test_a_light_inside_the_terrain_is_refused_in_windows(tmp_path, runner, dem):
+    out = tmp_path / "m.tif"
+    r = runner.invoke(cli, ["shadow", dem, str(out), "--light-position", "500300,3999500,10",
+                            "--window-size", "64"])
+    assert r.exit_code == 1 and "inside the terrain" in r.output
+    assert not out.exists()
