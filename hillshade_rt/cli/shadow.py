@@ -141,8 +141,9 @@ def hillshade(files, ambient, scale, algorithm, curvature, refraction_k, soft,
         from ..run.lightmap import LightmapConfig, lightmap
         refused = _lightmap_refused(kw, soft, curvature, refraction_k)
         lightmap(LightmapConfig(list(files), kw.pop("output"), light_position, light_lonlat,
-                                height_above_ground, to_read_options(kw),
-                                to_run_options(kw, say), refused, ambient=ambient, scale=scale,
+                                height_above_ground, read=to_read_options(kw),
+                                run=to_run_options(kw, say), refused=refused, ambient=ambient,
+                                scale=scale,
                                 falloff=falloff or "none", bits=int(bits or 8)))
         return
     if falloff is not None or bits is not None:
