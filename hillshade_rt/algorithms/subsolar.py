@@ -14,7 +14,9 @@ step_m^2 with R the body's radius of curvature in the ray's true azimuth at the 
 curvature). Then the exact march over the maximum-height pyramid
 (``pyramid.ray_is_blocked_pyramid``), as brute. Codes: 1 shadow, 0 lit, 255 void.
 
-CPU (``prange`` over rows) and CUDA twins from one device function (``_subsolar_cell``).
+CPU (``prange`` over rows) and CUDA twins from one device function (``_subsolar_cell``); every
+``a + b * c`` of the per-cell sun is ``raymath.madd`` (never fused on the GPU), so both backends
+compute the same rays bit for bit.
 """
 
 import math
@@ -25,7 +27,7 @@ from numba import prange
 from ._cuda import cuda, kernel
 from ._jitcache import njit
 from .pyramid import ray_is_blocked_pyramid
-from .raymath import ray_is_blocked
+from .raymath import madd, ray_is_blocked
 
 
 @njit(cache=True)
@@ -33,16 +35,16 @@ def cell_sun(slat, clat, slon, clon, a, e2, sx, sy, sz, h):
     """(east, north, up) of the vector from a cell (sin/cos latitude, longitude; height ``h``
     above the ellipsoid of semi-major axis ``a``, eccentricity squared ``e2``) to the sun at
     (sx, sy, sz), in the cell's local frame (metres)."""
-    n = a / math.sqrt(1.0 - e2 * slat * slat)
+    n = a / math.sqrt(madd(1.0, -e2 * slat, slat))
     px = (n + h) * clat * clon
     py = (n + h) * clat * slon
-    pz = (n * (1.0 - e2) + h) * slat
+    pz = madd(h, n, 1.0 - e2) * slat
     vx = sx - px
     vy = sy - py
     vz = sz - pz
-    up = clat * clon * vx + clat * slon * vy + slat * vz
-    east = -slon * vx + clon * vy
-    north = -slat * clon * vx - slat * slon * vy + clat * vz
+    up = madd(madd(clat * clon * vx, clat * slon, vy), slat, vz)
+    east = madd(-slon * vx, clon, vy)
+    north = madd(madd(-slat * clon * vx, -slat * slon, vy), clat, vz)
     return east, north, up
 
 
@@ -53,13 +55,13 @@ def cell_ray(slat, clat, slon, clon, cth, sth, a, e2, sx, sy, sz, h, dx, dy, col
     ``up`` <= 0: the sun is below the cell's horizon (the rest meaningless); ``step_dom`` 0: the
     sun at the zenith (nothing blocks it)."""
     e, n, u = cell_sun(slat, clat, slon, clon, a, e2, sx, sy, sz, h)
-    hor = math.sqrt(e * e + n * n)
+    hor = math.sqrt(madd(e * e, n, n))
     if u <= 0.0 or hor == 0.0:
         return u, False, 0, 0.0, 0.0, 0.0
     te = e / hor
     tn = n / hor
-    ge = te * cth + tn * sth           # grid azimuth = true azimuth + theta
-    gn = tn * cth - te * sth
+    ge = madd(te * cth, tn, sth)       # grid azimuth = true azimuth + theta
+    gn = madd(tn * cth, -te, sth)
     pc = ge * col_sign / dx            # as geometry.ray_steps
     pr = gn * row_sign / dy
     if abs(pc) >= abs(pr):
@@ -76,10 +78,10 @@ def cell_ray(slat, clat, slon, clon, cth, sth, a, e2, sx, sy, sz, h, dx, dy, col
     rise = (u / hor) * step_m
     curv = 0.0
     if curv_k >= 0.0:
-        w2 = 1.0 - e2 * slat * slat
+        w2 = madd(1.0, -e2 * slat, slat)
         big_n = a / math.sqrt(w2)
         big_m = a * (1.0 - e2) / (w2 * math.sqrt(w2))
-        inv_r = tn * tn / big_m + te * te / big_n
+        inv_r = madd(tn * tn / big_m, te * te, 1.0 / big_n)
         curv = (1.0 - curv_k) * 0.5 * inv_r * step_m * step_m
     return u, dom_col, sd, so, rise, curv
 
