@@ -464,7 +464,7 @@ def point_light_mask(heights, x: float, y: float, z: float, *,
 def subsolar_mask(dem, lat: float, lon: float, *, sun_distance: float | None = None,
                   body=None, height_above_ground: float = 0.0, curvature=True,
                   refraction_k: float | None = None, frames=None, pyramid=None,
-                  sun_xyz=None, backend: str = "cpu") -> np.ndarray:
+                  sun_xyz=None, soft: bool = False, backend: str = "cpu") -> np.ndarray:
     """Cast-shadow mask (uint8: 1 shadow, 0 lit, 255 nodata) of a DEM from ``read_dem`` lit by
     the sun whose subsolar point is (``lat``, ``lon``, degrees on the body) at ``sun_distance``
     metres from the body's centre (default the body's mean distance): every cell with its own
@@ -479,6 +479,8 @@ def subsolar_mask(dem, lat: float, lon: float, *, sun_distance: float | None = N
     the Earth, 0 elsewhere: ``earth.refraction_for``); the sun's elevation itself is geometric.
     frames (``bodysun.CellFrames``), pyramid (``algorithms.pyramid.MaxPyramid``) and
     ``sun_xyz``: prepared once for many suns (frames and pyramid are the costly parts).
+    soft: the visible fraction of the solar disk instead (float32 0..1, NaN nodata; the disk's
+    angular radius asin(R_sun / distance), the horizon from the cell's own ray).
     """
     from . import bodysun
     from .algorithms import pyramid as pyr_mod, subsolar
@@ -508,15 +510,23 @@ def subsolar_mask(dem, lat: float, lon: float, *, sun_distance: float | None = N
         raise HillshadeError(f"curvature must be True, False or 'auto', got {curvature!r}")
     k = refraction_for(body, refraction_k) if curvature else -1.0
     e2 = 1.0 - (body.b * body.b) / (body.a * body.a)
+    radius = bodysun.sun_radius_deg(float(np.linalg.norm(sun_xyz)))
     if backend == "gpu":
         from .gpu import GpuDem
         g = GpuDem(z)
         fr = tuple(g.upload(a) for a in frames.args())
+        if soft:
+            return subsolar.soft_fraction_gpu(g, fr, grid, body.a, e2, sun_xyz, radius, k,
+                                              lift=lift)
         return subsolar.shadow_mask_gpu(g, fr, grid, body.a, e2, sun_xyz, k, lift=lift)
     if backend not in ("cpu", "auto"):
         raise HillshadeError(f"backend must be cpu, gpu or auto, got {backend!r}")
     if not np.isfinite(z).any():
-        return np.full(z.shape, 255, dtype=np.uint8)
+        return (np.full(z.shape, np.nan, np.float32) if soft
+                else np.full(z.shape, 255, dtype=np.uint8))
     pyr = pyr_mod.pyramid_args(z, True if pyramid is None else pyramid)
     zmax = float(np.nanmax(z))
+    if soft:
+        return subsolar.soft_fraction(z, pyr, frames.args(), grid, body.a, e2, sun_xyz, radius,
+                                      k, zmax, lift)
     return subsolar.shadow_mask(z, pyr, frames.args(), grid, body.a, e2, sun_xyz, k, zmax, lift)

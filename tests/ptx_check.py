@@ -97,6 +97,8 @@ def main() -> int:
     f32 = np.float32
     frames = tuple(g.upload(np.full(z.shape, v, f32)) for v in (0.5, 0.866, 0.2, 0.98, 1.0, 0.0))
     subsolar.shadow_mask_gpu(g, frames, geographic, 1737400.0, 0.0, (1e11, 2e10, 5e10), 0.0)
+    subsolar.soft_fraction_gpu(g, frames, geographic, 1737400.0, 0.0, (1e11, 2e10, 5e10), 0.27,
+                               0.0)
     out = {}
     for (name, _), ptx in compiled.items():
         prev = out.get(name, {"ptx_bytes": 0, "fma": 0})

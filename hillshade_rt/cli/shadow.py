@@ -108,14 +108,14 @@ def _subsolar(files, subsolar, distance, body, light_position, light_lonlat, lif
                    sun[k] for k in SUN_KEYS if k not in PLACE_KEYS),
                "--light-position/--light-lonlat": light_position is not None
                or light_lonlat is not None,
-               "--soft": soft, "--self-shadow": self_shadow, "--classes": classes,
+               "--self-shadow": self_shadow, "--classes": classes,
                "--algorithm": given("algorithm")}
     for k, flag in (("window_size", "--window-size"), ("max_memory", "--max-memory"),
                     ("scheduler", "--scheduler"), ("output_pattern", "--output-pattern"),
                     ("cog", "--cog")):
         refused[flag] = bool(kw.pop(k))
     subsolar_shadow(SubsolarConfig(list(files), kw.pop("output"), subsolar, distance, body,
-                                   lift, curvature, refraction_k, to_read_options(kw),
+                                   lift, soft, curvature, refraction_k, to_read_options(kw),
                                    to_run_options(kw, say), refused))
 
 

@@ -1,9 +1,10 @@
 """The ``shadow --subsolar LAT,LON`` run (issue 21, item 2; ``arrays.subsolar_mask``): the sun
 given by its subsolar point on the DEM's body (``--body`` overrides the CRS's) and its distance
 (``--sun-distance``, default the body's mean distance), every cell lit by its own sun. In
-memory, hard shadows; the CPU, or the GPU with ``--backend gpu``. What it does not take yet
-(--azimuth/--time, a point light, --soft, --classes, --self-shadow, --algorithm, windows, Dask)
-is a usage error that says so."""
+memory; hard shadows or --soft (the visible fraction of the solar disk, whose radius is
+asin(R_sun / distance)); the CPU, or the GPU with ``--backend gpu``. What it does not take yet
+(--azimuth/--time, a point light, --classes, --self-shadow, --algorithm, windows, Dask) is a
+usage error that says so."""
 
 from __future__ import annotations
 
@@ -29,6 +30,7 @@ class SubsolarConfig:
     sun_distance: float | None = None
     body: str | None = None
     height_above_ground: float = 0.0
+    soft: bool = False
     curvature: bool | None = None
     refraction_k: float | None = None
     read: ReadOptions = field(default_factory=ReadOptions)
@@ -43,7 +45,7 @@ class SubsolarConfig:
         taken = [name for name, on in self.refused.items() if on]
         if taken:
             raise UsageProblem(f"--subsolar does not take {', '.join(taken)} (yet: in memory, "
-                               "hard shadows)")
+                               "the shadow or --soft)")
         inputs, output = inputs_and_output(self.files, self.output, None)
         if len(inputs) != 1:
             raise UsageProblem("--subsolar lights one DEM: give DEM OUTPUT")
@@ -70,13 +72,14 @@ def subsolar_shadow(cfg: SubsolarConfig) -> dict:
 
     from ..arrays import subsolar_mask
     from ..bodysun import CellFrames, body_from_option, cell_suns, mean_sun_distance, \
-        sun_vector
+        sun_radius_deg, sun_vector
     from ..earth import dem_body, refraction_for
     from ..errors import HillshadeError
     from ..io import check_output_format, input_label, output_driver, write_json, write_png, \
         write_raster
     from ..io.write import Claims
     from ..preview import relief_rgb
+    from ..products import product
     from .report import Timer
 
     ro = cfg.run
@@ -89,7 +92,8 @@ def subsolar_shadow(cfg: SubsolarConfig) -> dict:
     for extra, what in ((ro.report_path, "--report"), (ro.preview, "--preview")):
         if extra is not None:
             claims.claim(extra, what)
-    check_output_format(output, output_driver(output, ro.fmt), "uint8", 1, False)
+    prod = product("shadow", bool(cfg.soft))
+    check_output_format(output, output_driver(output, ro.fmt), prod.dtype, 1, prod.continuous)
     with timer("read"):
         d = cfg.read.read(dem)
     if d.transform is None or d.crs is None:
@@ -101,24 +105,31 @@ def subsolar_shadow(cfg: SubsolarConfig) -> dict:
     curvature = True if cfg.curvature is None else bool(cfg.curvature)
     with timer("compute"):
         frames = CellFrames.of_dem(d)
-        mask = subsolar_mask(d, lat, lon, body=body, height_above_ground=cfg.height_above_ground,
-                             curvature=curvature, refraction_k=cfg.refraction_k, frames=frames,
-                             sun_xyz=s, backend="gpu" if ro.backend == "gpu" else "cpu")
+        arr = subsolar_mask(d, lat, lon, body=body, height_above_ground=cfg.height_above_ground,
+                            curvature=curvature, refraction_k=cfg.refraction_k, frames=frames,
+                            sun_xyz=s, soft=bool(cfg.soft),
+                            backend="gpu" if ro.backend == "gpu" else "cpu")
         az, el = cell_suns(frames, body, s, d.heights, float(cfg.height_above_ground))
-    valid = mask != 255
-    share = float((mask[valid] == 1).mean()) if valid.any() else 0.0
+    if cfg.soft:
+        valid = np.isfinite(arr)
+        shade = np.where(valid, 1.0 - arr, 0.0)
+        share = float((arr[valid] < 0.5).mean()) if valid.any() else 0.0
+        arr = np.where(valid, arr, np.float32(prod.nodata)).astype(np.float32)
+    else:
+        valid = arr != 255
+        shade = np.where(arr == 1, 1.0, 0.0)
+        share = float((arr[valid] == 1).mean()) if valid.any() else 0.0
     el_v = el[valid] if valid.any() else el.ravel()
     az_v = az[valid] if valid.any() else az.ravel()
-    tags = {"HILLSHADE_RT_VERSION": __version__, "VALUES": "1 shadow, 0 lit, 255 nodata",
+    tags = {"HILLSHADE_RT_VERSION": __version__, "VALUES": prod.values,
             "SUBSOLAR": f"lat {lat:g} lon {lon:g} (degrees on {body.source})",
             "SUN_DISTANCE_M": f"{distance:.6g}",
             "HEIGHT_ABOVE_GROUND_M": f"{float(cfg.height_above_ground):g}"}
     with timer("write"):
-        write_raster(output, mask, d, nodata=255, description="cast shadow (per-cell suns)",
-                     tags=tags, overwrite=ro.overwrite, fmt=ro.fmt)
+        write_raster(output, arr, d, nodata=prod.nodata, description=f"{prod.what} (per-cell "
+                     "suns)", tags=tags, overwrite=ro.overwrite, fmt=ro.fmt)
         if ro.preview is not None:
-            write_png(ro.preview, relief_rgb(d.heights, d.grid,
-                                             shade=np.where(mask == 1, 1.0, 0.0)), ro.overwrite)
+            write_png(ro.preview, relief_rgb(d.heights, d.grid, shade=shade), ro.overwrite)
     rep = {"input": input_label(d.path), "output": os.path.abspath(output),
            "shape": list(d.shape),
            "subsolar": {"lat": lat, "lon": lon},
@@ -130,6 +141,7 @@ def subsolar_shadow(cfg: SubsolarConfig) -> dict:
            "curvature": {"applied": curvature,
                          "refraction_k": refraction_for(body, cfg.refraction_k)
                          if curvature else None},
+           "sun_radius_deg": sun_radius_deg(distance), "soft": bool(cfg.soft),
            "height_above_ground_m": float(cfg.height_above_ground),
            "shadow_fraction": share, "backend": "gpu" if ro.backend == "gpu" else "cpu",
            "algorithm": "subsolar (pyramid march, a sun per cell)",
@@ -140,5 +152,5 @@ def subsolar_shadow(cfg: SubsolarConfig) -> dict:
         ro.say("summary", f"hillshade-rt: {output}: {d.shape[1]}x{d.shape[0]}, subsolar point "
                           f"{lat:g},{lon:g} on {body.source}: sun elevation "
                           f"{el_v.min():.2f}..{el_v.max():.2f} deg; {100 * share:.2f}% of "
-                          f"valid cells in shadow; compute {timer.seconds['compute']:.2f} s")
+                          f"valid cells in shadow{' (less than half the disk)' if cfg.soft else ''}; compute {timer.seconds['compute']:.2f} s")
     return rep

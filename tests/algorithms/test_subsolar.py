@@ -175,3 +175,70 @@ def test_gpu_twin_equals_cpu():
         out = arrays.subsolar_mask(dem, 1.0, 83.7, curvature=curv, backend="gpu")
         np.testing.assert_array_equal(out, cpu)
         assert (cpu == 1).any() and (cpu == 0).any()
+
+
+def test_soft_on_a_flat_sphere_is_the_disk_above_the_astronomical_horizon():
+    """Across the terminator (0.02 degree cells on the lunar sphere) the visible fraction is
+    the disk above each cell's horizontal plane: sun.disk_fraction(0, el, asin(R_sun / d))."""
+    from hillshade_rt.sun import disk_fraction
+    dem = memory_dem(np.zeros((10, 60), np.float32), Affine(0.02, 0, -0.6, 0, -0.02, 10.1),
+                     MOON_GEOGRAPHIC)
+    body = dem_body(dem)
+    sub = (3.0, 90.53)                       # the terminator at lon 0, lat 10
+    f = arrays.subsolar_mask(dem, *sub, soft=True)
+    fr = bodysun.CellFrames.of_dem(dem)
+    _, el = bodysun.cell_suns(fr, body, bodysun.sun_vector(body, *sub), dem.heights)
+    radius = bodysun.sun_radius_deg(bodysun.AU)
+    assert abs(radius - 0.2666) < 1e-3
+    want = disk_fraction(0.0, el, radius)
+    assert f.dtype == np.float32
+    np.testing.assert_allclose(f, want, atol=1e-5)
+    partial = (f > 0) & (f < 1)
+    assert partial.sum() >= 10 and (f == 0).any() and (f == 1).any()
+
+
+def test_soft_agrees_with_the_hard_mask_and_the_plain_horizon():
+    """On relief: fraction > 1/2 exactly where the hard mask is lit; the partly lit cells'
+    fractions are the disk above the plain reference's horizon along the cell's own ray."""
+    from hillshade_rt.sun import disk_fraction
+    from hillshade_rt.testing import reference_horizon
+    z = fractal_terrain(24, 30, 4, relief=600.0)
+    z[2, 3] = np.nan
+    dem = memory_dem(z, Affine(0.002, 0, 12.0, 0, -0.002, -20.0), MOON_GEOGRAPHIC)
+    body = dem_body(dem)
+    sub = _subsolar_at(-20.024, 12.03, 203.7, 6.0)
+    hard = arrays.subsolar_mask(dem, *sub, curvature=False)
+    f = arrays.subsolar_mask(dem, *sub, curvature=False, soft=True)
+    valid = np.isfinite(z)
+    assert np.isnan(f[~valid]).all() and (hard[~valid] == 255).all()
+    np.testing.assert_array_equal(f[valid] > 0.5, hard[valid] == 0)
+    fr = bodysun.CellFrames.of_dem(dem)
+    az, el = bodysun.cell_suns(fr, body, bodysun.sun_vector(body, *sub), z)
+    gaz = bodysun.grid_azimuth(fr, az)
+    radius = bodysun.sun_radius_deg(bodysun.AU)
+    g = dem.grid
+    partial = np.argwhere((f > 0) & (f < 1))
+    assert len(partial) >= 5
+    for r, c in partial[:25]:
+        h = reference_horizon(z, g.dx, g.dy, gaz[r, c], g.col_sign, g.row_sign)[0][r, c]
+        assert abs(f[r, c] - disk_fraction(h, el[r, c], radius)) < 1e-4, (r, c)
+
+
+def test_soft_gpu_twin_equals_cpu():
+    """The CUDA soft kernel (the simulator here) against the CPU's, far and near suns."""
+    from hillshade_rt import gpu
+    ok, what = gpu.status()
+    if not ok:
+        pytest.skip(what)
+    z = fractal_terrain(10, 13, 4, relief=600.0)
+    z[2, 3] = np.nan
+    dem = memory_dem(z, Affine(0.002, 0, 12.0, 0, -0.002, -20.0), MOON_GEOGRAPHIC)
+    sub = _subsolar_at(-20.01, 12.013, 290.0, 9.0)
+    for distance in (None, 3e9):       # a near sun: a disk 13 degrees across, many cells partly lit
+        cpu = arrays.subsolar_mask(dem, *sub, soft=True, sun_distance=distance)
+        out = arrays.subsolar_mask(dem, *sub, soft=True, sun_distance=distance, backend="gpu")
+        # the decisions bit for bit; the partial fractions up to the backends' acos and atan
+        whole = np.isnan(cpu) | (cpu == 0) | (cpu == 1)
+        np.testing.assert_array_equal(out[whole], cpu[whole])
+        np.testing.assert_allclose(out, cpu, atol=1e-6)
+        assert ((cpu > 0) & (cpu < 1)).any() and np.isnan(cpu[2, 3])

@@ -55,7 +55,7 @@ def test_body_overrides_the_crs(tmp_path, runner, dem):
     (["--subsolar", "95,0"], "latitude"),
     (["--subsolar", "10"], "LAT,LON"),
     (["--subsolar", "10,0", "--azimuth", "163", "--elevation", "10"], "--azimuth"),
-    (["--subsolar", "10,0", "--soft"], "--soft"),
+    (["--subsolar", "10,0", "--classes"], "--classes"),
     (["--subsolar", "10,0", "--window-size", "64"], "--window-size"),
     (["--subsolar", "10,0", "--algorithm", "smap"], "--algorithm"),
     (["--subsolar", "10,0", "--light-position", "1,2,3"], "--light-position"),
@@ -76,3 +76,18 @@ def test_a_sun_inside_the_body_fails_in_one_line(tmp_path, runner, dem):
                             "1000"])
     assert r.exit_code == 1 and "radius" in r.output and "Traceback" not in r.output
     assert len(r.output.strip().splitlines()) == 1 and not out.exists()
+
+
+def test_soft_writes_the_visible_fraction(tmp_path, runner, dem):
+    out, rep = tmp_path / "f.tif", tmp_path / "r.json"
+    r = runner.invoke(cli, ["shadow", dem, str(out), "--subsolar", "-20.5,97.3", "--soft",
+                            "--sun-distance", "5e9", "--report", str(rep)])
+    assert r.exit_code == 0, r.output
+    want = subsolar_mask(read_dem(dem), -20.5, 97.3, sun_distance=5e9, soft=True)
+    got = read_band(out)
+    assert got.dtype == np.float32 and got[3, 4] == -9999.0
+    valid = np.isfinite(want)
+    np.testing.assert_array_equal(got[valid], want[valid])
+    assert ((want > 0) & (want < 1)).any()
+    doc = json.loads(rep.read_text())
+    assert doc["soft"] and abs(doc["sun_radius_deg"] - 7.99) < 0.01
