@@ -478,7 +478,8 @@ def subsolar_mask(dem, lat: float, lon: float, *, sun_distance: float | None = N
     azimuth at each cell, bent back by terrestrial refraction (``refraction_k``, default 0.13 on
     the Earth, 0 elsewhere: ``earth.refraction_for``); the sun's elevation itself is geometric.
     frames (``bodysun.CellFrames``), pyramid (``algorithms.pyramid.MaxPyramid``) and
-    ``sun_xyz``: prepared once for many suns (frames and pyramid are the costly parts).
+    ``sun_xyz``: prepared once for many suns (frames and pyramid are the costly parts; pass the
+    ``body`` as an ``earth.Body`` too: finding the CRS's costs ~10 ms a call).
     soft: the visible fraction of the solar disk instead (float32 0..1, NaN nodata; the disk's
     angular radius asin(R_sun / distance), the horizon from the cell's own ray).
     """
