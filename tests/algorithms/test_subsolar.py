@@ -50,7 +50,9 @@ def _cos_distance(dem, lat_s, lon_s):
     (MOON_GEOGRAPHIC, Affine(0.5, 0, -30.0, 0, -0.5, 30.0), (60, 120), (10.0, 100.0)),
     (MOON_GEOGRAPHIC, Affine(0.5, 0, -30.0, 0, -0.5, 30.0), (60, 120), (-23.4, -83.3)),
     (MOON_NORTH_POLAR, Affine(10000.0, 0, -300000.0, 0, -10000.0, 300000.0), (60, 60),
-     (-5.0, 30.0))])
+     (-5.0, 30.0)),
+    (MOON_NORTH_POLAR, Affine(10000.0, 0, -305000.0, 0, -10000.0, 305000.0), (61, 61),
+     (3.0, -131.3))])                                   # a cell centre on the pole
 def test_terminator_on_a_flat_sphere(crs, transform, shape, sub):
     """No relief on the lunar sphere, curvature on: lit exactly where the subsolar point is
     less than 90 degrees away (flat terrain on a sphere never shadows itself)."""
