@@ -49,6 +49,9 @@ class SubsolarConfig:
         inputs, output = inputs_and_output(self.files, self.output, None)
         if len(inputs) != 1:
             raise UsageProblem("--subsolar lights one DEM: give DEM OUTPUT")
+        d = self.sun_distance
+        if d is not None and not (math.isfinite(d) and d > 0):
+            raise UsageProblem(f"--sun-distance must be positive metres, got {d:g}")
         return inputs[0], output, parse_latlon(self.subsolar)
 
 
@@ -101,6 +104,9 @@ def subsolar_shadow(cfg: SubsolarConfig) -> dict:
                              "cell's place on the body)")
     body = body_from_option(cfg.body, dem_body(d))
     distance = mean_sun_distance(body) if cfg.sun_distance is None else float(cfg.sun_distance)
+    if not distance > body.a:
+        raise UsageProblem(f"--sun-distance must exceed the body's radius ({body.a:.0f} m, "
+                           f"{body.source}), got {distance:g} m")
     s = sun_vector(body, lat, lon, distance)
     curvature = True if cfg.curvature is None else bool(cfg.curvature)
     with timer("compute"):

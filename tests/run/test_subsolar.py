@@ -70,11 +70,12 @@ def test_what_subsolar_does_not_take_is_a_usage_error(tmp_path, runner, dem, ext
     assert not out.exists()
 
 
-def test_a_sun_inside_the_body_fails_in_one_line(tmp_path, runner, dem):
+@pytest.mark.parametrize("distance, words", [("1000", "radius"), ("-5", "positive")])
+def test_a_sun_inside_the_body_is_a_usage_error(tmp_path, runner, dem, distance, words):
     out = tmp_path / "m.tif"
     r = runner.invoke(cli, ["shadow", dem, str(out), "--subsolar", "10,0", "--sun-distance",
-                            "1000"])
-    assert r.exit_code == 1 and "radius" in r.output and "Traceback" not in r.output
+                            distance])
+    assert r.exit_code == 2 and words in r.output and "Traceback" not in r.output
     assert len(r.output.strip().splitlines()) == 1 and not out.exists()
 
 
