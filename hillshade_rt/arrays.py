@@ -474,3 +474,75 @@ def point_light_mask(heights, x: float, y: float, z: float, *,
             stats["gpu"] = g.report()
         return out
     return point.shadow_mask(z_arr, row, col, float(z), lift, pyramid)
+
+
+def subsolar_mask(dem, lat: float, lon: float, *, sun_distance: float | None = None,
+                  body=None, height_above_ground: float = 0.0, curvature=True,
+                  refraction_k: float | None = None, frames=None, pyramid=None,
+                  sun_xyz=None, soft: bool = False, backend: str = "cpu") -> np.ndarray:
+    """Cast-shadow mask (uint8: 1 shadow, 0 lit, 255 nodata) of a DEM from ``read_dem`` lit by
+    the sun whose subsolar point is (``lat``, ``lon``, degrees on the body) at ``sun_distance``
+    metres from the body's centre (default the body's mean distance): every cell with its own
+    sun direction from its own place on the body (issue 21; ``bodysun``,
+    ``algorithms.subsolar``). A cell whose sun is at or below its horizon is in shadow (the
+    body hides the sun: the terminator).
+
+    body: an ``earth.Body`` or ``--body``'s text ('moon', 'mars', 'earth', a radius in metres);
+    default the DEM's CRS's. curvature: True (default), False or "auto" (on when the raster is
+    more than 1 km across); the rays curve with the body's radius of curvature in their
+    azimuth at each cell, bent back by terrestrial refraction (``refraction_k``, default 0.13 on
+    the Earth, 0 elsewhere: ``earth.refraction_for``); the sun's elevation itself is geometric.
+    frames (``bodysun.CellFrames``), pyramid (``algorithms.pyramid.MaxPyramid``) and
+    ``sun_xyz``: prepared once for many suns (frames and pyramid are the costly parts; pass the
+    ``body`` as an ``earth.Body`` too: finding the CRS's costs ~10 ms a call).
+    soft: the visible fraction of the solar disk instead (float32 0..1, NaN nodata; the disk's
+    angular radius asin(R_sun / distance), the horizon from the cell's own ray).
+    """
+    from . import bodysun
+    from .algorithms import pyramid as pyr_mod, subsolar
+    from .earth import dem_body, refraction_for
+    if not (hasattr(dem, "heights") and hasattr(dem, "transform")):
+        raise HillshadeError("subsolar_mask takes a DEM from read_dem (its transform and CRS "
+                             "place every cell on the body)")
+    if dem.transform is None or dem.crs is None:
+        raise HillshadeError("per-cell suns need a DEM with a geotransform and a CRS")
+    z = dem.heights
+    if z.dtype != np.float32:
+        z = z.astype(np.float32)
+    if body is None or isinstance(body, (str, int, float)):
+        body = bodysun.body_from_option(None if body is None else str(body), dem_body(dem))
+    lift = _lift(height_above_ground)
+    if sun_xyz is None:
+        sun_xyz = bodysun.sun_vector(body, lat, lon, sun_distance)
+    if frames is None:
+        frames = bodysun.CellFrames.of_dem(dem)
+    if frames.shape != z.shape:
+        raise HillshadeError(f"frames are {frames.shape} but heights are {z.shape}")
+    grid = dem.grid
+    if curvature == "auto":
+        extent = max(float(np.max(grid.dx)) * grid.cols, float(np.max(grid.dy)) * grid.rows)
+        curvature = extent > 1000.0
+    elif curvature not in (True, False):
+        raise HillshadeError(f"curvature must be True, False or 'auto', got {curvature!r}")
+    k = refraction_for(body, refraction_k) if curvature else -1.0
+    e2 = 1.0 - (body.b * body.b) / (body.a * body.a)
+    radius = bodysun.sun_radius_deg(float(np.linalg.norm(sun_xyz)))
+    if backend == "gpu":
+        from .gpu import GpuDem
+        g = GpuDem(z)
+        fr = tuple(g.upload(a) for a in frames.args())
+        if soft:
+            return subsolar.soft_fraction_gpu(g, fr, grid, body.a, e2, sun_xyz, radius, k,
+                                              lift=lift)
+        return subsolar.shadow_mask_gpu(g, fr, grid, body.a, e2, sun_xyz, k, lift=lift)
+    if backend not in ("cpu", "auto"):
+        raise HillshadeError(f"backend must be cpu, gpu or auto, got {backend!r}")
+    if not np.isfinite(z).any():
+        return (np.full(z.shape, np.nan, np.float32) if soft
+                else np.full(z.shape, 255, dtype=np.uint8))
+    pyr = pyr_mod.pyramid_args(z, True if pyramid is None else pyramid)
+    zmax = float(np.nanmax(z))
+    if soft:
+        return subsolar.soft_fraction(z, pyr, frames.args(), grid, body.a, e2, sun_xyz, radius,
+                                      k, zmax, lift)
+    return subsolar.shadow_mask(z, pyr, frames.args(), grid, body.a, e2, sun_xyz, k, zmax, lift)

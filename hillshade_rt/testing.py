@@ -556,3 +556,22 @@ def write_subsolar_csv(path, rows) -> str:
 
 LUNAR_SOUTH_POLAR_STEREO = ("+proj=stere +lat_0=-90 +lat_ts=-90 +lon_0=0 +k=1 +x_0=0 +y_0=0 "
                             "+R=1737400 +units=m +no_defs")
+
+
+MOON_GEOGRAPHIC = "+proj=longlat +R=1737400 +no_defs"
+MOON_NORTH_POLAR = ("+proj=stere +lat_0=90 +lon_0=0 +k=1 +x_0=0 +y_0=0 +R=1737400 +units=m "
+                    "+no_defs")
+
+
+def memory_dem(z, transform, crs):
+    """A ``io.Dem`` of heights ``z`` (float32; NaN voids) with ``transform`` (affine) in ``crs``
+    (any text rasterio's CRS takes: PROJ string, EPSG code, WKT), gridded as ``read_dem`` grids
+    it, without a file (the per-cell suns' tests)."""
+    from rasterio.crs import CRS
+
+    from .geometry import grid_from_transform
+    from .io.dem import Dem
+    c = CRS.from_user_input(crs)
+    z = np.asarray(z, np.float32)
+    return Dem(z, grid_from_transform(transform, c, z.shape), "memory", "gdal",
+               transform=transform, crs=c)

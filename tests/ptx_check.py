@@ -94,6 +94,13 @@ def main() -> int:
         # the scan in windows (run.reach): a region's rays through a window on the device
         m = horizon.Marches(z[2:6, 3:9], (2, 6, 3, 9), rays, z.shape, 50.0)
         m.march(horizon.ScanWindow(z[0:8].copy(), (0, 8, 0, 14), z.shape, True, gpu.GpuDem))
+    # per-cell suns (algorithms.subsolar): the frames of a geographic lunar grid, curved rays
+    from hillshade_rt.algorithms import subsolar
+    f32 = np.float32
+    frames = tuple(g.upload(np.full(z.shape, v, f32)) for v in (0.5, 0.866, 0.2, 0.98, 1.0, 0.0))
+    subsolar.shadow_mask_gpu(g, frames, geographic, 1737400.0, 0.0, (1e11, 2e10, 5e10), 0.0)
+    subsolar.soft_fraction_gpu(g, frames, geographic, 1737400.0, 0.0, (1e11, 2e10, 5e10), 0.27,
+                               0.0)
     out = {}
     for (name, _), ptx in compiled.items():
         prev = out.get(name, {"ptx_bytes": 0, "fma": 0})

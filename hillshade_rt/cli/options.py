@@ -200,6 +200,22 @@ def lightmap_options(f):
     ])
 
 
+def subsolar_options(f):
+    """The sun by its subsolar point on a body (``shadow``): every cell its own sun."""
+    return _stack(f, [
+        click.option("--subsolar", metavar="LAT,LON", default=None,
+                     help="The sun straight above LAT,LON (degrees on the DEM's body) instead of "
+                          "--azimuth/--time: every cell's sun from its own place on the body; "
+                          "cells beyond the terminator are in shadow."),
+        click.option("--sun-distance", metavar="M", type=float, default=None,
+                     help="The sun's distance from the body's centre in metres, for "
+                          "--subsolar (default the body's mean distance: 1 AU, Mars 1.5237 AU)."),
+        click.option("--body", metavar="moon|mars|earth|RADIUS", default=None,
+                     help="The body for --subsolar instead of the CRS's: the Moon's or Mars' "
+                          "sphere, WGS84, or a sphere of RADIUS metres."),
+    ])
+
+
 def point_options(f):
     """Where the points of ``profile`` and ``query`` are: --at, --at-xy, --points."""
     return _stack(f, [

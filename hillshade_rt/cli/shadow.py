@@ -9,8 +9,8 @@ from .errors import errors_to_click, say
 from ..run.config import SUN_KEYS
 from .options import (algorithm_flags, algorithm_option, dem_options, finite, given,
                       height_above_ground_option, light_options, lightmap_options,
-                      physics_options, run_options,
-                      sun_options, to_read_options, to_run_options)
+                      physics_options, run_options, subsolar_options, sun_options,
+                      to_read_options, to_run_options)
 
 LIFT_HELP = ("Each cell's ray toward the sun starts this many metres above the cell (a person, "
              "a panel above every cell); brute marches it (auto runs brute), --soft the horizon "
@@ -43,11 +43,13 @@ def _config(files, kind, algorithm, options, kw, **more):
               help="Write classes: 0 lit, 1 self-shadow, 2 cast shadow, 255 nodata.")
 @height_above_ground_option(LIFT_HELP)
 @light_options
+@subsolar_options
 @run_options
 @dem_options
 @errors_to_click
 def shadow(files, algorithm, curvature, refraction_k, soft, self_shadow, classes,
-           height_above_ground, light_position, light_lonlat, **kw):
+           height_above_ground, light_position, light_lonlat, subsolar, sun_distance, body,
+           **kw):
     """Write the cast-shadow mask of DEM to OUTPUT (GeoTIFF: 1 shadow, 0 lit, 255 nodata).
 
     Several DEMs (tiles on one grid) are shaded as one mosaic, so that a mountain in one tile
@@ -57,6 +59,10 @@ def shadow(files, algorithm, curvature, refraction_k, soft, self_shadow, classes
     1 = fully lit, -9999 nodata); --classes writes 0 lit / 1 self-shadow / 2 cast / 255."""
     from ..algorithms import algorithm_for, options_for, options_from_cli
     from ..run import shade
+    if subsolar is not None or sun_distance is not None or body is not None:
+        return _subsolar(files, subsolar, sun_distance, body, light_position, light_lonlat,
+                         height_above_ground, soft, self_shadow, classes, curvature,
+                         refraction_k, kw)
     if light_position is not None or light_lonlat is not None:
         return _point_light(files, light_position, light_lonlat, height_above_ground, soft,
                             self_shadow, classes, algorithm, curvature, kw)
@@ -106,6 +112,30 @@ def _lightmap_refused(kw, soft, curvature, refraction_k) -> dict:
                     ("cog", "--cog")):
         refused[flag] = bool(kw.pop(k))
     return refused
+
+
+def _subsolar(files, subsolar, distance, body, light_position, light_lonlat, lift, soft,
+              self_shadow, classes, curvature, refraction_k, kw):
+    """``shadow --subsolar LAT,LON``: -> ``run.subsolar.SubsolarConfig`` -> ``run.subsolar``
+    (which refuses what it does not take yet)."""
+    from ..algorithms import options_from_cli
+    from ..run.config import PLACE_KEYS
+    from ..run.subsolar import SubsolarConfig, subsolar_shadow
+    options_from_cli(kw)
+    sun = {k: kw.pop(k) for k in SUN_KEYS}
+    refused = {"--azimuth/--elevation/--time/--start": any(
+                   sun[k] for k in SUN_KEYS if k not in PLACE_KEYS),
+               "--light-position/--light-lonlat": light_position is not None
+               or light_lonlat is not None,
+               "--self-shadow": self_shadow, "--classes": classes,
+               "--algorithm": given("algorithm")}
+    for k, flag in (("window_size", "--window-size"), ("max_memory", "--max-memory"),
+                    ("scheduler", "--scheduler"), ("output_pattern", "--output-pattern"),
+                    ("cog", "--cog")):
+        refused[flag] = bool(kw.pop(k))
+    subsolar_shadow(SubsolarConfig(list(files), kw.pop("output"), subsolar, distance, body,
+                                   lift, soft, curvature, refraction_k, to_read_options(kw),
+                                   to_run_options(kw, say), refused))
 
 
 @click.command()

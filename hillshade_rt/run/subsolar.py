@@ -1,0 +1,162 @@
+"""The ``shadow --subsolar LAT,LON`` run (issue 21, item 2; ``arrays.subsolar_mask``): the sun
+given by its subsolar point on the DEM's body (``--body`` overrides the CRS's) and its distance
+(``--sun-distance``, default the body's mean distance), every cell lit by its own sun. In
+memory; hard shadows or --soft (the visible fraction of the solar disk, whose radius is
+asin(R_sun / distance)); the CPU, or the GPU with ``--backend gpu``. What it does not take yet
+(--azimuth/--time, a point light, --classes, --self-shadow, --algorithm, windows, Dask) is a
+usage error that says so."""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, field
+
+from .. import __version__
+from ..errors import UsageProblem
+from .config import ReadOptions, RunOptions
+
+
+@dataclass
+class SubsolarConfig:
+    """``files``: DEM and OUTPUT (or the DEM alone with ``output``); ``subsolar``: (lat, lon)
+    or the command line's 'LAT,LON'; ``sun_distance`` metres or None; ``body``: --body's text
+    or None (the CRS's); ``curvature`` True/False or None (on); ``refused``: the options given
+    that this run does not take (name -> given)."""
+
+    files: list
+    output: str | None = None
+    subsolar: object = None
+    sun_distance: float | None = None
+    body: str | None = None
+    height_above_ground: float = 0.0
+    soft: bool = False
+    curvature: bool | None = None
+    refraction_k: float | None = None
+    read: ReadOptions = field(default_factory=ReadOptions)
+    run: RunOptions = field(default_factory=RunOptions)
+    refused: dict = field(default_factory=dict)
+
+    def check(self) -> tuple:
+        """(dem, output, (lat, lon)) checked: one DEM, nothing refused."""
+        from .config import inputs_and_output
+        if self.subsolar is None:
+            raise UsageProblem("--sun-distance and --body go with --subsolar LAT,LON")
+        taken = [name for name, on in self.refused.items() if on]
+        if taken:
+            raise UsageProblem(f"--subsolar does not take {', '.join(taken)} (yet: in memory, "
+                               "the shadow or --soft)")
+        inputs, output = inputs_and_output(self.files, self.output, None)
+        if len(inputs) != 1:
+            raise UsageProblem("--subsolar lights one DEM: give DEM OUTPUT")
+        d = self.sun_distance
+        if d is not None and not (math.isfinite(d) and d > 0):
+            raise UsageProblem(f"--sun-distance must be positive metres, got {d:g}")
+        return inputs[0], output, parse_latlon(self.subsolar)
+
+
+def parse_latlon(text) -> tuple[float, float]:
+    """'LAT,LON' as two finite floats, the latitude in [-90, 90] (a usage error otherwise)."""
+    parts = list(text) if isinstance(text, (tuple, list)) else str(text).split(",")
+    try:
+        vals = tuple(float(p) for p in parts)
+    except ValueError:
+        vals = ()
+    if len(vals) != 2 or not all(math.isfinite(v) for v in vals):
+        raise UsageProblem(f"--subsolar takes two numbers LAT,LON, got {text!r}")
+    if not -90.0 <= vals[0] <= 90.0:
+        raise UsageProblem(f"--subsolar latitude must be in [-90, 90] degrees, got {vals[0]:g}")
+    return vals
+
+
+def subsolar_shadow(cfg: SubsolarConfig) -> dict:
+    """Write the per-cell-sun cast-shadow mask of the DEM; returns the report."""
+    import numpy as np
+
+    from ..arrays import subsolar_mask
+    from ..bodysun import CellFrames, body_from_option, cell_suns, mean_sun_distance, \
+        sun_radius_deg, sun_vector
+    from ..earth import dem_body, refraction_for
+    from ..errors import HillshadeError
+    from ..io import check_output_format, input_label, output_driver, write_json, write_png, \
+        write_raster
+    from ..io.write import Claims
+    from ..preview import relief_rgb
+    from ..products import product
+    from .report import Timer
+
+    ro = cfg.run
+    dem, output, (lat, lon) = cfg.check()
+    if cfg.body is not None:
+        body_from_option(cfg.body)              # a bad --body: exit 2 before anything is read
+    timer = Timer()
+    claims = Claims([dem], ro.overwrite)
+    claims.claim(output, "OUTPUT")
+    for extra, what in ((ro.report_path, "--report"), (ro.preview, "--preview")):
+        if extra is not None:
+            claims.claim(extra, what)
+    prod = product("shadow", bool(cfg.soft))
+    check_output_format(output, output_driver(output, ro.fmt), prod.dtype, 1, prod.continuous)
+    with timer("read"):
+        d = cfg.read.read(dem)
+    if d.transform is None or d.crs is None:
+        raise HillshadeError("--subsolar needs a DEM with a geotransform and a CRS (each "
+                             "cell's place on the body)")
+    body = body_from_option(cfg.body, dem_body(d))
+    distance = mean_sun_distance(body) if cfg.sun_distance is None else float(cfg.sun_distance)
+    if not distance > body.a:
+        raise UsageProblem(f"--sun-distance must exceed the body's radius ({body.a:.0f} m, "
+                           f"{body.source}), got {distance:g} m")
+    s = sun_vector(body, lat, lon, distance)
+    curvature = True if cfg.curvature is None else bool(cfg.curvature)
+    with timer("compute"):
+        frames = CellFrames.of_dem(d)
+        arr = subsolar_mask(d, lat, lon, body=body, height_above_ground=cfg.height_above_ground,
+                            curvature=curvature, refraction_k=cfg.refraction_k, frames=frames,
+                            sun_xyz=s, soft=bool(cfg.soft),
+                            backend="gpu" if ro.backend == "gpu" else "cpu")
+        az, el = cell_suns(frames, body, s, d.heights, float(cfg.height_above_ground))
+    if cfg.soft:
+        valid = np.isfinite(arr)
+        shade = np.where(valid, 1.0 - arr, 0.0)
+        share = float((arr[valid] < 0.5).mean()) if valid.any() else 0.0
+        arr = np.where(valid, arr, np.float32(prod.nodata)).astype(np.float32)
+    else:
+        valid = arr != 255
+        shade = np.where(arr == 1, 1.0, 0.0)
+        share = float((arr[valid] == 1).mean()) if valid.any() else 0.0
+    el_v = el[valid] if valid.any() else el.ravel()
+    az_v = az[valid] if valid.any() else az.ravel()
+    tags = {"HILLSHADE_RT_VERSION": __version__, "VALUES": prod.values,
+            "SUBSOLAR": f"lat {lat:g} lon {lon:g} (degrees on {body.source})",
+            "SUN_DISTANCE_M": f"{distance:.6g}",
+            "HEIGHT_ABOVE_GROUND_M": f"{float(cfg.height_above_ground):g}"}
+    with timer("write"):
+        write_raster(output, arr, d, nodata=prod.nodata, description=f"{prod.what} (per-cell "
+                     "suns)", tags=tags, overwrite=ro.overwrite, fmt=ro.fmt)
+        if ro.preview is not None:
+            write_png(ro.preview, relief_rgb(d.heights, d.grid, shade=shade), ro.overwrite)
+    rep = {"input": input_label(d.path), "output": os.path.abspath(output),
+           "shape": list(d.shape),
+           "subsolar": {"lat": lat, "lon": lon},
+           "body": {"source": body.source, "a_m": body.a, "b_m": body.b},
+           "sun_distance_m": distance,
+           "sun": {"elevation_deg": [float(el_v.min()), float(el_v.max())],
+                   "azimuth_deg": [float(az_v.min()), float(az_v.max())],
+                   "azimuth": "true, clockwise from north"},
+           "curvature": {"applied": curvature,
+                         "refraction_k": refraction_for(body, cfg.refraction_k)
+                         if curvature else None},
+           "sun_radius_deg": sun_radius_deg(distance), "soft": bool(cfg.soft),
+           "height_above_ground_m": float(cfg.height_above_ground),
+           "shadow_fraction": share, "backend": "gpu" if ro.backend == "gpu" else "cpu",
+           "algorithm": "subsolar (pyramid march, a sun per cell)",
+           "seconds": dict(timer.seconds, total=timer.total()), "version": __version__}
+    if ro.report_path is not None:
+        write_json(ro.report_path, rep, ro.overwrite)
+    if not ro.quiet:
+        ro.say("summary", f"hillshade-rt: {output}: {d.shape[1]}x{d.shape[0]}, subsolar point "
+                          f"{lat:g},{lon:g} on {body.source}: sun elevation "
+                          f"{el_v.min():.2f}..{el_v.max():.2f} deg; {100 * share:.2f}% of "
+                          f"valid cells in shadow{' (less than half the disk)' if cfg.soft else ''}; compute {timer.seconds['compute']:.2f} s")
+    return rep

@@ -1,0 +1,94 @@
+"""``shadow --subsolar LAT,LON [--sun-distance M] [--body B]`` (issue 21, item 2): the command
+writes ``arrays.subsolar_mask``'s mask and reports the sun over the DEM; what it does not take
+is a usage error (exit 2, one line)."""
+
+import json
+
+import numpy as np
+import pytest
+from affine import Affine
+
+from hillshade_rt.arrays import subsolar_mask
+from hillshade_rt.cli import cli
+from hillshade_rt.io import read_dem
+from hillshade_rt.testing import MOON_GEOGRAPHIC, fractal_terrain, read_band, write_geotiff
+
+
+@pytest.fixture
+def dem(tmp_path):
+    z = fractal_terrain(40, 50, 6, relief=2500.0)
+    z[3, 4] = np.nan
+    return write_geotiff(tmp_path / "d.tif", z, Affine(0.01, 0, 20.0, 0, -0.01, -30.0),
+                         MOON_GEOGRAPHIC)
+
+
+def test_subsolar_writes_the_api_mask_and_reports(tmp_path, runner, dem):
+    out, rep = tmp_path / "m.tif", tmp_path / "r.json"
+    r = runner.invoke(cli, ["shadow", dem, str(out), "--subsolar", "-20.5,97.3",
+                            "--sun-distance", "2e11", "--report", str(rep)])
+    assert r.exit_code == 0, r.output
+    want = subsolar_mask(read_dem(dem), -20.5, 97.3, sun_distance=2e11)
+    got = read_band(out)
+    assert np.array_equal(got, want)
+    assert (want == 1).any() and (want == 0).any() and (want == 255).sum() == 1
+    doc = json.loads(rep.read_text())
+    assert doc["subsolar"] == {"lat": -20.5, "lon": 97.3} and doc["sun_distance_m"] == 2e11
+    assert doc["body"]["a_m"] == 1737400.0
+    lo, hi = doc["sun"]["elevation_deg"]
+    assert 0 < lo < hi < 30
+
+
+def test_body_overrides_the_crs(tmp_path, runner, dem):
+    out = tmp_path / "m.tif"
+    """A small body curves the rays more: the same suns, more cells lit."""
+    r = runner.invoke(cli, ["shadow", dem, str(out), "--subsolar", "-20.5,97.3", "--body",
+                            "20000", "--report", str(tmp_path / "r.json")])
+    assert r.exit_code == 0, r.output
+    want = subsolar_mask(read_dem(dem), -20.5, 97.3, body="20000")
+    assert np.array_equal(read_band(out), want)
+    moon = subsolar_mask(read_dem(dem), -20.5, 97.3)
+    assert ((want == 1) <= (moon == 1)).all() and (want != moon).any()
+    assert json.loads((tmp_path / "r.json").read_text())["body"]["a_m"] == 20000.0
+
+
+@pytest.mark.parametrize("extra, words", [
+    (["--subsolar", "95,0"], "latitude"),
+    (["--subsolar", "10"], "LAT,LON"),
+    (["--subsolar", "10,0", "--azimuth", "163", "--elevation", "10"], "--azimuth"),
+    (["--subsolar", "10,0", "--classes"], "--classes"),
+    (["--subsolar", "10,0", "--window-size", "64"], "--window-size"),
+    (["--subsolar", "10,0", "--algorithm", "smap"], "--algorithm"),
+    (["--subsolar", "10,0", "--light-position", "1,2,3"], "--light-position"),
+    (["--subsolar", "10,0", "--body", "venus"], "--body"),
+    (["--sun-distance", "2e11", "--azimuth", "163", "--elevation", "10"], "--subsolar"),
+])
+def test_what_subsolar_does_not_take_is_a_usage_error(tmp_path, runner, dem, extra, words):
+    out = tmp_path / "m.tif"
+    r = runner.invoke(cli, ["shadow", dem, str(out)] + extra)
+    assert r.exit_code == 2 and words in r.output and "Traceback" not in r.output, r.output
+    assert len(r.output.strip().splitlines()) == 1
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("distance, words", [("1000", "radius"), ("-5", "positive")])
+def test_a_sun_inside_the_body_is_a_usage_error(tmp_path, runner, dem, distance, words):
+    out = tmp_path / "m.tif"
+    r = runner.invoke(cli, ["shadow", dem, str(out), "--subsolar", "10,0", "--sun-distance",
+                            distance])
+    assert r.exit_code == 2 and words in r.output and "Traceback" not in r.output
+    assert len(r.output.strip().splitlines()) == 1 and not out.exists()
+
+
+def test_soft_writes_the_visible_fraction(tmp_path, runner, dem):
+    out, rep = tmp_path / "f.tif", tmp_path / "r.json"
+    r = runner.invoke(cli, ["shadow", dem, str(out), "--subsolar", "-20.5,97.3", "--soft",
+                            "--sun-distance", "5e9", "--report", str(rep)])
+    assert r.exit_code == 0, r.output
+    want = subsolar_mask(read_dem(dem), -20.5, 97.3, sun_distance=5e9, soft=True)
+    got = read_band(out)
+    assert got.dtype == np.float32 and got[3, 4] == -9999.0
+    valid = np.isfinite(want)
+    np.testing.assert_array_equal(got[valid], want[valid])
+    assert ((want > 0) & (want < 1)).any()
+    doc = json.loads(rep.read_text())
+    assert doc["soft"] and abs(doc["sun_radius_deg"] - 7.99) < 0.01
