@@ -142,6 +142,7 @@ class GpuDem:
         self._staging: dict = {}
         self._host_z = z           # for the pyramid, built at its first use (no copy)
         self._pyramid = None
+        self._host_pyramid = None   # the pyramid's host copy (``update`` patches it)
         self.check_memory(13 * z.size)
         with self._oom_errors():
             self.z = self.upload(z)
@@ -251,11 +252,53 @@ class GpuDem:
                     np.int64(0),)
             return self._no_pyramid
         if self._pyramid is None:
-            data, off, widths, nlev = pyramid.MaxPyramid(self._host_z).args
+            # kept on the host too: ``update`` patches the blocks over an edit and uploads those
+            self._host_pyramid = pyramid.MaxPyramid(self._host_z)
+            data, off, widths, nlev = self._host_pyramid.args
             self.check_memory(data.nbytes)
             with self._oom_errors():
                 self._pyramid = (self.upload(data), self.upload(off), self.upload(widths), nlev)
         return self._pyramid
+
+    def update(self, row: int, col: int, heights: np.ndarray,
+               zrange: tuple[float, float, bool] | None = None) -> None:
+        """Replace the heights of the window at (``row``, ``col``) by ``heights`` (float32,
+        h x w) on the device: only the window is uploaded (and put into place by a kernel); the
+        canonical copy in use is refreshed on the device, the pyramid's blocks over the window
+        patched on the host and only those uploaded. The host array the GpuDem was made of is
+        written too (``shading.Shader.update`` has done so already: the same array). ``zrange``
+        (lowest, highest, any void) of the edited DEM when the caller knows it, else computed."""
+        from .algorithms import frames
+        heights = np.ascontiguousarray(heights, dtype=np.float32)
+        h, w = heights.shape
+        rows, cols = self.shape
+        if not (0 <= row and 0 <= col and row + h <= rows and col + w <= cols):
+            raise HillshadeError(f"the window {h} x {w} at ({row}, {col}) is not inside the "
+                                 f"{rows} x {cols} DEM")
+        if h == 0 or w == 0:
+            return
+        self._host_z[row:row + h, col:col + w] = heights
+        with self._oom_errors():
+            d = self.upload(heights)
+            self.launch(frames.paste_gpu, h, w, self.z, d, np.int64(row), np.int64(col))
+            if self._canon is not None:
+                self._canon_key, key = None, self._canon_key
+                L, P = self._canon.shape
+                self.launch(frames.canonical_copy_gpu, L, P, self.z, self._canon, key[0],
+                            key[1], key[2], True)
+                self._canon_key = key
+            if self._pyramid is not None:
+                ranges = self._host_pyramid.update(self._host_z, (row, row + h, col, col + w))
+                data = self._host_pyramid.args[0]
+                for a, b in ranges[1:]:
+                    if b > a:
+                        self.stats["h2d_bytes"] += int(4 * (b - a))
+                        self._pyramid[0][a:b].copy_to_device(data[a:b], stream=self.stream)
+            self.stream.synchronize()
+        if zrange is None:
+            from .algorithms.counts import z_range
+            zrange = z_range(self._host_z)
+        self.zmin, self.zmax, self.void = float(zrange[0]), float(zrange[1]), bool(zrange[2])
 
     def canonical(self, frame):
         """The heights in the canonical (line, position) order of ``frame`` (``frames.Frame``),

@@ -186,6 +186,117 @@ class Shader:
                         (survey[0] / max(1, z.size), float(survey[1]), float(survey[2])))
         self.stats: dict = {}
         self.curvature_used: set = set()   # True/False seen, and the radii used (m)
+        # dynamic terrain (``update``): the DEM's version, and each edit since the first:
+        # (version after it, (r0, r1, c0, c1), highest height the window held before or after
+        # it, the raster's (zmin, zmax) before it)
+        self.version = 0
+        self._edits: list = []
+        self._valid = None      # valid cells of z, once an update needed them
+
+    # -- dynamic terrain ---------------------------------------------------------------------
+    def update(self, window, heights: np.ndarray) -> int:
+        """Replace part of the DEM: ``heights`` (2-D, float32 or cast to it; NaN voids) go into
+        ``self.z`` at ``window``, the (row, col) of its top-left cell, or a rasterio-like
+        ``Window`` (``row_off``, ``col_off``; its height and width must be heights' shape).
+
+        ``self.z`` is edited in place: the array the Shader was made with is the caller's, so the
+        caller's array changes too (the Shader never copied the DEM; copy before if you need the
+        original). Everything derived from the heights follows: the height range (exact: a full
+        pass only when the window held the lowest or highest cell and lost it), auto's survey,
+        the pyramid's blocks over the window (patched, the values a new build gives), the GPU's
+        copy (``gpu.GpuDem.update``: only the window is uploaded).
+
+        Returns the new ``version`` (the number of updates so far). A product rendered at
+        version v can be brought up to date with ``render(..., previous=(product, v))``, which
+        re-shades only the cells the edits since v can have changed."""
+        from .algorithms.counts import valid_range
+        if self.halo_ready or self.place is not None or self.carry is not None:
+            raise HillshadeError("update: this Shader lights a window of a larger raster; "
+                                 "make a Shader of the whole DEM to edit it")
+        heights = np.asarray(heights)
+        if heights.ndim != 2:
+            raise HillshadeError(f"update: the heights must be a 2-D array, got {heights.ndim}-D")
+        if hasattr(window, "row_off") and hasattr(window, "col_off"):
+            r0, c0 = int(window.row_off), int(window.col_off)
+            if (int(window.height), int(window.width)) != heights.shape:
+                raise HillshadeError(f"update: the window is {int(window.height)} x "
+                                     f"{int(window.width)} but the heights are "
+                                     f"{heights.shape[0]} x {heights.shape[1]}")
+        else:
+            try:
+                r0, c0 = (int(v) for v in window)
+            except (TypeError, ValueError):
+                raise HillshadeError("update: the window must be (row, col) of its top-left "
+                                     f"cell or a rasterio Window, got {window!r}") from None
+        h, w = heights.shape
+        rows, cols = self.z.shape
+        if not (0 <= r0 and 0 <= c0 and r0 + h <= rows and c0 + w <= cols):
+            raise HillshadeError(f"update: {h} x {w} heights at row {r0}, column {c0} do not "
+                                 f"fit in the {rows} x {cols} DEM")
+        r1, c1 = r0 + h, c0 + w
+        heights = np.ascontiguousarray(heights, dtype=np.float32)
+        if self._valid is None:
+            self._valid = int(valid_range(self.z)[0])
+        n_old, lo_old, hi_old = valid_range(self.z[r0:r1, c0:c1])
+        n_new, lo_new, hi_new = valid_range(heights)
+        before = (self.zmin, self.zmax)
+        self.z[r0:r1, c0:c1] = heights
+        self._valid += int(n_new) - int(n_old)
+        if not (math.isfinite(self.zmin) and math.isfinite(self.zmax)) or (
+                n_old and (lo_old <= self.zmin or hi_old >= self.zmax)):
+            _, lo, hi = valid_range(self.z)       # an extreme may have gone: look again
+            self.zmin, self.zmax = float(lo), float(hi)
+        else:
+            self.zmin, self.zmax = min(self.zmin, float(lo_new)), max(self.zmax, float(hi_new))
+        self.local_range = (self.zmin, self.zmax)
+        if self._survey is not None:
+            self._survey = (self._valid / max(1, self.z.size), self.zmin, self.zmax)
+        if self._pyramid is not None:
+            self._pyramid.update(self.z, (r0, r1, c0, c1))
+        if self._gpu is not None:
+            self._gpu.update(r0, c0, self.z[r0:r1, c0:c1],
+                             (self.zmin, self.zmax, self._valid < self.z.size))
+        self.version += 1
+        self._edits.append((self.version, (r0, r1, c0, c1),
+                            max(float(hi_old), float(hi_new)), before))
+        return self.version
+
+    def edits_since(self, version: int) -> list:
+        """The edits made after ``version`` (see ``update``), oldest first."""
+        if not (isinstance(version, (int, np.integer)) and 0 <= version <= self.version):
+            raise HillshadeError(f"previous: version {version!r} is not one of this Shader's "
+                                 f"(0 .. {self.version})")
+        return [e for e in self._edits if e[0] > version]
+
+    def affected_bounds(self, bounds: tuple[int, int, int, int], top: float, azimuth: float,
+                        elevation: float) -> tuple[int, int, int, int]:
+        """(r0, r1, c0, c1): the cells whose shadow toward the sun at (``azimuth``,
+        ``elevation``) an edit of ``bounds`` can change: the window and its anti-sun halo, the
+        cells whose ray can pass below ``top`` (the highest the window held before or after
+        the edit) over it, grown by one cell on every side (the interpolated samples next to
+        the window, the normals of the relief). The halo's length in cells takes the smallest
+        spacing of the raster (the rays of a row use its own spacing) and the flat ray
+        (curvature and a lift only raise rays)."""
+        rows, cols = self.z.shape
+        r0, r1, c0, c1 = bounds
+        m = 1
+        reach = (reach_m(top - self.zmin, elevation, 0.0) if math.isfinite(top) else 0.0)
+        away = azimuth + 180.0
+        east = math.sin(math.radians(away)) * self.grid.col_sign
+        north = math.cos(math.radians(away)) * self.grid.row_sign
+        dxm, dym = float(np.min(self.grid.dx)), float(np.min(self.grid.dy))
+
+        def grow(lo, hi, comp, spacing, n):
+            if abs(comp) < 1e-12:
+                return max(0, lo - 2 - m), min(n, hi + 2 + m)
+            more = (n if not math.isfinite(reach) else
+                    int(math.ceil(reach * abs(comp) / spacing)) + 2)
+            if comp > 0:
+                return max(0, lo - m), min(n, hi + more + m)
+            return max(0, lo - more - m), min(n, hi + m)
+        c0, c1 = grow(c0, c1, east, dxm, cols)
+        r0, r1 = grow(r0, r1, north, dym, rows)
+        return r0, r1, c0, c1
 
     def warm_up(self, azimuth: float, elevation: float, soft: bool = False,
                 incidence: bool = False, field: bool = False) -> None:
@@ -469,7 +580,8 @@ def field_method(algorithm: str, options: dict, soft: bool) -> bool:
 
 
 def render(shader: Shader, sun: SunOver, kind: str = "shadow", *, soft: bool = False,
-           self_shadow: bool = False, ambient: float = 0.2, stats: dict | None = None) -> np.ndarray:
+           self_shadow: bool = False, ambient: float = 0.2, stats: dict | None = None,
+           previous: tuple[np.ndarray, int] | None = None) -> np.ndarray:
     """What one sun makes of the DEM, over the whole raster (tile by tile when the sun is per
     tile):
 
@@ -481,11 +593,20 @@ def render(shader: Shader, sun: SunOver, kind: str = "shadow", *, soft: bool = F
       max(0, cos i) * lit), lit 1/0 (or the visible fraction with ``soft``);
     * ``sun``: float32 direct sun 0..1 (lit, or the visible fraction with ``soft``; ``self_shadow``
       zeroes faces turned away), NaN on voids: what sun hours add up.
+
+    ``previous``: (product, version), what this call made for the same sun, kind and options
+    when ``shader.version`` was ``version``; after ``Shader.update`` only the cells the edits
+    since then can have changed are made again (``rerender``), the rest copied from it (it is
+    not modified). The result is the product a new Shader of the edited DEM gives.
     """
     if kind not in KINDS:
         raise HillshadeError(f"unknown product {kind!r}")
     if kind == "classes" and soft:
         raise HillshadeError("classes are for hard shadows: --classes and --soft do not go together")
+    if previous is not None:
+        out = rerender(shader, sun, kind, soft, self_shadow, ambient, stats, previous)
+        if out is not None:
+            return out
     shape = shader.z.shape
     regions = sun.regions(shape)
     # a sun that varies across the raster: every cell's own direction in one march when the
@@ -500,6 +621,69 @@ def render(shader: Shader, sun: SunOver, kind: str = "shadow", *, soft: bool = F
         if out is None:
             out = np.empty(shape, part.dtype)
         out[r.rows, r.cols] = part
+    return out
+
+
+def exact_options(algorithm: str, options: dict) -> bool:
+    """Whether ``algorithm`` with ``options`` is exact (equals brute cell for cell)."""
+    spec = REGISTRY[algorithm]
+    return spec.exact and not any(
+        opt.approximate and options.get(opt.keyword) not in (None, opt.default)
+        for opt in spec.options)
+
+
+def rerender(shader: Shader, sun: SunOver, kind: str, soft: bool, self_shadow: bool,
+             ambient: float, stats: dict | None, previous) -> np.ndarray | None:
+    """``render``'s product brought up to date from ``previous`` = (product, version): for
+    each edit since ``version`` the cells of ``Shader.affected_bounds`` are made again (cast
+    shadows by brute's march of those cells over the whole edited DEM: an exact method's mask;
+    soft shadows and the relief by ``render_region``), the rest copied. None where a full
+    render is needed: a sun per tile or per cell, the sun (its lowest edge for ``soft``) at or
+    below the horizon, an approximate method (its errors depend on the whole raster: its own
+    full render, not a patch), or Earth curvature "auto" turned on or off by the edits.
+
+    The number of cells made again is added to ``stats["rerendered_cells"]`` (full renders
+    count in ``stats["rerender_full"]``); ``stats`` None: ``shader.stats``."""
+    from .algorithms import brute
+    counts = shader.stats if stats is None else stats
+    prev, since = previous
+    edits = shader.edits_since(since)
+    if np.shape(prev) != shader.z.shape:
+        raise HillshadeError(f"previous: a product of shape {np.shape(prev)} for a DEM of "
+                             f"{shader.z.shape}")
+    az, el = sun.azimuth, min(sun.elevation, 90.0)
+    low = sun.elevation - SUN_RADIUS_DEG if soft else sun.elevation
+    full = (sun.tiles is not None or low <= 0.0
+            or not (soft or exact_options(shader.algorithm, shader.options)))
+    if not full and edits and shader.curvature == "auto":
+        el_c = max(el, 1e-6) if soft else el
+        then = curvature_coefficient("auto", shader.body, shader.k, shader.extent_m,
+                                     edits[0][3], az, el_c)
+        full = then != shader.curvature_for(az, el_c)
+    if full:
+        counts["rerender_full"] = counts.get("rerender_full", 0) + 1
+        return None
+    out = np.array(prev, copy=True)
+    cells = 0
+    rays = None
+    for _, bounds, top, _ in edits:
+        r0, r1, c0, c1 = shader.affected_bounds(bounds, top, az, low)
+        region = Region(slice(r0, r1), slice(c0, c1), sun.azimuth, sun.elevation)
+        cast = None
+        if not soft:
+            if rays is None:
+                rays = shader.rays(shader.grid, az, el)
+                # the pyramid kept up to date by ``update`` (the GPU's host copy when it has
+                # one; --no-pyramid: the plain march, the same mask)
+                pyr = getattr(shader._gpu, "_host_pyramid", None)
+                if pyr is None or shader.options.get("pyramid", True) is False:
+                    pyr = shader.pyramid(shader.z, True)
+            cast = brute.march_box(shader.z, rays, (r0, r1, c0, c1), shader.local_range[1],
+                                   pyr, shader.lift)
+        out[r0:r1, c0:c1] = render_region(shader, region, kind, soft, self_shadow, ambient,
+                                          stats, cast)
+        cells += (r1 - r0) * (c1 - c0)
+    counts["rerendered_cells"] = counts.get("rerendered_cells", 0) + cells
     return out
 
 

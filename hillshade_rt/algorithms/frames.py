@@ -102,3 +102,12 @@ def canonical_copy_gpu(dem, can, dom_col, flip_line, flip_pos, to_canonical):
             can[v, p] = dem[r, c]
         else:
             dem[r, c] = can[v, p]
+
+
+@kernel
+def paste_gpu(dst, src, r0, c0):
+    """``dst[r0:r0 + h, c0:c0 + w] = src`` on the device (``src`` h x w): a window of new
+    heights uploaded on its own (``gpu.GpuDem.update``) put into place."""
+    c, r = cuda.grid(2)
+    if r < src.shape[0] and c < src.shape[1]:
+        dst[r0 + r, c0 + c] = src[r, c]
