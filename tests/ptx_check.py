@@ -40,6 +40,9 @@ def main() -> int:
             ary[...] = self
             return ary
 
+        def copy_to_device(self, ary, stream=0):
+            self[...] = ary
+
     def host(a):
         return np.ascontiguousarray(a).view(HostArray)
 
@@ -94,6 +97,8 @@ def main() -> int:
         # the scan in windows (run.reach): a region's rays through a window on the device
         m = horizon.Marches(z[2:6, 3:9], (2, 6, 3, 9), rays, z.shape, 50.0)
         m.march(horizon.ScanWindow(z[0:8].copy(), (0, 8, 0, 14), z.shape, True, gpu.GpuDem))
+    # dynamic terrain: a window of new heights put into place (GpuDem.update)
+    g.update(2, 3, z[2:5, 3:7] + 1.0)
     # per-cell suns (algorithms.subsolar): the frames of a geographic lunar grid, curved rays
     from hillshade_rt.algorithms import subsolar
     f32 = np.float32

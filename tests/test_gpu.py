@@ -329,7 +329,7 @@ def test_kernels_compile_for_a_real_gpu():
     kernels = json.loads(p.stdout.strip().splitlines()[-1])
     assert set(kernels) == {"_brute_gpu", "_mask_gpu", "_colour_gpu", "_nextv_pass_gpu",
                             "_scan_gpu", "_sweep_gpu", "canonical_copy_gpu", "_span_gpu",
-                            "_point_gpu", "_subsolar_gpu", "_soft_gpu"}
+                            "_point_gpu", "_subsolar_gpu", "_soft_gpu", "paste_gpu"}
     assert all(k["ptx_bytes"] > 1000 for k in kernels.values())
     for name in ("_brute_gpu", "_mask_gpu", "_sweep_gpu", "_nextv_pass_gpu", "_point_gpu",
                  "_subsolar_gpu"):
