@@ -83,6 +83,17 @@ def halo_bounds(bounds: tuple[int, int, int, int], shape: tuple[int, int], grid:
     return r0, r1, c0, c1
 
 
+def _window_range(a: np.ndarray) -> tuple[int, float, float]:
+    """(valid cells, lowest, highest) of a small window (numpy: a parallel kernel's start costs
+    more than the pass); inf / -inf when nothing is valid."""
+    ok = ~np.isnan(a)
+    n = int(ok.sum())
+    if not n:
+        return 0, math.inf, -math.inf
+    v = a[ok]
+    return n, float(v.min()), float(v.max())
+
+
 def warm_up(algorithm: str, grid: Grid | None = None, azimuth: float = 203.7,
             elevation: float = 10.0, backend: str = "cpu", **options) -> None:
     """Compile (or load from numba's cache) the kernels that a run of ``algorithm`` on ``grid``
@@ -237,8 +248,8 @@ class Shader:
         heights = np.ascontiguousarray(heights, dtype=np.float32)
         if self._valid is None:
             self._valid = int(valid_range(self.z)[0])
-        n_old, lo_old, hi_old = valid_range(self.z[r0:r1, c0:c1])
-        n_new, lo_new, hi_new = valid_range(heights)
+        n_old, lo_old, hi_old = _window_range(self.z[r0:r1, c0:c1])
+        n_new, lo_new, hi_new = _window_range(heights)
         before = (self.zmin, self.zmax)
         self.z[r0:r1, c0:c1] = heights
         self._valid += int(n_new) - int(n_old)
@@ -277,10 +288,20 @@ class Shader:
         the window, the normals of the relief). The halo's length in cells takes the smallest
         spacing of the raster (the rays of a row use its own spacing) and the flat ray
         (curvature and a lift only raise rays)."""
+        box = self._anti_sun(bounds, top, azimuth, elevation, self.zmin)
+        if not math.isfinite(top):
+            return box
+        # the cells of that box are no lower than its own lowest: a shorter halo serves
+        r0, r1, c0, c1 = box
+        lo = _window_range(self.z[r0:r1, c0:c1])[1]
+        return self._anti_sun(bounds, top, azimuth, elevation, lo) if lo > self.zmin else box
+
+    def _anti_sun(self, bounds, top, azimuth, elevation, low):
+        """``affected_bounds`` for cells no lower than ``low``."""
         rows, cols = self.z.shape
         r0, r1, c0, c1 = bounds
         m = 1
-        reach = (reach_m(top - self.zmin, elevation, 0.0) if math.isfinite(top) else 0.0)
+        reach = (reach_m(top - low, elevation, 0.0) if math.isfinite(top) else 0.0)
         away = azimuth + 180.0
         east = math.sin(math.radians(away)) * self.grid.col_sign
         north = math.cos(math.radians(away)) * self.grid.row_sign
