@@ -172,6 +172,12 @@ def test_march_box_is_brute_of_those_cells():
         np.testing.assert_array_equal(march_box(z, rays, (5, 23, 17, 40), float(np.nanmax(z)),
                                                 pyr), whole[5:23, 17:40])
     assert march_box(z, rays, (5, 5, 0, 3), 0.0).shape == (0, 3)
+    from hillshade_rt.algorithms import brute     # the parallel loop of larger boxes
+    big = np.tile(z, (4, 4))
+    rays = sun_rays(Grid.uniform(*big.shape, 10.0), 163.0, 9.0)
+    assert brute.BOX_SERIAL_CELLS < 150 * 170
+    np.testing.assert_array_equal(march_box(big, rays, (3, 153, 2, 172), float(np.nanmax(big))),
+                                  shadow_mask(big, rays)[3:153, 2:172])
 
 
 def test_what_cannot_be_updated_says_so():

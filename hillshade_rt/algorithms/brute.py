@@ -69,28 +69,47 @@ def _brute_cpu(z, pyr, off, widths, nlev, dom_col, step_dom, step_other, rise, c
     return n
 
 
+@njit(cache=True)
+def _brute_box_row(z, pyr, off, widths, nlev, dom_col, step_dom, step_other, rise, curv, zmax,
+                   lift, out, r0, c0, i):
+    """Row ``i`` of the box of ``out``'s shape at (r0, c0) of ``z``: each cell marched over all
+    of ``z`` with its row's ray (``_brute_cell``'s decision, written box-relative)."""
+    r = r0 + i
+    dc = dom_col[r] != 0
+    sd = np.int64(step_dom[r])
+    so = step_other[r]
+    ri = rise[r]
+    cv = curv[r]
+    for j in range(out.shape[1]):
+        c = c0 + j
+        if math.isnan(z[r, c]):
+            out[i, j] = 255
+        elif nlev > 0:
+            out[i, j] = 1 if ray_is_blocked_pyramid(z, pyr, off, widths, nlev, r, c, dc, sd, so,
+                                                    ri, cv, zmax, lift) else 0
+        else:
+            out[i, j] = 1 if ray_is_blocked(z, r, c, dc, sd, so, ri, cv, zmax, lift) else 0
+
+
 @njit(parallel=True, cache=True)
 def _brute_box_cpu(z, pyr, off, widths, nlev, dom_col, step_dom, step_other, rise, curv, zmax,
                    lift, out, r0, c0):
-    """The cells of the box of ``out``'s shape at (r0, c0) of ``z``, each marched over all of
-    ``z`` with its row's ray (``_brute_cell``'s decision, written box-relative)."""
-    h, w = out.shape
-    for i in prange(h):
-        r = r0 + i
-        dc = dom_col[r] != 0
-        sd = np.int64(step_dom[r])
-        so = step_other[r]
-        ri = rise[r]
-        cv = curv[r]
-        for j in range(w):
-            c = c0 + j
-            if math.isnan(z[r, c]):
-                out[i, j] = 255
-            elif nlev > 0:
-                out[i, j] = 1 if ray_is_blocked_pyramid(z, pyr, off, widths, nlev, r, c, dc, sd,
-                                                        so, ri, cv, zmax, lift) else 0
-            else:
-                out[i, j] = 1 if ray_is_blocked(z, r, c, dc, sd, so, ri, cv, zmax, lift) else 0
+    for i in prange(out.shape[0]):
+        _brute_box_row(z, pyr, off, widths, nlev, dom_col, step_dom, step_other, rise, curv,
+                       zmax, lift, out, r0, c0, i)
+
+
+@njit(cache=True)
+def _brute_box_serial(z, pyr, off, widths, nlev, dom_col, step_dom, step_other, rise, curv,
+                      zmax, lift, out, r0, c0):
+    for i in range(out.shape[0]):
+        _brute_box_row(z, pyr, off, widths, nlev, dom_col, step_dom, step_other, rise, curv,
+                       zmax, lift, out, r0, c0, i)
+
+
+# a box of fewer cells is marched on one thread: starting the parallel loop costs milliseconds
+# on a busy 2-core machine (4-8 ms measured, other processes running), more than its march
+BOX_SERIAL_CELLS = 16384
 
 
 def march_box(z: np.ndarray, rays: SunRays, bounds: tuple[int, int, int, int], zmax: float,
@@ -102,9 +121,9 @@ def march_box(z: np.ndarray, rays: SunRays, bounds: tuple[int, int, int, int], z
     r0, r1, c0, c1 = (int(v) for v in bounds)
     out = np.empty((max(0, r1 - r0), max(0, c1 - c0)), np.uint8)
     if out.size:
-        _brute_box_cpu(z, *pyramid_args(z, pyramid), rays.dom_col, rays.step_dom,
-                       rays.step_other, rays.rise, rays.curv, float(zmax), float(lift), out,
-                       np.int64(r0), np.int64(c0))
+        k = _brute_box_serial if out.size < BOX_SERIAL_CELLS else _brute_box_cpu
+        k(z, *pyramid_args(z, pyramid), rays.dom_col, rays.step_dom, rays.step_other,
+          rays.rise, rays.curv, float(zmax), float(lift), out, np.int64(r0), np.int64(c0))
     return out
 
 
