@@ -75,7 +75,7 @@ def _heights(z, r0, c0, h, w, how, dh, rng):
 @given(edits=st.lists(edit, min_size=1, max_size=3), method=st.sampled_from(METHODS),
        product=st.sampled_from(KINDS), az=st.sampled_from(AZIMUTHS),
        el=st.sampled_from(ELEVATIONS), geographic=st.booleans(),
-       curvature=st.sampled_from((False, True)), between=st.booleans())
+       curvature=st.sampled_from((False, True, "auto")), between=st.booleans())
 def test_update_and_rerender_equal_a_new_shader(edits, method, product, az, el, geographic,
                                                 curvature, between):
     name, options = method
@@ -102,6 +102,18 @@ def test_update_and_rerender_equal_a_new_shader(edits, method, product, az, el, 
         assert stats["rerendered_cells"] > 0 and "rerender_full" not in stats
     else:   # an approximate method: its own full render
         assert stats["rerender_full"] == 1 and "rerendered_cells" not in stats
+
+
+@pytest.mark.parametrize("az", AZIMUTHS)
+def test_a_lifted_observer_after_an_edit_equals_a_new_shader(az):
+    z = _terrain(7)
+    grid = _grid(True)
+    sun = SunOver(None, az, 9.0)
+    sh = Shader(z, grid, "auto", {}, "cpu", True, lift=2.5)
+    prev = render(sh, sun, "classes")
+    sh.update((14, 9), np.full((5, 4), float(np.nanmax(z)) + 10.0, np.float32))
+    want = render(Shader(sh.z.copy(), grid, "auto", {}, "cpu", True, lift=2.5), sun, "classes")
+    np.testing.assert_array_equal(render(sh, sun, "classes", previous=(prev, 0)), want)
 
 
 @pytest.mark.parametrize("az", AZIMUTHS)
