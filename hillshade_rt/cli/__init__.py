@@ -16,6 +16,7 @@ import sys
 import click
 
 from .. import __version__
+from .animate import animate
 from .errors import OneLineErrors
 from .horizon import horizon
 from .info import info
@@ -36,6 +37,7 @@ def cli():
 for _command in (shadow, hillshade, sun_hours, horizon, profile, query, skyview, info):
     cli.add_command(_command)
 cli.add_command(irradiance)
+cli.add_command(animate)
 
 
 def main():
