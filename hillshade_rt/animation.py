@@ -94,14 +94,18 @@ def font_size(width: int) -> int:
 
 def draw_label(indices: np.ndarray, text: str) -> np.ndarray:
     """``indices`` with ``text`` written in its top-left corner, white on a dark box (Pillow's
-    default font, sized to the picture; glyphs drawn without anti-aliasing: the palette has no
+    default font, sized to the picture, smaller where the text would not fit; glyphs drawn without anti-aliasing: the palette has no
     blends). Returns a new array."""
     from PIL import Image, ImageDraw, ImageFont
     img = Image.fromarray(indices, "L")      # indices as plain values: no blending below
     draw = ImageDraw.Draw(img)
     draw.fontmode = "1"
-    size = font_size(indices.shape[1])
+    width = indices.shape[1]
+    size = font_size(width)
     font = ImageFont.load_default(size)
+    while size > 6 and draw.textlength(text, font=font) > width - 2 * max(2, size // 4):
+        size -= 1           # a narrow picture: a smaller font, so that the label fits
+        font = ImageFont.load_default(size)
     pad = max(2, size // 4)
     left, top, right, bottom = draw.textbbox((pad, pad), text, font=font)
     draw.rectangle((0, 0, right + pad, bottom + pad), fill=BOX)
