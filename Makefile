@@ -7,7 +7,7 @@ OUTDIR ?= out
 EXAMPLE_DEM := examples/bigtujunga_srtm30m_utm11n_1197x643.tif
 EXAMPLE_OUT := $(OUTDIR)/bigtujunga_shadow.tif
 
-.PHONY: run test install install-test bench bench-sun bench-tiling bench-big bench-gpu bench-peers bench-horizon docs-pictures bench-writes bench-real bench-real-quick bench-fast bench-point gpu-check clean help
+.PHONY: run test install install-test bench bench-sun bench-tiling bench-big bench-gpu bench-peers bench-horizon docs-pictures docs-animation bench-writes bench-real bench-real-quick bench-fast bench-point gpu-check clean help
 
 help:
 	@echo "make run    - set up .venv, shade the bundled example DEM, print where the mask went"
@@ -26,6 +26,7 @@ help:
 	@echo "make bench-fast - the default's curvature cost, cost against size, geographic vs projected"
 	@echo "make bench-point - the point light vs brute's directional mask (4096^2, real DEMs)"
 	@echo "make docs-pictures - the pictures of docs/products.md, by the tool's --preview"
+	@echo "make docs-animation - the README's GIF: the shadows of a winter day on the example DEM"
 	@echo "make clean  - remove .venv and outputs"
 
 $(BIN)/python:
@@ -106,6 +107,13 @@ bench-peers: $(VENV)/.installed-peers
 # docs/products.md's pictures (docs/img/), each made by the command's own --preview
 docs-pictures: $(VENV)/.installed
 	$(BIN)/python docs/pictures.py
+
+# The README's animation (docs/img/day.gif): the winter solstice on the bundled DEM, 11 frames
+# from just after sunrise to after sunset, by the tool's own animate command
+docs-animation: $(VENV)/.installed
+	$(BIN)/hillshade-rt animate $(EXAMPLE_DEM) docs/img/day.gif --start 2026-12-21T07:00 \
+		--end 2026-12-21T17:00 --step 1h --tz America/Los_Angeles --size 400 --fps 3 \
+		--overwrite
 
 # Horizons in N directions and the sky view factor against one shadow mask, and the sky view
 # factor of rvt-py and whitebox-workflows against ours (issue 20)
