@@ -60,19 +60,28 @@ class AnimateConfig:
 
 
 def times_of(cfg: AnimateConfig):
-    """(SunRequest with its times, whether the labels are in local mean solar time). A day:
-    local midnight (``--tz``; else local mean solar time at the DEM's longitude, filled in by
-    :func:`day_times` once the place is known) every step until the next midnight."""
+    """The SunRequest with its times (a series), or without (a day: :func:`day_times` fills
+    them in once the DEM's place is known); too many frames refused before the DEM is read."""
     from ..sun import SunRequest, parse_date, parse_step
     step = cfg.step or DEFAULT_STEP
     try:
         if cfg.date is not None:
             parse_date(cfg.date, "--date")
-            parse_step(step)
-            return SunRequest.at_place([], **cfg.place)
-        return SunRequest.from_options(start=cfg.start, end=cfg.end, step=step, **cfg.place)
+            count = -(-_dt.timedelta(hours=23) // parse_step(step))    # at least, before the
+            req = SunRequest.at_place([], **cfg.place)                 # place is known
+        else:
+            req = SunRequest.from_options(start=cfg.start, end=cfg.end, step=step, **cfg.place)
+            count = len(req.times)
     except HillshadeError as exc:     # the command line alone decides these: exit 2
         raise UsageProblem(str(exc)) from None
+    check_count(count)
+    return req
+
+
+def check_count(count: int) -> None:
+    if count > MAX_FRAMES:
+        raise UsageProblem(f"{count} frames: more than {MAX_FRAMES}; use a longer --step or a "
+                           "shorter series")
 
 
 def day_times(day: _dt.date, step: str, tz, lon: float) -> list[_dt.datetime]:
@@ -124,9 +133,7 @@ def animate(cfg: AnimateConfig) -> dict:
         if cfg.date is not None:
             req.times = day_times(parse_date(cfg.date), cfg.step or DEFAULT_STEP, req.tz,
                                   site.lon)
-        if len(req.times) > MAX_FRAMES:
-            raise UsageProblem(f"{len(req.times)} frames: more than {MAX_FRAMES}; use a longer "
-                               "--step or a shorter series")
+        check_count(len(req.times))
         suns, sun_info = req.suns(d, site)
         zmin, zmax = d.height_range()
         shader = Shader(d.heights, d.grid, cfg.algorithm, {}, ran_on,

@@ -124,6 +124,8 @@ def test_mp4_without_the_extra_is_one_line(tmp_path, runner, monkeypatch):
     (["a.gif", "--date", "2026-06-21", "--fps", "0"], "--fps"),
     (["a.gif", "--date", "2026-06-21", "--size", "8"], "--size"),
     (["a.gif", "--date", "2026-06-21", "--step", "10s"], "more than 2000"),
+    (["a.gif", "--start", "2026-01-15T06:30Z", "--end", "2026-01-17T06:30Z", "--step", "1min"],
+     "2881 frames: more than 2000"),
 ])
 def test_usage_errors(tmp_path, runner, args, words):
     r = runner.invoke(cli, ["animate", LIDAR, str(tmp_path / args[0]), *args[1:]])
