@@ -9,6 +9,7 @@ from affine import Affine
 from PIL import Image
 from rasterio.crs import CRS
 
+import hillshade_rt as hr
 from hillshade_rt.animation import (LEVELS, PALETTE, draw_label, frame_indices, label_text,
                                     shadowed_pixels, step_of, write_gif)
 from hillshade_rt.errors import UsageProblem
@@ -89,3 +90,16 @@ def test_voids_are_white_and_the_run_checks_first(tmp_path):
         animate(AnimateConfig(dem, str(tmp_path / "b.gif"), date="2026-09-01",
                               start="2026-09-01T07:30", end="2026-09-01T08:30"))
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.gif", "z.tif"]
+
+
+def test_the_api(tmp_path):
+    z = fractal_terrain(50, 40, seed=2, relief=300.0).astype(np.float32)
+    dem = write_geotiff(tmp_path / "z.tif", z, Affine(25.0, 0, 500000.0, 0, -25.0, 4100000.0),
+                        CRS.from_epsg(32611))
+    first = dt.datetime(2026, 6, 21, 16, tzinfo=dt.timezone.utc)
+    rep = hr.animate(dem, tmp_path / "a.gif", start=first, end="2026-06-21T20:00Z", step="1h", size=25, tz="America/Los_Angeles")
+    assert rep["frames"] == 5 and rep["every_nth_cell"] == 2 and rep["picture"] == [25, 20]
+    with Image.open(tmp_path / "a.gif") as im:
+        assert im.n_frames == 5 and im.size == (20, 25)
+    with pytest.raises(TypeError, match="colour"):
+        hr.animate(dem, tmp_path / "b.gif", date="2026-06-21", colour="red")
