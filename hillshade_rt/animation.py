@@ -94,8 +94,8 @@ def font_size(width: int) -> int:
 
 def draw_label(indices: np.ndarray, text: str) -> np.ndarray:
     """``indices`` with ``text`` written in its top-left corner, white on a dark box (Pillow's
-    default font, sized to the picture, smaller where the text would not fit; glyphs drawn without anti-aliasing: the palette has no
-    blends). Returns a new array."""
+    default font, sized to the picture, smaller where the text would not fit; glyphs drawn
+    without anti-aliasing: the palette has no blends). Returns a new array."""
     from PIL import Image, ImageDraw, ImageFont
     img = Image.fromarray(indices, "L")      # indices as plain values: no blending below
     draw = ImageDraw.Draw(img)

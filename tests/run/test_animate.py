@@ -97,7 +97,8 @@ def test_the_api(tmp_path):
     dem = write_geotiff(tmp_path / "z.tif", z, Affine(25.0, 0, 500000.0, 0, -25.0, 4100000.0),
                         CRS.from_epsg(32611))
     first = dt.datetime(2026, 6, 21, 16, tzinfo=dt.timezone.utc)
-    rep = hr.animate(dem, tmp_path / "a.gif", start=first, end="2026-06-21T20:00Z", step="1h", size=25, tz="America/Los_Angeles")
+    rep = hr.animate(dem, tmp_path / "a.gif", start=first, end="2026-06-21T20:00Z", step="1h",
+                     size=25, tz="America/Los_Angeles")
     assert rep["frames"] == 5 and rep["every_nth_cell"] == 2 and rep["picture"] == [25, 20]
     with Image.open(tmp_path / "a.gif") as im:
         assert im.n_frames == 5 and im.size == (20, 25)
