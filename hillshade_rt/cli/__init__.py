@@ -25,6 +25,7 @@ from .query import query
 from .shadow import hillshade, shadow
 from .skyview import skyview
 from .sun_hours import sun_hours
+from .view import view
 
 
 @click.group(cls=OneLineErrors, context_settings={"help_option_names": ["-h", "--help"]})
@@ -36,6 +37,7 @@ def cli():
 for _command in (shadow, hillshade, sun_hours, horizon, profile, query, skyview, info):
     cli.add_command(_command)
 cli.add_command(irradiance)
+cli.add_command(view)
 
 
 def main():
