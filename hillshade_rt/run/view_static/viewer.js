@@ -31,8 +31,8 @@
     const b = map.getBounds(), size = map.getSize();
     if (size.x < 1 || size.y < 1) return;
     const x0 = b.getWest(), x1 = b.getEast(), y0 = -b.getNorth(), y1 = -b.getSouth();
-    const bbox = [x0, y0, x1, y1];
-    const url = "/api/render?" + query() + "&bbox=" + bbox.map((v) => v.toFixed(4)).join(",") +
+    const bbox = [x0, y0, x1, y1].map((v) => Number(v.toFixed(4)));   // as sent
+    const url = "/api/render?" + query() + "&bbox=" + bbox.join(",") +
                 "&w=" + size.x + "&h=" + size.y;
     const mine = ++seq;
     $("status").textContent = "shading ...";
@@ -93,7 +93,8 @@
     for (const e of [0, 30, 60]) { c.beginPath(); c.arc(90, 90, R * (1 - e / 90), 0, 2 * Math.PI); c.stroke(); }
     c.fillStyle = "#345"; c.font = "11px sans-serif"; c.textAlign = "center"; c.textBaseline = "middle";
     [["N", 0], ["E", 90], ["S", 180], ["W", 270]].forEach(([t, a]) => {
-      const p = toXY(a, -8); c.fillText(t, 90 + (p[0] - 90) * 1.1, 90 + (p[1] - 90) * 1.1);
+      const r = R + 6, b = a * Math.PI / 180;
+      c.fillText(t, 90 + r * Math.sin(b), 90 - r * Math.cos(b));
     });
     if (st.path && info.has_time) {
       c.strokeStyle = "#e0a020"; c.lineWidth = 2; c.beginPath();
@@ -132,8 +133,11 @@
     if (r.ok) { st.path = await r.json(); drawCompass(); }
   }
 
+  let marker = null;
   async function showPoint(e) {
     const x = e.latlng.lng, y = -e.latlng.lat;
+    if (marker) map.removeLayer(marker);
+    marker = L.circleMarker(e.latlng, { radius: 5, color: "#c00", weight: 2 }).addTo(map);
     const r = await fetch("/api/point?x=" + x + "&y=" + y + "&" + sunQuery() +
                           "&algorithm=" + encodeURIComponent(st.algorithm));
     if (!r.ok) { $("point").textContent = await r.text(); $("profile").style.display = "none"; return; }
@@ -163,7 +167,7 @@
 
   async function start() {
     info = await (await fetch("/api/info")).json();
-    $("dem").textContent = info.path + " (" + info.cols + " x " + info.rows + ")";
+    $("dem").textContent = info.path.split(/[\\/]/).pop() + " (" + info.cols + " x " + info.rows + ")";
     st.algorithm = info.algorithm;
     for (const a of info.algorithms) {
       const o = document.createElement("option"); o.value = o.textContent = a;
