@@ -3,9 +3,11 @@
 encoded and read back by the client) at several suns, algorithm auto, on real DEMs and a spectral
 fractal. Target (issue 22): <= 100 ms per update on the CPU.
 
-Per case: the median of 3 round trips per sun, and the split of one of them into shading
-(Viewer.render: cast shadows, relief, colours), PNG encoding (run.view.png_bytes) and the rest
-(HTTP, transfer). Figures for docs/benchmarks.md ("The viewer")."""
+Per case and sun: the median of 3 round trips, alternated in one process with the shadow mask
+alone (the Shader.cast the server makes for that view: what the command line's shadow run
+computes), so that the ratio round trip / mask says what the viewer adds whatever the machine's
+load; and one update split into the picture (Viewer.render) and the PNG. Figures for
+docs/benchmarks.md ("The viewer")."""
 
 from __future__ import annotations
 
@@ -66,7 +68,7 @@ def fetch(url: str) -> tuple[float, bytes]:
 
 def main() -> int:
     print(f"bench-view: {SIDE} x {SIDE} views, algorithm auto, {len(SUNS)} suns x {REPEAT} "
-          f"round trips, {os.cpu_count()} CPUs", flush=True)
+          f"round trips, {os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.1f}", flush=True)
     rows_out = []
     for label, dem, bbox in cases():
         viewer = Viewer(dem, "auto", "cpu")
@@ -77,12 +79,28 @@ def main() -> int:
         th.start()
         try:
             b = ",".join(str(v) for v in bbox)
-            per_sun = []
+            trips, masks = [], []
             for az, el in SUNS:
                 url = f"{srv.url}api/render?az={az}&el={el}&bbox={b}&w={SIDE}&h={SIDE}"
-                fetch(url)                    # the first of a sun: the pyramid, the survey
-                times = [fetch(url)[0] for _ in range(REPEAT)]
-                per_sun.append(statistics.median(times))
+                _, body = fetch(url)          # the first of a sun (and of a level: gradients)
+                pic, meta = viewer.render({"az": str(az), "el": str(el), "bbox": b,
+                                           "w": str(SIDE), "h": str(SIDE)})
+                n = int(meta["X-Level"])
+                rows, cols = viewer.level(n)[0].shape
+                ri = np.floor(bbox[1] + (np.arange(SIDE) + 0.5) * (bbox[3] - bbox[1]) / SIDE)
+                ci = np.floor(bbox[0] + (np.arange(SIDE) + 0.5) * (bbox[2] - bbox[0]) / SIDE)
+                ri, ci = ri[(ri >= 0) & (ri < dem.shape[0])] // n, ci[(ci >= 0) & (ci < dem.shape[1])] // n
+                rs = slice(int(ri.min()), int(ri.max()) + 1)
+                cs = slice(int(ci.min()), int(ci.max()) + 1)
+                sh = viewer.shader(n, "auto")
+                t_trip, t_mask = [], []
+                for _ in range(REPEAT):       # A/B alternated: the round trip, the mask alone
+                    t_trip.append(fetch(url)[0])
+                    t = time.perf_counter()
+                    viewer.call(viewer.part, sh, rs, cs, az, el)   # on the worker, as served
+                    t_mask.append(time.perf_counter() - t)
+                trips.append(statistics.median(t_trip))
+                masks.append(statistics.median(t_mask))
             # the split of one update
             q = {"az": "203.7", "el": "25", "bbox": b, "w": str(SIDE), "h": str(SIDE)}
             t0 = time.perf_counter()
@@ -90,23 +108,27 @@ def main() -> int:
             t1 = time.perf_counter()
             png = png_bytes(pic)
             t2 = time.perf_counter()
-            total, _ = fetch(f"{srv.url}api/render?az=203.7&el=25&bbox={b}&w={SIDE}&h={SIDE}")
         finally:
             srv.shutdown()
             srv.server_close()
-        ms = [1000 * t for t in per_sun]
-        rows_out.append((label, meta["X-Level"], meta["X-Algorithm"], ms,
-                         1000 * (t1 - t0), 1000 * (t2 - t1), 1000 * total, len(png)))
-        print(f"{label}\n  level {meta['X-Level']}, {meta['X-Algorithm']}; per sun (ms): "
-              + ", ".join(f"{az:g}/{el:g}: {m:.0f}" for (az, el), m in zip(SUNS, ms))
-              + f"\n  median {statistics.median(ms):.0f} ms, worst {max(ms):.0f} ms; one update: "
-                f"shading {1000 * (t1 - t0):.0f} ms, PNG {1000 * (t2 - t1):.0f} ms "
-                f"({len(png) / 1e6:.2f} MB), round trip {1000 * total:.0f} ms", flush=True)
-    print("\n| view | level | median ms | worst ms | shading ms | PNG ms | round trip ms |")
-    print("|---|---|---|---|---|---|---|")
-    for label, level, alg, ms, sh, pn, tot, _ in rows_out:
-        print(f"| {label} | {level} | {statistics.median(ms):.0f} | {max(ms):.0f} | {sh:.0f} | "
-              f"{pn:.0f} | {tot:.0f} |")
+        ms = [1000 * t for t in trips]
+        mm = [1000 * t for t in masks]
+        rows_out.append((label, meta["X-Level"], ms, mm, 1000 * (t1 - t0), 1000 * (t2 - t1)))
+        print(f"{label}\n  level {meta['X-Level']}, {meta['X-Algorithm']}; round trip / the "
+              "mask alone per sun (ms): "
+              + ", ".join(f"{az:g}/{el:g}: {m:.0f}/{k:.0f}" for (az, el), m, k in zip(SUNS, ms, mm))
+              + f"\n  round trip median {statistics.median(ms):.0f} ms, worst {max(ms):.0f} ms; "
+                f"mask alone median {statistics.median(mm):.0f} ms; one update in process "
+                f"{1000 * (t1 - t0):.0f} ms + PNG {1000 * (t2 - t1):.0f} ms "
+                f"({len(png) / 1e6:.1f} MB)", flush=True)
+    print("\n| view | level | round trip ms, median (worst) | mask alone ms, median | "
+          "round trip / mask (median of suns) | PNG ms |")
+    print("|---|---|---|---|---|---|")
+    for label, level, ms, mm, _, pn in rows_out:
+        ratio = statistics.median(m / k for m, k in zip(ms, mm))
+        print(f"| {label} | {level} | {statistics.median(ms):.0f} ({max(ms):.0f}) | "
+              f"{statistics.median(mm):.0f} | {ratio:.2f} | {pn:.0f} |")
+    print(f"load average at the end {os.getloadavg()[0]:.1f}")
     return 0
 
 

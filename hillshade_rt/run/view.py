@@ -20,7 +20,8 @@ what the page shows:
 * ``/api/download?...``: the whole DEM's mask at full resolution for the current sun, GeoTIFF.
 
 Malformed queries get a 400 with a one-line message; nothing a request does stops the server.
-Shading runs under one lock (the Shaders keep state; numba's kernels use every core anyway).
+Shading runs on one worker thread, one request at a time (the Shaders keep state; numba's
+kernels use every core anyway, and its OpenMP pool belongs to the calling thread).
 """
 
 from __future__ import annotations
@@ -34,6 +35,7 @@ import sys
 import tempfile
 import threading
 import zlib
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from urllib.parse import parse_qs, urlsplit
@@ -136,7 +138,10 @@ class Viewer:
         self.grid = dem.grid
         self.body = dem_body(dem)
         self.algorithm, self.backend, self.options = algorithm, backend, dict(options or {})
-        self.lock = threading.Lock()
+        # every computation on one worker thread, one at a time: the Shaders keep state, and
+        # numba's OpenMP pool belongs to the thread that calls a kernel (a pool per request
+        # thread would be made for each and compete for the cores with the last one's)
+        self._worker = ThreadPoolExecutor(1, thread_name_prefix="hillshade-rt-view")
         self._levels: dict = {}
         self._shaders: dict = {}
         self._gradients: dict = {}
@@ -158,6 +163,32 @@ class Viewer:
             self.zone_name = f"UTC{hours:+03d}:00 (from the longitude; --tz names a zone)"
         else:
             self.tz, self.zone_name = None, None
+
+    def call(self, fn, *args):
+        """``fn(*args)`` on the worker thread (its exceptions raised here)."""
+        return self._worker.submit(fn, *args).result()
+
+    def render(self, q: dict) -> tuple[np.ndarray, dict]:
+        """The picture a render query asks for: ((h, w, 4) uint8, headers)."""
+        return self.call(self._render, q)
+
+    def point(self, q: dict) -> dict:
+        """Height, lit or not and the horizon profile at (x, y) (pixel coordinates)."""
+        return self.call(self._point, q)
+
+    def download(self, q: dict) -> tuple[bytes, str]:
+        """The whole DEM's mask for the query's sun at full resolution as GeoTIFF bytes."""
+        return self.call(self._download, q)
+
+    def sunpath(self, q: dict) -> dict:
+        """The sun of the query's date every 10 minutes of the local day."""
+        return self.call(self._sunpath, q)
+
+    def warm_up(self) -> None:
+        self.call(self._warm_up)
+
+    def close(self) -> None:
+        self._worker.shutdown(wait=False, cancel_futures=True)
 
     # -- levels and shaders --------------------------------------------------------------------
     def level(self, n: int):
@@ -182,7 +213,7 @@ class Viewer:
                                         extent_m=self.extent_m)
         return self._shaders[key]
 
-    def warm_up(self) -> None:
+    def _warm_up(self) -> None:
         self.shader(1, self.algorithm).warm_up(203.7, 20.0, soft=False, incidence=True)
 
     # -- the sun -------------------------------------------------------------------------------
@@ -219,13 +250,12 @@ class Viewer:
         t0 = _dt.datetime.combine(day, _dt.time(0), self.tz)
         return [t0 + _dt.timedelta(minutes=m) for m in range(0, 24 * 60, step_min)]
 
-    def sunpath(self, q: dict) -> dict:
+    def _sunpath(self, q: dict) -> dict:
         if self.site is None:
             raise BadRequest("this DEM has no place on Earth (no CRS): no sun path")
         day = parse_day(q.get("date", ""))
         times = self.day_times(day)
-        with self.lock:
-            suns = self.suns(times)
+        suns = self.suns(times)
         return {"date": day.isoformat(), "zone": self.zone_name,
                 "points": [{"minutes": i * 10, "time": t.isoformat(), "azimuth": s.azimuth,
                             "elevation": s.elevation} for i, (t, s) in enumerate(zip(times, suns))]}
@@ -254,7 +284,7 @@ class Viewer:
             raise BadRequest(f"unknown algorithm {name!r}; known: {', '.join(REGISTRY)}")
         return name
 
-    def render(self, q: dict) -> tuple[np.ndarray, dict]:
+    def _render(self, q: dict) -> tuple[np.ndarray, dict]:
         """The picture a render query asks for: ((h, w, 4) uint8, headers)."""
         rows, cols = self.z.shape
         x0, y0, x1, y1 = bbox_of(q, (0.0, 0.0, float(cols), float(rows)))
@@ -280,24 +310,23 @@ class Viewer:
         c0, c1 = int(ci[cin].min()), int(ci[cin].max()) + 1
         rs, cs = slice(r0, r1), slice(c0, c1)
         az, el = sun["azimuth"], sun["elevation"]
-        with self.lock:
-            sh = self.shader(n, algorithm)
-            stats: dict = {}
-            ge, gn, g0 = self.gradients(n, rs, cs)
-            is_mask = False
-            if hours_day is not None:
-                hours, most = self.sun_hours(sh, rs, cs, hours_day)
-                meta["X-Sun-Hours-Max"] = f"{most:.2f}"
-                value, v0 = (hours / most if most > 0 else np.zeros_like(hours)), (r0, c0)
-                low, high = 0.25 * SUN_RGB, SUN_RGB
-            else:
-                value, v0 = self.part(sh, rs, cs, az, el, soft=soft, stats=stats)
-                if soft:
-                    value = 1.0 - value
-                is_mask = not soft
-                low, high = LIT_RGB, SHADOW_RGB
-            if algorithm == "auto" and stats.get("auto"):
-                meta["X-Algorithm"] = f"auto ({','.join(stats['auto']['chose'])})"
+        sh = self.shader(n, algorithm)
+        stats: dict = {}
+        ge, gn, g0 = self.gradients(n, rs, cs)
+        is_mask = False
+        if hours_day is not None:
+            hours, most = self.sun_hours(sh, rs, cs, hours_day)
+            meta["X-Sun-Hours-Max"] = f"{most:.2f}"
+            value, v0 = (hours / most if most > 0 else np.zeros_like(hours)), (r0, c0)
+            low, high = 0.25 * SUN_RGB, SUN_RGB
+        else:
+            value, v0 = self.part(sh, rs, cs, az, el, soft=soft, stats=stats)
+            if soft:
+                value = 1.0 - value
+            is_mask = not soft
+            low, high = LIT_RGB, SHADOW_RGB
+        if algorithm == "auto" and stats.get("auto"):
+            meta["X-Algorithm"] = f"auto ({','.join(stats['auto']['chose'])})"
         rgba(ge, gn, g0[0], g0[1], value, v0[0], v0[1], is_mask, np.where(rin, ri, -1),
              np.where(cin, ci, -1), *sun_vector(az, max(el, 5.0)), low.astype(np.float64),
              high.astype(np.float64), out)
@@ -361,7 +390,7 @@ class Viewer:
             hours += 0.5 * (m[rs.start - a:rs.stop - a, cs.start - b:cs.stop - b] == 0)
         return hours, most
 
-    def point(self, q: dict) -> dict:
+    def _point(self, q: dict) -> dict:
         """Height, lit or not and the horizon profile at (x, y) (pixel coordinates)."""
         from ..arrays import ground_height, horizon_profile
         from ..sun import Region
@@ -380,12 +409,11 @@ class Viewer:
         hb = ground_height(self.z, min(max(y - 0.5, 0.0), rows - 1.0),
                            min(max(x - 0.5, 0.0), cols - 1.0))
         out["height_bilinear"] = hb if math.isfinite(hb) else None
-        with self.lock:
-            sh = self.shader(1, self.algorithm_of(q))
-            m = sh.cast(Region(slice(r, r + 1), slice(c, c + 1), sun["azimuth"],
-                               sun["elevation"]))
-            out["lit"] = bool(m[0, 0] == 0)
-            az, ang, _ = horizon_profile(self.dem, [float(r)], [float(c)], step=2.0)
+        sh = self.shader(1, self.algorithm_of(q))
+        m = sh.cast(Region(slice(r, r + 1), slice(c, c + 1), sun["azimuth"],
+                           sun["elevation"]))
+        out["lit"] = bool(m[0, 0] == 0)
+        az, ang, _ = horizon_profile(self.dem, [float(r)], [float(c)], step=2.0)
         ang = np.asarray(ang[0], np.float64)
         toward = float(np.interp(sun["azimuth"], np.append(az, 360.0),
                                  np.append(ang, ang[0])))
@@ -399,16 +427,15 @@ class Viewer:
             out["lon"], out["lat"] = float(lo[0]), float(la[0])
         return out
 
-    def download(self, q: dict) -> tuple[bytes, str]:
+    def _download(self, q: dict) -> tuple[bytes, str]:
         """The whole DEM's mask for the query's sun at full resolution as GeoTIFF bytes."""
         from ..io.raster import write_raster
         from ..products import product
         from ..shading import render
         from ..sun import SunOver
         algorithm, soft, sun = self.algorithm_of(q), flag(q, "soft"), self.sun(q)
-        with self.lock:
-            data = render(self.shader(1, algorithm),
-                          SunOver(None, sun["azimuth"], sun["elevation"]), "shadow", soft=soft)
+        data = render(self.shader(1, algorithm),
+                      SunOver(None, sun["azimuth"], sun["elevation"]), "shadow", soft=soft)
         p = product("shadow", soft)
         if soft:
             data = np.where(np.isnan(data), np.float32(p.nodata), data).astype(np.float32)
@@ -600,3 +627,4 @@ def view(cfg: ViewConfig) -> None:
         server.serve_forever(poll_interval=0.2)
     finally:
         server.server_close()
+        viewer.close()

@@ -34,12 +34,14 @@ def dem():
 
 @pytest.fixture(scope="module")
 def server(dem):
-    srv = make_server(Viewer(dem), 0)
+    viewer = Viewer(dem)
+    srv = make_server(viewer, 0)
     th = threading.Thread(target=srv.serve_forever, kwargs={"poll_interval": 0.1}, daemon=True)
     th.start()
     yield srv
     srv.shutdown()
     srv.server_close()
+    viewer.close()
 
 
 def get(server, path):

@@ -59,11 +59,13 @@ def browser():
 
 @pytest.fixture(scope="module")
 def server():
-    srv = make_server(Viewer(read_dem(DEM)), 0)
+    viewer = Viewer(read_dem(DEM))
+    srv = make_server(viewer, 0)
     threading.Thread(target=srv.serve_forever, kwargs={"poll_interval": 0.1}, daemon=True).start()
     yield srv
     srv.shutdown()
     srv.server_close()
+    viewer.close()
 
 
 def wait_for(drv, script, timeout=120.0):
