@@ -299,3 +299,27 @@ def test_cli_errors_are_one_line(tmp_path):
     assert r.exit_code == 1 and len(r.output.strip().splitlines()) == 1
     r = CliRunner().invoke(cli, ["view", DEM, "--port", "70000"])
     assert r.exit_code == 2
+
+
+def test_a_dem_without_a_crs_has_no_times(tmp_path):
+    from hillshade_rt.run.config import ReadOptions
+    from hillshade_rt.testing import fractal_terrain, reference_mask, write_geotiff
+    z = fractal_terrain(64, 80, seed=9).astype(np.float32)
+    path = write_geotiff(tmp_path / "plain.tif", z)
+    dem = ReadOptions(pixel_size="5").read(path)
+    viewer = Viewer(dem)
+    srv = make_server(viewer, 0)
+    threading.Thread(target=srv.serve_forever, kwargs={"poll_interval": 0.1}, daemon=True).start()
+    try:
+        info = json.loads(get(srv, "/api/info")[2])
+        assert info["has_time"] is False and info["zone"] is None and info["date"] is None
+        status, _, body = get(srv, "/api/render?time=2026-06-21T12:00")
+        assert status == 400 and b"no place on Earth" in body
+        assert get(srv, "/api/sunpath?date=2026-06-21")[0] == 400
+        pic, _ = render(srv, az=163, el=20, bbox="0,0,80,64", w=80, h=64)
+        # the plain-Python reference of the model (no curvature on a 0.5 km raster)
+        assert np.array_equal(shadow_of(pic), reference_mask(z, 5.0, 5.0, 163.0, 20.0))
+    finally:
+        srv.shutdown()
+        srv.server_close()
+        viewer.close()
