@@ -323,3 +323,21 @@ def test_a_dem_without_a_crs_has_no_times(tmp_path):
         srv.shutdown()
         srv.server_close()
         viewer.close()
+
+
+def test_every_page_file_is_package_data():
+    """The wheel carries the page: pyproject's package-data globs cover every file of
+    view_static (checked against a built wheel once: index.html, JS, CSS, Leaflet, images)."""
+    import fnmatch
+    import tomllib
+
+    from hillshade_rt.run.view import STATIC
+    from hillshade_rt.testing import repo_root
+    with open(os.path.join(repo_root(), "pyproject.toml"), "rb") as f:
+        globs = tomllib.load(f)["tool"]["setuptools"]["package-data"]["hillshade_rt.run"]
+    base = os.path.dirname(STATIC)
+    files = [os.path.relpath(os.path.join(d, n), base).replace(os.sep, "/")
+             for d, _, names in os.walk(STATIC) for n in names]
+    assert len(files) >= 10
+    for f in files:
+        assert any(fnmatch.fnmatch(f, g) and f.count("/") == g.count("/") for g in globs), f
