@@ -329,9 +329,9 @@ def test_every_page_file_is_package_data():
     """The wheel carries the page: pyproject's package-data globs cover every file of
     view_static (checked against a built wheel once: index.html, JS, CSS, Leaflet, images)."""
     import fnmatch
-    import tomllib
 
     from hillshade_rt.run.view import STATIC
+    tomllib = pytest.importorskip("tomllib")         # Python >= 3.11
     from hillshade_rt.testing import repo_root
     with open(os.path.join(repo_root(), "pyproject.toml"), "rb") as f:
         globs = tomllib.load(f)["tool"]["setuptools"]["package-data"]["hillshade_rt.run"]
