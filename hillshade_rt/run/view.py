@@ -79,8 +79,13 @@ class ViewConfig:
     say: object = say_nothing
 
     def check(self) -> None:
+        from ..sun import zone
         if not (0 <= int(self.port) <= 65535):
             raise UsageProblem(f"--port must be 0..65535, got {self.port}")
+        try:
+            zone(self.tz)
+        except HillshadeError as exc:
+            raise UsageProblem(str(exc)) from None
 
 
 # --------------------------------------------------------------------------------------------

@@ -341,3 +341,11 @@ def test_every_page_file_is_package_data():
     assert len(files) >= 10
     for f in files:
         assert any(fnmatch.fnmatch(f, g) and f.count("/") == g.count("/") for g in globs), f
+
+
+def test_cli_unknown_zone_is_a_usage_error():
+    from click.testing import CliRunner
+
+    from hillshade_rt.cli import cli
+    r = CliRunner().invoke(cli, ["view", DEM, "--no-browser", "--tz", "Mars/Olympus"])
+    assert r.exit_code == 2 and "not an IANA time zone" in r.output
