@@ -153,3 +153,32 @@ def test_time_slider_updates_the_shadows(browser, server):
     tmp = SCREENSHOT + ".tmp.png"
     drv.save_screenshot(tmp)
     shutil.move(tmp, SCREENSHOT)
+
+
+def test_compass_drag_and_toggles(browser, server):
+    """Dragging the sun on the compass sets azimuth and elevation by hand (the picture follows);
+    soft shadows and sun hours each bring a new picture; the download link names the sun."""
+    from selenium.webdriver.common.action_chains import ActionChains
+    from selenium.webdriver.common.by import By
+
+    drv = browser
+    drv.get(server.url)
+    wait_for(drv, "return window.viewer && viewer.renders >= 1")
+    n = drv.execute_script("return viewer.renders")
+    compass = drv.find_element(By.ID, "compass")
+    # from the centre (zenith) 40 px to the east and 40 px north, then release: the compass's
+    # horizon is 80 px from the centre, so elevation 90 * (1 - 56.6 / 80) = 26.4, azimuth 45
+    ActionChains(drv).move_to_element(compass).click_and_hold().move_by_offset(20, -20) \
+        .move_by_offset(20, -20).release().perform()
+    last = wait_for(drv, f"return viewer.renders > {n} && viewer.state.mode === 'manual' "
+                         "&& Math.abs(viewer.last.azimuth - 45) < 3 && viewer.last")
+    assert abs(last["elevation"] - 26.4) < 3.0
+    assert "set by hand" in drv.find_element(By.ID, "sunlabel").text
+    for box, header in (("soft", None), ("sunhours", "sun hours")):
+        n = drv.execute_script("return viewer.renders")
+        drv.find_element(By.ID, box).click()
+        wait_for(drv, f"return viewer.renders > {n}")
+        if header:
+            assert header in drv.find_element(By.ID, "status").text
+        drv.find_element(By.ID, box).click()          # off again
+        wait_for(drv, f"return viewer.renders > {n + 1}")
