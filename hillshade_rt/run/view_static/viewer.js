@@ -56,7 +56,8 @@
                       elevation: el, level: parseInt(h("X-Level")), algorithm: h("X-Algorithm"),
                       time: h("X-Time"), ms: performance.now() - t0 };
       document.body.dataset.renders = String(viewer.renders);
-      $("status").textContent = "level 1/" + viewer.last.level + ", " + viewer.last.algorithm +
+      $("status").textContent = (viewer.last.level === 1 ? "full resolution" :
+        "overview: every " + viewer.last.level + "th cell") + ", " + viewer.last.algorithm +
         ", " + Math.round(viewer.last.ms) + " ms" +
         (h("X-Sun-Hours-Max") ? ", sun hours 0.." + h("X-Sun-Hours-Max") : "");
       sunLabel();
