@@ -349,3 +349,25 @@ def test_cli_unknown_zone_is_a_usage_error():
     from hillshade_rt.cli import cli
     r = CliRunner().invoke(cli, ["view", DEM, "--no-browser", "--tz", "Mars/Olympus"])
     assert r.exit_code == 2 and "not an IANA time zone" in r.output
+
+
+def test_gpu_backend_gives_the_cpu_pictures():
+    """The viewer on the CUDA backend (the simulator here: a small DEM): the whole view and a
+    window with its halo equal the CPU's mask."""
+    from affine import Affine
+
+    from hillshade_rt.testing import fractal_terrain, memory_dem
+    z = fractal_terrain(17, 21, 5, relief=150.0, octaves=4).astype(np.float32)
+    z[6:8, 9:11] = np.nan
+    dem = memory_dem(z, Affine(30.0, 0, 400000.0, 0, -30.0, 3800000.0), "EPSG:32611")
+    viewer = Viewer(dem, "auto", "gpu")
+    try:
+        for az, el, bbox in ((203.7, 12.0, "0,0,21,17"), (163.0, 20.0, "5,4,15,12")):
+            x0, y0, x1, y1 = (int(v) for v in bbox.split(","))
+            pic, meta = viewer.render({"az": str(az), "el": str(el), "bbox": bbox,
+                                       "w": str(x1 - x0), "h": str(y1 - y0)})
+            want = shadow_mask(dem, az, el, backend="cpu")[y0:y1, x0:x1]
+            assert np.array_equal(shadow_of(pic), want), (az, el)
+            assert meta["X-Algorithm"] == "auto (brute)"      # auto's pick on the GPU
+    finally:
+        viewer.close()
