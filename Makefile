@@ -7,7 +7,7 @@ OUTDIR ?= out
 EXAMPLE_DEM := examples/bigtujunga_srtm30m_utm11n_1197x643.tif
 EXAMPLE_OUT := $(OUTDIR)/bigtujunga_shadow.tif
 
-.PHONY: run test install install-test bench bench-sun bench-tiling bench-big bench-gpu bench-peers bench-horizon docs-pictures docs-animation bench-writes bench-real bench-real-quick bench-fast bench-point gpu-check clean help
+.PHONY: run test install install-test bench bench-sun bench-tiling bench-big bench-gpu bench-peers bench-horizon docs-pictures docs-animation docs-viewer bench-writes bench-real bench-real-quick bench-fast bench-point bench-view gpu-check clean help
 
 help:
 	@echo "make run    - set up .venv, shade the bundled example DEM, print where the mask went"
@@ -25,6 +25,7 @@ help:
 	@echo "make bench-real-quick - the same with 1024 and 6 suns (a few minutes on 2 cores)"
 	@echo "make bench-fast - the default's curvature cost, cost against size, geographic vs projected"
 	@echo "make bench-point - the point light vs brute's directional mask (4096^2, real DEMs)"
+	@echo "make bench-view - hillshade-rt view: a 1024^2 view recomputed and delivered (round trip)"
 	@echo "make docs-pictures - the pictures of docs/products.md, by the tool's --preview"
 	@echo "make docs-animation - the README's GIF: the shadows of a winter day on the example DEM"
 	@echo "make clean  - remove .venv and outputs"
@@ -67,6 +68,9 @@ bench-tiling: $(VENV)/.installed-test
 
 bench-point: $(VENV)/.installed
 	$(BIN)/python benchmarks/bench_point.py
+
+bench-view: $(VENV)/.installed
+	$(BIN)/python benchmarks/bench_view.py
 
 bench-writes: $(VENV)/.installed
 	$(BIN)/python benchmarks/bench_writes.py
@@ -131,6 +135,10 @@ bench-fast: $(VENV)/.installed
 
 bench-real-quick: $(VENV)/.installed-peers
 	MALLOC_MMAP_THRESHOLD_=131072 $(BIN)/python benchmarks/bench_real.py --quick $(BENCH_REAL_ARGS)
+
+# the viewer's screenshot in docs/viewer.md, taken by the browser test (Debian's chromium)
+docs-viewer: $(VENV)/.installed-test
+	HILLSHADE_RT_DOCS_SCREENSHOT=1 $(BIN)/python -m pytest -q tests/run/test_view_browser.py
 
 clean:
 	rm -rf $(VENV) $(OUTDIR) .pytest_cache .hypothesis

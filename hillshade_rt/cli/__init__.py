@@ -26,6 +26,7 @@ from .query import query
 from .shadow import hillshade, shadow
 from .skyview import skyview
 from .sun_hours import sun_hours
+from .view import view
 
 
 @click.group(cls=OneLineErrors, context_settings={"help_option_names": ["-h", "--help"]})
@@ -38,6 +39,7 @@ for _command in (shadow, hillshade, sun_hours, horizon, profile, query, skyview,
     cli.add_command(_command)
 cli.add_command(irradiance)
 cli.add_command(animate)
+cli.add_command(view)
 
 
 def main():

@@ -379,3 +379,16 @@ def given(name: str) -> bool:
         return True
     return ctx.get_parameter_source(name) not in (ParameterSource.DEFAULT,
                                                   ParameterSource.DEFAULT_MAP)
+
+
+def view_options(f):
+    """``hillshade-rt view``: where the viewer listens and whether it opens a browser."""
+    return _stack(f, [
+        click.option("--port", type=click.IntRange(0, 65535), default=0, show_default=True,
+                     help="Port on 127.0.0.1 to listen on (0: a free one)."),
+        click.option("--no-browser", is_flag=True,
+                     help="Do not open the default browser (the URL is printed)."),
+        click.option("--tz", default=None, metavar="ZONE",
+                     help="IANA zone of the times shown, e.g. Europe/Zurich (default: the "
+                          "offset nearest the DEM's longitude, in whole hours)."),
+    ])
