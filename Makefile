@@ -7,7 +7,7 @@ OUTDIR ?= out
 EXAMPLE_DEM := examples/bigtujunga_srtm30m_utm11n_1197x643.tif
 EXAMPLE_OUT := $(OUTDIR)/bigtujunga_shadow.tif
 
-.PHONY: run test install install-test bench bench-sun bench-tiling bench-big bench-gpu bench-peers bench-horizon docs-pictures bench-writes bench-real bench-real-quick bench-fast bench-point bench-update gpu-check clean help
+.PHONY: run test install install-test bench bench-sun bench-tiling bench-big bench-gpu bench-peers bench-horizon docs-pictures docs-animation docs-viewer bench-writes bench-real bench-real-quick bench-fast bench-point bench-view bench-update gpu-check clean help
 
 help:
 	@echo "make run    - set up .venv, shade the bundled example DEM, print where the mask went"
@@ -25,8 +25,10 @@ help:
 	@echo "make bench-real-quick - the same with 1024 and 6 suns (a few minutes on 2 cores)"
 	@echo "make bench-fast - the default's curvature cost, cost against size, geographic vs projected"
 	@echo "make bench-point - the point light vs brute's directional mask (4096^2, real DEMs)"
+	@echo "make bench-view - hillshade-rt view: a 1024^2 view recomputed and delivered (round trip)"
 	@echo "make bench-update - a 20x20 edit re-shaded (Shader.update) vs a full render"
 	@echo "make docs-pictures - the pictures of docs/products.md, by the tool's --preview"
+	@echo "make docs-animation - the README's GIF: the shadows of a winter day on the example DEM"
 	@echo "make clean  - remove .venv and outputs"
 
 $(BIN)/python:
@@ -67,6 +69,9 @@ bench-tiling: $(VENV)/.installed-test
 
 bench-point: $(VENV)/.installed
 	$(BIN)/python benchmarks/bench_point.py
+
+bench-view: $(VENV)/.installed
+	$(BIN)/python benchmarks/bench_view.py
 
 bench-update: $(VENV)/.installed
 	$(BIN)/python benchmarks/bench_update.py
@@ -111,6 +116,13 @@ bench-peers: $(VENV)/.installed-peers
 docs-pictures: $(VENV)/.installed
 	$(BIN)/python docs/pictures.py
 
+# The README's animation (docs/img/day.gif): the winter solstice on the bundled DEM, 11 frames
+# from just after sunrise to after sunset, by the tool's own animate command
+docs-animation: $(VENV)/.installed
+	$(BIN)/hillshade-rt animate $(EXAMPLE_DEM) docs/img/day.gif --start 2026-12-21T07:00 \
+		--end 2026-12-21T17:00 --step 1h --tz America/Los_Angeles --size 400 --fps 3 \
+		--overwrite
+
 # Horizons in N directions and the sky view factor against one shadow mask, and the sky view
 # factor of rvt-py and whitebox-workflows against ours (issue 20)
 bench-horizon: $(VENV)/.installed-peers
@@ -127,6 +139,10 @@ bench-fast: $(VENV)/.installed
 
 bench-real-quick: $(VENV)/.installed-peers
 	MALLOC_MMAP_THRESHOLD_=131072 $(BIN)/python benchmarks/bench_real.py --quick $(BENCH_REAL_ARGS)
+
+# the viewer's screenshot in docs/viewer.md, taken by the browser test (Debian's chromium)
+docs-viewer: $(VENV)/.installed-test
+	HILLSHADE_RT_DOCS_SCREENSHOT=1 $(BIN)/python -m pytest -q tests/run/test_view_browser.py
 
 clean:
 	rm -rf $(VENV) $(OUTDIR) .pytest_cache .hypothesis

@@ -14,7 +14,8 @@ _EXPORTS = {"HillshadeError": "errors", "Grid": "geometry", "sun_rays": "geometr
             "is_shadowed": "arrays", "sky_view": "arrays", "horizon_profile": "arrays",
             "sun_at_points": "arrays",
             "Shader": "shading", "render": "shading",
-            "solar_position": "sun", "parse_time": "sun", "sun_over": "sun", "shade": "api"}
+            "solar_position": "sun", "parse_time": "sun", "sun_over": "sun", "shade": "api",
+            "animate": "api"}
 
 __all__ = list(_EXPORTS) + ["__version__"]
 

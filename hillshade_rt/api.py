@@ -165,3 +165,33 @@ def irradiance(dem, output, *, date=None, end_date=None, start=None, end=None,
         return run_irradiance(cfg)
     finally:
         virtual_outputs.reset(token)
+
+
+def animate(dem, output, *, date=None, start=None, end=None, step: str | None = None,
+            fps: float = 12.0, size: int = 1024, label: bool = True, algorithm: str = "auto",
+            curvature: bool | None = None, refraction_k: float | None = None,
+            backend: str = "auto", overwrite: bool = False, report: str | None = None,
+            progress: bool = False, **more) -> dict:
+    """``hillshade-rt animate`` as a function: the shadows on the DEM at ``dem`` over a day
+    (``date``: a date or "YYYY-MM-DD") or a series (``start``, ``end``: datetimes or ISO
+    strings), every ``step`` (default "30min"), as a GIF or an MP4 at ``output`` (its
+    extension decides). Further keywords are the command line's options of the same name
+    (``tz``, ``lat``, ``lon``, ``band``, ``nodata``, ``threads``, ...). Returns the report."""
+    from .run import ReadOptions, RunOptions
+    from .run.animate import AnimateConfig, animate as run_animate
+    from .sun import DEFAULT_TOLERANCE
+    unknown = set(more) - set(_PASSED)
+    if unknown:
+        raise TypeError(f"animate() got unexpected keyword argument(s) "
+                        f"{', '.join(sorted(unknown))}")
+
+    def text(v):
+        return None if v is None else str(v.isoformat() if hasattr(v, "isoformat") else v)
+    place = {k: more.get(k, d) for k, d in zip(PLACE_KEYS, (None,) * 5 + (False,
+                                                                          DEFAULT_TOLERANCE))}
+    read = ReadOptions(**{k: more[k] for k in READ_KEYS if k in more})
+    run = RunOptions(backend=backend, threads=more.get("threads"), report_path=report,
+                     overwrite=overwrite, quiet=not progress, say=_stderr)
+    return run_animate(AnimateConfig(os.fspath(dem), os.fspath(output), text(date), text(start),
+                                     text(end), step, place, fps, size, label, algorithm,
+                                     curvature, refraction_k, read, run))

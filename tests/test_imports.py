@@ -217,7 +217,7 @@ LAYERS = [
     ("hillshade_rt.arrays", "hillshade_rt.run.plan", "hillshade_rt.irradiance"),
     ("hillshade_rt.shading",),
     ("hillshade_rt.io", "hillshade_rt.earth", "hillshade_rt.bodysun", "hillshade_rt.gpu",
-     "hillshade_rt.preview",
+     "hillshade_rt.preview", "hillshade_rt.animation",
      "hillshade_rt.products"),
     ("hillshade_rt.algorithms",),
     ("hillshade_rt.sun", "hillshade_rt.ephemeris"),

@@ -16,6 +16,7 @@ import sys
 import click
 
 from .. import __version__
+from .animate import animate
 from .errors import OneLineErrors
 from .horizon import horizon
 from .info import info
@@ -25,6 +26,7 @@ from .query import query
 from .shadow import hillshade, shadow
 from .skyview import skyview
 from .sun_hours import sun_hours
+from .view import view
 
 
 @click.group(cls=OneLineErrors, context_settings={"help_option_names": ["-h", "--help"]})
@@ -36,6 +38,8 @@ def cli():
 for _command in (shadow, hillshade, sun_hours, horizon, profile, query, skyview, info):
     cli.add_command(_command)
 cli.add_command(irradiance)
+cli.add_command(animate)
+cli.add_command(view)
 
 
 def main():

@@ -127,11 +127,35 @@ def sun_options(f):
         click.option("--time", "time", multiple=True, metavar="ISO8601",
                      help="Sun from this instant (e.g. 2026-06-21T14:30:00+02:00) at the DEM's "
                           "centre; repeat for a series (one band per time)."),
+    ] + _series_options("e.g. 30min, 1h, 1h30min, PT10M"))
+
+
+def _series_options(step_help: str):
+    """--start, --end and --step: a series of times."""
+    return [
         click.option("--start", default=None, metavar="ISO8601", help="Series: first time."),
         click.option("--end", default=None, metavar="ISO8601",
                      help="Series: last time (included when a step lands on it)."),
         click.option("--step", default=None, metavar="DURATION",
-                     help="Series: interval, e.g. 30min, 1h, 1h30min, PT10M."),
+                     help=f"Series: interval, {step_help}."),
+    ]
+
+
+def animation_options(f):
+    """``animate``: the times (a day or a series), the frame rate, the picture's size, the
+    label."""
+    return _stack(f, [
+        click.option("--date", "date_", default=None, metavar="YYYY-MM-DD",
+                     help="A day: frames from local midnight (--tz, else local mean solar "
+                          "time) every --step until the next midnight."),
+    ] + _series_options("e.g. 10min, 1h, PT15M (default 30min)") + [
+        click.option("--fps", type=click.FloatRange(min=0.0, min_open=True, max=50.0),
+                     default=12.0, show_default=True, help="Frames per second."),
+        click.option("--size", type=click.IntRange(min=16), default=1024, show_default=True,
+                     help="Pixels on the picture's long side at most (every n-th cell of the "
+                          "DEM; the shadows are computed at full resolution)."),
+        click.option("--label/--no-label", default=True, show_default=True,
+                     help="Write the date and local time on each frame (top left)."),
     ])
 
 
@@ -355,3 +379,16 @@ def given(name: str) -> bool:
         return True
     return ctx.get_parameter_source(name) not in (ParameterSource.DEFAULT,
                                                   ParameterSource.DEFAULT_MAP)
+
+
+def view_options(f):
+    """``hillshade-rt view``: where the viewer listens and whether it opens a browser."""
+    return _stack(f, [
+        click.option("--port", type=click.IntRange(0, 65535), default=0, show_default=True,
+                     help="Port on 127.0.0.1 to listen on (0: a free one)."),
+        click.option("--no-browser", is_flag=True,
+                     help="Do not open the default browser (the URL is printed)."),
+        click.option("--tz", default=None, metavar="ZONE",
+                     help="IANA zone of the times shown, e.g. Europe/Zurich (default: the "
+                          "offset nearest the DEM's longitude, in whole hours)."),
+    ])

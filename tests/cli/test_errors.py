@@ -65,10 +65,13 @@ def _command(name, dem, out):
             "hillshade": ["hillshade", dem, out],
             "sun-hours": ["sun-hours", dem, out, "--date", "2026-06-21", "--step", "6h"],
             "horizon": ["horizon", dem, out, "--azimuth", "200"],
-            "info": ["info", dem]}[name]
+            "info": ["info", dem],
+            "animate": ["animate", dem, out[:-4] + ".gif", "--date", "2026-06-21", "--step",
+                        "6h"]}[name]
 
 
-@pytest.mark.parametrize("command", ["shadow", "hillshade", "sun-hours", "horizon", "info"])
+@pytest.mark.parametrize("command", ["shadow", "hillshade", "sun-hours", "horizon", "info",
+                                     "animate"])
 @pytest.mark.parametrize("bad, msg", [(["--pixel-size", "0"], "--pixel-size"),
                                       (["--pixel-size", "a,b"], "--pixel-size"),
                                       (["--raw-shape", "abc"], "--raw-shape"),
@@ -82,7 +85,7 @@ def test_bad_dem_options_exit_2_on_every_command(tmp_path, runner, dem, command,
     _nothing_new(tmp_path, before)
 
 
-@pytest.mark.parametrize("command", ["shadow", "hillshade", "sun-hours"])
+@pytest.mark.parametrize("command", ["shadow", "hillshade", "sun-hours", "animate"])
 @pytest.mark.parametrize("place, msg", [(["--lat", "95", "--lon", "3"], "--lat must be"),
                                         (["--lat", "nan", "--lon", "3"], "--lat must be"),
                                         (["--lat", "45"], "--lat and --lon go together"),
@@ -91,10 +94,11 @@ def test_bad_dem_options_exit_2_on_every_command(tmp_path, runner, dem, command,
 def test_bad_place_exits_2(tmp_path, runner, dem, command, place, msg):
     out = str(tmp_path / "o.tif")
     args = (["sun-hours", dem, out, "--date", "2026-06-21"] if command == "sun-hours"
-            else [command, dem, out, "--time", "2026-06-21T12:00Z"])
+            else ["animate", dem, out[:-4] + ".gif", "--date", "2026-06-21"]
+            if command == "animate" else [command, dem, out, "--time", "2026-06-21T12:00Z"])
     r = runner.invoke(cli, args + place)
     _one_line(r, 2, msg)
-    assert not os.path.exists(out)
+    assert not os.path.exists(out) and not os.path.exists(out[:-4] + ".gif")
 
 
 def test_api_raises_the_same_messages(tmp_path, dem):

@@ -1,0 +1,201 @@
+"""The ``animate`` run: the shadows of a DEM over a day (or any series of times) as a GIF or an
+MP4, shaded relief with the cast shadows tinted and the local time written on each frame
+(``animation``: the frames and their encoding). Returns the report.
+
+The shadows are computed at the DEM's full resolution, one ``shading.Shader`` prepared once and
+rendered per time (the ``shadow`` command's mask for that time, cell for cell), and the picture
+takes every n-th cell of the DEM and of each mask (at most ``size`` pixels on the long side).
+Shadows computed on a decimated DEM would be cheaper for a big DEM but different: ridges lower,
+thin shadows lost or widened; the animation shows the masks the tool writes. The DEM is read
+whole (in memory); the frames are kept (one byte per pixel) until they are encoded.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import os
+from dataclasses import dataclass, field
+
+from .. import __version__
+from ..errors import HillshadeError, UsageProblem
+from .config import ReadOptions, RunOptions
+
+DEFAULT_STEP = "30min"
+MAX_FRAMES = 2000
+
+
+@dataclass
+class AnimateConfig:
+    """An ``animate`` run: ``dem`` to ``output`` (.gif or .mp4), the times as a day (``date``:
+    local midnight to midnight every ``step``) or a series (``start``, ``end``, ``step``), the
+    place of the sun (``place``: ``run.config.PLACE_KEYS``), frames per second, the picture's
+    long side, the label."""
+
+    dem: str
+    output: str
+    date: str | None = None
+    start: str | None = None
+    end: str | None = None
+    step: str | None = None           # None: DEFAULT_STEP
+    place: dict = field(default_factory=dict)
+    fps: float = 12.0
+    size: int = 1024
+    label: bool = True
+    algorithm: str = "auto"
+    curvature: object = None
+    refraction_k: float | None = None
+    read: ReadOptions = field(default_factory=ReadOptions)
+    run: RunOptions = field(default_factory=RunOptions)
+
+    def check(self) -> str:
+        """The options' combinations (UsageProblem) and the output's format (".gif"/".mp4")."""
+        from ..animation import check_output
+        series = self.start is not None or self.end is not None
+        if (self.date is not None) == series:
+            raise UsageProblem("give the times one way: --date, or --start and --end "
+                               "(with --step)")
+        if series and (self.start is None or self.end is None):
+            raise UsageProblem("--start and --end go together")
+        return check_output(self.output, self.fps, self.size)
+
+
+def times_of(cfg: AnimateConfig):
+    """The SunRequest with its times (a series), or without (a day: :func:`day_times` fills
+    them in once the DEM's place is known); too many frames refused before the DEM is read."""
+    from ..sun import SunRequest, parse_date, parse_step
+    step = cfg.step or DEFAULT_STEP
+    try:
+        if cfg.date is not None:
+            parse_date(cfg.date, "--date")
+            count = -(-_dt.timedelta(hours=23) // parse_step(step))    # at least, before the
+            req = SunRequest.at_place([], **cfg.place)                 # place is known
+        else:
+            req = SunRequest.from_options(start=cfg.start, end=cfg.end, step=step, **cfg.place)
+            count = len(req.times)
+    except HillshadeError as exc:     # the command line alone decides these: exit 2
+        raise UsageProblem(str(exc)) from None
+    check_count(count)
+    return req
+
+
+def check_count(count: int) -> None:
+    if count > MAX_FRAMES:
+        raise UsageProblem(f"{count} frames: more than {MAX_FRAMES}; use a longer --step or a "
+                           "shorter series")
+
+
+def day_times(day: _dt.date, step: str, tz, lon: float) -> list[_dt.datetime]:
+    """Local midnight of ``day``, then every ``step`` (elapsed time) before the next midnight:
+    in zone ``tz`` (a day of a clock change has 23 or 25 hours), or in local mean solar time at
+    ``lon`` when ``tz`` is None (UTC instants)."""
+    from ..sun import UTC, day_start, parse_step
+    dt = parse_step(step)
+    one = _dt.timedelta(days=1)
+    if tz is not None:
+        t0, t1 = day_start(day, tz), day_start(day + one, tz)
+    else:
+        t0 = _dt.datetime.combine(day, _dt.time(0), UTC) - _dt.timedelta(hours=lon / 15.0)
+        t1 = t0 + one
+    n = -((t0 - t1) // dt)        # ceil((t1 - t0) / dt)
+    return [(t0 + i * dt).astimezone(tz) if tz is not None else t0 + i * dt for i in range(n)]
+
+
+def animate(cfg: AnimateConfig) -> dict:
+    import numba
+    import numpy as np
+
+    from ..animation import (draw_label, frame_indices, label_text, relief_levels, step_of,
+                             subsample, write_gif, write_mp4)
+    from ..earth import dem_body
+    from ..io import input_label, write_json
+    from ..io.write import Claims, atomic_path
+    from ..shading import Shader, choose_backend, render
+    from ..sun import parse_date
+    from .notes import compile_note
+    from .report import Timer, progress
+
+    ro = cfg.run
+    fmt = cfg.check()
+    timer = Timer()
+    claims = Claims([cfg.dem], ro.overwrite)
+    claims.claim(cfg.output, "OUTPUT")
+    if ro.report_path is not None:
+        claims.claim(ro.report_path, "--report")
+    req = times_of(cfg)
+    if ro.threads is not None:
+        numba.set_num_threads(min(ro.threads, numba.config.NUMBA_NUM_THREADS))
+    ran_on = choose_backend(ro.backend, cfg.algorithm, {})
+    with timer("read"):
+        d = cfg.read.read(cfg.dem)
+    with timer("prepare"):
+        site = req.site(d, "animate computes the Earth's sun from times (light a DEM of "
+                           "another body with shadow, which takes the sun's direction)")
+        if cfg.date is not None:
+            req.times = day_times(parse_date(cfg.date), cfg.step or DEFAULT_STEP, req.tz,
+                                  site.lon)
+        check_count(len(req.times))
+        suns, sun_info = req.suns(d, site)
+        zmin, zmax = d.height_range()
+        shader = Shader(d.heights, d.grid, cfg.algorithm, {}, ran_on,
+                        "auto" if cfg.curvature is None else cfg.curvature, cfg.refraction_k,
+                        dem_body(d, req.lat), (zmin, zmax), survey=d.survey())
+        n = step_of(d.shape, cfg.size)
+        zs, gs = subsample(d.heights, d.grid, n)
+        void = np.isnan(zs)
+        night_levels = relief_levels(zs, gs, 315.0, 45.0)
+        day = [s for s in suns if not s.night]
+        if day:
+            if not ro.quiet:
+                note = compile_note(cfg.algorithm, ran_on, False)
+                if note:
+                    ro.say("compile", note)
+            shader.warm_up(day[0].azimuth, day[0].elevation, field=any(s.fieldwise for s in day))
+    lmt = site.lon if req.tz is None and cfg.date is not None else None
+    frames, records, algo_stats = [], [], {}
+    for sun in progress(suns, ro.quiet, "hillshade-rt animate", unit="frame"):
+        with timer("compute"):
+            mask = None if sun.night else render(shader, sun, "shadow", stats=algo_stats)
+        with timer("frames"):
+            if mask is None:
+                idx = frame_indices(night_levels, None, void)
+            else:
+                levels = relief_levels(zs, gs, sun.azimuth, sun.elevation)
+                idx = frame_indices(levels, mask[::n, ::n], void)
+            if cfg.label:
+                idx = draw_label(idx, label_text(sun.time, sun.night, lmt))
+        frames.append(idx)
+        rec = {"time": sun.time.isoformat(timespec="seconds"), "azimuth": sun.azimuth,
+               "elevation": sun.elevation, "night": sun.night}
+        if mask is not None:
+            valid = mask != 255
+            rec["shadow_fraction"] = (float((mask[valid] == 1).mean()) if valid.any() else None)
+        records.append(rec)
+    with timer("encode"):
+        with atomic_path(cfg.output, fmt, overwrite=ro.overwrite) as tmp:
+            try:
+                (write_gif if fmt == ".gif" else write_mp4)(tmp, frames, cfg.fps)
+            except (OSError, RuntimeError, ValueError) as exc:
+                msg = str(exc).strip().splitlines()
+                raise HillshadeError(f"{cfg.output}: cannot write the animation "
+                                     f"({msg[0] if msg else type(exc).__name__})") from None
+    rows, cols = frames[0].shape
+    nights = sum(1 for s in suns if s.night)
+    rep = {"input": input_label(d.path), "output": os.path.abspath(cfg.output),
+           "format": fmt[1:], "shape": list(d.shape), "picture": [rows, cols],
+           "every_nth_cell": n, "frames": len(frames), "night_frames": nights, "fps": cfg.fps,
+           "label": cfg.label,
+           "label_time": ("local mean solar time" if lmt is not None else
+                          (req.tz.key if req.tz is not None else "the times' own offsets")),
+           "algorithm": cfg.algorithm, "backend": ran_on, "times": records,
+           "curvature": shader.report(), "algorithm_stats": algo_stats,
+           "seconds": dict(timer.seconds, total=timer.total()), "version": __version__}
+    rep.update(sun_info or {})
+    if ro.report_path is not None:
+        write_json(ro.report_path, rep, ro.overwrite)
+    if not ro.quiet:
+        sec = timer.seconds
+        ro.say("summary", f"hillshade-rt: {cfg.output}: {len(frames)} frames ({nights} at "
+                          f"night) of {cols}x{rows} from {d.shape[1]}x{d.shape[0]}, "
+                          f"{cfg.fps:g} fps; shadows {sec.get('compute', 0.0):.2f} s, frames "
+                          f"{sec.get('frames', 0.0):.2f} s, encoding {sec['encode']:.2f} s")
+    return rep

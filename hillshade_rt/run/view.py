@@ -1,0 +1,635 @@
+"""``hillshade-rt view``: a local web viewer of a DEM's shadows (issue 22).
+
+A small HTTP server from the standard library (``http.server.ThreadingHTTPServer``: no
+dependency; the viewer is local and single-user, so a thread per request is plenty), bound to
+127.0.0.1 only. The DEM is read once and a :class:`~hillshade_rt.shading.Shader` prepared once
+per overview level (every n-th cell, n a power of two) and algorithm; each request shades only
+what the page shows:
+
+* ``/``, ``/static/...``: the page (``view_static/``: HTML, JS, CSS and Leaflet, vendored);
+* ``/api/info``: the DEM's size, bounds, CRS, zone, the default date and time, the algorithms;
+* ``/api/render?bbox=x0,y0,x1,y1&w=&h=&az=&el=|time=&algorithm=&soft=&sunhours=DATE``: a PNG
+  (RGBA) of the window ``bbox`` (pixel coordinates of the DEM: x a column, y a row, cell (r, c)
+  the square [c, c+1) x [r, r+1)) at ``w`` x ``h``: relief lit by the sun, cast shadows tinted
+  blue (lit pixels have red > blue, shadowed ones blue > red), transparent outside the DEM and
+  on voids. The window is shaded at the coarsest level that still has a cell per pixel, with
+  its halo toward the sun (``Shader.cast`` of a region: the same cells as the whole raster at
+  that level; level 1 is the command line's mask). Headers say the sun, level and algorithm;
+* ``/api/point?x=&y=&az=&el=|time=``: JSON: the height there, lit or not, its horizon profile;
+* ``/api/sunpath?date=``: the day's sun (grid azimuth, elevation) every 10 minutes;
+* ``/api/download?...``: the whole DEM's mask at full resolution for the current sun, GeoTIFF.
+
+Malformed queries get a 400 with a one-line message; nothing a request does stops the server.
+Shading runs on one worker thread, one request at a time (the Shaders keep state; numba's
+kernels use every core anyway, and its OpenMP pool belongs to the calling thread).
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import math
+import os
+import struct
+import sys
+import tempfile
+import threading
+import zlib
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
+from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+from urllib.parse import parse_qs, urlsplit
+
+import numpy as np
+
+from ..errors import HillshadeError, UsageProblem
+from .config import ReadOptions, say_nothing
+
+STATIC = os.path.join(os.path.dirname(__file__), "view_static")
+HOST = "127.0.0.1"
+MAX_PIXELS = 4096 * 4096          # largest picture a request may ask for
+GRADIENT_CELLS = 50_000_000       # levels up to this size keep their surface gradients
+LIT_RGB = np.array([1.0, 0.97, 0.88], np.float32)      # lit relief: red > blue
+SHADOW_RGB = np.array([0.30, 0.42, 0.85], np.float32)  # shadow (preview.TINT): blue > red
+SUN_RGB = np.array([1.0, 0.86, 0.45], np.float32)      # sun hours (preview.SUN)
+TYPES = {".html": "text/html; charset=utf-8", ".js": "text/javascript; charset=utf-8",
+         ".css": "text/css; charset=utf-8", ".png": "image/png", ".svg": "image/svg+xml",
+         ".txt": "text/plain; charset=utf-8"}
+
+
+class BadRequest(HillshadeError):
+    """A malformed query: answered 400 with this one line."""
+
+
+class NotFound(HillshadeError):
+    """Nothing there: answered 404."""
+
+
+@dataclass
+class ViewConfig:
+    """``hillshade-rt view DEM``: where to listen and what to shade with."""
+
+    dem: str
+    read: ReadOptions = field(default_factory=ReadOptions)
+    port: int = 0
+    open_browser: bool = True
+    algorithm: str = "auto"
+    backend: str = "auto"
+    tz: str | None = None
+    say: object = say_nothing
+
+    def check(self) -> None:
+        from ..sun import zone
+        if not (0 <= int(self.port) <= 65535):
+            raise UsageProblem(f"--port must be 0..65535, got {self.port}")
+        try:
+            zone(self.tz)
+        except HillshadeError as exc:
+            raise UsageProblem(str(exc)) from None
+
+
+# --------------------------------------------------------------------------------------------
+# pictures
+
+def png_bytes(rgba: np.ndarray, level: int = 0) -> bytes:
+    """An (h, w, 4) uint8 picture as PNG (RGBA, 8 bits, no filter, zlib ``level``; 0, stored:
+    the viewer's pictures go over the loopback, where 4 MB cost less than compressing them,
+    46 ms at level 1 for a 1024² view against 5 ms)."""
+    h, w, _ = rgba.shape
+    raw = np.empty((h, w * 4 + 1), np.uint8)
+    raw[:, 0] = 0
+    raw[:, 1:] = rgba.reshape(h, w * 4)
+
+    def chunk(kind: bytes, data: bytes) -> bytes:
+        return (struct.pack(">I", len(data)) + kind + data
+                + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF))
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 6, 0, 0, 0))
+            + chunk(b"IDAT", zlib.compress(raw.tobytes(), level)) + chunk(b"IEND", b""))
+
+
+def level_for(scale: float, shape: tuple[int, int]) -> int:
+    """The overview level (every n-th cell, n a power of two) for ``scale`` DEM cells per
+    pixel: the largest n <= scale, so that each pixel still has a cell; 1 when zoomed in."""
+    n = 1
+    while n * 2 <= scale and min(shape) // (n * 2) >= 2:
+        n *= 2
+    return n
+
+
+def pixel_cells(lo: float, hi: float, n_px: int, n_cells: int, level: int):
+    """For ``n_px`` pixels spanning [lo, hi) of one axis: each pixel's cell at ``level`` (index
+    into every ``level``-th cell) and whether it falls inside the raster's ``n_cells``."""
+    centre = lo + (np.arange(n_px) + 0.5) * ((hi - lo) / n_px)
+    cell = np.floor(centre).astype(np.int64)
+    inside = (cell >= 0) & (cell < n_cells)
+    idx = np.where(inside, cell // level, 0)
+    return idx, inside
+
+
+# --------------------------------------------------------------------------------------------
+# the viewer: a DEM prepared once, shaded per request
+
+class Viewer:
+    """A DEM in memory (``io.Dem``) ready to be shaded window by window (thread-safe)."""
+
+    def __init__(self, dem, algorithm: str = "auto", backend: str = "cpu",
+                 tz: str | None = None, options: dict | None = None):
+        from ..algorithms import lookup
+        from ..earth import dem_body
+        from ..sun import dem_site, zone
+        lookup(algorithm)
+        self.dem = dem
+        self.z = dem.heights
+        self.grid = dem.grid
+        self.body = dem_body(dem)
+        self.algorithm, self.backend, self.options = algorithm, backend, dict(options or {})
+        # every computation on one worker thread, one at a time: the Shaders keep state, and
+        # numba's OpenMP pool belongs to the thread that calls a kernel (a pool per request
+        # thread would be made for each and compete for the cores with the last one's)
+        self._worker = ThreadPoolExecutor(1, thread_name_prefix="hillshade-rt-view")
+        self._levels: dict = {}
+        self._shaders: dict = {}
+        self._gradients: dict = {}
+        self.zrange = tuple(float(v) for v in dem.height_range())
+        if not all(math.isfinite(v) for v in self.zrange):
+            raise HillshadeError(f"{dem.path}: every cell is nodata: nothing to view")
+        dx, dy = self.grid.centre_spacing()
+        rows, cols = self.z.shape
+        self.extent_m = math.hypot(cols * dx, rows * dy)
+        try:
+            self.site = dem_site(dem)
+        except HillshadeError:
+            self.site = None          # no CRS or not the Earth: azimuth and elevation only
+        if tz is not None:
+            self.tz, self.zone_name = zone(tz), tz
+        elif self.site is not None:
+            hours = int(round(self.site.lon / 15.0))
+            self.tz = _dt.timezone(_dt.timedelta(hours=hours))
+            self.zone_name = f"UTC{hours:+03d}:00 (from the longitude; --tz names a zone)"
+        else:
+            self.tz, self.zone_name = None, None
+
+    def call(self, fn, *args):
+        """``fn(*args)`` on the worker thread (its exceptions raised here)."""
+        return self._worker.submit(fn, *args).result()
+
+    def render(self, q: dict) -> tuple[np.ndarray, dict]:
+        """The picture a render query asks for: ((h, w, 4) uint8, headers)."""
+        return self.call(self._render, q)
+
+    def point(self, q: dict) -> dict:
+        """Height, lit or not and the horizon profile at (x, y) (pixel coordinates)."""
+        return self.call(self._point, q)
+
+    def download(self, q: dict) -> tuple[bytes, str]:
+        """The whole DEM's mask for the query's sun at full resolution as GeoTIFF bytes."""
+        return self.call(self._download, q)
+
+    def sunpath(self, q: dict) -> dict:
+        """The sun of the query's date every 10 minutes of the local day."""
+        return self.call(self._sunpath, q)
+
+    def warm_up(self) -> None:
+        self.call(self._warm_up)
+
+    def close(self) -> None:
+        self._worker.shutdown(wait=False, cancel_futures=True)
+
+    # -- levels and shaders --------------------------------------------------------------------
+    def level(self, n: int):
+        """(heights, grid) of every ``n``-th cell (kept)."""
+        from ..geometry import Grid
+        if n == 1:
+            return self.z, self.grid
+        if n not in self._levels:
+            z = np.ascontiguousarray(self.z[::n, ::n])
+            g = self.grid
+            self._levels[n] = (z, Grid(z.shape[0], z.shape[1], g.dx[::n] * n, g.dy[::n] * n,
+                                       g.col_sign, g.row_sign, g.method))
+        return self._levels[n]
+
+    def shader(self, n: int, algorithm: str):
+        from ..shading import Shader
+        key = (n, algorithm)
+        if key not in self._shaders:
+            z, g = self.level(n)
+            self._shaders[key] = Shader(z, g, algorithm, self.options, self.backend,
+                                        body=self.body, zrange=self.zrange,
+                                        extent_m=self.extent_m)
+        return self._shaders[key]
+
+    def _warm_up(self) -> None:
+        self.shader(1, self.algorithm).warm_up(203.7, 20.0, soft=False, incidence=True)
+
+    # -- the sun -------------------------------------------------------------------------------
+    def sun(self, q: dict) -> dict:
+        """The sun a query asks for: ``az`` and ``el`` (degrees), or ``time`` (ISO 8601; without
+        an offset a local time in the viewer's zone) -> {azimuth, elevation, time}."""
+        from ..geometry import normalize_azimuth
+        if "time" in q:
+            t = self.parse_time(q["time"])
+            s = self.suns([t])[0]
+            return {"azimuth": s.azimuth, "elevation": s.elevation, "time": t.isoformat()}
+        az, el = number(q, "az", 203.7), number(q, "el", 30.0)
+        if not -90.0 <= el <= 90.0:
+            raise BadRequest(f"el must be within [-90, 90] degrees, got {el}")
+        return {"azimuth": normalize_azimuth(az), "elevation": el, "time": None}
+
+    def parse_time(self, text: str) -> _dt.datetime:
+        from ..sun import parse_time
+        if self.site is None:
+            raise BadRequest("this DEM has no place on Earth (no CRS): give az and el")
+        try:
+            return parse_time(text, self.tz, "time")
+        except BadRequest:
+            raise
+        except HillshadeError as exc:
+            raise BadRequest(str(exc)) from None
+
+    def suns(self, times):
+        from ..sun import sun_over
+        return sun_over(self.site, self.z.shape, times)
+
+    def day_times(self, day: _dt.date, step_min: int = 10):
+        """Instants every ``step_min`` minutes of ``day`` in the viewer's zone."""
+        t0 = _dt.datetime.combine(day, _dt.time(0), self.tz)
+        return [t0 + _dt.timedelta(minutes=m) for m in range(0, 24 * 60, step_min)]
+
+    def _sunpath(self, q: dict) -> dict:
+        if self.site is None:
+            raise BadRequest("this DEM has no place on Earth (no CRS): no sun path")
+        day = parse_day(q.get("date", ""))
+        times = self.day_times(day)
+        suns = self.suns(times)
+        return {"date": day.isoformat(), "zone": self.zone_name,
+                "points": [{"minutes": i * 10, "time": t.isoformat(), "azimuth": s.azimuth,
+                            "elevation": s.elevation} for i, (t, s) in enumerate(zip(times, suns))]}
+
+    # -- what the page asks ----------------------------------------------------------------------
+    def info(self) -> dict:
+        from ..algorithms import REGISTRY
+        rows, cols = self.z.shape
+        tr = self.dem.transform
+        now = _dt.datetime.now(self.tz) if self.tz is not None else None
+        return {"path": self.dem.path, "rows": rows, "cols": cols,
+                "crs": self.dem.crs_string() if self.dem.crs is not None else None,
+                "transform": list(tr)[:6] if tr is not None else None,
+                "height_range": list(self.zrange),
+                "spacing_m": list(self.grid.centre_spacing()),
+                "zone": self.zone_name, "has_time": self.site is not None,
+                "date": now.date().isoformat() if now else None, "minutes": 10 * 60,
+                "algorithm": self.algorithm, "algorithms": list(REGISTRY),
+                "lat": self.site.lat if self.site else None,
+                "lon": self.site.lon if self.site else None}
+
+    def algorithm_of(self, q: dict) -> str:
+        from ..algorithms import REGISTRY
+        name = q.get("algorithm", self.algorithm) or self.algorithm
+        if name not in REGISTRY:
+            raise BadRequest(f"unknown algorithm {name!r}; known: {', '.join(REGISTRY)}")
+        return name
+
+    def _render(self, q: dict) -> tuple[np.ndarray, dict]:
+        """The picture a render query asks for: ((h, w, 4) uint8, headers)."""
+        rows, cols = self.z.shape
+        x0, y0, x1, y1 = bbox_of(q, (0.0, 0.0, float(cols), float(rows)))
+        w, h = int(number(q, "w", 512)), int(number(q, "h", 512))
+        if w < 1 or h < 1 or w * h > MAX_PIXELS:
+            raise BadRequest(f"w and h must be >= 1 and w*h <= {MAX_PIXELS}, got {w} x {h}")
+        algorithm = self.algorithm_of(q)
+        soft = flag(q, "soft")
+        hours_day = parse_day(q["sunhours"]) if q.get("sunhours") else None
+        sun = self.sun(q)
+        n = level_for(max((x1 - x0) / w, (y1 - y0) / h), (rows, cols))
+        ci, cin = pixel_cells(x0, x1, w, cols, n)
+        ri, rin = pixel_cells(y0, y1, h, rows, n)
+        out = np.zeros((h, w, 4), np.uint8)
+        meta = {"X-Level": str(n), "X-Sun-Azimuth": repr(sun["azimuth"]),
+                "X-Sun-Elevation": repr(sun["elevation"]), "X-Algorithm": algorithm,
+                "X-Time": sun["time"] or ""}
+        if not cin.any() or not rin.any():
+            return out, meta                 # the window lies outside the DEM: transparent
+        from ..algorithms.picture import rgba
+        from ..algorithms.relief import sun_vector
+        r0, r1 = int(ri[rin].min()), int(ri[rin].max()) + 1
+        c0, c1 = int(ci[cin].min()), int(ci[cin].max()) + 1
+        rs, cs = slice(r0, r1), slice(c0, c1)
+        az, el = sun["azimuth"], sun["elevation"]
+        sh = self.shader(n, algorithm)
+        stats: dict = {}
+        ge, gn, g0 = self.gradients(n, rs, cs)
+        is_mask = False
+        if hours_day is not None:
+            hours, most = self.sun_hours(sh, rs, cs, hours_day)
+            meta["X-Sun-Hours-Max"] = f"{most:.2f}"
+            value, v0 = (hours / most if most > 0 else np.zeros_like(hours)), (r0, c0)
+            low, high = 0.25 * SUN_RGB, SUN_RGB
+        else:
+            value, v0 = self.part(sh, rs, cs, az, el, soft=soft, stats=stats)
+            if soft:
+                value = 1.0 - value
+            is_mask = not soft
+            low, high = LIT_RGB, SHADOW_RGB
+        if algorithm == "auto" and stats.get("auto"):
+            meta["X-Algorithm"] = f"auto ({','.join(stats['auto']['chose'])})"
+        rgba(ge, gn, g0[0], g0[1], value, v0[0], v0[1], is_mask, np.where(rin, ri, -1),
+             np.where(cin, ci, -1), *sun_vector(az, max(el, 5.0)), low.astype(np.float64),
+             high.astype(np.float64), out)
+        return out, meta
+
+    def gradients(self, n: int, rs: slice, cs: slice):
+        """(ge, gn, (row, col) of their first cell): the surface gradients of level ``n`` for
+        rows ``rs``, columns ``cs``: the whole level's, computed once and kept when it has at
+        most ``GRADIENT_CELLS`` cells (8 bytes each), else the window's."""
+        from ..algorithms.picture import gradients
+        z, g = self.level(n)
+        whole = z.size <= GRADIENT_CELLS
+        if whole and n in self._gradients:
+            return self._gradients[n]
+        r0, r1, c0, c1 = ((0, z.shape[0], 0, z.shape[1]) if whole
+                          else (rs.start, rs.stop, cs.start, cs.stop))
+        ge = np.empty((r1 - r0, c1 - c0), np.float32)
+        gn = np.empty_like(ge)
+        gradients(z, g.dx, g.dy, float(g.col_sign), float(g.row_sign), r0, c0, ge, gn)
+        out = (ge, gn, (r0, c0))
+        if whole:
+            self._gradients[n] = out
+        return out
+
+    def part(self, sh, rs, cs, az: float, el: float, soft: bool = False, stats=None):
+        """(the cast-shadow mask, or with ``soft`` the visible fraction of the disk, (row, col)
+        of its first cell) covering rows ``rs``, columns ``cs`` of the shader's raster: the
+        window alone with its halo toward the sun, or, when that halo window holds more than
+        half the raster, the whole raster (its pyramid and survey kept from sun to sun) -- the
+        same cells either way."""
+        from ..sun import SUN_RADIUS_DEG, Region
+        rows, cols = sh.z.shape
+        region = Region(rs, cs, az, el)
+        low = el - SUN_RADIUS_DEG if soft else el      # the lowest ray the product marches
+        if el > 0:
+            big = low <= 0
+            if not big:
+                wr, wc = sh.window(region, min(low, 90.0))
+                big = (wr.indices(rows)[1] - wr.indices(rows)[0]) * \
+                    (wc.indices(cols)[1] - wc.indices(cols)[0]) > 0.5 * rows * cols
+            if big:
+                region = Region(slice(0, rows), slice(0, cols), az, el)
+        out = sh.visible_fraction(region) if soft else sh.cast(region, stats)
+        return out, (region.rows.start or 0, region.cols.start or 0)
+
+    def sun_hours(self, sh, rs, cs, day: _dt.date):
+        """Hours of direct sun of ``day`` (every 30 minutes) over rows ``rs``, columns ``cs``
+        of the shader's level, and the most any cell could get (the sun above the horizon)."""
+        from ..sun import Region
+        if self.site is None:
+            raise BadRequest("this DEM has no place on Earth (no CRS): no sun hours")
+        times = self.day_times(day, 30)
+        suns = self.suns([t + _dt.timedelta(minutes=15) for t in times])
+        hours = np.zeros((rs.stop - rs.start, cs.stop - cs.start), np.float32)
+        most = 0.0
+        for s in suns:
+            if s.elevation <= 0:
+                continue
+            most += 0.5
+            m, (a, b) = self.part(sh, rs, cs, s.azimuth, s.elevation)
+            hours += 0.5 * (m[rs.start - a:rs.stop - a, cs.start - b:cs.stop - b] == 0)
+        return hours, most
+
+    def _point(self, q: dict) -> dict:
+        """Height, lit or not and the horizon profile at (x, y) (pixel coordinates)."""
+        from ..arrays import ground_height, horizon_profile
+        from ..sun import Region
+        rows, cols = self.z.shape
+        x, y = number(q, "x"), number(q, "y")
+        r, c = int(math.floor(y)), int(math.floor(x))
+        if not (0 <= r < rows and 0 <= c < cols):
+            raise NotFound(f"({x}, {y}) lies outside the DEM ({cols} x {rows} cells)")
+        sun = self.sun(q)
+        height = float(self.z[r, c])
+        out = {"x": x, "y": y, "row": r, "col": c, "sun": sun,
+               "height": height if math.isfinite(height) else None,
+               "height_bilinear": None, "lit": None, "horizon": None}
+        if not math.isfinite(height):
+            return out
+        hb = ground_height(self.z, min(max(y - 0.5, 0.0), rows - 1.0),
+                           min(max(x - 0.5, 0.0), cols - 1.0))
+        out["height_bilinear"] = hb if math.isfinite(hb) else None
+        sh = self.shader(1, self.algorithm_of(q))
+        m = sh.cast(Region(slice(r, r + 1), slice(c, c + 1), sun["azimuth"],
+                           sun["elevation"]))
+        out["lit"] = bool(m[0, 0] == 0)
+        az, ang, _ = horizon_profile(self.dem, [float(r)], [float(c)], step=2.0)
+        ang = np.asarray(ang[0], np.float64)
+        toward = float(np.interp(sun["azimuth"], np.append(az, 360.0),
+                                 np.append(ang, ang[0])))
+        out["horizon"] = {"azimuths": [float(a) for a in az],
+                          "angles": [float(a) for a in ang], "toward_sun": toward}
+        if self.dem.transform is not None:
+            tr = self.dem.transform
+            out["map_x"], out["map_y"] = tr.c + tr.a * x, tr.f + tr.e * y
+        if self.site is not None and self.site.to_lonlat is not None:
+            lo, la = self.site.to_lonlat(np.array([float(r)]), np.array([float(c)]))
+            out["lon"], out["lat"] = float(lo[0]), float(la[0])
+        return out
+
+    def _download(self, q: dict) -> tuple[bytes, str]:
+        """The whole DEM's mask for the query's sun at full resolution as GeoTIFF bytes."""
+        from ..io.raster import write_raster
+        from ..products import product
+        from ..shading import render
+        from ..sun import SunOver
+        algorithm, soft, sun = self.algorithm_of(q), flag(q, "soft"), self.sun(q)
+        data = render(self.shader(1, algorithm),
+                      SunOver(None, sun["azimuth"], sun["elevation"]), "shadow", soft=soft)
+        p = product("shadow", soft)
+        if soft:
+            data = np.where(np.isnan(data), np.float32(p.nodata), data).astype(np.float32)
+        name = "shadow_{}_az{:.1f}_el{:.1f}.tif".format(
+            os.path.splitext(os.path.basename(self.dem.path))[0] or "dem",
+            sun["azimuth"], sun["elevation"])
+        with tempfile.TemporaryDirectory(prefix="hillshade-rt-view-") as tmp:
+            path = os.path.join(tmp, name)
+            tags = {"VALUES": p.values, "AZIMUTH": f"{sun['azimuth']:.4f}",
+                    "ELEVATION": f"{sun['elevation']:.4f}"}
+            if sun["time"]:
+                tags["TIME"] = sun["time"]
+            write_raster(path, data, self.dem, p.nodata, p.what, tags)
+            with open(path, "rb") as f:
+                return f.read(), name
+
+
+# --------------------------------------------------------------------------------------------
+# queries
+
+def number(q: dict, key: str, default: float | None = None) -> float:
+    if key not in q:
+        if default is None:
+            raise BadRequest(f"missing {key}")
+        return default
+    try:
+        v = float(q[key])
+    except ValueError:
+        raise BadRequest(f"{key} must be a number, got {q[key]!r}") from None
+    if not math.isfinite(v):
+        raise BadRequest(f"{key} must be finite, got {q[key]!r}")
+    return v
+
+
+def flag(q: dict, key: str) -> bool:
+    v = q.get(key, "0").lower()
+    if v in ("1", "true", "yes", "on"):
+        return True
+    if v in ("0", "false", "no", "off", ""):
+        return False
+    raise BadRequest(f"{key} must be 0 or 1, got {q[key]!r}")
+
+
+def bbox_of(q: dict, default) -> tuple[float, float, float, float]:
+    if "bbox" not in q:
+        return default
+    parts = q["bbox"].split(",")
+    try:
+        x0, y0, x1, y1 = (float(p) for p in parts)
+    except ValueError:
+        raise BadRequest(f"bbox must be x0,y0,x1,y1 (pixel coordinates), got {q['bbox']!r}") \
+            from None
+    if not all(math.isfinite(v) for v in (x0, y0, x1, y1)) or x1 <= x0 or y1 <= y0:
+        raise BadRequest(f"bbox must be finite with x0 < x1 and y0 < y1, got {q['bbox']!r}")
+    return x0, y0, x1, y1
+
+
+def parse_day(text: str) -> _dt.date:
+    try:
+        return _dt.date.fromisoformat(text.strip())
+    except ValueError:
+        raise BadRequest(f"date must be YYYY-MM-DD, got {text!r}") from None
+
+
+# --------------------------------------------------------------------------------------------
+# the server
+
+class Handler(BaseHTTPRequestHandler):
+    server_version = "hillshade-rt-view"
+    viewer: Viewer = None       # set on the subclass made by make_server
+    protocol_version = "HTTP/1.1"
+
+    def log_message(self, fmt, *args):   # quiet: the terminal shows the URL and errors only
+        pass
+
+    def send(self, status: int, body: bytes, ctype: str, headers: dict | None = None) -> None:
+        self.send_response(status)
+        self.send_header("Content-Type", ctype)
+        self.send_header("Content-Length", str(len(body)))
+        self.send_header("Cache-Control", "no-store")
+        for k, v in (headers or {}).items():
+            self.send_header(k, v)
+        self.end_headers()
+        if self.command != "HEAD":
+            self.wfile.write(body)
+
+    def send_json(self, obj: dict) -> None:
+        self.send(200, json.dumps(obj).encode(), "application/json")
+
+    def do_HEAD(self):
+        self.do_GET()
+
+    def do_GET(self):
+        url = urlsplit(self.path)
+        try:
+            q = {k: v[-1] for k, v in parse_qs(url.query, keep_blank_values=True).items()}
+        except ValueError:
+            q = None
+        v = self.viewer
+        try:
+            if q is None:
+                raise BadRequest("malformed query string")
+            path = url.path
+            if path in ("/", "/index.html"):
+                self.static("index.html")
+            elif path.startswith("/static/"):
+                self.static(path[len("/static/"):])
+            elif path == "/api/info":
+                self.send_json(v.info())
+            elif path == "/api/render":
+                pic, meta = v.render(q)
+                meta["Access-Control-Expose-Headers"] = ", ".join(meta)
+                self.send(200, png_bytes(pic), "image/png", meta)
+            elif path == "/api/point":
+                self.send_json(v.point(q))
+            elif path == "/api/sunpath":
+                self.send_json(v.sunpath(q))
+            elif path == "/api/download":
+                data, name = v.download(q)
+                self.send(200, data, "image/tiff",
+                          {"Content-Disposition": f'attachment; filename="{name}"'})
+            else:
+                raise NotFound(f"no such page: {url.path}")
+        except (BrokenPipeError, ConnectionResetError):
+            return
+        except BadRequest as exc:
+            self.send(400, one_line(exc), "text/plain; charset=utf-8")
+        except NotFound as exc:
+            self.send(404, one_line(exc), "text/plain; charset=utf-8")
+        except HillshadeError as exc:
+            self.send(400, one_line(exc), "text/plain; charset=utf-8")
+        except Exception as exc:   # noqa: BLE001 -- a request never stops the server
+            msg = f"internal error ({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''})"
+            print(f"hillshade-rt: view: {self.path}: {msg}", file=sys.stderr)
+            self.send(500, msg.encode(), "text/plain; charset=utf-8")
+
+    def static(self, name: str) -> None:
+        root = os.path.realpath(STATIC)
+        path = os.path.realpath(os.path.join(root, name))
+        if not path.startswith(root + os.sep) or not os.path.isfile(path):
+            raise NotFound(f"no such file: {name}")
+        with open(path, "rb") as f:
+            body = f.read()
+        self.send(200, body, TYPES.get(os.path.splitext(path)[1], "application/octet-stream"))
+
+
+def one_line(exc: BaseException) -> bytes:
+    text = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+    return text.encode()
+
+
+class Server(ThreadingHTTPServer):
+    daemon_threads = True
+    allow_reuse_address = False
+
+    @property
+    def url(self) -> str:
+        host, port = self.server_address[:2]
+        return f"http://{host}:{port}/"
+
+
+def make_server(viewer: Viewer, port: int = 0) -> Server:
+    """An HTTP server for ``viewer`` on 127.0.0.1:``port`` (0: a free port), not yet serving."""
+    handler = type("ViewHandler", (Handler,), {"viewer": viewer})
+    try:
+        return Server((HOST, int(port)), handler)
+    except OSError as exc:
+        raise HillshadeError(f"cannot listen on {HOST}:{port} ({exc.strerror or exc})") from None
+
+
+def view(cfg: ViewConfig) -> None:
+    """Read the DEM, prepare it, serve the viewer until interrupted (Ctrl-C: the server is
+    closed and the interruption goes on up: the command line exits 130)."""
+    from ..shading import choose_backend
+    cfg.check()
+    backend = choose_backend(cfg.backend, cfg.algorithm, {})
+    dem = cfg.read.read(cfg.dem)
+    viewer = Viewer(dem, cfg.algorithm, backend, cfg.tz)
+    server = make_server(viewer, cfg.port)
+    try:
+        cfg.say("compile", "preparing the kernels (numba) ...")
+        viewer.warm_up()
+        rows, cols = dem.shape
+        print(f"hillshade-rt: viewing {dem.path} ({cols} x {rows}) at {server.url} "
+              "(Ctrl-C stops)", flush=True)
+        if cfg.open_browser:
+            import webbrowser
+            threading.Thread(target=webbrowser.open, args=(server.url,), daemon=True).start()
+        server.serve_forever(poll_interval=0.2)
+    finally:
+        server.server_close()
+        viewer.close()

@@ -1,0 +1,373 @@
+"""hillshade-rt view's server (run/view.py): started in a thread on a free port and asked with
+urllib. The pictures' shadow pixels (blue > red) are checked against arrays.shadow_mask, the
+command line's mask, for the same sun."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+import urllib.error
+import urllib.request
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+import pytest
+
+from hillshade_rt.arrays import shadow_mask
+from hillshade_rt.io import read_dem
+from hillshade_rt.run.view import Viewer, make_server, png_bytes
+from hillshade_rt.testing import data_path
+
+DEM = data_path("everest_srtm3_voids_crop200.tif")     # EPSG:4326, 19.5 % voids
+
+
+@pytest.fixture(scope="module")
+def dem():
+    return read_dem(DEM)
+
+
+@pytest.fixture(scope="module")
+def server(dem):
+    viewer = Viewer(dem)
+    srv = make_server(viewer, 0)
+    th = threading.Thread(target=srv.serve_forever, kwargs={"poll_interval": 0.1}, daemon=True)
+    th.start()
+    yield srv
+    srv.shutdown()
+    srv.server_close()
+    viewer.close()
+
+
+def get(server, path):
+    """(status, headers, body) of GET ``path``."""
+    try:
+        with urllib.request.urlopen(server.url.rstrip("/") + path, timeout=60) as r:
+            return r.status, dict(r.headers), r.read()
+    except urllib.error.HTTPError as e:
+        return e.code, dict(e.headers), e.read()
+
+
+def decode(png: bytes) -> np.ndarray:
+    """(h, w, 4) uint8 of a PNG, read by GDAL (not by our encoder)."""
+    import warnings
+
+    from rasterio.errors import NotGeoreferencedWarning
+    from rasterio.io import MemoryFile
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", NotGeoreferencedWarning)
+        with MemoryFile(png) as mf, mf.open() as ds:
+            return np.moveaxis(ds.read(), 0, -1)
+
+
+def shadow_of(pic):
+    """1 where a pixel shows shadow (blue > red), 0 lit, 255 transparent (void, outside)."""
+    rgb = pic[..., :3].astype(int)
+    out = (rgb[..., 2] > rgb[..., 0]).astype(np.uint8)
+    out[pic[..., 3] == 0] = 255
+    return out
+
+
+def render(server, **q):
+    query = "&".join(f"{k}={v}" for k, v in q.items())
+    status, headers, body = get(server, "/api/render?" + query)
+    assert status == 200, body
+    return decode(body), headers
+
+
+def test_png_encoder_round_trip():
+    rng = np.random.default_rng(1)
+    pic = rng.integers(0, 256, (7, 13, 4), dtype=np.uint8)
+    assert np.array_equal(decode(png_bytes(pic)), pic)
+
+
+def test_page_and_static(server):
+    status, headers, body = get(server, "/")
+    assert status == 200 and headers["Content-Type"].startswith("text/html")
+    assert b"/static/leaflet/leaflet.js" in body and b"/static/viewer.js" in body
+    for name in ("leaflet/leaflet.js", "leaflet/leaflet.css", "viewer.js", "viewer.css",
+                 "leaflet/images/layers.png"):
+        status, _, body = get(server, "/static/" + name)
+        assert status == 200 and len(body) > 100, name
+    # nothing outside the static folder
+    assert get(server, "/static/../view.py")[0] == 404
+    assert get(server, "/static/%2e%2e/view.py")[0] == 404
+    assert get(server, "/nothing")[0] == 404
+
+
+def test_info(server, dem):
+    status, _, body = get(server, "/api/info")
+    info = json.loads(body)
+    assert status == 200
+    assert (info["rows"], info["cols"]) == dem.shape
+    assert info["has_time"] and info["zone"].startswith("UTC+06:00")    # Everest, 86.9 E
+    assert "auto" in info["algorithms"] and info["algorithm"] == "auto"
+    assert info["height_range"][0] == pytest.approx(float(np.nanmin(dem.heights)))
+
+
+@pytest.mark.parametrize("az, el", [(203.7, 12.0), (163.0, 25.0), (290.0, 8.0)])
+def test_full_resolution_equals_the_cli_mask(server, dem, az, el):
+    rows, cols = dem.shape
+    pic, h = render(server, az=az, el=el, bbox=f"0,0,{cols},{rows}", w=cols, h=rows)
+    assert h["X-Level"] == "1"
+    want = shadow_mask(dem, az, el)
+    assert 0.05 < np.mean(want == 1) < 0.9       # a real test: shadow and light both
+    assert np.array_equal(shadow_of(pic), want)
+
+
+def test_window_zoomed_in_and_out(server, dem):
+    az, el = 203.7, 12.0
+    want = shadow_mask(dem, az, el)
+    # a window of the DEM at 1:1: the mask's cells there (computed with its halo)
+    pic, h = render(server, az=az, el=el, bbox="50,60,150,140", w=100, h=80)
+    assert h["X-Level"] == "1"
+    assert np.array_equal(shadow_of(pic), want[60:140, 50:150])
+    # zoomed in 3x: each cell 3x3 pixels
+    pic, _ = render(server, az=az, el=el, bbox="120,30,160,50", w=120, h=60)
+    assert np.array_equal(shadow_of(pic), np.repeat(np.repeat(want[30:50, 120:160], 3, 0), 3, 1))
+    # the whole DEM on 50 x 50 pixels: the overview level (every 4th cell)
+    pic, h = render(server, az=az, el=el, w=50, h=50)
+    assert h["X-Level"] == "4" and pic.shape == (50, 50, 4)
+    void = np.isnan(dem.heights[::4, ::4])
+    assert np.array_equal(pic[..., 3] == 0, void)
+
+
+def test_window_partly_and_wholly_outside(server, dem):
+    az, el = 163.0, 25.0
+    want = shadow_mask(dem, az, el)
+    # 20 pixels beyond the western and northern edges: transparent there
+    pic, _ = render(server, az=az, el=el, bbox="-20,-20,80,80", w=100, h=100)
+    s = shadow_of(pic)
+    assert (pic[:20, :, 3] == 0).all() and (pic[:, :20, 3] == 0).all()
+    assert np.array_equal(s[20:, 20:], want[:80, :80])
+    # wholly outside: a transparent picture, no error
+    pic, h = render(server, az=az, el=el, bbox="500,500,600,600", w=64, h=32)
+    assert pic.shape == (32, 64, 4) and (pic[..., 3] == 0).all()
+    status, _, body = get(server, "/api/point?x=-3&y=10")
+    assert status == 404 and b"outside" in body
+
+
+def test_time_gives_the_sun_of_that_time(server, dem):
+    from hillshade_rt.sun import dem_site, parse_time, sun_over
+    rows, cols = dem.shape
+    pic, h = render(server, time="2026-06-21T16:30", bbox=f"0,0,{cols},{rows}", w=cols, h=rows)
+    t = parse_time("2026-06-21T16:30+06:00")
+    s = sun_over(dem_site(dem), dem.shape, [t])[0]
+    az, el = float(h["X-Sun-Azimuth"]), float(h["X-Sun-Elevation"])
+    assert (az, el) == (s.azimuth, s.elevation)
+    assert h["X-Time"].startswith("2026-06-21T16:30:00+06:00")
+    assert np.array_equal(shadow_of(pic), shadow_mask(dem, az, el))
+
+
+def test_soft_and_sun_hours_pictures(server, dem):
+    rows, cols = dem.shape
+    pic, _ = render(server, az=203.7, el=12, soft=1, bbox=f"0,0,{cols},{rows}", w=cols, h=rows)
+    hard = shadow_mask(dem, 203.7, 12)
+    s = shadow_of(pic)
+    # the soft picture: shadowed where the disk is mostly hidden, so close to the hard mask
+    assert np.mean(s[hard != 255] == hard[hard != 255]) > 0.95
+    pic, h = render(server, sunhours="2026-06-21", w=100, h=100)
+    assert 12.0 < float(h["X-Sun-Hours-Max"]) < 15.0     # the day's length at 28 N, in June
+    assert pic[..., 3].any()
+
+
+def test_point(server, dem):
+    az, el = 203.7, 12.0
+    want = shadow_mask(dem, az, el)
+    r, c = np.argwhere(np.isfinite(dem.heights) & (want == 1))[7]
+    status, _, body = get(server, f"/api/point?x={c + 0.5}&y={r + 0.5}&az={az}&el={el}")
+    p = json.loads(body)
+    assert status == 200 and (p["row"], p["col"]) == (r, c)
+    assert p["height"] == pytest.approx(float(dem.heights[r, c]))
+    assert p["lit"] is False
+    # in shadow: the horizon toward the sun stands above it (interpolated between 2-degree steps)
+    assert len(p["horizon"]["azimuths"]) == 180 and p["horizon"]["toward_sun"] > el - 2.0
+    r, c = np.argwhere(np.isfinite(dem.heights) & (want == 0))[11]
+    p = json.loads(get(server, f"/api/point?x={c + 0.2}&y={r + 0.9}&az={az}&el={el}")[2])
+    assert p["lit"] is True and -90 <= p["lat"] <= 90
+
+
+def test_sunpath(server):
+    status, _, body = get(server, "/api/sunpath?date=2026-06-21")
+    path = json.loads(body)
+    assert status == 200 and len(path["points"]) == 144
+    els = [p["elevation"] for p in path["points"]]
+    noon = path["points"][int(np.argmax(els))]
+    # Everest (28 N) at the June solstice: the sun culminates about 85 degrees up, near local
+    # noon (UTC+6 is 18 minutes ahead of the mean solar time at 86.9 E)
+    assert 80 < max(els) < 90 and 11 * 60 <= noon["minutes"] <= 13 * 60
+    assert min(els) < 0
+
+
+def test_download_is_the_mask(server, dem):
+    from rasterio.io import MemoryFile
+    status, headers, body = get(server, "/api/download?az=290&el=8")
+    assert status == 200 and "attachment" in headers["Content-Disposition"]
+    with MemoryFile(body) as mf, mf.open() as ds:
+        got = ds.read(1)
+        assert ds.crs == dem.crs and ds.transform == dem.transform and ds.nodata == 255
+    assert np.array_equal(got, shadow_mask(dem, 290, 8))
+
+
+@pytest.mark.parametrize("query, words", [
+    ("/api/render?az=abc&el=10", "az must be a number"),
+    ("/api/render?az=10&el=95", "el must be within"),
+    ("/api/render?bbox=1,2", "bbox must be"),
+    ("/api/render?bbox=5,5,1,1", "bbox must be"),
+    ("/api/render?w=0&h=10", "w and h"),
+    ("/api/render?w=100000&h=100000", "w and h"),
+    ("/api/render?algorithm=nope", "unknown algorithm"),
+    ("/api/render?soft=maybe", "soft must be"),
+    ("/api/render?time=yesterday", "not an ISO 8601 time"),
+    ("/api/render?sunhours=June", "date must be"),
+    ("/api/point?x=nan&y=1", "x must be finite"),
+    ("/api/point?y=1", "missing x"),
+    ("/api/sunpath?date=", "date must be"),
+])
+def test_malformed_queries_400_and_the_server_goes_on(server, query, words):
+    status, _, body = get(server, query)
+    assert status == 400
+    text = body.decode()
+    assert words in text and "\n" not in text.strip() and "Traceback" not in text
+    assert get(server, "/api/info")[0] == 200
+
+
+def test_concurrent_requests(server, dem):
+    rows, cols = dem.shape
+    suns = [(163.0, 25.0), (203.7, 12.0), (290.0, 8.0), (40.0, 30.0), (120.0, 15.0),
+            (250.0, 20.0)] * 2
+    wants = {s: shadow_mask(dem, *s) for s in suns}
+
+    def one(s):
+        return s, render(server, az=s[0], el=s[1], bbox=f"0,0,{cols},{rows}", w=cols, h=rows)[0]
+    with ThreadPoolExecutor(8) as ex:
+        futures = [ex.submit(one, s) for s in suns]
+        futures += [ex.submit(get, server, "/api/render?az=x") for _ in range(4)]
+        results = [f.result() for f in futures]
+    for s, pic in results[:len(suns)]:
+        assert np.array_equal(shadow_of(pic), wants[s]), s
+    assert all(r[0] == 400 for r in results[len(suns):])
+
+
+def test_bound_to_loopback_only(server):
+    host, port = server.server_address[:2]
+    assert host == "127.0.0.1" and port > 0
+    # this machine's other addresses: nothing listens there
+    others = set()
+    for name in (socket.gethostname(), socket.getfqdn()):
+        try:
+            others |= {a[4][0] for a in socket.getaddrinfo(name, None, socket.AF_INET)}
+        except OSError:
+            pass
+    others = {a for a in others if not a.startswith("127.")}
+    for addr in others:
+        with socket.socket() as s:
+            s.settimeout(2)
+            assert s.connect_ex((addr, port)) != 0, addr
+
+
+def test_cli_serves_and_stops_on_ctrl_c(tmp_path):
+    env = dict(os.environ, PYTHONUNBUFFERED="1")
+    p = subprocess.Popen([sys.executable, "-m", "hillshade_rt", "view", DEM, "--no-browser"],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        line = p.stdout.readline()
+        assert "http://127.0.0.1:" in line, (line, p.stderr.read() if p.poll() is not None else "")
+        url = line.split("at ", 1)[1].split()[0]
+        with urllib.request.urlopen(url + "api/info", timeout=60) as r:
+            assert json.loads(r.read())["rows"] == 200
+        p.send_signal(signal.SIGINT)
+        out, err = p.communicate(timeout=30)
+    finally:
+        if p.poll() is None:
+            p.kill()
+    assert p.returncode == 130
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1, err
+    assert "interrupted" in err
+
+
+def test_cli_errors_are_one_line(tmp_path):
+    from click.testing import CliRunner
+
+    from hillshade_rt.cli import cli
+    r = CliRunner().invoke(cli, ["view", str(tmp_path / "none.tif"), "--no-browser"])
+    assert r.exit_code == 1 and len(r.output.strip().splitlines()) == 1
+    r = CliRunner().invoke(cli, ["view", DEM, "--port", "70000"])
+    assert r.exit_code == 2
+
+
+def test_a_dem_without_a_crs_has_no_times(tmp_path):
+    from hillshade_rt.run.config import ReadOptions
+    from hillshade_rt.testing import fractal_terrain, reference_mask, write_geotiff
+    z = fractal_terrain(64, 80, seed=9).astype(np.float32)
+    path = write_geotiff(tmp_path / "plain.tif", z)
+    dem = ReadOptions(pixel_size="5").read(path)
+    viewer = Viewer(dem)
+    srv = make_server(viewer, 0)
+    threading.Thread(target=srv.serve_forever, kwargs={"poll_interval": 0.1}, daemon=True).start()
+    try:
+        info = json.loads(get(srv, "/api/info")[2])
+        assert info["has_time"] is False and info["zone"] is None and info["date"] is None
+        status, _, body = get(srv, "/api/render?time=2026-06-21T12:00")
+        assert status == 400 and b"no place on Earth" in body
+        assert get(srv, "/api/sunpath?date=2026-06-21")[0] == 400
+        pic, _ = render(srv, az=163, el=20, bbox="0,0,80,64", w=80, h=64)
+        # the plain-Python reference of the model (no curvature on a 0.5 km raster)
+        assert np.array_equal(shadow_of(pic), reference_mask(z, 5.0, 5.0, 163.0, 20.0))
+    finally:
+        srv.shutdown()
+        srv.server_close()
+        viewer.close()
+
+
+def test_every_page_file_is_package_data():
+    """The wheel carries the page: pyproject's package-data globs cover every file of
+    view_static (checked against a built wheel once: index.html, JS, CSS, Leaflet, images)."""
+    import fnmatch
+
+    from hillshade_rt.run.view import STATIC
+    tomllib = pytest.importorskip("tomllib")         # Python >= 3.11
+    from hillshade_rt.testing import repo_root
+    with open(os.path.join(repo_root(), "pyproject.toml"), "rb") as f:
+        globs = tomllib.load(f)["tool"]["setuptools"]["package-data"]["hillshade_rt.run"]
+    base = os.path.dirname(STATIC)
+    files = [os.path.relpath(os.path.join(d, n), base).replace(os.sep, "/")
+             for d, _, names in os.walk(STATIC) for n in names]
+    assert len(files) >= 10
+    for f in files:
+        assert any(fnmatch.fnmatch(f, g) and f.count("/") == g.count("/") for g in globs), f
+
+
+def test_cli_unknown_zone_is_a_usage_error():
+    from click.testing import CliRunner
+
+    from hillshade_rt.cli import cli
+    r = CliRunner().invoke(cli, ["view", DEM, "--no-browser", "--tz", "Mars/Olympus"])
+    assert r.exit_code == 2 and "not an IANA time zone" in r.output
+
+
+def test_gpu_backend_gives_the_cpu_pictures():
+    """The viewer on the CUDA backend (the simulator here: a small DEM): the whole view and a
+    window with its halo equal the CPU's mask."""
+    from affine import Affine
+
+    from hillshade_rt.testing import fractal_terrain, memory_dem
+    z = fractal_terrain(17, 21, 5, relief=150.0, octaves=4).astype(np.float32)
+    z[6:8, 9:11] = np.nan
+    dem = memory_dem(z, Affine(30.0, 0, 400000.0, 0, -30.0, 3800000.0), "EPSG:32611")
+    viewer = Viewer(dem, "auto", "gpu")
+    try:
+        for az, el, bbox in ((203.7, 12.0, "0,0,21,17"), (163.0, 20.0, "5,4,15,12")):
+            x0, y0, x1, y1 = (int(v) for v in bbox.split(","))
+            pic, meta = viewer.render({"az": str(az), "el": str(el), "bbox": bbox,
+                                       "w": str(x1 - x0), "h": str(y1 - y0)})
+            want = shadow_mask(dem, az, el, backend="cpu")[y0:y1, x0:x1]
+            assert np.array_equal(shadow_of(pic), want), (az, el)
+            assert meta["X-Algorithm"] == "auto (brute)"      # auto's pick on the GPU
+    finally:
+        viewer.close()
