@@ -13,12 +13,17 @@ from hypothesis import HealthCheck, given, settings, strategies as st
 
 from hillshade_rt.algorithms import REGISTRY
 from hillshade_rt.algorithms.brute import march_box, shadow_mask
-from hillshade_rt.algorithms.pyramid import MaxPyramid, _build
+from hillshade_rt.algorithms.pyramid import MaxPyramid
 from hillshade_rt.errors import HillshadeError
 from hillshade_rt.geometry import Grid, sun_rays
 from hillshade_rt.shading import Shader, render
 from hillshade_rt.sun import SunOver
 from hillshade_rt.testing import fractal_terrain
+
+
+def _build(z):
+    """A new pyramid of ``z``'s heights: (data, offsets, widths, levels)."""
+    return MaxPyramid(z.copy()).args
 
 AZIMUTHS = (163.0, 203.7, 290.0)
 ELEVATIONS = (4.0, 12.0, 35.0)
