@@ -18,6 +18,7 @@ import click
 from .. import __version__
 from .errors import OneLineErrors
 from .horizon import horizon
+from .illumination import illumination
 from .info import info
 from .irradiance import irradiance
 from .profile import profile
@@ -36,6 +37,7 @@ def cli():
 for _command in (shadow, hillshade, sun_hours, horizon, profile, query, skyview, info):
     cli.add_command(_command)
 cli.add_command(irradiance)
+cli.add_command(illumination)
 
 
 def main():
