@@ -7,7 +7,7 @@ OUTDIR ?= out
 EXAMPLE_DEM := examples/bigtujunga_srtm30m_utm11n_1197x643.tif
 EXAMPLE_OUT := $(OUTDIR)/bigtujunga_shadow.tif
 
-.PHONY: run test install install-test bench bench-sun bench-tiling bench-big bench-gpu bench-peers bench-horizon docs-pictures bench-writes bench-real bench-real-quick bench-fast bench-point gpu-check clean help
+.PHONY: run test install install-test bench bench-sun bench-tiling bench-big bench-gpu bench-peers bench-horizon docs-pictures bench-writes bench-real bench-real-quick bench-fast bench-point bench-illumination gpu-check clean help
 
 help:
 	@echo "make run    - set up .venv, shade the bundled example DEM, print where the mask went"
@@ -25,6 +25,7 @@ help:
 	@echo "make bench-real-quick - the same with 1024 and 6 suns (a few minutes on 2 cores)"
 	@echo "make bench-fast - the default's curvature cost, cost against size, geographic vs projected"
 	@echo "make bench-point - the point light vs brute's directional mask (4096^2, real DEMs)"
+	@echo "make bench-illumination - illumination: 1000 subsolar positions on a 2048^2 polar DEM and Kepler (issue 21: < 10 min)"
 	@echo "make docs-pictures - the pictures of docs/products.md, by the tool's --preview"
 	@echo "make clean  - remove .venv and outputs"
 
@@ -126,3 +127,6 @@ bench-real-quick: $(VENV)/.installed-peers
 
 clean:
 	rm -rf $(VENV) $(OUTDIR) .pytest_cache .hypothesis
+
+bench-illumination: $(VENV)/.installed
+	$(BIN)/python benchmarks/bench_illumination.py

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import math
 import os
+import threading
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -36,6 +37,7 @@ from ..errors import HillshadeError, UsageProblem
 from .config import ReadOptions, RunOptions
 
 BYTES_PER_CELL = 96     # heights 4, frames 24, pyramid ~6, mask 1, soft 4, sums 5 x 8 + 1
+_LOCK = threading.Lock()   # one numba computation at a time per worker process
 HALO_MARGIN = 2         # cells beyond the reach (interpolation between two cell centres)
 
 
@@ -260,10 +262,9 @@ def plan_windows(src, phys: Physics, suns, window_shape) -> tuple[list, float]:
 def region_task(src, region: Region, phys: Physics, suns, hours) -> tuple[dict, dict]:
     """A window (or the whole DEM) lit by a stretch of the series: its core's sums and counts
     (the Dask task; also the local windows' step)."""
-    from .reach import _task_lock
     with src.reader() as rd:
         z, frames, grid = _region_inputs(src, rd, region)
-    with _task_lock():
+    with _LOCK:
         sums, counts = light_series(z, frames, grid, phys, suns, hours)
     return _crop(sums, *_core_slices(region)), counts
 
