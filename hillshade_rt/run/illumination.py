@@ -302,8 +302,9 @@ def illumination(cfg: IllumConfig) -> dict:
     timer = Timer()
     claims = Claims([dem, cfg.subsolar_file], ro.overwrite)
     claims.claim(output, "OUTPUT")
-    if ro.report_path is not None:
-        claims.claim(ro.report_path, "--report")
+    for extra, what in ((ro.report_path, "--report"), (ro.preview, "--preview")):
+        if extra is not None:
+            claims.claim(extra, what)
     series = read_subsolar(cfg.subsolar_file)
     if len(series) < 2:
         raise HillshadeError(f"{cfg.subsolar_file}: the series needs at least 2 times (each "
@@ -380,6 +381,9 @@ def illumination(cfg: IllumConfig) -> dict:
                     stats[name][1] += int(v.size)
                 n_psr += int((sums["dark"][valid] == 1).sum())
     valid_n = stats[names[0]][1]
+    if ro.preview is not None:
+        with timer("write"):
+            _preview(src, output, ro)
     rep = {"input": input_label(src.path), "output": os.path.abspath(output),
            "subsolar_file": os.path.abspath(cfg.subsolar_file), "shape": list(src.shape),
            "times": len(series), "hours": total_h,
@@ -407,6 +411,24 @@ def illumination(cfg: IllumConfig) -> dict:
                           f"compute {timer.seconds['compute']:.2f} s "
                           f"({1000 * rep['seconds']['per_position']:.1f} ms a position)")
     return rep
+
+
+def _preview(src, output, ro) -> None:
+    """--preview: the relief coloured by the fraction of the time lit (purple the least, yellow
+    the most: stretched between the 2nd and 98th percentiles), both read back at most 2048
+    cells a side."""
+    from ..geometry import Grid
+    from ..io import read_decimated, write_png
+    from ..preview import relief_rgb, scaled
+    rows, cols = src.shape
+    n = max(1, math.ceil(max(rows, cols) / 2048))
+    shape = ((rows + n - 1) // n, (cols + n - 1) // n)
+    z = read_decimated(src.name, shape, src.band) * np.float32(src.z_factor)
+    g = src.grid
+    grid = Grid(shape[0], shape[1], g.dx[::n][:shape[0]] * n, g.dy[::n][:shape[0]] * n,
+                g.col_sign, g.row_sign, g.method)
+    frac = read_decimated(output, shape, 1)
+    write_png(ro.preview, relief_rgb(z, grid, ramp=scaled(frac)), ro.overwrite)
 
 
 def _run_regions(src, regs, phys, suns, hours, cfg, quiet):

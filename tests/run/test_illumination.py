@@ -232,9 +232,11 @@ def test_cli_report_and_bands(tmp_path, runner):
     dem, _, _ = _polar_pit(tmp_path, n=64)
     csv = _toy(tmp_path, n=6)
     out, rep = tmp_path / "o.tif", tmp_path / "r.json"
+    png = tmp_path / "p.png"
     r = runner.invoke(cli, ["illumination", dem, str(out), "--subsolar-file", csv, "--soft",
-                            "--report", str(rep)])
+                            "--report", str(rep), "--preview", str(png)])
     assert r.exit_code == 0, r.output
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert "6 subsolar positions" in r.output
     import rasterio
     with rasterio.open(out) as ds:
