@@ -288,13 +288,13 @@ def illumination(cfg: IllumConfig) -> dict:
     from ..io import BandWriter, input_label, write_json
     from ..io.write import Claims
     from .config import parse_window_size
-    from .plan import parse_size
+    from .horizon import memory_limit
     from .report import Timer, progress
 
     ro = cfg.run
     dem, output = cfg.check()
     window_shape = parse_window_size(cfg.window_size)
-    limit = parse_size(cfg.max_memory) if cfg.max_memory is not None else None
+    limit = memory_limit(cfg.max_memory)      # default: half of this machine's memory
     if cfg.body is not None:
         body_from_option(cfg.body)              # a bad --body: exit 2 before anything is read
     if ro.threads is not None:
@@ -312,8 +312,7 @@ def illumination(cfg: IllumConfig) -> dict:
     hours = series.durations_h()
     total_h = float(hours.sum())
     with timer("read"):
-        src = cfg.read.open(dem, windows=(window_shape is not None or limit is not None
-                                          or cfg.scheduler is not None))
+        src = cfg.read.open(dem, windows=window_shape is not None or cfg.scheduler is not None)
     with src:
         if src.transform is None or src.crs is None:
             raise HillshadeError("illumination needs a DEM with a geotransform and a CRS (each "
@@ -333,7 +332,7 @@ def illumination(cfg: IllumConfig) -> dict:
         phys = Physics(float(body.a), e2, k, float(cfg.height_above_ground), bool(cfg.soft),
                        float(body.b * body.b / body.a))
         windowed = window_shape is not None
-        if not windowed and limit is not None:
+        if not windowed:
             from .local import needs_windows
             from .plan import window_budget
             windowed = needs_windows(src, limit, BYTES_PER_CELL)
