@@ -88,7 +88,9 @@ def test_longest_shadow_hours_exact(tmp_path):
     runs last 3 and 4 hours; lit 7 of 14 hours; never permanently dark."""
     dem, _ = _flat_geographic(tmp_path, lon0=-2.0, lat0=2.0, res=0.25, shape=(16, 16))
     csv = _alternating_series(tmp_path, "LDDLDD", [0, 1, 3, 4, 10, 12])
-    out, _ = _run(tmp_path, dem, csv, soft=True)
+    out, rep = _run(tmp_path, dem, csv, soft=True)
+    # the sun over the far side: dark everywhere without a march
+    assert rep["positions"] == {"marched": 2, "dark_everywhere": 4}
     frac, soft, longest, psr = _bands(out, 4)
     np.testing.assert_allclose(frac, 0.5, atol=1e-7)
     np.testing.assert_allclose(longest, 4.0, atol=1e-6)
