@@ -206,7 +206,7 @@ def _region_inputs(src, rd, region: Region):
     r0, r1, c0, c1 = region.read
     z = np.empty((r1 - r0, c1 - c0), np.float32)
     rd.read(region.read, z)
-    tr = src.transform * Affine.translation(c0, r0)
+    tr = src.transform @ Affine.translation(c0, r0)
     return z, CellFrames.from_transform(tr, src.crs, z.shape), grid_from_transform(tr, src.crs,
                                                                                   z.shape)
 
@@ -240,7 +240,7 @@ def plan_windows(src, phys: Physics, suns, window_shape) -> tuple[list, float]:
             t = None
             if phys.curv_k < 0.0 and ok.any():
                 from affine import Affine
-                fr = CellFrames.from_transform(src.transform * Affine.translation(c0, r0),
+                fr = CellFrames.from_transform(src.transform @ Affine.translation(c0, r0),
                                                src.crs, z.shape).args()
                 best = np.full(z.shape[0], np.inf)
                 for s in suns:
