@@ -7,7 +7,7 @@ OUTDIR ?= out
 EXAMPLE_DEM := examples/bigtujunga_srtm30m_utm11n_1197x643.tif
 EXAMPLE_OUT := $(OUTDIR)/bigtujunga_shadow.tif
 
-.PHONY: run test install install-test bench bench-sun bench-tiling bench-big bench-gpu bench-peers bench-horizon docs-pictures docs-animation docs-viewer bench-writes bench-real bench-real-quick bench-fast bench-point bench-view bench-update gpu-check clean help
+.PHONY: run test install install-test bench bench-sun bench-tiling bench-big bench-gpu bench-peers bench-horizon docs-pictures docs-animation docs-viewer bench-writes bench-real bench-real-quick bench-fast bench-point bench-view bench-update bench-illumination gpu-check clean help
 
 help:
 	@echo "make run    - set up .venv, shade the bundled example DEM, print where the mask went"
@@ -27,6 +27,7 @@ help:
 	@echo "make bench-point - the point light vs brute's directional mask (4096^2, real DEMs)"
 	@echo "make bench-view - hillshade-rt view: a 1024^2 view recomputed and delivered (round trip)"
 	@echo "make bench-update - a 20x20 edit re-shaded (Shader.update) vs a full render"
+	@echo "make bench-illumination - illumination: 1000 subsolar positions on a 2048^2 polar DEM and Kepler (issue 21: < 10 min)"
 	@echo "make docs-pictures - the pictures of docs/products.md, by the tool's --preview"
 	@echo "make docs-animation - the README's GIF: the shadows of a winter day on the example DEM"
 	@echo "make clean  - remove .venv and outputs"
@@ -146,3 +147,6 @@ docs-viewer: $(VENV)/.installed-test
 
 clean:
 	rm -rf $(VENV) $(OUTDIR) .pytest_cache .hypothesis
+
+bench-illumination: $(VENV)/.installed
+	$(BIN)/python benchmarks/bench_illumination.py

@@ -64,10 +64,18 @@ def main() -> int:
         ["profile", dem, "--at=-118.155,34.305", "--height-above-ground", "2", "-o",
          out("profile.csv"), "--preview", img("profile.png")],
     ]
+    # the illumination of the Kepler crater (LOLA, its real place near 8 deg N) over a toy
+    # lunation (testing.toy_lunar_subsolar: one synodic month in 6-hour steps)
+    from hillshade_rt.testing import toy_lunar_subsolar, write_subsolar_csv
+    kepler = os.path.join(ROOT, "benchmarks", "data", "moon_kepler_crater_lola_ortho_804x804.tif")
+    lunation = write_subsolar_csv(out("lunation.csv"), toy_lunar_subsolar(119, 6.0))
+    steps.append(["illumination", kepler, out("illum.tif"), "--subsolar-file", lunation,
+                  "--preview", img("illumination.png")])
     for s in steps:
         cmd = [s[0], *s[1:], *q]
         print("hillshade-rt " + " ".join(shlex.quote(os.path.basename(a) if a.startswith(tmp)
-                                                     or a.startswith(IMG) else a)
+                                                     or a.startswith(IMG)
+                                                     or a.startswith(ROOT) else a)
                                          for a in cmd), flush=True)
         subprocess.run(TOOL + cmd, check=True)
     print(f"pictures in {IMG}")

@@ -228,14 +228,16 @@ def _soft_gpu(z, pyr, off, widths, nlev, slat, clat, slon, clon, cth, sth, dx, d
 
 
 def soft_fraction(z, pyr_args, frames, grid, a, e2, sun_xyz, radius_deg, curv_k=-1.0,
-                  zmax=None, lift=0.0):
+                  zmax=None, lift=0.0, out=None):
     """float32 visible fraction (0..1, NaN on voids) of the solar disk of angular radius
-    ``radius_deg`` at every cell; arguments as ``shadow_mask``."""
+    ``radius_deg`` at every cell; arguments as ``shadow_mask`` (``out``: a float32 array of z's
+    shape to fill, reused across suns)."""
     if z.dtype != np.float32 or z.ndim != 2:
         raise TypeError("heights must be a 2-D float32 array")
     if zmax is None:
         zmax = float(np.nanmax(z)) if np.isfinite(z).any() else -np.inf
-    out = np.empty(z.shape, np.float32)
+    if out is None:
+        out = np.empty(z.shape, np.float32)
     _soft_cpu(z, *pyr_args, *_args(frames, grid, a, e2, sun_xyz, curv_k, zmax, lift),
               float(radius_deg), out)
     return out
@@ -262,17 +264,20 @@ def _args(frames, grid, a, e2, sun_xyz, curv_k, zmax, lift):
             float(lift))
 
 
-def shadow_mask(z, pyr_args, frames, grid, a, e2, sun_xyz, curv_k=-1.0, zmax=None, lift=0.0):
+def shadow_mask(z, pyr_args, frames, grid, a, e2, sun_xyz, curv_k=-1.0, zmax=None, lift=0.0,
+                out=None):
     """uint8 mask (1 shadow, 0 lit, 255 void) of float32 heights ``z`` for the sun at
     ``sun_xyz`` (body-fixed metres): ``pyr_args`` the pyramid's kernel arguments
     (``pyramid.pyramid_args``), ``frames`` the six per-cell arrays of ``CellFrames.args()``,
     ``grid`` a ``geometry.Grid``, (``a``, ``e2``) the body's ellipsoid, ``curv_k`` the
-    refraction coefficient of curved rays (-1: no curvature), ``lift`` metres above each cell."""
+    refraction coefficient of curved rays (-1: no curvature), ``lift`` metres above each cell;
+    ``out``: a uint8 array of z's shape to fill (reused across suns: the illumination run)."""
     if z.dtype != np.float32 or z.ndim != 2:
         raise TypeError("heights must be a 2-D float32 array")
     if zmax is None:
         zmax = float(np.nanmax(z)) if np.isfinite(z).any() else -np.inf
-    out = np.empty(z.shape, np.uint8)
+    if out is None:
+        out = np.empty(z.shape, np.uint8)
     _subsolar_cpu(z, *pyr_args, *_args(frames, grid, a, e2, sun_xyz, curv_k, zmax, lift), out)
     return out
 

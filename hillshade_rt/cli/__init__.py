@@ -19,6 +19,7 @@ from .. import __version__
 from .animate import animate
 from .errors import OneLineErrors
 from .horizon import horizon
+from .illumination import illumination
 from .info import info
 from .irradiance import irradiance
 from .profile import profile
@@ -40,6 +41,7 @@ for _command in (shadow, hillshade, sun_hours, horizon, profile, query, skyview,
 cli.add_command(irradiance)
 cli.add_command(animate)
 cli.add_command(view)
+cli.add_command(illumination)
 
 
 def main():

@@ -231,12 +231,32 @@ def subsolar_options(f):
                      help="The sun straight above LAT,LON (degrees on the DEM's body) instead of "
                           "--azimuth/--time: every cell's sun from its own place on the body; "
                           "cells beyond the terminator are in shadow."),
-        click.option("--sun-distance", metavar="M", type=float, default=None,
-                     help="The sun's distance from the body's centre in metres, for "
-                          "--subsolar (default the body's mean distance: 1 AU, Mars 1.5237 AU)."),
-        click.option("--body", metavar="moon|mars|earth|RADIUS", default=None,
-                     help="The body for --subsolar instead of the CRS's: the Moon's or Mars' "
-                          "sphere, WGS84, or a sphere of RADIUS metres."),
+        _sun_distance_option("--subsolar"),
+        _body_option("--subsolar"),
+    ])
+
+
+def _sun_distance_option(what: str):
+    return click.option("--sun-distance", metavar="M", type=float, default=None,
+                        help="The sun's distance from the body's centre in metres, for "
+                             f"{what} (default the body's mean distance: 1 AU, Mars 1.5237 AU).")
+
+
+def _body_option(what: str):
+    return click.option("--body", metavar="moon|mars|earth|RADIUS", default=None,
+                        help=f"The body for {what} instead of the CRS's: the Moon's or Mars' "
+                             "sphere, WGS84, or a sphere of RADIUS metres.")
+
+
+def subsolar_series_options(f):
+    """A subsolar series (``illumination``): the file, the body, the sun's distance."""
+    return _stack(f, [
+        click.option("--subsolar-file", metavar="F", required=True,
+                     type=click.Path(dir_okay=False),
+                     help="The subsolar series: a CSV (time,lat,lon[,distance_m]; times "
+                          "increasing) or a JPL Horizons table saved as CSV (docs/subsolar.md)."),
+        _sun_distance_option("the series' times without a distance"),
+        _body_option("the series"),
     ])
 
 
