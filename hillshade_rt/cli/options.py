@@ -231,9 +231,20 @@ def subsolar_options(f):
                      help="The sun straight above LAT,LON (degrees on the DEM's body) instead of "
                           "--azimuth/--time: every cell's sun from its own place on the body; "
                           "cells beyond the terminator are in shadow."),
-        _sun_distance_option("--subsolar"),
+        _subsolar_file_option(False),
+        _sun_distance_option("--subsolar or the series' times without a distance"),
         _body_option("--subsolar"),
     ])
+
+
+def _subsolar_file_option(required: bool):
+    what = ("The subsolar series" if required else
+            "A subsolar series instead of --subsolar: one band per time (the band's "
+            "description its UTC time)")
+    return click.option("--subsolar-file", metavar="F", required=required, default=None,
+                        type=click.Path(dir_okay=False),
+                        help=what + ": a CSV (time,lat,lon[,distance_m]; times increasing) or "
+                                    "a JPL Horizons table saved as CSV (docs/subsolar.md).")
 
 
 def _sun_distance_option(what: str):
@@ -251,10 +262,7 @@ def _body_option(what: str):
 def subsolar_series_options(f):
     """A subsolar series (``illumination``): the file, the body, the sun's distance."""
     return _stack(f, [
-        click.option("--subsolar-file", metavar="F", required=True,
-                     type=click.Path(dir_okay=False),
-                     help="The subsolar series: a CSV (time,lat,lon[,distance_m]; times "
-                          "increasing) or a JPL Horizons table saved as CSV (docs/subsolar.md)."),
+        _subsolar_file_option(True),
         _sun_distance_option("the series' times without a distance"),
         _body_option("the series"),
     ])

@@ -48,19 +48,22 @@ def _config(files, kind, algorithm, options, kw, **more):
 @dem_options
 @errors_to_click
 def shadow(files, algorithm, curvature, refraction_k, soft, self_shadow, classes,
-           height_above_ground, light_position, light_lonlat, subsolar, sun_distance, body,
-           **kw):
+           height_above_ground, light_position, light_lonlat, subsolar, subsolar_file,
+           sun_distance, body, **kw):
     """Write the cast-shadow mask of DEM to OUTPUT (GeoTIFF: 1 shadow, 0 lit, 255 nodata).
 
     Several DEMs (tiles on one grid) are shaded as one mosaic, so that a mountain in one tile
     shadows the next; OUTPUT is the last path, or give it with -o. The sun:
     --azimuth/--elevation, or --time (repeatable) or --start/--end/--step at the DEM's
-    place (one band per time). --soft writes the visible fraction of the sun's disk (float32,
+    place (one band per time), or --subsolar LAT,LON / --subsolar-file F on the DEM's body (every
+    cell its own sun). --soft writes the visible fraction of the sun's disk (float32,
     1 = fully lit, -9999 nodata); --classes writes 0 lit / 1 self-shadow / 2 cast / 255."""
     from ..algorithms import algorithm_for, options_for, options_from_cli
     from ..run import shade
-    if subsolar is not None or sun_distance is not None or body is not None:
-        return _subsolar(files, subsolar, sun_distance, body, light_position, light_lonlat,
+    if subsolar is not None or subsolar_file is not None or sun_distance is not None or \
+            body is not None:
+        return _subsolar(files, subsolar, subsolar_file, sun_distance, body, light_position,
+                         light_lonlat,
                          height_above_ground, soft, self_shadow, classes, curvature,
                          refraction_k, kw)
     if light_position is not None or light_lonlat is not None:
@@ -114,9 +117,10 @@ def _lightmap_refused(kw, soft, curvature, refraction_k) -> dict:
     return refused
 
 
-def _subsolar(files, subsolar, distance, body, light_position, light_lonlat, lift, soft,
-              self_shadow, classes, curvature, refraction_k, kw):
-    """``shadow --subsolar LAT,LON``: -> ``run.subsolar.SubsolarConfig`` -> ``run.subsolar``
+def _subsolar(files, subsolar, subsolar_file, distance, body, light_position, light_lonlat, lift,
+              soft, self_shadow, classes, curvature, refraction_k, kw):
+    """``shadow --subsolar LAT,LON`` or ``--subsolar-file F``: -> ``run.subsolar.SubsolarConfig``
+    -> ``run.subsolar``
     (which refuses what it does not take yet)."""
     from ..algorithms import options_from_cli
     from ..run.config import PLACE_KEYS
@@ -135,7 +139,8 @@ def _subsolar(files, subsolar, distance, body, light_position, light_lonlat, lif
         refused[flag] = bool(kw.pop(k))
     subsolar_shadow(SubsolarConfig(list(files), kw.pop("output"), subsolar, distance, body,
                                    lift, soft, curvature, refraction_k, to_read_options(kw),
-                                   to_run_options(kw, say), refused))
+                                   to_run_options(kw, say), refused,
+                                   subsolar_file=subsolar_file))
 
 
 @click.command()

@@ -1,7 +1,8 @@
 """The ``shadow --subsolar LAT,LON`` run (issue 21, item 2; ``arrays.subsolar_mask``): the sun
 given by its subsolar point on the DEM's body (``--body`` overrides the CRS's) and its distance
-(``--sun-distance``, default the body's mean distance), every cell lit by its own sun. In
-memory; hard shadows or --soft (the visible fraction of the solar disk, whose radius is
+(``--sun-distance``, default the body's mean distance), every cell lit by its own sun; or a
+series of them (``--subsolar-file F``, ``ephemeris.read_subsolar``): one band per time, the
+cells' frames and the pyramid prepared once. In memory; hard shadows or --soft (the visible fraction of the solar disk, whose radius is
 asin(R_sun / distance)); the CPU, or the GPU with ``--backend gpu``. What it does not take yet
 (--azimuth/--time, a point light, --classes, --self-shadow, --algorithm, windows, Dask) is a
 usage error that says so."""
@@ -36,12 +37,17 @@ class SubsolarConfig:
     read: ReadOptions = field(default_factory=ReadOptions)
     run: RunOptions = field(default_factory=RunOptions)
     refused: dict = field(default_factory=dict)
+    subsolar_file: str | None = None
 
     def check(self) -> tuple:
-        """(dem, output, (lat, lon)) checked: one DEM, nothing refused."""
+        """(dem, output, (lat, lon) or None for a series) checked: one DEM, one of --subsolar
+        and --subsolar-file, nothing refused."""
         from .config import inputs_and_output
-        if self.subsolar is None:
-            raise UsageProblem("--sun-distance and --body go with --subsolar LAT,LON")
+        if self.subsolar is None and self.subsolar_file is None:
+            raise UsageProblem("--sun-distance and --body go with --subsolar LAT,LON or "
+                               "--subsolar-file F")
+        if self.subsolar is not None and self.subsolar_file is not None:
+            raise UsageProblem("give --subsolar LAT,LON or --subsolar-file F, not both")
         taken = [name for name, on in self.refused.items() if on]
         if taken:
             raise UsageProblem(f"--subsolar does not take {', '.join(taken)} (yet: in memory, "
@@ -52,7 +58,8 @@ class SubsolarConfig:
         d = self.sun_distance
         if d is not None and not (math.isfinite(d) and d > 0):
             raise UsageProblem(f"--sun-distance must be positive metres, got {d:g}")
-        return inputs[0], output, parse_latlon(self.subsolar)
+        return inputs[0], output, (None if self.subsolar is None
+                                   else parse_latlon(self.subsolar))
 
 
 def parse_latlon(text) -> tuple[float, float]:
@@ -86,7 +93,7 @@ def subsolar_shadow(cfg: SubsolarConfig) -> dict:
     from .report import Timer
 
     ro = cfg.run
-    dem, output, (lat, lon) = cfg.check()
+    dem, output, point = cfg.check()
     if cfg.body is not None:
         body_from_option(cfg.body)              # a bad --body: exit 2 before anything is read
     timer = Timer()
@@ -97,6 +104,12 @@ def subsolar_shadow(cfg: SubsolarConfig) -> dict:
             claims.claim(extra, what)
     prod = product("shadow", bool(cfg.soft))
     check_output_format(output, output_driver(output, ro.fmt), prod.dtype, 1, prod.continuous)
+    series = None
+    if point is None:
+        from ..ephemeris import read_subsolar
+        if ro.preview is not None:
+            raise UsageProblem("--preview shows one sun: not with --subsolar-file")
+        series = read_subsolar(cfg.subsolar_file)  # a bad file: nothing read, nothing written
     with timer("read"):
         d = cfg.read.read(dem)
     if d.transform is None or d.crs is None:
@@ -107,8 +120,11 @@ def subsolar_shadow(cfg: SubsolarConfig) -> dict:
     if not distance > body.a:
         raise UsageProblem(f"--sun-distance must exceed the body's radius ({body.a:.0f} m, "
                            f"{body.source}), got {distance:g} m")
-    s = sun_vector(body, lat, lon, distance)
     curvature = True if cfg.curvature is None else bool(cfg.curvature)
+    if series is not None:
+        return _series(cfg, d, output, series, body, distance, curvature, prod, timer)
+    lat, lon = point
+    s = sun_vector(body, lat, lon, distance)
     with timer("compute"):
         frames = CellFrames.of_dem(d)
         arr = subsolar_mask(d, lat, lon, body=body, height_above_ground=cfg.height_above_ground,
@@ -159,4 +175,83 @@ def subsolar_shadow(cfg: SubsolarConfig) -> dict:
                           f"{lat:g},{lon:g} on {body.source}: sun elevation "
                           f"{el_v.min():.2f}..{el_v.max():.2f} deg; {100 * share:.2f}% of "
                           f"valid cells in shadow{' (less than half the disk)' if cfg.soft else ''}; compute {timer.seconds['compute']:.2f} s")
+    return rep
+
+
+def _series(cfg: SubsolarConfig, d, output: str, series, body, default_distance: float,
+            curvature: bool, prod, timer) -> dict:
+    """``shadow --subsolar-file F``: one band per position of the series (description: its UTC
+    time; tags: the subsolar point and the distance), the frames and the pyramid made once,
+    the masks computed into one reused buffer; a progress bar. Returns the report."""
+    import numpy as np
+
+    from ..arrays import subsolar_mask
+    from ..bodysun import CellFrames, sun_vector
+    from ..earth import refraction_for
+    from ..errors import HillshadeError
+    from ..io import BandWriter, input_label, write_json
+    from ..sun import iso
+    from .report import progress
+
+    ro = cfg.run
+    dist = (np.full(len(series), default_distance) if series.distance is None
+            else np.asarray(series.distance, np.float64))
+    if not (dist > body.a).all():
+        i = int(np.argmin(dist > body.a))
+        raise HillshadeError(f"{series.path}: the sun's distance at {iso(series.times()[i])} "
+                             f"({dist[i]:g} m) is inside the body ({body.source}, radius "
+                             f"{body.a:.0f} m)")
+    times = series.times()
+    tags = {"HILLSHADE_RT_VERSION": __version__, "VALUES": prod.values,
+            "SUBSOLAR_FILE": os.path.basename(series.path),
+            "BODY": body.source,
+            "HEIGHT_ABOVE_GROUND_M": f"{float(cfg.height_above_ground):g}"}
+    backend = "gpu" if ro.backend == "gpu" else "cpu"
+    shares = []
+    with timer("compute"):
+        frames = CellFrames.of_dem(d)
+    with BandWriter(output, d, len(series), prod.dtype, prod.nodata, tags=tags,
+                    overwrite=ro.overwrite, fmt=ro.fmt) as w:
+        for i in progress(range(len(series)), ro.quiet, "subsolar positions", "position"):
+            lat, lon = float(series.lat[i]), float(series.lon[i])
+            with timer("compute"):
+                s = sun_vector(body, lat, lon, float(dist[i]))
+                buf = subsolar_mask(d, lat, lon, body=body,
+                                    height_above_ground=cfg.height_above_ground,
+                                    curvature=curvature, refraction_k=cfg.refraction_k,
+                                    frames=frames, sun_xyz=s, soft=bool(cfg.soft),
+                                    backend=backend)
+                if cfg.soft:
+                    valid = np.isfinite(buf)
+                    shares.append(float((buf[valid] < 0.5).mean()) if valid.any() else 0.0)
+                    band = np.where(valid, buf, np.float32(prod.nodata)).astype(np.float32)
+                else:
+                    valid = buf != 255
+                    shares.append(float((buf[valid] == 1).mean()) if valid.any() else 0.0)
+                    band = buf
+            with timer("write"):
+                w.write(i + 1, band, description=iso(times[i]),
+                        tags={"TIME": iso(times[i]), "SUBSOLAR": f"lat {lat:g} lon {lon:g}",
+                              "SUN_DISTANCE_M": f"{dist[i]:.6g}"})
+    rep = {"input": input_label(d.path), "output": os.path.abspath(output),
+           "shape": list(d.shape), "subsolar_file": os.path.abspath(series.path),
+           "times": [iso(t) for t in times],
+           "subsolar": [{"lat": float(a), "lon": float(b)} for a, b in zip(series.lat,
+                                                                            series.lon)],
+           "body": {"source": body.source, "a_m": body.a, "b_m": body.b},
+           "sun_distance_m": [float(x) for x in dist],
+           "curvature": {"applied": curvature,
+                         "refraction_k": refraction_for(body, cfg.refraction_k)
+                         if curvature else None},
+           "soft": bool(cfg.soft), "height_above_ground_m": float(cfg.height_above_ground),
+           "shadow_fraction": shares, "backend": backend,
+           "algorithm": "subsolar (pyramid march, a sun per cell)",
+           "seconds": dict(timer.seconds, total=timer.total()), "version": __version__}
+    if ro.report_path is not None:
+        write_json(ro.report_path, rep, ro.overwrite)
+    if not ro.quiet:
+        ro.say("summary", f"hillshade-rt: {output}: {d.shape[1]}x{d.shape[0]}, {len(series)} "
+                          f"subsolar positions on {body.source} (one band each): "
+                          f"{100 * min(shares):.2f}..{100 * max(shares):.2f}% of valid cells "
+                          f"in shadow; compute {timer.seconds['compute']:.2f} s")
     return rep

@@ -92,3 +92,62 @@ def test_soft_writes_the_visible_fraction(tmp_path, runner, dem):
     assert ((want > 0) & (want < 1)).any()
     doc = json.loads(rep.read_text())
     assert doc["soft"] and abs(doc["sun_radius_deg"] - 7.99) < 0.01
+
+
+def _series_csv(tmp_path, rows, header="time,lat,lon,distance_m"):
+    p = tmp_path / "sun.csv"
+    p.write_text(header + "\n" + "\n".join(",".join(str(v) for v in r) for r in rows) + "\n")
+    return str(p)
+
+
+def test_subsolar_file_writes_a_band_per_time(tmp_path, runner, dem):
+    """``shadow --subsolar-file``: band k is ``--subsolar`` of row k (its distance, or
+    --sun-distance where the file gives none), described by its UTC time."""
+    rows = [("2026-01-01T00:00:00Z", -20.5, 97.3, 2e11), ("2026-01-01T06:00:00Z", -15.0, 120.0,
+                                                          1.5e11),
+            ("2026-01-01T12:00:00Z", 3.25, 163.0, 1.0e11)]
+    csv = _series_csv(tmp_path, rows)
+    out, rep = tmp_path / "s.tif", tmp_path / "r.json"
+    r = runner.invoke(cli, ["shadow", dem, str(out), "--subsolar-file", csv, "--report",
+                            str(rep)])
+    assert r.exit_code == 0, r.output
+    import rasterio
+    with rasterio.open(out) as ds:
+        assert ds.count == 3
+        assert ds.descriptions == ("2026-01-01T00:00+00:00", "2026-01-01T06:00+00:00",
+                                   "2026-01-01T12:00+00:00")
+        assert ds.tags(2)["SUBSOLAR"] == "lat -15 lon 120"
+        bands = ds.read()
+    for k, (_, lat, lon, dist) in enumerate(rows):
+        want = subsolar_mask(read_dem(dem), lat, lon, sun_distance=dist)
+        assert np.array_equal(bands[k], want), k
+    assert not np.array_equal(bands[0], bands[2])
+    doc = json.loads(rep.read_text())
+    assert doc["sun_distance_m"] == [2e11, 1.5e11, 1e11] and len(doc["shadow_fraction"]) == 3
+    # without distances: --sun-distance for every time; --soft: the visible fraction per band
+    csv2 = _series_csv(tmp_path, [r[:3] for r in rows], "time,lat,lon")
+    out2 = tmp_path / "s2.tif"
+    r = runner.invoke(cli, ["shadow", dem, str(out2), "--subsolar-file", csv2, "--soft",
+                            "--sun-distance", "3e11"])
+    assert r.exit_code == 0, r.output
+    with rasterio.open(out2) as ds:
+        got = ds.read(3, masked=True)
+    want = subsolar_mask(read_dem(dem), 3.25, 163.0, sun_distance=3e11, soft=True)
+    assert np.allclose(got.filled(np.nan), want, equal_nan=True)
+
+
+@pytest.mark.parametrize("content, extra, code, words", [
+    ("time,lat,lon\n2026-01-01T06:00Z,0,0\n2026-01-01T00:00Z,0,0\n", [], 1, "increas"),
+    ("time,lon\n2026-01-01T00:00Z,0\n", [], 1, "no lat column"),
+    ("time,lat,lon\n2026-01-01T00:00Z,0,0\n", ["--subsolar", "1,2"], 2, "not both"),
+    ("time,lat,lon\n2026-01-01T00:00Z,0,0\n", ["--preview", "p.png"], 2, "--preview"),
+])
+def test_bad_subsolar_files_write_nothing(tmp_path, runner, dem, content, extra, code, words):
+    p = tmp_path / "bad.csv"
+    p.write_text(content)
+    out = tmp_path / "o.tif"
+    r = runner.invoke(cli, ["shadow", dem, str(out), "--subsolar-file", str(p)] + extra)
+    assert r.exit_code == code, r.output
+    assert words in r.output and "Traceback" not in r.output
+    assert len(r.output.strip().splitlines()) == 1
+    assert not out.exists()
