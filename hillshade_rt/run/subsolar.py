@@ -210,6 +210,11 @@ def _series(cfg: SubsolarConfig, d, output: str, series, body, default_distance:
     shares = []
     with timer("compute"):
         frames = CellFrames.of_dem(d)
+        pyramid = None
+        if backend == "cpu" and np.isfinite(d.heights).any():
+            from ..algorithms.pyramid import MaxPyramid
+            z = d.heights if d.heights.dtype == np.float32 else d.heights.astype(np.float32)
+            pyramid = MaxPyramid(z)
     with BandWriter(output, d, len(series), prod.dtype, prod.nodata, tags=tags,
                     overwrite=ro.overwrite, fmt=ro.fmt) as w:
         for i in progress(range(len(series)), ro.quiet, "subsolar positions", "position"):
@@ -219,8 +224,8 @@ def _series(cfg: SubsolarConfig, d, output: str, series, body, default_distance:
                 buf = subsolar_mask(d, lat, lon, body=body,
                                     height_above_ground=cfg.height_above_ground,
                                     curvature=curvature, refraction_k=cfg.refraction_k,
-                                    frames=frames, sun_xyz=s, soft=bool(cfg.soft),
-                                    backend=backend)
+                                    frames=frames, pyramid=pyramid, sun_xyz=s,
+                                    soft=bool(cfg.soft), backend=backend)
                 if cfg.soft:
                     valid = np.isfinite(buf)
                     shares.append(float((buf[valid] < 0.5).mean()) if valid.any() else 0.0)
