@@ -14,6 +14,7 @@ a quicker look::
 
     python benchmarks/bench_illumination.py                  # the full figure (~minutes)
     python benchmarks/bench_illumination.py --n 50 --size 1024
+    python benchmarks/bench_illumination.py --backend gpu     # on a machine with a GPU
 """
 
 import argparse
@@ -51,6 +52,8 @@ def main():
     ap.add_argument("--soft", action="store_true", help="also the --soft band")
     ap.add_argument("--skip-fractal", action="store_true")
     ap.add_argument("--skip-kepler", action="store_true")
+    ap.add_argument("--backend", default="cpu", choices=["cpu", "gpu"],
+                    help="gpu: the CUDA twins (issue 21's GPU target: under 30 s)")
     args = ap.parse_args()
     print(f"# bench_illumination: {platform.processor() or platform.machine()}, "
           f"{os.cpu_count()} cores, numba {numba.__version__} ({numba.get_num_threads()} "
@@ -72,12 +75,12 @@ def main():
         # compile once (numba's cache) on a small DEM so that the timings are of the run
         small = polar(tmp, zk[:64, :64], cell, "warm.tif")
         illumination(IllumConfig([small, os.path.join(tmp, "warm_out.tif")], subsolar_file=csv,
-                                 soft=args.soft, run=_quiet()))
+                                 soft=args.soft, run=_quiet(backend=args.backend)))
         for label, dem in dems:
             out = os.path.join(tmp, "out.tif")
             t0 = time.perf_counter()
             rep = illumination(IllumConfig([dem, out], subsolar_file=csv, soft=args.soft,
-                                           run=_quiet(overwrite=True)))
+                                           run=_quiet(overwrite=True, backend=args.backend)))
             wall = time.perf_counter() - t0
             print(f"{label}: {wall:.1f} s total, {1000 * wall / args.n:.1f} ms a position "
                   f"(compute {rep['seconds']['compute']:.1f} s); positions marched "
@@ -91,9 +94,9 @@ def main():
         print(json.dumps({"seconds": rep["seconds"]}, indent=None))
 
 
-def _quiet(overwrite=False):
+def _quiet(overwrite=False, backend="cpu"):
     from hillshade_rt.run.config import RunOptions
-    return RunOptions(quiet=True, overwrite=overwrite)
+    return RunOptions(quiet=True, overwrite=overwrite, backend=backend)
 
 
 if __name__ == "__main__":

@@ -95,6 +95,7 @@ class Physics:
     lift: float
     soft: bool
     r_min: float
+    backend: str = "cpu"
 
 
 def band_names(soft: bool) -> list[str]:
@@ -121,7 +122,10 @@ def light_series(z, frames, grid, phys: Physics, suns, hours, tick=None) -> tupl
     """The sums (``algorithms.illumination``) of heights ``z`` (float32, NaN voids) with its
     ``frames`` (``bodysun.CellFrames``) and ``grid`` lit by the suns ``suns`` ((n, 3) metres,
     body-fixed) of ``hours`` each, and the counts (positions marched, dark ones). The pyramid,
-    the highest height and the buffers made once; ``tick()`` after each position."""
+    the highest height and the buffers made once; ``tick()`` after each position. ``phys.backend``
+    "gpu": the heights, the pyramid and the frames uploaded once, each position's mask made by
+    the CUDA twins (``subsolar.shadow_mask_gpu``: bit for bit the CPU's) and folded into the
+    sums on the host."""
     from ..algorithms import illumination as ill, subsolar
     from ..algorithms.pyramid import pyramid_args
     from ..bodysun import sun_radius_deg
@@ -129,11 +133,16 @@ def light_series(z, frames, grid, phys: Physics, suns, hours, tick=None) -> tupl
     counts = {"positions": 0, "dark": 0}
     if not np.isfinite(z).any():
         return sums, counts
-    pyr = pyramid_args(z, True)
     zmax = float(np.nanmax(z))
     fr = frames.args()
-    mask = np.empty(z.shape, np.uint8)
-    frac = np.empty(z.shape, np.float32) if phys.soft else None
+    if phys.backend == "gpu":
+        from ..gpu import GpuDem
+        g = GpuDem(z)
+        frd = tuple(g.upload(a) for a in fr)
+    else:
+        pyr = pyramid_args(z, True)
+        mask = np.empty(z.shape, np.uint8)
+        frac = np.empty(z.shape, np.float32) if phys.soft else None
     for s, dt in zip(suns, hours):
         sx, sy, sz = (float(v) for v in s)
         dt = float(dt)
@@ -142,14 +151,22 @@ def light_series(z, frames, grid, phys: Physics, suns, hours, tick=None) -> tupl
             counts["dark"] += 1
             ill.accumulate_dark(z, dt, sums["start"], sums["end"], sums["longest"], sums["dark"])
         else:
-            subsolar.shadow_mask(z, pyr, fr, grid, phys.a, phys.e2, s, phys.curv_k, zmax,
-                                 phys.lift, out=mask)
+            if phys.backend == "gpu":
+                mask = subsolar.shadow_mask_gpu(g, frd, grid, phys.a, phys.e2, s, phys.curv_k,
+                                                zmax, phys.lift)
+            else:
+                subsolar.shadow_mask(z, pyr, fr, grid, phys.a, phys.e2, s, phys.curv_k, zmax,
+                                     phys.lift, out=mask)
             ill.accumulate(mask, dt, sums["lit"], sums["start"], sums["end"], sums["longest"],
                            sums["dark"])
             if phys.soft:
                 radius = sun_radius_deg(float(np.linalg.norm(s)))
-                subsolar.soft_fraction(z, pyr, fr, grid, phys.a, phys.e2, s, radius,
-                                       phys.curv_k, zmax, phys.lift, out=frac)
+                if phys.backend == "gpu":
+                    frac = subsolar.soft_fraction_gpu(g, frd, grid, phys.a, phys.e2, s, radius,
+                                                      phys.curv_k, zmax, phys.lift)
+                else:
+                    subsolar.soft_fraction(z, pyr, fr, grid, phys.a, phys.e2, s, radius,
+                                           phys.curv_k, zmax, phys.lift, out=frac)
                 ill.accumulate_soft(frac, dt, sums["soft"])
         if tick is not None:
             tick()
@@ -329,8 +346,10 @@ def illumination(cfg: IllumConfig) -> dict:
         curvature = True if cfg.curvature is None else bool(cfg.curvature)
         k = refraction_for(body, cfg.refraction_k) if curvature else -1.0
         e2 = 1.0 - (body.b * body.b) / (body.a * body.a)
+        from ..gpu import resolve_backend
+        backend = resolve_backend(ro.backend or "auto")
         phys = Physics(float(body.a), e2, k, float(cfg.height_above_ground), bool(cfg.soft),
-                       float(body.b * body.b / body.a))
+                       float(body.b * body.b / body.a), backend)
         windowed = window_shape is not None
         if not windowed:
             from .local import needs_windows
@@ -396,6 +415,7 @@ def illumination(cfg: IllumConfig) -> dict:
            "mean": {n: (stats[n][0] / stats[n][1] if stats[n][1] else None) for n in names},
            "permanently_shadowed_cells": n_psr,
            "scheduler": None if cfg.scheduler is None else str(cfg.scheduler),
+           "backend": phys.backend,
            "seconds": dict(timer.seconds, total=timer.total(),
                            per_position=timer.seconds.get("compute", 0.0) / len(series)),
            "version": __version__}

@@ -254,3 +254,20 @@ def test_cli_report_and_bands(tmp_path, runner):
     assert r.exit_code != 0 and "Traceback" not in r.output
     h = runner.invoke(cli, ["illumination", "--help"])
     assert h.exit_code == 0 and "--subsolar-file" in h.output
+
+
+def test_gpu_backend_equals_cpu(tmp_path):
+    """--backend gpu (here numba's CUDA simulator; a real device with NUMBA_ENABLE_CUDASIM=0):
+    the CUDA twins' masks folded into the same sums, equal to the CPU run band for band."""
+    from hillshade_rt.run.config import RunOptions
+    dem, _, _ = _polar_pit(tmp_path, n=24, rough=300.0)
+    csv = _toy(tmp_path, n=5, step_h=60.0)
+    cpu, rep_c = _run(tmp_path, dem, csv, soft=True, run=RunOptions(quiet=True, backend="cpu"))
+    gpu, rep_g = _run(tmp_path, dem, csv, name="g.tif", soft=True,
+                      run=RunOptions(quiet=True, backend="gpu"))
+    assert rep_c["backend"] == "cpu" and rep_g["backend"] == "gpu"
+    assert rep_g["positions"]["marched"] > 0
+    for i in range(4):
+        np.testing.assert_allclose(read_band(gpu, i + 1), read_band(cpu, i + 1), rtol=1e-6,
+                                   atol=1e-9)
+    assert 0 < np.nanmean(read_band(cpu, 1)) < 1
