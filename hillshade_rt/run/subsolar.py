@@ -83,10 +83,9 @@ def subsolar_shadow(cfg: SubsolarConfig) -> dict:
     from ..arrays import subsolar_mask
     from ..bodysun import CellFrames, body_from_option, cell_suns, mean_sun_distance, \
         sun_radius_deg, sun_vector
-    from ..earth import dem_body, refraction_for
+    from ..earth import dem_body
     from ..errors import HillshadeError
-    from ..io import check_output_format, input_label, output_driver, write_json, write_png, \
-        write_raster
+    from ..io import check_output_format, output_driver, write_png, write_raster
     from ..io.write import Claims
     from ..preview import relief_rgb
     from ..products import product
@@ -132,15 +131,8 @@ def subsolar_shadow(cfg: SubsolarConfig) -> dict:
                             sun_xyz=s, soft=bool(cfg.soft),
                             backend="gpu" if ro.backend == "gpu" else "cpu")
         az, el = cell_suns(frames, body, s, d.heights, float(cfg.height_above_ground))
-    if cfg.soft:
-        valid = np.isfinite(arr)
-        shade = np.where(valid, 1.0 - arr, 0.0)
-        share = float((arr[valid] < 0.5).mean()) if valid.any() else 0.0
-        arr = np.where(valid, arr, np.float32(prod.nodata)).astype(np.float32)
-    else:
-        valid = arr != 255
-        shade = np.where(arr == 1, 1.0, 0.0)
-        share = float((arr[valid] == 1).mean()) if valid.any() else 0.0
+    arr, valid, share = _band(arr, bool(cfg.soft), prod)
+    shade = np.where(valid, 1.0 - arr, 0.0) if cfg.soft else np.where(arr == 1, 1.0, 0.0)
     el_v = el[valid] if valid.any() else el.ravel()
     az_v = az[valid] if valid.any() else az.ravel()
     tags = {"HILLSHADE_RT_VERSION": __version__, "VALUES": prod.values,
@@ -152,24 +144,12 @@ def subsolar_shadow(cfg: SubsolarConfig) -> dict:
                      "suns)", tags=tags, overwrite=ro.overwrite, fmt=ro.fmt)
         if ro.preview is not None:
             write_png(ro.preview, relief_rgb(d.heights, d.grid, shade=shade), ro.overwrite)
-    rep = {"input": input_label(d.path), "output": os.path.abspath(output),
-           "shape": list(d.shape),
-           "subsolar": {"lat": lat, "lon": lon},
-           "body": {"source": body.source, "a_m": body.a, "b_m": body.b},
-           "sun_distance_m": distance,
-           "sun": {"elevation_deg": [float(el_v.min()), float(el_v.max())],
-                   "azimuth_deg": [float(az_v.min()), float(az_v.max())],
-                   "azimuth": "true, clockwise from north"},
-           "curvature": {"applied": curvature,
-                         "refraction_k": refraction_for(body, cfg.refraction_k)
-                         if curvature else None},
-           "sun_radius_deg": sun_radius_deg(distance), "soft": bool(cfg.soft),
-           "height_above_ground_m": float(cfg.height_above_ground),
-           "shadow_fraction": share, "backend": "gpu" if ro.backend == "gpu" else "cpu",
-           "algorithm": "subsolar (pyramid march, a sun per cell)",
-           "seconds": dict(timer.seconds, total=timer.total()), "version": __version__}
-    if ro.report_path is not None:
-        write_json(ro.report_path, rep, ro.overwrite)
+    rep = _report(cfg, d, output, body, curvature, timer, subsolar={"lat": lat, "lon": lon},
+                  sun_distance_m=distance,
+                  sun={"elevation_deg": [float(el_v.min()), float(el_v.max())],
+                       "azimuth_deg": [float(az_v.min()), float(az_v.max())],
+                       "azimuth": "true, clockwise from north"},
+                  sun_radius_deg=sun_radius_deg(distance), shadow_fraction=share)
     if not ro.quiet:
         ro.say("summary", f"hillshade-rt: {output}: {d.shape[1]}x{d.shape[0]}, subsolar point "
                           f"{lat:g},{lon:g} on {body.source}: sun elevation "
@@ -187,9 +167,8 @@ def _series(cfg: SubsolarConfig, d, output: str, series, body, default_distance:
 
     from ..arrays import subsolar_mask
     from ..bodysun import CellFrames, sun_vector
-    from ..earth import refraction_for
     from ..errors import HillshadeError
-    from ..io import BandWriter, input_label, write_json
+    from ..io import BandWriter
     from ..sun import iso
     from .report import progress
 
@@ -226,37 +205,53 @@ def _series(cfg: SubsolarConfig, d, output: str, series, body, default_distance:
                                     curvature=curvature, refraction_k=cfg.refraction_k,
                                     frames=frames, pyramid=pyramid, sun_xyz=s,
                                     soft=bool(cfg.soft), backend=backend)
-                if cfg.soft:
-                    valid = np.isfinite(buf)
-                    shares.append(float((buf[valid] < 0.5).mean()) if valid.any() else 0.0)
-                    band = np.where(valid, buf, np.float32(prod.nodata)).astype(np.float32)
-                else:
-                    valid = buf != 255
-                    shares.append(float((buf[valid] == 1).mean()) if valid.any() else 0.0)
-                    band = buf
+                band, _, share = _band(buf, bool(cfg.soft), prod)
+                shares.append(share)
             with timer("write"):
                 w.write(i + 1, band, description=iso(times[i]),
                         tags={"TIME": iso(times[i]), "SUBSOLAR": f"lat {lat:g} lon {lon:g}",
                               "SUN_DISTANCE_M": f"{dist[i]:.6g}"})
-    rep = {"input": input_label(d.path), "output": os.path.abspath(output),
-           "shape": list(d.shape), "subsolar_file": os.path.abspath(series.path),
-           "times": [iso(t) for t in times],
-           "subsolar": [{"lat": float(a), "lon": float(b)} for a, b in zip(series.lat,
-                                                                            series.lon)],
-           "body": {"source": body.source, "a_m": body.a, "b_m": body.b},
-           "sun_distance_m": [float(x) for x in dist],
-           "curvature": {"applied": curvature,
-                         "refraction_k": refraction_for(body, cfg.refraction_k)
-                         if curvature else None},
-           "soft": bool(cfg.soft), "height_above_ground_m": float(cfg.height_above_ground),
-           "shadow_fraction": shares, "backend": backend,
-           "algorithm": "subsolar (pyramid march, a sun per cell)",
-           "seconds": dict(timer.seconds, total=timer.total()), "version": __version__}
-    if ro.report_path is not None:
-        write_json(ro.report_path, rep, ro.overwrite)
+    rep = _report(cfg, d, output, body, curvature, timer,
+                  subsolar_file=os.path.abspath(series.path), times=[iso(t) for t in times],
+                  subsolar=[{"lat": float(a), "lon": float(b)}
+                            for a, b in zip(series.lat, series.lon)],
+                  sun_distance_m=[float(x) for x in dist], shadow_fraction=shares)
     if not ro.quiet:
         ro.say("summary", f"hillshade-rt: {output}: {d.shape[1]}x{d.shape[0]}, {len(series)} "
                           f"subsolar positions on {body.source} (one band each): "
                           f"{100 * min(shares):.2f}..{100 * max(shares):.2f}% of valid cells "
                           f"in shadow; compute {timer.seconds['compute']:.2f} s")
+    return rep
+
+
+def _band(arr, soft: bool, prod):
+    """(the band as written, valid cells, share of the valid cells in shadow) of a mask (1
+    shadow, 0 lit, 255 void) or a visible fraction (NaN void: ``prod.nodata`` written)."""
+    import numpy as np
+    if soft:
+        valid = np.isfinite(arr)
+        share = float((arr[valid] < 0.5).mean()) if valid.any() else 0.0
+        return np.where(valid, arr, np.float32(prod.nodata)).astype(np.float32), valid, share
+    valid = arr != 255
+    return arr, valid, float((arr[valid] == 1).mean()) if valid.any() else 0.0
+
+
+def _report(cfg: SubsolarConfig, d, output: str, body, curvature: bool, timer, **sun) -> dict:
+    """The report of a ``--subsolar`` or ``--subsolar-file`` run (``sun``: the keys of the
+    sun(s)), written to --report."""
+    from ..earth import refraction_for
+    from ..io import input_label, write_json
+    ro = cfg.run
+    rep = {"input": input_label(d.path), "output": os.path.abspath(output),
+           "shape": list(d.shape), **sun,
+           "body": {"source": body.source, "a_m": body.a, "b_m": body.b},
+           "curvature": {"applied": curvature,
+                         "refraction_k": refraction_for(body, cfg.refraction_k)
+                         if curvature else None},
+           "soft": bool(cfg.soft), "height_above_ground_m": float(cfg.height_above_ground),
+           "backend": "gpu" if ro.backend == "gpu" else "cpu",
+           "algorithm": "subsolar (pyramid march, a sun per cell)",
+           "seconds": dict(timer.seconds, total=timer.total()), "version": __version__}
+    if ro.report_path is not None:
+        write_json(ro.report_path, rep, ro.overwrite)
     return rep
