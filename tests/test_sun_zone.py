@@ -112,3 +112,26 @@ def test_cli_tz_auto(tmp_path):
     r = runner.invoke(cli, ["shadow", str(tmp_path / "none.tif"), str(tmp_path / "x.tif"),
                             "--time", "noon", "--tz", "auto"])
     assert r.exit_code == 2 and "not an ISO 8601 time" in r.output
+
+
+def test_sun_hours_tz_auto_days_in_the_dem_zone(tmp_path):
+    """sun-hours --tz auto: days from midnight to midnight in the DEM's zone (its tag says
+    which), the same hours as --tz Europe/Zurich; without --tz local mean solar time stays."""
+    import rasterio
+    from click.testing import CliRunner
+
+    from hillshade_rt.cli import cli
+    from hillshade_rt.testing import write_geotiff
+    d = zurich_dem()
+    path = write_geotiff(tmp_path / "zurich.tif", d.heights, d.transform, "EPSG:4326")
+    out = {}
+    for tz in ("auto", "Europe/Zurich", None):
+        name = tmp_path / f"h{len(out)}.tif"
+        r = CliRunner().invoke(cli, ["sun-hours", path, str(name), "--date", "2026-03-29",
+                                     "--step", "1h", "-q"] + (["--tz", tz] if tz else []))
+        assert r.exit_code == 0, r.output
+        with rasterio.open(name) as ds:
+            out[tz] = ds.tags()["DAY"], ds.read(1)
+    assert out["auto"][0] == out["Europe/Zurich"][0] == "midnight to midnight, Europe/Zurich"
+    assert np.array_equal(out["auto"][1], out["Europe/Zurich"][1])
+    assert "mean solar" in out[None][0]
