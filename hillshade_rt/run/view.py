@@ -21,7 +21,7 @@ what the page shows:
 * ``/api/download?...``: the whole DEM's mask at full resolution for the current sun, GeoTIFF
   (of the edited terrain after brush edits, which its TERRAIN and EDITS tags say);
 * ``POST /api/edit`` (JSON ``{x, y, radius, delta, shape}``; or ``map_x``, ``map_y`` in the
-  DEM's CRS): the terrain brush: the cells within ``radius`` metres raised or lowered by
+  DEM's CRS, or ``lon``, ``lat``): the terrain brush: the cells within ``radius`` metres raised or lowered by
   ``delta`` metres (``disk``) or set to the centre's height + ``delta`` (``flat``), in memory
   (``Shader.update`` on every Shader, the overview levels' cells of that window taken again);
   ``POST /api/undo``, ``POST /api/reset``: the last edit, every edit taken back.
@@ -140,7 +140,8 @@ def pixel_cells(lo: float, hi: float, n_px: int, n_cells: int, level: int):
 # the viewer: a DEM prepared once, shaded per request
 
 class Viewer:
-    """A DEM in memory (``io.Dem``) ready to be shaded window by window (thread-safe)."""
+    """A DEM in memory (``io.Dem``) ready to be shaded window by window (thread-safe). The
+    brush's edits change ``dem.heights`` in place (copy the Dem first to keep it)."""
 
     def __init__(self, dem, algorithm: str = "auto", backend: str = "cpu",
                  tz: str | None = None, options: dict | None = None):
@@ -470,7 +471,8 @@ class Viewer:
     # -- the terrain brush ---------------------------------------------------------------------
     def _edit(self, q: dict) -> dict:
         """Raise (``delta`` > 0) or lower the cells within ``radius`` metres of (``x``, ``y``)
-        (pixel coordinates, as /api/point; or ``map_x``, ``map_y`` in the DEM's CRS): ``disk``
+        (pixel coordinates, as /api/point; or ``map_x``, ``map_y`` in the DEM's CRS; or ``lon``,
+        ``lat``, WGS84 degrees): ``disk``
         adds ``delta`` to each (the ground's shape kept: an embankment), ``flat`` (flat-top) sets
         each to the centre cell's height + ``delta`` (a level roof or platform). Voids stay
         voids. The heights change in memory only (every Shader through ``Shader.update``, the
@@ -479,11 +481,17 @@ class Viewer:
             raise BadRequest("an edit is a JSON object: {x, y, radius, delta, shape}")
         qs = {k: str(v) for k, v in q.items() if v is not None and not isinstance(v, (dict, list))}
         rows, cols = self.z.shape
-        if "map_x" in qs or "map_y" in qs:
+        if "map_x" in qs or "map_y" in qs or "lon" in qs or "lat" in qs:
             tr = self.dem.transform
-            if tr is None:
+            if tr is None or self.dem.crs is None:
                 raise BadRequest("this DEM has no georeferencing: give x and y (pixels)")
-            x, y = ~tr * (number(qs, "map_x"), number(qs, "map_y"))
+            if "lon" in qs or "lat" in qs:
+                mx, my = self.from_lonlat(number(qs, "lon"), number(qs, "lat"))
+            else:
+                mx, my = number(qs, "map_x"), number(qs, "map_y")
+            x, y = ~tr @ (mx, my)
+            if not (math.isfinite(x) and math.isfinite(y)):
+                raise BadRequest("the point does not map to the DEM's grid")
         else:
             x, y = number(qs, "x"), number(qs, "y")
         radius, delta = number(qs, "radius"), number(qs, "delta")
@@ -519,6 +527,17 @@ class Viewer:
         return self._edit_state({"window": [r0, r1, c0, c1], "cells": int(inside.sum()),
                                  "shape": "flat" if shape != "disk" else "disk",
                                  "delta": delta, "radius": radius})
+
+    def from_lonlat(self, lon: float, lat: float) -> tuple[float, float]:
+        """(x, y) in the DEM's CRS of a WGS84 longitude and latitude."""
+        from pyproj import CRS as PCRS, Transformer
+        if self.site is None:
+            raise BadRequest("this DEM has no place on Earth: give x and y (pixels) or map_x "
+                             "and map_y")
+        t = Transformer.from_crs("EPSG:4326", PCRS.from_user_input(self.dem.crs.to_wkt()),
+                                 always_xy=True)
+        mx, my = t.transform(lon, lat)
+        return float(mx), float(my)
 
     def _undo(self) -> dict:
         if not self._undo_stack:

@@ -551,6 +551,23 @@ def test_malformed_edits_400_and_the_server_goes_on(edit_server, body, words):
     assert post(srv, "/api/nothing")[0] == 404
 
 
+def test_an_edit_at_map_coordinates_or_lon_lat(edit_server):
+    """map_x/map_y (the DEM's CRS) and lon/lat name the same cell as pixel x/y."""
+    srv, viewer = edit_server
+    tr = viewer.dem.transform
+    x, y = 80.5, 120.5
+    mx, my = tr @ (x, y)
+    p = json.loads(get(srv, f"/api/point?x={x}&y={y}&az=100&el=30")[2])
+    wins = []
+    for q in ({"x": x, "y": y}, {"map_x": mx, "map_y": my}, {"lon": p["lon"], "lat": p["lat"]}):
+        status, body = post(srv, "/api/edit", dict(q, radius=200, delta=5))
+        assert status == 200, body
+        wins.append(json.loads(body)["window"])
+    assert wins[0] == wins[1] == wins[2]
+    status, body = post(srv, "/api/edit", {"lon": 200, "lat": 95, "radius": 1, "delta": 1})
+    assert status == 400
+
+
 def test_an_edit_too_large_is_refused(edit_server, monkeypatch):
     import hillshade_rt.run.view as view
     srv, viewer = edit_server
