@@ -551,6 +551,47 @@ def test_malformed_edits_400_and_the_server_goes_on(edit_server, body, words):
     assert post(srv, "/api/nothing")[0] == 404
 
 
+def test_an_edit_reaches_every_algorithm_prepared(edit_server):
+    """Shaders of several algorithms share the heights: each is updated (each sees the old
+    heights go), so each draws the edited terrain's mask, at full resolution and at level 2."""
+    from hillshade_rt.testing import memory_dem
+    srv, viewer = edit_server
+    dem0 = read_dem(DEM)
+    rows, cols = dem0.shape
+    az, el = 250.0, 10.0
+    algos = ("auto", "brute", "bounds")
+    for a in algos:       # prepared before the edit
+        render(srv, az=az, el=el, algorithm=a, w=cols, h=rows)
+        render(srv, az=az, el=el, algorithm=a, w=cols // 2, h=rows // 2)
+    assert post(srv, "/api/edit", {"x": 100.5, "y": 100.5, "radius": 500, "delta": 1500})[0] == 200
+    z1, _ = disk_edit(dem0.heights, dem0.grid, 100, 100, 500.0, 1500.0)
+    edited = memory_dem(z1, dem0.transform, dem0.crs)
+    want = shadow_mask(edited, az, el)
+    fresh = Viewer(edited)
+    try:
+        want_small, _ = fresh.render({"az": str(az), "el": str(el), "w": str(cols // 2),
+                                      "h": str(rows // 2)})
+    finally:
+        fresh.close()
+    for a in algos:
+        pic, h = render(srv, az=az, el=el, algorithm=a, w=cols, h=rows)
+        assert h["X-Level"] == "1" and np.array_equal(shadow_of(pic), want), a
+        pic, h = render(srv, az=az, el=el, algorithm=a, w=cols // 2, h=rows // 2)
+        assert h["X-Level"] == "2" and np.array_equal(shadow_of(pic), shadow_of(want_small)), a
+    # the highest cells cut down to a level roof, above the lowest: every Shader's height range
+    # follows (none saw the new heights before its own update, so none misses the lost maximum)
+    r, c = np.unravel_index(np.nanargmax(z1), z1.shape)
+    status, body = post(srv, "/api/edit", {"x": c + 0.5, "y": r + 0.5, "radius": 600,
+                                           "delta": -1600, "shape": "flat"})
+    assert status == 200, body
+    z2, _ = disk_edit(z1, dem0.grid, r, c, 600.0, -1600.0, flat=True)
+    assert np.nanmin(z1) < np.nanmax(z2) < np.nanmax(z1)
+    for (n, a), sh in viewer._shaders.items():
+        zn = z2[::n, ::n]
+        assert (sh.zmin, sh.zmax) == (np.nanmin(zn), np.nanmax(zn)), (n, a)
+    assert json.loads(body)["height_range"] == [float(np.nanmin(z2)), float(np.nanmax(z2))]
+
+
 def test_an_edit_at_map_coordinates_or_lon_lat(edit_server):
     """map_x/map_y (the DEM's CRS) and lon/lat name the same cell as pixel x/y."""
     srv, viewer = edit_server
