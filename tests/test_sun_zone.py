@@ -30,7 +30,8 @@ def test_zurich_is_europe_zurich_with_daylight_saving():
     site = dem_site(zurich_dem())
     tz, name = zone_at(site.lon, site.lat)
     assert name == "Europe/Zurich"
-    july, january = dt.datetime(2026, 7, 15, 10, tzinfo=UTC), dt.datetime(2026, 1, 15, 10, tzinfo=UTC)
+    july = dt.datetime(2026, 7, 15, 10, tzinfo=UTC)
+    january = dt.datetime(2026, 1, 15, 10, tzinfo=UTC)
     assert offset(tz, july) == dt.timedelta(hours=2)
     assert offset(tz, january) == dt.timedelta(hours=1)
     assert zone_label(tz, name, july) == "Europe/Zurich (UTC+02:00, CEST)"

@@ -27,9 +27,9 @@ MAX_FRAMES = 2000
 @dataclass
 class AnimateConfig:
     """An ``animate`` run: ``dem`` to ``output`` (.gif or .mp4), the times as a day (``date``:
-    local midnight to midnight every ``step``, in ``--tz`` or else the zone of the DEM's centre) or a series (``start``, ``end``, ``step``), the
-    place of the sun (``place``: ``run.config.PLACE_KEYS``), frames per second, the picture's
-    long side, the label."""
+    local midnight to midnight every ``step``, in ``--tz`` or else the zone of the DEM's
+    centre) or a series (``start``, ``end``, ``step``), the place of the sun (``place``:
+    ``run.config.PLACE_KEYS``), frames per second, the picture's long side, the label."""
 
     dem: str
     output: str

@@ -21,8 +21,8 @@ what the page shows:
 * ``/api/download?...``: the whole DEM's mask at full resolution for the current sun, GeoTIFF
   (of the edited terrain after brush edits, which its TERRAIN and EDITS tags say);
 * ``POST /api/edit`` (JSON ``{x, y, radius, delta, shape}``; or ``map_x``, ``map_y`` in the
-  DEM's CRS, or ``lon``, ``lat``): the terrain brush: the cells within ``radius`` metres raised or lowered by
-  ``delta`` metres (``disk``) or set to the centre's height + ``delta`` (``flat``), in memory
+  DEM's CRS, or ``lon``, ``lat``): the terrain brush: the cells within ``radius`` metres raised
+  or lowered by ``delta`` metres (``disk``) or set to the centre's height + ``delta`` (``flat``), in memory
   (``Shader.update`` on every Shader, the overview levels' cells of that window taken again);
   ``POST /api/undo``, ``POST /api/reset``: the last edit, every edit taken back.
 
@@ -507,7 +507,8 @@ class Viewer:
             raise BadRequest(f"({x:g}, {y:g}) lies outside the DEM ({cols} x {rows} cells)")
         dxs, dys = float(self.grid.dx[r]), float(self.grid.dy[r])
         hr, hc = int(radius // dys), int(radius // dxs)
-        r0, r1, c0, c1 = max(0, r - hr), min(rows, r + hr + 1), max(0, c - hc), min(cols, c + hc + 1)
+        r0, r1 = max(0, r - hr), min(rows, r + hr + 1)
+        c0, c1 = max(0, c - hc), min(cols, c + hc + 1)
         if (r1 - r0) * (c1 - c0) > MAX_EDIT_CELLS:
             raise BadRequest(f"radius {radius:g} m covers {(r1 - r0) * (c1 - c0)} cells: at "
                              f"most {MAX_EDIT_CELLS} per edit")
