@@ -37,9 +37,13 @@ MAX_TILES = 4096
 # --------------------------------------------------------------------------------------------
 # times
 
+AUTO_ZONE = "auto"      # --tz auto: the zone of the DEM's centre (:func:`zone_at`)
+
+
 def zone(name: str | None):
-    """An IANA time zone (``zoneinfo``), or None."""
-    if name is None:
+    """An IANA time zone (``zoneinfo``), or None (also for ``auto``, the DEM's zone, which only
+    the DEM's place decides: :func:`zone_at`)."""
+    if name is None or is_auto(name):
         return None
     from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
     try:
@@ -47,6 +51,62 @@ def zone(name: str | None):
     except (ZoneInfoNotFoundError, ValueError, TypeError):
         raise HillshadeError(f"--tz {name!r}: not an IANA time zone name "
                              "(e.g. Europe/Zurich, America/Denver, UTC)") from None
+
+
+def is_auto(name) -> bool:
+    """Whether a --tz value asks for the DEM's own zone."""
+    return isinstance(name, str) and name.strip().lower() == AUTO_ZONE
+
+
+_FINDER = []
+
+
+def zone_name_at(lon: float, lat: float) -> str | None:
+    """The IANA zone name at (``lon``, ``lat``) (WGS84 degrees) from timezonefinder's polygons
+    (timezone-boundary-builder, shipped in its wheel: offline); at sea the nautical
+    ``Etc/GMT+N`` zone it gives; None where it has nothing or is not installed."""
+    try:
+        from timezonefinder import TimezoneFinder
+    except ImportError:
+        return None
+    if not _FINDER:
+        _FINDER.append(TimezoneFinder())
+    lon = (float(lon) + 180.0) % 360.0 - 180.0
+    lat = min(max(float(lat), -90.0), 90.0)
+    try:
+        return _FINDER[0].timezone_at(lng=lon, lat=lat)
+    except ValueError:
+        return None
+
+
+def zone_at(lon: float, lat: float):
+    """(tzinfo, name) of the place (``lon``, ``lat``): its IANA zone (``zoneinfo``, daylight
+    saving included), or, where none is known (no zone data, or timezonefinder missing), the
+    whole-hour offset nearest the longitude (``Etc/GMT-1`` east of Greenwich, as the nautical
+    zones are named; a fixed offset)."""
+    from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
+    name = zone_name_at(lon, lat)
+    if name is not None:
+        try:
+            return ZoneInfo(name), name
+        except (ZoneInfoNotFoundError, ValueError):
+            pass
+    hours = int(round(((float(lon) + 180.0) % 360.0 - 180.0) / 15.0))
+    name = "Etc/GMT" + (f"{-hours:+d}" if hours else "")
+    try:
+        return ZoneInfo(name), name
+    except (ZoneInfoNotFoundError, ValueError):
+        return _dt.timezone(_dt.timedelta(hours=hours)), f"UTC{hours:+03d}:00"
+
+
+def zone_label(tz, name: str, when: _dt.datetime | None = None) -> str:
+    """``Europe/Zurich (UTC+02:00, CEST)``: a zone's name with its offset at ``when`` (aware;
+    default now)."""
+    when = (when or _dt.datetime.now(UTC)).astimezone(tz)
+    abbr = when.tzname() or ""
+    off = "UTC" + _offset(when.utcoffset())
+    extra = f", {abbr}" if abbr and abbr[0].isalpha() and abbr != "UTC" else ""
+    return f"{name} ({off}{extra})"
 
 
 def _transition(tz, lo: _dt.datetime, hi: _dt.datetime) -> _dt.datetime:
@@ -604,6 +664,14 @@ def disk_fraction(horizon_deg, elevation_deg, radius_deg: float = SUN_RADIUS_DEG
     return (np.arccos(d) - d * np.sqrt(1.0 - d * d)) / math.pi
 
 
+def _times(time, start, end, step, tz) -> list[_dt.datetime]:
+    """--time's instants, or the series --start..--end every --step, local times in ``tz``."""
+    if time:
+        return [parse_time(t, tz, "--time") for t in time]
+    t0, t1 = parse_time(start, tz, "--start"), parse_time(end, tz, "--end")
+    return time_range(t0, t1, parse_step(step))
+
+
 @dataclass
 class SunRequest:
     """The sun options of a command line, checked before anything is read."""
@@ -616,6 +684,8 @@ class SunRequest:
     lon: float | None = None
     atmosphere: Atmosphere = Atmosphere()
     tolerance: float = DEFAULT_TOLERANCE
+    auto_tz: bool = False          # --tz auto: ``tz`` is the DEM's zone once :meth:`site` ran
+    pending: tuple | None = None   # --tz auto: (time, start, end, step) parsed again then
 
     @property
     def from_time(self) -> bool:
@@ -654,13 +724,11 @@ class SunRequest:
                 raise HillshadeError(f"{', '.join(given)} apply to a sun from --time or --start, "
                                      "not to --azimuth/--elevation")
             return cls(normalize_azimuth(azimuth), check_elevation(elevation, "--elevation"))
-        if time:
-            times = [parse_time(t, zone_, "--time") for t in time]
-        else:
-            t0, t1 = parse_time(start, zone_, "--start"), parse_time(end, zone_, "--end")
-            times = time_range(t0, t1, parse_step(step))
-        return cls.at_place(times, tz, lat, lon, pressure, temperature, no_refraction,
-                            sun_tolerance)
+        req = cls.at_place(_times(time, start, end, step, UTC if is_auto(tz) else zone_), tz,
+                           lat, lon, pressure, temperature, no_refraction, sun_tolerance)
+        if req.auto_tz:   # checked now with UTC standing in; read again in the DEM's zone
+            req.pending = (time, start, end, step)
+        return req
 
     @classmethod
     def at_place(cls, times, tz=None, lat=None, lon=None, pressure=None, temperature=None,
@@ -683,12 +751,20 @@ class SunRequest:
         atm = Atmosphere(not no_refraction, pressure,
                          12.0 if temperature is None else float(temperature))
         return cls(times=times, tz=zone_, lat=lat, lon=lon, atmosphere=atm,
-                   tolerance=float(sun_tolerance))
+                   tolerance=float(sun_tolerance), auto_tz=is_auto(tz))
 
     def site(self, dem, other_body: str | None = None):
         """Where this request's suns are computed for ``dem`` (``sun.dem_site``; ``other_body``:
-        what to advise for a DEM on another body than the Earth)."""
-        return dem_site(dem, self.lat, self.lon, other_body)
+        what to advise for a DEM on another body than the Earth). With ``--tz auto`` the zone
+        is then that of the site (:func:`zone_at`) and the times given without an offset are
+        read again as local times there."""
+        site = dem_site(dem, self.lat, self.lon, other_body)
+        if self.auto_tz and self.tz is None:
+            self.tz, name = zone_at(site.lon, site.lat)
+            site.notes.append(f"--tz auto: {name}, the zone at {site.lat:.4f}, {site.lon:.4f}")
+            if self.pending is not None:
+                self.times = _times(*self.pending, self.tz)
+        return site
 
     def suns(self, dem, site=None) -> tuple[list[SunOver], dict | None]:
         """(suns, site report) for ``dem``: the given sun, or the SPA's at each time (at

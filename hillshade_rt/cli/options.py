@@ -96,10 +96,11 @@ def place_options(f):
     """How the sun is computed from a time: zone, place, atmosphere, tolerance."""
     return _stack(f, [
         click.option("--tz", default=None, metavar="ZONE",
-                     help="IANA zone, e.g. Europe/Zurich: times written without an offset are "
-                          "local times there (daylight saving included) and outputs are labelled "
-                          "in it; sun-hours: days run midnight to midnight there (default: local "
-                          "mean solar time)."),
+                     help="IANA zone, e.g. Europe/Zurich, or 'auto' (the zone of the DEM's "
+                          "centre): times written without an offset are local times there "
+                          "(daylight saving included) and outputs are labelled in it; sun-hours: "
+                          "days run midnight to midnight there (default: local mean solar "
+                          "time)."),
         click.option("--lat", type=float, default=None,
                      help="Latitude of the sun's observer, degrees (default: the DEM's centre; "
                           "required for input without a CRS)."),
@@ -146,8 +147,8 @@ def animation_options(f):
     label."""
     return _stack(f, [
         click.option("--date", "date_", default=None, metavar="YYYY-MM-DD",
-                     help="A day: frames from local midnight (--tz, else local mean solar "
-                          "time) every --step until the next midnight."),
+                     help="A day: frames from local midnight (in --tz, else in the zone of "
+                          "the DEM's centre) every --step until the next midnight."),
     ] + _series_options("e.g. 10min, 1h, PT15M (default 30min)") + [
         click.option("--fps", type=click.FloatRange(min=0.0, min_open=True, max=50.0),
                      default=12.0, show_default=True, help="Frames per second."),
@@ -417,6 +418,6 @@ def view_options(f):
         click.option("--no-browser", is_flag=True,
                      help="Do not open the default browser (the URL is printed)."),
         click.option("--tz", default=None, metavar="ZONE",
-                     help="IANA zone of the times shown, e.g. Europe/Zurich (default: the "
-                          "offset nearest the DEM's longitude, in whole hours)."),
+                     help="IANA zone of the times shown, e.g. Europe/Zurich (default, or "
+                          "'auto': the zone of the DEM's centre, daylight saving included)."),
     ])

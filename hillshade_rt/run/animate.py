@@ -27,9 +27,9 @@ MAX_FRAMES = 2000
 @dataclass
 class AnimateConfig:
     """An ``animate`` run: ``dem`` to ``output`` (.gif or .mp4), the times as a day (``date``:
-    local midnight to midnight every ``step``) or a series (``start``, ``end``, ``step``), the
-    place of the sun (``place``: ``run.config.PLACE_KEYS``), frames per second, the picture's
-    long side, the label."""
+    local midnight to midnight every ``step``, in ``--tz`` or else the zone of the DEM's
+    centre) or a series (``start``, ``end``, ``step``), the place of the sun (``place``:
+    ``run.config.PLACE_KEYS``), frames per second, the picture's long side, the label."""
 
     dem: str
     output: str
@@ -62,15 +62,19 @@ class AnimateConfig:
 def times_of(cfg: AnimateConfig):
     """The SunRequest with its times (a series), or without (a day: :func:`day_times` fills
     them in once the DEM's place is known); too many frames refused before the DEM is read."""
-    from ..sun import SunRequest, parse_date, parse_step
+    from ..sun import AUTO_ZONE, SunRequest, parse_date, parse_step
     step = cfg.step or DEFAULT_STEP
+    # the labels' local time: --tz, else the zone of the DEM's centre (--tz auto)
+    place = dict(cfg.place)
+    if place.get("tz") is None:
+        place["tz"] = AUTO_ZONE
     try:
         if cfg.date is not None:
             parse_date(cfg.date, "--date")
             count = -(-_dt.timedelta(hours=23) // parse_step(step))    # at least, before the
-            req = SunRequest.at_place([], **cfg.place)                 # place is known
+            req = SunRequest.at_place([], **place)                     # place is known
         else:
-            req = SunRequest.from_options(start=cfg.start, end=cfg.end, step=step, **cfg.place)
+            req = SunRequest.from_options(start=cfg.start, end=cfg.end, step=step, **place)
             count = len(req.times)
     except HillshadeError as exc:     # the command line alone decides these: exit 2
         raise UsageProblem(str(exc)) from None
@@ -185,7 +189,10 @@ def animate(cfg: AnimateConfig) -> dict:
            "every_nth_cell": n, "frames": len(frames), "night_frames": nights, "fps": cfg.fps,
            "label": cfg.label,
            "label_time": ("local mean solar time" if lmt is not None else
-                          (req.tz.key if req.tz is not None else "the times' own offsets")),
+                          (getattr(req.tz, "key", str(req.tz)) if req.tz is not None
+                           else "the times' own offsets")
+                          + (" (the DEM's zone)" if req.auto_tz and req.tz is not None
+                             else "")),
            "algorithm": cfg.algorithm, "backend": ran_on, "times": records,
            "curvature": shader.report(), "algorithm_stats": algo_stats,
            "seconds": dict(timer.seconds, total=timer.total()), "version": __version__}

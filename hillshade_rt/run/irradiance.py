@@ -92,7 +92,7 @@ def irradiance(cfg: IrradianceConfig) -> dict:
     from ..io.write import Claims
     from ..preview import relief_rgb, scaled
     from ..shading import Shader, choose_backend
-    from ..sun import SunRequest, day_samples, iso, parse_date, parse_step, parse_time
+    from ..sun import UTC, SunRequest, day_samples, iso, parse_date, parse_step
     from .notes import compile_note
     from .report import Timer, progress
 
@@ -119,17 +119,14 @@ def irradiance(cfg: IrradianceConfig) -> dict:
             last = parse_date(cfg.end_date, "--end-date") if cfg.end_date is not None else first
             if last < first:
                 raise HillshadeError("--end-date is before --date")
-        else:
-            t0 = parse_time(cfg.start, req.tz, "--start")
-            t1 = parse_time(cfg.end, req.tz, "--end")
-            if req.tz is not None:     # shown in the zone of --tz
-                t0, t1 = t0.astimezone(req.tz), t1.astimezone(req.tz)
-            times, weights = ir.period_samples(t0, t1, step)
+        else:   # --tz auto: checked with UTC standing in, read again in the DEM's zone
+            t0, t1, times, weights = _period(cfg, req.tz or (UTC if req.auto_tz else None),
+                                             step)
     except HillshadeError as exc:
         raise UsageProblem(str(exc)) from None
     series = None
-    if cfg.ghi is not None:      # a bad file fails the run (exit 1) before the DEM is read
-        series = ir.read_series(cfg.ghi, req.tz)
+    if cfg.ghi is not None and not req.auto_tz:   # a bad file fails the run (exit 1) before
+        series = ir.read_series(cfg.ghi, req.tz)  # the DEM is read (--tz auto: once it is)
     if ro.threads is not None:
         numba.set_num_threads(min(ro.threads, numba.config.NUMBA_NUM_THREADS))
     ran_on = choose_backend(ro.backend, cfg.algorithm, {})
@@ -143,6 +140,11 @@ def irradiance(cfg: IrradianceConfig) -> dict:
         raise HillshadeError(f"{input_label(d.path)}: every height is nodata")
     with timer("prepare"):
         site = req.site(d, "irradiance computes the Earth's sun only")
+        if req.auto_tz:          # the DEM's zone is known now
+            if cfg.ghi is not None:
+                series = ir.read_series(cfg.ghi, req.tz)
+            if cfg.date is None:
+                t0, t1, times, weights = _period(cfg, req.tz, step)
         if cfg.date is not None:
             try:
                 times, weights = day_samples(first, last, cfg.step, req.tz, site.lon)
@@ -253,3 +255,13 @@ def irradiance(cfg: IrradianceConfig) -> dict:
                           f"shadows {sec.get('shadows', 0.0):.2f} s, sky view "
                           f"{sec['sky view']:.2f} s, total {sec['total']:.2f} s")
     return rep
+
+
+def _period(cfg, tz, step):
+    """(t0, t1, times, weights) of --start..--end, local times in ``tz``, shown in it."""
+    from .. import irradiance as ir
+    from ..sun import parse_time
+    t0, t1 = parse_time(cfg.start, tz, "--start"), parse_time(cfg.end, tz, "--end")
+    if tz is not None:     # shown in the zone of --tz
+        t0, t1 = t0.astimezone(tz), t1.astimezone(tz)
+    return (t0, t1, *ir.period_samples(t0, t1, step))

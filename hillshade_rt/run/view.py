@@ -7,7 +7,8 @@ per overview level (every n-th cell, n a power of two) and algorithm; each reque
 what the page shows:
 
 * ``/``, ``/static/...``: the page (``view_static/``: HTML, JS, CSS and Leaflet, vendored);
-* ``/api/info``: the DEM's size, bounds, CRS, zone, the default date and time, the algorithms;
+* ``/api/info``: the DEM's size, bounds, CRS, zone (``--tz``, else the IANA zone of the DEM's
+  centre: ``sun.zone_at``), the default date and time, the algorithms;
 * ``/api/render?bbox=x0,y0,x1,y1&w=&h=&az=&el=|time=&algorithm=&soft=&sunhours=DATE``: a PNG
   (RGBA) of the window ``bbox`` (pixel coordinates of the DEM: x a column, y a row, cell (r, c)
   the square [c, c+1) x [r, r+1)) at ``w`` x ``h``: relief lit by the sun, cast shadows tinted
@@ -17,11 +18,18 @@ what the page shows:
   that level; level 1 is the command line's mask). Headers say the sun, level and algorithm;
 * ``/api/point?x=&y=&az=&el=|time=``: JSON: the height there, lit or not, its horizon profile;
 * ``/api/sunpath?date=``: the day's sun (grid azimuth, elevation) every 10 minutes;
-* ``/api/download?...``: the whole DEM's mask at full resolution for the current sun, GeoTIFF.
+* ``/api/download?...``: the whole DEM's mask at full resolution for the current sun, GeoTIFF
+  (of the edited terrain after brush edits, which its TERRAIN and EDITS tags say);
+* ``POST /api/edit`` (JSON ``{x, y, radius, delta, shape}``; or ``map_x``, ``map_y`` in the
+  DEM's CRS, or ``lon``, ``lat``): the terrain brush: the cells within ``radius`` metres raised
+  or lowered by ``delta`` metres (``disk``) or set to the centre's height + ``delta`` (``flat``), in memory
+  (``Shader.update`` on every Shader, the overview levels' cells of that window taken again);
+  ``POST /api/undo``, ``POST /api/reset``: the last edit, every edit taken back.
 
 Malformed queries get a 400 with a one-line message; nothing a request does stops the server.
-Shading runs on one worker thread, one request at a time (the Shaders keep state; numba's
-kernels use every core anyway, and its OpenMP pool belongs to the calling thread).
+Shading and edits run on one worker thread, one request at a time (the Shaders keep state;
+numba's kernels use every core anyway, and its OpenMP pool belongs to the calling thread): the
+worker is the lock that keeps an edit from changing the heights under a render.
 """
 
 from __future__ import annotations
@@ -49,6 +57,8 @@ STATIC = os.path.join(os.path.dirname(__file__), "view_static")
 HOST = "127.0.0.1"
 MAX_PIXELS = 4096 * 4096          # largest picture a request may ask for
 GRADIENT_CELLS = 50_000_000       # levels up to this size keep their surface gradients
+MAX_EDIT_CELLS = 16_000_000       # cells one brush edit may cover (its bounding box)
+MAX_BODY = 1 << 16                # bytes of a POST's JSON
 LIT_RGB = np.array([1.0, 0.97, 0.88], np.float32)      # lit relief: red > blue
 SHADOW_RGB = np.array([0.30, 0.42, 0.85], np.float32)  # shadow (preview.TINT): blue > red
 SUN_RGB = np.array([1.0, 0.86, 0.45], np.float32)      # sun hours (preview.SUN)
@@ -130,13 +140,14 @@ def pixel_cells(lo: float, hi: float, n_px: int, n_cells: int, level: int):
 # the viewer: a DEM prepared once, shaded per request
 
 class Viewer:
-    """A DEM in memory (``io.Dem``) ready to be shaded window by window (thread-safe)."""
+    """A DEM in memory (``io.Dem``) ready to be shaded window by window (thread-safe). The
+    brush's edits change ``dem.heights`` in place (copy the Dem first to keep it)."""
 
     def __init__(self, dem, algorithm: str = "auto", backend: str = "cpu",
                  tz: str | None = None, options: dict | None = None):
         from ..algorithms import lookup
         from ..earth import dem_body
-        from ..sun import dem_site, zone
+        from ..sun import dem_site, is_auto, zone, zone_at
         lookup(algorithm)
         self.dem = dem
         self.z = dem.heights
@@ -150,6 +161,7 @@ class Viewer:
         self._levels: dict = {}
         self._shaders: dict = {}
         self._gradients: dict = {}
+        self._undo_stack: list = []     # (row, col, the heights an edit replaced)
         self.zrange = tuple(float(v) for v in dem.height_range())
         if not all(math.isfinite(v) for v in self.zrange):
             raise HillshadeError(f"{dem.path}: every cell is nodata: nothing to view")
@@ -160,12 +172,12 @@ class Viewer:
             self.site = dem_site(dem)
         except HillshadeError:
             self.site = None          # no CRS or not the Earth: azimuth and elevation only
-        if tz is not None:
-            self.tz, self.zone_name = zone(tz), tz
-        elif self.site is not None:
-            hours = int(round(self.site.lon / 15.0))
-            self.tz = _dt.timezone(_dt.timedelta(hours=hours))
-            self.zone_name = f"UTC{hours:+03d}:00 (from the longitude; --tz names a zone)"
+        self.zone_source = None
+        if tz is not None and not is_auto(tz):
+            self.tz, self.zone_name, self.zone_source = zone(tz), tz, "--tz"
+        elif self.site is not None:     # the zone of the DEM's centre (daylight saving too)
+            self.tz, self.zone_name = zone_at(self.site.lon, self.site.lat)
+            self.zone_source = "the DEM's centre"
         else:
             self.tz, self.zone_name = None, None
 
@@ -188,6 +200,18 @@ class Viewer:
     def sunpath(self, q: dict) -> dict:
         """The sun of the query's date every 10 minutes of the local day."""
         return self.call(self._sunpath, q)
+
+    def edit(self, q: dict) -> dict:
+        """Raise or lower the terrain under a brush (see :meth:`_edit`)."""
+        return self.call(self._edit, q)
+
+    def undo(self) -> dict:
+        """Take the last edit back."""
+        return self.call(self._undo)
+
+    def reset(self) -> dict:
+        """Take every edit back: the DEM as read."""
+        return self.call(self._reset)
 
     def warm_up(self) -> None:
         self.call(self._warm_up)
@@ -262,8 +286,18 @@ class Viewer:
         times = self.day_times(day)
         suns = self.suns(times)
         return {"date": day.isoformat(), "zone": self.zone_name,
+                "zone_label": self.zone_label(day),
                 "points": [{"minutes": i * 10, "time": t.isoformat(), "azimuth": s.azimuth,
                             "elevation": s.elevation} for i, (t, s) in enumerate(zip(times, suns))]}
+
+    def zone_label(self, day: _dt.date | None = None) -> str | None:
+        """The viewer's zone with its offset at noon of ``day`` (default today), e.g.
+        ``Europe/Zurich (UTC+02:00, CEST)``."""
+        from ..sun import zone_label
+        if self.tz is None:
+            return None
+        when = (_dt.datetime.combine(day, _dt.time(12), self.tz) if day is not None else None)
+        return zone_label(self.tz, self.zone_name, when)
 
     # -- what the page asks ----------------------------------------------------------------------
     def info(self) -> dict:
@@ -276,7 +310,9 @@ class Viewer:
                 "transform": list(tr)[:6] if tr is not None else None,
                 "height_range": list(self.zrange),
                 "spacing_m": list(self.grid.centre_spacing()),
-                "zone": self.zone_name, "has_time": self.site is not None,
+                "zone": self.zone_name, "zone_source": self.zone_source,
+                "zone_label": self.zone_label(now.date()) if now else None,
+                "has_time": self.site is not None,
                 "date": now.date().isoformat() if now else None, "minutes": 10 * 60,
                 "algorithm": self.algorithm, "algorithms": list(REGISTRY),
                 "lat": self.site.lat if self.site else None,
@@ -432,6 +468,142 @@ class Viewer:
             out["lon"], out["lat"] = float(lo[0]), float(la[0])
         return out
 
+    # -- the terrain brush ---------------------------------------------------------------------
+    def _edit(self, q: dict) -> dict:
+        """Raise (``delta`` > 0) or lower the cells within ``radius`` metres of (``x``, ``y``)
+        (pixel coordinates, as /api/point; or ``map_x``, ``map_y`` in the DEM's CRS; or ``lon``,
+        ``lat``, WGS84 degrees): ``disk``
+        adds ``delta`` to each (the ground's shape kept: an embankment), ``flat`` (flat-top) sets
+        each to the centre cell's height + ``delta`` (a level roof or platform). Voids stay
+        voids. The heights change in memory only (every Shader through ``Shader.update``, the
+        overview levels' cells of that window recomputed), never in the DEM's file."""
+        if not isinstance(q, dict):
+            raise BadRequest("an edit is a JSON object: {x, y, radius, delta, shape}")
+        qs = {k: str(v) for k, v in q.items() if v is not None and not isinstance(v, (dict, list))}
+        rows, cols = self.z.shape
+        if "map_x" in qs or "map_y" in qs or "lon" in qs or "lat" in qs:
+            tr = self.dem.transform
+            if tr is None or self.dem.crs is None:
+                raise BadRequest("this DEM has no georeferencing: give x and y (pixels)")
+            if "lon" in qs or "lat" in qs:
+                mx, my = self.from_lonlat(number(qs, "lon"), number(qs, "lat"))
+            else:
+                mx, my = number(qs, "map_x"), number(qs, "map_y")
+            x, y = ~tr @ (mx, my)
+            if not (math.isfinite(x) and math.isfinite(y)):
+                raise BadRequest("the point does not map to the DEM's grid")
+        else:
+            x, y = number(qs, "x"), number(qs, "y")
+        radius, delta = number(qs, "radius"), number(qs, "delta")
+        shape = qs.get("shape", "disk").strip().lower()
+        if shape not in ("disk", "flat", "flat-top"):
+            raise BadRequest(f"shape must be disk or flat (flat-top), got {shape!r}")
+        if not 0 <= radius <= 1e6:
+            raise BadRequest(f"radius must be >= 0 metres, got {radius}")
+        if abs(delta) > 1e5:
+            raise BadRequest(f"delta must be within +-100 km, got {delta}")
+        r, c = int(math.floor(y)), int(math.floor(x))
+        if not (0 <= r < rows and 0 <= c < cols):
+            raise BadRequest(f"({x:g}, {y:g}) lies outside the DEM ({cols} x {rows} cells)")
+        dxs, dys = float(self.grid.dx[r]), float(self.grid.dy[r])
+        hr, hc = int(radius // dys), int(radius // dxs)
+        r0, r1 = max(0, r - hr), min(rows, r + hr + 1)
+        c0, c1 = max(0, c - hc), min(cols, c + hc + 1)
+        if (r1 - r0) * (c1 - c0) > MAX_EDIT_CELLS:
+            raise BadRequest(f"radius {radius:g} m covers {(r1 - r0) * (c1 - c0)} cells: at "
+                             f"most {MAX_EDIT_CELLS} per edit")
+        ii, jj = np.ogrid[r0 - r:r1 - r, c0 - c:c1 - c]
+        inside = (ii * dys) ** 2 + (jj * dxs) ** 2 <= radius * radius
+        old = self.z[r0:r1, c0:c1].copy()
+        if shape == "disk":
+            new = np.where(inside, old + np.float32(delta), old)
+        else:
+            top = self.z[r, c]
+            if not math.isfinite(top):
+                raise BadRequest(f"the centre cell (row {r}, col {c}) is a void: a flat top "
+                                 "needs its height")
+            new = np.where(inside & np.isfinite(old), np.float32(top + delta), old)
+        self._apply(r0, c0, new.astype(np.float32))
+        self._undo_stack.append((r0, c0, old))
+        return self._edit_state({"window": [r0, r1, c0, c1], "cells": int(inside.sum()),
+                                 "shape": "flat" if shape != "disk" else "disk",
+                                 "delta": delta, "radius": radius})
+
+    def from_lonlat(self, lon: float, lat: float) -> tuple[float, float]:
+        """(x, y) in the DEM's CRS of a WGS84 longitude and latitude."""
+        from pyproj import CRS as PCRS, Transformer
+        if self.site is None:
+            raise BadRequest("this DEM has no place on Earth: give x and y (pixels) or map_x "
+                             "and map_y")
+        t = Transformer.from_crs("EPSG:4326", PCRS.from_user_input(self.dem.crs.to_wkt()),
+                                 always_xy=True)
+        mx, my = t.transform(lon, lat)
+        return float(mx), float(my)
+
+    def _undo(self) -> dict:
+        if not self._undo_stack:
+            raise BadRequest("nothing to undo")
+        r0, c0, old = self._undo_stack.pop()
+        self._apply(r0, c0, old)
+        h, w = old.shape
+        return self._edit_state({"window": [r0, r0 + h, c0, c0 + w]})
+
+    def _reset(self) -> dict:
+        while self._undo_stack:
+            r0, c0, old = self._undo_stack.pop()
+            self._apply(r0, c0, old)
+        return self._edit_state({})
+
+    def _edit_state(self, extra: dict) -> dict:
+        return dict(extra, edits=len(self._undo_stack), height_range=list(self.zrange))
+
+    def _apply(self, r0: int, c0: int, heights: np.ndarray) -> None:
+        """``heights`` into the DEM at (r0, c0): every full-resolution Shader updated (each sees
+        the old heights go: they share the array), then every overview level's cells in that
+        window taken again from the full resolution, their Shaders and gradients with them."""
+        h, w = heights.shape
+        r1, c1 = r0 + h, c0 + w
+        old = self.z[r0:r1, c0:c1].copy()
+        if not any(key[0] == 1 for key in self._shaders):
+            self.shader(1, self.algorithm)
+        for (n, _), sh in self._shaders.items():
+            if n == 1:
+                self.z[r0:r1, c0:c1] = old
+                sh.update((r0, c0), heights)
+        self.z[r0:r1, c0:c1] = heights
+        self._regradient(1, r0, r1, c0, c1)
+        for n, (zn, _) in self._levels.items():
+            a0, a1 = -(-r0 // n), -(-r1 // n)          # level-n rows whose cell is in [r0, r1)
+            b0, b1 = -(-c0 // n), -(-c1 // n)
+            if a0 >= a1 or b0 >= b1:
+                continue
+            fresh = np.ascontiguousarray(self.z[a0 * n:a1 * n:n, b0 * n:b1 * n:n])
+            before = zn[a0:a1, b0:b1].copy()
+            shaders = [sh for (m, _), sh in self._shaders.items() if m == n]
+            for sh in shaders:
+                zn[a0:a1, b0:b1] = before
+                sh.update((a0, b0), fresh)
+            zn[a0:a1, b0:b1] = fresh
+            self._regradient(n, a0, a1, b0, b1)
+        sh = next(sh for (n, _), sh in self._shaders.items() if n == 1)
+        self.zrange = (float(sh.zmin), float(sh.zmax))
+
+    def _regradient(self, n: int, r0: int, r1: int, c0: int, c1: int) -> None:
+        """The kept gradients of level ``n`` over rows r0..r1, columns c0..c1 (and the cells
+        next to them, whose Horn normals use these heights) computed again."""
+        from ..algorithms.picture import gradients
+        if n not in self._gradients:
+            return
+        ge, gn, _ = self._gradients[n]
+        z, g = self.level(n)
+        r0, r1 = max(0, r0 - 1), min(z.shape[0], r1 + 1)
+        c0, c1 = max(0, c0 - 1), min(z.shape[1], c1 + 1)
+        a = np.empty((r1 - r0, c1 - c0), np.float32)
+        b = np.empty_like(a)
+        gradients(z, g.dx, g.dy, float(g.col_sign), float(g.row_sign), r0, c0, a, b)
+        ge[r0:r1, c0:c1] = a
+        gn[r0:r1, c0:c1] = b
+
     def _download(self, q: dict) -> tuple[bytes, str]:
         """The whole DEM's mask for the query's sun at full resolution as GeoTIFF bytes."""
         from ..io.raster import write_raster
@@ -444,15 +616,21 @@ class Viewer:
         p = product("shadow", soft)
         if soft:
             data = np.where(np.isnan(data), np.float32(p.nodata), data).astype(np.float32)
-        name = "shadow_{}_az{:.1f}_el{:.1f}.tif".format(
+        edits = len(self._undo_stack)
+        name = "shadow_{}{}_az{:.1f}_el{:.1f}.tif".format(
             os.path.splitext(os.path.basename(self.dem.path))[0] or "dem",
-            sun["azimuth"], sun["elevation"])
+            "_edited" if edits else "", sun["azimuth"], sun["elevation"])
         with tempfile.TemporaryDirectory(prefix="hillshade-rt-view-") as tmp:
             path = os.path.join(tmp, name)
             tags = {"VALUES": p.values, "AZIMUTH": f"{sun['azimuth']:.4f}",
                     "ELEVATION": f"{sun['elevation']:.4f}"}
             if sun["time"]:
                 tags["TIME"] = sun["time"]
+            if edits:     # the mask is of the terrain as edited in the viewer, not the file's
+                tags["TERRAIN"] = (f"edited: {edits} brush edit(s) in hillshade-rt view "
+                                   "(in memory; the DEM's file is unchanged)")
+                tags["EDITS"] = json.dumps([[int(r0), int(c0), int(o.shape[0]), int(o.shape[1])]
+                                            for r0, c0, o in self._undo_stack])
             write_raster(path, data, self.dem, p.nodata, p.what, tags)
             with open(path, "rb") as f:
                 return f.read(), name
@@ -568,6 +746,41 @@ class Handler(BaseHTTPRequestHandler):
             return
         except BadRequest as exc:
             self.send(400, one_line(exc), "text/plain; charset=utf-8")
+        except NotFound as exc:
+            self.send(404, one_line(exc), "text/plain; charset=utf-8")
+        except HillshadeError as exc:
+            self.send(400, one_line(exc), "text/plain; charset=utf-8")
+        except Exception as exc:   # noqa: BLE001 -- a request never stops the server
+            msg = f"internal error ({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''})"
+            print(f"hillshade-rt: view: {self.path}: {msg}", file=sys.stderr)
+            self.send(500, msg.encode(), "text/plain; charset=utf-8")
+
+    def do_POST(self):
+        url = urlsplit(self.path)
+        v = self.viewer
+        try:
+            try:
+                size = int(self.headers.get("Content-Length") or 0)
+            except ValueError:
+                size = -1
+            if not 0 <= size <= MAX_BODY:
+                self.close_connection = True
+                raise BadRequest(f"the body must be JSON of at most {MAX_BODY} bytes")
+            body = self.rfile.read(size) if size else b""
+            if url.path == "/api/edit":
+                try:
+                    q = json.loads(body.decode("utf-8") or "null")
+                except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+                    raise BadRequest(f"the edit is not JSON ({exc})") from None
+                self.send_json(v.edit(q))
+            elif url.path == "/api/undo":
+                self.send_json(v.undo())
+            elif url.path == "/api/reset":
+                self.send_json(v.reset())
+            else:
+                raise NotFound(f"no such page: {url.path}")
+        except (BrokenPipeError, ConnectionResetError):
+            return
         except NotFound as exc:
             self.send(404, one_line(exc), "text/plain; charset=utf-8")
         except HillshadeError as exc:

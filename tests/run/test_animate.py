@@ -104,3 +104,22 @@ def test_the_api(tmp_path):
         assert im.n_frames == 5 and im.size == (20, 25)
     with pytest.raises(TypeError, match="colour"):
         hr.animate(dem, tmp_path / "b.gif", date="2026-06-21", colour="red")
+
+
+def test_without_tz_the_day_and_labels_are_in_the_dem_zone(tmp_path):
+    """No --tz: the day runs from midnight to midnight in the zone of the DEM's centre (UTM 32N
+    at 47 N, 8.5 E: Europe/Zurich), the labels in it (CEST in July), the report says so;
+    a series' local times are read there too."""
+    z = fractal_terrain(40, 40, seed=4, relief=300.0).astype(np.float32)
+    dem = write_geotiff(tmp_path / "z.tif", z, Affine(30.0, 0, 465000.0, 0, -30.0, 5248000.0),
+                        CRS.from_epsg(32632))
+    rep = animate(AnimateConfig(dem, str(tmp_path / "a.gif"), date="2026-07-15", step="6h",
+                                size=40))
+    assert rep["label_time"] == "Europe/Zurich (the DEM's zone)"
+    assert [t["time"] for t in rep["times"]] == [f"2026-07-15T{h:02d}:00:00+02:00"
+                                                 for h in (0, 6, 12, 18)]
+    rep = animate(AnimateConfig(dem, str(tmp_path / "b.gif"), start="2026-01-15T10:00",
+                                end="2026-01-15T12:00", step="1h", size=40))
+    assert rep["times"][0]["time"] == "2026-01-15T10:00:00+01:00" and rep["frames"] == 3
+    assert label_text(dt.datetime(2026, 7, 15, 10, tzinfo=ZoneInfo("Europe/Zurich")), False,
+                      None) == "2026-07-15 10:00 CEST"

@@ -291,6 +291,27 @@ def test_night_gives_no_beam(tmp_path, runner):
     assert doc["period_hours"] == 3.0
 
 
+def test_tz_auto_is_the_dem_zone(tmp_path, runner):
+    """--tz auto (the DEM is in UTM 11N at 34.3 N: America/Los_Angeles): local --start/--end
+    read there after the DEM, and --date's days run there; the same as naming the zone."""
+    dem = _dem(tmp_path, fractal_terrain(24, 24, 3, relief=200.0))
+    reps = {}
+    for tz in ("auto", "America/Los_Angeles"):
+        for kind, extra in (("period", ["--start", "2026-06-21T09:00", "--end",
+                                        "2026-06-21T11:00", "--step", "1h"]),
+                            ("day", ["--date", "2026-11-01", "--step", "2h"])):
+            rep = tmp_path / f"{kind}{len(reps)}.json"
+            _run(runner, [dem, tmp_path / f"{kind}{len(reps)}.tif", "--tz", tz, "-q",
+                          "--skyview-directions", "8", "--report", rep] + extra)
+            reps[tz, kind] = json.loads(rep.read_text())
+    for kind in ("period", "day"):
+        a, b = reps["auto", kind], reps["America/Los_Angeles", kind]
+        assert (a["period"], a["period_hours"], a["samples"]) == \
+            (b["period"], b["period_hours"], b["samples"]), kind
+    assert reps["auto", "period"]["period"].startswith("2026-06-21T09:00-07:00")
+    assert reps["auto", "day"]["period_hours"] == 25.0      # clocks go back on 1 November
+
+
 def _write_csv(path, rows, header="time,ghi,dni,dhi"):
     path.write_text(header + "\n" + "\n".join(",".join(str(v) for v in r) for r in rows) + "\n")
     return path

@@ -105,7 +105,9 @@ def test_info(server, dem):
     info = json.loads(body)
     assert status == 200
     assert (info["rows"], info["cols"]) == dem.shape
-    assert info["has_time"] and info["zone"].startswith("UTC+06:00")    # Everest, 86.9 E
+    assert info["has_time"] and info["zone"] == "Asia/Kathmandu"       # Everest, 86.6 E
+    assert info["zone_label"] == "Asia/Kathmandu (UTC+05:45)" and info["zone_source"] == \
+        "the DEM's centre"
     assert "auto" in info["algorithms"] and info["algorithm"] == "auto"
     assert info["height_range"][0] == pytest.approx(float(np.nanmin(dem.heights)))
 
@@ -156,11 +158,11 @@ def test_time_gives_the_sun_of_that_time(server, dem):
     from hillshade_rt.sun import dem_site, parse_time, sun_over
     rows, cols = dem.shape
     pic, h = render(server, time="2026-06-21T16:30", bbox=f"0,0,{cols},{rows}", w=cols, h=rows)
-    t = parse_time("2026-06-21T16:30+06:00")
+    t = parse_time("2026-06-21T16:30+05:45")
     s = sun_over(dem_site(dem), dem.shape, [t])[0]
     az, el = float(h["X-Sun-Azimuth"]), float(h["X-Sun-Elevation"])
     assert (az, el) == (s.azimuth, s.elevation)
-    assert h["X-Time"].startswith("2026-06-21T16:30:00+06:00")
+    assert h["X-Time"].startswith("2026-06-21T16:30:00+05:45")
     assert np.array_equal(shadow_of(pic), shadow_mask(dem, az, el))
 
 
@@ -199,7 +201,7 @@ def test_sunpath(server):
     els = [p["elevation"] for p in path["points"]]
     noon = path["points"][int(np.argmax(els))]
     # Everest (28 N) at the June solstice: the sun culminates about 85 degrees up, near local
-    # noon (UTC+6 is 18 minutes ahead of the mean solar time at 86.9 E)
+    # noon (Nepal's UTC+5:45 is 19 minutes behind the mean solar time at 86.6 E)
     assert 80 < max(els) < 90 and 11 * 60 <= noon["minutes"] <= 13 * 60
     assert min(els) < 0
 
@@ -369,5 +371,297 @@ def test_gpu_backend_gives_the_cpu_pictures():
             want = shadow_mask(dem, az, el, backend="cpu")[y0:y1, x0:x1]
             assert np.array_equal(shadow_of(pic), want), (az, el)
             assert meta["X-Algorithm"] == "auto (brute)"      # auto's pick on the GPU
+        # a brush edit on the GPU's copy (GpuDem.update): the CPU's mask of the edited heights
+        z0 = z.copy()         # the viewer edits the DEM's array in place
+        z1, _ = disk_edit(z0, dem.grid, 10, 5, 70.0, 200.0)
+        viewer.edit({"x": 5.5, "y": 10.5, "radius": 70, "delta": 200})
+        pic, _ = viewer.render({"az": "110", "el": "15", "bbox": "0,0,21,17", "w": "21",
+                                "h": "17"})
+        want = shadow_mask(memory_dem(z1, dem.transform, dem.crs), 110.0, 15.0, backend="cpu")
+        assert np.array_equal(shadow_of(pic), want)
+        assert not np.array_equal(want, shadow_mask(memory_dem(z0, dem.transform, dem.crs),
+                                                    110.0, 15.0, backend="cpu"))
     finally:
         viewer.close()
+
+
+# --------------------------------------------------------------------------------------------
+# the DEM's zone
+
+def test_zone_of_a_dem_in_zurich_with_daylight_saving():
+    """The slider's local time is Zurich's clock: 12:00 is 10:00 UTC in July (CEST), 11:00 UTC
+    in January (CET); the page is told the zone's name and its offset on the date shown."""
+    from affine import Affine
+
+    from hillshade_rt.testing import fractal_terrain, memory_dem
+    z = fractal_terrain(40, 50, 3, relief=300.0).astype(np.float32) + 400.0
+    dem = memory_dem(z, Affine(0.001, 0, 8.515, 0, -0.001, 47.39), "EPSG:4326")
+    viewer = Viewer(dem)
+    try:
+        info = viewer.info()
+        assert info["zone"] == "Europe/Zurich" and info["zone_source"] == "the DEM's centre"
+        for day, off in (("2026-07-15", "+02:00"), ("2026-01-15", "+01:00")):
+            sun = viewer.sun({"time": f"{day}T12:00"})
+            assert sun["time"] == f"{day}T12:00:00{off}"
+            path = viewer.sunpath({"date": day})
+            assert path["zone_label"].startswith(f"Europe/Zurich (UTC{off}")
+            assert path["points"][72]["time"] == f"{day}T12:00:00{off}"
+        # --tz still wins, and --tz auto is the default spelled out
+        assert Viewer(dem, tz="UTC").info()["zone"] == "UTC"
+        assert Viewer(dem, tz="auto").info()["zone"] == "Europe/Zurich"
+    finally:
+        viewer.close()
+
+
+# --------------------------------------------------------------------------------------------
+# the terrain brush
+
+def post(server, path, obj=None, raw=None):
+    """(status, body) of POST ``path`` with ``obj`` as JSON (or ``raw`` bytes)."""
+    data = raw if raw is not None else (b"" if obj is None else json.dumps(obj).encode())
+    req = urllib.request.Request(server.url.rstrip("/") + path, data=data, method="POST",
+                                 headers={"Content-Type": "application/json"})
+    try:
+        with urllib.request.urlopen(req, timeout=60) as r:
+            return r.status, r.read()
+    except urllib.error.HTTPError as e:
+        return e.code, e.read()
+
+
+@pytest.fixture
+def edit_server():
+    """A viewer of its own (edits change its heights) on the Everest DEM."""
+    dem = read_dem(DEM)
+    viewer = Viewer(dem)
+    srv = make_server(viewer, 0)
+    th = threading.Thread(target=srv.serve_forever, kwargs={"poll_interval": 0.1}, daemon=True)
+    th.start()
+    yield srv, viewer
+    srv.shutdown()
+    srv.server_close()
+    viewer.close()
+
+
+def disk_edit(z, grid, r, c, radius, delta, flat=False):
+    """The brush's edit written out: the cells whose centre lies within ``radius`` metres of
+    cell (r, c) (the spacing of row r) raised by ``delta``, or (``flat``) set to z[r, c] +
+    ``delta``; voids stay voids."""
+    out = z.copy()
+    dx, dy = float(grid.dx[r]), float(grid.dy[r])
+    ii, jj = np.indices(z.shape)
+    inside = ((ii - r) * dy) ** 2 + ((jj - c) * dx) ** 2 <= radius ** 2
+    if flat:
+        out[inside & np.isfinite(z)] = z[r, c] + np.float32(delta)
+    else:
+        out[inside] = z[inside] + np.float32(delta)
+    return out, int(inside.sum())
+
+
+def test_brush_edit_renders_the_edited_mask_and_undo_restores(edit_server):
+    from hillshade_rt.testing import memory_dem
+    srv, viewer = edit_server
+    dem0 = read_dem(DEM)
+    z0 = dem0.heights.copy()
+    rows, cols = z0.shape
+    az, el = 203.7, 12.0
+    whole = dict(az=az, el=el, bbox=f"0,0,{cols},{rows}", w=cols, h=rows)
+    before, _ = render(srv, **whole)
+    small_before, _ = render(srv, az=az, el=el, w=50, h=50)          # level 4
+    r, c = np.argwhere(np.isfinite(z0))[len(z0) * cols // 2]
+    status, body = post(srv, "/api/edit", {"x": c + 0.5, "y": r + 0.5, "radius": 400,
+                                           "delta": 800, "shape": "disk"})
+    assert status == 200, body
+    res = json.loads(body)
+    z1, n1 = disk_edit(z0, dem0.grid, r, c, 400.0, 800.0)
+    assert res["edits"] == 1 and res["cells"] == n1 and n1 > 10
+    want = shadow_mask(memory_dem(z1, dem0.transform, dem0.crs), az, el)
+    assert not np.array_equal(want, shadow_mask(dem0, az, el))     # the edit casts a shadow
+    pic, _ = render(srv, **whole)
+    assert np.array_equal(shadow_of(pic), want)
+    # the overview levels follow: as a viewer made on the edited heights draws them
+    fresh = Viewer(memory_dem(z1, dem0.transform, dem0.crs))
+    try:
+        for q in (dict(az=az, el=el, w=50, h=50), dict(az=290, el=8, w=100, h=100)):
+            want_pic, _ = fresh.render({k: str(v) for k, v in q.items()})
+            got, h = render(srv, **q)
+            assert h["X-Level"] != "1" and np.array_equal(got, want_pic), q
+    finally:
+        fresh.close()
+    # a flat top over it, then undo twice: the pictures and heights of the file again
+    status, body = post(srv, "/api/edit", {"x": c + 0.5, "y": r + 0.5, "radius": 250,
+                                           "delta": -100, "shape": "flat"})
+    assert status == 200 and json.loads(body)["edits"] == 2
+    z2, _ = disk_edit(z1, dem0.grid, r, c, 250.0, -100.0, flat=True)
+    pic, _ = render(srv, **whole)
+    assert np.array_equal(shadow_of(pic), shadow_mask(memory_dem(z2, dem0.transform, dem0.crs),
+                                                      az, el))
+    assert json.loads(post(srv, "/api/undo")[1])["edits"] == 1
+    assert np.array_equal(viewer.z, z1, equal_nan=True)
+    assert json.loads(post(srv, "/api/undo")[1])["edits"] == 0
+    assert np.array_equal(viewer.z, z0, equal_nan=True)
+    assert np.array_equal(render(srv, **whole)[0], before)
+    assert np.array_equal(render(srv, az=az, el=el, w=50, h=50)[0], small_before)
+    status, body = post(srv, "/api/undo")
+    assert status == 400 and b"nothing to undo" in body
+
+
+def test_brush_reset_and_the_download_of_the_edited_terrain(edit_server):
+    from rasterio.io import MemoryFile
+
+    from hillshade_rt.testing import memory_dem
+    srv, viewer = edit_server
+    dem0 = read_dem(DEM)
+    z0 = dem0.heights.copy()
+    z = z0
+    for x, y in ((60.5, 70.5), (120.5, 90.5)):
+        assert post(srv, "/api/edit", {"x": x, "y": y, "radius": 300, "delta": 500})[0] == 200
+        z, _ = disk_edit(z, dem0.grid, int(y), int(x), 300.0, 500.0)
+    status, headers, body = get(srv, "/api/download?az=290&el=8")
+    assert status == 200 and "_edited_" in headers["Content-Disposition"]
+    with MemoryFile(body) as mf, mf.open() as ds:
+        got, tags = ds.read(1), ds.tags()
+    assert np.array_equal(got, shadow_mask(memory_dem(z, dem0.transform, dem0.crs), 290, 8))
+    assert tags["TERRAIN"].startswith("edited: 2 brush edit(s)") and \
+        len(json.loads(tags["EDITS"])) == 2
+    status, body = post(srv, "/api/reset")
+    assert status == 200 and json.loads(body)["edits"] == 0
+    assert np.array_equal(viewer.z, z0, equal_nan=True)
+    status, headers, body = get(srv, "/api/download?az=290&el=8")
+    with MemoryFile(body) as mf, mf.open() as ds:
+        assert "TERRAIN" not in ds.tags()
+        assert np.array_equal(ds.read(1), shadow_mask(dem0, 290, 8))
+
+
+@pytest.mark.parametrize("body, words", [
+    (b"{not json", "not JSON"),
+    (b'{"x": 5, "y": 5, "delta": 10}', "missing radius"),
+    (b'{"x": 5, "y": 5, "radius": 10}', "missing delta"),
+    (b'{"x": "a", "y": 5, "radius": 10, "delta": 1}', "x must be a number"),
+    (b'{"x": 5, "y": 5, "radius": -1, "delta": 1}', "radius must be"),
+    (b'{"x": 5, "y": 5, "radius": 10, "delta": 1, "shape": "cone"}', "shape must be"),
+    (b'{"x": -5, "y": 5, "radius": 10, "delta": 1}', "outside the DEM"),
+    (b'[1, 2]', "JSON object"),
+])
+def test_malformed_edits_400_and_the_server_goes_on(edit_server, body, words):
+    srv, viewer = edit_server
+    z0 = viewer.z.copy()
+    status, text = post(srv, "/api/edit", raw=body)
+    assert status == 400 and words in text.decode() and "\n" not in text.decode().strip()
+    assert np.array_equal(viewer.z, z0, equal_nan=True) and get(srv, "/api/info")[0] == 200
+    assert post(srv, "/api/nothing")[0] == 404
+
+
+def test_an_edit_reaches_every_algorithm_prepared(edit_server):
+    """Shaders of several algorithms share the heights: each is updated (each sees the old
+    heights go), so each draws the edited terrain's mask, at full resolution and at level 2."""
+    from hillshade_rt.testing import memory_dem
+    srv, viewer = edit_server
+    dem0 = read_dem(DEM)
+    rows, cols = dem0.shape
+    az, el = 250.0, 10.0
+    algos = ("auto", "brute", "bounds")
+    for a in algos:       # prepared before the edit
+        render(srv, az=az, el=el, algorithm=a, w=cols, h=rows)
+        render(srv, az=az, el=el, algorithm=a, w=cols // 2, h=rows // 2)
+    assert post(srv, "/api/edit", {"x": 100.5, "y": 100.5, "radius": 500, "delta": 1500})[0] == 200
+    z1, _ = disk_edit(dem0.heights, dem0.grid, 100, 100, 500.0, 1500.0)
+    edited = memory_dem(z1, dem0.transform, dem0.crs)
+    want = shadow_mask(edited, az, el)
+    fresh = Viewer(edited)
+    try:
+        want_small, _ = fresh.render({"az": str(az), "el": str(el), "w": str(cols // 2),
+                                      "h": str(rows // 2)})
+    finally:
+        fresh.close()
+    for a in algos:
+        pic, h = render(srv, az=az, el=el, algorithm=a, w=cols, h=rows)
+        assert h["X-Level"] == "1" and np.array_equal(shadow_of(pic), want), a
+        pic, h = render(srv, az=az, el=el, algorithm=a, w=cols // 2, h=rows // 2)
+        assert h["X-Level"] == "2" and np.array_equal(shadow_of(pic), shadow_of(want_small)), a
+    # the highest cells cut down to a level roof, above the lowest: every Shader's height range
+    # follows (none saw the new heights before its own update, so none misses the lost maximum)
+    r, c = np.unravel_index(np.nanargmax(z1), z1.shape)
+    status, body = post(srv, "/api/edit", {"x": c + 0.5, "y": r + 0.5, "radius": 600,
+                                           "delta": -1600, "shape": "flat"})
+    assert status == 200, body
+    z2, _ = disk_edit(z1, dem0.grid, r, c, 600.0, -1600.0, flat=True)
+    assert np.nanmin(z1) < np.nanmax(z2) < np.nanmax(z1)
+    for (n, a), sh in viewer._shaders.items():
+        zn = z2[::n, ::n]
+        assert (sh.zmin, sh.zmax) == (np.nanmin(zn), np.nanmax(zn)), (n, a)
+    assert json.loads(body)["height_range"] == [float(np.nanmin(z2)), float(np.nanmax(z2))]
+
+
+def test_an_edit_at_map_coordinates_or_lon_lat(edit_server):
+    """map_x/map_y (the DEM's CRS) and lon/lat name the same cell as pixel x/y."""
+    srv, viewer = edit_server
+    tr = viewer.dem.transform
+    x, y = 80.5, 120.5
+    mx, my = tr @ (x, y)
+    p = json.loads(get(srv, f"/api/point?x={x}&y={y}&az=100&el=30")[2])
+    wins = []
+    for q in ({"x": x, "y": y}, {"map_x": mx, "map_y": my}, {"lon": p["lon"], "lat": p["lat"]}):
+        status, body = post(srv, "/api/edit", dict(q, radius=200, delta=5))
+        assert status == 200, body
+        wins.append(json.loads(body)["window"])
+    assert wins[0] == wins[1] == wins[2]
+    status, body = post(srv, "/api/edit", {"lon": 200, "lat": 95, "radius": 1, "delta": 1})
+    assert status == 400
+
+
+def test_an_edit_too_large_is_refused(edit_server, monkeypatch):
+    import hillshade_rt.run.view as view
+    srv, viewer = edit_server
+    monkeypatch.setattr(view, "MAX_EDIT_CELLS", 1000)
+    status, text = post(srv, "/api/edit", {"x": 5, "y": 5, "radius": 1e6, "delta": 1})
+    assert status == 400 and b"40000 cells: at most 1000" in text
+    # the box is clipped to the DEM: the whole DEM raised at once is one edit
+    monkeypatch.setattr(view, "MAX_EDIT_CELLS", 40000)
+    assert post(srv, "/api/edit", {"x": 5, "y": 5, "radius": 1e6, "delta": 1})[0] == 200
+    assert np.nanmax(viewer.z) == pytest.approx(np.nanmax(read_dem(DEM).heights) + 1)
+
+
+def test_edits_are_serialized_with_renders(edit_server):
+    """Edits posted while pictures are asked for: every picture is of the terrain before or
+    after some edit, never half of one (the worker thread runs one at a time)."""
+    from hillshade_rt.testing import memory_dem
+    srv, viewer = edit_server
+    dem0 = read_dem(DEM)
+    rows, cols = dem0.shape
+    az, el = 163.0, 25.0
+    spots = [(40.5, 40.5), (150.5, 60.5), (100.5, 150.5)]
+    masks, z = [shadow_mask(dem0, az, el)], dem0.heights.copy()
+    for x, y in spots:
+        z, _ = disk_edit(z, dem0.grid, int(y), int(x), 300.0, 600.0)
+        masks.append(shadow_mask(memory_dem(z, dem0.transform, dem0.crs), az, el))
+
+    def one(i):
+        if i % 3 == 0:
+            x, y = spots[i // 3]
+            return "edit", post(srv, "/api/edit", {"x": x, "y": y, "radius": 300, "delta": 600})
+        return "render", render(srv, az=az, el=el, bbox=f"0,0,{cols},{rows}", w=cols, h=rows)[0]
+    with ThreadPoolExecutor(6) as ex:
+        results = list(ex.map(one, range(9)))
+    for kind, res in results:
+        if kind == "edit":
+            assert res[0] == 200
+        else:   # the edits may land in any order: some subset of them is in each picture
+            s = shadow_of(res)
+            assert any(np.array_equal(s, m) for m in masks) or viewer_subset(s, dem0, spots, az, el)
+    assert np.array_equal(shadow_of(render(srv, az=az, el=el, bbox=f"0,0,{cols},{rows}", w=cols,
+                                           h=rows)[0]), masks[-1])
+
+
+def viewer_subset(s, dem0, spots, az, el):
+    """Whether ``s`` is the mask of the DEM with some subset of the edits at ``spots``."""
+    from itertools import combinations
+
+    from hillshade_rt.testing import memory_dem
+    for k in range(len(spots) + 1):
+        for sub in combinations(spots, k):
+            z = dem0.heights.copy()
+            for x, y in sub:
+                z, _ = disk_edit(z, dem0.grid, int(y), int(x), 300.0, 600.0)
+            if np.array_equal(s, shadow_mask(memory_dem(z, dem0.transform, dem0.crs), az, el)):
+                return True
+    return False

@@ -116,6 +116,11 @@ def test_time_slider_updates_the_shadows(browser, server, tmp_path):
                        "t.dispatchEvent(new Event('input'));")
     first = wait_for(drv, "return viewer.last && viewer.last.time.includes('T08:00') "
                           "&& viewer.last")
+    # the DEM's own zone (Big Tujunga, California), with its winter offset on that date
+    assert wait_for(drv, "const z = document.getElementById('zone').textContent;"
+                         "return z.includes('UTC-08:00') && z") == \
+        "times in America/Los_Angeles (UTC-08:00, PST)"
+    assert first["time"].endswith("-08:00")
     before = picture(drv)
     n = drv.execute_script("return viewer.renders")
 
@@ -188,3 +193,38 @@ def test_compass_drag_and_toggles(browser, server):
             assert header in drv.find_element(By.ID, "status").text
         drv.find_element(By.ID, box).click()          # off again
         wait_for(drv, f"return viewer.renders > {n + 1}")
+
+
+def test_terrain_brush_changes_the_picture(browser, server):
+    """The brush: toggled on, a click raises the terrain there (a 400 m block, 300 m across),
+    the picture is drawn again with its shadow; undo brings the first picture back."""
+    from selenium.webdriver.common.action_chains import ActionChains
+    from selenium.webdriver.common.by import By
+
+    drv = browser
+    drv.get(server.url)
+    wait_for(drv, "return window.viewer && viewer.renders >= 1")
+    # a low sun from the south-west by hand: long shadows, the same for every render
+    drv.execute_script("viewer.state.mode = 'manual'; viewer.state.az = 225; viewer.state.el = 10;"
+                       "document.getElementById('soft').dispatchEvent(new Event('change'));")
+    base = wait_for(drv, "return viewer.last && viewer.last.azimuth === 225 && viewer.renders")
+    before = picture(drv)
+    drv.find_element(By.ID, "brush").click()
+    assert drv.find_element(By.ID, "brush").get_attribute("aria-pressed") == "true"
+    for field, value in (("radius", "150"), ("delta", "400")):
+        box = drv.find_element(By.ID, field)
+        box.clear()
+        box.send_keys(value)
+    map_el = drv.find_element(By.ID, "map")
+    ActionChains(drv).move_to_element(map_el).click().perform()      # the map's centre
+    wait_for(drv, "return viewer.edits === 1")
+    wait_for(drv, f"return viewer.renders > {base}")
+    after = picture(drv)
+    assert after.shape == before.shape and not np.array_equal(after, before)
+    assert "1 edit(s)" in drv.find_element(By.ID, "edits").text
+    n = drv.execute_script("return viewer.renders")
+    drv.find_element(By.ID, "undo").click()
+    wait_for(drv, f"return viewer.edits === 0 && viewer.renders > {n}")
+    assert np.array_equal(picture(drv), before)
+    drv.find_element(By.ID, "brush").click()          # off: a click shows a point again
+    assert drv.find_element(By.ID, "brush").get_attribute("aria-pressed") == "false"

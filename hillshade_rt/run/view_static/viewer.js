@@ -5,8 +5,8 @@
 (function () {
   const $ = (id) => document.getElementById(id);
   const st = { mode: "time", az: 203.7, el: 30, date: null, minutes: 600, algorithm: "auto",
-               soft: false, sunhours: false, path: null };
-  const viewer = { renders: 0, last: null, state: st };
+               soft: false, sunhours: false, path: null, brush: false };
+  const viewer = { renders: 0, last: null, state: st, edits: 0 };
   window.viewer = viewer;
   let info = null, map = null, overlay = null, seq = 0, timer = null;
 
@@ -131,7 +131,10 @@
   async function loadPath() {
     if (!info.has_time) return;
     const r = await fetch("/api/sunpath?date=" + st.date);
-    if (r.ok) { st.path = await r.json(); drawCompass(); }
+    if (r.ok) {
+      st.path = await r.json(); drawCompass();
+      if (st.path.zone_label) $("zone").textContent = "times in " + st.path.zone_label;
+    }
   }
 
   let marker = null;
@@ -166,6 +169,33 @@
     ["N", "E", "S", "W"].forEach((t, i) => c.fillText(t, i * W / 4 + 2, 10));
   }
 
+  // -- the terrain brush: a click raises or lowers the terrain (the server's heights, in memory)
+  function showEdits(r) {
+    viewer.edits = r.edits;
+    document.body.dataset.edits = String(r.edits);
+    $("edits").textContent = r.edits === 0 ? "no edits" :
+      r.edits + " edit(s), in memory (the DEM's file is unchanged; the download is of the " +
+      "edited terrain)";
+  }
+  async function post(path, body) {
+    const r = await fetch(path, { method: "POST", headers: { "Content-Type": "application/json" },
+                                  body: body === undefined ? "" : JSON.stringify(body) });
+    if (!r.ok) { $("status").textContent = await r.text(); return; }
+    showEdits(await r.json());
+    schedule();
+  }
+  function applyBrush(e) {
+    return post("/api/edit", { x: e.latlng.lng, y: -e.latlng.lat,
+                               radius: parseFloat($("radius").value),
+                               delta: parseFloat($("delta").value), shape: $("shape").value });
+  }
+  function toggleBrush() {
+    st.brush = !st.brush;
+    $("brush").textContent = "brush: " + (st.brush ? "on (click the map)" : "off");
+    $("brush").setAttribute("aria-pressed", String(st.brush));
+    $("map").style.cursor = st.brush ? "crosshair" : "";
+  }
+
   async function start() {
     info = await (await fetch("/api/info")).json();
     $("dem").textContent = info.path.split(/[\\/]/).pop() + " (" + info.cols + " x " + info.rows + ")";
@@ -178,7 +208,7 @@
     if (info.has_time) {
       st.date = info.date; st.minutes = info.minutes;
       $("date").value = st.date; $("time").value = String(st.minutes);
-      $("zone").textContent = "times in " + info.zone;
+      $("zone").textContent = "times in " + (info.zone_label || info.zone);
     } else {
       st.mode = "manual";
       $("timebox").style.display = "none"; $("hoursbox").style.display = "none";
@@ -188,7 +218,10 @@
     viewer.map = map;
     map.fitBounds([[-info.rows, 0], [0, info.cols]]);
     map.on("moveend zoomend resize", schedule);
-    map.on("click", showPoint);
+    map.on("click", (e) => (st.brush ? applyBrush(e) : showPoint(e)));
+    $("brush").addEventListener("click", toggleBrush);
+    $("undo").addEventListener("click", () => post("/api/undo"));
+    $("reset").addEventListener("click", () => post("/api/reset"));
     $("date").addEventListener("change", () => {
       st.date = $("date").value; st.mode = "time"; loadPath(); schedule();
     });
