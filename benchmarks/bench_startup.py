@@ -1,6 +1,7 @@
 """Start-up of the command line (issue 23, item 6): the wall time of ``hillshade-rt --help`` and
 of an az/el ``shadow`` run on the bundled DEM (kernels already cached), median of 5 fresh
-processes each, and ``--version``.
+processes each, ``--version``, and ``rio --help`` of the ``rio`` beside each script (rio loads
+every plugin's command at start: hillshade-rt's command line is imported by every rio command).
 
     .venv/bin/python benchmarks/bench_startup.py [HILLSHADE_RT ...]
 
@@ -42,10 +43,16 @@ def main(exes: list[str]) -> None:
         for case, args in cases.items():
             for exe in exes:
                 times[exe, case].append(wall([exe, *args]))
+        for exe in exes:
+            rio = os.path.join(os.path.dirname(exe), "rio")
+            if os.path.exists(rio):
+                times.setdefault((exe, "rio --help"), []).append(wall([rio, "--help"]))
     for exe in exes:
         print(exe)
-        for case in cases:
-            t = times[exe, case]
+        for case in [*cases, "rio --help"]:
+            t = times.get((exe, case))
+            if not t:
+                continue
             print(f"  {case:14s} median {statistics.median(t):.3f} s  "
                   f"(min {min(t):.3f}, max {max(t):.3f}, n={len(t)})")
 

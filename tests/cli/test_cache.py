@@ -9,6 +9,7 @@ import numba
 
 from hillshade_rt.algorithms import _jitcache
 from hillshade_rt.cli import cli
+from hillshade_rt.testing import repo_root
 
 MODULE = """
 import numba
@@ -93,7 +94,6 @@ def test_cache_prune_command(tmp_path, runner, monkeypatch):
 
 
 def test_usage_documents_where_the_cache_is():
-    doc = open(os.path.join(os.path.dirname(__file__), "..", "..", "docs", "usage.md"),
-               encoding="utf-8").read()
+    doc = open(os.path.join(repo_root(), "docs", "usage.md"), encoding="utf-8").read()
     assert "hillshade-rt cache --prune" in doc and "NUMBA_CACHE_DIR" in doc
     assert "~/.cache/hillshade-rt/numba" in doc
