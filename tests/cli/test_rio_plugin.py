@@ -109,3 +109,32 @@ def test_errors_inside_rio_are_one_line_with_our_status(tmp_path, args, status, 
     assert not (tmp_path / "OUT.tif").exists()
     if status == 2:
         assert "--help')" in lines[0] and "rio " in lines[0]
+
+
+@pytest.mark.parametrize("raised, status, words", [
+    (KeyboardInterrupt(), 130, "interrupted (SIGINT); no output written"),
+    (ZeroDivisionError("boom"), 1, "internal error (ZeroDivisionError: boom)"),
+])
+def test_a_run_stopped_inside_another_group_is_one_line(tmp_path, monkeypatch, raised, status,
+                                                        words):
+    """In a plain click group, as rio's: an interrupt and a bug in a run end as they do in
+    hillshade-rt (130 and 1, one line), not as click's 'Aborted!' or a traceback."""
+    import click
+    from click.testing import CliRunner
+
+    import hillshade_rt.run as run
+
+    def shade(config):
+        raise raised
+    monkeypatch.setattr(run, "shade", shade)
+    monkeypatch.delenv("HILLSHADE_RT_DEBUG", raising=False)
+
+    @click.group()
+    def other():
+        pass
+    other.add_command(plugin.shadow)
+    r = CliRunner().invoke(other, ["shadow", LIDAR, str(tmp_path / "m.tif"), "--azimuth", "10",
+                                   "--elevation", "5"])
+    assert r.exit_code == status
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and words in lines[0], r.stderr
