@@ -7,7 +7,7 @@ OUTDIR ?= out
 EXAMPLE_DEM := examples/bigtujunga_srtm30m_utm11n_1197x643.tif
 EXAMPLE_OUT := $(OUTDIR)/bigtujunga_shadow.tif
 
-.PHONY: run test install install-test bench bench-sun bench-tiling bench-big bench-gpu bench-peers bench-horizon docs-pictures docs-animation docs-viewer bench-writes bench-real bench-real-quick bench-fast bench-point bench-view bench-update bench-illumination gpu-check clean help
+.PHONY: run test install install-test bench bench-sun bench-tiling bench-big bench-gpu bench-peers bench-horizon docs-pictures docs-animation docs-viewer bench-writes bench-real bench-real-quick bench-fast bench-point bench-view bench-update bench-illumination gpu-check clean clean-cache bench-startup help
 
 help:
 	@echo "make run    - set up .venv, shade the bundled example DEM, print where the mask went"
@@ -31,6 +31,8 @@ help:
 	@echo "make docs-pictures - the pictures of docs/products.md, by the tool's --preview"
 	@echo "make docs-animation - the README's GIF: the shadows of a winter day on the example DEM"
 	@echo "make clean  - remove .venv and outputs"
+	@echo "make clean-cache - remove numba's stale compiled kernels (hillshade-rt cache --prune)"
+	@echo "make bench-startup - wall time of hillshade-rt --help, --version and an az/el run"
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -147,6 +149,13 @@ docs-viewer: $(VENV)/.installed-test
 
 clean:
 	rm -rf $(VENV) $(OUTDIR) .pytest_cache .hypothesis
+
+# other versions' kernel folders and numba's stale index/data files (docs/usage.md)
+clean-cache: $(VENV)/.installed
+	$(BIN)/hillshade-rt cache --prune
+
+bench-startup: $(VENV)/.installed
+	$(BIN)/python benchmarks/bench_startup.py
 
 bench-illumination: $(VENV)/.installed
 	$(BIN)/python benchmarks/bench_illumination.py

@@ -40,7 +40,20 @@ def main() -> int:
     from .algorithms.counts import clean_heights
     clean_heights(np.zeros((4, 4), np.float32), 0.0, True)   # the read's nodata pass
     print(f"hillshade-rt: kernels ready ({time.perf_counter() - t0:.0f} s)", file=sys.stderr)
+    _stale_hint()
     return 0
+
+
+def _stale_hint() -> None:
+    """After compiling a new version's kernels, the older versions' folders are what a user
+    may want gone: say so, with their size (removing them is ``hillshade-rt cache --prune``'s
+    to do: another environment may still use one)."""
+    from .algorithms._jitcache import survey
+    others = survey()["other_versions"]
+    if others:
+        size = sum(s for _, s in others) / 1e6
+        print(f"hillshade-rt: {len(others)} other versions' compiled kernels ({size:.0f} MB) "
+              f"are cached too; 'hillshade-rt cache --prune' removes them", file=sys.stderr)
 
 
 if __name__ == "__main__":

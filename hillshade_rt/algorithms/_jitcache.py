@@ -85,3 +85,117 @@ def njit(*args, **options):
         with kernel_cache():
             return decorate(fn)
     return apply
+
+
+# ------------------------------------------------------------------------------------------
+# what is stale, and pruning it (``hillshade-rt cache``)
+#
+# Each version of the kernels compiles into a new ``<root>/<digest>`` folder and the old ones
+# stay; numba's own ``cache=True`` (``run/plan.py``: ``__pycache__`` beside the module, or
+# ``$NUMBA_CACHE_DIR/run_<sha1 of its folder>``) leaves the index and data files of a function
+# that moved to another line when its file was edited. An index file (``*.nbi``) holds numba's
+# version, then the source's stamp (numba >= 0.59: the SHA-256 of the file's bytes; before:
+# its mtime and size) and the data files (``*.N.nbc``) of its compiled signatures.
+
+def _is_digest(name: str) -> bool:
+    return len(name) == 16 and all(c in "0123456789abcdef" for c in name)
+
+
+def _stamps(source: str) -> list:
+    """The stamps numba may have written for ``source`` as it is now."""
+    st = os.stat(source)
+    with open(source, "rb") as fh:
+        return [hashlib.sha256(fh.read()).digest(), (st.st_mtime, st.st_size)]
+
+
+def _fresh_data(index: str, source: str) -> set[str] | None:
+    """The data files a fresh index file names, or None when it is stale (another numba, a
+    source that changed or is gone, or unreadable)."""
+    import pickle
+    try:
+        with open(index, "rb") as fh:
+            if pickle.load(fh) != numba.__version__:
+                return None
+            stamp, overloads = pickle.loads(fh.read())
+        if stamp not in _stamps(source):
+            return None
+        return set(overloads.values())
+    except Exception:   # noqa: BLE001 -- a truncated or foreign file is stale as much
+        return None
+
+
+def stale_files(folder: str, source_dir: str) -> list[str]:
+    """The stale ``*.nbi``/``*.nbc`` files of numba's cache ``folder`` whose sources are the
+    modules of ``source_dir``: index files that no longer match their module, and data files
+    no fresh index names."""
+    try:
+        names = os.listdir(folder)
+    except OSError:
+        return []
+    fresh, stale = set(), []
+    for name in names:
+        if name.endswith(".nbi"):
+            data = _fresh_data(os.path.join(folder, name),
+                               os.path.join(source_dir, name.split(".", 1)[0] + ".py"))
+            if data is None:
+                stale.append(name)
+            else:
+                fresh |= data
+    stale += [n for n in names if n.endswith(".nbc") and n not in fresh]
+    return [os.path.join(folder, n) for n in sorted(stale)]
+
+
+def _numba_subfolder(source_dir: str) -> str:
+    """The subfolder numba's user-provided cache locator gives the functions of
+    ``source_dir`` (``<folder name>_<sha1 of the absolute path>``)."""
+    path = os.path.abspath(source_dir)
+    return "_".join([os.path.basename(path), hashlib.sha1(path.encode()).hexdigest()])
+
+
+def _size(path: str) -> int:
+    if os.path.isfile(path):
+        return os.path.getsize(path)
+    return sum(os.path.getsize(os.path.join(d, f)) for d, _, fs in os.walk(path) for f in fs)
+
+
+def survey(package_dir: str | None = None) -> dict:
+    """Where the compiled kernels are and what of them is stale: ``root``, ``current`` (this
+    version's folder), its ``bytes``; ``other_versions`` (folders of other digests: another
+    version of the kernels or of numba, or another install of another version), ``stale``
+    (files of this install's sources that numba would never load again); sizes in bytes.
+    ``package_dir``: the package whose ``numba.njit(cache=True)`` modules (outside algorithms/)
+    are checked too, by default this one."""
+    package_dir = package_dir or os.path.dirname(_HERE)
+    root, current = _cache_root(), cache_dir()
+    try:
+        others = sorted(os.path.join(root, d) for d in os.listdir(root)
+                        if _is_digest(d) and os.path.join(root, d) != current)
+    except OSError:
+        others = []
+    stale = stale_files(os.path.join(current, _numba_subfolder(_HERE)), _HERE)
+    for d, subs, _ in os.walk(package_dir):
+        subs[:] = [s for s in subs if s != "__pycache__" and not s.startswith(".")]
+        if os.path.abspath(d) == _HERE:
+            continue
+        for folder in (os.path.join(d, "__pycache__"),
+                       os.path.join(numba.config.CACHE_DIR or "", _numba_subfolder(d))
+                       if numba.config.CACHE_DIR else None):
+            if folder:
+                stale += stale_files(folder, d)
+    return {"root": root, "current": current,
+            "bytes": _size(current) if os.path.isdir(current) else 0,
+            "other_versions": [(p, _size(p)) for p in others],
+            "stale": [(p, _size(p)) for p in stale]}
+
+
+def prune(package_dir: str | None = None) -> dict:
+    """Remove what ``survey`` finds stale: other versions' folders and stale files. Returns
+    the survey (what was removed). A folder or file that vanished meanwhile is skipped."""
+    import shutil
+    found = survey(package_dir)
+    for path, _ in found["other_versions"]:
+        shutil.rmtree(path, ignore_errors=True)
+    for path, _ in found["stale"]:
+        with contextlib.suppress(FileNotFoundError):
+            os.remove(path)
+    return found

@@ -15,8 +15,8 @@ import sys
 
 import click
 
-from .. import __version__
 from .animate import animate
+from .cache import cache
 from .errors import OneLineErrors
 from .horizon import horizon
 from .illumination import illumination
@@ -27,11 +27,12 @@ from .query import query
 from .shadow import hillshade, shadow
 from .skyview import skyview
 from .sun_hours import sun_hours
+from .version import version_option
 from .view import view
 
 
 @click.group(cls=OneLineErrors, context_settings={"help_option_names": ["-h", "--help"]})
-@click.version_option(__version__, prog_name="hillshade-rt")
+@version_option
 def cli():
     """Terrain cast-shadow masks from digital elevation models."""
 
@@ -42,6 +43,7 @@ cli.add_command(irradiance)
 cli.add_command(animate)
 cli.add_command(view)
 cli.add_command(illumination)
+cli.add_command(cache)
 
 
 def main():

@@ -34,71 +34,105 @@ def _complete_note() -> str:
     return f"; {len(names)} output(s) complete and kept: {shown}"
 
 
+@contextlib.contextmanager
+def signals_stop_runs():
+    """While a command runs: SIGINT, SIGTERM and SIGHUP stop it like Ctrl-C (``io.write``'s
+    handler: the unfinished output removed); the previous handlers restored afterwards."""
+    import signal
+    import threading
+
+    from ..io import write as writes
+    writes.reset()
+    previous = {}
+    if threading.current_thread() is threading.main_thread():
+        for s in writes.SIGNALS:
+            with contextlib.suppress(OSError, ValueError):
+                previous[s] = signal.signal(s, writes.on_signal)
+    try:
+        yield
+    finally:
+        for s, h in previous.items():
+            with contextlib.suppress(OSError, ValueError, TypeError):
+                signal.signal(s, h)
+
+
+@contextlib.contextmanager
+def one_line_errors():
+    """Every way out of the block but success, ``SystemExit`` and click's ``Exit`` (``--help``,
+    ``--version``) becomes one line on stderr and ``sys.exit`` with its status: 2 for a bad
+    command line, 1 for a failed run, 128 + the signal's number when interrupted."""
+    try:
+        yield
+    except (SystemExit, click.exceptions.Exit):
+        raise
+    except BaseException as exc:   # noqa: BLE001 -- every way out is one line
+        _exit_one_line(exc)
+
+
+def _exit_one_line(exc: BaseException):
+    from ..io.write import caught
+    if caught or isinstance(exc, (KeyboardInterrupt, click.exceptions.Abort)):
+        signum = caught[0] if caught else 2
+        done = _complete_note()
+        click.echo(f"hillshade-rt: interrupted ({_signal_name(signum)}); "
+                   + (done[2:] + ", the unfinished output removed" if done
+                      else "no output written"), err=True)
+        sys.exit(128 + signum)
+    if isinstance(exc, click.exceptions.NoArgsIsHelpError):  # click >= 8.2: bare group
+        click.echo(exc.ctx.get_help(), err=True)
+        sys.exit(2)
+    if isinstance(exc, click.ClickException):
+        msg = exc.format_message()
+        if isinstance(exc, click.UsageError) and exc.ctx is not None:
+            msg += f" (see '{exc.ctx.command_path} --help')"
+        elif exc.exit_code == 1:
+            msg += _complete_note()
+        click.echo(f"hillshade-rt: error: {msg}", err=True)
+        sys.exit(exc.exit_code)
+    if isinstance(exc, BrokenPipeError):
+        sys.exit(1)
+    if isinstance(exc, OSError):
+        where = f"{exc.filename}: " if exc.filename else ""
+        click.echo(f"hillshade-rt: error: {where}{exc.strerror or exc}"
+                   f"{_complete_note()}", err=True)
+        sys.exit(1)
+    if os.environ.get("HILLSHADE_RT_DEBUG"):
+        raise exc
+    first = str(exc).splitlines()[0] if str(exc) else ""
+    click.echo(f"hillshade-rt: error: internal error ({type(exc).__name__}"
+               f"{': ' + first if first else ''}); please report it, "
+               f"HILLSHADE_RT_DEBUG=1 shows the traceback{_complete_note()}", err=True)
+    sys.exit(1)
+
+
 class OneLineErrors(click.Group):
     """A group whose errors (usage errors included) print as a single line, never a traceback;
     SIGINT, SIGTERM and SIGHUP stop a run like Ctrl-C (exit 130, 143, 129)."""
 
     def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
-        import signal
-        import threading
-
-        from ..io import write as writes
-        writes.reset()
-        previous = {}
-        if threading.current_thread() is threading.main_thread():
-            for s in writes.SIGNALS:
-                with contextlib.suppress(OSError, ValueError):
-                    previous[s] = signal.signal(s, writes.on_signal)
-        try:
-            rv = self._main(args, prog_name, complete_var, **extra)
-        finally:
-            for s, h in previous.items():
-                with contextlib.suppress(OSError, ValueError, TypeError):
-                    signal.signal(s, h)
+        with signals_stop_runs():
+            with one_line_errors():
+                rv = super().main(args=args, prog_name=prog_name, complete_var=complete_var,
+                                  standalone_mode=False, **extra)
         if not standalone_mode:
             return rv
         sys.exit(rv if isinstance(rv, int) else 0)
 
-    def _main(self, args, prog_name, complete_var, **extra):
-        try:
-            return super().main(args=args, prog_name=prog_name, complete_var=complete_var,
-                                standalone_mode=False, **extra)
-        except SystemExit:
-            raise
-        except BaseException as exc:   # noqa: BLE001 -- every way out is one line
-            from ..io.write import caught
-            if caught or isinstance(exc, (KeyboardInterrupt, click.exceptions.Abort)):
-                signum = caught[0] if caught else 2
-                done = _complete_note()
-                click.echo(f"hillshade-rt: interrupted ({_signal_name(signum)}); "
-                           + (done[2:] + ", the unfinished output removed" if done
-                              else "no output written"), err=True)
-                sys.exit(128 + signum)
-            if isinstance(exc, click.exceptions.NoArgsIsHelpError):  # click >= 8.2: bare group
-                click.echo(exc.ctx.get_help(), err=True)
-                sys.exit(2)
-            if isinstance(exc, click.ClickException):
-                msg = exc.format_message()
-                if isinstance(exc, click.UsageError) and exc.ctx is not None:
-                    msg += f" (see '{exc.ctx.command_path} --help')"
-                elif exc.exit_code == 1:
-                    msg += _complete_note()
-                click.echo(f"hillshade-rt: error: {msg}", err=True)
-                sys.exit(exc.exit_code)
-            if isinstance(exc, BrokenPipeError):
-                sys.exit(1)
-            if isinstance(exc, OSError):
-                where = f"{exc.filename}: " if exc.filename else ""
-                click.echo(f"hillshade-rt: error: {where}{exc.strerror or exc}"
-                           f"{_complete_note()}", err=True)
-                sys.exit(1)
-            if os.environ.get("HILLSHADE_RT_DEBUG"):
-                raise
-            first = str(exc).splitlines()[0] if str(exc) else ""
-            click.echo(f"hillshade-rt: error: internal error ({type(exc).__name__}"
-                       f"{': ' + first if first else ''}); please report it, "
-                       f"HILLSHADE_RT_DEBUG=1 shows the traceback{_complete_note()}", err=True)
-            sys.exit(1)
+
+class InAnotherGroup:
+    """A command of ours as another program's subcommand (``rio shadow``): the other group
+    parses and invokes it (``make_context``, ``invoke``), never its ``main``, so its failures
+    are made one line here; and signals stop its run as they do in ``hillshade-rt``. A mixin
+    before the command's own class (``cli.rio.in_rio``)."""
+
+    def make_context(self, info_name, args, parent=None, **extra):
+        with one_line_errors():
+            return super().make_context(info_name, args, parent=parent, **extra)
+
+    def invoke(self, ctx):
+        with signals_stop_runs():
+            with one_line_errors():
+                return super().invoke(ctx)
 
 
 def errors_to_click(f):

@@ -53,6 +53,14 @@ def test_warm_step_compiles_what_a_first_run_needs(monkeypatch, capsys):
     assert warm.main() == 0
     assert calls == [("auto", False), ("auto", True)]
     assert "compiling the bounds kernels once" in capsys.readouterr().err
+    # after compiling a new version: a hint about the others' folders, when there are some
+    monkeypatch.setattr(_jitcache, "survey", lambda: {"other_versions": [("a", 3e6), ("b", 2e6)]})
+    assert warm.main() == 0
+    assert ("2 other versions' compiled kernels (5 MB) are cached too; 'hillshade-rt cache "
+            "--prune' removes them") in capsys.readouterr().err
+    monkeypatch.setattr(_jitcache, "survey", lambda: {"other_versions": []})
+    assert warm.main() == 0 and "--prune" not in capsys.readouterr().err
+    calls.clear()
     monkeypatch.setattr(_jitcache, "cached", lambda m: True)
     calls.clear()
     assert warm.main() == 0 and calls == [] and capsys.readouterr().err == ""
