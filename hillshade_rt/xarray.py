@@ -129,7 +129,9 @@ def _input(da, crs=None, spacing=None, nodata=None) -> _Input:
             crs = CRS.from_user_input(crs)
         except Exception as exc:  # noqa: BLE001 -- CRSError and the like
             raise HillshadeError(f"crs {crs!r}: not a CRS ({exc})") from None
-    transform = da.rio.transform(recalc=True)
+    # rioxarray: the stored GeoTransform's resolution (else the coordinates'), the origin from
+    # the coordinates (a slice of a raster has its own)
+    transform = da.rio.transform()
     if nodata is None:
         nodata = da.rio.nodata
         if nodata is None:
