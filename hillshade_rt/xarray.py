@@ -204,6 +204,16 @@ class _LazySource:
         return centre_height_of(z, r - r0, c - c0)
 
 
+@dataclass(frozen=True)
+class _Frame:
+    """What ``run.plan.Job`` reads of its DEM: the shape and the grid. Not the Dask array
+    itself: Dask looks inside a task's dataclass arguments, and the whole input would become a
+    dependency of every window's task."""
+
+    shape: tuple[int, int]
+    grid: Grid
+
+
 def _block_range(block):
     """(lowest, highest valid height, valid cells) of each STAT_BLOCK² block of ``block``."""
     from .run.plan import STAT_BLOCK as B
@@ -359,7 +369,7 @@ def _lazy_render(job, sun, stats, z, dtype):
 
 def _lazy_job(inp: _Input, req, algorithm, options, ran_on, curvature, refraction_k, kind,
               soft, self_shadow, lift):
-    """(job, block statistics, suns, sun info, source) of a Dask-backed input."""
+    """(job, block statistics, suns, sun info) of a Dask-backed input."""
     from .earth import dem_body
     from .run.plan import Job
     src = _LazySource(inp.heights, inp.grid, inp.transform, inp.crs, inp.path)
@@ -369,9 +379,9 @@ def _lazy_job(inp: _Input, req, algorithm, options, ran_on, curvature, refractio
     suns, info = req.suns(src)
     rows, cols = inp.shape
     dx, dy = inp.grid.centre_spacing()
-    job = Job(src, algorithm, options, ran_on, curvature, refraction_k, dem_body(src, req.lat),
-              (stats.zmin, stats.zmax), math.hypot(cols * dx, rows * dy), kind, soft,
-              self_shadow, 0.2, lift)
+    job = Job(_Frame(inp.shape, inp.grid), algorithm, options, ran_on, curvature, refraction_k,
+              dem_body(src, req.lat), (stats.zmin, stats.zmax),
+              math.hypot(cols * dx, rows * dy), kind, soft, self_shadow, 0.2, lift)
     return job, stats, suns, info
 
 

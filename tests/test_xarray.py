@@ -152,6 +152,30 @@ def test_dask_input_is_lazy_and_equals_in_memory_with_chunks_smaller_than_the_ha
     np.testing.assert_array_equal(h.values, da.hrt.horizon(100.0).values)
 
 
+def test_dask_task_reads_only_its_window():
+    """Computing one output chunk reads the input chunks of its window (the region and its
+    halo toward the sun), not the whole input."""
+    import dask.array as dka
+
+    da = rioxarray.open_rasterio(EVEREST).isel(band=0, drop=True)
+    reads = []
+
+    def record(block, block_info=None):
+        reads.append(tuple(block_info[0]["chunk-location"]))
+        return block
+    counted = dka.from_array(da.values, chunks=(32, 40)).map_blocks(record, dtype=da.dtype)
+    dk = da.copy(data=counted)
+    # a high sun: the halo toward the south-south-west is ~30 rows, ~15 columns here
+    lazy = dk.hrt.shadow(azimuth=203.7, elevation=60.0)
+    assert len(set(reads)) == 35          # the block height ranges: one pass over the input
+    reads.clear()
+    top_right = lazy[:32, 160:].compute()
+    np.testing.assert_array_equal(
+        top_right.values, da.hrt.shadow(azimuth=203.7, elevation=60.0).values[:32, 160:])
+    assert set(reads) <= {(r, c) for r in (0, 1, 2) for c in (3, 4)}
+    assert (1, 4) in set(reads) and (0, 4) in set(reads)
+
+
 def test_xy_only_input_and_its_crs():
     da = rioxarray.open_rasterio(LIDAR).isel(band=0, drop=True)
     z = da.values.astype(np.float32)
