@@ -217,3 +217,19 @@ def test_errors_are_one_clear_message():
         da.hrt.shadow(time="2026-06-21T12:00")
     with pytest.raises(HillshadeError, match="algorithm"):
         da.hrt.shadow(azimuth=163, elevation=8, algorithm="nope")
+
+
+def test_the_command_line_and_the_api_do_not_import_xarray():
+    """xarray and rioxarray are imported by ``hillshade_rt.xarray`` only: the command line's
+    start-up does not pay for them."""
+    import subprocess
+    import sys
+    code = ("import sys, hillshade_rt, hillshade_rt.cli, hillshade_rt.api, hillshade_rt.arrays\n"
+            "print(sorted(m for m in ('xarray', 'rioxarray') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.strip()
+    assert out == "[]"
+    code = ("import sys, hillshade_rt.xarray, xarray\n"
+            "print(hasattr(xarray.DataArray([[1.0]], dims=('y', 'x')), 'hrt'))")
+    assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          check=True).stdout.strip() == "True"
