@@ -130,8 +130,14 @@ def _input(da, crs=None, spacing=None, nodata=None) -> _Input:
         except Exception as exc:  # noqa: BLE001 -- CRSError and the like
             raise HillshadeError(f"crs {crs!r}: not a CRS ({exc})") from None
     # rioxarray: the stored GeoTransform's resolution (else the coordinates'), the origin from
-    # the coordinates (a slice of a raster has its own)
+    # the coordinates (a slice of a raster has its own); the coordinates' own where they
+    # disagree with the stored one beyond rounding (e.g. rows flipped to run south to north)
     transform = da.rio.transform()
+    if da.shape[0] > 1 and da.shape[1] > 1:
+        fresh = da.rio.transform(recalc=True)
+        if not np.allclose([transform.a, transform.e, transform.c, transform.f],
+                           [fresh.a, fresh.e, fresh.c, fresh.f], rtol=1e-9, atol=0.0):
+            transform = fresh
     if nodata is None:
         nodata = da.rio.nodata
         if nodata is None:

@@ -201,6 +201,24 @@ def test_xy_only_input_and_its_crs():
     np.testing.assert_array_equal(hx.shadow(plain, 163, 8, spacing=1.0).values, out.values)
 
 
+def test_rows_running_south_to_north_and_a_slice():
+    """A DataArray flipped to rows running south to north (y ascending; rioxarray's stored
+    transform still says north-up) is the same terrain: the flipped mask; a slice keeps its own
+    origin."""
+    da = rioxarray.open_rasterio(LIDAR).isel(band=0)
+    ref = da.hrt.shadow(azimuth=163, elevation=8)
+    up = da.isel(y=slice(None, None, -1))
+    got = up.hrt.shadow(azimuth=163, elevation=8)
+    np.testing.assert_array_equal(got.values[::-1], ref.values)
+    np.testing.assert_array_equal(got.y.values, up.y.values)
+    assert got.rio.transform().e == 1.0 and got.rio.transform(recalc=True) == got.rio.transform()
+    lazy = up.chunk({"y": 64, "x": 64}).hrt.shadow(azimuth=163, elevation=8)
+    np.testing.assert_array_equal(lazy.values, got.values)
+    sub = da.isel(y=slice(100, 300), x=slice(50, 250))
+    part = sub.hrt.shadow(azimuth=163, elevation=8)
+    assert part.rio.transform() == sub.rio.transform() != da.rio.transform()
+
+
 def test_errors_are_one_clear_message():
     da = rioxarray.open_rasterio(LIDAR)
     three = xr.concat([da, da], dim="band").assign_coords(band=[1, 2])
