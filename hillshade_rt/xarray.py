@@ -44,6 +44,38 @@ from .geometry import Grid
 _LOCK = threading.Lock()
 
 
+# the command line's options named in the library's messages, and their keywords here
+_KEYWORDS = {"lat", "lon", "time", "tz", "pressure", "temperature", "sun-tolerance",
+             "height-above-ground", "azimuth", "elevation", "date", "end-date", "step",
+             "max-distance", "directions", "algorithm", "self-shadow", "soft"}
+
+
+def _keywords(fn):
+    """``fn`` with the command line's options in its errors' messages named as its keywords
+    (``--lat`` -> ``lat=``)."""
+    import functools
+    import re
+
+    def word(m):
+        name = m.group(1)
+        return name.replace("-", "_") + "=" if name in _KEYWORDS else m.group(0)
+
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        try:
+            return fn(*args, **kwargs)
+        except HillshadeError as exc:
+            text = re.sub(r"--([a-z][a-z-]*)", word, str(exc))
+            if text == str(exc):
+                raise
+            try:
+                new = type(exc)(text)
+            except TypeError:
+                new = HillshadeError(text)
+            raise new from None
+    return wrapper
+
+
 # ---------------------------------------------------------------------------------------------
 # the input
 
@@ -397,6 +429,13 @@ def _lazy_job(inp: _Input, req, algorithm, options, ran_on, curvature, refractio
 def _request(azimuth, elevation, time, tz, lat, lon, pressure, temperature, refraction,
              sun_tolerance):
     from .sun import DEFAULT_TOLERANCE, SunRequest
+    direction = azimuth is not None or elevation is not None
+    if direction and time is not None:
+        raise HillshadeError("give the sun one way: azimuth and elevation, or time")
+    if not direction and time is None:
+        raise HillshadeError("no sun given: give azimuth and elevation, or time")
+    if direction and (azimuth is None or elevation is None):
+        raise HillshadeError("azimuth and elevation go together")
     texts, series = _time_list(time) if time is not None else ((), False)
     req = SunRequest.from_options(
         azimuth=azimuth, elevation=elevation, time=texts, tz=tz, lat=lat, lon=lon,
@@ -405,6 +444,7 @@ def _request(azimuth, elevation, time, tz, lat, lon, pressure, temperature, refr
     return req, series
 
 
+@_keywords
 def shadow(da, azimuth: float | None = None, elevation: float | None = None, *, time=None,
            tz: str | None = None, lat: float | None = None, lon: float | None = None,
            crs=None, spacing=None, nodata: float | None = None, algorithm: str = "auto",
@@ -469,7 +509,7 @@ def _lighting(da, kind, azimuth, elevation, time, tz, lat, lon, crs, spacing, no
         stack = np.stack
     if info is not None:
         attrs["sun_site"] = (f"{info['site']['latitude']:.6f}, {info['site']['longitude']:.6f}"
-                             f" ({info['site']['source']})")
+                             f" ({info['site']['source'].replace('--lat/--lon', 'lat/lon')})")
     if series:
         return _wrap(stack(arrays), inp, attrs, nd, kind, _series_dim(suns))
     out = _wrap(arrays[0], inp, {**attrs, **_sun_attrs(suns[0])}, nd, kind)
@@ -478,6 +518,7 @@ def _lighting(da, kind, azimuth, elevation, time, tz, lat, lon, crs, spacing, no
     return out
 
 
+@_keywords
 def horizon(da, azimuth, *, crs=None, spacing=None, nodata: float | None = None,
             method: str = "scan", sample_spacing: int = 1, backend: str = "auto",
             curvature="auto", refraction_k: float | None = None,
@@ -515,6 +556,7 @@ def horizon(da, azimuth, *, crs=None, spacing=None, nodata: float | None = None,
     return _wrap(arr[0], inp, {**attrs, "azimuth": azimuths[0]}, np.nan, "horizon")
 
 
+@_keywords
 def skyview(da, *, directions: int = 32, definition: str = "zaksek", openness: str | None = None,
             crs=None, spacing=None, nodata: float | None = None, curvature="auto",
             refraction_k: float | None = None, max_distance: float | None = None,
@@ -564,6 +606,7 @@ def _whole(compute, inp: _Input, shape):
                        if len(shape) == 3 else inp.heights.chunks)
 
 
+@_keywords
 def sun_hours(da, date, *, end_date=None, step: str = "10min", tz: str | None = None,
               lat: float | None = None, lon: float | None = None, crs=None, spacing=None,
               nodata: float | None = None, algorithm: str = "auto", backend: str = "auto",

@@ -182,6 +182,11 @@ def test_xy_only_input_and_its_crs():
     plain = xr.DataArray(z, dims=("y", "x"), coords={"y": da.y.values, "x": da.x.values})
     with pytest.raises(HillshadeError, match="no CRS.*spacing="):
         plain.hrt.shadow(azimuth=163, elevation=8)
+    # a sun from a time needs the place: the message names this function's keywords
+    with pytest.raises(HillshadeError, match="give lat= and lon= .* for a sun from time="):
+        plain.hrt.shadow(time="2026-06-21T12:00Z", spacing=1.0)
+    located = plain.hrt.shadow(time="2026-06-21T12:00Z", spacing=1.0, lat=45.0, lon=-93.0)
+    assert located.attrs["sun_site"] == "45.000000, -93.000000 (lat/lon)"
     # projected metres from spacing=: the array API's mask
     out = plain.hrt.shadow(azimuth=163, elevation=8, spacing=1.0)
     np.testing.assert_array_equal(out.values, shadow_mask(z, 163, 8, 1.0))
@@ -231,6 +236,10 @@ def test_errors_are_one_clear_message():
         bent.hrt.shadow(azimuth=163, elevation=8)
     with pytest.raises(HillshadeError, match="one way"):
         da.hrt.shadow(azimuth=163, elevation=8, time="2026-06-21T12:00Z")
+    with pytest.raises(HillshadeError, match="^no sun given"):
+        da.hrt.shadow()
+    with pytest.raises(HillshadeError, match="^azimuth and elevation go together"):
+        da.hrt.shadow(azimuth=163)
     with pytest.raises(HillshadeError, match="no UTC offset"):
         da.hrt.shadow(time="2026-06-21T12:00")
     with pytest.raises(HillshadeError, match="algorithm"):
