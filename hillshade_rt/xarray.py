@@ -462,7 +462,8 @@ def shadow(da, azimuth: float | None = None, elevation: float | None = None, *, 
     or a naive one with ``tz``; numpy datetime64 values are UTC) or a sequence of them (a list,
     a DatetimeIndex, ``ds.time.values``), which gives a ``time`` dimension. The sun of a time
     is the SPA's at the DEM's centre (``lat``/``lon`` elsewhere, or for a DataArray without a
-    CRS), per tile where it varies across the raster, as on the command line (``pressure``, ``temperature``, ``refraction``, ``sun_tolerance``).
+    CRS), per tile where it varies across the raster, as on the command line (``pressure``,
+    ``temperature``, ``refraction``, ``sun_tolerance``).
     ``crs``, ``spacing``, ``nodata``: see the module's notes. ``algorithm``, ``backend``,
     ``curvature``, ``refraction_k``, ``height_above_ground``, ``options``: as
     ``arrays.shadow_mask``; ``self_shadow``: surfaces facing away from the sun count as
