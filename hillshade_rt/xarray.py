@@ -303,9 +303,10 @@ def _wrap(arr, inp: _Input, attrs: dict, nodata, name: str, extra_dim=None) -> x
     return out
 
 
-def _time_list(time):
-    """(ISO texts for ``SunRequest``, whether a series was given) of ``time``: a text, a
-    datetime, a numpy/pandas time (naive ones: UTC), or a sequence of them."""
+def _time_list(time, tz=None):
+    """(ISO texts for ``SunRequest``, whether a series was given) of ``time``: a text or a
+    datetime (naive ones in ``tz``), a numpy datetime64 or pandas Timestamp (naive ones in
+    ``tz``, else UTC, as xarray's time coordinates), or a sequence of them."""
     series = not isinstance(time, (str, _dt.datetime, np.datetime64))
     if series:
         try:
@@ -318,12 +319,14 @@ def _time_list(time):
     for t in items:
         if isinstance(t, str):
             texts.append(t)
-        elif isinstance(t, _dt.datetime):
+        elif isinstance(t, _dt.datetime) and type(t).__module__ == "datetime":
             texts.append(t.isoformat())
         else:   # numpy datetime64, pandas Timestamp
             import pandas as pd
             ts = pd.Timestamp(t)
-            texts.append((ts if ts.tzinfo is not None else ts.tz_localize("UTC")).isoformat())
+            if ts.tzinfo is None and tz is None:
+                ts = ts.tz_localize("UTC")
+            texts.append(ts.isoformat())
     if not texts:
         raise HillshadeError("time: no times given")
     return texts, series
@@ -436,7 +439,7 @@ def _request(azimuth, elevation, time, tz, lat, lon, pressure, temperature, refr
         raise HillshadeError("no sun given: give azimuth and elevation, or time")
     if direction and (azimuth is None or elevation is None):
         raise HillshadeError("azimuth and elevation go together")
-    texts, series = _time_list(time) if time is not None else ((), False)
+    texts, series = _time_list(time, tz) if time is not None else ((), False)
     req = SunRequest.from_options(
         azimuth=azimuth, elevation=elevation, time=texts, tz=tz, lat=lat, lon=lon,
         pressure=pressure, temperature=temperature, no_refraction=not refraction,
@@ -458,9 +461,10 @@ def shadow(da, azimuth: float | None = None, elevation: float | None = None, *, 
     nodata).
 
     The sun: ``azimuth`` and ``elevation`` (degrees, grid azimuth clockwise from north), or
-    ``time``: one time (ISO 8601 text with an offset, an aware datetime or pandas Timestamp,
-    or a naive one with ``tz``; numpy datetime64 values are UTC) or a sequence of them (a list,
-    a DatetimeIndex, ``ds.time.values``), which gives a ``time`` dimension. The sun of a time
+    ``time``: one time (ISO 8601 text with an offset or an aware datetime; a naive one in
+    ``tz``; naive numpy datetime64 and pandas times in ``tz``, else UTC as xarray's time
+    coordinates) or a sequence of them (a list, a DatetimeIndex, ``ds.time.values``), which
+    gives a ``time`` dimension. The sun of a time
     is the SPA's at the DEM's centre (``lat``/``lon`` elsewhere, or for a DataArray without a
     CRS), per tile where it varies across the raster, as on the command line (``pressure``,
     ``temperature``, ``refraction``, ``sun_tolerance``).

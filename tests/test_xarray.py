@@ -74,6 +74,14 @@ def test_time_series_is_a_time_dimension_equal_to_the_command_line(tmp_path):
     assert night.tolist() == [False, False, True]
     assert (out.values[2] != 0).all()            # night: no cell lit
     assert out.attrs["sun_site"].endswith("(the DEM's centre)")
+    # xarray's times (naive datetime64: UTC) and aware datetimes: the same suns
+    import datetime as dt
+    utc = out.time.values
+    again = rioxarray.open_rasterio(EVEREST).hrt.shadow(time=utc)
+    np.testing.assert_array_equal(again.values, out.values)
+    aware = [dt.datetime.fromisoformat(t) for t in TIMES[:2]]
+    np.testing.assert_array_equal(
+        rioxarray.open_rasterio(EVEREST).hrt.shadow(time=aware).values, out.values[:2])
     # one time: no time dimension, the time as a scalar coordinate and in the attributes
     one = rioxarray.open_rasterio(EVEREST).hrt.shadow(time=TIMES[1])
     assert one.dims == ("y", "x")
