@@ -8,14 +8,13 @@ import math
 
 import numpy as np
 import pytest
+import rioxarray           # the `xarray` extra, in `test`
+import xarray as xr
 
-xr = pytest.importorskip("xarray")          # the `xarray` extra (in `test`: CI installs it)
-rioxarray = pytest.importorskip("rioxarray")
-
-import hillshade_rt.xarray as hx  # noqa: E402
-from hillshade_rt import HillshadeError  # noqa: E402
-from hillshade_rt.arrays import shadow_mask  # noqa: E402
-from hillshade_rt.testing import data_path  # noqa: E402
+import hillshade_rt.xarray as hx
+from hillshade_rt import HillshadeError
+from hillshade_rt.arrays import shadow_mask
+from hillshade_rt.testing import data_path
 
 LIDAR = data_path("lidar_dem_1m_utm15n_400x400.tif")      # UTM 15N, 1 m, 31 m of relief
 EVEREST = data_path("everest_srtm3_voids_crop200.tif")    # EPSG:4326, voids (-32768)
