@@ -116,10 +116,17 @@ def _heights_block(block, nodata):
 
 
 def _regular(values: np.ndarray, name: str) -> None:
+    """Refuse coordinates that are not evenly spaced (beyond a ten-thousandth of a cell, or
+    the rounding of their own type: float32 coordinates of a UTM raster are rounded to
+    centimetres)."""
     if values.size < 2:
         return
-    d = np.diff(values.astype(np.float64))
-    if not (np.all(np.isfinite(d)) and np.allclose(d, d[0], rtol=1e-6, atol=0.0) and d[0] != 0):
+    v = values.astype(np.float64)
+    d = (v[-1] - v[0]) / (v.size - 1)
+    eps = np.finfo(values.dtype).eps if values.dtype.kind == "f" else 0.0
+    off = np.abs(v - (v[0] + d * np.arange(v.size)))
+    if not (np.isfinite(d) and d != 0
+            and float(off.max()) <= max(1e-4 * abs(d), 4 * eps * float(np.abs(v).max()))):
         raise HillshadeError(f"the {name} coordinates are not regularly spaced: hillshade-rt "
                              "needs a regular grid")
 
