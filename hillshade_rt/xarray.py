@@ -27,6 +27,7 @@ time) runs when the function is called; the shadows when the result is computed.
 from __future__ import annotations
 
 import datetime as _dt
+import functools
 import math
 import threading
 from dataclasses import dataclass
@@ -539,9 +540,10 @@ def horizon(da, azimuth, *, crs=None, spacing=None, nodata: float | None = None,
     """Horizon angle (float32 degrees, NaN on voids, -90 where no terrain lies ahead) of every
     cell toward ``azimuth`` (one, or a sequence: an ``azimuth`` dimension), as
     ``hillshade-rt horizon`` (``arrays.horizon_angles``). A Dask-backed input gives a lazy
-    result computed as one task (a horizon needs every cell toward its azimuth; for rasters
-    larger than memory run ``hillshade-rt horizon``, which marches rays window after
-    window)."""
+    result, one task per chunk whose window holds every cell toward the azimuth (within
+    ``max_distance``, else to the raster's edge), curvature and body decided for the whole
+    raster: the in-memory angles (``method="hull"``, an approximation over the whole raster:
+    one task)."""
     from .arrays import horizon_angles
     from .geometry import normalize_azimuth
     series = not np.isscalar(azimuth)
@@ -557,7 +559,16 @@ def horizon(da, azimuth, *, crs=None, spacing=None, nodata: float | None = None,
                                         max_distance=max_distance,
                                         height_above_ground=height_above_ground)
                          for a in azimuths])
-    arr = _whole(compute, inp, (len(azimuths),) + inp.shape)
+    if inp.lazy and method == "scan":    # exact: windows toward each azimuth
+        import dask.array as dka
+        curv, body = _horizon_settings(inp, curvature, method)
+        arr = dka.stack([_lazy_reach(inp, [a], max_distance, functools.partial(
+            _horizon_window, grid=inp.grid, azimuth=a, method=method,
+            sample_spacing=sample_spacing, backend=backend, curvature=curv,
+            refraction_k=refraction_k, body=body, max_distance=max_distance,
+            lift=height_above_ground)) for a in azimuths])
+    else:
+        arr = _whole(compute, inp, (len(azimuths),) + inp.shape)
     attrs = {"product": "horizon", "units": "degrees above the horizontal",
              "no_terrain_ahead": -90.0, "method": method,
              "max_distance_m": max_distance, "height_above_ground_m":
@@ -576,8 +587,9 @@ def skyview(da, *, directions: int = 32, definition: str = "zaksek", openness: s
     """Sky view factor (float32 0..1, NaN on voids) from the exact horizon in ``directions``
     azimuths, ``definition`` "zaksek" or "dozier"; ``openness`` "positive" or "negative":
     Yokoyama's openness in degrees instead; as ``hillshade-rt skyview``
-    (``arrays.sky_view``). A Dask-backed input gives a lazy result computed as one task (every
-    direction needs the whole raster; ``hillshade-rt skyview`` runs windows)."""
+    (``arrays.sky_view``). A Dask-backed input gives a lazy result: with ``max_distance``, one
+    task per chunk with the cells within it all round; without, one task over the whole
+    raster (every direction reaches its edges)."""
     from .arrays import sky_view
     inp = _input(da, crs, spacing, nodata)
 
@@ -586,7 +598,18 @@ def skyview(da, *, directions: int = 32, definition: str = "zaksek", openness: s
         return sky_view(dem, None, directions, definition, curvature=curvature,
                         refraction_k=refraction_k, openness=openness,
                         max_distance=max_distance, height_above_ground=height_above_ground)
-    arr = _whole(compute, inp, inp.shape)
+    if inp.lazy and max_distance is not None:   # windows: each chunk and max_distance around
+        from .geometry import equal_azimuths
+        n = int(directions)
+        if n < 1:
+            raise HillshadeError(f"directions must be 1 or more, got {directions}")
+        curv, body = _horizon_settings(inp, curvature, "scan")
+        arr = _lazy_reach(inp, equal_azimuths(360.0 / n), max_distance, functools.partial(
+            _skyview_window, grid=inp.grid, directions=n, definition=definition,
+            curvature=curv, refraction_k=refraction_k, body=body, openness=openness,
+            max_distance=max_distance, lift=height_above_ground))
+    else:
+        arr = _whole(compute, inp, inp.shape)
     attrs = {"product": "openness" if openness else "skyview",
              "definition": f"{openness} openness" if openness else definition,
              "units": "degrees" if openness else "fraction of the sky (0..1)",
@@ -594,6 +617,79 @@ def skyview(da, *, directions: int = 32, definition: str = "zaksek", openness: s
              "height_above_ground_m": float(height_above_ground) or None,
              "hillshade_rt_version": __version__}
     return _wrap(arr, inp, attrs, np.nan, "skyview")
+
+
+def _horizon_settings(inp: _Input, curvature, method: str):
+    """(curvature, body) of the horizon products over the whole raster, decided once for its
+    windows as ``shading.horizon_shader`` decides them for the whole (curvature "auto": on for
+    the scan of a raster more than 1 km across; the body at the DEM's centre)."""
+    from .earth import dem_body
+    if curvature in ("auto", None):
+        rows, cols = inp.shape
+        dx, dy = inp.grid.centre_spacing()
+        curvature = math.hypot(cols * dx, rows * dy) > 1000.0 and method == "scan"
+    src = _LazySource(inp.heights, inp.grid, inp.transform, inp.crs, inp.path)
+    return curvature, dem_body(src)
+
+
+def _horizon_window(z, window, *, grid, azimuth, method, sample_spacing, backend, curvature,
+                    refraction_k, body, max_distance, lift):
+    from .arrays import horizon_angles
+    from .run.plan import window_grid
+    return horizon_angles(z, azimuth, window_grid(grid, window), method, sample_spacing,
+                          backend, curvature=curvature, refraction_k=refraction_k, body=body,
+                          max_distance=max_distance, height_above_ground=lift)
+
+
+def _skyview_window(z, window, *, grid, directions, definition, curvature, refraction_k, body,
+                    openness, max_distance, lift):
+    from .arrays import sky_view
+    from .run.plan import window_grid
+    return sky_view(z, window_grid(grid, window), directions, definition, curvature=curvature,
+                    refraction_k=refraction_k, body=body, openness=openness,
+                    max_distance=max_distance, height_above_ground=lift)
+
+
+def _reach_part(part, z, window, region):
+    """One task of :func:`_lazy_reach`: ``part`` over the window, cut to the region."""
+    r0, r1, c0, c1 = region
+    w0, _, v0, _ = window
+    z = np.array(z, dtype=np.float32, copy=True)
+    inner = (slice(r0 - w0, r1 - w0), slice(c0 - v0, c1 - v0))
+    if not np.isfinite(z[inner]).any():
+        return np.full((r1 - r0, c1 - c0), np.nan, np.float32)
+    with _LOCK:
+        return np.asarray(part(z, window)[inner], np.float32)
+
+
+def _lazy_reach(inp: _Input, azimuths, max_distance, part):
+    """A lazy float32 product of a Dask-backed input (horizon angles, sky view), one task per
+    chunk of the input: the chunk's window holds, toward each of ``azimuths``, every cell
+    within ``max_distance`` metres (to the raster's edge without one; ``shading.halo_bounds``,
+    as the planner's halos) and a cell all round; ``part(heights, window)`` makes the product
+    over the window, of which the task keeps the chunk."""
+    import dask
+    import dask.array as dka
+
+    from .shading import halo_bounds
+    z = inp.heights
+    reach = math.inf if max_distance is None else float(max_distance)
+    task = dask.delayed(_reach_part, pure=True)
+    redges = np.cumsum((0,) + tuple(z.chunks[0]))
+    cedges = np.cumsum((0,) + tuple(z.chunks[1]))
+    blocks = []
+    for r0, r1 in zip(redges[:-1], redges[1:]):
+        row = []
+        for c0, c1 in zip(cedges[:-1], cedges[1:]):
+            region = (int(r0), int(r1), int(c0), int(c1))
+            wins = [halo_bounds(region, inp.shape, inp.grid, a, reach, 1) for a in azimuths]
+            w = (min(x[0] for x in wins), max(x[1] for x in wins), min(x[2] for x in wins),
+                 max(x[3] for x in wins))
+            row.append(dka.from_delayed(task(part, z[w[0]:w[1], w[2]:w[3]], w, region),
+                                        shape=(region[1] - region[0], region[3] - region[2]),
+                                        dtype=np.float32))
+        blocks.append(row)
+    return dka.block(blocks)
 
 
 def _with_heights(inp: _Input, z) -> _Input:

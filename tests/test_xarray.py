@@ -154,9 +154,15 @@ def test_dask_input_is_lazy_and_equals_in_memory_with_chunks_smaller_than_the_ha
     assert isinstance(hours.data, dask.array.Array)
     np.testing.assert_array_equal(hours.values, da.hrt.sun_hours(date="2026-06-21",
                                                                   step="2h").values)
-    h = dk.hrt.horizon(100.0)
-    assert isinstance(h.data, dask.array.Array)
-    np.testing.assert_array_equal(h.values, da.hrt.horizon(100.0).values)
+    # horizons: windows toward each azimuth, to the edge or within max_distance
+    for kw in ({}, {"max_distance": 3000.0}):
+        h = dk.hrt.horizon([100.0, 203.7], **kw)
+        assert isinstance(h.data, dask.array.Array) and h.dims == ("azimuth", "y", "x")
+        np.testing.assert_array_equal(h.values, da.hrt.horizon([100.0, 203.7], **kw).values)
+    for kw in ({"max_distance": 2500.0}, {"max_distance": 2000.0, "openness": "negative"}):
+        v = dk.hrt.skyview(directions=8, **kw)
+        assert isinstance(v.data, dask.array.Array)
+        np.testing.assert_array_equal(v.values, da.hrt.skyview(directions=8, **kw).values)
 
 
 def test_dask_task_reads_only_its_window():
