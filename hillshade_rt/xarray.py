@@ -4,7 +4,8 @@ registers the ``da.hrt`` accessor, with :func:`shadow`, :func:`horizon`, :func:`
 
 The input is a 2-D DataArray (or one with a ``band`` dimension of size 1) whose x/y coordinates
 are regularly spaced. Its CRS is ``crs=``, else rioxarray's ``da.rio.crs``, else
-``da.attrs["crs"]``; its transform rioxarray's ``da.rio.transform()``. Without a CRS the ground
+``da.attrs["crs"]``; its transform rioxarray's ``da.rio.transform()`` (from the coordinates
+where the stored one disagrees with them). Without a CRS the ground
 spacing must be given (``spacing=``: metres per cell, ``d`` or ``(dx, dy)``), as the array API
 (``hillshade_rt.arrays``) requires. Nodata (``da.rio.nodata``, ``_FillValue``, or ``nodata=``),
 NaN and infinities are voids.
@@ -21,7 +22,9 @@ and the halo **toward the sun** that can shadow it (from the heights' block rang
 windows are exactly what the planner reads, whatever the input's chunks (a chunk smaller than
 the halo is fine: a task reads the slices of every chunk its window covers). One pass over the
 input (the block height ranges the halos come from, and the centre height for a sun from a
-time) runs when the function is called; the shadows when the result is computed.
+time) runs when the function is called; the shadows when the result is computed. Horizons
+take windows toward their azimuth (to the edge, or within ``max_distance``), sky views within
+``max_distance`` all round (without it: one task over the whole raster).
 """
 
 from __future__ import annotations
