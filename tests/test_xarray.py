@@ -273,3 +273,22 @@ def test_the_command_line_and_the_api_do_not_import_xarray():
             "print(hasattr(xarray.DataArray([[1.0]], dims=('y', 'x')), 'hrt'))")
     assert subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           check=True).stdout.strip() == "True"
+
+
+def test_the_docs_example_runs(tmp_path, monkeypatch):
+    """docs/usage.md, "In xarray": its example, run from the repository's root as it says
+    (the GeoTIFF it writes goes to a temporary folder here)."""
+    import os
+    import re
+
+    from hillshade_rt.testing import repo_root
+    text = open(os.path.join(repo_root(), "docs", "usage.md"), encoding="utf-8").read()
+    section = text.split("## In xarray", 1)[1]
+    code = re.search(r"```python\n(.*?)```", section, re.S).group(1)
+    code = code.replace('"examples/', '"' + os.path.join(repo_root(), "examples", ""))
+    monkeypatch.chdir(tmp_path)
+    scope: dict = {}
+    exec(compile(code, "usage.md", "exec"), scope)
+    written = rioxarray.open_rasterio(tmp_path / "sun_hours.tif")
+    assert written.rio.crs == scope["dem"].rio.crs
+    assert float(written.max()) > 10.0 and scope["day"].sizes["time"] == 2
