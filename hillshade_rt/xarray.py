@@ -175,7 +175,10 @@ def _input(da, crs=None, spacing=None, nodata=None) -> _Input:
     # rioxarray: the stored GeoTransform's resolution (else the coordinates'), the origin from
     # the coordinates (a slice of a raster has its own); the coordinates' own where they
     # disagree with the stored one beyond rounding (e.g. rows flipped to run south to north)
-    transform = da.rio.transform()
+    try:
+        transform = da.rio.transform()
+    except Exception as exc:  # noqa: BLE001 -- rioxarray's errors (one row, no resolution)
+        raise HillshadeError(f"the DataArray's transform is unknown: {exc}") from None
     if da.shape[0] > 1 and da.shape[1] > 1:
         fresh = da.rio.transform(recalc=True)
         if not np.allclose([transform.a, transform.e, transform.c, transform.f],
@@ -199,7 +202,10 @@ def _input(da, crs=None, spacing=None, nodata=None) -> _Input:
     else:
         pixel = None
         if spacing is not None:
-            dxy = np.broadcast_to(np.asarray(spacing, np.float64), (2,))
+            try:
+                dxy = np.broadcast_to(np.asarray(spacing, np.float64), (2,))
+            except (TypeError, ValueError):
+                dxy = np.array([np.nan])
             if not (np.all(np.isfinite(dxy)) and np.all(dxy > 0)):
                 raise HillshadeError(f"spacing must be positive metres, d or (dx, dy), got "
                                      f"{spacing!r}")
