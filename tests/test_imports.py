@@ -211,7 +211,7 @@ def test_no_cycles_in_package():
 LAYERS = [
     ("hillshade_rt.__main__",),
     ("hillshade_rt.cli",),
-    ("hillshade_rt.api",),
+    ("hillshade_rt.api", "hillshade_rt.xarray"),
     ("hillshade_rt.run",),
     ("hillshade_rt.warm", "hillshade_rt.testing"),
     ("hillshade_rt.arrays", "hillshade_rt.run.plan", "hillshade_rt.irradiance"),
