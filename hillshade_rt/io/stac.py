@@ -253,7 +253,8 @@ def footprint(crs, transform, shape, points_per_side: int = 16):
     edge = [(c * cols / n, 0.0) for c in range(n)] + [(cols, r * rows / n) for r in range(n)] + \
            [(cols - c * cols / n, rows) for c in range(n)] + \
            [(0.0, rows - r * rows / n) for r in range(n)]
-    xy = [transform * (c, r) for c, r in edge]
+    a, b, c0, d, e, f = tuple(transform)[:6]
+    xy = [(a * c + b * r + c0, d * c + e * r + f) for c, r in edge]
     src = CRS.from_user_input(crs.to_wkt() if hasattr(crs, "to_wkt") else crs)
     a = src.ellipsoid.semi_major_metre if src.ellipsoid is not None else None
     if a is not None and abs(a - 6378137.0) > 50_000.0:
