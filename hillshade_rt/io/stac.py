@@ -289,10 +289,15 @@ def write_stac_item(path: str, raster: str, *, when: _dt.datetime | None = None,
     from pystac.extensions.projection import ProjectionExtension
     from pystac.extensions.view import ViewExtension
 
-    with rasterio.open(raster) as ds:
-        crs, transform, shape, driver = ds.crs, ds.transform, (ds.height, ds.width), ds.driver
-        bounds = list(ds.bounds)
-        tags = ds.tags(ns="IMAGE_STRUCTURE") if driver == "GTiff" else {}
+    import warnings
+    from rasterio.errors import NotGeoreferencedWarning
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", NotGeoreferencedWarning)
+        with rasterio.open(raster) as ds:
+            crs, transform, shape, driver = ds.crs, ds.transform, (ds.height, ds.width), ds.driver
+            bounds = list(ds.bounds)
+            tags = ds.tags(ns="IMAGE_STRUCTURE") if driver == "GTiff" else {}
+    georeferenced = crs is not None or not transform.is_identity
     geometry, bbox = footprint(crs, transform, shape)
     ident = os.path.splitext(os.path.basename(raster))[0]
     if when is None and (start is None or end is None):
@@ -317,8 +322,9 @@ def write_stac_item(path: str, raster: str, *, when: _dt.datetime | None = None,
     else:
         proj.epsg = None
     proj.shape = list(shape)
-    proj.transform = [float(v) for v in tuple(transform)[:6]]
-    proj.bbox = [float(v) for v in bounds]
+    if georeferenced:     # a raster without a geotransform: no transform, no bbox
+        proj.transform = [float(v) for v in tuple(transform)[:6]]
+        proj.bbox = [float(v) for v in bounds]
     if sun is not None:
         view = ViewExtension.ext(item, add_if_missing=True)
         view.sun_azimuth, view.sun_elevation = float(sun[0]), float(sun[1])

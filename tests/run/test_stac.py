@@ -343,3 +343,46 @@ def test_a_point_light_refuses_the_stac_options(runner, tmp_path, dem):
     r = run(runner, "shadow", dem, tmp_path / "o.tif", "--light-position",
             "420300,5159700,3000", "--sun-from-stac", item)
     assert r.exit_code == 2, r.output
+
+
+def test_a_dem_without_crs_gets_an_item_without_geometry(runner, tmp_path, offline):
+    import pystac
+    z = fractal_terrain(40, 40, seed=5, relief=50.0)
+    dem = write_geotiff(tmp_path / "plain.tif", z)
+    out, meta = tmp_path / "o.tif", tmp_path / "o.json"
+    r = run(runner, "shadow", dem, out, "--pixel-size", 2, "--azimuth", 120, "--elevation", 25,
+            "--stac-item", meta)
+    assert r.exit_code == 0, r.output
+    d = json.loads(meta.read_text())
+    assert d["geometry"] is None and "bbox" not in d and d["properties"]["proj:code"] is None
+    assert d["properties"]["proj:shape"] == [40, 40]
+    assert "proj:transform" not in d["properties"] and "proj:bbox" not in d["properties"]
+    pystac.Item.from_file(str(meta)).validate(validator=validator())
+
+
+def test_the_python_api_takes_both(tmp_path, dem):
+    import hillshade_rt as hr
+    item = _json(tmp_path / "item.json", sentinel2_item())
+    rep = hr.shade(dem, str(tmp_path / "a.tif"), sun_from_stac=item,
+                   stac_item=tmp_path / "a.json")
+    assert rep["sun_from_stac"]["item"] == "S2B_32TMS_20230714_0_L2A"
+    d = json.loads((tmp_path / "a.json").read_text())
+    assert d["properties"]["view:sun_elevation"] == 28.7
+    assert d["properties"]["hillshade_rt:command"].startswith("hillshade_rt.shade")
+
+
+def test_reading_an_item_imports_no_pystac(tmp_path):
+    """pystac is imported only to write an item: the command line and a run that reads one do
+    not import it."""
+    import subprocess
+    import sys
+    item = _json(tmp_path / "item.json", sentinel2_item())
+    code = ("import sys\n"
+            "import hillshade_rt.cli, hillshade_rt.run.shade\n"
+            "from hillshade_rt.run.stac import sun_from_item\n"
+            f"sun, scene = sun_from_item({{'sun_from_stac': {item!r}}})\n"
+            "assert sun['azimuth'] == 151.3 and scene.id.startswith('S2B')\n"
+            "print('pystac' in sys.modules, 'jsonschema' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.split()
+    assert out == ["False", "False"]
