@@ -386,3 +386,30 @@ def test_reading_an_item_imports_no_pystac(tmp_path):
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.split()
     assert out == ["False", "False"]
+
+
+def test_an_item_from_a_url(runner, tmp_path, dem):
+    """An http URL (a server on the loopback interface: the test stays offline); a missing one
+    fails in one line."""
+    import functools
+    import http.server
+    import threading
+    _json(tmp_path / "item.json", sentinel2_item())
+    class Quiet(http.server.SimpleHTTPRequestHandler):
+        def log_message(self, *a):      # the server's log is not the command's stderr
+            pass
+    handler = functools.partial(Quiet, directory=str(tmp_path))
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    try:
+        url = f"http://127.0.0.1:{server.server_address[1]}"
+        a, rep = tmp_path / "a.tif", tmp_path / "r.json"
+        r = run(runner, "shadow", dem, a, "--sun-from-stac", f"{url}/item.json", "--report", rep)
+        assert r.exit_code == 0, r.output
+        assert json.loads(rep.read_text())["sun_from_stac"]["elevation"] == 28.7
+        r = run(runner, "shadow", dem, tmp_path / "b.tif", "--sun-from-stac", f"{url}/no.json")
+        assert r.exit_code == 1 and "HTTP 404" in r.stderr, r.output
+        assert len(r.stderr.strip().splitlines()) == 1
+    finally:
+        server.shutdown()
+        server.server_close()
