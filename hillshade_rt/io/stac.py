@@ -50,6 +50,7 @@ class ItemSun:
     elevation: float | None
     time: _dt.datetime | None
     keys: tuple[str, str] | None = None
+    bbox: tuple[float, float, float, float] | None = None    # the scene's, WGS84 (2-D)
 
     @property
     def has_angles(self) -> bool:
@@ -211,7 +212,18 @@ def item_sun(doc, path: str) -> ItemSun:
                 if props.get("start_datetime") is not None else "")
         raise HillshadeError(f"{path}: item {ident} gives no sun: no view:sun_azimuth/"
                              f"view:sun_elevation and no datetime{span}")
-    return ItemSun(path, ident, az, el, t, keys)
+    return ItemSun(path, ident, az, el, t, keys, _bbox(item.get("bbox")))
+
+
+def _bbox(b):
+    """An item's 2-D WGS84 bbox (west, south, east, north), from 4 or 6 numbers; None when it
+    has none (or something else)."""
+    if not isinstance(b, list) or len(b) not in (4, 6) or not all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+            for v in b):
+        return None
+    n = len(b) // 2
+    return (float(b[0]), float(b[1]), float(b[n]), float(b[n + 1]))
 
 
 def read_item_sun(path: str) -> ItemSun:

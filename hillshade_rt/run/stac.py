@@ -47,6 +47,26 @@ def sun_from_item(sun: dict, quiet: bool = True, say=None):
     return sun, scene
 
 
+def note_if_apart(scene, src, say) -> None:
+    """Say (a note) when the DEM ``src`` lies outside the scene's bbox: its sun is then
+    probably not the one meant (another scene's item). Nothing when either has no place on
+    the Earth or the bbox crosses the antimeridian."""
+    if scene is None or scene.bbox is None or src.crs is None or src.transform is None:
+        return
+    w, s, e, n = scene.bbox
+    if w > e:
+        return
+    from ..io.stac import footprint
+    try:
+        _, (dw, ds, de, dn) = footprint(src.crs, src.transform, src.shape, 4)
+    except HillshadeError:
+        return
+    if de < w or dw > e or dn < s or ds > n:
+        say("note", f"the DEM ({dw:.3f}..{de:.3f} E, {ds:.3f}..{dn:.3f} N) lies outside the "
+                    f"bbox of STAC item {scene.id} ({w:.3f}..{e:.3f} E, {s:.3f}..{n:.3f} N): "
+                    "its sun is that scene's, elsewhere")
+
+
 def scene_tags(scene) -> dict:
     """The output's tags saying where its sun came from."""
     from ..sun import iso

@@ -413,3 +413,16 @@ def test_an_item_from_a_url(runner, tmp_path, dem):
     finally:
         server.shutdown()
         server.server_close()
+
+
+def test_a_dem_outside_the_scene_is_said(runner, tmp_path, dem):
+    """The DEM lies in the Alps (46.6 N, 7.96 E): an item over Minnesota gets a note; the
+    Sentinel-2 tile around it does not."""
+    far = sentinel2_item()
+    far["bbox"] = [-94.5, 46.0, -93.0, 47.0]
+    item = _json(tmp_path / "far.json", far)
+    r = run(runner, "shadow", dem, tmp_path / "a.tif", "--sun-from-stac", item)
+    assert r.exit_code == 0 and "lies outside the bbox of STAC item" in r.stderr, r.output
+    near = _json(tmp_path / "near.json", sentinel2_item(**{}))
+    r = run(runner, "shadow", dem, tmp_path / "b.tif", "--sun-from-stac", near)
+    assert r.exit_code == 0 and "lies outside" not in r.stderr, r.output
