@@ -426,3 +426,17 @@ def test_a_dem_outside_the_scene_is_said(runner, tmp_path, dem):
     near = _json(tmp_path / "near.json", sentinel2_item(**{}))
     r = run(runner, "shadow", dem, tmp_path / "b.tif", "--sun-from-stac", near)
     assert r.exit_code == 0 and "lies outside" not in r.stderr, r.output
+
+
+def test_a_sun_from_a_time_dates_the_item_and_gives_the_true_azimuth(runner, tmp_path, dem):
+    out, meta, rep = tmp_path / "t.tif", tmp_path / "t.json", tmp_path / "r.json"
+    r = run(runner, "shadow", dem, out, "--time", "2023-07-14T10:27:39Z", "--stac-item", meta,
+            "--report", rep)
+    assert r.exit_code == 0, r.output
+    p = json.loads(meta.read_text())["properties"]
+    sun = json.loads(rep.read_text())["sun"]
+    assert p["datetime"] == "2023-07-14T10:27:39Z" and p["hillshade_rt:sun_source"] == "time"
+    assert p["view:sun_azimuth"] == pytest.approx(sun["true_azimuth"])
+    assert p["view:sun_elevation"] == pytest.approx(sun["elevation"])
+    # west of its zone's central meridian (9 E), grid north is west of true north
+    assert sun["true_azimuth"] != pytest.approx(sun["azimuth"], abs=0.1)
