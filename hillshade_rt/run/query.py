@@ -159,6 +159,9 @@ def query(cfg: QueryConfig) -> dict:
                cfg.run.overwrite).claim(
             cfg.output, "-o/--output")
     d = cfg.read.read(cfg.dem)
+    if scene is not None:
+        from .stac import to_grid_north
+        req = to_grid_north(req, scene, d)      # an item's azimuth is from true north
     points, _ = locate(points, d)
     on_ground(points, d, lift)
     if fmt == "geojson" and any(p["lon"] is None for p in points):

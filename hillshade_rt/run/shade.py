@@ -91,7 +91,8 @@ def _shade(cfg, src, windowed, inputs, output, req, pattern, wshape, limit, clai
     if cfg.height_above_ground:     # the observer's height, in every output's tags
         out.base_tags["HEIGHT_ABOVE_GROUND_M"] = f"{float(cfg.height_above_ground):g}"
     if scene is not None:           # the sun of a STAC item: which item, in every output's tags
-        from .stac import note_if_apart, scene_tags
+        from .stac import note_if_apart, scene_tags, to_grid_north
+        req = to_grid_north(req, scene, src)      # its azimuth from true north
         out.base_tags.update(scene_tags(scene))
         if not ro.quiet:
             note_if_apart(scene, src, ro.say)

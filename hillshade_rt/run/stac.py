@@ -47,6 +47,37 @@ def sun_from_item(sun: dict, quiet: bool = True, say=None):
     return sun, scene
 
 
+def to_grid_north(req, scene, dem):
+    """The SunRequest ``req`` of an item's angles with the azimuth turned from true north (the
+    view extension's) to the DEM's grid north by the meridian convergence at its centre, as
+    suns from times are (``sun.dem_site``); ``true_azimuth`` keeps the item's. A DEM without a
+    CRS, or not on the Earth: the raster's north is taken as true north. ``dem``: anything
+    with ``crs``, ``transform``, ``shape`` and ``path`` (a ``DemSource``, a ``Dem``); nothing
+    is read."""
+    import dataclasses
+    import types
+
+    import numpy as np
+
+    from ..sun import dem_site
+    if scene is None or not scene.has_angles:
+        return req
+    conv = 0.0
+    if dem.crs is not None and dem.transform is not None:
+        where = types.SimpleNamespace(crs=dem.crs, transform=dem.transform, shape=dem.shape,
+                                      path=dem.path, centre_height=lambda: (0.0, ""))
+        try:
+            site = dem_site(where)
+        except HillshadeError:       # another body: no true north of the Earth's to turn from
+            site = None
+        if site is not None:
+            rows, cols = dem.shape
+            conv = float(site.convergence(np.array([(rows - 1) / 2.0]),
+                                          np.array([(cols - 1) / 2.0]))[0])
+    return dataclasses.replace(req, azimuth=(scene.azimuth + conv) % 360.0,
+                               true_azimuth=scene.azimuth)
+
+
 def note_if_apart(scene, src, say) -> None:
     """Say (a note) when the DEM ``src`` lies outside the scene's bbox: its sun is then
     probably not the one meant (another scene's item). Nothing when either has no place on

@@ -70,8 +70,18 @@ def _json(path, doc) -> str:
 
 @pytest.fixture
 def dem(tmp_path):
+    """A DEM in UTM 32N, west of the zone's central meridian (9 E): grid north is 0.76 degrees
+    east of true north at its centre."""
     z = fractal_terrain(60, 70, seed=23, relief=400.0)
     return write_geotiff(tmp_path / "dem.tif", z, T, UTM32)
+
+
+@pytest.fixture
+def dem_ll(tmp_path):
+    """A DEM in longitude/latitude (grid north is true north), 0.0001 degree cells (~10 m)."""
+    z = fractal_terrain(60, 70, seed=23, relief=400.0)
+    return write_geotiff(tmp_path / "dem_ll.tif", z, Affine(1e-4, 0, 7.96, 0, -1e-4, 46.59),
+                         CRS.from_epsg(4326))
 
 
 @pytest.fixture
@@ -107,7 +117,8 @@ def run(runner, *args):
     return runner.invoke(cli, [str(a) for a in args])
 
 
-def test_the_mask_from_an_item_is_the_mask_of_its_angles(runner, tmp_path, dem):
+def test_the_mask_from_an_item_is_the_mask_of_its_angles(runner, tmp_path, dem_ll):
+    dem = dem_ll
     item = _json(tmp_path / "item.json", sentinel2_item())
     a, b, rep = tmp_path / "a.tif", tmp_path / "b.tif", tmp_path / "r.json"
     r = run(runner, "shadow", dem, a, "--sun-from-stac", item, "--report", rep)
@@ -128,7 +139,8 @@ def test_the_mask_from_an_item_is_the_mask_of_its_angles(runner, tmp_path, dem):
     assert doc["sun"]["azimuth"] == pytest.approx(151.3)
 
 
-def test_hillshade_takes_the_items_sun_too(runner, tmp_path, dem):
+def test_hillshade_takes_the_items_sun_too(runner, tmp_path, dem_ll):
+    dem = dem_ll
     item = _json(tmp_path / "item.json", sentinel2_item())
     a, b = tmp_path / "a.tif", tmp_path / "b.tif"
     assert run(runner, "hillshade", dem, a, "--sun-from-stac", item).exit_code == 0
@@ -245,7 +257,8 @@ def test_planetary_computer_landsat_and_old_eo_items():
     assert item_sun(coll, "c.json").id == landsat["id"]
 
 
-def test_an_item_collection_of_one_and_a_zip_member(runner, tmp_path, dem):
+def test_an_item_collection_of_one_and_a_zip_member(runner, tmp_path, dem_ll):
+    dem = dem_ll
     a, b, c = tmp_path / "a.tif", tmp_path / "b.tif", tmp_path / "c.tif"
     coll = _json(tmp_path / "search.json",
                  {"type": "FeatureCollection", "features": [sentinel2_item()]})
@@ -440,3 +453,27 @@ def test_a_sun_from_a_time_dates_the_item_and_gives_the_true_azimuth(runner, tmp
     assert p["view:sun_elevation"] == pytest.approx(sun["elevation"])
     # west of its zone's central meridian (9 E), grid north is west of true north
     assert sun["true_azimuth"] != pytest.approx(sun["azimuth"], abs=0.1)
+
+
+def test_on_a_projected_dem_the_items_azimuth_is_turned_to_grid_north(runner, tmp_path, dem):
+    """view:sun_azimuth is from true north; a UTM DEM's rows run along grid north: the item's
+    azimuth is turned by the meridian convergence at the DEM's centre (pyproj's, independently),
+    as a sun from a time is; the report keeps the item's as the true azimuth."""
+    from pyproj import Proj
+    item = _json(tmp_path / "item.json", sentinel2_item())
+    a, rep = tmp_path / "a.tif", tmp_path / "r.json"
+    r = run(runner, "shadow", dem, a, "--sun-from-stac", item, "--report", rep)
+    assert r.exit_code == 0, r.output
+    sun = json.loads(rep.read_text())["sun"]
+    lon, lat = Transformer.from_crs(32632, 4326, always_xy=True).transform(420350.0, 5159700.0)
+    gamma = Proj(32632).get_factors(lon, lat).meridian_convergence      # -0.755 here
+    assert gamma == pytest.approx(-0.755, abs=0.01)
+    assert sun["azimuth"] == pytest.approx(151.3 - gamma, abs=1e-6)
+    assert sun["true_azimuth"] == 151.3 and sun["elevation"] == 28.7
+    b = tmp_path / "b.tif"
+    r = run(runner, "shadow", dem, b, "--azimuth", repr(sun["azimuth"]), "--elevation", 28.7)
+    assert r.exit_code == 0, r.output
+    assert np.array_equal(read_band(a), read_band(b))
+    c = tmp_path / "c.tif"       # the untouched angle gives another mask: the turn matters here
+    assert run(runner, "shadow", dem, c, "--azimuth", 151.3, "--elevation", 28.7).exit_code == 0
+    assert not np.array_equal(read_band(a), read_band(c))
