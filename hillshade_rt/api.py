@@ -54,7 +54,8 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
           fmt: str | None = None,
           client=None, overwrite: bool = False, report: str | None = None,
           preview: str | None = None, progress: bool = False,
-          height_above_ground: float = 0.0, **more) -> dict:
+          height_above_ground: float = 0.0, sun_from_stac: str | None = None,
+          stac_item: str | None = None, **more) -> dict:
     """Shade DEM file(s) into ``output`` (one band per sun) or ``output_pattern`` files.
 
     ``dems``: a path or a list of paths (tiles on one grid, shaded as one surface; with
@@ -65,6 +66,8 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
     ``fmt``: a GDAL driver name (default from the extension, as ``--format``).
     ``height_above_ground``: metres above every cell its ray starts from, as
     ``--height-above-ground`` (brute marches it; ``algorithm="auto"`` runs brute).
+    ``sun_from_stac``: a STAC item's path or URL, its scene's sun (``--sun-from-stac``);
+    ``stac_item``: also write a STAC item describing ``output`` there (``--stac-item``).
     ``max_memory`` (bytes or "2GB"), ``window_size`` ((rows, cols), an int, or "2048x2048"):
     windows as ``--max-memory``/``--window-size``. ``client``: a ``distributed.Client`` (or a
     scheduler address, or "local:N"): windows and times run as Dask tasks on it; the client is
@@ -98,6 +101,7 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
                time=tuple(str(_iso(t)) for t in ([times] if isinstance(times, (str, _dt.datetime))
                                                  else times)),
                start=_iso(start), end=_iso(end), step=step,
+               sun_from_stac=None if sun_from_stac is None else os.fspath(sun_from_stac),
                **{k: more.get(k, d) for k, d in zip(PLACE_KEYS, (None,) * 5 + (False, DEFAULT_TOLERANCE))})
     read = ReadOptions(**{k: more[k] for k in READ_KEYS if k in more})
     run = RunOptions(backend=backend, threads=more.get("threads"), report_path=report,
@@ -112,7 +116,8 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
                       read=read, run=run, output=None if output is None else os.fspath(output),
                       output_pattern=output_pattern, max_memory=max_memory,
                       window_size=window_size, cog=cog, scheduler=client,
-                      height_above_ground=height_above_ground)
+                      height_above_ground=height_above_ground,
+                      stac_item=None if stac_item is None else os.fspath(stac_item))
     token = virtual_outputs.set(True)    # /vsimem/ outputs are fine from Python
     try:
         return run_shade(cfg)

@@ -557,6 +557,8 @@ class SunOver:
         d = {"azimuth": self.azimuth, "elevation": self.elevation}
         if self.time is not None:
             d.update(time=iso(self.time), true_azimuth=self.true_azimuth, zenith=self.zenith)
+        elif self.true_azimuth is not None:     # a given sun's azimuth from true north
+            d["true_azimuth"] = self.true_azimuth
         d["night"] = self.night
         d["mode"] = "per tile" if self.tiles else "one vector"
         if self.field_deviation_deg is not None:
@@ -686,6 +688,9 @@ class SunRequest:
     tolerance: float = DEFAULT_TOLERANCE
     auto_tz: bool = False          # --tz auto: ``tz`` is the DEM's zone once :meth:`site` ran
     pending: tuple | None = None   # --tz auto: (time, start, end, step) parsed again then
+    # a given sun's azimuth from true north, when it was given so (a STAC item's): ``azimuth``
+    # is then the grid azimuth it was turned to (run.stac.to_grid_north)
+    true_azimuth: float | None = None
 
     @property
     def from_time(self) -> bool:
@@ -770,7 +775,8 @@ class SunRequest:
         """(suns, site report) for ``dem``: the given sun, or the SPA's at each time (at
         ``site`` when the caller already has it)."""
         if not self.from_time:
-            return [SunOver(None, self.azimuth, self.elevation)], None
+            return [SunOver(None, self.azimuth, self.elevation,
+                            true_azimuth=self.true_azimuth)], None
         site = site or self.site(dem)
         suns = sun_over(site, dem.shape, self.times, self.atmosphere, self.tolerance)
         atm = self.atmosphere

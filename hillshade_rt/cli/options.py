@@ -128,7 +128,47 @@ def sun_options(f):
         click.option("--time", "time", multiple=True, metavar="ISO8601",
                      help="Sun from this instant (e.g. 2026-06-21T14:30:00+02:00) at the DEM's "
                           "centre; repeat for a series (one band per time)."),
-    ] + _series_options("e.g. 30min, 1h, 1h30min, PT10M"))
+    ] + _series_options("e.g. 30min, 1h, 1h30min, PT10M") + [
+        click.option("--sun-from-stac", "sun_from_stac", default=None, metavar="ITEM.json",
+                     help="The sun of a satellite scene: its STAC item's view:sun_azimuth and "
+                          "view:sun_elevation (else the sun at the DEM at its datetime); a "
+                          "file, URL or zip member, an item or a collection of one."),
+    ])
+
+
+def stac_item_option(f):
+    """``--stac-item OUT.json``: a STAC item describing OUTPUT (pystac, the ``stac`` extra)."""
+    return click.option("--stac-item", "stac_item", default=None, metavar="OUT.json",
+                        type=click.Path(dir_okay=False),
+                        help="Also write a STAC item describing OUTPUT (footprint, projection, "
+                             "the sun, checksum; needs pip install 'hillshade-rt[stac]').")(f)
+
+
+def command_line() -> str | None:
+    """The current command as given on the command line (what a STAC item records): the
+    command's path and the parameters given there, in click's order; None outside click."""
+    import shlex
+    from click.core import ParameterSource
+    ctx = click.get_current_context(silent=True)
+    if ctx is None:
+        return None
+    def long(opts):
+        return next((o for o in opts if o.startswith("--")), opts[0])
+    words = ctx.command_path.split()
+    for p in ctx.command.params:
+        if ctx.get_parameter_source(p.name) != ParameterSource.COMMANDLINE:
+            continue
+        value = ctx.params.get(p.name)
+        values = list(value) if isinstance(value, (list, tuple)) else [value]
+        if isinstance(p, click.Argument):
+            words += [str(v) for v in values]
+        elif getattr(p, "is_flag", False):
+            on = value if getattr(p, "is_bool_flag", False) else True
+            words.append(long(p.opts) if on or not p.secondary_opts else long(p.secondary_opts))
+        else:
+            for v in values:
+                words += [long(p.opts), str(v)]
+    return shlex.join(words)
 
 
 def _series_options(step_help: str):

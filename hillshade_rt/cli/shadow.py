@@ -7,10 +7,10 @@ import click
 
 from .errors import errors_to_click, say
 from ..run.config import SUN_KEYS
-from .options import (algorithm_flags, algorithm_option, dem_options, finite, given,
-                      height_above_ground_option, light_options, lightmap_options,
-                      physics_options, run_options, subsolar_options, sun_options,
-                      to_read_options, to_run_options)
+from .options import (algorithm_flags, algorithm_option, command_line, dem_options, finite,
+                      given, height_above_ground_option, light_options, lightmap_options,
+                      physics_options, run_options, stac_item_option, subsolar_options,
+                      sun_options, to_read_options, to_run_options)
 
 LIFT_HELP = ("Each cell's ray toward the sun starts this many metres above the cell (a person, "
              "a panel above every cell); brute marches it (auto runs brute), --soft the horizon "
@@ -27,7 +27,8 @@ def _config(files, kind, algorithm, options, kw, **more):
                        algorithm_explicit=given("algorithm"), read=read, run=run,
                        output=kw.pop("output"), output_pattern=kw.pop("output_pattern"),
                        max_memory=kw.pop("max_memory"), window_size=kw.pop("window_size"),
-                       cog=kw.pop("cog"), scheduler=kw.pop("scheduler"), **more)
+                       cog=kw.pop("cog"), scheduler=kw.pop("scheduler"),
+                       stac_item=kw.pop("stac_item"), command=command_line(), **more)
 
 
 @click.command()
@@ -45,6 +46,7 @@ def _config(files, kind, algorithm, options, kw, **more):
 @light_options
 @subsolar_options
 @run_options
+@stac_item_option
 @dem_options
 @errors_to_click
 def shadow(files, algorithm, curvature, refraction_k, soft, self_shadow, classes,
@@ -91,7 +93,7 @@ def _point_light(files, position, lonlat, lift, soft, self_shadow, classes, algo
                "--soft": soft, "--self-shadow": self_shadow, "--classes": classes,
                "--algorithm": given("algorithm"), "--earth-curvature": curvature is not None}
     for k, flag in (("scheduler", "--scheduler"), ("output_pattern", "--output-pattern"),
-                    ("cog", "--cog")):
+                    ("cog", "--cog"), ("stac_item", "--stac-item")):
         refused[flag] = bool(kw.pop(k))
     window_size, max_memory = kw.pop("window_size"), kw.pop("max_memory")
     light_shadow(LightConfig(list(files), kw.pop("output"), position, lonlat, lift, window_size,
@@ -112,7 +114,7 @@ def _lightmap_refused(kw, soft, curvature, refraction_k) -> dict:
                "--backend gpu": kw.get("backend") == "gpu"}
     for k, flag in (("window_size", "--window-size"), ("max_memory", "--max-memory"),
                     ("scheduler", "--scheduler"), ("output_pattern", "--output-pattern"),
-                    ("cog", "--cog")):
+                    ("cog", "--cog"), ("stac_item", "--stac-item")):
         refused[flag] = bool(kw.pop(k))
     return refused
 
@@ -135,7 +137,7 @@ def _subsolar(files, subsolar, subsolar_file, distance, body, light_position, li
                "--algorithm": given("algorithm")}
     for k, flag in (("window_size", "--window-size"), ("max_memory", "--max-memory"),
                     ("scheduler", "--scheduler"), ("output_pattern", "--output-pattern"),
-                    ("cog", "--cog")):
+                    ("cog", "--cog"), ("stac_item", "--stac-item")):
         refused[flag] = bool(kw.pop(k))
     subsolar_shadow(SubsolarConfig(list(files), kw.pop("output"), subsolar, distance, body,
                                    lift, soft, curvature, refraction_k, to_read_options(kw),
@@ -159,6 +161,7 @@ def _subsolar(files, subsolar, subsolar_file, distance, body, light_position, li
 @light_options
 @lightmap_options
 @run_options
+@stac_item_option
 @dem_options
 @errors_to_click
 def hillshade(files, ambient, scale, algorithm, curvature, refraction_k, soft,

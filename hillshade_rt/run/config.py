@@ -21,7 +21,7 @@ from ..errors import HillshadeError, UsageProblem
 # atmosphere (``sun.SunRequest.at_place``), all the sun options of the lighting commands
 # (``SunRequest.from_options``), the DEM's read options (``ReadOptions``)
 PLACE_KEYS = ("tz", "lat", "lon", "pressure", "temperature", "no_refraction", "sun_tolerance")
-SUN_KEYS = ("azimuth", "elevation", "time", "start", "end", "step") + PLACE_KEYS
+SUN_KEYS = ("azimuth", "elevation", "time", "start", "end", "step", "sun_from_stac") + PLACE_KEYS
 READ_KEYS = ("band", "nodata", "z_factor", "pixel_size", "raw_shape", "raw_dtype",
              "raw_byteorder")
 
@@ -116,6 +116,8 @@ class ShadeConfig:
     cog: bool = False
     scheduler: object = None
     height_above_ground: float = 0.0    # metres: each cell's ray starts this far above it
+    stac_item: str | None = None        # --stac-item: a STAC item describing OUTPUT
+    command: str | None = None          # the command line, as the STAC item records it
 
     def check(self) -> None:
         """The combinations no run can take (before the sun is looked at, as before). With a

@@ -141,8 +141,10 @@ def query(cfg: QueryConfig) -> dict:
     fmt = output_format(cfg.fmt, cfg.output)
     check_lift(cfg.height_above_ground, "brute", False)
     lift = float(cfg.height_above_ground)
+    from .stac import sun_from_item
+    sun, scene = sun_from_item(cfg.sun, cfg.run.quiet, cfg.run.say)   # --sun-from-stac
     try:     # a bad sun is the command line's fault (exit status 2)
-        req = SunRequest.from_options(**cfg.sun)
+        req = SunRequest.from_options(**sun)
     except UsageProblem:
         raise
     except HillshadeError as exc:
@@ -152,9 +154,14 @@ def query(cfg: QueryConfig) -> dict:
                            "the clear-sky irradiance depends on the date and the place")
     points = gather(cfg.at, cfg.at_xy, cfg.points)
     if cfg.output is not None:
-        Claims([cfg.dem] + ([cfg.points] if cfg.points else []), cfg.run.overwrite).claim(
+        Claims([cfg.dem] + ([cfg.points] if cfg.points else [])
+               + ([cfg.sun["sun_from_stac"]] if cfg.sun.get("sun_from_stac") else []),
+               cfg.run.overwrite).claim(
             cfg.output, "-o/--output")
     d = cfg.read.read(cfg.dem)
+    if scene is not None:
+        from .stac import to_grid_north
+        req = to_grid_north(req, scene, d)      # an item's azimuth is from true north
     points, _ = locate(points, d)
     on_ground(points, d, lift)
     if fmt == "geojson" and any(p["lon"] is None for p in points):
@@ -201,6 +208,7 @@ def query(cfg: QueryConfig) -> dict:
            "crs": d.crs_string(), "convention": CONVENTION,
            "height_above_ground_m": lift, "earth_curvature": bool(res["curved"].any()),
            "sun_source": "time" if req.from_time else "given",
+           "sun_from_stac": scene.as_dict() if scene is not None else None,
            "irradiance": IRRADIANCE if irr is not None else None,
            "points": n, "suns": m, "version": __version__, "rows": out_rows}
     if sun_info is not None:

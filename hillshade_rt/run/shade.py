@@ -25,13 +25,16 @@ def shade(cfg: ShadeConfig) -> dict:
     from .local import needs_windows
     from .outputs import OutputPattern
     from .report import Timer
+    from .stac import check_item_output, sun_from_item
 
     cfg.check()
     kind, soft, algorithm, options = cfg.kind, cfg.soft, cfg.algorithm, cfg.options
     ro = cfg.run
     timer = Timer()
+    # --sun-from-stac: the item's sun (a bad item fails the run, exit status 1)
+    sun, scene = sun_from_item(cfg.sun, ro.quiet, ro.say)
     try:     # a bad sun is the command line's fault (exit status 2)
-        req = SunRequest.from_options(**cfg.sun, default_sun=cfg.default_sun)
+        req = SunRequest.from_options(**sun, default_sun=cfg.default_sun)
     except UsageProblem:
         raise
     except HillshadeError as exc:
@@ -45,9 +48,11 @@ def shade(cfg: ShadeConfig) -> dict:
                  else default_max_memory())
     except HillshadeError as exc:
         raise UsageProblem(f"--max-memory: {exc}") from None
-    claims = Claims(inputs, ro.overwrite)   # every path written: no input, no two the same
-    if output is not None:
+    item_in = [cfg.sun["sun_from_stac"]] if cfg.sun.get("sun_from_stac") else []
+    claims = Claims(inputs + item_in, ro.overwrite)   # every path written: no input, no two
+    if output is not None:                            # the same
         claims.claim(output, "OUTPUT")
+    check_item_output(cfg.stac_item, output, pattern, claims)
     for extra, what in ((ro.report_path, "--report"), (ro.preview, "--preview")):
         if extra is not None:
             claims.claim(extra, what)
@@ -62,11 +67,11 @@ def shade(cfg: ShadeConfig) -> dict:
         src = cfg.read.open(inputs, windows=forced)
     with src:
         return _shade(cfg, src, forced or needs_windows(src, limit, per_cell), inputs, output,
-                      req, pattern, wshape, limit, claims, ran_on, per_cell, timer)
+                      req, pattern, wshape, limit, claims, ran_on, per_cell, timer, scene)
 
 
 def _shade(cfg, src, windowed, inputs, output, req, pattern, wshape, limit, claims, ran_on,
-           per_cell, timer):
+           per_cell, timer, scene=None):
     """``shade`` once the DEM is open: in memory or in windows, then the report."""
     import numba
 
@@ -85,6 +90,12 @@ def _shade(cfg, src, windowed, inputs, output, req, pattern, wshape, limit, clai
                   cfg.ambient, ro.fmt)
     if cfg.height_above_ground:     # the observer's height, in every output's tags
         out.base_tags["HEIGHT_ABOVE_GROUND_M"] = f"{float(cfg.height_above_ground):g}"
+    if scene is not None:           # the sun of a STAC item: which item, in every output's tags
+        from .stac import note_if_apart, scene_tags, to_grid_north
+        req = to_grid_north(req, scene, src)      # its azimuth from true north
+        out.base_tags.update(scene_tags(scene))
+        if not ro.quiet:
+            note_if_apart(scene, src, ro.say)
     # Dask's parts are put together by GDAL (no 16-bit encoding of soft shadows on the way)
     out.via_vrt = cfg.scheduler is not None
     if output is not None:   # the format can hold the product (before any work)
@@ -120,6 +131,7 @@ def _shade(cfg, src, windowed, inputs, output, req, pattern, wshape, limit, clai
                        algorithm_stats=run["algo_stats"], gpu=run.get("gpu"))
     rep["sun"] = records[0] if len(records) == 1 else None
     rep["sun_source"] = "time" if req.from_time else "given"
+    rep["sun_from_stac"] = scene.as_dict() if scene is not None else None
     if run["sun_info"] is not None:
         rep.update(run["sun_info"])
     if len(records) > 1 or req.from_time:
@@ -136,6 +148,12 @@ def _shade(cfg, src, windowed, inputs, output, req, pattern, wshape, limit, clai
     rep["processing"] = run["processing"]
     if ro.preview is not None:
         rep["preview"] = os.path.abspath(ro.preview)
+    if cfg.stac_item is not None:   # once the raster is whole (its checksum), before the report
+        from .stac import write_item
+        with timer("write"):
+            write_item(cfg.stac_item, output, suns, scene, kind=kind, algorithm=algorithm,
+                       command=cfg.command, overwrite=ro.overwrite)
+        rep["stac_item"] = os.path.abspath(cfg.stac_item)
     if ro.report_path is not None:
         write_json(ro.report_path, rep, ro.overwrite)
     if not ro.quiet:
