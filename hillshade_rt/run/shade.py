@@ -82,7 +82,7 @@ def _shade(cfg, src, windowed, inputs, output, req, pattern, wshape, limit, clai
     prod = product(kind, soft)
     dtype, nodata = prod.dtype, prod.nodata
     out = Outputs(prod, algorithm, output, pattern, claims, cfg.cog, ro.preview is not None,
-                  cfg.ambient, ro.fmt)
+                  cfg.ambient, ro.fmt, ro.creation_options)
     if cfg.height_above_ground:     # the observer's height, in every output's tags
         out.base_tags["HEIGHT_ABOVE_GROUND_M"] = f"{float(cfg.height_above_ground):g}"
     # Dask's parts are put together by GDAL (no 16-bit encoding of soft shadows on the way)

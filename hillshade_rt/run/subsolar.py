@@ -96,7 +96,8 @@ def subsolar_shadow(cfg: SubsolarConfig) -> dict:
         if extra is not None:
             claims.claim(extra, what)
     prod = product("shadow", bool(cfg.soft))
-    check_output_format(output, output_driver(output, ro.fmt), prod.dtype, 1, prod.continuous)
+    check_output_format(output, output_driver(output, ro.fmt), prod.dtype, 1, prod.continuous,
+                        ro.creation_options)
     with timer("read"):
         d = cfg.read.read(dem)
     if d.transform is None or d.crs is None:
@@ -133,7 +134,8 @@ def subsolar_shadow(cfg: SubsolarConfig) -> dict:
             "HEIGHT_ABOVE_GROUND_M": f"{float(cfg.height_above_ground):g}"}
     with timer("write"):
         write_raster(output, arr, d, nodata=prod.nodata, description=f"{prod.what} (per-cell "
-                     "suns)", tags=tags, overwrite=ro.overwrite, fmt=ro.fmt)
+                     "suns)", tags=tags, overwrite=ro.overwrite, fmt=ro.fmt,
+                     co=ro.creation_options)
         if ro.preview is not None:
             write_png(ro.preview, relief_rgb(d.heights, d.grid, shade=shade), ro.overwrite)
     rep = {"input": input_label(d.path), "output": os.path.abspath(output),
