@@ -316,11 +316,18 @@ def _probe(drv: str, dtype: str, count: int, ext: str, options: dict) -> str | N
         for lg, level in zip(loggers, levels):
             lg.removeHandler(signals)
             lg.setLevel(level)
-    said = [" ".join(m.replace("\\n", " ").split()) for m in signals.errors + signals.warnings]
-    said += [" ".join(failure.split())] if failure else []
-    said = [re.sub(r"^(src|probe)\.\w+(, band \d+)?: ", "", m) for m in said if m]
-    useful = [m for m in said if "see previous exception" not in m.lower()]
-    return (useful or said or [None])[0]
+    # rasterio's exception when it says something, else what GDAL signalled, errors first
+    said = [_plain(m) for m in ([failure] if failure else []) + signals.errors + signals.warnings]
+    useful = [m for m in said if m and "see previous exception" not in m.lower()]
+    return (useful or [m for m in said if m] or [None])[0]
+
+
+def _plain(message: str) -> str:
+    """GDAL's message about a probe, without the probe's files and libtiff's function names."""
+    m = " ".join(message.replace("\\n", " ").split())
+    m = re.sub(r"\S*hillshade-rt-co-[^/\s]*/", "", m)
+    m = re.sub(r"^_?TIFF\w*:\s*", "", m)
+    return re.sub(r"^(src|probe)\.\w+(, band \d+)?:\s*", "", m)
 
 
 DEFLATE_LEVEL = 1   # GeoTIFF outputs: DEFLATE at this level (see gtiff_profile)
