@@ -277,7 +277,7 @@ def _probe(drv: str, dtype: str, count: int, ext: str, options: dict) -> str | N
     from rasterio.errors import NotGeoreferencedWarning
     from rasterio.transform import from_origin
 
-    from .write import _CAPTURE, _StderrCapture
+    from .write import stderr_dropped
 
     signals = _GdalSignals()
     loggers = [logging.getLogger(n) for n in ("rasterio._env", "rasterio._err", "rasterio._io",
@@ -289,9 +289,8 @@ def _probe(drv: str, dtype: str, count: int, ext: str, options: dict) -> str | N
             lg.setLevel(logging.INFO)
     failure = None
     # what GDAL's TIFF library prints (from its compression threads too) is the probe's only
-    cap = _StderrCapture() if _CAPTURE.acquire(blocking=False) else contextlib.nullcontext()
     try:
-        with tempfile.TemporaryDirectory(prefix="hillshade-rt-co-") as tmp, cap, \
+        with tempfile.TemporaryDirectory(prefix="hillshade-rt-co-") as tmp, stderr_dropped(), \
                 warnings.catch_warnings(), rasterio.Env():
             warnings.simplefilter("ignore", NotGeoreferencedWarning)
             prof = dict(width=16, height=16, count=count, dtype=dtype,
@@ -311,8 +310,6 @@ def _probe(drv: str, dtype: str, count: int, ext: str, options: dict) -> str | N
             except Exception as exc:     # GDAL's, rasterio's (block sizes), numpy's
                 failure = str(exc).splitlines()[0].strip() if str(exc) else type(exc).__name__
     finally:
-        if isinstance(cap, _StderrCapture):
-            _CAPTURE.release()
         for lg, level in zip(loggers, levels):
             lg.removeHandler(signals)
             lg.setLevel(level)
