@@ -70,8 +70,8 @@ def _can_write(drv: str) -> bool:
 def check_output_format(path: str, drv: str, dtype: str, count: int, continuous: bool,
                         co: dict | None = None, resampling: str = "nearest") -> None:
     """Refuse what ``drv`` cannot hold: float values in an integer-only format (soft shadows in
-    PNG are the exception: 16 bits, see :class:`BandWriter`), a lossy format or compression
-    for masks, more bands than one in a picture format; then, for any format but the default
+    PNG are the exception: 16 bits, see :class:`BandWriter`), a lossy format for masks, a
+    lossy compression (``co``) for masks and classes, more bands than one in a picture format; then, for any format but the default
     GeoTIFF and COG, and whenever there are creation options ``co`` (``--co``), GDAL's own
     verdict on the file (:func:`check_creation`): before any work, nothing written."""
     if drv in _INTEGER_ONLY:
@@ -86,7 +86,7 @@ def check_output_format(path: str, drv: str, dtype: str, count: int, continuous:
                              "PNG (.png) or GeoTIFF (.tif)")
     co = co or {}
     lossy = _lossy_compression(co)
-    if lossy and not continuous:
+    if lossy and not continuous and dtype != "float32":   # (floats: LERC's error is a choice)
         raise HillshadeError(f"{path}: --co {lossy} is lossy and would change the mask's "
                              "values; use a lossless COMPRESS (DEFLATE, ZSTD, LZW, ...)")
     if co or drv not in ("GTiff", "COG"):
