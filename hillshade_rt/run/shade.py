@@ -90,7 +90,8 @@ def _shade(cfg, src, windowed, inputs, output, req, pattern, wshape, limit, clai
     if output is not None:   # the format can hold the product (before any work)
         check_output_format(output, output_driver(output, ro.fmt, cfg.cog), dtype,
                             len(req.times) if req.from_time else 1,
-                            out.continuous and not out.via_vrt)
+                            out.continuous and not out.via_vrt, ro.creation_options,
+                            out.resampling)
     if not ro.quiet:
         note = compile_note(algorithm, ran_on, cfg.self_shadow or kind != "shadow")
         if note:

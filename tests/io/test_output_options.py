@@ -146,10 +146,14 @@ def test_co_float_product_and_strips(tmp_path, runner):
     (["--cog", "--co", "BLOCKXSIZE=512"], 1, "COG takes BLOCKSIZE"),
     (["-f", "COG", "--co", "ZLEVEL=9"], 1, "COG takes LEVEL"),
     (["-f", "PNG", "--co", "FOO=1"], 1, "driver PNG does not support creation option FOO"),
+    # Dask: refused before the workers start, not when the parts are put together
+    (["--scheduler", "local:2", "--window-size", "200", "--co", "FOO=1"], 1, "--co FOO=1"),
+    (["--output-pattern", "p_{index}.tif", "--co", "FOO=1"], 1, "--co FOO=1"),
 ])
 def test_bad_co_one_line_nothing_written(tmp_path, runner, args, code, words):
-    out = tmp_path / "out.tif"
-    r = runner.invoke(cli, ["shadow", LIDAR, str(out), "-q"] + SUN + args)
+    args = [str(tmp_path / a) if a.startswith("p_") else a for a in args]
+    out = [] if "--output-pattern" in args else [str(tmp_path / "out.tif")]
+    r = runner.invoke(cli, ["shadow", LIDAR, *out, "-q"] + SUN + args)
     line = one_line_error(r, code)
     assert words in line, line
     assert os.listdir(tmp_path) == []
