@@ -71,9 +71,10 @@ def check_output_format(path: str, drv: str, dtype: str, count: int, continuous:
                         co: dict | None = None, resampling: str = "nearest") -> None:
     """Refuse what ``drv`` cannot hold: float values in an integer-only format (soft shadows in
     PNG are the exception: 16 bits, see :class:`BandWriter`), a lossy format for masks, a
-    lossy compression (``co``) for masks and classes, more bands than one in a picture format; then, for any format but the default
-    GeoTIFF and COG, and whenever there are creation options ``co`` (``--co``), GDAL's own
-    verdict on the file (:func:`check_creation`): before any work, nothing written."""
+    lossy compression (``co``) for masks and classes, more bands than one in a picture
+    format; then, for any format but the default GeoTIFF and COG, and whenever there are
+    creation options ``co`` (``--co``), GDAL's own verdict on the file
+    (:func:`check_creation`): before any work, nothing written."""
     if drv in _INTEGER_ONLY:
         if dtype == "float32" and not (continuous and "uint16" in _INTEGER_ONLY[drv]):
             raise HillshadeError(f"{path}: {drv} holds integers, this product is float32; write "
@@ -291,7 +292,7 @@ def _probe(drv: str, dtype: str, count: int, ext: str, options: dict) -> str | N
     # what GDAL's TIFF library prints (from its compression threads too) is the probe's only
     try:
         with tempfile.TemporaryDirectory(prefix="hillshade-rt-co-") as tmp, stderr_dropped(), \
-                warnings.catch_warnings(), rasterio.Env():
+                warnings.catch_warnings(), rasterio.Env(GDAL_VALIDATE_CREATION_OPTIONS="YES"):
             warnings.simplefilter("ignore", NotGeoreferencedWarning)
             prof = dict(width=16, height=16, count=count, dtype=dtype,
                         transform=from_origin(0, 16, 1, 1))

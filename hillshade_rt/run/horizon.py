@@ -142,7 +142,8 @@ def _writers(cfg, dem, azimuths, tags, dist_tags):
                    overwrite=ro.overwrite, fmt=ro.fmt, co=ro.creation_options)
     wd = (None if cfg.distance is None else
           BandWriter(cfg.distance, dem, n, "float32", -9999.0, dist_tags,
-                     overview_resampling=resampling, overwrite=ro.overwrite, fmt=ro.fmt, co=ro.creation_options))
+                     overview_resampling=resampling, overwrite=ro.overwrite, fmt=ro.fmt,
+                     co=ro.creation_options))
     return w, wd
 
 
