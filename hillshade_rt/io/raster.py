@@ -215,6 +215,7 @@ _OTHER_NAME = {"COG": {"BLOCKXSIZE": "BLOCKSIZE", "BLOCKYSIZE": "BLOCKSIZE", "ZL
                "GTiff": {"BLOCKSIZE": "BLOCKXSIZE and BLOCKYSIZE",
                          "LEVEL": "ZLEVEL, ZSTD_LEVEL or LZMA_PRESET"}}
 
+_PROBE_BANDS = 16      # bands of a trial file at most (2000 bands: 1 s)
 _VERDICTS: dict = {}   # check_creation's answers: (driver, type, bands, ext, options) -> reason
 
 
@@ -228,9 +229,11 @@ def check_creation(path: str, drv: str, dtype: str, count: int, options: dict,
     or error GDAL signals is a :class:`HillshadeError` naming the ``--co`` (of ``co``) it is
     about, e.g. "out.tif: --co FOO=1: driver GTiff does not support creation option FOO"."""
     ext = ".tif" if drv in ("GTiff", "COG") else (os.path.splitext(path)[1] or ".out")
-    key = (drv, dtype, count, ext, tuple(sorted(options.items())))
+    # a year of hourly bands tried as 16: the drivers' limits on bands are 1, 3 or 4, or 2^16
+    bands = min(count, _PROBE_BANDS)
+    key = (drv, dtype, bands, ext, tuple(sorted(options.items())))
     if key not in _VERDICTS:
-        _VERDICTS[key] = _probe(drv, dtype, count, ext, options)
+        _VERDICTS[key] = _probe(drv, dtype, bands, ext, options)
     reason = _VERDICTS[key]
     if reason is None:
         return
