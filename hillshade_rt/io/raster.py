@@ -193,8 +193,8 @@ def output_options(drv: str, dtype: str, count: int, co: dict | None = None,
 
 
 def _lossy_compression(co: dict) -> str | None:
-    """The ``--co`` that makes a GeoTIFF's compression lossy (COMPRESS=JPEG, WEBP but
-    lossless, LERC with a MAX_Z_ERROR), if any."""
+    """The ``--co`` that makes a GeoTIFF's compression lossy (COMPRESS=JPEG, WEBP without
+    WEBP_LOSSLESS, LERC with a MAX_Z_ERROR), if any."""
     comp = co.get("COMPRESS", "").upper()
     if comp == "JPEG":
         return "COMPRESS=JPEG"
