@@ -51,7 +51,7 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
           self_shadow: bool = False, ambient: float = 0.2, scale: float | None = None,
           curvature: bool | None = None, refraction_k: float | None = None,
           backend: str = "auto", max_memory=None, window_size=None, cog: bool = False,
-          fmt: str | None = None,
+          fmt: str | None = None, creation_options=None,
           client=None, overwrite: bool = False, report: str | None = None,
           preview: str | None = None, progress: bool = False,
           height_above_ground: float = 0.0, sun_from_stac: str | None = None,
@@ -64,6 +64,8 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
     ``azimuth``/``elevation``, or ``times`` (datetimes or ISO strings), or ``start``/``end``/
     ``step`` at the DEM's place. ``algorithm_options``: e.g. ``{"nextv": "quad"}``.
     ``fmt``: a GDAL driver name (default from the extension, as ``--format``).
+    ``creation_options``: GDAL creation options of the files written, as ``--co`` (a mapping
+    such as ``{"COMPRESS": "ZSTD"}`` or ``["COMPRESS=ZSTD"]``), over the tool's defaults.
     ``height_above_ground``: metres above every cell its ray starts from, as
     ``--height-above-ground`` (brute marches it; ``algorithm="auto"`` runs brute).
     ``sun_from_stac``: a STAC item's path or URL, its scene's sun (``--sun-from-stac``);
@@ -106,7 +108,7 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
     read = ReadOptions(**{k: more[k] for k in READ_KEYS if k in more})
     run = RunOptions(backend=backend, threads=more.get("threads"), report_path=report,
                      overwrite=overwrite, quiet=not progress, fmt=fmt, preview=preview,
-                     say=_stderr)
+                     say=_stderr, creation_options=creation_options)
     hill = product == "hillshade"
     cfg = ShadeConfig(files, product, sun, default_sun=(315.0, 45.0) if hill else None,
                       algorithm=algorithm, options=options, curvature=curvature,
@@ -131,8 +133,9 @@ def irradiance(dem, output, *, date=None, end_date=None, start=None, end=None,
                mean: bool = False, soft: bool = False, perez: bool = False,
                skyview_directions: int = 32, algorithm: str = "auto",
                curvature: bool | None = None, refraction_k: float | None = None,
-               backend: str = "auto", fmt: str | None = None, overwrite: bool = False,
-               report: str | None = None, preview: str | None = None, progress: bool = False,
+               backend: str = "auto", fmt: str | None = None, creation_options=None,
+               overwrite: bool = False, report: str | None = None,
+               preview: str | None = None, progress: bool = False,
                **more) -> dict:
     """``hillshade-rt irradiance`` as a function: the beam, diffuse, reflected and global
     irradiance on every cell of the DEM at ``dem`` over a period, written to ``output`` (4
@@ -141,7 +144,8 @@ def irradiance(dem, output, *, date=None, end_date=None, start=None, end=None,
     sky: ``clear_sky`` ("ineichen", the default, with ``linke_turbidity``; "haurwitz") or
     ``ghi``, the path of a measured series (CSV: time, ghi[, dni, dhi]). Further keywords are
     the command line's options of the same name (``tz``, ``lat``, ``lon``, ``band``,
-    ``nodata``, ``threads``, ...). Returns the report. For heights in memory:
+    ``nodata``, ``threads``, ...); ``fmt`` and ``creation_options`` as for :func:`shade`.
+    Returns the report. For heights in memory:
     :func:`hillshade_rt.arrays.irradiance`."""
     from .run import ReadOptions, RunOptions
     from .run.irradiance import IrradianceConfig, irradiance as run_irradiance
@@ -159,7 +163,7 @@ def irradiance(dem, output, *, date=None, end_date=None, start=None, end=None,
     read = ReadOptions(**{k: more[k] for k in READ_KEYS if k in more})
     run = RunOptions(backend=backend, threads=more.get("threads"), report_path=report,
                      overwrite=overwrite, quiet=not progress, fmt=fmt, preview=preview,
-                     say=_stderr)
+                     say=_stderr, creation_options=creation_options)
     cfg = IrradianceConfig(os.fspath(dem), os.fspath(output), text(date), text(end_date),
                            text(start), text(end), step, clear_sky, linke_turbidity, albedo,
                            None if ghi is None else os.fspath(ghi), mean, soft, perez,

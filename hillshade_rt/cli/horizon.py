@@ -45,7 +45,8 @@ from .options import (backend_option, dem_options, finite, format_option,
 @errors_to_click
 def horizon(dem, output, azimuth, directions, distance, method, sample_spacing, max_distance,
             curvature, refraction_k, height_above_ground, preview, backend, threads, max_memory,
-            window_size, scheduler, overwrite, quiet, fmt, **read_opts):
+            window_size, scheduler, overwrite, quiet, fmt,
+            creation_options, **read_opts):
     """Write the horizon angle toward --azimuth (or toward each of --directions N azimuths, one
     band each) of every cell of DEM to OUTPUT.
 
@@ -55,7 +56,7 @@ def horizon(dem, output, azimuth, directions, distance, method, sample_spacing, 
     --max-memory (or any, with --window-size) is computed in windows, with the same result."""
     from ..run import HorizonConfig, horizon as run_horizon
     kw = dict(preview=preview, backend=backend, threads=threads, overwrite=overwrite,
-              quiet=quiet, fmt=fmt, **read_opts)
+              quiet=quiet, fmt=fmt, creation_options=creation_options, **read_opts)
     run_horizon(HorizonConfig(dem, output, azimuth, method, sample_spacing, curvature,
                               refraction_k, to_read_options(kw), to_run_options(kw, say),
                               directions=directions, distance=distance,

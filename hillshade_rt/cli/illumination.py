@@ -6,8 +6,9 @@ from __future__ import annotations
 import click
 
 from .errors import errors_to_click, say
-from .options import (backend_option, dem_options, height_above_ground_option, max_memory_option,
-                      overwrite_option, physics_options, preview_option, quiet_option,
+from .options import (backend_option, dem_options, format_option, height_above_ground_option,
+                      max_memory_option, overwrite_option, physics_options, preview_option,
+                      quiet_option,
                       report_option, scheduler_option, subsolar_series_options, threads_option,
                       to_read_options, to_run_options, window_size_option)
 
@@ -29,19 +30,21 @@ from .options import (backend_option, dem_options, height_above_ground_option, m
 @report_option
 @overwrite_option("Replace OUTPUT (and the report) if they exist.")
 @quiet_option("No progress bar or summary on stderr.")
+@format_option
 @dem_options
 @errors_to_click
 def illumination(dem, output, subsolar_file, sun_distance, body, height_above_ground, curvature,
                  refraction_k, soft, preview, max_memory, window_size, scheduler, backend,
-                 threads, report_path, overwrite, quiet, **read_opts):
+                 threads, report_path, overwrite, quiet, fmt, creation_options, **read_opts):
     """Write the illumination of DEM over a subsolar series to OUTPUT (float32 GeoTIFF, NaN
     nodata), every cell with its own sun on the body: band 1 the fraction of the time lit
     (each time weighted by its interval), [2 with --soft: the mean visible fraction of the solar
     disk], then the longest continuous shadow (hours) and permanently shadowed (1 never lit in
     the series, 0 otherwise)."""
     from ..run.illumination import IllumConfig, illumination as run_illumination
-    kw = dict(preview=preview, backend=backend, threads=threads, report_path=report_path, overwrite=overwrite,
-              quiet=quiet, **read_opts)
+    kw = dict(preview=preview, backend=backend, threads=threads, report_path=report_path,
+              overwrite=overwrite, quiet=quiet, fmt=fmt, creation_options=creation_options,
+              **read_opts)
     read = to_read_options(kw)
     run_illumination(IllumConfig([dem, output], subsolar_file=subsolar_file, body=body,
                                  sun_distance=sun_distance,

@@ -63,7 +63,8 @@ def irradiance(dem, output, date_, end_date, start, end, step, clear_sky, linke_
                albedo, ghi, mean, perez, skyview_directions, tz, lat, lon, pressure, temperature,
                no_refraction, sun_tolerance, algorithm, curvature, refraction_k, soft,
                height_above_ground, preview,
-               backend, threads, report_path, overwrite, quiet, fmt, **read_opts):
+               backend, threads, report_path, overwrite, quiet, fmt,
+               creation_options, **read_opts):
     """Write the beam, diffuse, reflected and global irradiance on every cell of DEM over a
     period to OUTPUT: 4 float32 bands, Wh/m2 (W/m2 with --mean), -9999 nodata. Beam: DNI on
     the tilted surface, in cast shadow 0; diffuse: DHI times the sky view factor; reflected:
@@ -72,7 +73,7 @@ def irradiance(dem, output, date_, end_date, start, end, step, clear_sky, linke_
     kw = dict(tz=tz, lat=lat, lon=lon, pressure=pressure, temperature=temperature,
               no_refraction=no_refraction, sun_tolerance=sun_tolerance, preview=preview,
               backend=backend, threads=threads, report_path=report_path, overwrite=overwrite,
-              quiet=quiet, fmt=fmt, **read_opts)
+              quiet=quiet, fmt=fmt, creation_options=creation_options, **read_opts)
     place = {k: kw.pop(k) for k in PLACE_KEYS}
     run_irradiance(IrradianceConfig(
         dem, output, date_, end_date, start, end, step, clear_sky, linke_turbidity, albedo, ghi,

@@ -58,8 +58,8 @@ def _check_z_factor(ctx, param, value):
 def dem_options(f):
     """Options that say how to read a DEM (shared by every command that reads one)."""
     return _stack(f, [
-        click.option("-b", "--band", type=click.IntRange(min=1), default=1, show_default=True,
-                     help="Band of a multi-band raster."),
+        click.option("-b", "--band", "--bidx", "band", type=click.IntRange(min=1), default=1,
+                     show_default=True, help="Band of a multi-band raster."),
         click.option("--nodata", type=float, default=None,
                      help="Nodata value (overrides the file's). NaN is always nodata."),
         click.option("-z", "--z-factor", type=float, default=1.0, show_default=True,
@@ -78,11 +78,32 @@ def dem_options(f):
     ])
 
 
+def _check_creation_options(ctx, param, value):
+    """``--co NAME=VALUE`` (repeatable) -> {NAME: VALUE}; a malformed one: exit status 2."""
+    if not value:
+        return {}
+    from ..io.raster import parse_creation_options
+    try:
+        return parse_creation_options(value)
+    except HillshadeError as exc:
+        raise click.UsageError(str(exc), ctx=ctx) from None
+
+
 def format_option(f):
-    return click.option("-f", "--format", "--of", "fmt", metavar="DRIVER", default=None,
-                     help="Output format, a GDAL driver name (GTiff, COG, PNG, JPEG, AAIGrid, "
-                          "...); default: from the output's extension (.png PNG, .jpg JPEG, "
-                          ".asc AAIGrid, ...), else GeoTIFF.")(f)
+    """``-f/--format DRIVER`` and ``--co NAME=VALUE``: the rasters' GDAL driver and creation
+    options (rasterio's ``rio`` spellings)."""
+    return _stack(f, [
+        click.option("-f", "--format", "--of", "fmt", metavar="DRIVER", default=None,
+                     help="Output format, a GDAL driver name that can write (GTiff, COG, PNG, "
+                          "JPEG, HFA, ENVI, AAIGrid, ...); default: from the output's extension "
+                          "(.png PNG, .jpg JPEG, .asc AAIGrid, ...), else GeoTIFF."),
+        click.option("--co", "creation_options", metavar="NAME=VALUE", multiple=True,
+                     callback=_check_creation_options,
+                     help="A GDAL creation option of the output's driver, e.g. COMPRESS=ZSTD, "
+                          "PREDICTOR=2, BLOCKXSIZE=512, BIGTIFF=YES (with --cog or -f COG: the "
+                          "COG driver's, e.g. BLOCKSIZE=1024, LEVEL=9); repeatable; overrides "
+                          "the defaults (tiled, deflated). GDAL checks them before the run."),
+    ])
 
 
 def backend_option(f):
@@ -436,7 +457,8 @@ def to_run_options(kw: dict, say):
     """The options every run takes (backend, threads, report, overwrite, quiet, format,
     preview), popped from ``kw`` where given, as ``run.RunOptions``."""
     from ..run.config import RunOptions
-    keys = ("backend", "threads", "report_path", "overwrite", "quiet", "fmt", "preview")
+    keys = ("backend", "threads", "report_path", "overwrite", "quiet", "fmt", "preview",
+            "creation_options")
     return RunOptions(say=say, **{k: kw.pop(k) for k in keys if k in kw})
 
 

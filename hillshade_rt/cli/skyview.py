@@ -48,13 +48,15 @@ from .options import (backend_option, dem_options, format_option,
 @errors_to_click
 def skyview(dem, output, directions, definition, terrain_configuration, openness, max_distance,
             curvature, refraction_k, height_above_ground, preview, backend, threads, max_memory,
-            window_size, scheduler, overwrite, quiet, fmt, **read_opts):
+            window_size, scheduler, overwrite, quiet, fmt,
+            creation_options, **read_opts):
     """Write the sky view factor of every cell of DEM to OUTPUT (float32 0..1, -9999 nodata)
     from its exact horizon in --directions azimuths, or its openness (--openness, degrees).
     A DEM larger than --max-memory (or any, with --window-size) is computed in windows, with
     the same result."""
     from ..run.skyview import SkyviewConfig, skyview as run_skyview
     kw = dict(preview=preview, backend=backend, threads=threads, overwrite=overwrite, quiet=quiet, fmt=fmt,
+              creation_options=creation_options,
               **read_opts)
     run_skyview(SkyviewConfig(dem, output, directions, definition, terrain_configuration,
                               curvature, refraction_k, to_read_options(kw),

@@ -41,7 +41,8 @@ from .options import (algorithm_option, backend_option, dem_options, format_opti
 def sun_hours(dem, output, date_, end_date, step, tz, lat, lon, pressure, temperature,
               no_refraction, sun_tolerance, algorithm, curvature, refraction_k, soft,
               height_above_ground, self_shadow, preview, backend, threads, report_path,
-              overwrite, quiet, fmt, **read_opts):
+              overwrite, quiet, fmt,
+              creation_options, **read_opts):
     """Write the hours of direct sun per cell of DEM over a day (or a range of days) to OUTPUT
     (float32 hours, -9999 nodata), like WhiteboxTools' TimeInDaylight or GRASS r.sun's insolation
     time: the sun every --step, each lit sample counting for its interval."""
@@ -49,7 +50,7 @@ def sun_hours(dem, output, date_, end_date, step, tz, lat, lon, pressure, temper
     kw = dict(tz=tz, lat=lat, lon=lon, pressure=pressure, temperature=temperature,
               no_refraction=no_refraction, sun_tolerance=sun_tolerance, preview=preview,
               backend=backend, threads=threads, report_path=report_path, overwrite=overwrite,
-              quiet=quiet, fmt=fmt, **read_opts)
+              quiet=quiet, fmt=fmt, creation_options=creation_options, **read_opts)
     place = {k: kw.pop(k) for k in PLACE_KEYS}
     run_sun_hours(SunHoursConfig(dem, output, date_, end_date, step, place, algorithm, curvature,
                                  refraction_k, soft, self_shadow, to_read_options(kw),

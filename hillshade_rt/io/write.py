@@ -420,6 +420,21 @@ class _StderrCapture:
 _CAPTURE = threading.Lock()
 
 
+@contextlib.contextmanager
+def stderr_dropped():
+    """What GDAL's libraries print on the process's stderr while a block runs, dropped (a
+    probe's expected failures, :func:`.raster.check_creation`); one thread at a time (another
+    thread's block prints as usual)."""
+    if not _CAPTURE.acquire(blocking=False):
+        yield
+        return
+    try:
+        with _StderrCapture():
+            yield
+    finally:
+        _CAPTURE.release()
+
+
 def _disk_full(path: str) -> bool:
     with contextlib.suppress(OSError):
         st = os.statvfs(os.path.dirname(os.path.abspath(path)) or ".")

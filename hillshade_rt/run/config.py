@@ -85,6 +85,13 @@ class RunOptions:
     fmt: str | None = None
     preview: str | None = None
     say: Callable[[str, str], None] = say_nothing
+    # --co NAME=VALUE: GDAL creation options of the rasters written, over the tool's defaults
+    # ({NAME: VALUE}, io.parse_creation_options)
+    creation_options: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        from ..io.raster import parse_creation_options
+        self.creation_options = parse_creation_options(self.creation_options)
 
 
 @dataclass

@@ -202,14 +202,16 @@ def run_on_dask(scheduler, job, suns, plans, out, share, stride, quiet, algo_sta
                           [band_sources(i) for i in range(len(suns))], dtype, out.nodata,
                           [out.description(s) for s in suns], out.base_tags,
                           [sun_tags(s) for s in suns])
-            copy_vrt(doc, out.output, out.dtype, out.cog, out.resampling, out.overwrite, out.fmt)
+            copy_vrt(doc, out.output, out.dtype, out.cog, out.resampling, out.overwrite, out.fmt,
+                     out.co)
         else:
             for i, s in enumerate(suns):
                 doc = vrt_xml(src.shape, src.transform, src.crs, [band_sources(i)], dtype,
                               out.nodata, [out.description(s)], {**out.base_tags, **sun_tags(s)})
                 scratch = out.tile_paths is not None   # a mosaic cut into tiles: GeoTIFF
                 copy_vrt(doc, out.target(i), out.dtype, out.file_cog, out.resampling,
-                         out.overwrite or scratch, None if scratch else out.fmt)
+                         out.overwrite or scratch, None if scratch else out.fmt,
+                         None if scratch else out.co)
                 out.finish(i, s, src)
         records = [out.record(s, i, per_sun[i]["stats"], per_sun[i]["seconds"],
                               marched_per_cell(plans[i]))

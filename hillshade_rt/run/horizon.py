@@ -74,7 +74,8 @@ def horizon(cfg: HorizonConfig) -> dict:
     if cfg.distance is not None:
         claims.claim(cfg.distance, "--distance")
     for path in [output] + ([cfg.distance] if cfg.distance is not None else []):
-        check_output_format(path, output_driver(path, ro.fmt), "float32", len(azimuths), False)
+        check_output_format(path, output_driver(path, ro.fmt), "float32", len(azimuths), False,
+                            ro.creation_options)
     if method == "hull" and sample_spacing != 1:
         raise UsageProblem("--sample-spacing applies to --method scan only")
     if method == "hull" and cfg.distance is not None:
@@ -138,10 +139,11 @@ def _writers(cfg, dem, azimuths, tags, dist_tags):
     many = cfg.directions is not None
     resampling = "average" if many else "nearest"
     w = BandWriter(cfg.output, dem, n, "float32", -9999.0, tags, overview_resampling=resampling,
-                   overwrite=ro.overwrite, fmt=ro.fmt)
+                   overwrite=ro.overwrite, fmt=ro.fmt, co=ro.creation_options)
     wd = (None if cfg.distance is None else
           BandWriter(cfg.distance, dem, n, "float32", -9999.0, dist_tags,
-                     overview_resampling=resampling, overwrite=ro.overwrite, fmt=ro.fmt))
+                     overview_resampling=resampling, overwrite=ro.overwrite, fmt=ro.fmt,
+                     co=ro.creation_options))
     return w, wd
 
 
@@ -391,7 +393,7 @@ def _vrt_outputs(cfg, src, azimuths, tags, dist_tags) -> dict:
     band_tags = [t[2] for t in texts] if many else None
     common = dict(shape=src.shape, transform=src.transform, crs=src.crs,
                   resampling="average" if many else "nearest", overwrite=ro.overwrite,
-                  fmt=ro.fmt, band_tags=band_tags)
+                  fmt=ro.fmt, co=ro.creation_options, band_tags=band_tags)
     out = {"angles": VrtOutput(cfg.output, descriptions=[t[0] for t in texts], tags=tags,
                                **common)}
     if cfg.distance is not None:

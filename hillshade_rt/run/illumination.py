@@ -369,7 +369,8 @@ def illumination(cfg: IllumConfig) -> dict:
         stats = {n: [0.0, 0] for n in names}
         n_psr = 0
         with timer("compute"), BandWriter(output, src, len(names), "float32", float("nan"),
-                                          tags, overwrite=ro.overwrite) as w:
+                                          tags, overwrite=ro.overwrite, fmt=ro.fmt,
+                                          co=ro.creation_options) as w:
             if windowed or cfg.scheduler is not None:
                 if windowed:
                     regs, _ = plan_windows(src, phys, suns, window_shape)

@@ -110,7 +110,7 @@ def irradiance(cfg: IrradianceConfig) -> dict:
         raise HillshadeError(f"{output}: {driver} holds one band of integers or one grid; "
                              f"irradiance writes {len(ir.BANDS)} float32 bands "
                              f"({', '.join(ir.BANDS)}): write a GeoTIFF (.tif)")
-    check_output_format(output, driver, "float32", len(ir.BANDS), True)
+    check_output_format(output, driver, "float32", len(ir.BANDS), True, ro.creation_options)
     try:    # the command line alone decides these: a bad one is a usage error (exit 2)
         step = parse_step(cfg.step)
         req = SunRequest.at_place([], **cfg.place)
@@ -213,7 +213,7 @@ def irradiance(cfg: IrradianceConfig) -> dict:
     with timer("write"):
         with BandWriter(output, d, len(ir.BANDS), "float32", -9999.0, tags,
                         overview_resampling="average", overwrite=ro.overwrite,
-                        fmt=ro.fmt) as w:
+                        fmt=ro.fmt, co=ro.creation_options) as w:
             for i, k in enumerate(ir.BANDS, 1):
                 v = bands[k]
                 w.write(i, np.where(np.isnan(v), np.float32(-9999.0), v), k, {"UNITS": unit})

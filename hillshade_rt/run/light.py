@@ -100,7 +100,8 @@ def light_shadow(cfg: LightConfig) -> dict:
     for extra, what in ((ro.report_path, "--report"), (ro.preview, "--preview")):
         if extra is not None:
             claims.claim(extra, what)
-    check_output_format(output, output_driver(output, ro.fmt), "uint8", 1, False)
+    check_output_format(output, output_driver(output, ro.fmt), "uint8", 1, False,
+                        ro.creation_options)
     with timer("read"):
         src = cfg.read.open(dem, windows=wshape is not None)
     with src:
@@ -138,7 +139,8 @@ def light_shadow(cfg: LightConfig) -> dict:
                                         backend=ro.backend, stats=st)
             with timer("write"):
                 write_raster(output, mask, d, nodata=255, description="cast shadow (point light)",
-                             tags=tags, overwrite=ro.overwrite, fmt=ro.fmt)
+                             tags=tags, overwrite=ro.overwrite, fmt=ro.fmt,
+                             co=ro.creation_options)
                 if ro.preview is not None:
                     write_png(ro.preview, relief_rgb(d.heights, d.grid,
                                                      shade=np.where(mask == 1, 1.0, 0.0)),
@@ -192,7 +194,8 @@ def _windows(src, row, col, zl, lift, wshape, limit, per_cell, output, tags, ro,
     shadowed = valid = windows = 0
     largest = 0
     with src.reader() as rd, BandWriter(output, src, 1, "uint8", 255, tags,
-                                        overwrite=ro.overwrite, fmt=ro.fmt) as w:
+                                        overwrite=ro.overwrite, fmt=ro.fmt,
+                                        co=ro.creation_options) as w:
         fr, fc = math.floor(row), math.floor(col)        # the light inside the terrain?
         a, b = max(0, fr - 1), min(rows, fr + 3)
         c, d = max(0, fc - 1), min(cols, fc + 3)

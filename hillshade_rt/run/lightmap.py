@@ -146,7 +146,7 @@ def lightmap(cfg: LightmapConfig) -> dict:
         if extra is not None:
             claims.claim(extra, what)
     dtype = "uint8" if cfg.bits == 8 else "uint16"
-    check_output_format(output, output_driver(output, ro.fmt), dtype, 1, True)
+    check_output_format(output, output_driver(output, ro.fmt), dtype, 1, True, ro.creation_options)
     with timer("read"):
         d = cfg.read.read(dem)
     if cfg.scale is not None:
@@ -169,7 +169,8 @@ def lightmap(cfg: LightmapConfig) -> dict:
     with timer("write"):
         write_raster(output, relief, d, nodata=0,
                      description="shaded relief (point light)", tags=tags,
-                     overview_resampling="average", overwrite=ro.overwrite, fmt=ro.fmt)
+                     overview_resampling="average", overwrite=ro.overwrite, fmt=ro.fmt,
+                     co=ro.creation_options)
         if ro.preview is not None:
             write_png(ro.preview, relief_rgb(d.heights, d.grid,
                                              shade=np.where(mask == 1, 1.0, 0.0)), ro.overwrite)

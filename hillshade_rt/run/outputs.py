@@ -105,12 +105,13 @@ class Outputs:
     nodata, tags and descriptions."""
 
     def __init__(self, product, algorithm, output, pattern, claims, cog, preview, ambient,
-                 fmt=None):
+                 fmt=None, co=None):
         self.product = product          # a products.Product
         self.kind, self.soft = product.kind, product.soft
         self.dtype, self.nodata = product.dtype, product.nodata
         self.output, self.pattern, self.cog = output, pattern, cog
         self.claims, self.overwrite, self.fmt = claims, claims.overwrite, fmt
+        self.co = dict(co or {})     # --co: creation options of the files published
         self.preview, self.ambient = preview, ambient
         self.base_tags = {"HILLSHADE_RT_VERSION": __version__, "ALGORITHM": algorithm,
                           "VALUES": product.values}
@@ -138,7 +139,8 @@ class Outputs:
                 self.claims.claim(p, "--output-pattern")
                 check_output_format(p, output_driver(p, self.fmt, self.cog and not per_tile),
                                     self.dtype, 1,
-                                    self.continuous and not (per_tile or self.via_vrt))
+                                    self.continuous and not (per_tile or self.via_vrt), self.co,
+                                    self.resampling)
         if per_tile:
             self.tiles, self.tile_paths = tiles, paths
             self.paths = [None] * len(suns)
@@ -175,7 +177,8 @@ class Outputs:
                           self.nodata, [self.description(sun)],
                           {**self.base_tags, **sun_tags(sun),
                            "TILE_SOURCE": input_label(t["path"])})
-            copy_vrt(doc, path, self.dtype, self.cog, self.resampling, self.overwrite, self.fmt)
+            copy_vrt(doc, path, self.dtype, self.cog, self.resampling, self.overwrite, self.fmt,
+                     self.co)
         self._remove(scratch)
 
     def _remove(self, path):
@@ -197,14 +200,16 @@ class Outputs:
         if self.output is None:
             return contextlib.nullcontext()
         return BandWriter(self.output, dem, count, self.dtype, self.nodata, self.base_tags,
-                          self.cog, self.resampling, overwrite=self.overwrite, fmt=self.fmt)
+                          self.cog, self.resampling, overwrite=self.overwrite, fmt=self.fmt,
+                          co=self.co)
 
     def file_writer(self, dem, i, sun):
         from ..io import BandWriter
         scratch = self.tile_paths is not None   # a mosaic to be cut into tiles: a GeoTIFF
         return BandWriter(self.target(i), dem, 1, self.dtype, self.nodata,
                           {**self.base_tags, **sun_tags(sun)}, self.file_cog, self.resampling,
-                          overwrite=self.overwrite or scratch, fmt=None if scratch else self.fmt)
+                          overwrite=self.overwrite or scratch, fmt=None if scratch else self.fmt,
+                          co=None if scratch else self.co)
 
     def record(self, sun, i, st, seconds, per_cell=False):
         rec = dict(sun.as_dict(), shadow_fraction=st["shadow_fraction"], compute_s=seconds)

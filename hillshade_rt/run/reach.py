@@ -515,6 +515,7 @@ class VrtOutput:
     resampling: str = "nearest"
     overwrite: bool = False
     fmt: str | None = None
+    co: dict | None = None          # --co: creation options
 
     def write(self, bands) -> None:
         from ..io import copy_vrt
@@ -522,4 +523,5 @@ class VrtOutput:
         doc = vrt_xml(self.shape, self.transform, self.crs, bands, "Float32", -9999.0,
                       self.descriptions, {k: str(v) for k, v in self.tags.items()},
                       self.band_tags)
-        copy_vrt(doc, self.path, "float32", False, self.resampling, self.overwrite, self.fmt)
+        copy_vrt(doc, self.path, "float32", False, self.resampling, self.overwrite, self.fmt,
+                 self.co)

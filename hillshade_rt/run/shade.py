@@ -87,7 +87,7 @@ def _shade(cfg, src, windowed, inputs, output, req, pattern, wshape, limit, clai
     prod = product(kind, soft)
     dtype, nodata = prod.dtype, prod.nodata
     out = Outputs(prod, algorithm, output, pattern, claims, cfg.cog, ro.preview is not None,
-                  cfg.ambient, ro.fmt)
+                  cfg.ambient, ro.fmt, ro.creation_options)
     if cfg.height_above_ground:     # the observer's height, in every output's tags
         out.base_tags["HEIGHT_ABOVE_GROUND_M"] = f"{float(cfg.height_above_ground):g}"
     if scene is not None:           # the sun of a STAC item: which item, in every output's tags
@@ -101,7 +101,8 @@ def _shade(cfg, src, windowed, inputs, output, req, pattern, wshape, limit, clai
     if output is not None:   # the format can hold the product (before any work)
         check_output_format(output, output_driver(output, ro.fmt, cfg.cog), dtype,
                             len(req.times) if req.from_time else 1,
-                            out.continuous and not out.via_vrt)
+                            out.continuous and not out.via_vrt, ro.creation_options,
+                            out.resampling)
     if not ro.quiet:
         note = compile_note(algorithm, ran_on, cfg.self_shadow or kind != "shadow")
         if note:

@@ -115,7 +115,8 @@ def skyview(cfg: SkyviewConfig) -> dict:
     claims.claim(cfg.output, "OUTPUT")
     if ro.preview is not None:
         claims.claim(ro.preview, "--preview")
-    check_output_format(cfg.output, output_driver(cfg.output, ro.fmt), "float32", 1, True)
+    check_output_format(cfg.output, output_driver(cfg.output, ro.fmt), "float32", 1, True,
+                        ro.creation_options)
     if ro.threads is not None:
         numba.set_num_threads(min(ro.threads, numba.config.NUMBA_NUM_THREADS))
     ran_on = choose_backend(ro.backend, "horizon", {"method": "scan"})
@@ -154,7 +155,8 @@ def _writer(cfg, dem, definition, n, curved, max_distance):
     ro = cfg.run
     return BandWriter(cfg.output, dem, 1, "float32", -9999.0,
                       _tags(cfg, definition, n, curved, max_distance),
-                      overview_resampling="average", overwrite=ro.overwrite, fmt=ro.fmt)
+                      overview_resampling="average", overwrite=ro.overwrite, fmt=ro.fmt,
+                      co=ro.creation_options)
 
 
 class _Stats:
@@ -251,7 +253,8 @@ def _in_windows(cfg, definition, src, ran_on, max_distance, timer, *, wshape, li
             out = VrtOutput(cfg.output, src.shape, src.transform, src.crs,
                             [describe(cfg, definition)],
                             _tags(cfg, definition, n, curved, max_distance),
-                            resampling="average", overwrite=ro.overwrite, fmt=ro.fmt)
+                            resampling="average", overwrite=ro.overwrite, fmt=ro.fmt,
+                      co=ro.creation_options)
             with timer("compute"):
                 fig, parts, extra = run_on_dask(cfg.scheduler, job, regs, product,
                                                 {"result": out}, ro.quiet)

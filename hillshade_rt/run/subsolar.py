@@ -102,7 +102,8 @@ def subsolar_shadow(cfg: SubsolarConfig) -> dict:
         if extra is not None:
             claims.claim(extra, what)
     prod = product("shadow", bool(cfg.soft))
-    check_output_format(output, output_driver(output, ro.fmt), prod.dtype, 1, prod.continuous)
+    check_output_format(output, output_driver(output, ro.fmt), prod.dtype, 1, prod.continuous,
+                        ro.creation_options)
     series = None
     if point is None:
         from ..ephemeris import read_subsolar
@@ -141,7 +142,8 @@ def subsolar_shadow(cfg: SubsolarConfig) -> dict:
             "HEIGHT_ABOVE_GROUND_M": f"{float(cfg.height_above_ground):g}"}
     with timer("write"):
         write_raster(output, arr, d, nodata=prod.nodata, description=f"{prod.what} (per-cell "
-                     "suns)", tags=tags, overwrite=ro.overwrite, fmt=ro.fmt)
+                     "suns)", tags=tags, overwrite=ro.overwrite, fmt=ro.fmt,
+                     co=ro.creation_options)
         if ro.preview is not None:
             write_png(ro.preview, relief_rgb(d.heights, d.grid, shade=shade), ro.overwrite)
     rep = _report(cfg, d, output, body, curvature, timer, subsolar={"lat": lat, "lon": lon},
@@ -195,7 +197,7 @@ def _series(cfg: SubsolarConfig, d, output: str, series, body, default_distance:
             z = d.heights if d.heights.dtype == np.float32 else d.heights.astype(np.float32)
             pyramid = MaxPyramid(z)
     with BandWriter(output, d, len(series), prod.dtype, prod.nodata, tags=tags,
-                    overwrite=ro.overwrite, fmt=ro.fmt) as w:
+                    overwrite=ro.overwrite, fmt=ro.fmt, co=ro.creation_options) as w:
         for i in progress(range(len(series)), ro.quiet, "subsolar positions", "position"):
             lat, lon = float(series.lat[i]), float(series.lon[i])
             with timer("compute"):

@@ -37,7 +37,8 @@ def sun_hours(cfg: SunHoursConfig) -> dict:
                        (ro.preview, "--preview")):
         if path is not None:
             claims.claim(path, what)
-    check_output_format(output, output_driver(output, ro.fmt), "float32", 1, False)
+    check_output_format(output, output_driver(output, ro.fmt), "float32", 1, False,
+                        ro.creation_options)
     try:    # the command line alone decides these: a bad one is a usage error (exit 2)
         first = parse_date(cfg.date, "--date")
         last = parse_date(cfg.end_date, "--end-date") if cfg.end_date is not None else first
@@ -92,7 +93,7 @@ def sun_hours(cfg: SunHoursConfig) -> dict:
     with timer("write"):
         write_raster(output, np.where(np.isnan(hours), np.float32(-9999.0), hours), d,
                      nodata=-9999.0, description="hours of direct sun", tags=tags,
-                     overwrite=ro.overwrite, fmt=ro.fmt)
+                     overwrite=ro.overwrite, fmt=ro.fmt, co=ro.creation_options)
         if ro.preview is not None:
             top = float(np.nanmax(hours)) if np.isfinite(hours).any() else 0.0
             write_png(ro.preview, relief_rgb(d.heights, d.grid,

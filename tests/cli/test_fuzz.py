@@ -490,6 +490,13 @@ def run_options(draw, command, nsuns, wild):
         if not re.fullmatch(r"\s*(\d+)\s*(?:[xX,]\s*(\d+))?\s*", ws) or \
                 any(int(g) < 1 for g in re.findall(r"\d+", ws)):
             bad.append(f"--window-size {ws!r}")
+    if often(draw, 8):
+        # creation options: GDAL's verdict (exit 0, or 1 with nothing written), malformed: 2
+        co = pick(draw, wild, ["COMPRESS=ZSTD", "predictor=2", "BLOCKXSIZE=512", "FOO=1",
+                               "BIGTIFF=MAYBE"], ["FOO", "=1", "COMPRESS=", "A B=1"])
+        argv += ["--co", co]
+        if co in ("FOO", "=1", "COMPRESS=", "A B=1"):
+            bad.append(f"--co {co!r}")
     if often(draw, 10):
         th = pick(draw, wild, ["1", "2"], ["0"])
         argv += ["--threads", th]

@@ -303,6 +303,7 @@ def test_mosaic_one_output_per_tile(tmp_path, runner, extra):
                         assert ds.tags()["TIME"] == rf.tags(k + 1)["TIME"]
                         if "--cog" in extra:
                             assert ds.tags(ns="IMAGE_STRUCTURE").get("LAYOUT") == "COG"
+                            _cog_valid(outdir / f"{stem}_{k}.tif")
                         np.testing.assert_array_equal(
                             ds.read(1), want[k][r0:r0 + src.height, c0:c0 + src.width])
     assert all(0.05 < np.mean(w == 1) < 0.9 for w in want)
@@ -355,7 +356,15 @@ def test_cog_output(tmp_path, runner, window):
         assert ds.overviews(1)[:1] == [2]
         assert ds.tags(ns="IMAGE_STRUCTURE").get("LAYOUT") == "COG"
         np.testing.assert_array_equal(ds.read(1), read_band(ref))
+    _cog_valid(out)
     assert sorted(os.listdir(tmp_path)) == ["cog.tif", "ref.tif"]
+
+
+def _cog_valid(path):
+    """rio-cogeo's validator (the test extra): a valid COG, no errors."""
+    from rio_cogeo.cogeo import cog_validate
+    ok, errors, warnings = cog_validate(str(path), quiet=True)
+    assert ok and errors == [], (path, errors, warnings)
 
 
 @pytest.mark.parametrize("method,mode", [([], "per cell"), (["--algorithm", "smap"], "per tile")])
