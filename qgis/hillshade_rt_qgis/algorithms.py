@@ -153,7 +153,7 @@ class HillshadeRtAlgorithm(QgsProcessingAlgorithm):
         if result.returncode != 0:
             raise QgsProcessingException(result.error_line())
         feedback.setProgress(100)
-        return {"OUTPUT": argv[argv.index("-o") + 1]}
+        return {"OUTPUT": self.parameterAsOutputLayer(parameters, "OUTPUT", context)}
 
 
 class ShadowAlgorithm(HillshadeRtAlgorithm):

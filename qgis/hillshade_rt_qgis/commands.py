@@ -87,11 +87,14 @@ def _check_choice(name: str, value: str, choices: Sequence[str]) -> str:
     return value
 
 
-def dem_args(dem: str, band: int = 1) -> list:
-    """The DEM and its band (the band only when not the first)."""
+def dem_args(dem: str, output: str, band: int = 1) -> list:
+    """The DEM and the output (both commands' positional arguments), the band when not the
+    first."""
     if not dem:
         raise ProgramError("no DEM given")
-    return [dem] + (["--band", str(int(band))] if band and int(band) != 1 else [])
+    if not output:
+        raise ProgramError("no output file given")
+    return [dem, output] + (["--band", str(int(band))] if band and int(band) != 1 else [])
 
 
 def sun_args(mode: str = "azimuth", azimuth: Optional[float] = None,
@@ -109,20 +112,17 @@ def sun_args(mode: str = "azimuth", azimuth: Optional[float] = None,
     return ["--time", time_, "--tz", (tz or "").strip() or "UTC"]
 
 
-def common_tail(output: str, algorithm: Optional[str] = None, soft: bool = False,
+def common_tail(algorithm: Optional[str] = None, soft: bool = False,
                 extra: Iterable[str] = ()) -> list:
-    """What every lighting command ends with: the algorithm, --soft, the user's extra options,
-    ``-o OUTPUT --overwrite`` (QGIS asked where to write; the program still publishes the file
-    whole or not at all)."""
+    """What every command ends with: the algorithm, --soft, the user's extra options,
+    --overwrite (QGIS asked where to write; the program still publishes the file whole or not
+    at all)."""
     args = []
     if algorithm is not None:
         args += ["--algorithm", _check_choice("the algorithm", algorithm, ALGORITHMS)]
     if soft:
         args.append("--soft")
-    args += list(extra)
-    if not output:
-        raise ProgramError("no output file given")
-    return args + ["-o", output, "--overwrite"]
+    return args + list(extra) + ["--overwrite"]
 
 
 def split_extra(text: Optional[str]) -> list:
@@ -142,10 +142,10 @@ def shadow_argv(program: str, dem: str, output: str, *, band: int = 1, sun: str 
                 extra: Iterable[str] = ()) -> list:
     """``hillshade-rt shadow``: the cast-shadow mask (1 shadow, 0 lit, 255 nodata) or, with
     ``soft``, the visible fraction of the sun's disk."""
-    return ([program, "shadow"] + dem_args(dem, band)
+    return ([program, "shadow"] + dem_args(dem, output, band)
             + sun_args(sun, azimuth, elevation, time_, tz)
             + (["--self-shadow"] if self_shadow else [])
-            + common_tail(output, algorithm, soft, extra))
+            + common_tail(algorithm, soft, extra))
 
 
 def hillshade_argv(program: str, dem: str, output: str, *, band: int = 1,
@@ -155,10 +155,10 @@ def hillshade_argv(program: str, dem: str, output: str, *, band: int = 1,
                    algorithm: str = "auto", soft: bool = False,
                    extra: Iterable[str] = ()) -> list:
     """``hillshade-rt hillshade``: 8-bit shaded relief with cast shadows."""
-    return ([program, "hillshade"] + dem_args(dem, band)
+    return ([program, "hillshade"] + dem_args(dem, output, band)
             + sun_args(sun, azimuth, elevation, time_, tz)
             + ["--ambient", _number(ambient)]
-            + common_tail(output, algorithm, soft, extra))
+            + common_tail(algorithm, soft, extra))
 
 
 def sun_hours_argv(program: str, dem: str, output: str, *, date: str,
@@ -174,13 +174,13 @@ def sun_hours_argv(program: str, dem: str, output: str, *, date: str,
         raise ProgramError("the step must be more than 0 minutes")
     seconds = round(float(step_minutes) * 60)
     step = f"{seconds // 60}min" if seconds % 60 == 0 else f"{seconds}s"
-    args = [program, "sun-hours"] + dem_args(dem, band) + ["--date", date]
+    args = [program, "sun-hours"] + dem_args(dem, output, band) + ["--date", date]
     if end_date:
         args += ["--end-date", end_date]
     args += ["--step", step]
     if tz and tz.strip():
         args += ["--tz", tz.strip()]
-    return args + common_tail(output, algorithm, soft, extra)
+    return args + common_tail(algorithm, soft, extra)
 
 
 def skyview_argv(program: str, dem: str, output: str, *, band: int = 1, directions: int = 32,
@@ -188,13 +188,13 @@ def skyview_argv(program: str, dem: str, output: str, *, band: int = 1, directio
                  extra: Iterable[str] = ()) -> list:
     """``hillshade-rt skyview``: the sky view factor (0..1) from each cell's exact horizon in
     ``directions`` azimuths, up to ``max_distance`` metres (None or 0: the whole DEM)."""
-    args = ([program, "skyview"] + dem_args(dem, band)
+    args = ([program, "skyview"] + dem_args(dem, output, band)
             + ["--directions", str(int(directions)),
                "--definition", _check_choice("the definition", definition,
                                              SKYVIEW_DEFINITIONS)])
     if max_distance:
         args += ["--max-distance", _number(max_distance)]
-    return args + common_tail(output, None, False, extra)
+    return args + common_tail(None, False, extra)
 
 
 def child_env(environ: Optional[dict] = None) -> dict:
