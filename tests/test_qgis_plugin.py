@@ -290,12 +290,12 @@ def qgis(tmp_path_factory):
         z.extractall(plugins)
     env = dict(os.environ, QT_QPA_PLATFORM="offscreen", QGIS_CUSTOM_CONFIG_PATH=str(config),
                QGIS_PLUGINPATH=str(plugins), XDG_RUNTIME_DIR=str(base))
-    # QGIS's embedded Python takes its prefix from the python3 found on PATH: a virtual
-    # environment's bin there would make it this venv's (no qgis module)
+    # QGIS's embedded Python takes its prefix from the first python3 on PATH: this venv's (or
+    # pyenv's) there would leave it without its qgis module; QGIS's own folder goes first
     env.pop("VIRTUAL_ENV", None)
-    env["PATH"] = os.pathsep.join(
+    env["PATH"] = os.pathsep.join([os.path.dirname(binary)] + [
         d for d in env.get("PATH", "").split(os.pathsep)
-        if d and not os.path.exists(os.path.join(os.path.dirname(d), "pyvenv.cfg")))
+        if d and not os.path.exists(os.path.join(os.path.dirname(d), "pyvenv.cfg"))])
 
     def run(*args, timeout=600):
         return subprocess.run([binary, *args], env=env, capture_output=True, text=True,
