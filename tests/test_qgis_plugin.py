@@ -300,6 +300,7 @@ def qgis(tmp_path_factory):
     def run(*args, timeout=600):
         return subprocess.run([binary, *args], env=env, capture_output=True, text=True,
                               timeout=timeout, cwd=str(base))
+    run.env = env
 
     enabled = run("plugins", "enable", "hillshade_rt_qgis")
     assert enabled.returncode == 0, enabled.stdout + enabled.stderr
@@ -368,3 +369,66 @@ def test_qgis_bad_parameter_gives_program_error(qgis, tmp_path):
     assert error.startswith("hillshade-rt: error: --tz 'Mars/Olympus'")
     assert f"ERROR:\t{error}" in done.stdout + done.stderr, done.stdout + done.stderr
     assert not out.exists()
+
+
+# QGIS's own Python: the plugin's provider in a QgsApplication, a run cancelled by its feedback
+CANCEL_SCRIPT = r"""
+import os, sys, time
+from qgis.core import (QgsApplication, QgsProcessingException, QgsProcessingFeedback)
+app = QgsApplication([], False)
+app.initQgis()
+plugins, program, dem, out = sys.argv[1:5]
+sys.path[:0] = [plugins, os.path.join(QgsApplication.pkgDataPath(), "python", "plugins")]
+from processing.core.Processing import Processing
+Processing.initialize()
+from processing.core.ProcessingConfig import ProcessingConfig
+from hillshade_rt_qgis.provider import HillshadeRtProvider
+provider = HillshadeRtProvider()            # kept: the registry does not own it from Python
+assert QgsApplication.processingRegistry().addProvider(provider)
+ProcessingConfig.setSettingValue("HILLSHADE_RT_PROGRAM", program)
+import processing
+
+class Feedback(QgsProcessingFeedback):
+    started = None
+    def pushCommandInfo(self, info):
+        print("COMMAND", info, flush=True)
+        Feedback.started = time.monotonic()
+    def isCanceled(self):
+        return self.started is not None and time.monotonic() - self.started > 2
+
+t0 = time.monotonic()
+try:
+    processing.run("hillshade_rt:skyview", {"INPUT": dem, "DIRECTIONS": 360, "OUTPUT": out},
+                   feedback=Feedback())
+    print("FINISHED")
+except QgsProcessingException as e:
+    print("EXCEPTION", e)
+print("AFTER_CANCEL", round(time.monotonic() - Feedback.started, 1))
+"""
+
+
+@pytest.mark.qgis
+def test_qgis_cancel_terminates_program(qgis, tmp_path):
+    """Cancelling in QGIS (the feedback's isCanceled) stops the program at once: the
+    algorithm fails with 'canceled', the program leaves nothing in the output folder."""
+    binary = qgis_process_binary()
+    python = os.path.join(os.path.dirname(binary), "python3")
+    script, out_dir = tmp_path / "cancel.py", tmp_path / "out"
+    script.write_text(CANCEL_SCRIPT)
+    out_dir.mkdir()
+    plugins = tmp_path / "plugins"
+    with zipfile.ZipFile(make_zip(tmp_path)) as z:
+        z.extractall(plugins)
+    env = qgis.env
+    done = subprocess.run([python, str(script), str(plugins), PROGRAM,
+                           os.path.join(repo_root(), "examples",
+                                        "bigtujunga_srtm30m_utm11n_1197x643.tif"),
+                           str(out_dir / "svf.tif")],
+                          env=env, capture_output=True, text=True, timeout=300)
+    lines = done.stdout.splitlines()
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert lines[0].startswith(f"COMMAND {PROGRAM} skyview "), lines
+    assert "EXCEPTION canceled: hillshade-rt was stopped (no output written)" in lines, lines
+    after = float(lines[-1].split()[-1])
+    assert after < 2 + 10, lines       # cancelled after 2 s; terminated within its grace
+    assert os.listdir(out_dir) == []

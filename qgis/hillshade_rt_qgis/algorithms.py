@@ -141,7 +141,7 @@ class HillshadeRtAlgorithm(QgsProcessingAlgorithm):
 
         def on_line(line):
             # its one-line error becomes the algorithm's error (below): not shown twice
-            if not commands.is_error_line(line):
+            if line.strip() and not commands.is_error_line(line):
                 feedback.pushInfo(line)
         try:
             result = commands.run(argv, on_line=on_line, is_canceled=feedback.isCanceled)
