@@ -67,7 +67,8 @@ def main(argv=None) -> int:
         raw, log = os.path.join(base, "screen.png"), os.path.join(base, "log.txt")
         env = dict(os.environ, QGIS_PLUGINPATH=plugins, HRT_SHOT_DEM=os.path.abspath(args.dem),
                    HRT_SHOT_DIR=base, HRT_SHOT_PNG=raw, HRT_SHOT_LOG=log,
-                   XDG_RUNTIME_DIR=base, PATH=qgis_path(os.environ.get("PATH", ""), shutil.which("qgis")))
+                   XDG_RUNTIME_DIR=base,
+                   PATH=qgis_path(os.environ.get("PATH", ""), shutil.which("qgis")))
         env.pop("VIRTUAL_ENV", None)
         env.pop("QT_QPA_PLATFORM", None)
         command = ["xvfb-run", "-a", "-s", f"-screen 0 {SIZE[0]}x{SIZE[1]}x24",
