@@ -234,7 +234,8 @@ def test_run_program_error_line(tmp_path):
     out = tmp_path / "o.tif"
     lines = []
     argv = cmd.shadow_argv(PROGRAM, DEM, str(out), azimuth=225, elevation=-5)
-    result = cmd.run(argv, on_line=lines.append, env={**os.environ, "PYTHONPATH": "/nowhere"})
+    # QGIS's PYTHONHOME would stop the venv's Python from starting: run() drops it
+    result = cmd.run(argv, on_line=lines.append, env={**os.environ, "PYTHONHOME": "/nowhere"})
     assert result.returncode == 2 and not result.canceled
     assert result.error_line().startswith("hillshade-rt: error: ")
     assert "elevation" in result.error_line()
