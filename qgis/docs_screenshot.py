@@ -65,7 +65,9 @@ def main(argv=None) -> int:
         with zipfile.ZipFile(args.zip) as z:
             z.extractall(plugins)
         raw, log = os.path.join(base, "screen.png"), os.path.join(base, "log.txt")
-        env = dict(os.environ, QGIS_PLUGINPATH=plugins, HRT_SHOT_DEM=os.path.abspath(args.dem),
+        # a copy: QGIS writes statistics (.aux.xml) beside the rasters it opens
+        dem = shutil.copy(args.dem, os.path.join(base, os.path.basename(args.dem)))
+        env = dict(os.environ, QGIS_PLUGINPATH=plugins, HRT_SHOT_DEM=dem,
                    HRT_SHOT_DIR=base, HRT_SHOT_PNG=raw, HRT_SHOT_LOG=log,
                    XDG_RUNTIME_DIR=base,
                    PATH=qgis_path(os.environ.get("PATH", ""), shutil.which("qgis")))

@@ -302,6 +302,9 @@ def qgis(tmp_path_factory):
         return subprocess.run([binary, *args], env=env, capture_output=True, text=True,
                               timeout=timeout, cwd=str(base))
     run.env = env
+    # QGIS writes statistics beside the rasters it opens (.aux.xml): the DEMs it reads are
+    # copies, and the checkout stays as it was
+    run.dem = shutil.copy(DEM, base / "dem.tif")
 
     enabled = run("plugins", "enable", "hillshade_rt_qgis")
     assert enabled.returncode == 0, enabled.stdout + enabled.stderr
@@ -319,16 +322,16 @@ def qgis(tmp_path_factory):
     return run
 
 
-def direct(*args) -> subprocess.CompletedProcess:
-    return subprocess.run([PROGRAM, "shadow", DEM, *args], capture_output=True, text=True,
+def direct(dem, *args) -> subprocess.CompletedProcess:
+    return subprocess.run([PROGRAM, "shadow", str(dem), *args], capture_output=True, text=True,
                           timeout=600)
 
 
 @pytest.mark.qgis
 def test_qgis_shadow_equals_program(qgis, tmp_path):
     out, ref = tmp_path / "qgis.tif", tmp_path / "ref.tif"
-    done = qgis("run", "hillshade_rt:shadow", "--json", "--", f"INPUT={DEM}", "AZIMUTH=225",
-                "ELEVATION=20", f"OUTPUT={out}")
+    done = qgis("run", "hillshade_rt:shadow", "--json", "--", f"INPUT={qgis.dem}",
+                "AZIMUTH=225", "ELEVATION=20", f"OUTPUT={out}")
     assert done.returncode == 0, done.stdout + done.stderr
     report = json.loads(done.stdout)
     assert report["results"]["OUTPUT"] == str(out)
@@ -337,7 +340,7 @@ def test_qgis_shadow_equals_program(qgis, tmp_path):
     assert info[0].startswith(PROGRAM + " shadow ") and "--azimuth 225 --elevation 20" in info[0]
     assert any(line.startswith(f"hillshade-rt: {out}: 400x400, sun az 225 el 20")
                for line in info), info
-    assert direct(str(ref), "--azimuth", "225", "--elevation", "20").returncode == 0
+    assert direct(qgis.dem, str(ref), "--azimuth", "225", "--elevation", "20").returncode == 0
     got, want = read_band(out), read_band(ref)
     assert got.dtype == want.dtype == np.uint8
     assert {0, 1} <= set(np.unique(want).tolist())
@@ -347,11 +350,11 @@ def test_qgis_shadow_equals_program(qgis, tmp_path):
 @pytest.mark.qgis
 def test_qgis_time_zone_equals_program(qgis, tmp_path):
     out, ref = tmp_path / "qgis.tif", tmp_path / "ref.tif"
-    done = qgis("run", "hillshade_rt:shadow", "--", f"INPUT={DEM}", "SUN=1",
+    done = qgis("run", "hillshade_rt:shadow", "--", f"INPUT={qgis.dem}", "SUN=1",
                 "DATETIME=2026-12-21T08:40:00", "TIMEZONE=America/Chicago", "ALGORITHM=bounds",
                 f"OUTPUT={out}")
     assert done.returncode == 0, done.stdout + done.stderr
-    assert direct(str(ref), "--time", "2026-12-21T08:40", "--tz", "America/Chicago",
+    assert direct(qgis.dem, str(ref), "--time", "2026-12-21T08:40", "--tz", "America/Chicago",
                   "--algorithm", "bounds").returncode == 0
     want = read_band(ref)
     assert 0 < (want == 1).mean() < 1
@@ -361,10 +364,10 @@ def test_qgis_time_zone_equals_program(qgis, tmp_path):
 @pytest.mark.qgis
 def test_qgis_bad_parameter_gives_program_error(qgis, tmp_path):
     out = tmp_path / "never.tif"
-    done = qgis("run", "hillshade_rt:shadow", "--", f"INPUT={DEM}", "SUN=1",
+    done = qgis("run", "hillshade_rt:shadow", "--", f"INPUT={qgis.dem}", "SUN=1",
                 "DATETIME=2026-06-21T14:30:00", "TIMEZONE=Mars/Olympus", f"OUTPUT={out}")
     assert done.returncode != 0
-    own = direct(str(out), "--time", "2026-06-21T14:30:00", "--tz", "Mars/Olympus")
+    own = direct(qgis.dem, str(out), "--time", "2026-06-21T14:30:00", "--tz", "Mars/Olympus")
     assert own.returncode == 2
     error = own.stderr.strip().splitlines()[-1]
     assert error.startswith("hillshade-rt: error: --tz 'Mars/Olympus'")
@@ -422,8 +425,9 @@ def test_qgis_cancel_terminates_program(qgis, tmp_path):
         z.extractall(plugins)
     env = qgis.env
     done = subprocess.run([python, str(script), str(plugins), PROGRAM,
-                           os.path.join(repo_root(), "examples",
-                                        "bigtujunga_srtm30m_utm11n_1197x643.tif"),
+                           shutil.copy(os.path.join(repo_root(), "examples",
+                                                    "bigtujunga_srtm30m_utm11n_1197x643.tif"),
+                                       tmp_path / "dem.tif"),
                            str(out_dir / "svf.tif")],
                           env=env, capture_output=True, text=True, timeout=300)
     lines = done.stdout.splitlines()
