@@ -8,9 +8,8 @@ $HRT_SHOT_LOG: what happened (the driver prints it)."""
 import os
 import traceback
 
-from qgis.core import (QgsPalettedRasterRenderer, QgsProject, QgsRasterLayer)
+from qgis.core import QgsProject, QgsRasterLayer
 from qgis.PyQt.QtCore import QTimer
-from qgis.PyQt.QtGui import QColor
 from qgis.PyQt.QtWidgets import QApplication, QDockWidget, QSplitter
 from qgis.utils import iface, plugins
 
@@ -37,18 +36,18 @@ def prepare():
     relief = processing.run("hillshade_rt:hillshade", {
         "INPUT": DEM, **SUN, "AMBIENT": 0.25,
         "OUTPUT": os.path.join(SCRATCH, "relief.tif")})["OUTPUT"]
-    mask = processing.run("hillshade_rt:shadow", {
+    # loaded by Processing itself, styled by the plugin (translucent blue shadow)
+    mask = processing.runAndLoadResults("hillshade_rt:shadow", {
         "INPUT": DEM, **SUN, "OUTPUT": os.path.join(SCRATCH, "shadow.tif")})["OUTPUT"]
     log(f"computed {relief} and {mask}")
     base = QgsRasterLayer(relief, "hillshade-rt hillshade (az 225, el 18)")
-    shadow = QgsRasterLayer(mask, "hillshade-rt shadow mask")
-    shadow.setRenderer(QgsPalettedRasterRenderer(shadow.dataProvider(), 1, [
-        QgsPalettedRasterRenderer.Class(1, QColor(30, 70, 230, 120), "cast shadow"),
-        QgsPalettedRasterRenderer.Class(0, QColor(0, 0, 0, 0), "lit")]))
+    shadow = QgsProject.instance().mapLayersByName("Shadow mask")[0]
+    log(f"shadow mask loaded with the renderer {shadow.renderer().type()}")
+    shadow.setName("hillshade-rt shadow mask")
     project = QgsProject.instance()
     project.setCrs(base.crs())
-    project.addMapLayer(base)
-    project.addMapLayer(shadow)
+    project.addMapLayer(base, False)
+    project.layerTreeRoot().insertLayer(1, base)     # below the shadow mask
     window = iface.mainWindow()
     screen = QApplication.primaryScreen().geometry()
     window.setGeometry(screen)                 # no window manager under Xvfb: no maximize

@@ -375,10 +375,11 @@ def test_qgis_bad_parameter_gives_program_error(qgis, tmp_path):
     assert not out.exists()
 
 
-# QGIS's own Python: the plugin's provider in a QgsApplication, a run cancelled by its feedback
-CANCEL_SCRIPT = r"""
+# QGIS's own Python: the zip's provider in a QgsApplication, the program's path set
+PRELUDE = r"""
 import os, sys, time
-from qgis.core import (QgsApplication, QgsProcessingException, QgsProcessingFeedback)
+from qgis.core import (QgsApplication, QgsProcessingException, QgsProcessingFeedback,
+                       QgsProject)
 app = QgsApplication([], False)
 app.initQgis()
 plugins, program, dem, out = sys.argv[1:5]
@@ -391,7 +392,26 @@ provider = HillshadeRtProvider()            # kept: the registry does not own it
 assert QgsApplication.processingRegistry().addProvider(provider)
 ProcessingConfig.setSettingValue("HILLSHADE_RT_PROGRAM", program)
 import processing
+"""
 
+
+def qgis_python(qgis, tmp_path, body: str, dem: str) -> list:
+    """Run PRELUDE + ``body`` with QGIS's Python (the python3 beside qgis_process) on a copy
+    of ``dem``, the output in tmp_path/out; its stdout's lines."""
+    python = os.path.join(os.path.dirname(qgis_process_binary()), "python3")
+    script, out_dir, plugins = tmp_path / "script.py", tmp_path / "out", tmp_path / "plugins"
+    script.write_text(PRELUDE + body)
+    out_dir.mkdir()
+    with zipfile.ZipFile(make_zip(tmp_path)) as z:
+        z.extractall(plugins)
+    done = subprocess.run([python, str(script), str(plugins), PROGRAM,
+                           shutil.copy(dem, tmp_path / "dem.tif"), str(out_dir / "out.tif")],
+                          env=qgis.env, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stdout + done.stderr
+    return done.stdout.splitlines()
+
+
+CANCEL = r"""
 class Feedback(QgsProcessingFeedback):
     started = None
     def pushCommandInfo(self, info):
@@ -400,7 +420,6 @@ class Feedback(QgsProcessingFeedback):
     def isCanceled(self):
         return self.started is not None and time.monotonic() - self.started > 2
 
-t0 = time.monotonic()
 try:
     processing.run("hillshade_rt:skyview", {"INPUT": dem, "DIRECTIONS": 360, "OUTPUT": out},
                    feedback=Feedback())
@@ -415,25 +434,30 @@ print("AFTER_CANCEL", round(time.monotonic() - Feedback.started, 1))
 def test_qgis_cancel_terminates_program(qgis, tmp_path):
     """Cancelling in QGIS (the feedback's isCanceled) stops the program at once: the
     algorithm fails with 'canceled', the program leaves nothing in the output folder."""
-    binary = qgis_process_binary()
-    python = os.path.join(os.path.dirname(binary), "python3")
-    script, out_dir = tmp_path / "cancel.py", tmp_path / "out"
-    script.write_text(CANCEL_SCRIPT)
-    out_dir.mkdir()
-    plugins = tmp_path / "plugins"
-    with zipfile.ZipFile(make_zip(tmp_path)) as z:
-        z.extractall(plugins)
-    env = qgis.env
-    done = subprocess.run([python, str(script), str(plugins), PROGRAM,
-                           shutil.copy(os.path.join(repo_root(), "examples",
-                                                    "bigtujunga_srtm30m_utm11n_1197x643.tif"),
-                                       tmp_path / "dem.tif"),
-                           str(out_dir / "svf.tif")],
-                          env=env, capture_output=True, text=True, timeout=300)
-    lines = done.stdout.splitlines()
-    assert done.returncode == 0, done.stdout + done.stderr
+    lines = qgis_python(qgis, tmp_path, CANCEL, os.path.join(
+        repo_root(), "examples", "bigtujunga_srtm30m_utm11n_1197x643.tif"))
     assert lines[0].startswith(f"COMMAND {PROGRAM} skyview "), lines
     assert "EXCEPTION canceled: hillshade-rt was stopped (no output written)" in lines, lines
     after = float(lines[-1].split()[-1])
     assert after < 2 + 10, lines       # cancelled after 2 s; terminated within its grace
-    assert os.listdir(out_dir) == []
+    assert os.listdir(tmp_path / "out") == []
+
+
+LOAD = r"""
+processing.runAndLoadResults("hillshade_rt:shadow", {"INPUT": dem, "OUTPUT": out})
+processing.runAndLoadResults("hillshade_rt:shadow", {"INPUT": dem, "SOFT": True,
+                                                     "OUTPUT": out[:-4] + "_soft.tif"})
+for layer in sorted(QgsProject.instance().mapLayers().values(), key=lambda l: l.source()):
+    r = layer.renderer()
+    print(os.path.basename(layer.source()), r.type(),
+          [(c.value, c.color.alpha()) for c in r.classes()] if r.type() == "paletted" else "")
+"""
+
+
+@pytest.mark.qgis
+def test_qgis_shadow_mask_loads_styled(qgis, tmp_path):
+    """A shadow mask that QGIS loads on completion gets the plugin's style: shadow (1)
+    translucent, lit (0) transparent; a soft shadow stays QGIS's grey."""
+    lines = qgis_python(qgis, tmp_path, LOAD, DEM)
+    assert lines == ["out.tif paletted [(1.0, 120), (0.0, 0)]",
+                     "out_soft.tif singlebandgray "], lines

@@ -3,17 +3,31 @@
 non-zero exit status raises QgsProcessingException with the program's one-line error, and
 cancelling terminates the child (which leaves no output behind)."""
 
-from qgis.core import (QgsProcessing, QgsProcessingAlgorithm, QgsProcessingException,
+from qgis.core import (QgsPalettedRasterRenderer, QgsProcessingAlgorithm,
+                       QgsProcessingException, QgsProcessingLayerPostProcessorInterface,
                        QgsProcessingParameterBand, QgsProcessingParameterBoolean,
                        QgsProcessingParameterDateTime, QgsProcessingParameterDefinition,
                        QgsProcessingParameterEnum, QgsProcessingParameterNumber,
                        QgsProcessingParameterRasterDestination,
                        QgsProcessingParameterRasterLayer, QgsProcessingParameterString)
 from qgis.PyQt.QtCore import QCoreApplication
+from qgis.PyQt.QtGui import QColor
 
 from . import commands
 
 SUN_LABELS = ("Azimuth and elevation", "Date and time (in the time zone below)")
+
+
+class ShadowStyle(QgsProcessingLayerPostProcessorInterface):
+    """The shadow mask as QGIS loads it: shadow translucent blue, lit cells transparent (255,
+    nodata, is transparent already)."""
+
+    def postProcessLayer(self, layer, context, feedback):  # noqa: N802
+        renderer = QgsPalettedRasterRenderer(layer.dataProvider(), 1, [
+            QgsPalettedRasterRenderer.Class(1, QColor(30, 70, 230, 120), "shadow"),
+            QgsPalettedRasterRenderer.Class(0, QColor(0, 0, 0, 0), "lit")])
+        layer.setRenderer(renderer)
+        layer.triggerRepaint()
 
 
 class HillshadeRtAlgorithm(QgsProcessingAlgorithm):
@@ -153,7 +167,13 @@ class HillshadeRtAlgorithm(QgsProcessingAlgorithm):
         if result.returncode != 0:
             raise QgsProcessingException(result.error_line())
         feedback.setProgress(100)
-        return {"OUTPUT": self.parameterAsOutputLayer(parameters, "OUTPUT", context)}
+        output = self.parameterAsOutputLayer(parameters, "OUTPUT", context)
+        self.style_output(output, parameters, context)
+        return {"OUTPUT": output}
+
+    def style_output(self, output, parameters, context):
+        """A style for the output when QGIS loads it (none: QGIS's default)."""
+
 
 
 class ShadowAlgorithm(HillshadeRtAlgorithm):
@@ -177,6 +197,14 @@ class ShadowAlgorithm(HillshadeRtAlgorithm):
         self.addParameter(QgsProcessingParameterBoolean(
             "SELF_SHADOW", self.tr("Also shadow cells facing away from the sun"), False))
         self.add_tail()
+
+    def style_output(self, output, parameters, context):
+        if (context.willLoadLayerOnCompletion(output)
+                and not self.parameterAsBoolean(parameters, "SOFT", context)):
+            # kept alive on the class: QGIS does not own a post-processor made in Python, and
+            # it runs after this (cloned) algorithm may be gone
+            ShadowStyle.instance = ShadowStyle()
+            context.layerToLoadOnCompletionDetails(output).setPostProcessor(ShadowStyle.instance)
 
     def command(self, program, parameters, context):
         return commands.shadow_argv(
