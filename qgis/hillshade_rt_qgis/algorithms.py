@@ -4,7 +4,8 @@ non-zero exit status raises QgsProcessingException with the program's one-line e
 cancelling terminates the child (which leaves no output behind)."""
 
 from qgis.core import (QgsPalettedRasterRenderer, QgsProcessingAlgorithm,
-                       QgsProcessingException, QgsProcessingLayerPostProcessorInterface,
+                       QgsProcessingException, QgsProcessingFeedback,
+                       QgsProcessingLayerPostProcessorInterface,
                        QgsProcessingParameterBand, QgsProcessingParameterBoolean,
                        QgsProcessingParameterDateTime, QgsProcessingParameterDefinition,
                        QgsProcessingParameterEnum, QgsProcessingParameterNumber,
@@ -145,6 +146,8 @@ class HillshadeRtAlgorithm(QgsProcessingAlgorithm):
 
     def processAlgorithm(self, parameters, context, feedback):  # noqa: N802
         from processing.core.ProcessingConfig import ProcessingConfig
+        if feedback is None:
+            feedback = QgsProcessingFeedback()
         try:
             program = commands.find_program(
                 ProcessingConfig.getSetting(commands.SETTING_PROGRAM))
@@ -173,7 +176,6 @@ class HillshadeRtAlgorithm(QgsProcessingAlgorithm):
 
     def style_output(self, output, parameters, context):
         """A style for the output when QGIS loads it (none: QGIS's default)."""
-
 
 
 class ShadowAlgorithm(HillshadeRtAlgorithm):
