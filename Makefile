@@ -7,7 +7,7 @@ OUTDIR ?= out
 EXAMPLE_DEM := examples/bigtujunga_srtm30m_utm11n_1197x643.tif
 EXAMPLE_OUT := $(OUTDIR)/bigtujunga_shadow.tif
 
-.PHONY: run test install install-test bench bench-sun bench-tiling bench-big bench-gpu bench-peers bench-horizon docs-pictures docs-animation docs-viewer bench-writes bench-real bench-real-quick bench-fast bench-point bench-view bench-update bench-illumination gpu-check clean clean-cache bench-startup help
+.PHONY: run test install install-test bench bench-sun bench-tiling bench-big bench-gpu bench-peers bench-horizon docs-pictures docs-animation docs-viewer bench-writes bench-real bench-real-quick bench-fast bench-point bench-view bench-update bench-illumination gpu-check clean clean-cache bench-startup help qgis-plugin docs-qgis
 
 help:
 	@echo "make run    - set up .venv, shade the bundled example DEM, print where the mask went"
@@ -30,6 +30,8 @@ help:
 	@echo "make bench-illumination - illumination: 1000 subsolar positions on a 2048^2 polar DEM and Kepler (issue 21: < 10 min)"
 	@echo "make docs-pictures - the pictures of docs/products.md, by the tool's --preview"
 	@echo "make docs-animation - the README's GIF: the shadows of a winter day on the example DEM"
+	@echo "make qgis-plugin - the QGIS plugin as dist/hillshade_rt_qgis.zip (Plugins > Install from ZIP)"
+	@echo "make docs-qgis - docs/img/qgis.png: QGIS (Debian's, under Xvfb) with the plugin's shadow"
 	@echo "make clean  - remove .venv and outputs"
 	@echo "make clean-cache - remove numba's stale compiled kernels (hillshade-rt cache --prune)"
 	@echo "make bench-startup - wall time of hillshade-rt --help, --version and an az/el run"
@@ -146,6 +148,17 @@ bench-real-quick: $(VENV)/.installed-peers
 # the viewer's screenshot in docs/viewer.md, taken by the browser test (Debian's chromium)
 docs-viewer: $(VENV)/.installed-test
 	HILLSHADE_RT_DOCS_SCREENSHOT=1 $(BIN)/python -m pytest -q tests/run/test_view_browser.py
+
+# the QGIS plugin (qgis/hillshade_rt_qgis: a Processing provider running the hillshade-rt
+# program), zipped with its folder on top, reproducibly (docs/qgis.md)
+QGIS_ZIP ?= dist/hillshade_rt_qgis.zip
+qgis-plugin:
+	$(PYTHON) qgis/build_zip.py qgis/hillshade_rt_qgis $(QGIS_ZIP)
+
+# docs/img/qgis.png: needs Debian's qgis, python3-qgis, xvfb, xauth, imagemagick (docs/qgis.md)
+docs-qgis: $(VENV)/.installed qgis-plugin
+	$(PYTHON) qgis/docs_screenshot.py --zip $(QGIS_ZIP) --program $(BIN)/hillshade-rt \
+		--dem $(EXAMPLE_DEM) --out docs/img/qgis.png
 
 clean:
 	rm -rf $(VENV) $(OUTDIR) .pytest_cache .hypothesis

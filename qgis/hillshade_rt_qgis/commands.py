@@ -1,0 +1,292 @@
+"""The ``hillshade-rt`` command lines of the plugin's algorithms, finding the program, and running
+it as a child process (pure Python: no qgis, no numba, no hillshade_rt import).
+
+QGIS's own Python never imports hillshade_rt: numba (and its llvmlite) loaded into QGIS's
+process breaks other plugins and QGIS itself (UMEP-processing issues #23 and #79). The program
+runs in its own environment (a venv, pipx, ``pip install --user``); the plugin only builds its
+argv, streams its stderr and reads its exit status. Importable without QGIS, so that the
+project's tests check the command lines on any machine (tests/test_qgis_plugin.py).
+"""
+
+from __future__ import annotations
+
+import os
+import queue
+import shutil
+import subprocess
+import sys
+import threading
+import time
+from dataclasses import dataclass, field
+from typing import Callable, Iterable, Optional, Sequence
+
+PROGRAM = "hillshade-rt"
+# the provider's setting (Processing > Providers > hillshade-rt): the program's path
+SETTING_PROGRAM = "HILLSHADE_RT_PROGRAM"
+
+# hillshade_rt.algorithms.REGISTRY's names, in its order (a test checks they agree)
+ALGORITHMS = ("auto", "bounds", "brute", "smap", "horizon", "sweep")
+SKYVIEW_DEFINITIONS = ("zaksek", "dozier")
+SUN_MODES = ("azimuth", "time")        # the sun from --azimuth/--elevation, or --time + --tz
+
+# variables of QGIS's own Python and GDAL/PROJ that must not reach the program: its Python
+# (a venv) and rasterio's GDAL and PROJ (inside its wheel) are not QGIS's
+CHILD_ENV_DROPPED = ("PYTHONPATH", "PYTHONHOME", "PYTHONSTARTUP", "PYTHONEXECUTABLE",
+                     "PYTHONUSERBASE", "GDAL_DATA", "GDAL_DRIVER_PATH", "PROJ_LIB",
+                     "PROJ_DATA", "GDAL_SKIP")
+
+
+class ProgramError(Exception):
+    """A failure shown to the user as one line (the algorithms raise it as a
+    QgsProcessingException)."""
+
+
+def local_bin(home: Optional[str] = None) -> str:
+    """``~/.local/bin``: where ``pip install --user`` and pipx put programs."""
+    return os.path.join(home or os.path.expanduser("~"), ".local", "bin")
+
+
+def find_program(setting: Optional[str] = None, path: Optional[str] = None,
+                 home: Optional[str] = None) -> str:
+    """The ``hillshade-rt`` executable: the provider setting when given (a file, or a folder
+    holding it), else ``hillshade-rt`` on PATH (``path``: that search path, default the
+    process's), else in ``~/.local/bin``. Raises ProgramError naming what was tried."""
+    if setting and setting.strip():
+        given = os.path.expanduser(setting.strip())
+        if os.path.isdir(given):
+            found = shutil.which(PROGRAM, path=given)
+            if found:
+                return found
+            raise ProgramError(f"no {PROGRAM} program in {given} (the provider setting "
+                               "'hillshade-rt executable')")
+        if os.path.isfile(given) and os.access(given, os.X_OK):
+            return given
+        raise ProgramError(f"{given}: no such executable (the provider setting 'hillshade-rt "
+                           "executable': Settings > Options > Processing > Providers > "
+                           "hillshade-rt)")
+    found = shutil.which(PROGRAM, path=path)
+    if found:
+        return found
+    found = shutil.which(PROGRAM, path=local_bin(home))
+    if found:
+        return found
+    raise ProgramError(f"{PROGRAM} not found on PATH nor in {local_bin(home)}: install it "
+                       "(pipx install hillshade-rt) or set its path in Settings > Options > "
+                       "Processing > Providers > hillshade-rt")
+
+
+def _number(x: float) -> str:
+    """A float as the command line writes it: no trailing zeros, no exponent for usual
+    values."""
+    return format(float(x), "g") if abs(float(x)) < 1e15 else repr(float(x))
+
+
+def _check_choice(name: str, value: str, choices: Sequence[str]) -> str:
+    if value not in choices:
+        raise ProgramError(f"{name} must be one of {', '.join(choices)}, not {value!r}")
+    return value
+
+
+def dem_args(dem: str, output: str, band: int = 1) -> list:
+    """The DEM and the output (both commands' positional arguments), the band when not the
+    first."""
+    if not dem:
+        raise ProgramError("no DEM given")
+    if not output:
+        raise ProgramError("no output file given")
+    return [dem, output] + (["--band", str(int(band))] if band and int(band) != 1 else [])
+
+
+def sun_args(mode: str = "azimuth", azimuth: Optional[float] = None,
+             elevation: Optional[float] = None, time_: Optional[str] = None,
+             tz: Optional[str] = None) -> list:
+    """``--azimuth A --elevation E``, or ``--time T [--tz ZONE]`` (``mode`` 'azimuth' or
+    'time'). A time without a UTC offset needs a zone; without one it is taken as UTC."""
+    _check_choice("the sun", mode, SUN_MODES)
+    if mode == "azimuth":
+        if azimuth is None or elevation is None:
+            raise ProgramError("the sun by azimuth and elevation needs both")
+        return ["--azimuth", _number(azimuth), "--elevation", _number(elevation)]
+    if not time_:
+        raise ProgramError("the sun from a date and time needs the date and time")
+    return ["--time", time_, "--tz", (tz or "").strip() or "UTC"]
+
+
+def common_tail(algorithm: Optional[str] = None, soft: bool = False,
+                extra: Iterable[str] = ()) -> list:
+    """What every command ends with: the algorithm, --soft, the user's extra options,
+    --overwrite (QGIS asked where to write; the program still publishes the file whole or not
+    at all)."""
+    args = []
+    if algorithm is not None:
+        args += ["--algorithm", _check_choice("the algorithm", algorithm, ALGORITHMS)]
+    if soft:
+        args.append("--soft")
+    return args + list(extra) + ["--overwrite"]
+
+
+def split_extra(text: Optional[str]) -> list:
+    """The 'additional command-line options' string as arguments (shell-like quoting, POSIX
+    rules on every system so that a Windows path is quoted the same way)."""
+    import shlex
+    try:
+        return shlex.split(text or "", posix=True)
+    except ValueError as e:
+        raise ProgramError(f"additional options: {e}") from None
+
+
+def shadow_argv(program: str, dem: str, output: str, *, band: int = 1, sun: str = "azimuth",
+                azimuth: Optional[float] = 315.0, elevation: Optional[float] = 45.0,
+                time_: Optional[str] = None, tz: Optional[str] = None,
+                algorithm: str = "auto", soft: bool = False, self_shadow: bool = False,
+                extra: Iterable[str] = ()) -> list:
+    """``hillshade-rt shadow``: the cast-shadow mask (1 shadow, 0 lit, 255 nodata) or, with
+    ``soft``, the visible fraction of the sun's disk."""
+    return ([program, "shadow"] + dem_args(dem, output, band)
+            + sun_args(sun, azimuth, elevation, time_, tz)
+            + (["--self-shadow"] if self_shadow else [])
+            + common_tail(algorithm, soft, extra))
+
+
+def hillshade_argv(program: str, dem: str, output: str, *, band: int = 1,
+                   sun: str = "azimuth", azimuth: Optional[float] = 315.0,
+                   elevation: Optional[float] = 45.0, time_: Optional[str] = None,
+                   tz: Optional[str] = None, ambient: float = 0.2,
+                   algorithm: str = "auto", soft: bool = False,
+                   extra: Iterable[str] = ()) -> list:
+    """``hillshade-rt hillshade``: 8-bit shaded relief with cast shadows."""
+    return ([program, "hillshade"] + dem_args(dem, output, band)
+            + sun_args(sun, azimuth, elevation, time_, tz)
+            + ["--ambient", _number(ambient)]
+            + common_tail(algorithm, soft, extra))
+
+
+def sun_hours_argv(program: str, dem: str, output: str, *, date: str,
+                   end_date: Optional[str] = None, step_minutes: float = 10.0,
+                   tz: Optional[str] = None, band: int = 1, algorithm: str = "auto",
+                   soft: bool = False, extra: Iterable[str] = ()) -> list:
+    """``hillshade-rt sun-hours``: hours of direct sun per cell over a day (or days up to
+    ``end_date``), the sun every ``step_minutes``; days run midnight to midnight in ``tz``
+    (empty: local mean solar time)."""
+    if not date:
+        raise ProgramError("sun hours need a date")
+    if not step_minutes or float(step_minutes) <= 0:
+        raise ProgramError("the step must be more than 0 minutes")
+    seconds = round(float(step_minutes) * 60)
+    step = f"{seconds // 60}min" if seconds % 60 == 0 else f"{seconds}s"
+    args = [program, "sun-hours"] + dem_args(dem, output, band) + ["--date", date]
+    if end_date:
+        args += ["--end-date", end_date]
+    args += ["--step", step]
+    if tz and tz.strip():
+        args += ["--tz", tz.strip()]
+    return args + common_tail(algorithm, soft, extra)
+
+
+def skyview_argv(program: str, dem: str, output: str, *, band: int = 1, directions: int = 32,
+                 definition: str = "zaksek", max_distance: Optional[float] = None,
+                 extra: Iterable[str] = ()) -> list:
+    """``hillshade-rt skyview``: the sky view factor (0..1) from each cell's exact horizon in
+    ``directions`` azimuths, up to ``max_distance`` metres (None or 0: the whole DEM)."""
+    args = ([program, "skyview"] + dem_args(dem, output, band)
+            + ["--directions", str(int(directions)),
+               "--definition", _check_choice("the definition", definition,
+                                             SKYVIEW_DEFINITIONS)])
+    if max_distance:
+        args += ["--max-distance", _number(max_distance)]
+    return args + common_tail(None, False, extra)
+
+
+def child_env(environ: Optional[dict] = None) -> dict:
+    """The program's environment: this process's, less QGIS's Python and GDAL/PROJ variables
+    (:data:`CHILD_ENV_DROPPED`)."""
+    env = dict(os.environ if environ is None else environ)
+    for name in CHILD_ENV_DROPPED:
+        env.pop(name, None)
+    return env
+
+
+def is_error_line(line: str) -> bool:
+    """Whether ``line`` is the program's one-line error."""
+    return line.startswith(PROGRAM + ": error:")
+
+
+@dataclass
+class Result:
+    """How a run of the program ended."""
+    returncode: int
+    lines: list = field(default_factory=list)     # its stderr (and stdout), line by line
+    canceled: bool = False
+
+    def error_line(self) -> str:
+        """The program's one-line error (``hillshade-rt: error: ...``), else its last line,
+        else its exit status."""
+        for line in reversed(self.lines):
+            if is_error_line(line):
+                return line
+        for line in reversed(self.lines):
+            if line.strip():
+                return line.strip()
+        return f"{PROGRAM} exited with status {self.returncode}"
+
+
+def run(argv: Sequence[str], on_line: Callable[[str], None] = lambda line: None,
+        is_canceled: Callable[[], bool] = lambda: False, poll: float = 0.1,
+        grace: float = 5.0, env: Optional[dict] = None) -> Result:
+    """Run ``argv``, handing each line it writes (stderr and stdout) to ``on_line`` as it
+    comes; when ``is_canceled()`` turns true the child is terminated (SIGTERM: it removes its
+    unfinished output and exits), and killed after ``grace`` seconds if still running.
+    Raises ProgramError when the program cannot be started."""
+    kw = {}
+    if sys.platform == "win32":
+        kw["creationflags"] = getattr(subprocess, "CREATE_NO_WINDOW", 0)
+    try:
+        child = subprocess.Popen(list(argv), stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                                 stderr=subprocess.STDOUT, env=child_env(env), **kw)
+    except OSError as e:
+        raise ProgramError(f"cannot start {argv[0]}: {e.strerror or e}") from None
+    lines: list = []
+    pending: "queue.Queue" = queue.Queue()
+
+    def reader():                   # a thread: the pipe is read while the child runs
+        for raw in iter(child.stdout.readline, b""):
+            # tqdm's carriage returns: keep the last state of the line
+            pending.put(raw.decode("utf-8", "replace").rstrip("\r\n").rsplit("\r", 1)[-1])
+        child.stdout.close()
+
+    def drain():                    # on_line runs in the caller's thread only
+        while True:
+            try:
+                line = pending.get_nowait()
+            except queue.Empty:
+                return
+            lines.append(line)
+            on_line(line)
+
+    thread = threading.Thread(target=reader, daemon=True)
+    thread.start()
+    canceled = False
+    while child.poll() is None:
+        drain()
+        if is_canceled():
+            canceled = True
+            child.terminate()
+            deadline = time.monotonic() + grace
+            while child.poll() is None and time.monotonic() < deadline:
+                time.sleep(poll)
+            if child.poll() is None:
+                child.kill()
+            break
+        time.sleep(poll)
+    child.wait()
+    thread.join(timeout=grace)
+    drain()
+    return Result(child.returncode, lines, canceled)
+
+
+def quote(argv: Sequence[str]) -> str:
+    """The command line as one string (for the log: copy it into a shell)."""
+    if sys.platform == "win32":
+        return subprocess.list2cmdline(list(argv))
+    import shlex
+    return " ".join(shlex.quote(a) for a in argv)

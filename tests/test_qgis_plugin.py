@@ -1,0 +1,463 @@
+"""The QGIS plugin (qgis/hillshade_rt_qgis, docs/qgis.md).
+
+Without QGIS: ``make qgis-plugin``'s zip (one top folder, metadata.txt with
+hasProcessingProvider=yes, the code, reproducible), the plugin's imports (never hillshade_rt or
+numba), its command lines (commands.py: parameters -> ``hillshade-rt`` argv, each parsed by the
+real CLI), finding the program, running it (stderr lines, the one-line error, cancel).
+
+With QGIS (marker ``qgis``): ``qgis_process run hillshade_rt:shadow`` of the zip's plugin on the
+repo's test DEM, with this venv's ``hillshade-rt`` as the provider's program setting, gives the
+pixels of ``hillshade-rt shadow`` with the same sun; a bad parameter gives the program's one-line
+error. Skipped only when ``qgis_process`` is not on PATH; with HILLSHADE_RT_REQUIRE_QGIS=1 (CI,
+once it installs QGIS) a missing qgis_process fails instead.
+"""
+
+from __future__ import annotations
+
+import ast
+import configparser
+import importlib.util
+import json
+import os
+import shutil
+import subprocess
+import sys
+import time
+import zipfile
+
+import numpy as np
+import pytest
+
+from hillshade_rt.testing import data_path, read_band, repo_root
+
+PLUGIN = os.path.join(repo_root(), "qgis", "hillshade_rt_qgis")
+DEM = data_path("lidar_dem_1m_utm15n_400x400.tif")
+PROGRAM = os.path.join(os.path.dirname(sys.executable), "hillshade-rt")
+PLUGIN_FILES = {"__init__.py", "plugin.py", "provider.py", "algorithms.py", "commands.py",
+                "metadata.txt", "icon.svg"}
+
+
+def load_commands():
+    """qgis/hillshade_rt_qgis/commands.py, imported by its path (pure Python: no qgis)."""
+    spec = importlib.util.spec_from_file_location("hillshade_rt_qgis_commands",
+                                                  os.path.join(PLUGIN, "commands.py"))
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module          # dataclasses look the module up
+    spec.loader.exec_module(module)
+    return module
+
+
+cmd = load_commands()
+
+
+def make_zip(tmp_path, name="plugin.zip") -> str:
+    target = str(tmp_path / name)
+    subprocess.run(["make", "-s", "-C", repo_root(), "qgis-plugin", f"QGIS_ZIP={target}",
+                    f"PYTHON={sys.executable}"], check=True, capture_output=True, timeout=120)
+    return target
+
+
+# --- the zip
+
+def test_make_qgis_plugin_zip(tmp_path):
+    import hillshade_rt
+    target = make_zip(tmp_path)
+    with zipfile.ZipFile(target) as z:
+        names = z.namelist()
+        assert z.testzip() is None
+        meta_text = z.read("hillshade_rt_qgis/metadata.txt").decode()
+        init = z.read("hillshade_rt_qgis/__init__.py").decode()
+        stamps = {i.date_time for i in z.infolist()}
+    # one top folder, the plugin's; its files and nothing else (no caches)
+    assert {n.split("/")[0] for n in names} == {"hillshade_rt_qgis"}
+    assert {n.split("/", 1)[1] for n in names} == PLUGIN_FILES
+    assert stamps == {(1980, 1, 1, 0, 0, 0)}
+    meta = configparser.ConfigParser()
+    meta.read_string(meta_text)
+    general = meta["general"]
+    assert general["hasProcessingProvider"] == "yes"
+    assert general["qgisMinimumVersion"] == "3.22"
+    assert general["version"] == hillshade_rt.__version__
+    for key in ("name", "description", "about", "author", "email", "repository"):
+        assert general[key].strip(), key
+    assert "def classFactory(iface)" in init
+    # reproducible: the same bytes twice
+    again = make_zip(tmp_path, "again.zip")
+    with open(target, "rb") as a, open(again, "rb") as b:
+        assert a.read() == b.read()
+
+
+def test_plugin_never_imports_hillshade_rt_or_numba():
+    """numba inside QGIS's Python breaks plugins (UMEP-processing #23, #79): the plugin imports
+    only the standard library, qgis, processing and itself."""
+    allowed = {"qgis", "processing"} | set(sys.stdlib_module_names)
+    for name in sorted(os.listdir(PLUGIN)):
+        if not name.endswith(".py"):
+            continue
+        with open(os.path.join(PLUGIN, name)) as f:
+            tree = ast.parse(f.read(), name)
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Import):
+                tops = [a.name.split(".")[0] for a in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.level == 0:
+                tops = [node.module.split(".")[0]]
+            else:
+                continue
+            assert set(tops) <= allowed, f"{name}:{node.lineno} imports {tops}"
+
+
+def test_algorithm_names_are_the_registry():
+    from hillshade_rt.algorithms import REGISTRY
+    assert cmd.ALGORITHMS == tuple(REGISTRY)
+
+
+# --- the command lines
+
+def parse(argv):
+    """The params the real CLI parses from ``argv`` (the program's subcommand and options);
+    an unknown option or bad value raises click's error."""
+    from hillshade_rt.cli import cli
+    command = cli.commands[argv[1]]
+    with command.make_context(argv[1], list(argv[2:])) as ctx:
+        return ctx.params
+
+
+def test_shadow_argv_azimuth():
+    argv = cmd.shadow_argv("/opt/hr/bin/hillshade-rt", "/d/dem.tif", "/o/out.tif",
+                           azimuth=225.0, elevation=20.5, algorithm="brute", soft=True,
+                           self_shadow=True)
+    assert argv == ["/opt/hr/bin/hillshade-rt", "shadow", "/d/dem.tif", "/o/out.tif",
+                    "--azimuth", "225", "--elevation", "20.5", "--self-shadow",
+                    "--algorithm", "brute", "--soft", "--overwrite"]
+    p = parse(argv)
+    assert (p["azimuth"], p["elevation"], p["algorithm"], p["soft"], p["self_shadow"],
+            p["overwrite"]) == (225.0, 20.5, "brute", True, True, True)
+    assert p["files"] == ("/d/dem.tif", "/o/out.tif")      # DEM... OUTPUT: the last is written
+
+
+def test_shadow_argv_time_zone_band_extra():
+    argv = cmd.shadow_argv("hillshade-rt", "dem.tif", "out.tif", band=2, sun="time",
+                           time_="2026-06-21T14:30:00", tz=" Europe/Zurich ",
+                           extra=cmd.split_extra("--no-earth-curvature --threads 2"))
+    assert argv == ["hillshade-rt", "shadow", "dem.tif", "out.tif", "--band", "2",
+                    "--time", "2026-06-21T14:30:00", "--tz", "Europe/Zurich",
+                    "--algorithm", "auto", "--no-earth-curvature", "--threads", "2",
+                    "--overwrite"]
+    p = parse(argv)
+    assert p["time"] == ("2026-06-21T14:30:00",) and p["tz"] == "Europe/Zurich"
+    assert p["band"] == 2 and p["curvature"] is False and p["threads"] == 2
+    # no zone: UTC (the program refuses a time without offset or zone)
+    assert cmd.sun_args("time", time_="2026-06-21T12:00:00", tz="")[-2:] == ["--tz", "UTC"]
+
+
+def test_hillshade_sun_hours_skyview_argv():
+    argv = cmd.hillshade_argv("hr", "dem.tif", "hs.tif", azimuth=300, elevation=30,
+                              ambient=0.35)
+    assert argv == ["hr", "hillshade", "dem.tif", "hs.tif", "--azimuth", "300", "--elevation",
+                    "30", "--ambient", "0.35", "--algorithm", "auto", "--overwrite"]
+    assert parse(argv)["ambient"] == 0.35
+
+    argv = cmd.sun_hours_argv("hr", "dem.tif", "h.tif", date="2026-12-01",
+                              end_date="2026-12-31", step_minutes=15, tz="Europe/Vienna",
+                              algorithm="bounds")
+    assert argv == ["hr", "sun-hours", "dem.tif", "h.tif", "--date", "2026-12-01",
+                    "--end-date", "2026-12-31", "--step", "15min", "--tz", "Europe/Vienna",
+                    "--algorithm", "bounds", "--overwrite"]
+    p = parse(argv)
+    assert (p["dem"], p["output"]) == ("dem.tif", "h.tif")
+    assert (p["date_"], p["end_date"], p["step"], p["tz"]) == ("2026-12-01", "2026-12-31",
+                                                                "15min", "Europe/Vienna")
+    # a step that is not whole minutes: seconds; no zone: no --tz (local mean solar time)
+    argv = cmd.sun_hours_argv("hr", "dem.tif", "h.tif", date="2026-06-21", step_minutes=0.5)
+    assert argv[argv.index("--step") + 1] == "30s" and "--tz" not in argv
+    parse(argv)
+
+    argv = cmd.skyview_argv("hr", "dem.tif", "svf.tif", directions=16, definition="dozier",
+                            max_distance=500.0)
+    assert argv == ["hr", "skyview", "dem.tif", "svf.tif", "--directions", "16",
+                    "--definition", "dozier", "--max-distance", "500", "--overwrite"]
+    p = parse(argv)
+    assert (p["directions"], p["definition"], p["max_distance"]) == (16, "dozier", 500.0)
+    assert "--max-distance" not in cmd.skyview_argv("hr", "d.tif", "o.tif", max_distance=0)
+
+
+def test_argv_refusals():
+    with pytest.raises(cmd.ProgramError, match="algorithm must be one of"):
+        cmd.shadow_argv("hr", "d.tif", "o.tif", algorithm="fastest")
+    with pytest.raises(cmd.ProgramError, match="needs the date and time"):
+        cmd.shadow_argv("hr", "d.tif", "o.tif", sun="time", time_=None)
+    with pytest.raises(cmd.ProgramError, match="definition must be one of"):
+        cmd.skyview_argv("hr", "d.tif", "o.tif", definition="rvt")
+    with pytest.raises(cmd.ProgramError, match="additional options"):
+        cmd.split_extra('--tz "Europe/Zurich')
+    with pytest.raises(cmd.ProgramError, match="step"):
+        cmd.sun_hours_argv("hr", "d.tif", "o.tif", date="2026-06-21", step_minutes=0)
+
+
+# --- finding and running the program
+
+def _executable(path):
+    path.write_text("#!/bin/sh\nexit 0\n")
+    path.chmod(0o755)
+    return str(path)
+
+
+def test_find_program(tmp_path):
+    home, on_path, elsewhere = tmp_path / "home", tmp_path / "bin", tmp_path / "opt"
+    for d in (home / ".local" / "bin", on_path, elsewhere):
+        d.mkdir(parents=True)
+    local = _executable(home / ".local" / "bin" / "hillshade-rt")
+    # nothing on PATH: ~/.local/bin
+    assert cmd.find_program("", path=str(tmp_path / "empty"), home=str(home)) == local
+    # on PATH first
+    first = _executable(on_path / "hillshade-rt")
+    assert cmd.find_program(None, path=str(on_path), home=str(home)) == first
+    # the setting wins: a file, or a folder holding it
+    given = _executable(elsewhere / "hillshade-rt")
+    assert cmd.find_program(given, path=str(on_path), home=str(home)) == given
+    assert cmd.find_program(str(elsewhere), path=str(on_path), home=str(home)) == given
+    with pytest.raises(cmd.ProgramError, match="no such executable"):
+        cmd.find_program(str(tmp_path / "missing"), path=str(on_path), home=str(home))
+    with pytest.raises(cmd.ProgramError, match="not found on PATH nor in"):
+        cmd.find_program("", path=str(tmp_path / "empty"), home=str(tmp_path / "nohome"))
+
+
+def test_child_env_drops_qgis_python_and_gdal():
+    env = cmd.child_env({"PATH": "/usr/bin", "PYTHONPATH": "/usr/share/qgis/python",
+                         "PYTHONHOME": "/usr", "GDAL_DATA": "/usr/share/gdal",
+                         "PROJ_LIB": "/usr/share/proj", "HOME": "/root"})
+    assert env == {"PATH": "/usr/bin", "HOME": "/root"}
+
+
+def test_run_program_error_line(tmp_path):
+    """The real program, a bad elevation: exit 2, its one-line error; no output."""
+    out = tmp_path / "o.tif"
+    lines = []
+    argv = cmd.shadow_argv(PROGRAM, DEM, str(out), azimuth=225, elevation=-5)
+    # QGIS's PYTHONHOME would stop the venv's Python from starting: run() drops it
+    result = cmd.run(argv, on_line=lines.append, env={**os.environ, "PYTHONHOME": "/nowhere"})
+    assert result.returncode == 2 and not result.canceled
+    assert result.error_line().startswith("hillshade-rt: error: ")
+    assert "elevation" in result.error_line()
+    assert lines == result.lines and result.error_line() in lines
+    assert not out.exists()
+
+
+def test_run_program_canceled(tmp_path):
+    """Cancelling terminates the child at once (no waiting for it to finish)."""
+    script = tmp_path / "slow.py"
+    script.write_text("import sys, time\nprint('started', flush=True)\n"
+                      "print('on stderr', file=sys.stderr, flush=True)\ntime.sleep(60)\n")
+    seen = []
+    t0 = time.monotonic()
+    result = cmd.run([sys.executable, str(script)], on_line=seen.append,
+                     is_canceled=lambda: len(seen) >= 2)
+    assert time.monotonic() - t0 < 20
+    assert result.canceled and result.returncode != 0
+    assert sorted(seen) == ["on stderr", "started"]
+
+
+def test_run_program_missing():
+    with pytest.raises(cmd.ProgramError, match="cannot start"):
+        cmd.run(["/nonexistent/hillshade-rt", "--version"])
+
+
+# --- in QGIS (qgis_process)
+
+def qgis_process_binary() -> str | None:
+    """qgis_process on PATH; Debian's /usr/bin/qgis_process is a wrapper script that passes
+    --noversioncheck, which 3.22's qgis_process refuses (qgis/QGIS#57683): its
+    qgis_process.bin beside it is the program itself."""
+    found = shutil.which("qgis_process")
+    if found is None:
+        return None
+    beside = found + ".bin"
+    return beside if os.access(beside, os.X_OK) else found
+
+
+@pytest.fixture(scope="module")
+def qgis(tmp_path_factory):
+    """A QGIS profile with the zip's plugin installed and enabled and the provider's program
+    setting pointing at this venv's hillshade-rt: returns run(args) -> CompletedProcess."""
+    binary = qgis_process_binary()
+    if binary is None:
+        if os.environ.get("HILLSHADE_RT_REQUIRE_QGIS"):
+            pytest.fail("qgis_process not on PATH (HILLSHADE_RT_REQUIRE_QGIS is set)")
+        pytest.skip("qgis_process not on PATH (apt-get install qgis qgis-providers "
+                    "python3-qgis)")
+    base = tmp_path_factory.mktemp("qgis")
+    plugins, config = base / "plugins", base / "config"
+    with zipfile.ZipFile(make_zip(base)) as z:
+        z.extractall(plugins)
+    env = dict(os.environ, QT_QPA_PLATFORM="offscreen", QGIS_CUSTOM_CONFIG_PATH=str(config),
+               QGIS_PLUGINPATH=str(plugins), XDG_RUNTIME_DIR=str(base))
+    # QGIS's embedded Python takes its prefix from the first python3 on PATH: this venv's (or
+    # pyenv's) there would leave it without its qgis module; QGIS's own folder goes first
+    env.pop("VIRTUAL_ENV", None)
+    env["PATH"] = os.pathsep.join([os.path.dirname(binary)] + [
+        d for d in env.get("PATH", "").split(os.pathsep)
+        if d and not os.path.exists(os.path.join(os.path.dirname(d), "pyvenv.cfg"))])
+
+    def run(*args, timeout=600):
+        return subprocess.run([binary, *args], env=env, capture_output=True, text=True,
+                              timeout=timeout, cwd=str(base))
+    run.env = env
+    # QGIS writes statistics beside the rasters it opens (.aux.xml): the DEMs it reads are
+    # copies, and the checkout stays as it was
+    run.dem = shutil.copy(DEM, base / "dem.tif")
+
+    enabled = run("plugins", "enable", "hillshade_rt_qgis")
+    assert enabled.returncode == 0, enabled.stdout + enabled.stderr
+    # the provider setting, as Settings > Options > Processing > Providers saves it
+    ini = config / "profiles" / "default" / "QGIS" / "QGIS3.ini"
+    line = f"Configuration\\{cmd.SETTING_PROGRAM}={PROGRAM}"
+    text = ini.read_text() if ini.exists() else ""
+    if "[Processing]\n" in text:
+        text = text.replace("[Processing]\n", f"[Processing]\n{line}\n", 1)
+    else:
+        text += f"\n[Processing]\n{line}\n"
+    ini.write_text(text)
+    listed = run("list")
+    assert "hillshade_rt:shadow" in listed.stdout, listed.stdout + listed.stderr
+    return run
+
+
+def direct(dem, *args) -> subprocess.CompletedProcess:
+    return subprocess.run([PROGRAM, "shadow", str(dem), *args], capture_output=True, text=True,
+                          timeout=600)
+
+
+@pytest.mark.qgis
+def test_qgis_shadow_equals_program(qgis, tmp_path):
+    out, ref = tmp_path / "qgis.tif", tmp_path / "ref.tif"
+    done = qgis("run", "hillshade_rt:shadow", "--json", "--", f"INPUT={qgis.dem}",
+                "AZIMUTH=225", "ELEVATION=20", f"OUTPUT={out}")
+    assert done.returncode == 0, done.stdout + done.stderr
+    report = json.loads(done.stdout)
+    assert report["results"]["OUTPUT"] == str(out)
+    # the command and the program's stderr (its summary line) in the feedback
+    info = report["log"]["info"]
+    assert info[0].startswith(PROGRAM + " shadow ") and "--azimuth 225 --elevation 20" in info[0]
+    assert any(line.startswith(f"hillshade-rt: {out}: 400x400, sun az 225 el 20")
+               for line in info), info
+    assert direct(qgis.dem, str(ref), "--azimuth", "225", "--elevation", "20").returncode == 0
+    got, want = read_band(out), read_band(ref)
+    assert got.dtype == want.dtype == np.uint8
+    assert {0, 1} <= set(np.unique(want).tolist())
+    np.testing.assert_array_equal(got, want)
+
+
+@pytest.mark.qgis
+def test_qgis_time_zone_equals_program(qgis, tmp_path):
+    out, ref = tmp_path / "qgis.tif", tmp_path / "ref.tif"
+    done = qgis("run", "hillshade_rt:shadow", "--", f"INPUT={qgis.dem}", "SUN=1",
+                "DATETIME=2026-12-21T08:40:00", "TIMEZONE=America/Chicago", "ALGORITHM=bounds",
+                f"OUTPUT={out}")
+    assert done.returncode == 0, done.stdout + done.stderr
+    assert direct(qgis.dem, str(ref), "--time", "2026-12-21T08:40", "--tz", "America/Chicago",
+                  "--algorithm", "bounds").returncode == 0
+    want = read_band(ref)
+    assert 0 < (want == 1).mean() < 1
+    np.testing.assert_array_equal(read_band(out), want)
+
+
+@pytest.mark.qgis
+def test_qgis_bad_parameter_gives_program_error(qgis, tmp_path):
+    out = tmp_path / "never.tif"
+    done = qgis("run", "hillshade_rt:shadow", "--", f"INPUT={qgis.dem}", "SUN=1",
+                "DATETIME=2026-06-21T14:30:00", "TIMEZONE=Mars/Olympus", f"OUTPUT={out}")
+    assert done.returncode != 0
+    own = direct(qgis.dem, str(out), "--time", "2026-06-21T14:30:00", "--tz", "Mars/Olympus")
+    assert own.returncode == 2
+    error = own.stderr.strip().splitlines()[-1]
+    assert error.startswith("hillshade-rt: error: --tz 'Mars/Olympus'")
+    assert f"ERROR:\t{error}" in done.stdout + done.stderr, done.stdout + done.stderr
+    assert not out.exists()
+
+
+# QGIS's own Python: the zip's provider in a QgsApplication, the program's path set
+PRELUDE = r"""
+import os, sys, time
+from qgis.core import (QgsApplication, QgsProcessingException, QgsProcessingFeedback,
+                       QgsProject)
+app = QgsApplication([], False)
+app.initQgis()
+plugins, program, dem, out = sys.argv[1:5]
+sys.path[:0] = [plugins, os.path.join(QgsApplication.pkgDataPath(), "python", "plugins")]
+from processing.core.Processing import Processing
+Processing.initialize()
+from processing.core.ProcessingConfig import ProcessingConfig
+from hillshade_rt_qgis.provider import HillshadeRtProvider
+provider = HillshadeRtProvider()            # kept: the registry does not own it from Python
+assert QgsApplication.processingRegistry().addProvider(provider)
+ProcessingConfig.setSettingValue("HILLSHADE_RT_PROGRAM", program)
+import processing
+"""
+
+
+def qgis_python(qgis, tmp_path, body: str, dem: str) -> list:
+    """Run PRELUDE + ``body`` with QGIS's Python (the python3 beside qgis_process) on a copy
+    of ``dem``, the output in tmp_path/out; its stdout's lines."""
+    python = os.path.join(os.path.dirname(qgis_process_binary()), "python3")
+    script, out_dir, plugins = tmp_path / "script.py", tmp_path / "out", tmp_path / "plugins"
+    script.write_text(PRELUDE + body)
+    out_dir.mkdir()
+    with zipfile.ZipFile(make_zip(tmp_path)) as z:
+        z.extractall(plugins)
+    done = subprocess.run([python, str(script), str(plugins), PROGRAM,
+                           shutil.copy(dem, tmp_path / "dem.tif"), str(out_dir / "out.tif")],
+                          env=qgis.env, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stdout + done.stderr
+    return done.stdout.splitlines()
+
+
+CANCEL = r"""
+class Feedback(QgsProcessingFeedback):
+    started = None
+    def pushCommandInfo(self, info):
+        print("COMMAND", info, flush=True)
+        Feedback.started = time.monotonic()
+    def isCanceled(self):
+        return self.started is not None and time.monotonic() - self.started > 2
+
+try:
+    processing.run("hillshade_rt:skyview", {"INPUT": dem, "DIRECTIONS": 360, "OUTPUT": out},
+                   feedback=Feedback())
+    print("FINISHED")
+except QgsProcessingException as e:
+    print("EXCEPTION", e)
+print("AFTER_CANCEL", round(time.monotonic() - Feedback.started, 1))
+"""
+
+
+@pytest.mark.qgis
+def test_qgis_cancel_terminates_program(qgis, tmp_path):
+    """Cancelling in QGIS (the feedback's isCanceled) stops the program at once: the
+    algorithm fails with 'canceled', the program leaves nothing in the output folder."""
+    lines = qgis_python(qgis, tmp_path, CANCEL, os.path.join(
+        repo_root(), "examples", "bigtujunga_srtm30m_utm11n_1197x643.tif"))
+    assert lines[0].startswith(f"COMMAND {PROGRAM} skyview "), lines
+    assert "EXCEPTION canceled: hillshade-rt was stopped (no output written)" in lines, lines
+    after = float(lines[-1].split()[-1])
+    assert after < 2 + 10, lines       # cancelled after 2 s; terminated within its grace
+    assert os.listdir(tmp_path / "out") == []
+
+
+LOAD = r"""
+processing.runAndLoadResults("hillshade_rt:shadow", {"INPUT": dem, "OUTPUT": out})
+processing.runAndLoadResults("hillshade_rt:shadow", {"INPUT": dem, "SOFT": True,
+                                                     "OUTPUT": out[:-4] + "_soft.tif"})
+for layer in sorted(QgsProject.instance().mapLayers().values(), key=lambda l: l.source()):
+    r = layer.renderer()
+    print(os.path.basename(layer.source()), r.type(),
+          [(c.value, c.color.alpha()) for c in r.classes()] if r.type() == "paletted" else "")
+"""
+
+
+@pytest.mark.qgis
+def test_qgis_shadow_mask_loads_styled(qgis, tmp_path):
+    """A shadow mask that QGIS loads on completion gets the plugin's style: shadow (1)
+    translucent, lit (0) transparent; a soft shadow stays QGIS's grey."""
+    lines = qgis_python(qgis, tmp_path, LOAD, DEM)
+    assert lines == ["out.tif paletted [(1.0, 120), (0.0, 0)]",
+                     "out_soft.tif singlebandgray "], lines
