@@ -10,13 +10,12 @@ import logging
 import os
 import re
 import sys
-import threading
 import warnings
 
 import numpy as np
 
 from ..errors import HillshadeError, UsageProblem
-from .write import atomic_path, gdal_checked, temp_beside
+from .write import GdalRecords, atomic_path, gdal_checked, temp_beside
 
 # formats GDAL writes by copying a finished dataset (CreateCopy) rather than block by block;
 # what each can hold
@@ -251,23 +250,22 @@ def check_creation(path: str, drv: str, dtype: str, count: int, options: dict,
     raise HillshadeError(f"{path}: {shown}: {reason}")
 
 
-class _GdalSignals(logging.Handler):
-    """What GDAL signals in this thread while a probe runs: errors first, then warnings."""
+class _GdalSignals(GdalRecords):
+    """What GDAL signals in this thread while a probe runs: errors (``io.write``'s records),
+    then warnings."""
 
     def __init__(self):
-        super().__init__(logging.DEBUG)
-        self.errors: list[str] = []
+        super().__init__()
+        self.errors = self.messages
         self.warnings: list[str] = []
-        self.thread = threading.get_ident()
 
     def emit(self, record):
         if record.thread != self.thread:
             return
-        msg = record.getMessage()
-        if msg.startswith("GDAL signalled an error") or record.levelno >= logging.ERROR:
-            text = msg.split("msg=", 1)[-1].strip("'\"") if "msg=" in msg else msg
-            self.errors.append(text)
-        elif record.levelno >= logging.WARNING:
+        n = len(self.errors)
+        super().emit(record)
+        if len(self.errors) == n and record.levelno >= logging.WARNING:
+            msg = record.getMessage()
             # "CPLE_NotSupported in driver GTiff does not support creation option FOO"
             self.warnings.append(msg.split(" in ", 1)[-1] if msg.startswith("CPLE_") else msg)
 

@@ -329,7 +329,7 @@ def write_json(path: str, obj: dict, overwrite: bool = False) -> None:
 # --------------------------------------------------------------------------------------------
 # GDAL's write errors
 
-class _Records(logging.Handler):
+class GdalRecords(logging.Handler):
     """Collects the failures GDAL signals in this thread while a block runs (rasterio logs them,
     in the thread that made the GDAL call)."""
 
@@ -451,7 +451,7 @@ def gdal_checked(path: str, what: str = "cannot write"):
     from rasterio._err import CPLE_BaseError
     from rasterio.errors import RasterioError
 
-    rec = _Records()
+    rec = GdalRecords()
     log = logging.getLogger("rasterio._env")
     level = log.level
     log.addHandler(rec)

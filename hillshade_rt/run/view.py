@@ -744,13 +744,18 @@ class Handler(BaseHTTPRequestHandler):
                 raise NotFound(f"no such page: {url.path}")
         except (BrokenPipeError, ConnectionResetError):
             return
-        except BadRequest as exc:
-            self.send(400, one_line(exc), "text/plain; charset=utf-8")
-        except NotFound as exc:
-            self.send(404, one_line(exc), "text/plain; charset=utf-8")
-        except HillshadeError as exc:
-            self.send(400, one_line(exc), "text/plain; charset=utf-8")
         except Exception as exc:   # noqa: BLE001 -- a request never stops the server
+            self.fail(exc)
+
+    def fail(self, exc: BaseException) -> None:
+        """The answer to a request that failed: 404 for no such page, 400 for a bad request
+        (``BadRequest``, any ``HillshadeError``), else 500 with the error on one line, also
+        printed on stderr."""
+        if isinstance(exc, NotFound):
+            self.send(404, one_line(exc), "text/plain; charset=utf-8")
+        elif isinstance(exc, HillshadeError):
+            self.send(400, one_line(exc), "text/plain; charset=utf-8")
+        else:
             msg = f"internal error ({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''})"
             print(f"hillshade-rt: view: {self.path}: {msg}", file=sys.stderr)
             self.send(500, msg.encode(), "text/plain; charset=utf-8")
@@ -781,14 +786,8 @@ class Handler(BaseHTTPRequestHandler):
                 raise NotFound(f"no such page: {url.path}")
         except (BrokenPipeError, ConnectionResetError):
             return
-        except NotFound as exc:
-            self.send(404, one_line(exc), "text/plain; charset=utf-8")
-        except HillshadeError as exc:
-            self.send(400, one_line(exc), "text/plain; charset=utf-8")
         except Exception as exc:   # noqa: BLE001 -- a request never stops the server
-            msg = f"internal error ({type(exc).__name__}: {str(exc).splitlines()[0] if str(exc) else ''})"
-            print(f"hillshade-rt: view: {self.path}: {msg}", file=sys.stderr)
-            self.send(500, msg.encode(), "text/plain; charset=utf-8")
+            self.fail(exc)
 
     def static(self, name: str) -> None:
         root = os.path.realpath(STATIC)
