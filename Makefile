@@ -39,8 +39,9 @@ help:
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
 
-# after installing, numba compiles the default kernels once (python -m hillshade_rt.warm): the
-# first run does not wait for them
+# after installing, numba compiles every kernel the commands use, once per install, in parallel
+# processes (python -m hillshade_rt.warm; about a minute on 2 cores): no command compiles at its
+# first run. Nothing is compiled again while this install's kernels are cached.
 $(VENV)/.installed: pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install -q -e .
 	$(BIN)/python -m hillshade_rt.warm
@@ -48,6 +49,7 @@ $(VENV)/.installed: pyproject.toml | $(BIN)/python
 
 $(VENV)/.installed-test: pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install -q -e '.[test]'
+	$(BIN)/python -m hillshade_rt.warm
 	@touch $@ $(VENV)/.installed
 
 install: $(VENV)/.installed

@@ -46,17 +46,43 @@ def cache_dir() -> str:
     return os.path.join(_cache_root(), source_digest())
 
 
-def cached(module: str) -> bool:
-    """Whether numba's cache already holds compiled kernels of ``algorithms/<module>.py`` for this
-    version (an index file ``<module>.<function>-<line>.py311.nbi``): if not, the first call
-    compiles them (seconds to a minute), which the command line says before it happens."""
-    root = cache_dir()
-    try:
-        subs = [os.path.join(root, d) for d in os.listdir(root)]
-        return any(f.startswith(module + ".") and f.endswith(".nbi")
-                   for sub in subs if os.path.isdir(sub) for f in os.listdir(sub))
-    except OSError:
+#: Every kernel of the package, as its ``njit`` made it (``warm.missing`` checks each is cached).
+KERNELS: list = []
+
+
+def loadable(dispatcher) -> bool:
+    """Whether numba's cache holds a compiled signature of ``dispatcher`` that this install
+    loads: its index file in the folder numba's locator gives *this* install's source file
+    (``<root>/<digest>/<folder>_<sha1 of the folder's path>``: another checkout of the same
+    version has its own), written for the source as it is now (numba's stamp), with an entry
+    for this machine's code generator and this function's bytecode (numba's index key)."""
+    cache = getattr(dispatcher, "_cache", None)
+    index_file = getattr(cache, "_cache_file", None)
+    if index_file is None:
         return False
+    try:
+        overloads = index_file._load_index()
+    except Exception:       # noqa: BLE001 -- an unreadable index is as good as none
+        return False
+    if not overloads:
+        return False
+    from numba.core.registry import cpu_target
+    codegen = cpu_target.target_context.codegen()
+    return any(key[1:] == cache._index_key(key[0], codegen)[1:] for key in overloads)
+
+
+def cached(module: str) -> bool:
+    """Whether numba's cache holds, for this install, compiled kernels of every function of
+    ``algorithms/<module>.py`` (``loadable``): if not, the first call compiles them (seconds to
+    a minute), which the command line says before it happens."""
+    import importlib
+    try:
+        importlib.import_module(f"{__package__}.{module}")
+    except ImportError:
+        return False
+    name = f"{__package__}.{module}"
+    mine = [k for k in KERNELS if k.py_func.__module__ == name]
+    return bool(mine) and all(loadable(k) for k in mine)
 
 
 @contextlib.contextmanager
@@ -78,13 +104,18 @@ def njit(*args, **options):
     ``@njit(cache=True, ...)`` as with numba's (or bare ``@njit``)."""
     if args and callable(args[0]):            # bare @njit
         with kernel_cache():
-            return numba.njit(*args, **options)
+            return _register(numba.njit(*args, **options))
     decorate = numba.njit(*args, **options)
 
     def apply(fn):
         with kernel_cache():
-            return decorate(fn)
+            return _register(decorate(fn))
     return apply
+
+
+def _register(dispatcher):
+    KERNELS.append(dispatcher)
+    return dispatcher
 
 
 # ------------------------------------------------------------------------------------------

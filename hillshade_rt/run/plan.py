@@ -38,7 +38,9 @@ import re
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
+
+from ..algorithms._jitcache import njit
 
 from ..algorithms import REGISTRY
 from ..errors import HillshadeError

@@ -11,15 +11,6 @@ LIDAR = data_path("lidar_dem_1m_utm15n_400x400.tif")
 SUN = ["--azimuth", "203.7", "--elevation", "12"]
 
 
-def test_cached_reads_numba_index_files(tmp_path, monkeypatch):
-    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
-    assert not _jitcache.cached("smap")
-    sub = tmp_path / _jitcache.source_digest() / "algorithms_0123"
-    sub.mkdir(parents=True)
-    (sub / "brute._brute_cpu-39.py311.nbi").write_bytes(b"")
-    assert _jitcache.cached("brute") and not _jitcache.cached("smap")
-
-
 def test_cli_says_once_that_it_compiles_and_quiet_says_nothing(tmp_path, runner, monkeypatch):
     from hillshade_rt.cli import errors as cli_errors
     r = runner.invoke(cli, ["shadow", LIDAR, str(tmp_path / "z.tif")] + SUN)
@@ -37,33 +28,6 @@ def test_cli_says_once_that_it_compiles_and_quiet_says_nothing(tmp_path, runner,
     r = runner.invoke(cli, ["hillshade", LIDAR, str(tmp_path / "c.tif"), "--algorithm", "brute"])
     assert r.exit_code == 0 and "compiling" not in r.stderr     # brute and relief are cached
     assert "relief" in seen
-
-
-def test_warm_step_compiles_what_a_first_run_needs(monkeypatch, capsys):
-    """`python -m hillshade_rt.warm` (run by `make install`): says what it compiles, runs the
-    default's (auto: bounds and brute) warm-up on a projected and a per-row grid, and is silent
-    when everything is cached."""
-    from hillshade_rt import warm
-    from hillshade_rt.shading import Shader
-    calls = []
-    real = Shader.warm_up
-    monkeypatch.setattr(Shader, "warm_up", lambda self, *a, **k: calls.append(
-        (self.algorithm, bool((self.grid.dx != self.grid.dx[0]).any()))) or real(self, *a, **k))
-    monkeypatch.setattr(_jitcache, "cached", lambda m: m != "bounds")
-    assert warm.main() == 0
-    assert calls == [("auto", False), ("auto", True)]
-    assert "compiling the bounds kernels once" in capsys.readouterr().err
-    # after compiling a new version: a hint about the others' folders, when there are some
-    monkeypatch.setattr(_jitcache, "survey", lambda: {"other_versions": [("a", 3e6), ("b", 2e6)]})
-    assert warm.main() == 0
-    assert ("2 other versions' compiled kernels (5 MB) are cached too; 'hillshade-rt cache "
-            "--prune' removes them") in capsys.readouterr().err
-    monkeypatch.setattr(_jitcache, "survey", lambda: {"other_versions": []})
-    assert warm.main() == 0 and "--prune" not in capsys.readouterr().err
-    calls.clear()
-    monkeypatch.setattr(_jitcache, "cached", lambda m: True)
-    calls.clear()
-    assert warm.main() == 0 and calls == [] and capsys.readouterr().err == ""
 
 
 def test_a_kernel_module_imported_alone_caches_in_this_versions_folder(tmp_path):
