@@ -20,8 +20,9 @@ ROOT = pathlib.Path(hillshade_rt.__file__).parent
 PACKAGE = "hillshade_rt"
 ALGORITHMS = "hillshade_rt.algorithms"
 # what the algorithms may import from above their own package
+# (``_preload``: numba's start-up, which ``_jitcache`` sets up for every kernel)
 BELOW_ALGORITHMS = {"hillshade_rt", "hillshade_rt.errors", "hillshade_rt.geometry",
-                    "hillshade_rt.sun"}
+                    "hillshade_rt.sun", "hillshade_rt._preload"}
 
 
 def modules() -> dict[str, pathlib.Path]:

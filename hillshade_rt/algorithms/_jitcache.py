@@ -19,6 +19,8 @@ import threading
 
 import numba
 
+from .._preload import light_loading
+
 _HERE = os.path.dirname(os.path.abspath(__file__))
 _SETTING = threading.RLock()    # numba's CACHE_DIR is global: one decorator at a time sets it
 
@@ -116,6 +118,10 @@ def njit(*args, **options):
 def _register(dispatcher):
     KERNELS.append(dispatcher)
     return dispatcher
+
+
+# this package's cached kernels load without numba's registries refreshed (``_preload``)
+light_loading()
 
 
 # ------------------------------------------------------------------------------------------
