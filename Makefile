@@ -7,7 +7,7 @@ OUTDIR ?= out
 EXAMPLE_DEM := examples/bigtujunga_srtm30m_utm11n_1197x643.tif
 EXAMPLE_OUT := $(OUTDIR)/bigtujunga_shadow.tif
 
-.PHONY: run test install install-test bench bench-sun bench-tiling bench-big bench-gpu bench-peers bench-horizon docs-pictures docs-animation docs-viewer bench-writes bench-real bench-real-quick bench-fast bench-point bench-view bench-update bench-illumination gpu-check clean clean-cache bench-startup help qgis-plugin docs-qgis
+.PHONY: run test install install-test bench bench-sun bench-tiling bench-big bench-gpu bench-peers bench-horizon docs-pictures docs-animation docs-viewer bench-writes bench-real bench-real-quick bench-fast bench-point bench-view bench-update bench-illumination gpu-check clean clean-cache bench-startup bench-batch help qgis-plugin docs-qgis
 
 help:
 	@echo "make run    - set up .venv, shade the bundled example DEM, print where the mask went"
@@ -35,6 +35,7 @@ help:
 	@echo "make clean  - remove .venv and outputs"
 	@echo "make clean-cache - remove numba's stale compiled kernels (hillshade-rt cache --prune)"
 	@echo "make bench-startup - wall time of hillshade-rt --help, --version and an az/el run"
+	@echo "make bench-batch - a Makefile of 256^2/512^2 tiles: gdaldem vs hillshade-rt standalone, server, --context, one call"
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -175,6 +176,13 @@ clean-cache: $(VENV)/.installed
 
 bench-startup: $(VENV)/.installed
 	$(BIN)/python benchmarks/bench_startup.py
+
+# A Makefile of tiles (the repository's real DEMs cut into 256^2 and 512^2 tiles): gdaldem
+# hillshade, hillshade-rt standalone, with the server, with --context, one call; the start-up
+# phases; the first run after the warm-up. Needs Debian's gdal-bin (gdaldem, gdalbuildvrt).
+# BENCH_BATCH_ARGS passes options, e.g. BENCH_BATCH_ARGS="--no-cache --jobs 2".
+bench-batch: $(VENV)/.installed
+	$(BIN)/python benchmarks/bench_batch.py $(BENCH_BATCH_ARGS)
 
 bench-illumination: $(VENV)/.installed
 	$(BIN)/python benchmarks/bench_illumination.py

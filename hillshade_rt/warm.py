@@ -323,8 +323,6 @@ class CompileCounter:
 def run_group(name: str, compiled: list | None = None) -> int:
     """Run one group's scenarios in this process; 0 when all ran. ``compiled``: a list to which
     the names of the kernels numba compiled (not loaded) are added."""
-    import click
-
     from .cli import cli
     failed = 0
     counter = CompileCounter().__enter__()
@@ -344,14 +342,15 @@ def run_group(name: str, compiled: list | None = None) -> int:
                 continue
             argv = [a.format(**values) for a in args] + ["--overwrite", "-q"]
             try:
-                cli.main(args=argv, prog_name="hillshade-rt", standalone_mode=False)
-            except (click.exceptions.Exit, SystemExit) as exc:
-                code = getattr(exc, "exit_code", getattr(exc, "code", 0))
-                if code:
-                    failed += 1
+                code = cli.main(args=argv, prog_name="hillshade-rt", standalone_mode=False)
+            except SystemExit as exc:
+                code = exc.code
             except Exception as exc:          # noqa: BLE001 -- said, and the group goes on
-                print(f"hillshade-rt: warm-up scenario {' '.join(args)} failed: {exc}",
-                      file=sys.stderr)
+                code = getattr(exc, "exit_code", 1)     # click's Exit and usage errors
+                if code:
+                    print(f"hillshade-rt: warm-up scenario {' '.join(args)} failed: {exc}",
+                          file=sys.stderr)
+            if code:
                 failed += 1
     counter.__exit__(None, None, None)
     if compiled is not None:

@@ -1,6 +1,6 @@
 """``hillshade-rt --version``: this version and what it runs on (numba, GDAL, rasterio, numpy,
 the backends), for bug reports. Cheap: the versions come from the installed packages' metadata,
-GDAL's from rasterio (the one import, a tenth of a second), and the GPU line from the files of
+GDAL's from the name of the library rasterio's wheel carries (else from rasterio), and the GPU line from the files of
 the NVIDIA driver; CUDA is never initialised (``--backend gpu`` and ``hillshade-rt info`` do
 that)."""
 
@@ -55,6 +55,19 @@ def gpus_seen() -> list[str] | None:
 
 
 def gdal_version() -> str:
+    """GDAL's version: from the name of the libgdal a rasterio wheel carries
+    (``rasterio.libs/libgdal-<hash>.so.<soversion>.<major>.<minor>.<patch>``) without loading it;
+    else from rasterio, imported (a tenth of a second: a rasterio built on the system's GDAL)."""
+    import re
+    try:
+        from importlib.metadata import distribution
+        libs = str(distribution("rasterio").locate_file("rasterio.libs"))
+        for name in sorted(glob.glob(os.path.join(libs, "libgdal*"))):
+            m = re.search(r"\.so\.\d+\.(\d+\.\d+\.\d+)$", name)
+            if m:
+                return m.group(1)
+    except Exception:     # noqa: BLE001 -- then rasterio says
+        pass
     try:
         import rasterio
         return rasterio.__gdal_version__
