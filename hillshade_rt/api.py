@@ -27,7 +27,7 @@ from .errors import HillshadeError
 from .run.config import PLACE_KEYS, READ_KEYS
 
 # keyword arguments passed on as the run's options of the same name
-_PASSED = PLACE_KEYS + READ_KEYS + ("threads",)
+_PASSED = PLACE_KEYS + READ_KEYS + ("threads", "context")
 
 
 def _iso(t):
@@ -105,7 +105,8 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
                start=_iso(start), end=_iso(end), step=step,
                sun_from_stac=None if sun_from_stac is None else os.fspath(sun_from_stac),
                **{k: more.get(k, d) for k, d in zip(PLACE_KEYS, (None,) * 5 + (False, DEFAULT_TOLERANCE))})
-    read = ReadOptions(**{k: more[k] for k in READ_KEYS if k in more})
+    read = ReadOptions(**{k: more[k] for k in READ_KEYS if k in more},
+                       context=None if more.get("context") is None else os.fspath(more["context"]))
     run = RunOptions(backend=backend, threads=more.get("threads"), report_path=report,
                      overwrite=overwrite, quiet=not progress, fmt=fmt, preview=preview,
                      say=_stderr, creation_options=creation_options)
@@ -160,7 +161,8 @@ def irradiance(dem, output, *, date=None, end_date=None, start=None, end=None,
         return None if v is None else str(v.isoformat() if hasattr(v, "isoformat") else v)
     place = {k: more.get(k, d) for k, d in zip(PLACE_KEYS, (None,) * 5 + (False,
                                                                           DEFAULT_TOLERANCE))}
-    read = ReadOptions(**{k: more[k] for k in READ_KEYS if k in more})
+    read = ReadOptions(**{k: more[k] for k in READ_KEYS if k in more},
+                       context=None if more.get("context") is None else os.fspath(more["context"]))
     run = RunOptions(backend=backend, threads=more.get("threads"), report_path=report,
                      overwrite=overwrite, quiet=not progress, fmt=fmt, preview=preview,
                      say=_stderr, creation_options=creation_options)
@@ -198,7 +200,8 @@ def animate(dem, output, *, date=None, start=None, end=None, step: str | None = 
         return None if v is None else str(v.isoformat() if hasattr(v, "isoformat") else v)
     place = {k: more.get(k, d) for k, d in zip(PLACE_KEYS, (None,) * 5 + (False,
                                                                           DEFAULT_TOLERANCE))}
-    read = ReadOptions(**{k: more[k] for k in READ_KEYS if k in more})
+    read = ReadOptions(**{k: more[k] for k in READ_KEYS if k in more},
+                       context=None if more.get("context") is None else os.fspath(more["context"]))
     run = RunOptions(backend=backend, threads=more.get("threads"), report_path=report,
                      overwrite=overwrite, quiet=not progress, say=_stderr)
     return run_animate(AnimateConfig(os.fspath(dem), os.fspath(output), text(date), text(start),
