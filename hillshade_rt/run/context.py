@@ -52,6 +52,12 @@ class Area:
         a0, _, b0, _ = self.bounds
         return region[0] - a0, region[1] - a0, region[2] - b0, region[3] - b0
 
+    def regions(self, regs):
+        """Regions of the tile (its rows and columns, e.g. ``run.reach.plan_regions`` of its
+        shape) in the context's coordinates."""
+        a0, _, b0, _ = self.bounds
+        return [(r0 + a0, r1 + a0, c0 + b0, c1 + b0) for r0, r1, c0, c1 in regs]
+
     def check_valid(self) -> None:
         """``AllNodata`` when every cell of the tile is nodata in the context (read in bands of
         rows, stopping at the first valid cell)."""
