@@ -164,8 +164,7 @@ def irradiance(dem, output, *, date=None, end_date=None, start=None, end=None,
         return None if v is None else str(v.isoformat() if hasattr(v, "isoformat") else v)
     place = {k: more.get(k, d) for k, d in zip(PLACE_KEYS, (None,) * 5 + (False,
                                                                           DEFAULT_TOLERANCE))}
-    read = ReadOptions(**{k: more[k] for k in READ_KEYS if k in more},
-                       context=None if context is None else os.fspath(context))
+    read = ReadOptions(**{k: more[k] for k in READ_KEYS if k in more})
     run = RunOptions(backend=backend, threads=more.get("threads"), report_path=report,
                      overwrite=overwrite, quiet=not progress, fmt=fmt, preview=preview,
                      say=_stderr, creation_options=creation_options)
