@@ -55,7 +55,7 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
           client=None, overwrite: bool = False, report: str | None = None,
           preview: str | None = None, progress: bool = False,
           height_above_ground: float = 0.0, sun_from_stac: str | None = None,
-          stac_item: str | None = None, **more) -> dict:
+          stac_item: str | None = None, context=None, **more) -> dict:
     """Shade DEM file(s) into ``output`` (one band per sun) or ``output_pattern`` files.
 
     ``dems``: a path or a list of paths (tiles on one grid, shaded as one surface; with
@@ -73,7 +73,10 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
     ``max_memory`` (bytes or "2GB"), ``window_size`` ((rows, cols), an int, or "2048x2048"):
     windows as ``--max-memory``/``--window-size``. ``client``: a ``distributed.Client`` (or a
     scheduler address, or "local:N"): windows and times run as Dask tasks on it; the client is
-    left open. Further keywords are the command line's options of the same name (``tz``,
+    left open. ``context``: a raster (VRT, mosaic) on the grid of ``dems`` (one tile) whose
+    heights its rays see, as ``--context``: the output covers the tile and equals the same
+    cells of the whole raster's output. Further keywords are the command line's options of the
+    same name (``tz``,
     ``lat``, ``lon``, ``band``, ``nodata``, ``z_factor``, ``pixel_size``, ``raw_shape``, ...).
 
     Returns the report (what ``--report`` writes; also written to ``report`` when given)."""
@@ -105,7 +108,8 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
                start=_iso(start), end=_iso(end), step=step,
                sun_from_stac=None if sun_from_stac is None else os.fspath(sun_from_stac),
                **{k: more.get(k, d) for k, d in zip(PLACE_KEYS, (None,) * 5 + (False, DEFAULT_TOLERANCE))})
-    read = ReadOptions(**{k: more[k] for k in READ_KEYS if k in more})
+    read = ReadOptions(**{k: more[k] for k in READ_KEYS if k in more},
+                       context=None if context is None else os.fspath(context))
     run = RunOptions(backend=backend, threads=more.get("threads"), report_path=report,
                      overwrite=overwrite, quiet=not progress, fmt=fmt, preview=preview,
                      say=_stderr, creation_options=creation_options)

@@ -13,6 +13,13 @@ class UsageProblem(HillshadeError):
     CLI exits with status 2 as for any malformed command line."""
 
 
+class AllNodata(HillshadeError):
+    """Every cell of the DEM (or of the tile of a ``--context`` run) is nodata: nothing to
+    shade. The lighting and horizon runs catch it and write their outputs all nodata, with a
+    note (a tile of the sea must not stop a Makefile); what cannot write such an output (the
+    viewer, points) lets it stand as the error."""
+
+
 class Interrupted(KeyboardInterrupt):
     """SIGINT, SIGTERM or SIGHUP received: the run stops, removes what is unfinished and the
     command line exits with 128 + the signal's number."""

@@ -5,7 +5,7 @@ from __future__ import annotations
 import click
 
 from .errors import errors_to_click, say
-from .options import (backend_option, dem_options, finite, format_option,
+from .options import (context_option, backend_option, dem_options, finite, format_option,
                       height_above_ground_option, horizon_physics_options, max_distance_option,
                       max_memory_option, overwrite_option, preview_option, quiet_option,
                       scheduler_option, threads_option, to_read_options, to_run_options,
@@ -42,6 +42,7 @@ from .options import (backend_option, dem_options, finite, format_option,
 @quiet_option()
 @format_option
 @dem_options
+@context_option
 @errors_to_click
 def horizon(dem, output, azimuth, directions, distance, method, sample_spacing, max_distance,
             curvature, refraction_k, height_above_ground, preview, backend, threads, max_memory,

@@ -7,7 +7,7 @@ import click
 
 from .errors import errors_to_click, say
 from ..run.config import PLACE_KEYS
-from .options import (algorithm_option, backend_option, dem_options, finite, format_option,
+from .options import (context_option, algorithm_option, backend_option, dem_options, finite, format_option,
                       height_above_ground_option, overwrite_option, physics_options, place_options,
                       preview_option, quiet_option, report_option, threads_option, to_read_options,
                       to_run_options)
@@ -58,6 +58,7 @@ from .options import (algorithm_option, backend_option, dem_options, finite, for
 @quiet_option("No progress bar or summary on stderr.")
 @format_option
 @dem_options
+@context_option
 @errors_to_click
 def irradiance(dem, output, date_, end_date, start, end, step, clear_sky, linke_turbidity,
                albedo, ghi, mean, perez, skyview_directions, tz, lat, lon, pressure, temperature,

@@ -437,6 +437,17 @@ def run_options(f):
 
 
 # the algorithms' own options, generated from the registry (each belongs to one algorithm)
+def context_option(f):
+    """--context RASTER: the DEM is a tile of a larger raster whose heights its rays see (the
+    lighting and horizon commands; ``run.config.ReadOptions.context``)."""
+    return click.option(
+        "--context", metavar="RASTER", default=None, type=click.Path(dir_okay=False),
+        help="The DEM is a tile of RASTER (a VRT or mosaic of the tiles, on the same grid): "
+             "the output covers the tile only, but its rays see RASTER's heights (only the "
+             "windows they need are read), so that each tile equals the same cells of the "
+             "whole mosaic's output. For one process per tile, e.g. from a Makefile.")(f)
+
+
 def algorithm_flags(f):
     from ..algorithms import OPTIONS
     for _, opt in reversed(list(OPTIONS.values())):      # the first listed shows first
@@ -450,7 +461,7 @@ def algorithm_flags(f):
 def to_read_options(kw: dict):
     """The DEM options of ``dem_options``, popped from ``kw``, as ``run.ReadOptions``."""
     from ..run.config import ReadOptions
-    return ReadOptions(**{k: kw.pop(k) for k in READ_KEYS})
+    return ReadOptions(**{k: kw.pop(k) for k in READ_KEYS}, context=kw.pop("context", None))
 
 
 def to_run_options(kw: dict, say):

@@ -7,7 +7,8 @@ import click
 
 from .errors import errors_to_click, say
 from ..run.config import SUN_KEYS
-from .options import (algorithm_flags, algorithm_option, command_line, dem_options, finite,
+from .options import (algorithm_flags, algorithm_option, command_line, context_option,
+                      dem_options, finite,
                       given, height_above_ground_option, light_options, lightmap_options,
                       physics_options, run_options, stac_item_option, subsolar_options,
                       sun_options, to_read_options, to_run_options)
@@ -48,6 +49,7 @@ def _config(files, kind, algorithm, options, kw, **more):
 @run_options
 @stac_item_option
 @dem_options
+@context_option
 @errors_to_click
 def shadow(files, algorithm, curvature, refraction_k, soft, self_shadow, classes,
            height_above_ground, light_position, light_lonlat, subsolar, subsolar_file,
@@ -91,7 +93,8 @@ def _point_light(files, position, lonlat, lift, soft, self_shadow, classes, algo
     refused = {"--azimuth/--elevation/--time/--start": any(
                    sun[k] for k in SUN_KEYS if k not in PLACE_KEYS),
                "--soft": soft, "--self-shadow": self_shadow, "--classes": classes,
-               "--algorithm": given("algorithm"), "--earth-curvature": curvature is not None}
+               "--algorithm": given("algorithm"), "--earth-curvature": curvature is not None,
+               "--context": kw.get("context") is not None}
     for k, flag in (("scheduler", "--scheduler"), ("output_pattern", "--output-pattern"),
                     ("cog", "--cog"), ("stac_item", "--stac-item")):
         refused[flag] = bool(kw.pop(k))
@@ -111,7 +114,8 @@ def _lightmap_refused(kw, soft, curvature, refraction_k) -> dict:
                "--soft": soft, "--algorithm": given("algorithm"),
                "--earth-curvature": curvature is not None,
                "--refraction-k": refraction_k is not None,
-               "--backend gpu": kw.get("backend") == "gpu"}
+               "--backend gpu": kw.get("backend") == "gpu",
+               "--context": kw.get("context") is not None}
     for k, flag in (("window_size", "--window-size"), ("max_memory", "--max-memory"),
                     ("scheduler", "--scheduler"), ("output_pattern", "--output-pattern"),
                     ("cog", "--cog"), ("stac_item", "--stac-item")):
@@ -134,7 +138,7 @@ def _subsolar(files, subsolar, subsolar_file, distance, body, light_position, li
                "--light-position/--light-lonlat": light_position is not None
                or light_lonlat is not None,
                "--self-shadow": self_shadow, "--classes": classes,
-               "--algorithm": given("algorithm")}
+               "--algorithm": given("algorithm"), "--context": kw.get("context") is not None}
     for k, flag in (("window_size", "--window-size"), ("max_memory", "--max-memory"),
                     ("scheduler", "--scheduler"), ("output_pattern", "--output-pattern"),
                     ("cog", "--cog"), ("stac_item", "--stac-item")):
@@ -163,6 +167,7 @@ def _subsolar(files, subsolar, subsolar_file, distance, body, light_position, li
 @run_options
 @stac_item_option
 @dem_options
+@context_option
 @errors_to_click
 def hillshade(files, ambient, scale, algorithm, curvature, refraction_k, soft,
               height_above_ground, light_position, light_lonlat, falloff, bits, **kw):

@@ -6,7 +6,7 @@ import click
 
 from .errors import errors_to_click, say
 from ..run.config import PLACE_KEYS
-from .options import (algorithm_option, backend_option, dem_options, format_option,
+from .options import (context_option, algorithm_option, backend_option, dem_options, format_option,
                       height_above_ground_option, overwrite_option, physics_options, place_options,
                       preview_option, quiet_option, report_option, threads_option, to_read_options,
                       to_run_options)
@@ -37,6 +37,7 @@ from .options import (algorithm_option, backend_option, dem_options, format_opti
 @quiet_option("No progress bar or summary on stderr.")
 @format_option
 @dem_options
+@context_option
 @errors_to_click
 def sun_hours(dem, output, date_, end_date, step, tz, lat, lon, pressure, temperature,
               no_refraction, sun_tolerance, algorithm, curvature, refraction_k, soft,

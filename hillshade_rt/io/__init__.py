@@ -25,7 +25,7 @@ from .._lazy import lazy_names
 
 _EXPORTS = {
     # reading
-    "open_dem": "source", "read_dem": "source", "open_windowed": "source",
+    "open_dem": "source", "read_dem": "source", "open_windowed": "source", "place_in": "source",
     "DemSource": "source", "DemOptions": "source", "Reader": "source",
     "parse_pixel_size": "source", "check_z_factor": "source", "READ_CHUNK": "source",
     "Dem": "dem", "heights_into": "dem", "grid_of": "dem",

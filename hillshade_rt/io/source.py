@@ -35,7 +35,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .._preload import while_numba_starts
-from ..errors import HillshadeError, UsageProblem
+from ..errors import AllNodata, HillshadeError, UsageProblem
 from ..geometry import Grid
 from . import raw as _raw
 from .dem import Dem, check_transform, grid_of, heights_into, to_heights
@@ -276,7 +276,7 @@ class DemSource:
         if dem.heights.size == 0:
             raise HillshadeError(f"{self.path}: the raster is empty")
         if dem.valid_count() == 0:
-            raise HillshadeError(f"{self.path}: every cell is nodata, nothing to shade")
+            raise AllNodata(f"{self.path}: every cell is nodata, nothing to shade")
         return dem
 
     def _dem(self, values: np.ndarray, nodata, kind: str, driver: str, dtype: str) -> Dem:
@@ -437,6 +437,39 @@ def open_dem(paths, options: DemOptions | None = None, *, windows: bool = False)
     if src.data is not None:
         src.whole_only = _stdin_in_windows()
     return src
+
+
+def place_in(context: DemSource, tile: DemSource) -> tuple[int, int, int, int]:
+    """Where the cells of ``tile`` lie in ``context`` (``--context``): (r0, r1, c0, c1), rows and
+    columns of the context. Both georeferenced, in one CRS, with the same cell size, the tile's
+    cells on the context's, and all of them inside it; a usage error (one line) otherwise."""
+    name, ctx = tile.path, context.path
+    if tile.transform is None or context.transform is None:
+        raise UsageProblem(f"{name if tile.transform is None else ctx}: --context needs "
+                           "georeferenced rasters (the tile is placed in the context by its "
+                           "geotransform)")
+    t, c = tile.transform, context.transform
+    if tile.crs != context.crs:
+        raise UsageProblem(f"--context {ctx}: its CRS differs from {name}'s; the context must be "
+                           "on the tile's grid (reproject with gdalwarp first)")
+    if not (t.b == 0 and t.d == 0 and c.b == 0 and c.d == 0):
+        raise UsageProblem(f"--context {ctx}: rotated geotransforms cannot be placed in one "
+                           "another")
+    if not (math.isclose(t.a, c.a, rel_tol=1e-9) and math.isclose(t.e, c.e, rel_tol=1e-9)):
+        raise UsageProblem(f"--context {ctx}: its cell size ({c.a:g}, {c.e:g}) differs from "
+                           f"{name}'s ({t.a:g}, {t.e:g}); the context must be on the tile's grid")
+    fx, fy = (t.c - c.c) / c.a, (t.f - c.f) / c.e
+    if abs(fx - round(fx)) > 1e-6 or abs(fy - round(fy)) > 1e-6:
+        raise UsageProblem(f"--context {ctx}: its cells are not aligned with {name}'s (offset "
+                           f"{fx % 1:.3f}, {fy % 1:.3f} cells); the context must be on the tile's "
+                           "grid")
+    r0, c0 = int(round(fy)), int(round(fx))
+    r1, c1 = r0 + tile.shape[0], c0 + tile.shape[1]
+    rows, cols = context.shape
+    if r0 < 0 or c0 < 0 or r1 > rows or c1 > cols:
+        raise UsageProblem(f"--context {ctx} does not contain {name} (the tile's rows {r0}..{r1} "
+                           f"and columns {c0}..{c1} against the context's {rows} x {cols})")
+    return r0, r1, c0, c1
 
 
 def read_dem(path, *, band: int = 1, nodata: float | None = None,

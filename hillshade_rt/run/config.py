@@ -45,6 +45,31 @@ class ReadOptions:
     raw_shape: object = None
     raw_dtype: str | None = None
     raw_byteorder: str | None = None
+    # --context RASTER: the DEM is a tile of this raster (same grid), whose heights its rays
+    # see (run.context)
+    context: str | None = None
+
+    def inputs(self) -> list:
+        """The paths read besides the DEMs (no output may be one): the context."""
+        return [] if self.context is None else [self.context]
+
+    def check_context(self, dems, **given) -> None:
+        """The options ``--context`` does not go with (``given``: flag -> whether given), and
+        one DEM only: usage errors."""
+        if self.context is None:
+            return
+        dems = [dems] if isinstance(dems, (str, os.PathLike)) else list(dems)
+        if len(dems) != 1:
+            raise UsageProblem("--context takes one DEM, the tile (the context is the mosaic "
+                               "of the tiles)")
+        for flag, on in given.items():
+            if on:
+                raise UsageProblem(f"--context does not go with {flag}")
+
+    def open_area(self, dems):
+        """The tile ``dems`` placed in the context (``run.context.Area``), both opened."""
+        from .context import open_area
+        return open_area(self, dems)
 
     def options(self):
         """As ``io.DemOptions`` (the texts parsed)."""

@@ -10,7 +10,7 @@ import math
 import os
 
 from .. import __version__
-from ..errors import HillshadeError, UsageProblem
+from ..errors import AllNodata, HillshadeError, UsageProblem
 from .config import HorizonConfig, parse_window_size
 
 # bytes per cell of a run in memory: heights, the pyramid, one direction's angles and distances
@@ -67,7 +67,10 @@ def horizon(cfg: HorizonConfig) -> dict:
     ro, output, method, sample_spacing = cfg.run, cfg.output, cfg.method, cfg.sample_spacing
     timer = Timer()
     azimuths = cfg.azimuths()
-    claims = Claims([cfg.dem], ro.overwrite)
+    cfg.read.check_context(cfg.dem, **{"--scheduler": cfg.scheduler is not None,
+                                       "--preview": ro.preview is not None,
+                                       "--method hull": method == "hull"})
+    claims = Claims([cfg.dem] + cfg.read.inputs(), ro.overwrite)
     claims.claim(output, "OUTPUT")
     if ro.preview is not None:
         claims.claim(ro.preview, "--preview")
@@ -95,6 +98,16 @@ def horizon(cfg: HorizonConfig) -> dict:
         note = compile_note("horizon", ran_on)
         if note:
             ro.say("compile", note)
+    if cfg.read.context is not None:    # a tile of the context: its windows, in the context
+        with timer("read"):
+            area = cfg.read.open_area(cfg.dem)
+        with area:
+            try:
+                area.check_valid()
+            except AllNodata:
+                return _all_nodata(cfg, area.tile, azimuths, ran_on, max_distance, timer)
+            return _in_windows(cfg, area.source, azimuths, ran_on, max_distance, timer,
+                               wshape=wshape, limit=limit, area=area)
     forced = wshape is not None or cfg.scheduler is not None
     with timer("read"):    # opened (not read) once, for its size and then its values
         src = cfg.read.open(cfg.dem, windows=forced)
@@ -104,7 +117,11 @@ def horizon(cfg: HorizonConfig) -> dict:
             raise UsageProblem("--method hull runs in memory only (its hulls are as long as a "
                                "line): use --method scan for a DEM in windows")
         run = _in_windows if windowed else _in_memory
-        return run(cfg, src, azimuths, ran_on, max_distance, timer, wshape=wshape, limit=limit)
+        try:
+            return run(cfg, src, azimuths, ran_on, max_distance, timer, wshape=wshape,
+                       limit=limit)
+        except AllNodata:       # (raised before any output is opened)
+            return _all_nodata(cfg, src, azimuths, ran_on, max_distance, timer)
 
 
 def _tags(cfg, azimuths, curved, k, radius, max_distance):
@@ -293,14 +310,17 @@ def horizon_job(src, azimuths, ran_on, curvature, refraction_k, method, bstats, 
                       height_above_ground=float(height_above_ground)), shader
 
 
-def prepare_windows(src, job, limit, wshape, timer):
-    """The regions of a windowed run (``reach.plan_regions``) with the kernels compiled."""
+def prepare_windows(src, job, limit, wshape, timer, area=None):
+    """The regions of a windowed run (``reach.plan_regions``) with the kernels compiled.
+    ``area`` (``run.context.Area``, ``--context``): the regions of that tile of ``src``."""
     import numpy as np
 
     from ..algorithms.horizon import Marches, ScanWindow
     from ..geometry import Grid, sun_rays
     from .reach import plan_regions
-    regs, mem = plan_regions(src.shape, limit, wshape)
+    regs, mem = plan_regions(src.shape if area is None else area.shape, limit, wshape)
+    if area is not None:
+        regs = area.regions(regs)
     with timer("prepare"):     # compile (or load) the window kernels: a 4 x 4 march
         z = np.zeros((4, 4), np.float32)
         rays = sun_rays(Grid.uniform(4, 4, *src.grid.centre_spacing(), src.grid.col_sign,
@@ -311,7 +331,8 @@ def prepare_windows(src, job, limit, wshape, timer):
     return regs, mem
 
 
-def _in_windows(cfg, src, azimuths, ran_on, max_distance, timer, *, wshape, limit):
+def _in_windows(cfg, src, azimuths, ran_on, max_distance, timer, *, wshape, limit, area=None):
+    """``area``: the tile of ``src`` to make (``--context``; its windows read from ``src``)."""
     import numpy as np
 
     from ..geometry import Grid
@@ -330,10 +351,11 @@ def _in_windows(cfg, src, azimuths, ran_on, max_distance, timer, *, wshape, limi
         job, shader = horizon_job(src, azimuths, ran_on, cfg.curvature, cfg.refraction_k,
                                   cfg.method, bstats, False, cfg.sample_spacing, max_distance,
                                   cfg.height_above_ground)
-        regs, mem = prepare_windows(src, job, limit, wshape, timer)
+        regs, mem = prepare_windows(src, job, limit, wshape, timer, area)
         curved = job.curvatures[0] > 0
         tags, dist_tags = _tags(cfg, azimuths, curved, shader.k, shader.body.radius(az),
                                 max_distance)
+        geom = src if area is None else area.tile
         n = bstats.stride
         share = np.zeros(bstats.preview.shape, np.float32) if ro.preview else None
         extra = {}
@@ -345,13 +367,15 @@ def _in_windows(cfg, src, azimuths, ran_on, max_distance, timer, *, wshape, limi
                                             ro.quiet, share, n if ro.preview else None)
         else:
             fig = Figures()
-            w, wd = _writers(cfg, src, azimuths, tags, dist_tags)
+            w, wd = _writers(cfg, geom, azimuths, tags, dist_tags)
             from tqdm import tqdm
             bar = tqdm(total=len(regs), desc="hillshade-rt", unit="window", leave=False,
                        disable=True if ro.quiet or len(regs) < 2 else None)
             with w, (contextlib.nullcontext() if wd is None else wd), src.reader() as rd, bar:
                 for reg in regs:
-                    def put(name, i, arr, reg=reg):
+                    out_reg = reg if area is None else area.local(reg)
+
+                    def put(name, i, arr, reg=reg, out_reg=out_reg):
                         a = azimuths[i]
                         text, dtext, btags = _band_text(cfg, a)
                         if name == "angles" and share is not None and i == 0:
@@ -361,9 +385,11 @@ def _in_windows(cfg, src, azimuths, ran_on, max_distance, timer, *, wshape, limi
                         arr[np.isnan(arr)] = -9999.0
                         with timer("write"):
                             if name == "angles":
-                                w.write(i + 1, arr, description=text, tags=btags, window=reg)
+                                w.write(i + 1, arr, description=text, tags=btags,
+                                        window=out_reg)
                             else:
-                                wd.write(i + 1, arr, description=dtext, tags=btags, window=reg)
+                                wd.write(i + 1, arr, description=dtext, tags=btags,
+                                         window=out_reg)
                     with timer("compute"):
                         fig.add(region_outputs(job, rd, reg, product, put))
                     bar.update(1)
@@ -378,10 +404,36 @@ def _in_windows(cfg, src, azimuths, ran_on, max_distance, timer, *, wshape, limi
         with timer("write"):
             write_png(ro.preview, relief_rgb(pv, g, az, 45.0, shade=share), ro.overwrite)
     processing = {"mode": "windows" if cfg.scheduler is None else "dask",
-                  "cells": src.shape[0] * src.shape[1], "memory": mem,
+                  "cells": geom.shape[0] * geom.shape[1], "memory": mem,
                   "window_shape_requested": list(wshape) if wshape else None,
                   **fig.as_dict(), **extra}
-    return _report(cfg, src, azimuths, ran_on, curved, {}, timer, processing)
+    if area is not None:
+        from ..io import input_label
+        processing["context"] = {"path": input_label(src.path), "shape": list(src.shape),
+                                 "window": list(area.bounds)}
+    return _report(cfg, geom, azimuths, ran_on, curved, {}, timer, processing)
+
+
+def _all_nodata(cfg, geom, azimuths, ran_on, max_distance, timer):
+    """A DEM (or ``--context`` tile) whose every cell is nodata: every band -9999, a note."""
+    import numpy as np
+
+    from .context import nodata_note
+    tags, dist_tags = _tags(cfg, azimuths, False, 0.0, 0.0, max_distance)
+    w, wd = _writers(cfg, geom, azimuths, tags, dist_tags)
+    arr = np.full(geom.shape, -9999.0, np.float32)
+    with timer("write"), w, (contextlib.nullcontext() if wd is None else wd):
+        for i, a in enumerate(azimuths):
+            text, dtext, btags = _band_text(cfg, a)
+            w.write(i + 1, arr, description=text, tags=btags)
+            if wd is not None:
+                wd.write(i + 1, arr, description=dtext, tags=btags)
+        w.finish()
+        if wd is not None:
+            wd.finish()
+    cfg.run.say("note", nodata_note(geom.path))
+    return _report(cfg, geom, azimuths, ran_on, False, {}, timer,
+                   {"mode": "all nodata", "cells": int(arr.size)})
 
 
 def _vrt_outputs(cfg, src, azimuths, tags, dist_tags) -> dict:

@@ -100,6 +100,10 @@ def irradiance(cfg: IrradianceConfig) -> dict:
     cfg.check()
     lift = float(cfg.height_above_ground)
     timer = Timer()
+    if cfg.read.context is not None:
+        raise UsageProblem("irradiance does not take --context yet (its sky view runs over the "
+                           "DEM in memory): give the tile with enough terrain around it, or use "
+                           "shadow / sun-hours / skyview with --context")
     claims = Claims([cfg.dem, cfg.ghi], ro.overwrite)     # (the --ghi series is an input)
     for path, what in ((output, "OUTPUT"), (ro.report_path, "--report"),
                        (ro.preview, "--preview")):
@@ -134,10 +138,12 @@ def irradiance(cfg: IrradianceConfig) -> dict:
         note = compile_note(cfg.algorithm, ran_on, True)
         if note:
             ro.say("compile", note)
+    from ..errors import AllNodata
     with timer("read"):
-        d = cfg.read.read(cfg.dem)
-    if not np.isfinite(d.heights).any():
-        raise HillshadeError(f"{input_label(d.path)}: every height is nodata")
+        try:
+            d = cfg.read.read(cfg.dem)
+        except AllNodata:     # every band all nodata, a note (a tile of the sea)
+            return _all_nodata(cfg, timer)
     with timer("prepare"):
         site = req.site(d, "irradiance computes the Earth's sun only")
         if req.auto_tz:          # the DEM's zone is known now
@@ -254,6 +260,34 @@ def irradiance(cfg: IrradianceConfig) -> dict:
                           f"{g['min']:.1f} .. {g['max']:.1f} {unit} (mean {g['mean']:.1f}); "
                           f"shadows {sec.get('shadows', 0.0):.2f} s, sky view "
                           f"{sec['sky view']:.2f} s, total {sec['total']:.2f} s")
+    return rep
+
+
+def _all_nodata(cfg, timer) -> dict:
+    """A DEM whose every cell is nodata: the four bands all -9999, a note; the report."""
+    import numpy as np
+
+    from .. import irradiance as ir
+    from ..io import BandWriter, input_label, write_json
+    from .context import nodata_note
+    ro = cfg.run
+    src = cfg.read.open(cfg.dem)
+    src.close()
+    tags = {"HILLSHADE_RT_VERSION": __version__, "NODATA": "-9999 (every cell of the DEM is "
+            "nodata)"}
+    with timer("write"), BandWriter(cfg.output, src, len(ir.BANDS), "float32", -9999.0, tags,
+                                    overview_resampling="average", overwrite=ro.overwrite,
+                                    fmt=ro.fmt, co=ro.creation_options) as w:
+        arr = np.full(src.shape, -9999.0, np.float32)
+        for i, k in enumerate(ir.BANDS, 1):
+            w.write(i, arr, k)
+    rep = {"input": input_label(src.path), "output": os.path.abspath(cfg.output),
+           "shape": list(src.shape), "all_nodata": True,
+           "bands": {k: {"min": None, "mean": None, "max": None} for k in ir.BANDS},
+           "seconds": dict(timer.seconds, total=timer.total()), "version": __version__}
+    if ro.report_path is not None:
+        write_json(ro.report_path, rep, ro.overwrite)
+    ro.say("note", nodata_note(src.path))
     return rep
 
 

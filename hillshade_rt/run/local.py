@@ -100,9 +100,11 @@ def in_memory(inputs, source, scale, req, out, timer, algorithm, options, ran_on
 
 def tiled(inputs, source, scale, req, out, timer, algorithm, options, ran_on,
           curvature, refraction_k, soft, self_shadow, ambient, quiet, *, limit,
-          window_shape, scheduler, per_cell, lift=0.0):
+          window_shape, scheduler, per_cell, lift=0.0, area=None):
     """``source``: the DEM already opened for windows (``ReadOptions.open``). ``lift``:
-    --height-above-ground (``plan.Job``: the halos and the march)."""
+    --height-above-ground (``plan.Job``: the halos and the march). ``area``: a tile of
+    ``source`` (``run.context.Area``, ``--context``): only its cells are lit and written, on
+    the tile's grid, their windows read from ``source``."""
     import math
 
     import numpy as np
@@ -122,13 +124,15 @@ def tiled(inputs, source, scale, req, out, timer, algorithm, options, ran_on,
         if scale is not None:
             apply_scale(src, scale)
     rows, cols = src.shape
+    geom = src if area is None else area.tile      # what the outputs are georeferenced like
+    bounds = None if area is None else area.bounds
     tally = Tally()
     with timer("prepare"):   # one pass for the height ranges; solar positions; compilation
         bstats = block_stats(src, preview_side=2048 if out.preview else None)
         tally.stats_pass_bytes = rows * cols * src.itemsize
         zrange = (bstats.zmin, bstats.zmax)
         suns, sun_info = req.suns(src)
-        out.plan(suns, inputs, src.tiles)
+        out.plan(suns, inputs, src.tiles if area is None else None)
         dx, dy = src.grid.centre_spacing()
         job = Job(src, algorithm, options, ran_on, "auto" if curvature is None else curvature,
                   refraction_k, dem_body(src, req.lat), zrange, math.hypot(cols * dx, rows * dy),
@@ -142,8 +146,8 @@ def tiled(inputs, source, scale, req, out, timer, algorithm, options, ran_on,
         except HillshadeError as exc:
             budget, mem, small = 0, None, exc
         try:
-            plans = [job.pieces(s, bstats, budget, window_shape, in_order=scheduler is None)
-                     for s in suns]
+            plans = [job.pieces(s, bstats, budget, window_shape, in_order=scheduler is None,
+                                area=bounds) for s in suns]
         except MemoryTooSmall as exc:
             small, cells = small or exc, exc.cells
         else:
@@ -171,12 +175,12 @@ def tiled(inputs, source, scale, req, out, timer, algorithm, options, ran_on,
         total = sum(len(p) for p in plans)
         bar = tqdm(total=total, desc="hillshade-rt", unit="window", leave=False,
                    disable=True if quiet or total < 2 else None)
-        with out.writer(src, len(suns)) as writer, src.reader() as rd, bar:
+        with out.writer(geom, len(suns)) as writer, src.reader() as rd, bar:
             cache = WindowCache(rd)
             carry = job.carrier(plans)
             for i, (sun, pieces) in enumerate(zip(suns, plans)):
                 t0 = timer.seconds.get("compute", 0.0)
-                with (out.file_writer(src, i, sun) if writer is None
+                with (out.file_writer(geom, i, sun) if writer is None
                       else contextlib.nullcontext(writer)) as w:
                     band = 1 if writer is None else i + 1
                     st = None
@@ -195,7 +199,8 @@ def tiled(inputs, source, scale, req, out, timer, algorithm, options, ran_on,
                             arr = np.where(np.isnan(arr), np.float32(out.nodata), arr).astype(
                                 np.float32)
                         with timer("write"):
-                            w.write(band, arr, window=p.region)
+                            w.write(band, arr, window=p.region if area is None
+                                    else area.local(p.region))
                         bar.update(1)
                     w.describe(band, out.description(sun),
                                sun_tags(sun) if writer is not None else None)
@@ -213,9 +218,14 @@ def tiled(inputs, source, scale, req, out, timer, algorithm, options, ran_on,
                     writer.finish()
         extra = {}
     curv = curvature_report(job.curvature, used, job.body, job.k)
-    processing = {"mode": "tiled" if scheduler is None else "dask", "cells": rows * cols,
+    processing = {"mode": "tiled" if scheduler is None else "dask",
+                  "cells": rows * cols if area is None else area.shape[0] * area.shape[1],
                   "memory": mem, "window_shape_requested": list(window_shape) if window_shape
                   else None, **tally.as_dict(src.itemsize), **extra}
+    if area is not None:
+        from ..io import input_label
+        processing["context"] = {"path": input_label(src.path), "shape": list(src.shape),
+                                 "window": list(area.bounds)}
     if src.tiles:
         from ..io import input_label
         processing["mosaic"] = [{"path": input_label(t["path"]), "window": list(t["window"])}
@@ -226,9 +236,41 @@ def tiled(inputs, source, scale, req, out, timer, algorithm, options, ran_on,
         g = Grid(pv.shape[0], pv.shape[1], src.grid.dx[::n] * n, src.grid.dy[::n] * n,
                  src.grid.col_sign, src.grid.row_sign, src.grid.method)
         return relief_rgb(pv, g, az, el, shade=share)
-    return {"dem": src, "suns": suns, "sun_info": sun_info, "records": records, "stats": st,
+    return {"dem": geom, "suns": suns, "sun_info": sun_info, "records": records, "stats": st,
             "algo_stats": algo_stats, "zrange": zrange, "curvature": curv, "gpu": None,
             "relief": relief, "processing": processing}
+
+
+def all_nodata(inputs, source, req, out, timer, area=None, **_):
+    """The run of a DEM (or a ``--context`` tile) whose every cell is nodata: every output
+    written all nodata (its bands and tags as a run that lights them), nothing lit. The suns
+    are those of ``source`` (the context's, with ``area``)."""
+    import numpy as np
+
+    from .outputs import sun_tags
+    geom = source if area is None else area.tile
+    with timer("prepare"):
+        suns, sun_info = req.suns(source)
+        out.plan(suns, inputs, source.tiles if area is None else None)
+    nan = np.full(geom.shape, np.nan, np.float32)
+    arr = np.full(geom.shape, out.nodata, out.dtype)
+    st = out.product.stats(nan if out.soft else arr)
+    records = []
+    with timer("write"), out.writer(geom, len(suns)) as writer:
+        for i, sun in enumerate(suns):
+            if writer is not None:
+                writer.write(i + 1, arr, description=out.description(sun), tags=sun_tags(sun))
+            else:
+                with out.file_writer(geom, i, sun) as w:
+                    w.write(1, arr, description=out.description(sun))
+                out.finish(i, sun, source)
+            records.append(out.record(sun, i, st, 0.0))
+        if writer is not None:
+            writer.finish()
+    return {"dem": geom, "suns": suns, "sun_info": sun_info, "records": records, "stats": st,
+            "algo_stats": {}, "zrange": (None, None), "curvature": None, "gpu": None,
+            "relief": lambda az, el: np.zeros(geom.shape + (3,), np.uint8),
+            "processing": {"mode": "all nodata", "cells": int(arr.size)}}
 
 
 def mean_stats(records, last):

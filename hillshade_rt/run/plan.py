@@ -43,7 +43,7 @@ from numba import prange
 from ..algorithms._jitcache import njit
 
 from ..algorithms import REGISTRY
-from ..errors import HillshadeError
+from ..errors import AllNodata, HillshadeError
 from ..geometry import Grid
 from ..io.source import READ_CHUNK, DemSource, Reader
 from ..preview import every_nth
@@ -263,7 +263,7 @@ def block_stats(source: DemSource, block: int = STAT_BLOCK,
                     sub, (a, b) = every_nth(z, r0, c0, stride)
                     pv[a:a + sub.shape[0], b:b + sub.shape[1]] = sub
     if valid == 0:
-        raise HillshadeError(f"{source.path}: every cell is nodata, nothing to shade")
+        raise AllNodata(f"{source.path}: every cell is nodata, nothing to shade")
     return BlockStats(block, lo, hi, valid, pv, stride)
 
 
@@ -606,10 +606,13 @@ class Job:
         return arr
 
     def pieces(self, sun, stats: BlockStats, budget_cells: int,
-               window_shape: tuple[int, int] | None = None, in_order: bool = True) -> list[Piece]:
+               window_shape: tuple[int, int] | None = None, in_order: bool = True,
+               area: tuple[int, int, int, int] | None = None) -> list[Piece]:
         """The pieces of one sun (per-tile suns: each tile's, cut further to fit).
         ``in_order``: the windows are lit one after the other in this order (SMap tables are
-        carried along strips); False for independent tasks (Dask), which carry nothing."""
+        carried along strips); False for independent tasks (Dask), which carry nothing.
+        ``area`` (r0, r1, c0, c1): only the cells there (a tile of the raster, ``--context``):
+        the sun's regions cut to it, their windows read from the whole raster."""
         from ..shading import field_method
         from ..sun import SUN_RADIUS_DEG
         out = []
@@ -619,6 +622,11 @@ class Job:
         for reg in sun.regions(shape):
             r0, r1, _ = reg.rows.indices(shape[0])
             c0, c1, _ = reg.cols.indices(shape[1])
+            if area is not None:
+                r0, r1, c0, c1 = max(r0, area[0]), min(r1, area[1]), max(c0, area[2]), \
+                    min(c1, area[3])
+                if r0 >= r1 or c0 >= c1:
+                    continue
             el = reg.elevation
             if self.soft:
                 night, hel = el + SUN_RADIUS_DEG <= 0, el - SUN_RADIUS_DEG

@@ -49,8 +49,10 @@ def shade(cfg: ShadeConfig) -> dict:
     except HillshadeError as exc:
         raise UsageProblem(f"--max-memory: {exc}") from None
     item_in = [cfg.sun["sun_from_stac"]] if cfg.sun.get("sun_from_stac") else []
-    claims = Claims(inputs + item_in, ro.overwrite)   # every path written: no input, no two
-    if output is not None:                            # the same
+    cfg.read.check_context(inputs, **{"--scheduler": cfg.scheduler is not None,
+                                      "--preview": ro.preview is not None})
+    claims = Claims(inputs + item_in + cfg.read.inputs(), ro.overwrite)   # every path written:
+    if output is not None:                            # no input, no two the same
         claims.claim(output, "OUTPUT")
     check_item_output(cfg.stac_item, output, pattern, claims)
     for extra, what in ((ro.report_path, "--report"), (ro.preview, "--preview")):
@@ -62,6 +64,12 @@ def shade(cfg: ShadeConfig) -> dict:
         numba.set_num_threads(min(ro.threads, numba.config.NUMBA_NUM_THREADS))
     ran_on = choose_backend(ro.backend, algorithm, options)
     per_cell = bytes_per_cell(algorithm, kind, soft, cfg.self_shadow)
+    if cfg.read.context is not None:    # a tile of the context: its windows, in the context
+        with timer("read"):
+            area = cfg.read.open_area(inputs)
+        with area:
+            return _shade(cfg, area.source, True, inputs, output, req, pattern, wshape, limit,
+                          claims, ran_on, per_cell, timer, scene, area)
     forced = cfg.scheduler is not None or wshape is not None or len(inputs) > 1
     with timer("read"):     # opened (not read) once, for its size and then its values
         src = cfg.read.open(inputs, windows=forced)
@@ -71,13 +79,16 @@ def shade(cfg: ShadeConfig) -> dict:
 
 
 def _shade(cfg, src, windowed, inputs, output, req, pattern, wshape, limit, claims, ran_on,
-           per_cell, timer, scene=None):
-    """``shade`` once the DEM is open: in memory or in windows, then the report."""
+           per_cell, timer, scene=None, area=None):
+    """``shade`` once the DEM is open: in memory or in windows, then the report. ``area``: the
+    tile of ``src`` a ``--context`` run lights (``run.context.Area``)."""
     import numba
 
     from ..io import check_output_format, input_label, output_driver, write_json, write_png
     from ..products import product
-    from .local import bounded_gdal_cache, in_memory, mean_stats, tiled
+    from ..errors import AllNodata
+    from .context import nodata_note
+    from .local import all_nodata, bounded_gdal_cache, in_memory, mean_stats, tiled
     from .notes import compile_note, note_to_show
     from .outputs import Outputs
     from .report import build_report, shown_paths, summary_line
@@ -107,13 +118,21 @@ def _shade(cfg, src, windowed, inputs, output, req, pattern, wshape, limit, clai
         note = compile_note(algorithm, ran_on, cfg.self_shadow or kind != "shadow")
         if note:
             ro.say("compile", note)
+    empty = None
     try:
         with (bounded_gdal_cache() if windowed else contextlib.nullcontext()):
-            run = (tiled if windowed else in_memory)(
-                inputs, src, cfg.scale, req, out, timer, algorithm, options, ran_on,
-                cfg.curvature, cfg.refraction_k, soft, cfg.self_shadow, cfg.ambient, ro.quiet,
-                limit=limit, window_shape=wshape, scheduler=cfg.scheduler, per_cell=per_cell,
-                lift=cfg.height_above_ground)
+            try:
+                if area is not None:
+                    area.check_valid()
+                run = (tiled if windowed else in_memory)(
+                    inputs, src, cfg.scale, req, out, timer, algorithm, options, ran_on,
+                    cfg.curvature, cfg.refraction_k, soft, cfg.self_shadow, cfg.ambient,
+                    ro.quiet, limit=limit, window_shape=wshape, scheduler=cfg.scheduler,
+                    per_cell=per_cell, lift=cfg.height_above_ground,
+                    **({} if area is None else {"area": area}))
+            except AllNodata:      # (raised before any output is opened): all nodata then
+                empty = (src if area is None else area.tile).path
+                run = all_nodata(inputs, src, req, out, timer, area)
     finally:
         out.cleanup()
     d, suns, records = run["dem"], run["suns"], run["records"]
@@ -157,6 +176,8 @@ def _shade(cfg, src, windowed, inputs, output, req, pattern, wshape, limit, clai
         rep["stac_item"] = os.path.abspath(cfg.stac_item)
     if ro.report_path is not None:
         write_json(ro.report_path, rep, ro.overwrite)
+    if empty is not None:       # said even with --quiet: the output is not what was asked
+        ro.say("note", nodata_note(empty))
     if not ro.quiet:
         # the outputs named as the user gave them (as every command does), a pattern's files
         ro.say("summary", summary_line(rep, output if output is not None

@@ -111,7 +111,9 @@ def skyview(cfg: SkyviewConfig) -> dict:
     wshape = parse_window_size(cfg.window_size)
     limit = memory_limit(cfg.max_memory)
     timer = Timer()
-    claims = Claims([cfg.dem], ro.overwrite)
+    cfg.read.check_context(cfg.dem, **{"--scheduler": cfg.scheduler is not None,
+                                       "--preview": ro.preview is not None})
+    claims = Claims([cfg.dem] + cfg.read.inputs(), ro.overwrite)
     claims.claim(cfg.output, "OUTPUT")
     if ro.preview is not None:
         claims.claim(ro.preview, "--preview")
@@ -120,15 +122,35 @@ def skyview(cfg: SkyviewConfig) -> dict:
     if ro.threads is not None:
         numba.set_num_threads(min(ro.threads, numba.config.NUMBA_NUM_THREADS))
     ran_on = choose_backend(ro.backend, "horizon", {"method": "scan"})
-    forced = wshape is not None or cfg.scheduler is not None
-    with timer("read"):
-        src = cfg.read.open(cfg.dem, windows=forced)
-    with src:
-        windowed = forced or needs_windows(src, limit, BYTES_PER_CELL)
-        run = _in_windows if windowed else _in_memory
-        result, processing, curved, relief = run(cfg, definition, src, ran_on, max_distance,
-                                                  timer, wshape=wshape, limit=limit)
-    if ro.preview is not None:
+    from ..errors import AllNodata
+    if cfg.read.context is not None:    # a tile of the context: its windows, in the context
+        with timer("read"):
+            area = cfg.read.open_area(cfg.dem)
+        with area:
+            src = area.tile
+            try:
+                area.check_valid()
+                result, processing, curved, relief = _in_windows(
+                    cfg, definition, area.source, ran_on, max_distance, timer, wshape=wshape,
+                    limit=limit, area=area)
+            except AllNodata:
+                result, processing, curved, relief = _all_nodata(cfg, definition, src,
+                                                                 max_distance, timer)
+    else:
+        forced = wshape is not None or cfg.scheduler is not None
+        with timer("read"):
+            src = cfg.read.open(cfg.dem, windows=forced)
+        with src:
+            windowed = forced or needs_windows(src, limit, BYTES_PER_CELL)
+            run = _in_windows if windowed else _in_memory
+            try:
+                result, processing, curved, relief = run(cfg, definition, src, ran_on,
+                                                         max_distance, timer, wshape=wshape,
+                                                         limit=limit)
+            except AllNodata:    # (raised before the output is opened)
+                result, processing, curved, relief = _all_nodata(cfg, definition, src,
+                                                                 max_distance, timer)
+    if ro.preview is not None and relief is not None:
         with timer("write"):
             _preview(cfg, *relief)
     return _report(cfg, definition, src, ran_on, curved, result, processing, timer,
@@ -228,7 +250,22 @@ def _in_memory(cfg, definition, src, ran_on, max_distance, timer, **_):
             (d.heights, d.grid))
 
 
-def _in_windows(cfg, definition, src, ran_on, max_distance, timer, *, wshape, limit):
+def _all_nodata(cfg, definition, geom, max_distance, timer):
+    """A DEM (or ``--context`` tile) whose every cell is nodata: the output all -9999, a
+    note."""
+    from .context import nodata_note
+    with timer("write"), _writer(cfg, geom, definition, int(cfg.directions), False,
+                                 max_distance) as w:
+        w.write(1, np.full(geom.shape, -9999.0, np.float32),
+                description=describe(cfg, definition))
+        w.finish()
+    cfg.run.say("note", nodata_note(geom.path))
+    return _Stats(), {"mode": "all nodata", "cells": geom.shape[0] * geom.shape[1]}, False, None
+
+
+def _in_windows(cfg, definition, src, ran_on, max_distance, timer, *, wshape, limit,
+                area=None):
+    """``area``: the tile of ``src`` to make (``--context``; its windows read from ``src``)."""
     from ..algorithms.skyview import inverted
     from ..geometry import equal_azimuths
     from .horizon import horizon_job, prepare_windows
@@ -247,8 +284,9 @@ def _in_windows(cfg, definition, src, ran_on, max_distance, timer, *, wshape, li
         job, shader = horizon_job(src, azimuths, ran_on, cfg.curvature, cfg.refraction_k,
                                   "scan", bstats, inverted(definition), 1, max_distance,
                                   cfg.height_above_ground)
-        regs, mem = prepare_windows(src, job, limit, wshape, timer)
+        regs, mem = prepare_windows(src, job, limit, wshape, timer, area)
         curved = bool(shader.curvature)
+        geom = src if area is None else area.tile
         if cfg.scheduler is not None:
             out = VrtOutput(cfg.output, src.shape, src.transform, src.crs,
                             [describe(cfg, definition)],
@@ -264,10 +302,12 @@ def _in_windows(cfg, definition, src, ran_on, max_distance, timer, *, wshape, li
             from tqdm import tqdm
             bar = tqdm(total=len(regs), desc="hillshade-rt", unit="window", leave=False,
                        disable=True if ro.quiet or len(regs) < 2 else None)
-            with _writer(cfg, src, definition, n, curved, max_distance) as w, \
+            with _writer(cfg, geom, definition, n, curved, max_distance) as w, \
                     src.reader() as rd, bar:
                 for reg in regs:
-                    def put(name, band, out, reg=reg):
+                    out_reg = reg if area is None else area.local(reg)
+
+                    def put(name, band, out, reg=out_reg):
                         st.add(out)
                         with timer("write"):
                             w.write(1, np.where(np.isnan(out), np.float32(-9999.0), out),
@@ -278,9 +318,13 @@ def _in_windows(cfg, definition, src, ran_on, max_distance, timer, *, wshape, li
                 with timer("write"):
                     w.finish()
     processing = {"mode": "windows" if cfg.scheduler is None else "dask",
-                  "cells": src.shape[0] * src.shape[1], "memory": mem,
+                  "cells": geom.shape[0] * geom.shape[1], "memory": mem,
                   "window_shape_requested": list(wshape) if wshape else None,
                   **fig.as_dict(), **extra}
+    if area is not None:
+        from ..io import input_label
+        processing["context"] = {"path": input_label(src.path), "shape": list(src.shape),
+                                 "window": list(area.bounds)}
     relief = None
     if ro.preview is not None:     # the every-n-th heights of the statistics pass
         from ..geometry import Grid

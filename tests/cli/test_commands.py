@@ -101,8 +101,6 @@ def _bad_inputs(tmp_path):
     txt.write_text("not a raster\n")
     empty = tmp_path / "empty.bin"
     empty.write_bytes(b"")
-    allnd = write_geotiff(tmp_path / "allnd.tif", np.full((5, 5), -9999, np.int16),
-                          Affine(1, 0, 400000, 0, -1, 3800000), CRS.from_epsg(32611), -9999)
     rotated = write_geotiff(tmp_path / "rot.tif", fractal_terrain(8, 8, 1),
                             Affine(29.5, 5.2, 400000, 5.2, -29.5, 3800000), CRS.from_epsg(32611))
     raw = tmp_path / "g.f32"
@@ -113,7 +111,6 @@ def _bad_inputs(tmp_path):
         ("not a raster", [str(txt)], ok, "cannot read"),
         ("empty raster", [str(empty), "--raw-shape", "1x1", "--raw-dtype", "float32",
                           "--pixel-size", "1"], ok, "empty"),
-        ("all nodata", [allnd], ok, "nodata"),
         ("raw wrong shape", [str(raw), "--raw-shape", "10x11", "--raw-dtype", "float32",
                              "--pixel-size", "1"], ok, "10x11"),
         ("raw wrong dtype size", [str(raw), "--raw-shape", "7x7", "--raw-dtype", "float64",
@@ -146,6 +143,23 @@ def test_every_input_error_is_one_line_and_leaves_nothing(tmp_path, runner):
         assert len(lines) == 1 and lines[0].startswith("hillshade-rt: error:"), (name, r.stderr)
         assert text.lower() in lines[0].lower(), (name, lines[0])
         assert os.listdir(outdir) == [], (name, os.listdir(outdir))
+
+
+def test_all_nodata_dem_is_no_error(tmp_path, runner):
+    """A DEM whose every cell is nodata (a tile of the sea) writes an all-nodata mask, says so
+    in one note and exits 0: a Makefile does not stop at the coast."""
+    allnd = write_geotiff(tmp_path / "allnd.tif", np.full((5, 5), -9999, np.int16),
+                          Affine(1, 0, 400000, 0, -1, 3800000), CRS.from_epsg(32611), -9999)
+    out = tmp_path / "mask.tif"
+    r = runner.invoke(cli, ["shadow", allnd, str(out), "--azimuth", "10", "--elevation", "20",
+                            "--report", str(tmp_path / "r.json")])
+    assert r.exit_code == 0, r.output
+    notes = [ln for ln in r.stderr.splitlines() if "note:" in ln]
+    assert len(notes) == 1 and "every cell is nodata" in notes[0]
+    import rasterio
+    with rasterio.open(out) as ds:
+        assert ds.nodata == 255 and (ds.read(1) == 255).all()
+    assert json.loads((tmp_path / "r.json").read_text())["processing"]["mode"] == "all nodata"
 
 
 def test_output_folder_missing(tmp_path, runner):
