@@ -37,9 +37,9 @@ def _shade(cfg, each):
     (each DEM on its own)."""
     from ..run import shade
     from ..run.batch import check_pattern, shade_each
-    check_pattern(cfg.output_pattern, each)
     if each:
         return shade_each(cfg)
+    check_pattern(cfg.output_pattern, False)     # {stem} without --each
     return shade(cfg)
 
 

@@ -77,7 +77,7 @@ def target_of(path: str) -> str:
     return real
 
 
-def _same(a: str, b: str) -> bool:
+def same_file(a: str, b: str) -> bool:
     """Whether paths ``a`` and ``b`` name one file (through symbolic and hard links)."""
     if is_virtual(a) or is_virtual(b):
         return a == b
@@ -113,10 +113,10 @@ class Claims:
         path = os.fspath(path)
         check_output_path(path, self.overwrite)
         for p in self.inputs:
-            if p != "-" and _same(path, p):
+            if p != "-" and same_file(path, p):
                 raise UsageProblem(f"{path}: {what} is also an input ({p}); give another path")
         for q, other in self.paths:
-            if _same(path, q):
+            if same_file(path, q):
                 msg = (f"{path}: given twice as {what}" if other == what and path == q else
                        f"{path}: {what} and {other} name the same file; give different paths")
                 raise UsageProblem(msg)

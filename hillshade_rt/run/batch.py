@@ -143,16 +143,24 @@ class BatchClaims:
         self.owner: str | None = None                 # the DEM whose run claims now
 
     def claim(self, path: str, what: str) -> None:
-        from ..io.write import _same
+        from ..io.write import same_file
         path = os.fspath(path)
+        for p in self.inputs:      # before "already exists": an input always does
+            if p != "-" and same_file(path, p):
+                raise UsageProblem(f"{path}: {self._whose(self.owner)} is also an input "
+                                   f"({p}); give another path")
         for q, who in self.owners.items():
-            if _same(path, q):
+            if same_file(path, q):
                 if who == self.owner:
                     return      # claimed again by the same DEM's run (checked before the run)
-                raise UsageProblem(f"{path}: the outputs of {who} and {self.owner} name the same "
-                                   "file; give a pattern that tells them apart")
+                raise UsageProblem(f"{path}: {self._whose(who)} and {self._whose(self.owner)} "
+                                   "name the same file; give paths that tell them apart")
         self._own.claim(path, what)
         self.owners[path] = self.owner or what
+
+    @staticmethod
+    def _whose(owner: str | None) -> str:
+        return owner if owner is None or owner.startswith("--") else f"the output of {owner}"
 
 
 # ---------------------------------------------------------------------------------------------
