@@ -171,12 +171,12 @@ class Each:
     """What a command does with one DEM of a batch. ``run(dem, out, as_pattern, say)``: the
     single-DEM run, into ``out`` (a path; with ``as_pattern`` a pattern of the command's own
     fields), saying its messages through ``say``, returning its report;
-    ``empty(dem, out, as_pattern)``: write the all-nodata
-    output(s) of a DEM whose every cell is nodata; ``fields``: the pattern's fields the
-    single run fills (``{time}``, ...), empty for one output per DEM."""
+    ``empty(dem, out, as_pattern)``: write the all-nodata output(s) of a DEM whose every cell
+    is nodata; ``fields``: the pattern's fields the single run fills (``{time}``, ...), empty
+    for one output per DEM."""
 
     command: str
-    run: Callable[[str, str, bool], dict]
+    run: Callable[[str, str, bool, Callable[[str, str], None]], dict]
     empty: Callable[[str, str, bool], None]
     fields: tuple = ()
 
