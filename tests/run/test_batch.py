@@ -260,3 +260,26 @@ def test_fill_stem_keeps_the_other_fields():
         "  a{b}_{x}_3.tif"
     with pytest.raises(UsageProblem):
         check_pattern("{stem", True)
+
+
+def test_kernels_warmed_once_per_kind_of_grid(tmp_path, dems, monkeypatch):
+    """One process, one warm-up per kind of run (here: a projected and a geographic grid), not
+    one per DEM; outside a batch every run warms up as before."""
+    import hillshade_rt as hr
+    from hillshade_rt import shading
+    calls = []
+    real = shading.Shader._warm_up
+
+    def counted(self, *a, **k):
+        calls.append(self.grid.method)
+        return real(self, *a, **k)
+
+    monkeypatch.setattr(shading.Shader, "_warm_up", counted)
+    twin = str(tmp_path / "in" / "everest2.tif")
+    with open(dems["everest"], "rb") as fi, open(twin, "wb") as fo:
+        fo.write(fi.read())
+    hr.shade([dems["everest"], dems["fractal"], twin, dems["lidar"]], each=True,
+             output_pattern=str(tmp_path / "{stem}.tif"), azimuth=203.7, elevation=10)
+    assert len(calls) == 2 and len(set(calls)) == 2
+    hr.shade(dems["fractal"], str(tmp_path / "one.tif"), azimuth=203.7, elevation=10)
+    assert len(calls) == 3
