@@ -444,7 +444,7 @@ def run_options(f):
                      help="One file per time instead of one multi-band OUTPUT, e.g. "
                           "'out_{time:%Y%m%dT%H%M}.tif' (fields: time, index, azimuth, elevation, "
                           "tile: the input's file name; with several input tiles, one file per "
-                          "tile)."),
+                          "tile; with --each, stem: each DEM's own output)."),
         preview_option("Also write a quick-look PNG (shaded relief, shadows tinted)."),
         backend_option,
         threads_option,
