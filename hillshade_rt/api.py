@@ -55,7 +55,7 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
           client=None, overwrite: bool = False, report: str | None = None,
           preview: str | None = None, progress: bool = False,
           height_above_ground: float = 0.0, sun_from_stac: str | None = None,
-          stac_item: str | None = None, context=None, **more) -> dict:
+          stac_item: str | None = None, context=None, each: bool = False, **more) -> dict:
     """Shade DEM file(s) into ``output`` (one band per sun) or ``output_pattern`` files.
 
     ``dems``: a path or a list of paths (tiles on one grid, shaded as one surface; with
@@ -79,9 +79,17 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
     same name (``tz``,
     ``lat``, ``lon``, ``band``, ``nodata``, ``z_factor``, ``pixel_size``, ``raw_shape``, ...).
 
+    ``each``: many unrelated DEMs (any grid, CRS, size) in one call, each shaded on its own
+    into ``output_pattern`` with ``{stem}`` (the input's file name without its extension), as
+    ``--each``: the report lists each input's status (``ok``, ``empty``: every cell nodata,
+    written all nodata; ``failed`` and its message) and its own run's report; when any failed,
+    :class:`~hillshade_rt.run.batch.BatchFailed` (a ``HillshadeError``) is raised after the
+    others are written, its ``report`` attribute the report.
+
     Returns the report (what ``--report`` writes; also written to ``report`` when given)."""
     from .run import ReadOptions, RunOptions, ShadeConfig
     from .run import shade as run_shade
+    from .run.batch import check_pattern, shade_each
     from .algorithms import algorithm_for, options_for
     from .run.config import PRODUCTS
     from .sun import DEFAULT_TOLERANCE
@@ -95,7 +103,9 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
                                                                             for p in dems]
     if not files:
         raise HillshadeError("no DEM given")
-    if output is None and output_pattern is None:
+    if not each:
+        check_pattern(output_pattern, False)     # {stem} without each
+    if output is None and output_pattern is None and not each:
         raise HillshadeError("give output or output_pattern")
     if scale is not None and product != "hillshade":
         raise HillshadeError("scale applies to product='hillshade'")
@@ -126,7 +136,7 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
                       stac_item=None if stac_item is None else os.fspath(stac_item))
     token = virtual_outputs.set(True)    # /vsimem/ outputs are fine from Python
     try:
-        return run_shade(cfg)
+        return shade_each(cfg) if each else run_shade(cfg)
     finally:
         virtual_outputs.reset(token)
 

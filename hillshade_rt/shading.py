@@ -20,6 +20,7 @@ so the result is exactly brute's.
 
 from __future__ import annotations
 
+import contextvars
 import math
 
 import numpy as np
@@ -29,6 +30,11 @@ from .errors import HillshadeError
 from .earth import Body, curvature_coefficient, curvature_report, refraction_for
 from .geometry import Grid, SunRays, sun_rays
 from .sun import SUN_RADIUS_DEG, Region, SunOver, disk_fraction
+
+# a batch of runs in one process (run.batch, ``--each``): the warm-ups already done (a set of
+# keys, ``Shader.warm_key``), so that the DEMs after the first do not light the small terrain
+# again; None outside a batch (every Shader warms up, as a single run always did)
+warmed = contextvars.ContextVar("warmed", default=None)
 
 # a tile whose window (tile + halo) holds more than this many times its own cells is marched by
 # brute over its own cells only (exact), instead of running the algorithm over the whole window
@@ -325,7 +331,27 @@ class Shader:
         measure computing. On the CPU by lighting a small rough terrain through this very path
         (the same calls and argument types: the algorithm, or both methods of ``auto`` and its
         survey; the pyramid, refinements, soft horizons, the report's counts), on a grid with
-        the same pattern of spacing; on the GPU through ``shadow.warm_up``."""
+        the same pattern of spacing; on the GPU through ``shadow.warm_up``. In a batch
+        (:data:`warmed`) once per kind of run."""
+        done = warmed.get()
+        key = self.warm_key(soft, incidence, field)
+        if done is not None and key in done:
+            return
+        self._warm_up(azimuth, elevation, soft, incidence, field)
+        if done is not None:
+            done.add(key)
+
+    def warm_key(self, soft: bool, incidence: bool, field: bool) -> tuple:
+        """What decides which kernels a warm-up compiles (their argument types and the paths
+        taken), not the heights nor the sun."""
+        g = self.grid
+        return (self.backend, self.algorithm, tuple(sorted((k, repr(v))
+                                                           for k, v in self.options.items())),
+                bool(soft), bool(incidence), bool(field), g.method, g.col_sign, g.row_sign,
+                repr(self.curvature), self.lift > 0)
+
+    def _warm_up(self, azimuth: float, elevation: float, soft: bool, incidence: bool,
+                 field: bool) -> None:
         from .algorithms.counts import code_counts
         el = min(max(elevation, 1.0), 89.0)
         if self.backend != "cpu":

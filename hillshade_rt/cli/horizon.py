@@ -5,7 +5,8 @@ from __future__ import annotations
 import click
 
 from .errors import errors_to_click, say
-from .options import (context_option, backend_option, dem_options, finite, format_option,
+from .options import (context_option, each_pattern_options,
+                      backend_option, dem_options, finite, format_option,
                       height_above_ground_option, horizon_physics_options, max_distance_option,
                       max_memory_option, overwrite_option, preview_option, quiet_option,
                       scheduler_option, threads_option, to_read_options, to_run_options,
@@ -13,8 +14,8 @@ from .options import (context_option, backend_option, dem_options, finite, forma
 
 
 @click.command()
-@click.argument("dem", type=click.Path(dir_okay=False))
-@click.argument("output", type=click.Path(dir_okay=False))
+@click.argument("files", metavar="DEM OUTPUT | DEM... --each", nargs=-1, required=True,
+                type=click.Path(dir_okay=False))
 @click.option("--azimuth", type=float, default=None, callback=finite,
               help="Azimuth along which to look, degrees clockwise from north (one band).")
 @click.option("--directions", type=click.IntRange(8, 360), default=None, metavar="N",
@@ -41,13 +42,14 @@ from .options import (context_option, backend_option, dem_options, finite, forma
 @overwrite_option()
 @quiet_option()
 @format_option
+@each_pattern_options
 @dem_options
 @context_option
 @errors_to_click
-def horizon(dem, output, azimuth, directions, distance, method, sample_spacing, max_distance,
+def horizon(files, azimuth, directions, distance, method, sample_spacing, max_distance,
             curvature, refraction_k, height_above_ground, preview, backend, threads, max_memory,
             window_size, scheduler, overwrite, quiet, fmt,
-            creation_options, **read_opts):
+            creation_options, each, output_pattern, **read_opts):
     """Write the horizon angle toward --azimuth (or toward each of --directions N azimuths, one
     band each) of every cell of DEM to OUTPUT.
 
@@ -56,11 +58,17 @@ def horizon(dem, output, azimuth, directions, distance, method, sample_spacing, 
     lit by a sun at this azimuth iff its angle <= the sun's elevation. A DEM larger than
     --max-memory (or any, with --window-size) is computed in windows, with the same result."""
     from ..run import HorizonConfig, horizon as run_horizon
+    from ..run.batch import split_files, horizon_each
+    dem, output = split_files(files, each, output_pattern, "horizon")
     kw = dict(preview=preview, backend=backend, threads=threads, overwrite=overwrite,
               quiet=quiet, fmt=fmt, creation_options=creation_options, **read_opts)
-    run_horizon(HorizonConfig(dem, output, azimuth, method, sample_spacing, curvature,
-                              refraction_k, to_read_options(kw), to_run_options(kw, say),
-                              directions=directions, distance=distance,
-                              max_distance=max_distance, max_memory=max_memory,
-                              window_size=window_size, scheduler=scheduler,
-                              height_above_ground=height_above_ground))
+    cfg = HorizonConfig(dem, output, azimuth, method, sample_spacing, curvature,
+                        refraction_k, to_read_options(kw), to_run_options(kw, say),
+                        directions=directions, distance=distance,
+                        max_distance=max_distance, max_memory=max_memory,
+                        window_size=window_size, scheduler=scheduler,
+                        height_above_ground=height_above_ground)
+    if each:
+        horizon_each(cfg, dem, output_pattern)
+    else:
+        run_horizon(cfg)

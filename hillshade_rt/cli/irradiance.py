@@ -7,15 +7,16 @@ import click
 
 from .errors import errors_to_click, say
 from ..run.config import PLACE_KEYS
-from .options import (context_option, algorithm_option, backend_option, dem_options, finite, format_option,
+from .options import (context_option, each_pattern_options,
+                      algorithm_option, backend_option, dem_options, finite, format_option,
                       height_above_ground_option, overwrite_option, physics_options, place_options,
                       preview_option, quiet_option, report_option, threads_option, to_read_options,
                       to_run_options)
 
 
 @click.command()
-@click.argument("dem", type=click.Path(dir_okay=False))
-@click.argument("output", type=click.Path(dir_okay=False))
+@click.argument("files", metavar="DEM OUTPUT | DEM... --each", nargs=-1, required=True,
+                type=click.Path(dir_okay=False))
 @click.option("--date", "date_", default=None, metavar="YYYY-MM-DD",
               help="The day (or first day), midnight to midnight in --tz (else local mean "
                    "solar time).")
@@ -57,27 +58,34 @@ from .options import (context_option, algorithm_option, backend_option, dem_opti
 @overwrite_option("Replace outputs if they exist.")
 @quiet_option("No progress bar or summary on stderr.")
 @format_option
+@each_pattern_options
 @dem_options
 @context_option
 @errors_to_click
-def irradiance(dem, output, date_, end_date, start, end, step, clear_sky, linke_turbidity,
+def irradiance(files, date_, end_date, start, end, step, clear_sky, linke_turbidity,
                albedo, ghi, mean, perez, skyview_directions, tz, lat, lon, pressure, temperature,
                no_refraction, sun_tolerance, algorithm, curvature, refraction_k, soft,
                height_above_ground, preview,
                backend, threads, report_path, overwrite, quiet, fmt,
-               creation_options, **read_opts):
+               creation_options, each, output_pattern, **read_opts):
     """Write the beam, diffuse, reflected and global irradiance on every cell of DEM over a
     period to OUTPUT: 4 float32 bands, Wh/m2 (W/m2 with --mean), -9999 nodata. Beam: DNI on
     the tilted surface, in cast shadow 0; diffuse: DHI times the sky view factor; reflected:
     GHI times albedo times the terrain's view factor."""
     from ..run.irradiance import IrradianceConfig, irradiance as run_irradiance
+    from ..run.batch import split_files, irradiance_each
+    dem, output = split_files(files, each, output_pattern, "irradiance")
     kw = dict(tz=tz, lat=lat, lon=lon, pressure=pressure, temperature=temperature,
               no_refraction=no_refraction, sun_tolerance=sun_tolerance, preview=preview,
               backend=backend, threads=threads, report_path=report_path, overwrite=overwrite,
               quiet=quiet, fmt=fmt, creation_options=creation_options, **read_opts)
     place = {k: kw.pop(k) for k in PLACE_KEYS}
-    run_irradiance(IrradianceConfig(
+    cfg = IrradianceConfig(
         dem, output, date_, end_date, start, end, step, clear_sky, linke_turbidity, albedo, ghi,
         mean, soft, perez, skyview_directions, place, algorithm, curvature, refraction_k,
         to_read_options(kw), to_run_options(kw, say),
-        height_above_ground=height_above_ground))
+        height_above_ground=height_above_ground)
+    if each:
+        irradiance_each(cfg, dem, output_pattern)
+    else:
+        run_irradiance(cfg)

@@ -412,6 +412,30 @@ def scheduler_option(f):
                              "hillshade-rt[dask] and DEM paths the workers can read.")(f)
 
 
+EACH_HELP = ("Each DEM on its own (different grids, CRSs, sizes welcome), into its own file "
+             "named by --output-pattern's {stem} (the input's file name without extension), "
+             "e.g. 'out/{stem}_shadow.tif'; a DEM that fails is named and the others go on "
+             "(exit 1 at the end). Without it several DEMs are one mosaic.")
+
+
+def each_option(f):
+    """``--each``: many unrelated DEMs in one call (``run.batch``)."""
+    return click.option("--each", is_flag=True, help=EACH_HELP)(f)
+
+
+def each_pattern_options(f):
+    """``--each`` and its ``--output-pattern`` for a command that takes ``DEM OUTPUT``."""
+    return _stack(f, [
+        click.option("--each", is_flag=True,
+                     help="Several DEMs, each on its own into its own file named by "
+                          "--output-pattern's {stem} (the input's file name without "
+                          "extension); then every path given is a DEM. A DEM that fails is "
+                          "named and the others go on (exit 1 at the end)."),
+        click.option("--output-pattern", default=None, metavar="PATTERN",
+                     help="With --each: each DEM's output, e.g. 'out/{stem}_hours.tif'."),
+    ])
+
+
 def run_options(f):
     return _stack(f, [
         click.option("-o", "--output", default=None, type=click.Path(dir_okay=False),
@@ -420,7 +444,7 @@ def run_options(f):
                      help="One file per time instead of one multi-band OUTPUT, e.g. "
                           "'out_{time:%Y%m%dT%H%M}.tif' (fields: time, index, azimuth, elevation, "
                           "tile: the input's file name; with several input tiles, one file per "
-                          "tile)."),
+                          "tile; with --each, stem: each DEM's own output)."),
         preview_option("Also write a quick-look PNG (shaded relief, shadows tinted)."),
         backend_option,
         threads_option,

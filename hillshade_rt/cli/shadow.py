@@ -8,7 +8,7 @@ import click
 from .errors import errors_to_click, say
 from ..run.config import SUN_KEYS
 from .options import (algorithm_flags, algorithm_option, command_line, context_option,
-                      dem_options, finite,
+                      dem_options, each_option, finite,
                       given, height_above_ground_option, light_options, lightmap_options,
                       physics_options, run_options, stac_item_option, subsolar_options,
                       sun_options, to_read_options, to_run_options)
@@ -19,7 +19,8 @@ LIFT_HELP = ("Each cell's ray toward the sun starts this many metres above the c
 
 
 def _config(files, kind, algorithm, options, kw, **more):
-    """The ShadeConfig of a lighting command's parsed options ``kw``."""
+    """The ShadeConfig of a lighting command's parsed options ``kw`` (``each`` popped by
+    the caller: ``_shade``)."""
     from ..run.config import ShadeConfig
     sun = {k: kw.pop(k) for k in SUN_KEYS}
     read = to_read_options(kw)
@@ -30,6 +31,17 @@ def _config(files, kind, algorithm, options, kw, **more):
                        max_memory=kw.pop("max_memory"), window_size=kw.pop("window_size"),
                        cog=kw.pop("cog"), scheduler=kw.pop("scheduler"),
                        stac_item=kw.pop("stac_item"), command=command_line(), **more)
+
+
+def _shade(cfg, each):
+    """``run.shade`` (one DEM or one mosaic), or with ``--each`` ``run.batch.shade_each``
+    (each DEM on its own)."""
+    from ..run import shade
+    from ..run.batch import check_pattern, shade_each
+    if each:
+        return shade_each(cfg)
+    check_pattern(cfg.output_pattern, False)     # {stem} without --each
+    return shade(cfg)
 
 
 @click.command()
@@ -47,6 +59,7 @@ def _config(files, kind, algorithm, options, kw, **more):
 @light_options
 @subsolar_options
 @run_options
+@each_option
 @stac_item_option
 @dem_options
 @context_option
@@ -57,13 +70,13 @@ def shadow(files, algorithm, curvature, refraction_k, soft, self_shadow, classes
     """Write the cast-shadow mask of DEM to OUTPUT (GeoTIFF: 1 shadow, 0 lit, 255 nodata).
 
     Several DEMs (tiles on one grid) are shaded as one mosaic, so that a mountain in one tile
-    shadows the next; OUTPUT is the last path, or give it with -o. The sun:
+    shadows the next; OUTPUT is the last path, or give it with -o. Unrelated DEMs (any grid,
+    CRS, size): --each with --output-pattern 'out/{stem}_shadow.tif', each on its own. The sun:
     --azimuth/--elevation, or --time (repeatable) or --start/--end/--step at the DEM's
     place (one band per time), or --subsolar LAT,LON / --subsolar-file F on the DEM's body (every
     cell its own sun). --soft writes the visible fraction of the sun's disk (float32,
     1 = fully lit, -9999 nodata); --classes writes 0 lit / 1 self-shadow / 2 cast / 255."""
     from ..algorithms import algorithm_for, options_for, options_from_cli
-    from ..run import shade
     if subsolar is not None or subsolar_file is not None or sun_distance is not None or \
             body is not None:
         return _subsolar(files, subsolar, subsolar_file, sun_distance, body, light_position,
@@ -76,9 +89,11 @@ def shadow(files, algorithm, curvature, refraction_k, soft, self_shadow, classes
     flags = options_from_cli(kw)
     algorithm = algorithm_for(algorithm, flags)
     options = options_for(algorithm, flags)
-    shade(_config(files, "classes" if classes else "shadow", algorithm, options, kw,
-                  curvature=curvature, refraction_k=refraction_k, soft=soft,
-                  self_shadow=self_shadow or classes, height_above_ground=height_above_ground))
+    each = kw.pop("each")
+    _shade(_config(files, "classes" if classes else "shadow", algorithm, options, kw,
+                   curvature=curvature, refraction_k=refraction_k, soft=soft,
+                   self_shadow=self_shadow or classes, height_above_ground=height_above_ground),
+           each)
 
 
 def _point_light(files, position, lonlat, lift, soft, self_shadow, classes, algorithm, curvature,
@@ -96,7 +111,7 @@ def _point_light(files, position, lonlat, lift, soft, self_shadow, classes, algo
                "--algorithm": given("algorithm"), "--earth-curvature": curvature is not None,
                "--context": kw.get("context") is not None}
     for k, flag in (("scheduler", "--scheduler"), ("output_pattern", "--output-pattern"),
-                    ("cog", "--cog"), ("stac_item", "--stac-item")):
+                    ("cog", "--cog"), ("stac_item", "--stac-item"), ("each", "--each")):
         refused[flag] = bool(kw.pop(k))
     window_size, max_memory = kw.pop("window_size"), kw.pop("max_memory")
     light_shadow(LightConfig(list(files), kw.pop("output"), position, lonlat, lift, window_size,
@@ -118,7 +133,7 @@ def _lightmap_refused(kw, soft, curvature, refraction_k) -> dict:
                "--context": kw.get("context") is not None}
     for k, flag in (("window_size", "--window-size"), ("max_memory", "--max-memory"),
                     ("scheduler", "--scheduler"), ("output_pattern", "--output-pattern"),
-                    ("cog", "--cog"), ("stac_item", "--stac-item")):
+                    ("cog", "--cog"), ("stac_item", "--stac-item"), ("each", "--each")):
         refused[flag] = bool(kw.pop(k))
     return refused
 
@@ -141,7 +156,7 @@ def _subsolar(files, subsolar, subsolar_file, distance, body, light_position, li
                "--algorithm": given("algorithm"), "--context": kw.get("context") is not None}
     for k, flag in (("window_size", "--window-size"), ("max_memory", "--max-memory"),
                     ("scheduler", "--scheduler"), ("output_pattern", "--output-pattern"),
-                    ("cog", "--cog"), ("stac_item", "--stac-item")):
+                    ("cog", "--cog"), ("stac_item", "--stac-item"), ("each", "--each")):
         refused[flag] = bool(kw.pop(k))
     subsolar_shadow(SubsolarConfig(list(files), kw.pop("output"), subsolar, distance, body,
                                    lift, soft, curvature, refraction_k, to_read_options(kw),
@@ -165,6 +180,7 @@ def _subsolar(files, subsolar, subsolar_file, distance, body, light_position, li
 @light_options
 @lightmap_options
 @run_options
+@each_option
 @stac_item_option
 @dem_options
 @context_option
@@ -179,7 +195,6 @@ def hillshade(files, ambient, scale, algorithm, curvature, refraction_k, soft,
     (--light-position/--light-lonlat) L points from each cell to the light; --falloff,
     --bits 16 and -f PNG make lightmaps."""
     from ..errors import UsageProblem
-    from ..run import shade
     if light_position is not None or light_lonlat is not None:
         from ..run.lightmap import LightmapConfig, lightmap
         refused = _lightmap_refused(kw, soft, curvature, refraction_k)
@@ -192,6 +207,7 @@ def hillshade(files, ambient, scale, algorithm, curvature, refraction_k, soft,
     if falloff is not None or bits is not None:
         raise UsageProblem("--falloff and --bits go with a point light (--light-position or "
                            "--light-lonlat)")
-    shade(_config(files, "hillshade", algorithm, {}, kw, default_sun=(315.0, 45.0),
-                  curvature=curvature, refraction_k=refraction_k, soft=soft, self_shadow=True,
-                  ambient=ambient, scale=scale, height_above_ground=height_above_ground))
+    each = kw.pop("each")
+    _shade(_config(files, "hillshade", algorithm, {}, kw, default_sun=(315.0, 45.0),
+                   curvature=curvature, refraction_k=refraction_k, soft=soft, self_shadow=True,
+                   ambient=ambient, scale=scale, height_above_ground=height_above_ground), each)

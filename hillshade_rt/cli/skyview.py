@@ -5,7 +5,8 @@ from __future__ import annotations
 import click
 
 from .errors import errors_to_click, say
-from .options import (context_option, backend_option, dem_options, format_option,
+from .options import (context_option, each_pattern_options,
+                      backend_option, dem_options, format_option,
                       height_above_ground_option, horizon_physics_options,
                       max_distance_option, max_memory_option, overwrite_option,
                       preview_option, quiet_option, scheduler_option, threads_option, to_read_options, to_run_options,
@@ -13,8 +14,8 @@ from .options import (context_option, backend_option, dem_options, format_option
 
 
 @click.command()
-@click.argument("dem", type=click.Path(dir_okay=False))
-@click.argument("output", type=click.Path(dir_okay=False))
+@click.argument("files", metavar="DEM OUTPUT | DEM... --each", nargs=-1, required=True,
+                type=click.Path(dir_okay=False))
 @click.option("--directions", type=click.IntRange(4, 360), default=32, show_default=True,
               metavar="N", help="Equally spaced azimuths, clockwise from north (4..360).")
 @click.option("--definition", type=click.Choice(["zaksek", "dozier"]), default="zaksek",
@@ -44,24 +45,31 @@ from .options import (context_option, backend_option, dem_options, format_option
 @overwrite_option()
 @quiet_option()
 @format_option
+@each_pattern_options
 @dem_options
 @context_option
 @errors_to_click
-def skyview(dem, output, directions, definition, terrain_configuration, openness, max_distance,
+def skyview(files, directions, definition, terrain_configuration, openness, max_distance,
             curvature, refraction_k, height_above_ground, preview, backend, threads, max_memory,
             window_size, scheduler, overwrite, quiet, fmt,
-            creation_options, **read_opts):
+            creation_options, each, output_pattern, **read_opts):
     """Write the sky view factor of every cell of DEM to OUTPUT (float32 0..1, -9999 nodata)
     from its exact horizon in --directions azimuths, or its openness (--openness, degrees).
     A DEM larger than --max-memory (or any, with --window-size) is computed in windows, with
     the same result."""
     from ..run.skyview import SkyviewConfig, skyview as run_skyview
+    from ..run.batch import split_files, skyview_each
+    dem, output = split_files(files, each, output_pattern, "skyview")
     kw = dict(preview=preview, backend=backend, threads=threads, overwrite=overwrite, quiet=quiet, fmt=fmt,
               creation_options=creation_options,
               **read_opts)
-    run_skyview(SkyviewConfig(dem, output, directions, definition, terrain_configuration,
-                              curvature, refraction_k, to_read_options(kw),
-                              to_run_options(kw, say), openness=openness,
-                              max_distance=max_distance, max_memory=max_memory,
-                              window_size=window_size, scheduler=scheduler,
-                              height_above_ground=height_above_ground))
+    cfg = SkyviewConfig(dem, output, directions, definition, terrain_configuration,
+                        curvature, refraction_k, to_read_options(kw),
+                        to_run_options(kw, say), openness=openness,
+                        max_distance=max_distance, max_memory=max_memory,
+                        window_size=window_size, scheduler=scheduler,
+                        height_above_ground=height_above_ground)
+    if each:
+        skyview_each(cfg, dem, output_pattern)
+    else:
+        run_skyview(cfg)

@@ -6,15 +6,16 @@ import click
 
 from .errors import errors_to_click, say
 from ..run.config import PLACE_KEYS
-from .options import (context_option, algorithm_option, backend_option, dem_options, format_option,
+from .options import (context_option, algorithm_option, backend_option, dem_options,
+                      each_pattern_options, format_option,
                       height_above_ground_option, overwrite_option, physics_options, place_options,
                       preview_option, quiet_option, report_option, threads_option, to_read_options,
                       to_run_options)
 
 
 @click.command("sun-hours")
-@click.argument("dem", type=click.Path(dir_okay=False))
-@click.argument("output", type=click.Path(dir_okay=False))
+@click.argument("files", metavar="DEM OUTPUT | DEM... --each", nargs=-1, required=True,
+                type=click.Path(dir_okay=False))
 @click.option("--date", "date_", required=True, metavar="YYYY-MM-DD", help="The day (or first day).")
 @click.option("--end-date", default=None, metavar="YYYY-MM-DD",
               help="Last day of a range (included); the hours are the total over the range.")
@@ -36,24 +37,31 @@ from .options import (context_option, algorithm_option, backend_option, dem_opti
 @overwrite_option("Replace outputs if they exist.")
 @quiet_option("No progress bar or summary on stderr.")
 @format_option
+@each_pattern_options
 @dem_options
 @context_option
 @errors_to_click
-def sun_hours(dem, output, date_, end_date, step, tz, lat, lon, pressure, temperature,
+def sun_hours(files, date_, end_date, step, tz, lat, lon, pressure, temperature,
               no_refraction, sun_tolerance, algorithm, curvature, refraction_k, soft,
               height_above_ground, self_shadow, preview, backend, threads, report_path,
               overwrite, quiet, fmt,
-              creation_options, **read_opts):
+              creation_options, each, output_pattern, **read_opts):
     """Write the hours of direct sun per cell of DEM over a day (or a range of days) to OUTPUT
     (float32 hours, -9999 nodata), like WhiteboxTools' TimeInDaylight or GRASS r.sun's insolation
-    time: the sun every --step, each lit sample counting for its interval."""
+    time: the sun every --step, each lit sample counting for its interval. Several DEMs:
+    --each --output-pattern 'out/{stem}_hours.tif', each with its own place's sun."""
     from ..run import SunHoursConfig, sun_hours as run_sun_hours
+    from ..run.batch import split_files, sun_hours_each
+    dem, output = split_files(files, each, output_pattern, "sun-hours")
     kw = dict(tz=tz, lat=lat, lon=lon, pressure=pressure, temperature=temperature,
               no_refraction=no_refraction, sun_tolerance=sun_tolerance, preview=preview,
               backend=backend, threads=threads, report_path=report_path, overwrite=overwrite,
               quiet=quiet, fmt=fmt, creation_options=creation_options, **read_opts)
     place = {k: kw.pop(k) for k in PLACE_KEYS}
-    run_sun_hours(SunHoursConfig(dem, output, date_, end_date, step, place, algorithm, curvature,
-                                 refraction_k, soft, self_shadow, to_read_options(kw),
-                                 to_run_options(kw, say),
-                                 height_above_ground=height_above_ground))
+    cfg = SunHoursConfig(dem, output, date_, end_date, step, place, algorithm, curvature,
+                         refraction_k, soft, self_shadow, to_read_options(kw),
+                         to_run_options(kw, say), height_above_ground=height_above_ground)
+    if each:
+        sun_hours_each(cfg, dem, output_pattern)
+    else:
+        run_sun_hours(cfg)

@@ -77,7 +77,7 @@ def target_of(path: str) -> str:
     return real
 
 
-def _same(a: str, b: str) -> bool:
+def same_file(a: str, b: str) -> bool:
     """Whether paths ``a`` and ``b`` name one file (through symbolic and hard links)."""
     if is_virtual(a) or is_virtual(b):
         return a == b
@@ -89,14 +89,23 @@ def _same(a: str, b: str) -> bool:
     return os.path.realpath(a) == os.path.realpath(b)
 
 
+# the claims of a batch of runs (run.batch, ``--each``): while set, every run's Claims also
+# checks its paths against the batch's inputs and the outputs of the batch's other runs
+batch_claims = contextvars.ContextVar("batch_claims", default=None)
+
+
 class Claims:
     """The paths one run will write, checked before any work against its inputs and each
-    other; ``what`` names the option in messages ("OUTPUT", "--report", ...)."""
+    other; ``what`` names the option in messages ("OUTPUT", "--report", ...). Inside a batch
+    (:data:`batch_claims`) also against the batch's inputs and its other runs' outputs."""
 
     def __init__(self, inputs=(), overwrite: bool = False):
         self.inputs = [os.fspath(p) for p in inputs if p is not None]
         self.overwrite = overwrite
         self.paths: list[tuple[str, str]] = []
+        self.batch = batch_claims.get()
+        if self.batch is not None:
+            self.inputs += [p for p in self.batch.inputs if p not in self.inputs]
 
     def claim(self, path: str, what: str) -> str:
         """Check ``path`` (see :func:`check_output_path`) and that it is no input and no other
@@ -104,13 +113,15 @@ class Claims:
         path = os.fspath(path)
         check_output_path(path, self.overwrite)
         for p in self.inputs:
-            if p != "-" and _same(path, p):
+            if p != "-" and same_file(path, p):
                 raise UsageProblem(f"{path}: {what} is also an input ({p}); give another path")
         for q, other in self.paths:
-            if _same(path, q):
+            if same_file(path, q):
                 msg = (f"{path}: given twice as {what}" if other == what and path == q else
                        f"{path}: {what} and {other} name the same file; give different paths")
                 raise UsageProblem(msg)
+        if self.batch is not None:
+            self.batch.claim(path, what)
         self.paths.append((path, what))
         return path
 
