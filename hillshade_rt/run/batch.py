@@ -254,7 +254,7 @@ def run_each(files, pattern: str, each: Each, ro) -> dict:
                 if first_compile[0]:
                     ro.say(kind, message)
                 return
-            if kind == "note":
+            if kind == "note" and not message.startswith(_label(dem)):
                 message = f"{_label(dem)}: {message}"
             ro.say(kind, message)
         return say
@@ -298,7 +298,7 @@ def run_each(files, pattern: str, each: Each, ro) -> dict:
                     note = (f"{_label(dem)}: every cell is nodata: wrote all-nodata "
                             f"{_shown(outs)}")
                     entry.update(status="empty", message=note)
-                    if not ro.quiet:
+                    if rep is None and not ro.quiet:     # (a run that wrote it said so)
                         ro.say("note", note)
                 else:
                     entry["status"] = "ok"

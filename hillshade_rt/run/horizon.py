@@ -191,7 +191,7 @@ def _report(cfg, src, azimuths, ran_on, curved, stats, timer, processing):
     if not ro.quiet:
         toward = (f"toward az {azimuths[0]:g}" if not many else
                   f"toward {len(azimuths)} directions ({360.0 / len(azimuths):g} deg apart)")
-        where = "" if processing["mode"] == "in memory" else (
+        where = "" if processing["mode"] in ("in memory", "all nodata") else (
             f", {processing['regions']} windows" + (" on Dask" if processing["mode"] == "dask"
                                                     else ""))
         ro.say("summary", f"hillshade-rt: {cfg.output}: {cols}x{rows}, horizon {toward} "
@@ -431,7 +431,8 @@ def _all_nodata(cfg, geom, azimuths, ran_on, max_distance, timer):
         w.finish()
         if wd is not None:
             wd.finish()
-    cfg.run.say("note", nodata_note(geom.path))
+    if not cfg.run.quiet:
+        cfg.run.say("note", nodata_note(geom.path))
     return _report(cfg, geom, azimuths, ran_on, False, {}, timer,
                    {"mode": "all nodata", "cells": int(arr.size)})
 

@@ -287,7 +287,8 @@ def _all_nodata(cfg, timer) -> dict:
            "seconds": dict(timer.seconds, total=timer.total()), "version": __version__}
     if ro.report_path is not None:
         write_json(ro.report_path, rep, ro.overwrite)
-    ro.say("note", nodata_note(src.path))
+    if not ro.quiet:
+        ro.say("note", nodata_note(src.path))
     return rep
 
 

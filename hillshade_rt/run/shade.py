@@ -176,7 +176,7 @@ def _shade(cfg, src, windowed, inputs, output, req, pattern, wshape, limit, clai
         rep["stac_item"] = os.path.abspath(cfg.stac_item)
     if ro.report_path is not None:
         write_json(ro.report_path, rep, ro.overwrite)
-    if empty is not None:       # said even with --quiet: the output is not what was asked
+    if empty is not None and not ro.quiet:     # (-q: the report and the EMPTY tag keep it)
         ro.say("note", nodata_note(empty))
     if not ro.quiet:
         # the outputs named as the user gave them (as every command does), a pattern's files

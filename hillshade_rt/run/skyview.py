@@ -259,7 +259,8 @@ def _all_nodata(cfg, definition, geom, max_distance, timer):
         w.write(1, np.full(geom.shape, -9999.0, np.float32),
                 description=describe(cfg, definition))
         w.finish()
-    cfg.run.say("note", nodata_note(geom.path))
+    if not cfg.run.quiet:
+        cfg.run.say("note", nodata_note(geom.path))
     return _Stats(), {"mode": "all nodata", "cells": geom.shape[0] * geom.shape[1]}, False, None
 
 
@@ -363,7 +364,7 @@ def _report(cfg, definition, src, ran_on, curved, st, processing, timer, max_dis
     if not ro.quiet:
         mean = values["mean"]
         shown = f"{mean:.3f}" if mean is not None else "nan"
-        where = "" if processing["mode"] == "in memory" else (
+        where = "" if processing["mode"] in ("in memory", "all nodata") else (
             f", {processing['regions']} windows" + (" on Dask" if processing["mode"] == "dask"
                                                     else ""))
         ro.say("summary", f"hillshade-rt: {cfg.output}: {cols}x{rows}, "

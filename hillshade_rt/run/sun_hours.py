@@ -150,7 +150,7 @@ def sun_hours(cfg: SunHoursConfig) -> dict:
         rep["context"] = {"path": input_label(cfg.read.context), "window": list(area.bounds)}
     if ro.report_path is not None:
         write_json(ro.report_path, rep, ro.overwrite)
-    if empty is not None:
+    if empty is not None and not ro.quiet:
         ro.say("note", nodata_note(empty))
     elif not ro.quiet:
         h = rep["hours"]

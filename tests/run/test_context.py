@@ -291,10 +291,12 @@ def test_all_nodata_tile_writes_nodata(coast, cmd, extra, nodata, with_context):
     d, sea, vrt = coast
     out = d / "o.tif"
     more = ["--context", vrt] if with_context else []
-    res = CliRunner().invoke(cli, [cmd, sea, str(out), *extra, *more, "-q"])
+    res = CliRunner().invoke(cli, [cmd, sea, str(out), *extra, *more])
     assert res.exit_code == 0, res.output
     notes = [ln for ln in res.output.splitlines() if "every cell is nodata" in ln]
     assert len(notes) == 1 and "note" in notes[0], res.output
+    quiet = CliRunner().invoke(cli, [cmd, sea, str(out), *extra, *more, "-q", "--overwrite"])
+    assert quiet.exit_code == 0 and quiet.output == "", quiet.output    # -q: nothing said
     got, prof = _read_all(out)
     assert prof["nodata"] == nodata and (got == nodata).all()
     assert (prof["height"], prof["width"]) == (64, 64)
