@@ -15,17 +15,23 @@ import sys
 import time
 
 
+def missing() -> list[str]:
+    """The kernel modules of the defaults whose compiled kernels numba's cache lacks: auto's,
+    the Horn normals and the read's nodata pass."""
+    from .algorithms import REGISTRY
+    from .algorithms._jitcache import cached
+    return [m for m in REGISTRY["auto"].kernel_modules + ("relief", "counts") if not cached(m)]
+
+
 def main() -> int:
     import numpy as np
 
-    from .algorithms import REGISTRY
-    from .algorithms._jitcache import cache_dir, cached
+    from .algorithms._jitcache import cache_dir
     from .shading import Shader
     from .earth import Body
     from .geometry import Grid
 
-    # the default's kernels, the Horn normals and the read's nodata pass
-    todo = [m for m in REGISTRY["auto"].kernel_modules + ("relief", "counts") if not cached(m)]
+    todo = missing()
     if not todo:
         return 0
     print(f"hillshade-rt: compiling the {', '.join(todo)} kernels once (cached in "
