@@ -17,11 +17,13 @@ server of another key, a refusal, a full server, a timeout, a server gone before
 accepted) returns None: the call runs in this process, as if there were no server, and says
 nothing about it.
 
-One call: connect; send the request (command line, environment, umask) with the descriptors of
-the working folder, stdin, stdout and stderr (SCM_RIGHTS: the job writes to this terminal or
-pipe itself, isatty as here); the server's master answers ``busy``/``refused`` or passes the
-call to a worker, which answers ``accepted``; this process answers ``go`` (from then on the job
-is the server's: it is never run twice) and waits for ``status``. SIGINT, SIGTERM and SIGHUP are
+One call: connect; send the request (command line, environment, umask); the server's master
+answers ``busy``/``refused`` or passes the call to a worker, which answers ``accepted``; this
+process answers ``go`` with the descriptors of its working folder, stdin, stdout and stderr
+(SCM_RIGHTS: the job writes to this terminal or pipe itself, isatty as here; they are sent only
+to a worker that has just answered, never left in a wedged server's queue, where they would keep
+a pipe of this process's open after it ended). From ``go`` on the job is the server's (it is
+never run twice) and this process waits for ``status``. SIGINT, SIGTERM and SIGHUP are
 passed on as ``cancel`` (the job stops as it would here: 130, 143, 129, its unfinished output
 removed); a worker that ends without a status (killed, crashed) ends the call with one line
 and status 1 (atomic outputs: nothing half-written is left under its name).
@@ -354,7 +356,7 @@ class _Call:
         req = {"type": "job", "proto": PROTOCOL, "key": self.key, "argv": self.argv,
                "env": dict(self.environ), "umask": umask}
         try:
-            send_frame(self.sock, req, [cwd, 0, 1, 2])
+            send_frame(self.sock, req)
             deadline = time.monotonic() + REPLY_TIMEOUT
             while True:       # the master's answer, or the worker's
                 try:
@@ -368,7 +370,7 @@ class _Call:
             if not isinstance(answer, dict) or answer.get("type") != "accepted":
                 return None        # busy, refused, gone, or something else: run here
             pid = answer.get("pid")
-            send_frame(self.sock, {"type": "go"})
+            send_frame(self.sock, {"type": "go"}, [cwd, 0, 1, 2])
         except (OSError, ValueError, TimeoutError):
             return None
         except Exception:        # noqa: BLE001 -- not yet committed: run here

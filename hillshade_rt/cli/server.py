@@ -7,8 +7,8 @@ runs one parallel kernel at a time per process).
 
 The master accepts every connection (the peer must be this user: SO_PEERCRED), reads its
 request and answers ``status`` and ``stop`` itself; a job whose key is not the server's is
-``refused``; a job goes to an idle worker with its descriptors (the connection, the caller's
-working folder, stdin, stdout, stderr), or waits for one at most ``--queue-wait`` seconds and
+``refused``; a job goes to an idle worker with the connection (the worker receives the
+caller's working folder and standard streams itself, with the caller's ``go``), or waits for one at most ``--queue-wait`` seconds and
 is then answered ``busy`` (the caller runs it itself: a full server never makes a call wait
 longer than that). A worker reports ``ready`` once its imports are done and its kernels loaded
 (or compiled: until then the callers run in their own processes), and ``done`` after each job;
@@ -258,7 +258,7 @@ class Master:
         if client.peer_uid(conn) != os.getuid():
             conn.close()
             return
-        frames = client.Frames(conn, want_fds=4)
+        frames = client.Frames(conn)
         try:
             req = frames.read(1.0)
         except (OSError, ValueError, TimeoutError):
@@ -275,7 +275,7 @@ class Master:
         elif kind == "stop":
             self.answer(conn, dict(self.status(), type="stopping"))
             self.stop("asked to stop")
-        elif kind == "job" and len(fds) == 4:
+        elif kind == "job":
             if req.get("key") != self.where["key"]:
                 self.answer(conn, {"type": "refused", "why": "another version or setting"})
             elif self.stopping is not None:

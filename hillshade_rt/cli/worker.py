@@ -120,20 +120,29 @@ class Watcher(threading.Thread):
             self.active = False
 
 
-def run_job(req: dict, conn: socket.socket, fds: list[int]) -> tuple[str, int, bool]:
+def run_job(req: dict, conn: socket.socket) -> tuple[str, int, bool]:
     """One job: ("skipped", 0, True) when the caller did not say go, else ("done", status,
     whether this process is fit for another job)."""
-    from .group import run
-    cwd, *std = fds
-    frames = client.Frames(conn)
+    frames = client.Frames(conn, want_fds=4)
     try:
         conn.settimeout(None)
         client.send_frame(conn, {"type": "accepted", "pid": os.getpid()})
         go = frames.read(client.REPLY_TIMEOUT)
     except (OSError, ValueError, TimeoutError):
         go = None
-    if not (isinstance(go, dict) and go.get("type") == "go"):
-        return "skipped", 0, True
+    try:
+        if not (isinstance(go, dict) and go.get("type") == "go" and len(frames.fds) == 4):
+            return "skipped", 0, True
+        return _run(req, conn, frames)
+    finally:
+        for fd in frames.fds:
+            with contextlib.suppress(OSError):
+                os.close(fd)
+
+
+def _run(req: dict, conn: socket.socket, frames: client.Frames) -> tuple[str, int, bool]:
+    from .group import run
+    cwd, *std = frames.fds
     argv = [str(a) for a in req.get("argv", [])]
     for stream in (sys.stdout, sys.stderr):
         with contextlib.suppress(Exception):
@@ -206,14 +215,14 @@ def main(argv=None) -> int:
     channel.send(b"ready")
     while True:
         try:
-            msg, fds, _, _ = socket.recv_fds(channel, 1 << 20, 5)
+            msg, fds, _, _ = socket.recv_fds(channel, 1 << 20, 1)
         except OSError:
             return 0
         if not msg:
             return 0            # the master is gone or stopping
         for fd in fds:
             os.set_inheritable(fd, False)
-        if len(fds) != 5:
+        if len(fds) != 1:
             for fd in fds:
                 os.close(fd)
             continue
@@ -221,15 +230,12 @@ def main(argv=None) -> int:
         try:
             import json
             req = json.loads(msg[4:].decode("utf-8", "surrogateescape"))
-            what, code, fit = run_job(req, conn, fds[1:])
+            what, code, fit = run_job(req, conn)
         except BaseException as exc:      # noqa: BLE001 -- this process is not fit any more
             log(f"a job failed in the worker: {type(exc).__name__}: {exc}")
             what, code, fit = "done", 1, False
         finally:
             conn.close()
-            for fd in fds[1:]:
-                with contextlib.suppress(OSError):
-                    os.close(fd)
         with contextlib.suppress(OSError):
             channel.send(f"{what} {code} {int(fit)}".encode())
         if not fit:
