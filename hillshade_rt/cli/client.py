@@ -261,6 +261,8 @@ def hand_over(argv, environ=os.environ) -> int | None:
     if how == "off" or not goes_to_server(argv, environ):
         return None
     try:
+        if how == "running" and folder_problem(runtime_dir(environ)):
+            return None      # no server can be there (one lstat: a plain call's whole cost)
         where = paths(environ)
         sock = connect(where["socket"])
     except Exception:        # noqa: BLE001 -- anything here means: run in this process

@@ -163,6 +163,7 @@ class Master:
             log(f"worker {w.proc.pid} ready ({time.monotonic() - w.since:.1f} s)")
             w.state = "idle"
             self.failures = 0
+            self.last = time.monotonic()     # idle counts from when there is a worker to serve
         elif words[0] == "done":
             w.jobs += 1
             self.jobs += 1
