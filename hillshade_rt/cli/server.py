@@ -240,7 +240,7 @@ class Master:
 
     # -- requests ---------------------------------------------------------------------------
     def accept(self) -> None:
-        while True:
+        while self.listener is not None:       # (a request may stop the server)
             try:
                 conn, _ = self.listener.accept()
             except (BlockingIOError, InterruptedError):

@@ -114,6 +114,8 @@ class Server:
         pids = self.all_pids()
         r = hrt(["serve", "stop"], self.env, timeout=60)
         ok = gone(pids)
+        with open(client.paths(self.env)["log"]) as fh:
+            self.log = fh.read()
         if not ok:
             for pid in pids:
                 try:
@@ -121,6 +123,10 @@ class Server:
                 except ProcessLookupError:
                     pass
         assert r.returncode == 0 and ok, (r.stdout, r.stderr)
+        assert "Traceback" not in self.log, self.log
+        if r.stdout.startswith("stopped"):          # (not stopped already: idle)
+            assert "stopping: asked to stop" in self.log
+        assert re.search(r"stopped after \d+ job\(s\)", self.log), self.log
 
 
 @pytest.fixture(scope="module")
@@ -457,6 +463,9 @@ def test_the_idle_timeout_stops_the_server(rundir):
         assert status(srv.env) is None
         assert gone(srv.pids)
         assert not os.path.exists(client.paths(srv.env)["socket"])
+        with open(client.paths(srv.env)["log"]) as fh:
+            log = fh.read()
+        assert "stopping: idle for 2 s" in log and "stopped after 0 job(s)" in log, log
     finally:
         srv.stop()
 
