@@ -133,6 +133,8 @@ def choose_backend(backend: str, algorithm: str, options: dict) -> str:
     return "cpu" if why else chosen
 
 
+_WARMED: set = set()     # Shader.warm_up: the kinds of calls warmed in this process
+
 class Shader:
     """A DEM ready to be lit: ``z`` float32 heights (NaN voids, used in place), ``grid`` its
     geometry. ``backend`` 'cpu' or 'gpu' (already resolved: ``shadow.choose_backend``).
@@ -354,6 +356,14 @@ class Shader:
                  field: bool) -> None:
         from .algorithms.counts import code_counts
         el = min(max(elevation, 1.0), 89.0)
+        # once per process for each kind of call (a warm server runs many): what decides the
+        # kernels and their argument types, the sun's octant included (the frames' views)
+        key = (self.backend, self.algorithm, repr(sorted(self.options.items())),
+               self.grid.method, self.grid.col_sign, self.grid.row_sign, repr(self.curvature),
+               self.k, repr(self.lift), soft, incidence, field, int(azimuth % 360.0 // 45.0),
+               azimuth % 45.0 == 0.0, elevation >= 89.0)
+        if key in _WARMED:
+            return
         if self.backend != "cpu":
             for name in (("brute",) if self.algorithm == "auto" else (self.algorithm,)):
                 warm_up(name, self.grid, azimuth, el, backend=self.backend, **self.options)
@@ -390,6 +400,7 @@ class Shader:
             small4 = Grid.uniform(4, 4, *self.grid.centre_spacing(), self.grid.col_sign,
                                   self.grid.row_sign)
             inc(np.zeros((4, 4), np.float32), small4, azimuth, elevation)
+        _WARMED.add(key)
 
     # -- per sun -------------------------------------------------------------------------------
     def curvature_for(self, azimuth: float, elevation: float) -> float:

@@ -13,58 +13,36 @@ import contextlib
 import os
 import sys
 
-import click
 
-from .animate import animate
-from .cache import cache
-from .errors import OneLineErrors
-from .horizon import horizon
-from .illumination import illumination
-from .info import info
-from .irradiance import irradiance
-from .profile import profile
-from .query import query
-from .shadow import hillshade, shadow
-from .skyview import skyview
-from .sun_hours import sun_hours
-from .version import version_option
-from .view import view
-
-
-@click.group(cls=OneLineErrors, context_settings={"help_option_names": ["-h", "--help"]})
-@version_option
-def cli():
-    """Terrain cast-shadow masks from digital elevation models."""
-
-
-for _command in (shadow, hillshade, sun_hours, horizon, profile, query, skyview, info):
-    cli.add_command(_command)
-cli.add_command(irradiance)
-cli.add_command(animate)
-cli.add_command(view)
-cli.add_command(illumination)
-cli.add_command(cache)
+def __getattr__(name):
+    """``cli`` (the click group) imported when first asked for: ``main`` hands a command line
+    to a running server (``client.hand_over``) before it imports click and the commands."""
+    if name == "cli":
+        from .group import cli
+        globals()["cli"] = cli
+        return cli
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def main():
     """Console-script entry point (and ``python -m hillshade_rt``).
+
+    First the server: when this install's server runs (``hillshade-rt serve``,
+    ``HILLSHADE_RT_SERVER``), the command line runs there and this process only waits for its
+    exit status (``client.hand_over``: the standard library only, no click, numpy or numba);
+    otherwise, or whenever it cannot be reached, the command runs here (``group.run``).
 
     The process ends with ``os._exit`` once the command is done and stdout and stderr are
     flushed: the interpreter's teardown of numba's and LLVM's objects took 0.2-0.3 s of every
     run (a fifth of a 10000² shadow run end to end) and has nothing left to do, every output
     being closed and in place by then. Where another thread or a child process is still alive
     (nothing of ours leaves one), the ordinary exit, which waits for them."""
-    try:
-        cli(prog_name="hillshade-rt")
-        code = 0
-    except SystemExit as exc:
-        code = exc.code
+    from .client import hand_over
+    code = hand_over(sys.argv[1:])
     if code is None:
-        code = 0
-    elif not isinstance(code, int):
-        print(code, file=sys.stderr)
-        code = 1
-    if _nothing_left_running():
+        from .group import run
+        code = run()
+    if nothing_left_running():
         if "logging" in sys.modules:
             import logging
             logging.shutdown()
@@ -75,7 +53,7 @@ def main():
     sys.exit(code)
 
 
-def _nothing_left_running() -> bool:
+def nothing_left_running() -> bool:
     """No other live non-daemon thread and no child process (``main``'s fast exit)."""
     import threading
     if any(t.is_alive() and not t.daemon and t is not threading.main_thread()
