@@ -20,7 +20,6 @@ so the result is exactly brute's.
 
 from __future__ import annotations
 
-import contextvars
 import math
 
 import numpy as np
@@ -30,11 +29,6 @@ from .errors import HillshadeError
 from .earth import Body, curvature_coefficient, curvature_report, refraction_for
 from .geometry import Grid, SunRays, sun_rays
 from .sun import SUN_RADIUS_DEG, Region, SunOver, disk_fraction
-
-# a batch of runs in one process (run.batch, ``--each``): the warm-ups already done (a set of
-# keys, ``Shader.warm_key``), so that the DEMs after the first do not light the small terrain
-# again; None outside a batch (every Shader warms up, as a single run always did)
-warmed = contextvars.ContextVar("warmed", default=None)
 
 # a tile whose window (tile + halo) holds more than this many times its own cells is marched by
 # brute over its own cells only (exact), instead of running the algorithm over the whole window
@@ -333,37 +327,23 @@ class Shader:
         measure computing. On the CPU by lighting a small rough terrain through this very path
         (the same calls and argument types: the algorithm, or both methods of ``auto`` and its
         survey; the pyramid, refinements, soft horizons, the report's counts), on a grid with
-        the same pattern of spacing; on the GPU through ``shadow.warm_up``. In a batch
-        (:data:`warmed`) once per kind of run."""
-        done = warmed.get()
-        key = self.warm_key(soft, incidence, field)
-        if done is not None and key in done:
-            return
-        self._warm_up(azimuth, elevation, soft, incidence, field)
-        if done is not None:
-            done.add(key)
-
-    def warm_key(self, soft: bool, incidence: bool, field: bool) -> tuple:
-        """What decides which kernels a warm-up compiles (their argument types and the paths
-        taken), not the heights nor the sun."""
-        g = self.grid
-        return (self.backend, self.algorithm, tuple(sorted((k, repr(v))
-                                                           for k, v in self.options.items())),
-                bool(soft), bool(incidence), bool(field), g.method, g.col_sign, g.row_sign,
-                repr(self.curvature), self.lift > 0)
-
-    def _warm_up(self, azimuth: float, elevation: float, soft: bool, incidence: bool,
-                 field: bool) -> None:
-        from .algorithms.counts import code_counts
-        el = min(max(elevation, 1.0), 89.0)
-        # once per process for each kind of call (a warm server runs many): what decides the
-        # kernels and their argument types, the sun's octant included (the frames' views)
+        the same pattern of spacing; on the GPU through ``shadow.warm_up``. Once per process
+        for each kind of call (a batch of DEMs, a warm server's worker: many runs)."""
+        # what decides the kernels and their argument types, the sun's octant included (the
+        # frames' views)
         key = (self.backend, self.algorithm, repr(sorted(self.options.items())),
                self.grid.method, self.grid.col_sign, self.grid.row_sign, repr(self.curvature),
                self.k, repr(self.lift), soft, incidence, field, int(azimuth % 360.0 // 45.0),
                azimuth % 45.0 == 0.0, elevation >= 89.0)
         if key in _WARMED:
             return
+        self._warm_up(azimuth, elevation, soft, incidence, field)
+        _WARMED.add(key)
+
+    def _warm_up(self, azimuth: float, elevation: float, soft: bool, incidence: bool,
+                 field: bool) -> None:
+        from .algorithms.counts import code_counts
+        el = min(max(elevation, 1.0), 89.0)
         if self.backend != "cpu":
             for name in (("brute",) if self.algorithm == "auto" else (self.algorithm,)):
                 warm_up(name, self.grid, azimuth, el, backend=self.backend, **self.options)
@@ -400,7 +380,6 @@ class Shader:
             small4 = Grid.uniform(4, 4, *self.grid.centre_spacing(), self.grid.col_sign,
                                   self.grid.row_sign)
             inc(np.zeros((4, 4), np.float32), small4, azimuth, elevation)
-        _WARMED.add(key)
 
     # -- per sun -------------------------------------------------------------------------------
     def curvature_for(self, azimuth: float, elevation: float) -> float:

@@ -47,13 +47,16 @@ def log(message: str) -> None:
 def warm_up() -> None:
     """Import what the commands import and load the default kernels, by running the default
     commands on small DEMs (a projected and a geographic one) in a temporary folder; the
-    kernels numba's cache lacks are compiled first (``warm.main``, said in the log)."""
+    kernels numba's cache lacks are compiled first (``python -m hillshade_rt.warm``, said in
+    the log)."""
     import tempfile
 
-    from .. import warm
+    import subprocess
+
     from .group import run
-    if not warm.all_cached():
-        warm.main([])
+    # the kernels numba's cache lacks for this install, compiled first (nothing when all are)
+    subprocess.run([sys.executable, "-m", "hillshade_rt.warm"], stdin=subprocess.DEVNULL,
+                   check=False)
     import numpy as np
     import rasterio
     from rasterio.transform import from_origin

@@ -5,7 +5,8 @@ by ``--output-pattern``'s ``{stem}`` (the input's file name without its extensio
 may lie on different grids, in different CRSs, with different sizes and value types; each is
 opened, lit and written exactly as the single-DEM call ``shadow tiles/a.tif out/a_shadow.tif ...``
 would (the same run function, the same config with that DEM and that output), in one process:
-the imports, numba's kernels and their warm-up (``shading.warmed``) are paid once, not per DEM.
+the imports, numba's kernels and their warm-up (once per process: ``shading.Shader.warm_up``)
+are paid once, not per DEM.
 Without ``--each`` several DEMs stay one mosaic (``run.shade``), as before.
 
 Before any work: the options are checked once (a bad one is a usage error, exit status 2, as for
@@ -216,7 +217,6 @@ def run_each(files, pattern: str, each: Each, ro) -> dict:
     the command's ``RunOptions`` (its report path, overwrite, quiet, say). Returns the batch's
     report; raises :class:`BatchFailed` after it when any DEM failed."""
     from ..io import write as writes
-    from ..shading import warmed
     from .report import Timer
 
     files = [os.fspath(f) for f in files]
@@ -260,7 +260,6 @@ def run_each(files, pattern: str, each: Each, ro) -> dict:
         return say
 
     token_c = writes.batch_claims.set(claims)
-    token_w = warmed.set(set()) if warmed.get() is None else None
     try:
         for dem, out, as_pattern in plan:
             claims.owner = dem
@@ -310,8 +309,6 @@ def run_each(files, pattern: str, each: Each, ro) -> dict:
             entries.append(entry)
     finally:
         writes.batch_claims.reset(token_c)
-        if token_w is not None:
-            warmed.reset(token_w)
     writes.completed[:] = done
     counts = {k: sum(1 for e in entries if e["status"] == k) for k in ("ok", "empty", "failed")}
     rep = {"command": each.command, "mode": "each", "output_pattern": pattern,

@@ -264,7 +264,7 @@ def test_fill_stem_keeps_the_other_fields():
 
 def test_kernels_warmed_once_per_kind_of_grid(tmp_path, dems, monkeypatch):
     """One process, one warm-up per kind of run (here: a projected and a geographic grid), not
-    one per DEM; outside a batch every run warms up as before."""
+    one per DEM; a later run of the same kind in the process (a server's worker) none."""
     import hillshade_rt as hr
     from hillshade_rt import shading
     calls = []
@@ -275,6 +275,7 @@ def test_kernels_warmed_once_per_kind_of_grid(tmp_path, dems, monkeypatch):
         return real(self, *a, **k)
 
     monkeypatch.setattr(shading.Shader, "_warm_up", counted)
+    monkeypatch.setattr(shading, "_WARMED", set())      # what earlier tests warmed aside
     twin = str(tmp_path / "in" / "everest2.tif")
     with open(dems["everest"], "rb") as fi, open(twin, "wb") as fo:
         fo.write(fi.read())
@@ -282,4 +283,6 @@ def test_kernels_warmed_once_per_kind_of_grid(tmp_path, dems, monkeypatch):
              output_pattern=str(tmp_path / "{stem}.tif"), azimuth=203.7, elevation=10)
     assert len(calls) == 2 and len(set(calls)) == 2
     hr.shade(dems["fractal"], str(tmp_path / "one.tif"), azimuth=203.7, elevation=10)
-    assert len(calls) == 3
+    assert len(calls) == 2
+    hr.shade(dems["fractal"], str(tmp_path / "two.tif"), azimuth=20.0, elevation=10)
+    assert len(calls) == 3          # another octant of the sun: the frames' other views
