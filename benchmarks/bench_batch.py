@@ -118,7 +118,7 @@ def wrong_cells(folder: str, way: str, whole: str) -> int | None:
     """Cells of the tiles' masks that differ from the whole DEM's mask (nodata aside)."""
     import rasterio
     from rasterio.windows import from_bounds
-    out = os.path.join(folder, "out_" + way.replace("+", "_"))
+    out = os.path.join(folder, "out_" + way.replace("+", "_").replace(" ", "_"))
     if way == "gdaldem" or not os.path.isdir(out):
         return None
     n = 0
