@@ -273,8 +273,7 @@ def kernels() -> list:
         if not info.name.startswith("_"):
             importlib.import_module(f"{algorithms.__name__}.{info.name}")
     importlib.import_module(f"{__package__}.run.plan")
-    # a kernel inlined into its callers (``inline="always"``) is compiled into them, never alone
-    return [k for k in _jitcache.KERNELS if k.targetoptions.get("inline") != "always"]
+    return [k for k in _jitcache.KERNELS if _jitcache.compiled_alone(k)]
 
 
 def missing() -> list[str]:

@@ -41,6 +41,11 @@ def test_warm_fills_an_empty_cache_with_every_kernel(warmed):
     # and there are kernels to check (the registry is not empty)
     n = _python("from hillshade_rt import warm; print(len(warm.kernels()))", env)
     assert int(n.stdout) > 60, n.stderr
+    # the run's "compiling" note (``cached``) agrees: nothing left to compile for any algorithm
+    code = ("from hillshade_rt.algorithms import REGISTRY, _jitcache\n"
+            "print(all(_jitcache.cached(m) for a in REGISTRY.values() for m in a.kernel_modules))")
+    agree = _python(code, env)
+    assert agree.stdout.strip() == "True", agree.stdout + agree.stderr
     # a second warm-up finds everything cached: nothing said, nothing run
     again = _python(["-m", "hillshade_rt.warm"], env)
     assert again.returncode == 0 and again.stderr == ""

@@ -83,8 +83,14 @@ def cached(module: str) -> bool:
     except ImportError:
         return False
     name = f"{__package__}.{module}"
-    mine = [k for k in KERNELS if k.py_func.__module__ == name]
+    mine = [k for k in KERNELS if k.py_func.__module__ == name and compiled_alone(k)]
     return bool(mine) and all(loadable(k) for k in mine)
+
+
+def compiled_alone(dispatcher) -> bool:
+    """Whether numba compiles (and caches) ``dispatcher`` as a function of its own: a kernel
+    inlined into its callers (``inline="always"``) is compiled into them, never alone."""
+    return dispatcher.targetoptions.get("inline") != "always"
 
 
 @contextlib.contextmanager
