@@ -357,23 +357,27 @@ def run_group(name: str, compiled: list | None = None) -> int:
     return 1 if failed else 0
 
 
-def run_all(jobs: int | None = None) -> int:
-    """Every group, ``jobs`` processes at a time (default: the CPU count); 0 when all ran."""
+def run_all(jobs: int | None = None, times: dict | None = None) -> int:
+    """Every group, ``jobs`` processes at a time (default: the CPU count); 0 when all ran.
+    ``times``: filled with each group's seconds."""
     jobs = max(1, jobs or os.cpu_count() or 1)
     # the longest groups first: the default's kernels are the biggest
     pending = list(GROUPS)
-    running: list[tuple[str, subprocess.Popen]] = []
+    running: list[tuple[str, subprocess.Popen, float]] = []
     failed = []
     env = dict(os.environ, NUMBA_NUM_THREADS="1")     # compiling is single-threaded anyway
     while pending or running:
         while pending and len(running) < jobs:
             name = pending.pop(0)
             running.append((name, subprocess.Popen(
-                [sys.executable, "-m", "hillshade_rt.warm", "--group", name], env=env)))
+                [sys.executable, "-m", "hillshade_rt.warm", "--group", name], env=env),
+                time.perf_counter()))
         time.sleep(0.1)
         for item in list(running):
             if item[1].poll() is not None:
                 running.remove(item)
+                if times is not None:
+                    times[item[0]] = time.perf_counter() - item[2]
                 if item[1].returncode:
                     failed.append(item[0])
     if failed:
@@ -389,6 +393,7 @@ def main(argv=None) -> int:
                    help="list the kernels not cached for this install; exit 1 when any")
     p.add_argument("--force", action="store_true", help="run the scenarios whatever is cached")
     p.add_argument("--jobs", type=int, default=None, help="processes (default: CPU count)")
+    p.add_argument("--times", action="store_true", help="say each group's seconds")
     p.add_argument("--group", choices=sorted(GROUPS), help=argparse.SUPPRESS)
     args = p.parse_args(argv)
     if args.group:
@@ -404,7 +409,11 @@ def main(argv=None) -> int:
     print(f"hillshade-rt: compiling the kernels once for this install (cached in "
           f"{cache_dir()}; about a minute)", file=sys.stderr, flush=True)
     t0 = time.perf_counter()
-    code = run_all(args.jobs)
+    times: dict = {}
+    code = run_all(args.jobs, times)
+    if args.times:
+        print("hillshade-rt: " + ", ".join(f"{k} {v:.0f} s" for k, v in times.items()),
+              file=sys.stderr)
     gone = missing()
     if gone:
         print(f"hillshade-rt: {len(gone)} kernels were not compiled by the warm-up: "
