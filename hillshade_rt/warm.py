@@ -69,6 +69,17 @@ GROUPS: dict[str, list[list[str]]] = {
          "--soft"],
         ["hillshade", "{utm}", "{out}/k.tif", "--azimuth", "203.7", "--elevation", "10",
          "--window-size", "64"],
+        # a tile of a larger raster (--context): the windowed runs cut to the tile
+        ["shadow", "{tile}", "{out}/w.tif", "--azimuth", "203.7", "--elevation", "10",
+         "--context", "{utm}"],
+        ["shadow", "{tile}", "{out}/w.tif", "--azimuth", "203.7", "--elevation", "10",
+         "--context", "{utm}", "--soft"],
+        ["hillshade", "{tile}", "{out}/w.tif", "--azimuth", "203.7", "--elevation", "10",
+         "--context", "{utm}"],
+        ["sun-hours", "{tile}", "{out}/w.tif", "--date", "2026-06-21", "--step", "3h",
+         "--context", "{utm}"],
+        ["horizon", "{tile}", "{out}/w.tif", "--directions", "8", "--context", "{utm}"],
+        ["skyview", "{tile}", "{out}/w.tif", "--directions", "8", "--context", "{utm}"],
         ["animate", "{utm}", "{out}/l.gif", "--start", "2026-06-21T08:00", "--end",
          "2026-06-21T10:00", "--step", "1h", "--tz", "America/Los_Angeles", "--size", "32"],
         ["query", "{utm}", "--at-xy", "{utm_xy}", "--azimuth", "203.7", "--elevation", "10",
@@ -232,6 +243,7 @@ def _write_dems(folder: str) -> dict:
     zi[3, 4] = -32768
     names["utm"] = write("utm.tif", zi, utm_t, "EPSG:32611", -32768)
     names["u16"] = write("u16.tif", z.astype(np.uint16), utm_t, "EPSG:32611", 0)
+    names["tile"] = write("tile.tif", zi[:64, :64], utm_t, "EPSG:32611", -32768)
     zd = z.astype(np.float64)
     zd[5, 6] = np.nan
     names["f64"] = write("f64.tif", zd, utm_t, "EPSG:32611", None)
