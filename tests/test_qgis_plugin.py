@@ -164,7 +164,7 @@ def test_hillshade_sun_hours_skyview_argv():
                     "--end-date", "2026-12-31", "--step", "15min", "--tz", "Europe/Vienna",
                     "--algorithm", "bounds", "--overwrite"]
     p = parse(argv)
-    assert (p["dem"], p["output"]) == ("dem.tif", "h.tif")
+    assert p["files"] == ("dem.tif", "h.tif")       # DEM OUTPUT (or DEM... --each)
     assert (p["date_"], p["end_date"], p["step"], p["tz"]) == ("2026-12-01", "2026-12-31",
                                                                 "15min", "Europe/Vienna")
     # a step that is not whole minutes: seconds; no zone: no --tz (local mean solar time)

@@ -177,8 +177,8 @@ def test_skyview_and_horizon_each(tmp_path, runner, dems):
     (["--each", "--output-pattern", "{stem}.tif", "--stac-item", "i.json"], "--stac-item"),
     (["--each", "--output-pattern", "{stem}.tif", "--elevation", "10"], "azimuth"),
 ])
-def test_usage_errors_exit_2_before_any_work(tmp_path, runner, dems, args, words):
-    os.chdir(tmp_path)
+def test_usage_errors_exit_2_before_any_work(tmp_path, runner, dems, args, words, monkeypatch):
+    monkeypatch.chdir(tmp_path)
     base = args if "--elevation" in args else args + SUN
     r = runner.invoke(cli, ["shadow", dems["lidar"], dems["everest"], *base])
     assert r.exit_code == 2, r.output

@@ -257,7 +257,7 @@ def test_planetary_computer_landsat_and_old_eo_items():
     assert item_sun(coll, "c.json").id == landsat["id"]
 
 
-def test_an_item_collection_of_one_and_a_zip_member(runner, tmp_path, dem_ll):
+def test_an_item_collection_of_one_and_a_zip_member(runner, tmp_path, dem_ll, monkeypatch):
     dem = dem_ll
     a, b, c = tmp_path / "a.tif", tmp_path / "b.tif", tmp_path / "c.tif"
     coll = _json(tmp_path / "search.json",
@@ -268,7 +268,7 @@ def test_an_item_collection_of_one_and_a_zip_member(runner, tmp_path, dem_ll):
     r = run(runner, "shadow", dem, b, "--sun-from-stac",
             f"/vsizip/{tmp_path / 'scene.zip'}/S2B/item.json")
     assert r.exit_code == 0, r.output
-    os.chdir(tmp_path)
+    monkeypatch.chdir(tmp_path)
     r = run(runner, "shadow", dem, c, "--sun-from-stac", "zip://scene.zip!S2B/item.json")
     assert r.exit_code == 0, r.output
     assert np.array_equal(read_band(a), read_band(b)) and np.array_equal(read_band(a),
