@@ -5,7 +5,8 @@ neighbours. With ``--context`` (a VRT or mosaic of the tiles on the same grid) t
 the tile only (its shape, transform and CRS) while its heights, and those its rays cross, are
 read from the context, in the windowed runs' windows: ``run.plan`` (shadows, hillshade, sun
 hours: the region and its halo toward the sun) and ``run.reach`` (horizons, sky view: the rays'
-reach, ``--max-distance`` or the context's edge). The regions of those runs are cut to the tile
+reach, ``--max-distance`` or the context's edge); irradiance uses both (its beam's shadows per
+sun, its Dozier sky view). The regions of those runs are cut to the tile
 (:meth:`Area.clip`) and written at the tile's coordinates (:meth:`Area.local`).
 
 Everything the whole raster's run decides from the whole raster is decided from the context:

@@ -180,6 +180,55 @@ def test_horizon_and_skyview_tiles(mosaic, cmd, extra):
     assert differ > 0
 
 
+@pytest.mark.parametrize("extra", [
+    ["--date", "2026-12-21", "--step", "2h", "--skyview-directions", "8"],
+    ["--start", "2026-06-21T05:00-07:00", "--end", "2026-06-21T19:00-07:00", "--step", "3h",
+     "--skyview-directions", "8", "--perez", "--soft", "--mean"],
+])
+def test_irradiance_tiles(mosaic, extra):
+    """irradiance --context: the beam's cast shadows and incidence per sun from the context's
+    windows, Dozier's sky view with rays to the context's edge, the place, the suns per tile
+    and curvature "auto" the mosaic's: the four bands equal the mosaic's cells bit for bit."""
+    import json
+    vrt, tiles, meta, d = mosaic
+    r_ = CliRunner()
+
+    def run(dem, out, *more):
+        rep = str(out) + ".json"
+        res = r_.invoke(cli, ["irradiance", dem, str(out), "--overwrite", "-q", "--report",
+                              rep, *extra, *more])
+        assert res.exit_code == 0, res.output
+        with open(rep, encoding="utf-8") as fh:
+            return _read_all(out)[0], json.load(fh)
+    whole, rep_w = run(vrt, d / "whole.tif")
+    differ = 0
+    for p, r, c in (tiles[0], tiles[4]):
+        got, rep = run(p, d / "tile.tif", "--context", vrt)
+        np.testing.assert_array_equal(got, _cells(whole, r, c))
+        assert rep["shape"] == [SIDE, SIDE] and rep["context"]["window"] == [r, r + SIDE, c,
+                                                                            c + SIDE]
+        assert rep["site"] == rep_w["site"]
+        assert rep["curvature"]["applied"] == rep_w["curvature"]["applied"]
+        alone, rep_a = run(p, d / "alone.tif")
+        assert rep_a["site"] != rep_w["site"]
+        differ += int((alone != _cells(whole, r, c)).sum())
+    # without --context the shadows and the sky beyond the tile's edges are lost
+    assert differ > 0
+
+
+def test_irradiance_context_refusals(mosaic, tmp_path):
+    vrt, tiles, meta, d = mosaic
+    res = CliRunner().invoke(cli, ["irradiance", tiles[0][0], str(tmp_path / "o.tif"),
+                                   "--context", vrt, "--date", "2026-06-21", "--preview",
+                                   str(tmp_path / "p.png")])
+    assert res.exit_code == 2 and "--preview" in res.output, res.output
+    assert len(res.output.strip().splitlines()) == 1
+    res = CliRunner().invoke(cli, ["irradiance", tiles[0][0], vrt, "--context", vrt,
+                                   "--date", "2026-06-21", "--overwrite"])
+    assert res.exit_code != 0 and len(res.output.strip().splitlines()) == 1, res.output
+    assert not (tmp_path / "o.tif").exists()
+
+
 def test_reads_only_the_tiles_windows(tmp_path, monkeypatch):
     """A tile in the middle of a context 8 x 8 tiles large: the windows lit are the tile and its
     halo toward the sun (recorded), a small share of the context; far away cells do not
@@ -302,10 +351,13 @@ def test_all_nodata_tile_writes_nodata(coast, cmd, extra, nodata, with_context):
     assert (prof["height"], prof["width"]) == (64, 64)
 
 
-def test_all_nodata_irradiance(coast):
+@pytest.mark.parametrize("with_context", [True, False])
+def test_all_nodata_irradiance(coast, with_context):
     d, sea, vrt = coast
+    more = ["--context", vrt] if with_context else []
     res = CliRunner().invoke(cli, ["irradiance", sea, str(d / "i.tif"), "--date", "2026-06-21",
-                                   "--step", "3h"])
+                                   "--step", "3h", *more])
     assert res.exit_code == 0, res.output
+    assert "every cell is nodata" in res.output
     got, prof = _read_all(d / "i.tif")
     assert got.shape[0] == 4 and (got == -9999.0).all()
