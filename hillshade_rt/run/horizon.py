@@ -349,7 +349,8 @@ def _in_windows(cfg, src, azimuths, ran_on, max_distance, timer, *, wshape, limi
     product = Product("horizon", distance=cfg.distance is not None)
     with bounded_gdal_cache():
         with timer("prepare"):    # one pass: the block height ranges (and the preview)
-            bstats = block_stats(src, preview_side=2048 if ro.preview else None)
+            bstats = (block_stats(src, preview_side=2048 if ro.preview else None)
+                      if area is None else area.block_stats())
         job, shader = horizon_job(src, azimuths, ran_on, cfg.curvature, cfg.refraction_k,
                                   cfg.method, bstats, False, cfg.sample_spacing, max_distance,
                                   cfg.height_above_ground)
@@ -410,9 +411,7 @@ def _in_windows(cfg, src, azimuths, ran_on, max_distance, timer, *, wshape, limi
                   "window_shape_requested": list(wshape) if wshape else None,
                   **fig.as_dict(), **extra}
     if area is not None:
-        from ..io import input_label
-        processing["context"] = {"path": input_label(src.path), "shape": list(src.shape),
-                                 "window": list(area.bounds)}
+        processing["context"] = area.report()
     return _report(cfg, geom, azimuths, ran_on, curved, {}, timer, processing)
 
 

@@ -299,7 +299,7 @@ def _run(cfg, d, area, req, step, series, ran_on, lift, timer, first, last, peri
            "seconds": sec, "version": __version__}
     rep.update(sun_info or {})
     if area is not None:
-        rep["context"] = {"path": input_label(area.source.path), "window": list(area.bounds)}
+        rep["context"] = area.report()
         rep["processing"] = processing
     if ro.report_path is not None:
         write_json(ro.report_path, rep, ro.overwrite)
@@ -329,11 +329,10 @@ def _in_context(cfg, area, suns, weights, sky, work, ran_on, curvature, body, li
     from ..algorithms.relief import incidence
     from ..earth import curvature_report
     from ..geometry import equal_azimuths
-    from ..io import input_label
     from .horizon import horizon_job, memory_limit, prepare_windows
     from .local import bounded_gdal_cache
-    from .plan import (Job, WindowCache, block_stats, bytes_per_cell, default_max_memory,
-                       window_budget, window_grid)
+    from .plan import (Job, WindowCache, bytes_per_cell, default_max_memory, window_budget,
+                       window_grid)
     from .reach import Figures, Product, region_outputs
 
     src = area.source
@@ -342,7 +341,7 @@ def _in_context(cfg, area, suns, weights, sky, work, ran_on, curvature, body, li
     fig = Figures()
     with bounded_gdal_cache():
         with timer("prepare"):
-            bstats = block_stats(src)
+            bstats = area.block_stats()     # (the context's, kept between runs)
             dx, dy = src.grid.centre_spacing()
             job = Job(src, cfg.algorithm, {}, ran_on, curvature, cfg.refraction_k, body,
                       (bstats.zmin, bstats.zmax), math.hypot(cols * dx, rows * dy), "sun",
@@ -399,8 +398,6 @@ def _in_context(cfg, area, suns, weights, sky, work, ran_on, curvature, body, li
                                 soft=cfg.soft, perez=cfg.perez, stats=algo_stats, timer=timer,
                                 progress=bar)
     processing = {"mode": "windows", "cells": area.shape[0] * area.shape[1],
-                  "context": {"path": input_label(src.path), "shape": list(src.shape),
-                              "window": list(area.bounds)},
                   "shadow_windows": read["windows"], "shadow_window_cells": read["cells"],
                   "sky_view": fig.as_dict()}
     return bands, vd, curvature_report(job.curvature, used, job.body, job.k), processing
