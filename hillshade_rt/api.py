@@ -149,7 +149,7 @@ def irradiance(dem, output, *, date=None, end_date=None, start=None, end=None,
                curvature: bool | None = None, refraction_k: float | None = None,
                backend: str = "auto", fmt: str | None = None, creation_options=None,
                overwrite: bool = False, report: str | None = None,
-               preview: str | None = None, progress: bool = False,
+               preview: str | None = None, progress: bool = False, context=None,
                **more) -> dict:
     """``hillshade-rt irradiance`` as a function: the beam, diffuse, reflected and global
     irradiance on every cell of the DEM at ``dem`` over a period, written to ``output`` (4
@@ -158,8 +158,9 @@ def irradiance(dem, output, *, date=None, end_date=None, start=None, end=None,
     sky: ``clear_sky`` ("ineichen", the default, with ``linke_turbidity``; "haurwitz") or
     ``ghi``, the path of a measured series (CSV: time, ghi[, dni, dhi]). Further keywords are
     the command line's options of the same name (``tz``, ``lat``, ``lon``, ``band``,
-    ``nodata``, ``threads``, ...); ``fmt`` and ``creation_options`` as for :func:`shade`.
-    Returns the report. For heights in memory:
+    ``nodata``, ``threads``, ...); ``fmt`` and ``creation_options`` as for :func:`shade`;
+    ``context`` as ``--context`` (the DEM a tile of that raster). Returns the report. For
+    heights in memory:
     :func:`hillshade_rt.arrays.irradiance`."""
     from .run import ReadOptions, RunOptions
     from .run.irradiance import IrradianceConfig, irradiance as run_irradiance
@@ -174,7 +175,8 @@ def irradiance(dem, output, *, date=None, end_date=None, start=None, end=None,
         return None if v is None else str(v.isoformat() if hasattr(v, "isoformat") else v)
     place = {k: more.get(k, d) for k, d in zip(PLACE_KEYS, (None,) * 5 + (False,
                                                                           DEFAULT_TOLERANCE))}
-    read = ReadOptions(**{k: more[k] for k in READ_KEYS if k in more})
+    read = ReadOptions(**{k: more[k] for k in READ_KEYS if k in more},
+                       context=None if context is None else os.fspath(context))
     run = RunOptions(backend=backend, threads=more.get("threads"), report_path=report,
                      overwrite=overwrite, quiet=not progress, fmt=fmt, preview=preview,
                      say=_stderr, creation_options=creation_options)

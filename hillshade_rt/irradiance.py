@@ -370,8 +370,28 @@ def accumulate(shader, suns, weights, sky: Sky, vd: np.ndarray, albedo: float, *
     shadows (``shading.render``) are computed only for samples with the sun up and light to
     cast; ``timer`` (``run.report.Timer``-like) times them as "shadows" and the rest as
     "irradiance"; ``progress`` wraps the loop (a progress bar)."""
-    import contextlib
     from .shading import render
+
+    def direct(s, timed):
+        with timed("shadows"):
+            lit = render(shader, s, "sun", soft=soft, stats=stats)
+        with timed("irradiance"):
+            return np.maximum(cos_incidence(shader, s), np.float32(0.0)) * lit
+    return sums(direct, np.isnan(shader.z), lambda: slope_terms(shader.z, shader.grid), suns,
+                weights, sky, vd, albedo, soft=soft, perez=perez, per_time=per_time,
+                stats=stats, timer=timer, progress=progress)
+
+
+def sums(direct, void: np.ndarray, slopes, suns, weights, sky: Sky, vd: np.ndarray,
+         albedo: float, *, soft: bool = False, perez: bool = False, per_time: bool = False,
+         stats: dict | None = None, timer=None, progress=None) -> dict:
+    """``accumulate``'s bands over any cells: ``direct(sun, timed)`` gives max(cos i, 0) · lit
+    of the cells (float32, NaN voids) for a sun with light to cast (``timed(stage)``: the
+    timer's context), ``void`` marks their voids, ``slopes()`` gives their (cos S, sin S)
+    (Perez only). The cells may be a whole DEM (``accumulate``) or a tile of a larger raster
+    whose shadows and incidence come from its windows (``run.irradiance`` with --context): the
+    arithmetic per cell is the same, cell by cell, in the same order and types."""
+    import contextlib
     w = np.asarray(weights, np.float64)
     n = len(suns)
     if not (len(w) == n == len(sky.dni)):
@@ -381,11 +401,10 @@ def accumulate(shader, suns, weights, sky: Sky, vd: np.ndarray, albedo: float, *
 
     def timed(stage):
         return timer(stage) if timer is not None else contextlib.nullcontext()
-    shape = shader.z.shape
-    void = np.isnan(shader.z)
+    shape = void.shape
     vd64 = vd.astype(np.float64)
     if perez:
-        cos_s, sin_s = slope_terms(shader.z, shader.grid)
+        cos_s, sin_s = slopes()
         # the horizon band's share left by the terrain, relative to the open plane's
         horizon_share = np.minimum(vd64 / ((1.0 + cos_s) / 2.0), 1.0)
     if per_time:
@@ -399,20 +418,17 @@ def accumulate(shader, suns, weights, sky: Sky, vd: np.ndarray, albedo: float, *
         s = suns[k]
         dni, dhi, ghi = float(sky.dni[k]), float(sky.dhi[k]), float(sky.ghi[k])
         circ = perez and dhi > 0 and bool(sky.perez_on[k]) and sky.f1[k] > 0
-        direct = None
+        d_k = None
         if (dni > 0 or circ) and not is_dark(s, soft):
-            with timed("shadows"):
-                lit = render(shader, s, "sun", soft=soft, stats=stats)
-            with timed("irradiance"):
-                direct = np.maximum(cos_incidence(shader, s), np.float32(0.0)) * lit
+            d_k = direct(s, timed)
             counted["samples_with_shadows"] += 1
         with timed("irradiance"):
-            b_t = zero if direct is None else np.float32(dni) * direct
+            b_t = zero if d_k is None else np.float32(dni) * d_k
             if perez:
                 if dhi > 0 and sky.perez_on[k]:
                     d_t = (1.0 - sky.f1[k]) * vd64 + sky.f2[k] * sin_s * horizon_share
-                    if direct is not None and sky.f1[k] > 0:
-                        d_t += (sky.f1[k] / sky.b[k]) * direct
+                    if d_k is not None and sky.f1[k] > 0:
+                        d_t += (sky.f1[k] / sky.b[k]) * d_k
                     d_t = np.maximum(dhi * d_t, 0.0)
                 else:
                     d_t = zero
@@ -423,7 +439,7 @@ def accumulate(shader, suns, weights, sky: Sky, vd: np.ndarray, albedo: float, *
                 stacks["global"][k] = (stacks["beam"][k] + stacks["diffuse"][k]
                                        + stacks["reflected"][k])
             else:
-                if direct is not None:
+                if d_k is not None:
                     beam += w[k] * b_t
                 if perez and d_t is not zero:
                     diffuse += w[k] * d_t

@@ -7,6 +7,15 @@ os.environ.setdefault("NUMBA_ENABLE_CUDASIM", "1")
 
 import pytest  # noqa: E402
 
+
+@pytest.fixture(autouse=True, scope="session")
+def _stats_cache(tmp_path_factory):
+    """The --context statistics cache (run.statscache) in a folder of the test session, not
+    the user's ~/.cache (tests that look at it set HILLSHADE_RT_STATS_DIR themselves)."""
+    if "HILLSHADE_RT_STATS_DIR" not in os.environ:
+        os.environ["HILLSHADE_RT_STATS_DIR"] = str(tmp_path_factory.mktemp("stats-cache"))
+    yield
+
 # Fixtures only: the helpers the tests share (terrains, the plain-Python reference, GeoTIFF
 # writing, the repository's data) are plain functions in hillshade_rt.testing; tests import them
 # from there, never from this file or from another test file (tests/test_testing.py checks).

@@ -327,6 +327,34 @@ class DemSource:
         finally:
             r.close()
 
+    def files(self) -> list[str] | None:
+        """The local files whose bytes make the heights (a VRT and the files it references, as
+        GDAL lists them; a raw grid's file; each tile of a mosaic's), absolute; None when one
+        of them is not a local file (standard input, a /vsi path or URL): then nothing can
+        tell whether the heights changed."""
+        if self.data is not None:
+            return None
+        if self.kind == "raw" or self.kind == "tiff":
+            names = [self.name if self.kind == "raw" else self.path]
+        elif self.kind == "mosaic":
+            names = []
+            for t in self.tiles:
+                with contextlib.ExitStack() as stack:
+                    names += list(open_raster(t["path"], stack, name=t.get("name")).files)
+        else:
+            ds, give_back = self._acquire()
+            try:
+                names = list(ds.files)
+            finally:
+                give_back()
+        out = []
+        for n in names or [self.name]:
+            n = str(n)
+            if n.startswith("/vsi") or "://" in n or not os.path.isfile(n):
+                return None
+            out.append(os.path.abspath(n))
+        return sorted(set(out))
+
     def centre_height(self) -> tuple[float, str]:
         """The height at the centre, as ``sun.dem_site`` takes it, read from the centre only."""
         from ..sun import centre_height_of

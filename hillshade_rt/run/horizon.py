@@ -288,10 +288,11 @@ def _in_memory(cfg, src, azimuths, ran_on, max_distance, timer, **_):
 
 
 def horizon_job(src, azimuths, ran_on, curvature, refraction_k, method, bstats, invert=False,
-                sample_spacing=1, max_distance=math.inf, height_above_ground=0.0):
+                sample_spacing=1, max_distance=math.inf, height_above_ground=0.0, body=None):
     """(the ``reach.HorizonJob`` of a windowed run, its horizon Shader): the rays and curvature
     an in-memory run of the same DEM would use (its shader decides from the raster's shape and
-    spacing, never its heights); the observer ``height_above_ground`` metres above each cell."""
+    spacing, never its heights); the observer ``height_above_ground`` metres above each cell.
+    ``body``: the run's (default: the DEM's, ``earth.dem_body``)."""
     import numpy as np
 
     from ..earth import dem_body
@@ -299,7 +300,8 @@ def horizon_job(src, azimuths, ran_on, curvature, refraction_k, method, bstats, 
     from .reach import HorizonJob
     # the Shader looks at the raster's shape only: a zero-stride stand-in, no memory
     shader = horizon_shader(np.broadcast_to(np.float32(0.0), src.shape), src.grid, ran_on,
-                            curvature, refraction_k, dem_body(src), method)
+                            curvature, refraction_k, dem_body(src) if body is None else body,
+                            method)
     curvs = [shader.curvature_used_for(a, 45.0) for a in azimuths]
     gpu = None
     if ran_on == "gpu":
@@ -347,7 +349,8 @@ def _in_windows(cfg, src, azimuths, ran_on, max_distance, timer, *, wshape, limi
     product = Product("horizon", distance=cfg.distance is not None)
     with bounded_gdal_cache():
         with timer("prepare"):    # one pass: the block height ranges (and the preview)
-            bstats = block_stats(src, preview_side=2048 if ro.preview else None)
+            bstats = (block_stats(src, preview_side=2048 if ro.preview else None)
+                      if area is None else area.block_stats())
         job, shader = horizon_job(src, azimuths, ran_on, cfg.curvature, cfg.refraction_k,
                                   cfg.method, bstats, False, cfg.sample_spacing, max_distance,
                                   cfg.height_above_ground)
@@ -408,9 +411,7 @@ def _in_windows(cfg, src, azimuths, ran_on, max_distance, timer, *, wshape, limi
                   "window_shape_requested": list(wshape) if wshape else None,
                   **fig.as_dict(), **extra}
     if area is not None:
-        from ..io import input_label
-        processing["context"] = {"path": input_label(src.path), "shape": list(src.shape),
-                                 "window": list(area.bounds)}
+        processing["context"] = area.report()
     return _report(cfg, geom, azimuths, ran_on, curved, {}, timer, processing)
 
 

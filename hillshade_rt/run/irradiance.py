@@ -5,7 +5,10 @@ a period (Wh/m², or the mean W/m²), four float32 bands; the formulas are
 The sun is sampled as ``sun-hours`` samples it (every step, each sample at the middle of its
 interval, weighted by the interval's hours; per tile on large rasters; nights skipped), the same
 suns light the cast shadows (``shading.render``) and feed the clear-sky model. The DEM is held
-in memory (no windows yet).
+in memory; with ``--context`` the DEM is a tile of a larger raster (``run.context``): the
+cast shadows and the incidence come from the context's windows (``run.plan.Job``, the regions
+cut to the tile), the sky view from the windowed horizon march (``run.reach``, the rays to the
+context's edge), so that every cell gets the bits the whole context's run gives it.
 """
 
 from __future__ import annotations
@@ -83,28 +86,22 @@ class IrradianceConfig:
 
 def irradiance(cfg: IrradianceConfig) -> dict:
     import numba
-    import numpy as np
 
     from .. import irradiance as ir
-    from ..earth import dem_body
-    from ..io import (BandWriter, check_output_format, input_label, output_driver, write_json,
-                      write_png)
+    from ..io import check_output_format, output_driver
     from ..io.write import Claims
-    from ..preview import relief_rgb, scaled
-    from ..shading import Shader, choose_backend
-    from ..sun import UTC, SunRequest, day_samples, iso, parse_date, parse_step
+    from ..shading import choose_backend
+    from ..sun import UTC, SunRequest, parse_date, parse_step
     from .notes import compile_note
-    from .report import Timer, progress
+    from .report import Timer
 
     ro, output = cfg.run, cfg.output
     cfg.check()
     lift = float(cfg.height_above_ground)
     timer = Timer()
-    if cfg.read.context is not None:
-        raise UsageProblem("irradiance does not take --context yet (its sky view runs over the "
-                           "DEM in memory): give the tile with enough terrain around it, or use "
-                           "shadow / sun-hours / skyview with --context")
-    claims = Claims([cfg.dem, cfg.ghi], ro.overwrite)     # (the --ghi series is an input)
+    cfg.read.check_context(cfg.dem, **{"--preview": ro.preview is not None})
+    # (the --ghi series and the context are inputs)
+    claims = Claims([cfg.dem, cfg.ghi] + cfg.read.inputs(), ro.overwrite)
     for path, what in ((output, "OUTPUT"), (ro.report_path, "--report"),
                        (ro.preview, "--preview")):
         if path is not None:
@@ -139,11 +136,47 @@ def irradiance(cfg: IrradianceConfig) -> dict:
         if note:
             ro.say("compile", note)
     from ..errors import AllNodata
+    area = None
     with timer("read"):
-        try:
-            d = cfg.read.read(cfg.dem)
-        except AllNodata:     # every band all nodata, a note (a tile of the sea)
-            return _all_nodata(cfg, timer)
+        if cfg.read.context is not None:     # a tile: the heights are the context's
+            area = cfg.read.open_area(cfg.dem)
+            try:
+                area.check_valid()
+            except AllNodata:
+                area.close()
+                return _all_nodata(cfg, timer)
+            d = area.source          # the place, the suns, the body: the context's
+        else:
+            try:
+                d = cfg.read.read(cfg.dem)
+            except AllNodata:     # every band all nodata, a note (a tile of the sea)
+                return _all_nodata(cfg, timer)
+    try:
+        return _run(cfg, d, area, req, step, series, ran_on, lift, timer,
+                    first if cfg.date is not None else None,
+                    last if cfg.date is not None else None,
+                    None if cfg.date is not None or req.auto_tz else (t0, t1, times, weights))
+    finally:
+        if area is not None:
+            area.close()
+
+
+def _run(cfg, d, area, req, step, series, ran_on, lift, timer, first, last, period_given):
+    """The run once the DEM (``d``: in memory; with ``area``, the context opened for windows)
+    is open: the suns, the sky, the sky view, the sums, the output and the report."""
+    import numpy as np
+
+    from .. import irradiance as ir
+    from ..earth import dem_body
+    from ..io import BandWriter, input_label, write_json, write_png
+    from ..preview import relief_rgb, scaled
+    from ..shading import Shader
+    from ..sun import day_samples, iso
+    from .report import progress
+
+    ro, output = cfg.run, cfg.output
+    if period_given is not None:
+        t0, t1, times, weights = period_given
     with timer("prepare"):
         site = req.site(d, "irradiance computes the Earth's sun only")
         if req.auto_tz:          # the DEM's zone is known now
@@ -179,24 +212,33 @@ def irradiance(cfg: IrradianceConfig) -> dict:
             ir.with_perez(sky, times, zen)
         curvature = "auto" if cfg.curvature is None else cfg.curvature
         body = dem_body(d, req.lat)
-        shader = Shader(d.heights, d.grid, cfg.algorithm, {}, ran_on, curvature,
-                        cfg.refraction_k, body, d.height_range(), survey=d.survey(),
-                        lift=lift)
         work = [s for s in suns if not ir.is_dark(s, cfg.soft)]
-        if work:
-            shader.warm_up(work[0].azimuth, max(work[0].elevation, 1.0), soft=cfg.soft,
-                           incidence=True, field=any(s.fieldwise for s in work))
-    with timer("sky view"):
-        vd = ir.dozier_view(d.heights, d.grid, cfg.skyview_directions, ran_on, curvature,
-                            cfg.refraction_k, body, lift)
+        if area is None:
+            shader = Shader(d.heights, d.grid, cfg.algorithm, {}, ran_on, curvature,
+                            cfg.refraction_k, body, d.height_range(), survey=d.survey(),
+                            lift=lift)
+            if work:
+                shader.warm_up(work[0].azimuth, max(work[0].elevation, 1.0), soft=cfg.soft,
+                               incidence=True, field=any(s.fieldwise for s in work))
     algo_stats: dict = {}
-    with timer("compute"):
-        bands = ir.accumulate(shader, suns, weights, sky, vd, cfg.albedo, soft=cfg.soft,
-                              perez=cfg.perez, stats=algo_stats, timer=timer,
-                              progress=lambda it: progress(it, ro.quiet,
-                                                           "hillshade-rt irradiance", "sun"))
-        if cfg.mean:
-            bands = {k: (v / np.float32(hours)).astype(np.float32) for k, v in bands.items()}
+    bar = lambda it: progress(it, ro.quiet, "hillshade-rt irradiance", "sun")  # noqa: E731
+    if area is None:
+        with timer("sky view"):
+            vd = ir.dozier_view(d.heights, d.grid, cfg.skyview_directions, ran_on, curvature,
+                                cfg.refraction_k, body, lift)
+        with timer("compute"):
+            bands = ir.accumulate(shader, suns, weights, sky, vd, cfg.albedo, soft=cfg.soft,
+                                  perez=cfg.perez, stats=algo_stats, timer=timer,
+                                  progress=bar)
+        curv = shader.report()
+        geom = d
+    else:
+        bands, vd, curv, processing = _in_context(cfg, area, suns, weights, sky, work, ran_on,
+                                                  curvature, body, lift, timer, algo_stats,
+                                                  bar)
+        geom = area.tile
+    if cfg.mean:
+        bands = {k: (v / np.float32(hours)).astype(np.float32) for k, v in bands.items()}
     units = ("W/m2, mean over the period" if cfg.mean
              else "Wh/m2, energy over the period")
     sky_model = "perez" if cfg.perez else "isotropic"
@@ -209,7 +251,12 @@ def irradiance(cfg: IrradianceConfig) -> dict:
             "SUN": "NREL SPA (pvlib.spa) at the DEM's centre, per tile where it varies; "
                    + ("apparent (refracted) elevation" if req.atmosphere.refraction
                       else "true elevation (--no-refraction)"),
-            "EDGE": "no terrain beyond the raster: border cells see open sky outward"}
+            "EDGE": "no terrain beyond the raster: border cells see open sky outward"
+                    if area is None else
+                    f"the tile's cells in the context {input_label(area.source.path)} "
+                    f"(rows {area.bounds[0]}..{area.bounds[1]}, columns "
+                    f"{area.bounds[2]}..{area.bounds[3]}): its terrain casts the shadows and "
+                    "bounds the sky view; no terrain beyond the context"}
     if cfg.ghi is None:
         tags["CLEAR_SKY"] = cfg.clear_sky or "ineichen"
         tags["TURBIDITY"] = sky.turbidity or "none (Haurwitz takes none)"
@@ -217,7 +264,7 @@ def irradiance(cfg: IrradianceConfig) -> dict:
         tags["SPLIT"] = sky.split
     unit = "W/m2" if cfg.mean else "Wh/m2"
     with timer("write"):
-        with BandWriter(output, d, len(ir.BANDS), "float32", -9999.0, tags,
+        with BandWriter(output, geom, len(ir.BANDS), "float32", -9999.0, tags,
                         overview_resampling="average", overwrite=ro.overwrite,
                         fmt=ro.fmt, co=ro.creation_options) as w:
             for i, k in enumerate(ir.BANDS, 1):
@@ -234,8 +281,8 @@ def irradiance(cfg: IrradianceConfig) -> dict:
     sec = dict(timer.seconds, total=timer.total())
     with_shadows = algo_stats.pop("samples_with_shadows", 0)
     algo_stats.pop("samples", None)
-    rep = {"input": input_label(d.path), "output": os.path.abspath(output),
-           "shape": list(d.shape), "algorithm": cfg.algorithm, "backend": ran_on,
+    rep = {"input": input_label(geom.path), "output": os.path.abspath(output),
+           "shape": list(geom.shape), "algorithm": cfg.algorithm, "backend": ran_on,
            "period": period, "period_hours": hours, "step": cfg.step, "units": unit,
            "samples": len(suns), "samples_with_sun": len(work),
            "samples_with_shadows": with_shadows,
@@ -248,19 +295,112 @@ def irradiance(cfg: IrradianceConfig) -> dict:
                         "dhi_wh_m2": float(np.sum(np.asarray(weights) * sky.dhi)),
                         "ghi_wh_m2": float(np.sum(np.asarray(weights) * sky.ghi))},
            "bands": {k: summary(bands[k]) for k in ir.BANDS},
-           "curvature": shader.report(), "algorithm_stats": algo_stats,
+           "curvature": curv, "algorithm_stats": algo_stats,
            "seconds": sec, "version": __version__}
     rep.update(sun_info or {})
+    if area is not None:
+        rep["context"] = area.report()
+        rep["processing"] = processing
     if ro.report_path is not None:
         write_json(ro.report_path, rep, ro.overwrite)
     if not ro.quiet:
         g = rep["bands"]["global"]
-        ro.say("summary", f"hillshade-rt: {output}: {d.shape[1]}x{d.shape[0]}, {period}, "
+        ro.say("summary", f"hillshade-rt: {output}: {geom.shape[1]}x{geom.shape[0]}, {period}, "
                           f"{len(work)} of {len(suns)} samples with the sun up; global "
                           f"{g['min']:.1f} .. {g['max']:.1f} {unit} (mean {g['mean']:.1f}); "
                           f"shadows {sec.get('shadows', 0.0):.2f} s, sky view "
                           f"{sec['sky view']:.2f} s, total {sec['total']:.2f} s")
     return rep
+
+
+def _in_context(cfg, area, suns, weights, sky, work, ran_on, curvature, body, lift, timer,
+                algo_stats, bar):
+    """The four bands of the tile of ``area`` (``--context``): each sun's cast shadows and
+    incidence from the context's windows (``run.plan.Job``, product "sun", the regions cut to
+    the tile), Dozier's sky view from the windowed horizon march (``run.reach``: the rays to
+    the context's edge), the slopes from the tile and a cell around it; then the same sums,
+    cell by cell, as a run of the whole context in memory (``irradiance.sums``). Returns
+    (bands, Vd, the curvature's report, the report's ``processing``)."""
+    import math
+
+    import numpy as np
+
+    from .. import irradiance as ir
+    from ..algorithms.relief import incidence
+    from ..earth import curvature_report
+    from ..geometry import equal_azimuths
+    from .horizon import horizon_job, memory_limit, prepare_windows
+    from .local import bounded_gdal_cache
+    from .plan import (Job, WindowCache, bytes_per_cell, default_max_memory, window_budget,
+                       window_grid)
+    from .reach import Figures, Product, region_outputs
+
+    src = area.source
+    rows, cols = src.shape
+    r0, r1, c0, c1 = area.bounds
+    fig = Figures()
+    with bounded_gdal_cache():
+        with timer("prepare"):
+            bstats = area.block_stats()     # (the context's, kept between runs)
+            dx, dy = src.grid.centre_spacing()
+            job = Job(src, cfg.algorithm, {}, ran_on, curvature, cfg.refraction_k, body,
+                      (bstats.zmin, bstats.zmax), math.hypot(cols * dx, rows * dy), "sun",
+                      cfg.soft, False, 0.2, lift)
+            budget = window_budget(default_max_memory(),
+                                   bytes_per_cell(cfg.algorithm, "sun", cfg.soft))[0]
+            if work:
+                job.warm_up(work[0])
+            azimuths = equal_azimuths(360.0 / int(cfg.skyview_directions))
+            hjob, _ = horizon_job(src, azimuths, ran_on, curvature, cfg.refraction_k, "scan",
+                                  bstats, False, 1, math.inf, lift, body=body)
+        regs, _ = prepare_windows(src, hjob, memory_limit(None), None, timer, area)
+        with src.reader() as rd:
+            # the tile and a cell around it: its voids, and its slopes (Horn's normals) for
+            # Perez
+            m = (max(0, r0 - 1), min(rows, r1 + 1), max(0, c0 - 1), min(cols, c1 + 1))
+            zm = np.empty((m[1] - m[0], m[3] - m[2]), np.float32)
+            rd.read(m, zm)
+            inner = (slice(r0 - m[0], r1 - m[0]), slice(c0 - m[2], c1 - m[2]))
+            void = np.isnan(zm[inner])
+
+            def slopes():
+                cos_s = incidence(zm, window_grid(src.grid, m), 0.0, 90.0,
+                                  *inner).astype(np.float64)
+                return cos_s, np.sqrt(np.maximum(1.0 - cos_s * cos_s, 0.0))
+            with timer("sky view"):       # Dozier's Vd of the tile's regions, as skyview's
+                vd = np.empty(area.shape, np.float32)
+                product = Product("skyview", definition="dozier")
+                for reg in regs:
+                    a0, a1, b0, b1 = area.local(reg)
+
+                    def put(name, band, out, a0=a0, a1=a1, b0=b0, b1=b1):
+                        vd[a0:a1, b0:b1] = out
+                    fig.add(region_outputs(hjob, rd, reg, product, put))
+            cache, used = WindowCache(rd), set()
+            read = {"windows": 0, "cells": 0}
+
+            def direct(s, timed):
+                """max(cos i, 0) * lit over the tile, window by window of the sun's plan."""
+                out = np.empty(area.shape, np.float32)
+                with timed("shadows"):
+                    pieces = job.pieces(s, bstats, budget, area=area.bounds)
+                    carry = job.carrier([pieces])
+                    for p in pieces:
+                        lit, cosi = job.light_incidence(cache.get(p.window), p, algo_stats,
+                                                        used, carry)
+                        a0, a1, b0, b1 = area.local(p.region)
+                        out[a0:a1, b0:b1] = np.maximum(cosi, np.float32(0.0)) * lit
+                        read["windows"] += 1
+                        read["cells"] += p.cells
+                return out
+            with timer("compute"):
+                bands = ir.sums(direct, void, slopes, suns, weights, sky, vd, cfg.albedo,
+                                soft=cfg.soft, perez=cfg.perez, stats=algo_stats, timer=timer,
+                                progress=bar)
+    processing = {"mode": "windows", "cells": area.shape[0] * area.shape[1],
+                  "shadow_windows": read["windows"], "shadow_window_cells": read["cells"],
+                  "sky_view": fig.as_dict()}
+    return bands, vd, curvature_report(job.curvature, used, job.body, job.k), processing
 
 
 def _all_nodata(cfg, timer) -> dict:

@@ -128,8 +128,12 @@ def tiled(inputs, source, scale, req, out, timer, algorithm, options, ran_on,
     bounds = None if area is None else area.bounds
     tally = Tally()
     with timer("prepare"):   # one pass for the height ranges; solar positions; compilation
-        bstats = block_stats(src, preview_side=2048 if out.preview else None)
-        tally.stats_pass_bytes = rows * cols * src.itemsize
+        if area is None:
+            bstats = block_stats(src, preview_side=2048 if out.preview else None)
+            tally.stats_pass_bytes = rows * cols * src.itemsize
+        else:       # (the context's, kept between runs)
+            bstats = area.block_stats()
+            tally.stats_pass_bytes = area.statistics["bytes_read"]
         zrange = (bstats.zmin, bstats.zmax)
         suns, sun_info = req.suns(src)
         out.plan(suns, inputs, src.tiles if area is None else None)
@@ -223,9 +227,7 @@ def tiled(inputs, source, scale, req, out, timer, algorithm, options, ran_on,
                   "memory": mem, "window_shape_requested": list(window_shape) if window_shape
                   else None, **tally.as_dict(src.itemsize), **extra}
     if area is not None:
-        from ..io import input_label
-        processing["context"] = {"path": input_label(src.path), "shape": list(src.shape),
-                                 "window": list(area.bounds)}
+        processing["context"] = area.report()
     if src.tiles:
         from ..io import input_label
         processing["mosaic"] = [{"path": input_label(t["path"]), "window": list(t["window"])}

@@ -592,18 +592,31 @@ class Job:
         """The product over ``piece.region`` from its window's heights ``z``. ``carry``: the
         run's ``carrier()``, for windows lit in plan order (a fresh one otherwise: SMap then
         still masks the region only)."""
+        return self._light(z, piece, stats, curvature_used, carry)[0]
+
+    def light_incidence(self, z: np.ndarray, piece: Piece, stats: dict | None = None,
+                        curvature_used: set | None = None,
+                        carry=None) -> tuple[np.ndarray, np.ndarray]:
+        """(``light``'s product, the cos of the incidence of the piece's sun on the region's
+        cells: float32, NaN voids), both from the window's heights ``z`` (the region's
+        neighbours for the normals are in it): what irradiance's beam takes."""
+        arr, sh, region = self._light(z, piece, stats, curvature_used, carry)
+        return arr, sh.incidence(region)
+
+    def _light(self, z, piece, stats, curvature_used, carry):
         from ..shading import render_region
         from ..sun import Region
         sh = self.shader(z, piece.window, piece.zrange,
                          carry if carry is not None else self.carrier())
         rows, cols = piece.inner()
+        region = Region(rows, cols, piece.azimuth, piece.elevation)
         # a sun per cell: the window's cells each with their own (as a run in memory does)
         cast = None if piece.sun is None else sh.cast_field(piece.sun, stats)[rows, cols]
-        arr = render_region(sh, Region(rows, cols, piece.azimuth, piece.elevation), self.kind,
-                             self.soft, self.self_shadow, self.ambient, stats, cast)
+        arr = render_region(sh, region, self.kind, self.soft, self.self_shadow, self.ambient,
+                            stats, cast)
         if curvature_used is not None:
             curvature_used |= sh.curvature_used
-        return arr
+        return arr, sh, region
 
     def pieces(self, sun, stats: BlockStats, budget_cells: int,
                window_shape: tuple[int, int] | None = None, in_order: bool = True,

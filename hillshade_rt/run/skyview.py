@@ -281,7 +281,8 @@ def _in_windows(cfg, definition, src, ran_on, max_distance, timer, *, wshape, li
     st, fig, extra = _Stats(), Figures(), {}
     with bounded_gdal_cache():
         with timer("prepare"):
-            bstats = block_stats(src, preview_side=2048 if ro.preview else None)
+            bstats = (block_stats(src, preview_side=2048 if ro.preview else None)
+                      if area is None else area.block_stats())
         job, shader = horizon_job(src, azimuths, ran_on, cfg.curvature, cfg.refraction_k,
                                   "scan", bstats, inverted(definition), 1, max_distance,
                                   cfg.height_above_ground)
@@ -323,9 +324,7 @@ def _in_windows(cfg, definition, src, ran_on, max_distance, timer, *, wshape, li
                   "window_shape_requested": list(wshape) if wshape else None,
                   **fig.as_dict(), **extra}
     if area is not None:
-        from ..io import input_label
-        processing["context"] = {"path": input_label(src.path), "shape": list(src.shape),
-                                 "window": list(area.bounds)}
+        processing["context"] = area.report()
     relief = None
     if ro.preview is not None:     # the every-n-th heights of the statistics pass
         from ..geometry import Grid

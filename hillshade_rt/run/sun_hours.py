@@ -147,7 +147,7 @@ def sun_hours(cfg: SunHoursConfig) -> dict:
            "seconds": dict(timer.seconds, total=timer.total()), "version": __version__}
     rep.update(sun_info or {})
     if cfg.read.context is not None:
-        rep["context"] = {"path": input_label(cfg.read.context), "window": list(area.bounds)}
+        rep["context"] = area.report()
     if ro.report_path is not None:
         write_json(ro.report_path, rep, ro.overwrite)
     if empty is not None and not ro.quiet:
@@ -171,7 +171,7 @@ def _in_context(cfg, area, work, ran_on, req, timer, algo_stats):
 
     from ..earth import curvature_report, dem_body
     from .local import bounded_gdal_cache
-    from .plan import Job, WindowCache, block_stats, bytes_per_cell, default_max_memory, \
+    from .plan import Job, WindowCache, bytes_per_cell, default_max_memory, \
         window_budget
     from .report import progress
     src = area.source
@@ -179,7 +179,7 @@ def _in_context(cfg, area, work, ran_on, req, timer, algo_stats):
     r0, r1, c0, c1 = area.bounds
     with bounded_gdal_cache():
         with timer("prepare"):
-            bstats = block_stats(src)
+            bstats = area.block_stats()     # (the context's, kept between runs)
             rows, cols = src.shape
             dx, dy = src.grid.centre_spacing()
             job = Job(src, cfg.algorithm, {}, ran_on,

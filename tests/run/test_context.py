@@ -180,6 +180,55 @@ def test_horizon_and_skyview_tiles(mosaic, cmd, extra):
     assert differ > 0
 
 
+@pytest.mark.parametrize("extra", [
+    ["--date", "2026-12-21", "--step", "2h", "--skyview-directions", "8"],
+    ["--start", "2026-06-21T05:00-07:00", "--end", "2026-06-21T19:00-07:00", "--step", "3h",
+     "--skyview-directions", "8", "--perez", "--soft", "--mean"],
+])
+def test_irradiance_tiles(mosaic, extra):
+    """irradiance --context: the beam's cast shadows and incidence per sun from the context's
+    windows, Dozier's sky view with rays to the context's edge, the place, the suns per tile
+    and curvature "auto" the mosaic's: the four bands equal the mosaic's cells bit for bit."""
+    import json
+    vrt, tiles, meta, d = mosaic
+    r_ = CliRunner()
+
+    def run(dem, out, *more):
+        rep = str(out) + ".json"
+        res = r_.invoke(cli, ["irradiance", dem, str(out), "--overwrite", "-q", "--report",
+                              rep, *extra, *more])
+        assert res.exit_code == 0, res.output
+        with open(rep, encoding="utf-8") as fh:
+            return _read_all(out)[0], json.load(fh)
+    whole, rep_w = run(vrt, d / "whole.tif")
+    differ = 0
+    for p, r, c in (tiles[0], tiles[4]):
+        got, rep = run(p, d / "tile.tif", "--context", vrt)
+        np.testing.assert_array_equal(got, _cells(whole, r, c))
+        assert rep["shape"] == [SIDE, SIDE] and rep["context"]["window"] == [r, r + SIDE, c,
+                                                                            c + SIDE]
+        assert rep["site"] == rep_w["site"]
+        assert rep["curvature"]["applied"] == rep_w["curvature"]["applied"]
+        alone, rep_a = run(p, d / "alone.tif")
+        assert rep_a["site"] != rep_w["site"]
+        differ += int((alone != _cells(whole, r, c)).sum())
+    # without --context the shadows and the sky beyond the tile's edges are lost
+    assert differ > 0
+
+
+def test_irradiance_context_refusals(mosaic, tmp_path):
+    vrt, tiles, meta, d = mosaic
+    res = CliRunner().invoke(cli, ["irradiance", tiles[0][0], str(tmp_path / "o.tif"),
+                                   "--context", vrt, "--date", "2026-06-21", "--preview",
+                                   str(tmp_path / "p.png")])
+    assert res.exit_code == 2 and "--preview" in res.output, res.output
+    assert len(res.output.strip().splitlines()) == 1
+    res = CliRunner().invoke(cli, ["irradiance", tiles[0][0], vrt, "--context", vrt,
+                                   "--date", "2026-06-21", "--overwrite"])
+    assert res.exit_code != 0 and len(res.output.strip().splitlines()) == 1, res.output
+    assert not (tmp_path / "o.tif").exists()
+
+
 def test_reads_only_the_tiles_windows(tmp_path, monkeypatch):
     """A tile in the middle of a context 8 x 8 tiles large: the windows lit are the tile and its
     halo toward the sun (recorded), a small share of the context; far away cells do not
@@ -302,10 +351,152 @@ def test_all_nodata_tile_writes_nodata(coast, cmd, extra, nodata, with_context):
     assert (prof["height"], prof["width"]) == (64, 64)
 
 
-def test_all_nodata_irradiance(coast):
+@pytest.mark.parametrize("with_context", [True, False])
+def test_all_nodata_irradiance(coast, with_context):
     d, sea, vrt = coast
+    more = ["--context", vrt] if with_context else []
     res = CliRunner().invoke(cli, ["irradiance", sea, str(d / "i.tif"), "--date", "2026-06-21",
-                                   "--step", "3h"])
+                                   "--step", "3h", *more])
     assert res.exit_code == 0, res.output
+    assert "every cell is nodata" in res.output
     got, prof = _read_all(d / "i.tif")
     assert got.shape[0] == 4 and (got == -9999.0).all()
+
+
+# ---------------------------------------------------------------------------------------------
+# the context's block statistics, kept between runs (run.statscache)
+
+@pytest.fixture
+def small_mosaic(tmp_path, monkeypatch):
+    """A fractal 512² cut into four 256² tiles and their VRT; the statistics cache in a folder
+    of its own: (folder, [(tile, r0, c0)], vrt, heights, transform, cache folder)."""
+    from hillshade_rt.testing import fractal_terrain
+    z = (fractal_terrain(512, 512, 11, relief=400.0) + 500.0).astype(np.float32)
+    t = Affine(30.0, 0, 400000.0, 0, -30.0, 3800000.0)
+    tiles = []
+    for r in (0, 256):
+        for c in (0, 256):
+            tiles.append((write_geotiff(tmp_path / f"s_{r}_{c}.tif", z[r:r + 256, c:c + 256],
+                                        t @ Affine.translation(c, r), "EPSG:32611", -9999.0),
+                          r, c))
+    vrt = _vrt(tmp_path / "s.vrt", (512, 512), t, rasterio.crs.CRS.from_epsg(32611),
+               [(p, r, c, (256, 256)) for p, r, c in tiles], -9999.0)
+    # (Float32 tiles under an Int16 VRT would round: the VRT says Float32)
+    with open(vrt, encoding="utf-8") as fh:
+        doc = fh.read().replace('dataType="Int16"', 'dataType="Float32"')
+    with open(vrt, "w", encoding="utf-8") as fh:
+        fh.write(doc)
+    cache = tmp_path / "stats"
+    monkeypatch.setenv("HILLSHADE_RT_STATS_DIR", str(cache))
+    return tmp_path, tiles, vrt, z, t, cache
+
+
+def _shade_tile(tile, out, vrt):
+    rep = api.shade(tile, out, azimuth=203.7, elevation=15.0, overwrite=True, context=vrt)
+    return read_band(out), rep["processing"]
+
+
+def test_statistics_cached_between_runs(small_mosaic, monkeypatch):
+    """The first run of a tile reads the whole context once for its statistics and stores
+    them; the next runs (other tiles, other commands) read only their windows; the outputs
+    are the same with and without the cache."""
+    from hillshade_rt.io import source
+    d, tiles, vrt, z, t, cache = small_mosaic
+    read = []
+    orig = source.Reader.read
+
+    def spy(self, bounds, out):
+        read.append((bounds[1] - bounds[0]) * (bounds[3] - bounds[2]))
+        return orig(self, bounds, out)
+    monkeypatch.setattr(source.Reader, "read", spy)
+    tile = tiles[3][0]
+    first, proc = _shade_tile(tile, d / "a.tif", vrt)
+    st = proc["context"]["statistics_pass"]
+    assert st["cache"] == "stored" and st["bytes_read"] == 512 * 512 * 4
+    assert proc["statistics_pass_bytes"] == 512 * 512 * 4 and sum(read) >= 512 * 512
+    assert len(os.listdir(cache)) == 1 and st["file"].startswith(str(cache))
+    before = sum(read)
+    read.clear()
+    again, proc = _shade_tile(tile, d / "b.tif", vrt)
+    assert proc["context"]["statistics_pass"] == {"cache": "hit", "bytes_read": 0,
+                                                  "file": st["file"]}
+    assert proc["statistics_pass_bytes"] == 0
+    # only the tile's windows (and its validity check): the statistics pass less
+    assert sum(read) == before - 512 * 512 and sum(read) < 512 * 512
+    np.testing.assert_array_equal(again, first)
+    # the other commands take the same entry
+    res = CliRunner().invoke(cli, ["sun-hours", tiles[0][0], str(d / "h.tif"), "--context",
+                                   vrt, "--date", "2026-12-21", "--step", "3h", "-q",
+                                   "--report", str(d / "h.json")])
+    assert res.exit_code == 0, res.output
+    import json
+    with open(d / "h.json", encoding="utf-8") as fh:
+        assert json.load(fh)["context"]["statistics_pass"]["cache"] == "hit"
+    # without the cache: the same output
+    monkeypatch.setenv("HILLSHADE_RT_STATS_DIR", "off")
+    off, proc = _shade_tile(tile, d / "c.tif", vrt)
+    assert proc["context"]["statistics_pass"]["cache"] == "off"
+    np.testing.assert_array_equal(off, first)
+
+
+def test_statistics_cache_follows_the_sources(small_mosaic, monkeypatch):
+    """Touching a tile of the context, or rewriting it, makes the next run read the context
+    again (a new entry); the result is then that of the changed context."""
+    d, tiles, vrt, z, t, cache = small_mosaic
+    tile = tiles[3][0]
+    _shade_tile(tile, d / "a.tif", vrt)
+    _, proc = _shade_tile(tile, d / "a.tif", vrt)
+    assert proc["context"]["statistics_pass"]["cache"] == "hit"
+    far = tiles[0][0]                       # touched: its time changes, not its heights
+    st = os.stat(far)
+    os.utime(far, ns=(st.st_atime_ns, st.st_mtime_ns + 5_000_000_000))
+    _, proc = _shade_tile(tile, d / "a.tif", vrt)
+    assert proc["context"]["statistics_pass"]["cache"] == "stored"
+    # rewritten: a mountain in the tile up-sun, higher than the whole context was
+    z2 = z.copy()
+    z2[:256, :256] += 3000.0
+    write_geotiff(tiles[0][0], z2[:256, :256], t, "EPSG:32611", -9999.0)
+    changed, proc = _shade_tile(tile, d / "b.tif", vrt)
+    assert proc["context"]["statistics_pass"]["cache"] == "stored"
+    monkeypatch.setenv("HILLSHADE_RT_STATS_DIR", "off")
+    fresh, _ = _shade_tile(tile, d / "c.tif", vrt)
+    np.testing.assert_array_equal(changed, fresh)
+
+
+@pytest.mark.parametrize("garbage", [b"", b"PK\x03\x04 not a zip", None])
+def test_statistics_cache_bad_entry_is_computed_again(small_mosaic, garbage):
+    """A partial, corrupt or foreign entry (arrays that do not fit the context) is ignored: the statistics are read again and the entry replaced; the output the same."""
+    d, tiles, vrt, z, t, cache = small_mosaic
+    tile = tiles[1][0]
+    first, proc = _shade_tile(tile, d / "a.tif", vrt)
+    path = proc["context"]["statistics_pass"]["file"]
+    if garbage is None:              # its key, but arrays of another shape
+        with np.load(path) as f:
+            key = f["key"]
+        np.savez(path, key=key, lo=np.zeros((1, 1), np.float32),
+                 hi=np.zeros((1, 1), np.float32), valid=np.array(1))
+    else:
+        with open(path, "wb") as fh:
+            fh.write(garbage)
+    again, proc = _shade_tile(tile, d / "b.tif", vrt)
+    assert proc["context"]["statistics_pass"]["cache"] == "stored"
+    np.testing.assert_array_equal(again, first)
+    _, proc = _shade_tile(tile, d / "b.tif", vrt)
+    assert proc["context"]["statistics_pass"]["cache"] == "hit"
+
+
+def test_cache_command_shows_and_prunes_the_statistics(small_mosaic, monkeypatch, tmp_path):
+    from hillshade_rt.run import statscache
+    d, tiles, vrt, z, t, cache = small_mosaic
+    _shade_tile(tiles[0][0], d / "a.tif", vrt)
+    found = statscache.survey()
+    assert found["root"] == str(cache) and found["entries"] == 1 and found["stale"] == []
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "numba"))    # (not the real one)
+    res = CliRunner().invoke(cli, ["cache"])
+    assert res.exit_code == 0 and f"context statistics cache: {cache}" in res.output
+    assert "entries: 1" in res.output
+    os.unlink(tiles[2][0])                       # a file of the entry gone: stale
+    assert len(statscache.survey()["stale"]) == 1
+    res = CliRunner().invoke(cli, ["cache", "--prune"])
+    assert res.exit_code == 0, res.output
+    assert os.listdir(cache) == []
