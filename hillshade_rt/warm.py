@@ -80,6 +80,8 @@ GROUPS: dict[str, list[list[str]]] = {
          "--context", "{utm}"],
         ["horizon", "{tile}", "{out}/w.tif", "--directions", "8", "--context", "{utm}"],
         ["skyview", "{tile}", "{out}/w.tif", "--directions", "8", "--context", "{utm}"],
+        ["irradiance", "{tile}", "{out}/w.tif", "--date", "2026-06-21", "--step", "3h",
+         "--skyview-directions", "8", "--context", "{utm}"],
         ["animate", "{utm}", "{out}/l.gif", "--start", "2026-06-21T08:00", "--end",
          "2026-06-21T10:00", "--step", "1h", "--tz", "America/Los_Angeles", "--size", "32"],
         ["query", "{utm}", "--at-xy", "{utm_xy}", "--azimuth", "203.7", "--elevation", "10",
