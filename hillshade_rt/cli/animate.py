@@ -7,7 +7,8 @@ import click
 from .errors import errors_to_click, say
 from ..run.config import PLACE_KEYS
 from .options import (algorithm_option, animation_options, backend_option, curvature_options,
-                      dem_options, overwrite_option, place_options, quiet_option, report_option,
+                      dem_options, overwrite_option, place_options, quiet_option,
+                      progress_option, report_option,
                       threads_option, to_read_options, to_run_options)
 
 
@@ -23,11 +24,12 @@ from .options import (algorithm_option, animation_options, backend_option, curva
 @report_option
 @overwrite_option("Replace OUTPUT (and the report) if they exist.")
 @quiet_option("No progress bar or summary on stderr.")
+@progress_option
 @dem_options
 @errors_to_click
 def animate(dem, output, date_, start, end, step, fps, size, label, tz, lat, lon, pressure,
             temperature, no_refraction, sun_tolerance, algorithm, curvature, refraction_k,
-            backend, threads, report_path, overwrite, quiet, **read_opts):
+            backend, threads, report_path, overwrite, quiet, progress, **read_opts):
     """Write an animation of the shadows on DEM over a day (--date) or a series of times
     (--start/--end/--step) to OUTPUT: a looping GIF, or an MP4 (needs the video extra: pip
     install 'hillshade-rt[video]'). Each frame is the shaded relief, lit by that time's sun, with
@@ -37,6 +39,7 @@ def animate(dem, output, date_, start, end, step, fps, size, label, tz, lat, lon
     kw = dict(tz=tz, lat=lat, lon=lon, pressure=pressure, temperature=temperature,
               no_refraction=no_refraction, sun_tolerance=sun_tolerance, backend=backend,
               threads=threads, report_path=report_path, overwrite=overwrite, quiet=quiet,
+              progress=progress,
               **read_opts)
     place = {k: kw.pop(k) for k in PLACE_KEYS}
     run_animate(AnimateConfig(dem, output, date_, start, end, step, place, fps, size, label,

@@ -9,6 +9,7 @@ from .options import (context_option, each_pattern_options,
                       backend_option, dem_options, finite, format_option,
                       height_above_ground_option, horizon_physics_options, max_distance_option,
                       max_memory_option, overwrite_option, preview_option, quiet_option,
+                      progress_option,
                       scheduler_option, threads_option, to_read_options, to_run_options,
                       window_size_option)
 
@@ -41,6 +42,7 @@ from .options import (context_option, each_pattern_options,
 @scheduler_option
 @overwrite_option()
 @quiet_option()
+@progress_option
 @format_option
 @each_pattern_options
 @dem_options
@@ -48,7 +50,7 @@ from .options import (context_option, each_pattern_options,
 @errors_to_click
 def horizon(files, azimuth, directions, distance, method, sample_spacing, max_distance,
             curvature, refraction_k, height_above_ground, preview, backend, threads, max_memory,
-            window_size, scheduler, overwrite, quiet, fmt,
+            window_size, scheduler, overwrite, quiet, progress, fmt,
             creation_options, each, output_pattern, **read_opts):
     """Write the horizon angle toward --azimuth (or toward each of --directions N azimuths, one
     band each) of every cell of DEM to OUTPUT.
@@ -61,7 +63,8 @@ def horizon(files, azimuth, directions, distance, method, sample_spacing, max_di
     from ..run.batch import split_files, horizon_each
     dem, output = split_files(files, each, output_pattern, "horizon")
     kw = dict(preview=preview, backend=backend, threads=threads, overwrite=overwrite,
-              quiet=quiet, fmt=fmt, creation_options=creation_options, **read_opts)
+              quiet=quiet, progress=progress, fmt=fmt, creation_options=creation_options,
+              **read_opts)
     cfg = HorizonConfig(dem, output, azimuth, method, sample_spacing, curvature,
                         refraction_k, to_read_options(kw), to_run_options(kw, say),
                         directions=directions, distance=distance,

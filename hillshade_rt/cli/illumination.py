@@ -8,7 +8,7 @@ import click
 from .errors import errors_to_click, say
 from .options import (backend_option, dem_options, format_option, height_above_ground_option,
                       max_memory_option, overwrite_option, physics_options, preview_option,
-                      quiet_option,
+                      quiet_option, progress_option,
                       report_option, scheduler_option, subsolar_series_options, threads_option,
                       to_read_options, to_run_options, window_size_option)
 
@@ -30,12 +30,14 @@ from .options import (backend_option, dem_options, format_option, height_above_g
 @report_option
 @overwrite_option("Replace OUTPUT (and the report) if they exist.")
 @quiet_option("No progress bar or summary on stderr.")
+@progress_option
 @format_option
 @dem_options
 @errors_to_click
 def illumination(dem, output, subsolar_file, sun_distance, body, height_above_ground, curvature,
                  refraction_k, soft, preview, max_memory, window_size, scheduler, backend,
-                 threads, report_path, overwrite, quiet, fmt, creation_options, **read_opts):
+                 threads, report_path, overwrite, quiet, progress, fmt, creation_options,
+                 **read_opts):
     """Write the illumination of DEM over a subsolar series to OUTPUT (float32 GeoTIFF, NaN
     nodata), every cell with its own sun on the body: band 1 the fraction of the time lit
     (each time weighted by its interval), [2 with --soft: the mean visible fraction of the solar
@@ -43,7 +45,8 @@ def illumination(dem, output, subsolar_file, sun_distance, body, height_above_gr
     the series, 0 otherwise)."""
     from ..run.illumination import IllumConfig, illumination as run_illumination
     kw = dict(preview=preview, backend=backend, threads=threads, report_path=report_path,
-              overwrite=overwrite, quiet=quiet, fmt=fmt, creation_options=creation_options,
+              overwrite=overwrite, quiet=quiet, progress=progress, fmt=fmt,
+              creation_options=creation_options,
               **read_opts)
     read = to_read_options(kw)
     run_illumination(IllumConfig([dem, output], subsolar_file=subsolar_file, body=body,

@@ -10,7 +10,8 @@ from ..run.config import PLACE_KEYS
 from .options import (context_option, each_pattern_options,
                       algorithm_option, backend_option, dem_options, finite, format_option,
                       height_above_ground_option, overwrite_option, physics_options, place_options,
-                      preview_option, quiet_option, report_option, threads_option, to_read_options,
+                      preview_option, quiet_option, progress_option, report_option,
+                      threads_option, to_read_options,
                       to_run_options)
 
 
@@ -57,6 +58,7 @@ from .options import (context_option, each_pattern_options,
 @report_option
 @overwrite_option("Replace outputs if they exist.")
 @quiet_option("No progress bar or summary on stderr.")
+@progress_option
 @format_option
 @each_pattern_options
 @dem_options
@@ -66,7 +68,7 @@ def irradiance(files, date_, end_date, start, end, step, clear_sky, linke_turbid
                albedo, ghi, mean, perez, skyview_directions, tz, lat, lon, pressure, temperature,
                no_refraction, sun_tolerance, algorithm, curvature, refraction_k, soft,
                height_above_ground, preview,
-               backend, threads, report_path, overwrite, quiet, fmt,
+               backend, threads, report_path, overwrite, quiet, progress, fmt,
                creation_options, each, output_pattern, **read_opts):
     """Write the beam, diffuse, reflected and global irradiance on every cell of DEM over a
     period to OUTPUT: 4 float32 bands, Wh/m2 (W/m2 with --mean), -9999 nodata. Beam: DNI on
@@ -78,7 +80,8 @@ def irradiance(files, date_, end_date, start, end, step, clear_sky, linke_turbid
     kw = dict(tz=tz, lat=lat, lon=lon, pressure=pressure, temperature=temperature,
               no_refraction=no_refraction, sun_tolerance=sun_tolerance, preview=preview,
               backend=backend, threads=threads, report_path=report_path, overwrite=overwrite,
-              quiet=quiet, fmt=fmt, creation_options=creation_options, **read_opts)
+              quiet=quiet, progress=progress, fmt=fmt, creation_options=creation_options,
+              **read_opts)
     place = {k: kw.pop(k) for k in PLACE_KEYS}
     cfg = IrradianceConfig(
         dem, output, date_, end_date, start, end, step, clear_sky, linke_turbidity, albedo, ghi,

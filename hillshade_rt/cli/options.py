@@ -366,6 +366,16 @@ def quiet_option(what: str = "No summary line on stderr."):
     return deco
 
 
+# run.report.PROGRESS_MODES (not imported here: the command line starts without the run layer)
+PROGRESS_MODES = ("bar", "json")
+
+progress_option = click.option(
+    "--progress", type=click.Choice(PROGRESS_MODES), default="bar", show_default=True,
+    help='bar: a progress bar on stderr (on a terminal, not with -q); json: instead a line '
+         '{"progress": F} on stderr after each step (F the fraction done, increasing to 1.0; '
+         'flushed; also with -q), for a program that shows the progress (the QGIS plugin).')
+
+
 def physics_options(f):
     """Curvature, refraction and soft shadows of the lighting commands."""
     return _stack(f, _curvature_options("rays can be longer than 1 km") + [
@@ -451,6 +461,7 @@ def run_options(f):
         report_option,
         overwrite_option("Replace outputs (and the report, the preview) if they exist."),
         quiet_option("No progress bar or summary on stderr."),
+        progress_option,
         max_memory_option,
         window_size_option,
         click.option("--cog", is_flag=True,
@@ -492,8 +503,8 @@ def to_run_options(kw: dict, say):
     """The options every run takes (backend, threads, report, overwrite, quiet, format,
     preview), popped from ``kw`` where given, as ``run.RunOptions``."""
     from ..run.config import RunOptions
-    keys = ("backend", "threads", "report_path", "overwrite", "quiet", "fmt", "preview",
-            "creation_options")
+    keys = ("backend", "threads", "report_path", "overwrite", "quiet", "progress", "fmt",
+            "preview", "creation_options")
     return RunOptions(say=say, **{k: kw.pop(k) for k in keys if k in kw})
 
 

@@ -9,7 +9,8 @@ from .options import (context_option, each_pattern_options,
                       backend_option, dem_options, format_option,
                       height_above_ground_option, horizon_physics_options,
                       max_distance_option, max_memory_option, overwrite_option,
-                      preview_option, quiet_option, scheduler_option, threads_option, to_read_options, to_run_options,
+                      preview_option, quiet_option, progress_option, scheduler_option,
+                      threads_option, to_read_options, to_run_options,
                       window_size_option)
 
 
@@ -44,6 +45,7 @@ from .options import (context_option, each_pattern_options,
 @scheduler_option
 @overwrite_option()
 @quiet_option()
+@progress_option
 @format_option
 @each_pattern_options
 @dem_options
@@ -51,7 +53,7 @@ from .options import (context_option, each_pattern_options,
 @errors_to_click
 def skyview(files, directions, definition, terrain_configuration, openness, max_distance,
             curvature, refraction_k, height_above_ground, preview, backend, threads, max_memory,
-            window_size, scheduler, overwrite, quiet, fmt,
+            window_size, scheduler, overwrite, quiet, progress, fmt,
             creation_options, each, output_pattern, **read_opts):
     """Write the sky view factor of every cell of DEM to OUTPUT (float32 0..1, -9999 nodata)
     from its exact horizon in --directions azimuths, or its openness (--openness, degrees).
@@ -60,7 +62,8 @@ def skyview(files, directions, definition, terrain_configuration, openness, max_
     from ..run.skyview import SkyviewConfig, skyview as run_skyview
     from ..run.batch import split_files, skyview_each
     dem, output = split_files(files, each, output_pattern, "skyview")
-    kw = dict(preview=preview, backend=backend, threads=threads, overwrite=overwrite, quiet=quiet, fmt=fmt,
+    kw = dict(preview=preview, backend=backend, threads=threads, overwrite=overwrite,
+              quiet=quiet, progress=progress, fmt=fmt,
               creation_options=creation_options,
               **read_opts)
     cfg = SkyviewConfig(dem, output, directions, definition, terrain_configuration,

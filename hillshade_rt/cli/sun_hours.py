@@ -9,7 +9,8 @@ from ..run.config import PLACE_KEYS
 from .options import (context_option, algorithm_option, backend_option, dem_options,
                       each_pattern_options, format_option,
                       height_above_ground_option, overwrite_option, physics_options, place_options,
-                      preview_option, quiet_option, report_option, threads_option, to_read_options,
+                      preview_option, quiet_option, progress_option, report_option,
+                      threads_option, to_read_options,
                       to_run_options)
 
 
@@ -36,6 +37,7 @@ from .options import (context_option, algorithm_option, backend_option, dem_opti
 @report_option
 @overwrite_option("Replace outputs if they exist.")
 @quiet_option("No progress bar or summary on stderr.")
+@progress_option
 @format_option
 @each_pattern_options
 @dem_options
@@ -44,7 +46,7 @@ from .options import (context_option, algorithm_option, backend_option, dem_opti
 def sun_hours(files, date_, end_date, step, tz, lat, lon, pressure, temperature,
               no_refraction, sun_tolerance, algorithm, curvature, refraction_k, soft,
               height_above_ground, self_shadow, preview, backend, threads, report_path,
-              overwrite, quiet, fmt,
+              overwrite, quiet, progress, fmt,
               creation_options, each, output_pattern, **read_opts):
     """Write the hours of direct sun per cell of DEM over a day (or a range of days) to OUTPUT
     (float32 hours, -9999 nodata), like WhiteboxTools' TimeInDaylight or GRASS r.sun's insolation
@@ -56,7 +58,8 @@ def sun_hours(files, date_, end_date, step, tz, lat, lon, pressure, temperature,
     kw = dict(tz=tz, lat=lat, lon=lon, pressure=pressure, temperature=temperature,
               no_refraction=no_refraction, sun_tolerance=sun_tolerance, preview=preview,
               backend=backend, threads=threads, report_path=report_path, overwrite=overwrite,
-              quiet=quiet, fmt=fmt, creation_options=creation_options, **read_opts)
+              quiet=quiet, progress=progress, fmt=fmt, creation_options=creation_options,
+              **read_opts)
     place = {k: kw.pop(k) for k in PLACE_KEYS}
     cfg = SunHoursConfig(dem, output, date_, end_date, step, place, algorithm, curvature,
                          refraction_k, soft, self_shadow, to_read_options(kw),

@@ -156,7 +156,8 @@ def animate(cfg: AnimateConfig) -> dict:
             shader.warm_up(day[0].azimuth, day[0].elevation, field=any(s.fieldwise for s in day))
     lmt = site.lon if req.tz is None and cfg.date is not None else None
     frames, records, algo_stats = [], [], {}
-    for sun in progress(suns, ro.quiet, "hillshade-rt animate", unit="frame"):
+    for sun in progress(suns, ro.quiet, "hillshade-rt animate", unit="frame",
+                        mode=ro.progress):
         with timer("compute"):
             mask = None if sun.night else render(shader, sun, "shadow", stats=algo_stats)
         with timer("frames"):

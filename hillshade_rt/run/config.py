@@ -107,6 +107,7 @@ class RunOptions:
     report_path: str | None = None
     overwrite: bool = False
     quiet: bool = False
+    progress: str = "bar"       # --progress: "bar" (tqdm's, on a terminal) or "json" lines
     fmt: str | None = None
     preview: str | None = None
     say: Callable[[str, str], None] = say_nothing

@@ -147,13 +147,13 @@ def shade_piece(job, piece, path: str, nodata, stride: int | None = None) -> dic
             "seconds": time.perf_counter() - t0, "shade": shade}
 
 
-def run_on_dask(scheduler, job, suns, plans, out, share, stride, quiet, algo_stats, used, tally):
+def run_on_dask(scheduler, job, suns, plans, out, share, stride, quiet, algo_stats, used, tally,
+                progress_mode="bar"):
     """Run every (sun, piece) as a task and assemble the outputs; returns (records, last stats,
     report figures). ``out`` is the command's output description (bands or files)."""
-    from tqdm import tqdm
-
     from ..products import merge_stats
     from .outputs import sun_tags
+    from .report import progress_total
     from ..io import copy_vrt
     from ..io.vrt import VrtSource, vrt_xml
     from .plan import marched_per_cell
@@ -172,8 +172,8 @@ def run_on_dask(scheduler, job, suns, plans, out, share, stride, quiet, algo_sta
                 futures.append(f)
         from distributed import as_completed
         per_sun = [dict(stats=None, seconds=0.0) for _ in suns]
-        bar = tqdm(total=len(futures), desc="hillshade-rt (dask)", unit="window", leave=False,
-                   disable=True if quiet or len(futures) < 2 else None)
+        bar = progress_total(len(futures), quiet, "hillshade-rt (dask)", "window",
+                             progress_mode)
         with bar:
             for f in as_completed(futures):
                 res = f.result()

@@ -367,13 +367,13 @@ def _in_windows(cfg, src, azimuths, ran_on, max_distance, timer, *, wshape, limi
             with timer("compute"):
                 fig, _, extra = run_on_dask(cfg.scheduler, job, regs, product,
                                             _vrt_outputs(cfg, src, azimuths, tags, dist_tags),
-                                            ro.quiet, share, n if ro.preview else None)
+                                            ro.quiet, share, n if ro.preview else None,
+                                            progress_mode=ro.progress)
         else:
             fig = Figures()
             w, wd = _writers(cfg, geom, azimuths, tags, dist_tags)
-            from tqdm import tqdm
-            bar = tqdm(total=len(regs), desc="hillshade-rt", unit="window", leave=False,
-                       disable=True if ro.quiet or len(regs) < 2 else None)
+            from .report import progress_total
+            bar = progress_total(len(regs), ro.quiet, "hillshade-rt", "window", ro.progress)
             with w, (contextlib.nullcontext() if wd is None else wd), src.reader() as rd, bar:
                 for reg in regs:
                     out_reg = reg if area is None else area.local(reg)

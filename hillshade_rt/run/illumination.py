@@ -383,7 +383,8 @@ def illumination(cfg: IllumConfig) -> dict:
                 frames = CellFrames.of_dem(d)
                 rows, cols = d.shape
                 regs = [Region((0, rows, 0, cols), (0, rows, 0, cols))]
-                bar = progress(range(len(series)), ro.quiet, "illumination", "position")
+                bar = progress(range(len(series)), ro.quiet, "illumination", "position",
+                               mode=ro.progress)
                 with bar:
                     sums, c = light_series(d.heights, frames, d.grid, phys, suns, hours,
                                            tick=lambda: bar.update(1))
@@ -457,7 +458,8 @@ def _run_regions(src, regs, phys, suns, hours, cfg, quiet):
     from ..algorithms.illumination import combine
     from .report import progress
     if cfg.scheduler is None:
-        bar = progress(range(len(regs) * len(suns)), quiet, "illumination", "position")
+        bar = progress(range(len(regs) * len(suns)), quiet, "illumination", "position",
+                       mode=cfg.run.progress)
         with bar, src.reader() as rd:
             for reg in regs:
                 z, frames, grid = _region_inputs(src, rd, reg)
@@ -478,7 +480,8 @@ def _run_regions(src, regs, phys, suns, hours, cfg, quiet):
                                           pure=False)
                 session.futures.append(f)
                 futs[(ri, ci)] = f
-        bar = progress(range(len(futs)), quiet, "illumination", "task")
+        bar = progress(range(len(futs)), quiet, "illumination", "task",
+                       mode=cfg.run.progress)
         with bar:
             done = {}
             from distributed import as_completed

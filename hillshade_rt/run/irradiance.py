@@ -221,7 +221,8 @@ def _run(cfg, d, area, req, step, series, ran_on, lift, timer, first, last, peri
                 shader.warm_up(work[0].azimuth, max(work[0].elevation, 1.0), soft=cfg.soft,
                                incidence=True, field=any(s.fieldwise for s in work))
     algo_stats: dict = {}
-    bar = lambda it: progress(it, ro.quiet, "hillshade-rt irradiance", "sun")  # noqa: E731
+    bar = lambda it: progress(it, ro.quiet, "hillshade-rt irradiance", "sun",
+                                mode=ro.progress)  # noqa: E731
     if area is None:
         with timer("sky view"):
             vd = ir.dozier_view(d.heights, d.grid, cfg.skyview_directions, ran_on, curvature,

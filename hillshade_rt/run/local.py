@@ -36,7 +36,8 @@ def needs_windows(src, limit, per_cell) -> bool:
 
 
 def in_memory(inputs, source, scale, req, out, timer, algorithm, options, ran_on,
-              curvature, refraction_k, soft, self_shadow, ambient, quiet, *, lift=0.0, **_):
+              curvature, refraction_k, soft, self_shadow, ambient, quiet, *, lift=0.0,
+              progress_mode="bar", **_):
     """``source``: the DEM already opened (``ReadOptions.open``; read here, not opened again).
     ``lift``: --height-above-ground (``shading.Shader``)."""
     import numpy as np
@@ -68,7 +69,7 @@ def in_memory(inputs, source, scale, req, out, timer, algorithm, options, ran_on
     records, algo_stats = [], {}
     share, st = None, None
     with out.writer(d, len(suns)) as writer:
-        for i, sun in enumerate(progress(suns, quiet, "hillshade-rt")):
+        for i, sun in enumerate(progress(suns, quiet, "hillshade-rt", mode=progress_mode)):
             t0 = timer.seconds.get("compute", 0.0)
             with timer("compute"):
                 arr = render(shader, sun, kind, soft=soft, self_shadow=self_shadow,
@@ -100,7 +101,7 @@ def in_memory(inputs, source, scale, req, out, timer, algorithm, options, ran_on
 
 def tiled(inputs, source, scale, req, out, timer, algorithm, options, ran_on,
           curvature, refraction_k, soft, self_shadow, ambient, quiet, *, limit,
-          window_shape, scheduler, per_cell, lift=0.0, area=None):
+          window_shape, scheduler, per_cell, lift=0.0, area=None, progress_mode="bar"):
     """``source``: the DEM already opened for windows (``ReadOptions.open``). ``lift``:
     --height-above-ground (``plan.Job``: the halos and the march). ``area``: a tile of
     ``source`` (``run.context.Area``, ``--context``): only its cells are lit and written, on
@@ -173,12 +174,11 @@ def tiled(inputs, source, scale, req, out, timer, algorithm, options, ran_on,
         from .dask import run_on_dask
         with timer("compute"):
             records, st, extra = run_on_dask(scheduler, job, suns, plans, out, share, n, quiet,
-                                             algo_stats, used, tally)
+                                             algo_stats, used, tally, progress_mode)
     else:
-        from tqdm import tqdm
-        total = sum(len(p) for p in plans)
-        bar = tqdm(total=total, desc="hillshade-rt", unit="window", leave=False,
-                   disable=True if quiet or total < 2 else None)
+        from .report import progress_total
+        bar = progress_total(sum(len(p) for p in plans), quiet, "hillshade-rt", "window",
+                             progress_mode)
         with out.writer(geom, len(suns)) as writer, src.reader() as rd, bar:
             cache = WindowCache(rd)
             carry = job.carrier(plans)

@@ -457,16 +457,16 @@ def region_task(job: HorizonJob, region, product: Product, folder: str,
 
 
 def run_on_dask(scheduler, job: HorizonJob, regs, product: Product, outputs: dict,
-                quiet: bool, share=None, stride: int | None = None) -> tuple[Figures, list, dict]:
+                quiet: bool, share=None, stride: int | None = None,
+                progress_mode: str = "bar") -> tuple[Figures, list, dict]:
     """Every region as a task; then each output (``outputs``: name -> a function of the VRT
     document of its parts that writes it) assembled through a VRT. Returns (the figures, the
     results' statistics per region, what the report says of the scheduler). The parts' folder
     beside the first output is removed, also when the run fails."""
     from dataclasses import replace
 
-    from tqdm import tqdm
-
     from ..io.vrt import VrtSource
+    from .report import progress_total
     from .dask import DaskSession
 
     first = next(iter(outputs.values()))
@@ -479,8 +479,8 @@ def run_on_dask(scheduler, job: HorizonJob, regs, product: Product, outputs: dic
                                   pure=False) for reg in regs]
         from distributed import as_completed
         fig, results = Figures(), []
-        bar = tqdm(total=len(futures), desc="hillshade-rt (dask)", unit="window", leave=False,
-                   disable=True if quiet or len(futures) < 2 else None)
+        bar = progress_total(len(futures), quiet, "hillshade-rt (dask)", "window",
+                             progress_mode)
         with bar:
             for f in as_completed(futures):
                 res = f.result()

@@ -129,9 +129,67 @@ def summary_line(report: dict, shown: str | None = None) -> str:
             + f", total {report['seconds']['total']:.2f} s")
 
 
-def progress(items, quiet: bool, desc: str, unit: str = "time"):
-    """A tqdm bar on stderr over ``items`` (off with ``quiet``, and when stderr is no terminal)."""
-    from tqdm import tqdm
+PROGRESS_MODES = ("bar", "json")    # --progress: tqdm's bar, or lines of JSON for programs
+
+
+class JsonProgress:
+    """Progress for a program reading stderr (--progress json): after each step a line
+    ``{"progress": F}``, F the fraction done (0 < F <= 1, increasing, 1.0 last), flushed at
+    once; a line only when F (to 3 decimals) changes. Iterates like tqdm over ``items``, or
+    counts ``update(n)`` toward ``total``; a context manager like tqdm's bars."""
+
+    def __init__(self, items=None, total: int | None = None, stream=None) -> None:
+        self.items = items
+        self.total = len(items) if total is None else int(total)
+        self.done = 0
+        self.said = 0.0
+        self.stream = stream
+
+    def __len__(self) -> int:
+        return self.total
+
+    def __iter__(self):
+        for item in self.items:
+            yield item
+            self.update(1)
+
+    def update(self, n: int = 1) -> None:
+        import json
+        import sys
+        self.done += n
+        frac = 1.0 if self.total <= 0 else round(min(self.done / self.total, 1.0), 3)
+        if frac > self.said:
+            self.said = frac
+            stream = self.stream or sys.stderr
+            stream.write(json.dumps({"progress": frac}) + "\n")
+            stream.flush()
+
+    def close(self) -> None:
+        pass
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def progress(items, quiet: bool, desc: str, unit: str = "time", mode: str = "bar"):
+    """A tqdm bar on stderr over ``items`` (off with ``quiet``, and when stderr is no terminal);
+    with ``mode`` "json" (--progress json) lines of JSON instead, whatever ``quiet`` says
+    (:class:`JsonProgress`)."""
     items = list(items)
+    if mode == "json":
+        return JsonProgress(items)
+    from tqdm import tqdm
     return tqdm(items, desc=desc, unit=unit, disable=True if quiet or len(items) < 2 else None,
                 leave=False)
+
+
+def progress_total(total: int, quiet: bool, desc: str, unit: str, mode: str = "bar"):
+    """:func:`progress` counted by ``update(n)`` toward ``total`` instead of over items."""
+    if mode == "json":
+        return JsonProgress(total=total)
+    from tqdm import tqdm
+    return tqdm(total=total, desc=desc, unit=unit, leave=False,
+                disable=True if quiet or total < 2 else None)

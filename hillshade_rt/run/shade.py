@@ -128,7 +128,7 @@ def _shade(cfg, src, windowed, inputs, output, req, pattern, wshape, limit, clai
                     inputs, src, cfg.scale, req, out, timer, algorithm, options, ran_on,
                     cfg.curvature, cfg.refraction_k, soft, cfg.self_shadow, cfg.ambient,
                     ro.quiet, limit=limit, window_shape=wshape, scheduler=cfg.scheduler,
-                    per_cell=per_cell, lift=cfg.height_above_ground,
+                    per_cell=per_cell, lift=cfg.height_above_ground, progress_mode=ro.progress,
                     **({} if area is None else {"area": area}))
             except AllNodata:      # (raised before any output is opened): all nodata then
                 empty = (src if area is None else area.tile).path

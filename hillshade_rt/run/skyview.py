@@ -297,13 +297,13 @@ def _in_windows(cfg, definition, src, ran_on, max_distance, timer, *, wshape, li
                       co=ro.creation_options)
             with timer("compute"):
                 fig, parts, extra = run_on_dask(cfg.scheduler, job, regs, product,
-                                                {"result": out}, ro.quiet)
+                                                {"result": out}, ro.quiet,
+                                                progress_mode=ro.progress)
             for lo, total, count in parts:
                 st.lo, st.total, st.count = min(st.lo, lo), st.total + total, st.count + count
         else:
-            from tqdm import tqdm
-            bar = tqdm(total=len(regs), desc="hillshade-rt", unit="window", leave=False,
-                       disable=True if ro.quiet or len(regs) < 2 else None)
+            from .report import progress_total
+            bar = progress_total(len(regs), ro.quiet, "hillshade-rt", "window", ro.progress)
             with _writer(cfg, geom, definition, n, curved, max_distance) as w, \
                     src.reader() as rd, bar:
                 for reg in regs:

@@ -198,7 +198,8 @@ def _series(cfg: SubsolarConfig, d, output: str, series, body, default_distance:
             pyramid = MaxPyramid(z)
     with BandWriter(output, d, len(series), prod.dtype, prod.nodata, tags=tags,
                     overwrite=ro.overwrite, fmt=ro.fmt, co=ro.creation_options) as w:
-        for i in progress(range(len(series)), ro.quiet, "subsolar positions", "position"):
+        for i in progress(range(len(series)), ro.quiet, "subsolar positions", "position",
+                             mode=ro.progress):
             lat, lon = float(series.lat[i]), float(series.lon[i])
             with timer("compute"):
                 s = sun_vector(body, lat, lon, float(dist[i]))

@@ -112,7 +112,8 @@ def sun_hours(cfg: SunHoursConfig) -> dict:
                 hours = np.where(np.isnan(d.heights), np.float32(np.nan), np.float32(0.0))
         if empty is None:
             with timer("compute"):
-                for s, w in progress(work, ro.quiet, "hillshade-rt sun-hours", unit="sun"):
+                for s, w in progress(work, ro.quiet, "hillshade-rt sun-hours", unit="sun",
+                                         mode=ro.progress):
                     hours += np.float32(w) * render(shader, s, "sun", soft=soft,
                                                     self_shadow=self_shadow, stats=algo_stats)
             curv = shader.report()
@@ -199,7 +200,8 @@ def _in_context(cfg, area, work, ran_on, req, timer, algo_stats):
             del z
             cache, used = WindowCache(rd), set()
             with timer("compute"):
-                for s, w in progress(work, cfg.run.quiet, "hillshade-rt sun-hours", unit="sun"):
+                for s, w in progress(work, cfg.run.quiet, "hillshade-rt sun-hours",
+                                         unit="sun", mode=cfg.run.progress):
                     pieces = job.pieces(s, bstats, budget, area=area.bounds)
                     carry = job.carrier([pieces])
                     for p in pieces:
