@@ -32,7 +32,35 @@ from hillshade_rt.testing import data_path, read_band, repo_root
 
 PLUGIN = os.path.join(repo_root(), "qgis", "hillshade_rt_qgis")
 DEM = data_path("lidar_dem_1m_utm15n_400x400.tif")
-PROGRAM = os.path.join(os.path.dirname(sys.executable), "hillshade-rt")
+
+
+def this_checkouts_program() -> str:
+    """This venv's ``hillshade-rt`` when it runs this checkout's code; else (the venv installed
+    from another checkout, this one on PYTHONPATH) a script that runs this checkout's: the
+    plugin removes PYTHONPATH from the program's environment (QGIS's Python must not reach
+    it), so the venv's program alone would run the other checkout's code."""
+    import atexit
+    import tempfile
+
+    import hillshade_rt
+    venv_program = os.path.join(os.path.dirname(sys.executable), "hillshade-rt")
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    where = subprocess.run([sys.executable, "-c",
+                            "import hillshade_rt; print(hillshade_rt.__file__)"],
+                           env=env, capture_output=True, text=True, cwd="/").stdout.strip()
+    if where and os.path.samefile(where, hillshade_rt.__file__):
+        return venv_program
+    folder = tempfile.mkdtemp(prefix="hrt-program-")
+    atexit.register(shutil.rmtree, folder, True)
+    script = os.path.join(folder, "hillshade-rt")
+    with open(script, "w") as f:
+        f.write(f"#!/bin/sh\nPYTHONPATH={repo_root()} exec {sys.executable} -m hillshade_rt "
+                '"$@"\n')
+    os.chmod(script, 0o755)
+    return script
+
+
+PROGRAM = this_checkouts_program()
 PLUGIN_FILES = {"__init__.py", "plugin.py", "provider.py", "algorithms.py", "commands.py",
                 "metadata.txt", "icon.svg"}
 
@@ -192,6 +220,162 @@ def test_argv_refusals():
         cmd.split_extra('--tz "Europe/Zurich')
     with pytest.raises(cmd.ProgramError, match="step"):
         cmd.sun_hours_argv("hr", "d.tif", "o.tif", date="2026-06-21", step_minutes=0)
+
+
+def test_horizon_profile_query_argv(tmp_path):
+    argv = cmd.horizon_argv("hr", "dem.tif", "hz.tif", azimuth=135.5, max_distance=300,
+                            height_above_ground=1.5)
+    assert argv == ["hr", "horizon", "dem.tif", "hz.tif", "--azimuth", "135.5", "--method",
+                    "scan", "--max-distance", "300", "--height-above-ground", "1.5",
+                    "--overwrite"]
+    p = parse(argv)
+    assert (p["azimuth"], p["max_distance"], p["height_above_ground"]) == (135.5, 300.0, 1.5)
+    argv = cmd.horizon_argv("hr", "dem.tif", "hz.tif", mode="directions", directions=16,
+                            distance="/o/d.tif", method="hull", band=2)
+    assert argv == ["hr", "horizon", "dem.tif", "hz.tif", "--band", "2", "--directions", "16",
+                    "--distance", "/o/d.tif", "--method", "hull", "--overwrite"]
+    p = parse(argv)
+    assert (p["directions"], p["distance"], p["method"], p["azimuth"]) == (16, "/o/d.tif",
+                                                                            "hull", None)
+
+    argv = cmd.profile_argv("hr", "dem.tif", "/o/prof.geojson", points="/t/p.csv", step=5,
+                            height_above_ground=2)
+    assert argv == ["hr", "profile", "dem.tif", "--points", "/t/p.csv", "--step", "5",
+                    "--height-above-ground", "2", "--format", "geojson", "-o",
+                    "/o/prof.geojson", "--overwrite"]
+    p = parse(argv)
+    assert (p["points"], p["step"], p["fmt"] if "fmt" in p else p["format"],
+            p["output"]) == ("/t/p.csv", 5.0, "geojson", "/o/prof.geojson")
+    assert cmd.profile_argv("hr", "d.tif", "o.CSV", points="p.csv")[-5:-3] == ["--format",
+                                                                              "csv"]
+    assert cmd.table_format("o.txt", cmd.QUERY_FORMATS) == "csv"
+
+    argv = cmd.query_argv("hr", "dem.tif", "q.csv", points="p.csv", azimuth=200,
+                          elevation=20)
+    assert argv == ["hr", "query", "dem.tif", "--points", "p.csv", "--azimuth", "200",
+                    "--elevation", "20", "--format", "csv", "-o", "q.csv", "--overwrite"]
+    parse(argv)
+    argv = cmd.query_argv("hr", "dem.tif", "q.json", points="p.csv", sun="series",
+                          time_="2026-06-21T08:00:00", end_time="2026-06-21T18:00:00",
+                          step_minutes=90, tz="America/Chicago", irradiance=True, band=3)
+    assert argv == ["hr", "query", "dem.tif", "--points", "p.csv", "--start",
+                    "2026-06-21T08:00:00", "--end", "2026-06-21T18:00:00", "--step", "90min",
+                    "--tz", "America/Chicago", "--irradiance", "--format", "json", "-o",
+                    "q.json", "--band", "3", "--overwrite"]
+    p = parse(argv)
+    assert (p["start"], p["end"], p["step"], p["irradiance"], p["band"]) == (
+        "2026-06-21T08:00:00", "2026-06-21T18:00:00", "90min", True, 3)
+    argv = cmd.query_argv("hr", "dem.tif", "q.csv", points="p.csv", sun="time",
+                          time_="2026-06-21T08:00:00")
+    assert argv[4:8] == ["p.csv", "--time", "2026-06-21T08:00:00", "--tz"]
+    parse(argv)
+
+    pts = tmp_path / "p.csv"
+    assert cmd.write_points_csv(str(pts), [("a", 1, 2.5), (7, 429400.125, 5150600.0)]) == 2
+    assert pts.read_text().splitlines() == ["id,x,y", "a,1.0,2.5", "7,429400.125,5150600.0"]
+    with pytest.raises(cmd.ProgramError, match="no points"):
+        cmd.write_points_csv(str(pts), [])
+
+
+def test_irradiance_animate_illumination_argv():
+    argv = cmd.irradiance_argv("hr", "dem.tif", "irr.tif", date="2026-06-21",
+                               end_date="2026-06-22", step_minutes=30, tz="Europe/Zurich",
+                               clear_sky="haurwitz", linke_turbidity=3.5, albedo=0.3,
+                               ghi="/m/ghi.csv", mean=True, perez=True, skyview_directions=16,
+                               height_above_ground=1, algorithm="brute", soft=True)
+    assert argv == ["hr", "irradiance", "dem.tif", "irr.tif", "--date", "2026-06-21",
+                    "--end-date", "2026-06-22", "--step", "30min", "--tz", "Europe/Zurich",
+                    "--clear-sky", "haurwitz", "--linke-turbidity", "3.5", "--albedo", "0.3",
+                    "--ghi", "/m/ghi.csv", "--mean", "--perez", "--skyview-directions", "16",
+                    "--height-above-ground", "1", "--algorithm", "brute", "--soft",
+                    "--overwrite"]
+    p = parse(argv)
+    assert (p["clear_sky"], p["linke_turbidity"], p["albedo"], p["ghi"], p["mean"],
+            p["perez"], p["skyview_directions"]) == ("haurwitz", 3.5, 0.3, "/m/ghi.csv", True,
+                                                     True, 16)
+    argv = cmd.irradiance_argv("hr", "dem.tif", "irr.tif", date="2026-06-21")
+    assert argv == ["hr", "irradiance", "dem.tif", "irr.tif", "--date", "2026-06-21",
+                    "--step", "15min", "--clear-sky", "ineichen", "--albedo", "0.2",
+                    "--skyview-directions", "32", "--algorithm", "auto", "--overwrite"]
+    parse(argv)
+
+    argv = cmd.animate_argv("hr", "dem.tif", "a.gif", date="2026-06-21", step_minutes=60,
+                            tz="America/Chicago", fps=4, size=128, label=False)
+    assert argv == ["hr", "animate", "dem.tif", "a.gif", "--date", "2026-06-21", "--step",
+                    "60min", "--tz", "America/Chicago", "--fps", "4", "--size", "128",
+                    "--no-label", "--algorithm", "auto", "--overwrite"]
+    p = parse(argv)
+    assert (p["date_"], p["fps"], p["size"], p["label"]) == ("2026-06-21", 4.0, 128, False)
+    argv = cmd.animate_argv("hr", "dem.tif", "a.mp4", mode="series",
+                            start="2026-06-21T06:00:00", end="2026-06-21T20:00:00")
+    assert argv[4:10] == ["--start", "2026-06-21T06:00:00", "--end", "2026-06-21T20:00:00",
+                          "--step", "30min"]
+    parse(argv)
+
+    argv = cmd.illumination_argv("hr", "dem.tif", "il.tif", subsolar_file="/s/sun.csv",
+                                 body=" moon ", sun_distance=1.5e11, height_above_ground=2,
+                                 soft=True)
+    assert argv == ["hr", "illumination", "dem.tif", "il.tif", "--subsolar-file",
+                    "/s/sun.csv", "--body", "moon", "--sun-distance", "1.5e+11",
+                    "--height-above-ground", "2", "--soft", "--overwrite"]
+    p = parse(argv)
+    assert (p["subsolar_file"], p["body"], p["sun_distance"], p["soft"]) == (
+        "/s/sun.csv", "moon", 1.5e11, True)
+    parse(cmd.illumination_argv("hr", "dem.tif", "il.tif", subsolar_file="s.csv"))
+
+
+def test_new_argv_refusals():
+    with pytest.raises(cmd.ProgramError, match="horizon must be one of"):
+        cmd.horizon_argv("hr", "d.tif", "o.tif", mode="both")
+    with pytest.raises(cmd.ProgramError, match="no points"):
+        cmd.profile_argv("hr", "d.tif", "o.csv", points="")
+    with pytest.raises(cmd.ProgramError, match="first and last time"):
+        cmd.query_argv("hr", "d.tif", "o.csv", points="p.csv", sun="series",
+                       time_="2026-06-21T08:00:00")
+    with pytest.raises(cmd.ProgramError, match="needs the date"):
+        cmd.animate_argv("hr", "d.tif", "o.gif")
+    with pytest.raises(cmd.ProgramError, match="subsolar"):
+        cmd.illumination_argv("hr", "d.tif", "o.tif", subsolar_file="")
+    with pytest.raises(cmd.ProgramError, match="clear sky must be one of"):
+        cmd.irradiance_argv("hr", "d.tif", "o.tif", date="2026-06-21", clear_sky="perez")
+
+
+def test_progress_commands_are_the_clis():
+    """--progress json goes to the commands that take it, and only to those; the argv still
+    parses."""
+    from hillshade_rt.cli import cli
+    takes = {name for name, c in cli.commands.items()
+             if any("--progress" in p.opts for p in c.params)}
+    assert takes == set(cmd.PROGRESS_COMMANDS)
+    argv = cmd.with_progress(cmd.shadow_argv("hr", "d.tif", "o.tif",
+                                             extra=["--progress", "bar"]))
+    assert argv[-3:] == ["--progress", "json", "--overwrite"]
+    assert parse(argv)["progress"] == "json"       # the last one given wins
+    argv = cmd.profile_argv("hr", "d.tif", "o.csv", points="p.csv")
+    assert cmd.with_progress(argv) == argv
+
+
+def test_parse_progress_lines():
+    assert cmd.parse_progress('{"progress": 0.42}') == pytest.approx(42.0)
+    assert cmd.parse_progress('{"progress": 1.0}\n') == 100.0
+    assert cmd.parse_progress('{"progress": 0}') == 0.0
+    assert cmd.parse_progress('{"progress": 1.5}') == 100.0
+    for other in ("hillshade-rt: o.tif: 400x400, ...", "", "{", '{"progress": "x"}',
+                  '{"progress": 0.5, "eta": 3}', '["progress"]', '{"progress": true}',
+                  '{"progress": NaN}'):
+        assert cmd.parse_progress(other) is None, other
+
+
+def test_run_program_progress_lines(tmp_path):
+    """The real program over many suns: its progress lines, read by the plugin's parser,
+    increase to 100 %."""
+    argv = cmd.with_progress(cmd.sun_hours_argv(PROGRAM, DEM, str(tmp_path / "h.tif"),
+                                                date="2026-06-21", step_minutes=120))
+    result = cmd.run(argv)
+    assert result.returncode == 0, result.lines
+    got = [cmd.parse_progress(line) for line in result.lines]
+    got = [p for p in got if p is not None]
+    assert len(got) >= 4 and got == sorted(set(got)) and got[-1] == 100.0, result.lines
 
 
 # --- finding and running the program

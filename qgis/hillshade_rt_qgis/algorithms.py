@@ -3,20 +3,29 @@
 non-zero exit status raises QgsProcessingException with the program's one-line error, and
 cancelling terminates the child (which leaves no output behind)."""
 
-from qgis.core import (QgsPalettedRasterRenderer, QgsProcessingAlgorithm,
-                       QgsProcessingException, QgsProcessingFeedback,
+import os
+import uuid
+
+from qgis.core import (QgsCoordinateTransform, QgsPalettedRasterRenderer, QgsProcessing,
+                       QgsProcessingAlgorithm, QgsProcessingException, QgsProcessingFeedback,
                        QgsProcessingLayerPostProcessorInterface,
                        QgsProcessingParameterBand, QgsProcessingParameterBoolean,
                        QgsProcessingParameterDateTime, QgsProcessingParameterDefinition,
-                       QgsProcessingParameterEnum, QgsProcessingParameterNumber,
+                       QgsProcessingParameterEnum, QgsProcessingParameterFeatureSource,
+                       QgsProcessingParameterField, QgsProcessingParameterFile,
+                       QgsProcessingParameterFileDestination, QgsProcessingParameterNumber,
                        QgsProcessingParameterRasterDestination,
-                       QgsProcessingParameterRasterLayer, QgsProcessingParameterString)
+                       QgsProcessingParameterRasterLayer, QgsProcessingParameterString,
+                       QgsProcessingUtils)
 from qgis.PyQt.QtCore import QCoreApplication
 from qgis.PyQt.QtGui import QColor
 
 from . import commands
 
 SUN_LABELS = ("Azimuth and elevation", "Date and time (in the time zone below)")
+SERIES_LABEL = "A series: from the date and time to the end, every step"
+TABLE_FILTER = "CSV (*.csv);;GeoJSON (*.geojson);;JSON (*.json)"
+ANIMATION_FILTER = "GIF animation (*.gif);;MP4 video (*.mp4)"
 
 
 class ShadowStyle(QgsProcessingLayerPostProcessorInterface):
@@ -39,6 +48,8 @@ class HillshadeRtAlgorithm(QgsProcessingAlgorithm):
     DISPLAY = ""
     HELP = ""
     OUTPUT_LABEL = "Output"
+    # the output: a raster layer, or a file of this filter (a table, an animation)
+    OUTPUT_FILTER = None
 
     def tr(self, text):
         return QCoreApplication.translate("HillshadeRt", text)
@@ -71,9 +82,12 @@ class HillshadeRtAlgorithm(QgsProcessingAlgorithm):
         self.addParameter(QgsProcessingParameterBand("BAND", self.tr("Band"), 1, "INPUT",
                                                      optional=True))
 
-    def add_sun(self):
+    def add_sun(self, series=False):
+        """SUN (0 azimuth and elevation, 1 a date and time, 2 with ``series``: a series up to
+        END_DATETIME every STEP minutes), AZIMUTH, ELEVATION, DATETIME, TIMEZONE."""
+        labels = list(SUN_LABELS) + ([SERIES_LABEL] if series else [])
         self.addParameter(QgsProcessingParameterEnum(
-            "SUN", self.tr("The sun from"), [self.tr(s) for s in SUN_LABELS], defaultValue=0))
+            "SUN", self.tr("The sun from"), [self.tr(s) for s in labels], defaultValue=0))
         self.addParameter(QgsProcessingParameterNumber(
             "AZIMUTH", self.tr("Sun azimuth (degrees clockwise from north)"),
             QgsProcessingParameterNumber.Double, 315.0, minValue=-360.0, maxValue=720.0))
@@ -83,7 +97,40 @@ class HillshadeRtAlgorithm(QgsProcessingAlgorithm):
         self.addParameter(QgsProcessingParameterDateTime(
             "DATETIME", self.tr("Date and time (local time in the time zone)"),
             QgsProcessingParameterDateTime.DateTime, optional=True))
+        if series:
+            self.add_series_end()
         self.add_zone("UTC")
+
+    def add_series_end(self, step=60.0):
+        self.addParameter(QgsProcessingParameterDateTime(
+            "END_DATETIME", self.tr("Series: last date and time (local time in the time zone)"),
+            QgsProcessingParameterDateTime.DateTime, optional=True))
+        self.add_step(step, "Series: step (minutes)")
+
+    def add_step(self, default, text="Step (minutes)"):
+        self.addParameter(QgsProcessingParameterNumber(
+            "STEP", self.tr(text), QgsProcessingParameterNumber.Double, default,
+            minValue=0.1, maxValue=1440.0))
+
+    def add_dates(self, end_text="End date (a range of days, included)"):
+        self.addParameter(QgsProcessingParameterDateTime(
+            "DATE", self.tr("Date"), QgsProcessingParameterDateTime.Date))
+        self.addParameter(QgsProcessingParameterDateTime(
+            "END_DATE", self.tr(end_text), QgsProcessingParameterDateTime.Date, optional=True))
+
+    def add_height(self, text="Height above the ground (m)"):
+        self.addParameter(QgsProcessingParameterNumber(
+            "HEIGHT_ABOVE_GROUND", self.tr(text), QgsProcessingParameterNumber.Double, 0.0,
+            minValue=0.0))
+
+    def add_points(self):
+        """POINTS (a point layer, any CRS: moved into the DEM's) and ID_FIELD (their names in
+        the table; empty: the feature ids)."""
+        self.addParameter(QgsProcessingParameterFeatureSource(
+            "POINTS", self.tr("Points"), [QgsProcessing.TypeVectorPoint]))
+        self.addParameter(QgsProcessingParameterField(
+            "ID_FIELD", self.tr("Point names from the field (empty: feature ids)"),
+            parentLayerParameterName="POINTS", optional=True))
 
     def add_zone(self, default):
         self.addParameter(QgsProcessingParameterString(
@@ -99,16 +146,21 @@ class HillshadeRtAlgorithm(QgsProcessingAlgorithm):
         self.addParameter(QgsProcessingParameterBoolean("SOFT", self.tr(text), False))
 
     def add_tail(self):
+        """EXTRA (advanced) and OUTPUT: a raster, or a file of OUTPUT_FILTER."""
         extra = QgsProcessingParameterString(
             "EXTRA", self.tr("Additional hillshade-rt options (e.g. --no-earth-curvature "
                              "--threads 4)"), "", optional=True)
         extra.setFlags(extra.flags() | QgsProcessingParameterDefinition.FlagAdvanced)
         self.addParameter(extra)
-        self.addParameter(QgsProcessingParameterRasterDestination(
-            "OUTPUT", self.tr(self.OUTPUT_LABEL)))
+        if self.OUTPUT_FILTER is None:
+            self.addParameter(QgsProcessingParameterRasterDestination(
+                "OUTPUT", self.tr(self.OUTPUT_LABEL)))
+        else:
+            self.addParameter(QgsProcessingParameterFileDestination(
+                "OUTPUT", self.tr(self.OUTPUT_LABEL), self.tr(self.OUTPUT_FILTER)))
 
     # -- values
-    def dem(self, parameters, context):
+    def dem_layer(self, parameters, context):
         layer = self.parameterAsRasterLayer(parameters, "INPUT", context)
         if layer is None:
             raise QgsProcessingException(self.tr("the DEM could not be opened"))
@@ -116,26 +168,81 @@ class HillshadeRtAlgorithm(QgsProcessingAlgorithm):
             raise QgsProcessingException(self.tr(
                 "the DEM must be a raster read through GDAL (a file), not a "
                 "{} layer").format(layer.providerType()))
-        return layer.source()
+        return layer
+
+    def dem(self, parameters, context):
+        return self.dem_layer(parameters, context).source()
+
+    def output(self, parameters, context, name="OUTPUT"):
+        if self.OUTPUT_FILTER is None or name != "OUTPUT":
+            return self.parameterAsOutputLayer(parameters, name, context)
+        return self.parameterAsFileOutput(parameters, name, context)
 
     def common(self, parameters, context):
         """The keywords every command takes: the DEM, band, output, extra options."""
         return dict(dem=self.dem(parameters, context),
-                    output=self.parameterAsOutputLayer(parameters, "OUTPUT", context),
+                    output=self.output(parameters, context),
                     band=self.parameterAsInt(parameters, "BAND", context) or 1,
                     extra=commands.split_extra(
                         self.parameterAsString(parameters, "EXTRA", context)))
 
+    def when(self, parameters, context, name):
+        """A date and time parameter as the command line writes it (None when not set)."""
+        t = self.parameterAsDateTime(parameters, name, context)
+        return t.toString("yyyy-MM-ddTHH:mm:ss") if t is not None and t.isValid() else None
+
+    def day(self, parameters, context, name):
+        d = self.parameterAsDateTime(parameters, name, context)
+        return d.date().toString("yyyy-MM-dd") if d is not None and d.isValid() else None
+
+    def number(self, parameters, context, name):
+        return self.parameterAsDouble(parameters, name, context)
+
+    def flag(self, parameters, context, name):
+        return self.parameterAsBoolean(parameters, name, context)
+
+    def points_file(self, parameters, context):
+        """The POINTS as the --points CSV (id,x,y in the DEM's CRS) in Processing's temporary
+        folder; every vertex of a multipoint is a point."""
+        source = self.parameterAsSource(parameters, "POINTS", context)
+        if source is None:
+            raise QgsProcessingException(self.tr("the points could not be opened"))
+        crs = self.dem_layer(parameters, context).crs()
+        field = self.parameterAsString(parameters, "ID_FIELD", context)
+        to_dem = (QgsCoordinateTransform(source.sourceCrs(), crs, context.transformContext())
+                  if crs.isValid() and source.sourceCrs().isValid()
+                  and source.sourceCrs() != crs else None)
+
+        def points():
+            for f in source.getFeatures():
+                geom = f.geometry()
+                if geom is None or geom.isEmpty():
+                    continue
+                if to_dem is not None:
+                    geom.transform(to_dem)
+                name = f[field] if field else f.id()
+                for k, v in enumerate(geom.vertices()):
+                    yield (name if k == 0 else f"{name}_{k}"), v.x(), v.y()
+        path = os.path.join(QgsProcessingUtils.tempFolder(),
+                            f"hillshade_rt_points_{uuid.uuid4().hex}.csv")
+        try:
+            commands.write_points_csv(path, points())
+        except commands.ProgramError as e:
+            raise QgsProcessingException(str(e))
+        return path
+
     def sun(self, parameters, context):
-        """sun=..., azimuth, elevation, time_, tz of the sun parameters."""
-        mode = commands.SUN_MODES[self.parameterAsEnum(parameters, "SUN", context)]
-        when = self.parameterAsDateTime(parameters, "DATETIME", context)
-        return dict(sun=mode,
-                    azimuth=self.parameterAsDouble(parameters, "AZIMUTH", context),
-                    elevation=self.parameterAsDouble(parameters, "ELEVATION", context),
-                    time_=(when.toString("yyyy-MM-ddTHH:mm:ss")
-                           if when is not None and when.isValid() else None),
-                    tz=self.parameterAsString(parameters, "TIMEZONE", context))
+        """sun=..., azimuth, elevation, time_, tz of the sun parameters (and end_time,
+        step_minutes of a series)."""
+        mode = commands.QUERY_SUN_MODES[self.parameterAsEnum(parameters, "SUN", context)]
+        sun = dict(sun=mode, azimuth=self.number(parameters, context, "AZIMUTH"),
+                   elevation=self.number(parameters, context, "ELEVATION"),
+                   time_=self.when(parameters, context, "DATETIME"),
+                   tz=self.parameterAsString(parameters, "TIMEZONE", context))
+        if mode == "series":
+            sun.update(end_time=self.when(parameters, context, "END_DATETIME"),
+                       step_minutes=self.number(parameters, context, "STEP"))
+        return sun
 
     def algorithm(self, parameters, context):
         return self.parameterAsEnumString(parameters, "ALGORITHM", context) or "auto"
@@ -151,14 +258,17 @@ class HillshadeRtAlgorithm(QgsProcessingAlgorithm):
         try:
             program = commands.find_program(
                 ProcessingConfig.getSetting(commands.SETTING_PROGRAM))
-            argv = self.command(program, parameters, context)
+            argv = commands.with_progress(self.command(program, parameters, context))
         except commands.ProgramError as e:
             raise QgsProcessingException(str(e))
         feedback.pushCommandInfo(commands.quote(argv))
 
         def on_line(line):
+            percent = commands.parse_progress(line)
+            if percent is not None:             # {"progress": F}: the progress bar
+                feedback.setProgress(percent)
             # its one-line error becomes the algorithm's error (below): not shown twice
-            if line.strip() and not commands.is_error_line(line):
+            elif line.strip() and not commands.is_error_line(line):
                 feedback.pushInfo(line)
         try:
             result = commands.run(argv, on_line=on_line, is_canceled=feedback.isCanceled)
@@ -170,9 +280,13 @@ class HillshadeRtAlgorithm(QgsProcessingAlgorithm):
         if result.returncode != 0:
             raise QgsProcessingException(result.error_line())
         feedback.setProgress(100)
-        output = self.parameterAsOutputLayer(parameters, "OUTPUT", context)
+        output = self.output(parameters, context)
         self.style_output(output, parameters, context)
-        return {"OUTPUT": output}
+        return dict(self.more_outputs(parameters, context), OUTPUT=output)
+
+    def more_outputs(self, parameters, context):
+        """Outputs besides OUTPUT (name -> path)."""
+        return {}
 
     def style_output(self, output, parameters, context):
         """A style for the output when QGIS loads it (none: QGIS's default)."""
@@ -255,26 +369,18 @@ class SunHoursAlgorithm(HillshadeRtAlgorithm):
 
     def initAlgorithm(self, config=None):  # noqa: N802
         self.add_dem()
-        self.addParameter(QgsProcessingParameterDateTime(
-            "DATE", self.tr("Date"), QgsProcessingParameterDateTime.Date))
-        self.addParameter(QgsProcessingParameterDateTime(
-            "END_DATE", self.tr("End date (a range of days, included)"),
-            QgsProcessingParameterDateTime.Date, optional=True))
-        self.addParameter(QgsProcessingParameterNumber(
-            "STEP", self.tr("Step (minutes)"), QgsProcessingParameterNumber.Double, 10.0,
-            minValue=0.1, maxValue=1440.0))
+        self.add_dates()
+        self.add_step(10.0)
         self.add_zone("")
         self.add_algorithm()
         self.add_soft("Soft shadows (count the visible fraction of the sun's disk)")
         self.add_tail()
 
     def command(self, program, parameters, context):
-        def day(name):
-            d = self.parameterAsDateTime(parameters, name, context)
-            return d.date().toString("yyyy-MM-dd") if d is not None and d.isValid() else None
         return commands.sun_hours_argv(
-            program, **self.common(parameters, context), date=day("DATE"),
-            end_date=day("END_DATE"),
+            program, **self.common(parameters, context),
+            date=self.day(parameters, context, "DATE"),
+            end_date=self.day(parameters, context, "END_DATE"),
             step_minutes=self.parameterAsDouble(parameters, "STEP", context),
             tz=self.parameterAsString(parameters, "TIMEZONE", context),
             algorithm=self.algorithm(parameters, context),
@@ -313,4 +419,271 @@ class SkyviewAlgorithm(HillshadeRtAlgorithm):
             max_distance=self.parameterAsDouble(parameters, "MAX_DISTANCE", context))
 
 
-ALGORITHMS = (ShadowAlgorithm, SunHoursAlgorithm, SkyviewAlgorithm, HillshadeAlgorithm)
+class HorizonAlgorithm(HillshadeRtAlgorithm):
+    NAME = "horizon"
+    DISPLAY = "Horizon angle"
+    OUTPUT_LABEL = "Horizon angles"
+    HELP = ("<p>The horizon angle of every cell (<code>hillshade-rt horizon</code>; float32 "
+            "degrees above the horizontal, -9999 nodata; -90: no terrain ahead) toward one "
+            "azimuth (one band), or toward each of N equally spaced azimuths, north first "
+            "(one band each, its description the azimuth). A cell is lit by a sun at that "
+            "azimuth iff its angle is at most the sun's elevation. <b>Distance</b>: also the "
+            "ground distance in metres to each horizon point (the same bands). scan is exact; "
+            "hull approximates, faster.</p>")
+
+    def initAlgorithm(self, config=None):  # noqa: N802
+        self.add_dem()
+        self.addParameter(QgsProcessingParameterEnum(
+            "MODE", self.tr("Horizon toward"),
+            [self.tr("One azimuth"), self.tr("N directions (one band each)")], defaultValue=0))
+        self.addParameter(QgsProcessingParameterNumber(
+            "AZIMUTH", self.tr("Azimuth (degrees clockwise from north)"),
+            QgsProcessingParameterNumber.Double, 180.0, minValue=-360.0, maxValue=720.0))
+        self.addParameter(QgsProcessingParameterNumber(
+            "DIRECTIONS", self.tr("Directions"), QgsProcessingParameterNumber.Integer, 32,
+            minValue=8, maxValue=360))
+        self.addParameter(QgsProcessingParameterEnum(
+            "METHOD", self.tr("Method"), list(commands.HORIZON_METHODS), defaultValue="scan",
+            usesStaticStrings=True))
+        self.addParameter(QgsProcessingParameterNumber(
+            "MAX_DISTANCE", self.tr("Maximum distance (m, 0: the whole DEM)"),
+            QgsProcessingParameterNumber.Double, 0.0, minValue=0.0))
+        self.add_height()
+        self.add_tail()
+        self.addParameter(QgsProcessingParameterRasterDestination(
+            "DISTANCE", self.tr("Distance to the horizon (m)"), optional=True,
+            createByDefault=False))
+
+    def distance(self, parameters, context):
+        if parameters.get("DISTANCE") in (None, ""):
+            return None
+        return self.parameterAsOutputLayer(parameters, "DISTANCE", context) or None
+
+    def more_outputs(self, parameters, context):
+        distance = self.distance(parameters, context)
+        return {"DISTANCE": distance} if distance else {}
+
+    def command(self, program, parameters, context):
+        return commands.horizon_argv(
+            program, **self.common(parameters, context),
+            mode=commands.HORIZON_MODES[self.parameterAsEnum(parameters, "MODE", context)],
+            azimuth=self.number(parameters, context, "AZIMUTH"),
+            directions=self.parameterAsInt(parameters, "DIRECTIONS", context),
+            distance=self.distance(parameters, context),
+            method=self.parameterAsEnumString(parameters, "METHOD", context) or "scan",
+            max_distance=self.number(parameters, context, "MAX_DISTANCE"),
+            height_above_ground=self.number(parameters, context, "HEIGHT_ABOVE_GROUND"))
+
+
+class ProfileAlgorithm(HillshadeRtAlgorithm):
+    NAME = "profile"
+    DISPLAY = "Horizon profile at points"
+    OUTPUT_LABEL = "Horizon profiles (table)"
+    OUTPUT_FILTER = TABLE_FILTER
+    HELP = ("<p>The horizon profile of each point (<code>hillshade-rt profile</code>): the "
+            "horizon elevation and the distance to it every <i>step</i> degrees of azimuth, "
+            "clockwise from north, as a table: CSV (one row per point and azimuth; its first "
+            "lines, starting with #, state the conventions), JSON or GeoJSON (one feature per "
+            "point), by the file's extension. The points may be in any CRS.</p>")
+
+    def initAlgorithm(self, config=None):  # noqa: N802
+        self.add_dem()
+        self.add_points()
+        self.addParameter(QgsProcessingParameterNumber(
+            "STEP", self.tr("Step (degrees of azimuth)"), QgsProcessingParameterNumber.Double,
+            1.0, minValue=0.01, maxValue=90.0))
+        self.add_height("Observer's height above the ground (m)")
+        self.add_tail()
+
+    def command(self, program, parameters, context):
+        return commands.profile_argv(
+            program, **self.common(parameters, context),
+            points=self.points_file(parameters, context),
+            step=self.number(parameters, context, "STEP"),
+            height_above_ground=self.number(parameters, context, "HEIGHT_ABOVE_GROUND"))
+
+
+class QueryAlgorithm(HillshadeRtAlgorithm):
+    NAME = "query"
+    DISPLAY = "Sun at points (query)"
+    OUTPUT_LABEL = "Sun at the points (table)"
+    OUTPUT_FILTER = TABLE_FILTER
+    HELP = ("<p>Whether the sun reaches each point (<code>hillshade-rt query</code>): for each "
+            "point and sun, lit or not, the sun's azimuth and elevation, the horizon toward "
+            "the sun and the margin between them, as a table: CSV (one row per point and sun; "
+            "its first lines, starting with #, state the conventions), JSON or GeoJSON, by the "
+            "file's extension. The sun by azimuth and elevation, from a date and time, or a "
+            "series of times every <i>step</i> minutes (local times in the time zone). "
+            "<b>Irradiance</b>: also the clear-sky DNI and the direct beam on a horizontal "
+            "surface (suns from times).</p>")
+
+    def initAlgorithm(self, config=None):  # noqa: N802
+        self.add_dem()
+        self.add_points()
+        self.add_sun(series=True)
+        self.add_height("Observer's height above the ground (m)")
+        self.addParameter(QgsProcessingParameterBoolean(
+            "IRRADIANCE", self.tr("Also the clear-sky direct irradiance (suns from times)"),
+            False))
+        self.add_tail()
+
+    def command(self, program, parameters, context):
+        return commands.query_argv(
+            program, **self.common(parameters, context), **self.sun(parameters, context),
+            points=self.points_file(parameters, context),
+            height_above_ground=self.number(parameters, context, "HEIGHT_ABOVE_GROUND"),
+            irradiance=self.flag(parameters, context, "IRRADIANCE"))
+
+
+class IrradianceAlgorithm(HillshadeRtAlgorithm):
+    NAME = "irradiance"
+    DISPLAY = "Irradiance"
+    OUTPUT_LABEL = "Irradiance"
+    HELP = ("<p>The beam, diffuse, reflected and global irradiance of every cell over a day or "
+            "a range of days (<code>hillshade-rt irradiance</code>): 4 float32 bands, Wh/m2 "
+            "(W/m2 with <i>mean</i>), -9999 nodata. Beam: DNI on the tilted surface, 0 in cast "
+            "shadow; diffuse: DHI x the sky view factor (isotropic, or Perez); reflected: GHI x "
+            "albedo x the terrain's view factor. A clear sky (pvlib's Ineichen or Haurwitz), "
+            "or a measured one: a CSV of time, ghi (and dni, dhi) in W/m2.</p>")
+
+    def initAlgorithm(self, config=None):  # noqa: N802
+        self.add_dem()
+        self.add_dates()
+        self.add_step(15.0)
+        self.add_zone("")
+        self.addParameter(QgsProcessingParameterEnum(
+            "CLEAR_SKY", self.tr("Clear sky"), list(commands.CLEAR_SKIES),
+            defaultValue="ineichen", usesStaticStrings=True))
+        self.addParameter(QgsProcessingParameterNumber(
+            "LINKE_TURBIDITY", self.tr("Linke turbidity (0: pvlib's monthly climatology)"),
+            QgsProcessingParameterNumber.Double, 0.0, minValue=0.0))
+        self.addParameter(QgsProcessingParameterNumber(
+            "ALBEDO", self.tr("Albedo (ground reflectance, 0..1)"),
+            QgsProcessingParameterNumber.Double, 0.2, minValue=0.0, maxValue=1.0))
+        self.addParameter(QgsProcessingParameterFile(
+            "GHI", self.tr("Measured sky: CSV of time, ghi [, dni, dhi] (W/m2)"),
+            extension="csv", optional=True))
+        self.addParameter(QgsProcessingParameterBoolean(
+            "MEAN", self.tr("Mean W/m2 over the period instead of Wh/m2"), False))
+        self.addParameter(QgsProcessingParameterBoolean(
+            "PEREZ", self.tr("Perez anisotropic sky"), False))
+        self.addParameter(QgsProcessingParameterNumber(
+            "SKYVIEW_DIRECTIONS", self.tr("Sky view directions"),
+            QgsProcessingParameterNumber.Integer, 32, minValue=4, maxValue=360))
+        self.add_height("Height of the receiving surface above the ground (m)")
+        self.add_algorithm()
+        self.add_soft("Soft shadows (the visible fraction of the sun's disk)")
+        self.add_tail()
+
+    def command(self, program, parameters, context):
+        return commands.irradiance_argv(
+            program, **self.common(parameters, context),
+            date=self.day(parameters, context, "DATE"),
+            end_date=self.day(parameters, context, "END_DATE"),
+            step_minutes=self.number(parameters, context, "STEP"),
+            tz=self.parameterAsString(parameters, "TIMEZONE", context),
+            clear_sky=self.parameterAsEnumString(parameters, "CLEAR_SKY", context)
+            or "ineichen",
+            linke_turbidity=self.number(parameters, context, "LINKE_TURBIDITY"),
+            albedo=self.number(parameters, context, "ALBEDO"),
+            ghi=self.parameterAsFile(parameters, "GHI", context) or None,
+            mean=self.flag(parameters, context, "MEAN"),
+            perez=self.flag(parameters, context, "PEREZ"),
+            skyview_directions=self.parameterAsInt(parameters, "SKYVIEW_DIRECTIONS", context),
+            height_above_ground=self.number(parameters, context, "HEIGHT_ABOVE_GROUND"),
+            algorithm=self.algorithm(parameters, context),
+            soft=self.flag(parameters, context, "SOFT"))
+
+
+class AnimateAlgorithm(HillshadeRtAlgorithm):
+    NAME = "animate"
+    DISPLAY = "Animate shadows (GIF, MP4)"
+    OUTPUT_LABEL = "Animation"
+    OUTPUT_FILTER = ANIMATION_FILTER
+    HELP = ("<p>An animation of the shadows over a day, from local midnight, or over a series "
+            "of times (<code>hillshade-rt animate</code>): each frame the shaded relief lit by "
+            "that time's sun, cast shadows tinted blue, dark at night, the local time written "
+            "in a corner. A looping GIF, or an MP4 (needs the program's video extra: pip "
+            "install 'hillshade-rt[video]'), by the file's extension. Times are local times in "
+            "the time zone (empty: the zone of the DEM's centre).</p>")
+
+    def initAlgorithm(self, config=None):  # noqa: N802
+        self.add_dem()
+        self.addParameter(QgsProcessingParameterEnum(
+            "MODE", self.tr("Frames over"),
+            [self.tr("A day (the date)"), self.tr("A series (start to end)")], defaultValue=0))
+        self.addParameter(QgsProcessingParameterDateTime(
+            "DATE", self.tr("Date"), QgsProcessingParameterDateTime.Date, optional=True))
+        self.addParameter(QgsProcessingParameterDateTime(
+            "DATETIME", self.tr("Series: first date and time"),
+            QgsProcessingParameterDateTime.DateTime, optional=True))
+        self.addParameter(QgsProcessingParameterDateTime(
+            "END_DATETIME", self.tr("Series: last date and time"),
+            QgsProcessingParameterDateTime.DateTime, optional=True))
+        self.add_step(30.0, "Step between frames (minutes)")
+        self.add_zone("")
+        self.addParameter(QgsProcessingParameterNumber(
+            "FPS", self.tr("Frames per second"), QgsProcessingParameterNumber.Double, 12.0,
+            minValue=0.1, maxValue=50.0))
+        self.addParameter(QgsProcessingParameterNumber(
+            "SIZE", self.tr("Picture size (pixels on the long side, at most)"),
+            QgsProcessingParameterNumber.Integer, 1024, minValue=16))
+        self.addParameter(QgsProcessingParameterBoolean(
+            "LABEL", self.tr("Write the date and time on each frame"), True))
+        self.add_algorithm()
+        self.add_tail()
+
+    def command(self, program, parameters, context):
+        return commands.animate_argv(
+            program, **self.common(parameters, context),
+            mode=commands.ANIMATE_MODES[self.parameterAsEnum(parameters, "MODE", context)],
+            date=self.day(parameters, context, "DATE"),
+            start=self.when(parameters, context, "DATETIME"),
+            end=self.when(parameters, context, "END_DATETIME"),
+            step_minutes=self.number(parameters, context, "STEP"),
+            tz=self.parameterAsString(parameters, "TIMEZONE", context),
+            fps=self.number(parameters, context, "FPS"),
+            size=self.parameterAsInt(parameters, "SIZE", context),
+            label=self.flag(parameters, context, "LABEL"),
+            algorithm=self.algorithm(parameters, context))
+
+
+class IlluminationAlgorithm(HillshadeRtAlgorithm):
+    NAME = "illumination"
+    DISPLAY = "Illumination over a subsolar series"
+    OUTPUT_LABEL = "Illumination"
+    HELP = ("<p>The illumination of every cell over a subsolar series "
+            "(<code>hillshade-rt illumination</code>; float32, NaN nodata), each cell with its "
+            "own sun on the body (the Moon, Mars, the Earth): band 1 the fraction of the time "
+            "lit, [2 with soft shadows: the mean visible fraction of the sun's disk], then the "
+            "longest continuous shadow (hours) and permanently shadowed (1 never lit). The "
+            "series: a CSV of time,lat,lon[,distance_m] or a JPL Horizons table saved as "
+            "CSV.</p>")
+
+    def initAlgorithm(self, config=None):  # noqa: N802
+        self.add_dem()
+        self.addParameter(QgsProcessingParameterFile(
+            "SUBSOLAR_FILE", self.tr("Subsolar series (CSV or JPL Horizons table)")))
+        self.addParameter(QgsProcessingParameterString(
+            "BODY", self.tr("Body: moon, mars, earth or a radius in metres (empty: the "
+                            "CRS's)"), "", optional=True))
+        self.addParameter(QgsProcessingParameterNumber(
+            "SUN_DISTANCE", self.tr("The sun's distance (m; 0: the body's mean distance)"),
+            QgsProcessingParameterNumber.Double, 0.0, minValue=0.0))
+        self.add_height("Height of the lit point above every cell (m)")
+        self.add_soft("Soft shadows (the visible fraction of the sun's disk)")
+        self.add_tail()
+
+    def command(self, program, parameters, context):
+        return commands.illumination_argv(
+            program, **self.common(parameters, context),
+            subsolar_file=self.parameterAsFile(parameters, "SUBSOLAR_FILE", context),
+            body=self.parameterAsString(parameters, "BODY", context),
+            sun_distance=self.number(parameters, context, "SUN_DISTANCE"),
+            height_above_ground=self.number(parameters, context, "HEIGHT_ABOVE_GROUND"),
+            soft=self.flag(parameters, context, "SOFT"))
+
+
+ALGORITHMS = (ShadowAlgorithm, SunHoursAlgorithm, SkyviewAlgorithm, HillshadeAlgorithm,
+              HorizonAlgorithm, ProfileAlgorithm, IrradianceAlgorithm, QueryAlgorithm,
+              AnimateAlgorithm, IlluminationAlgorithm)

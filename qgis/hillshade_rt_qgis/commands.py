@@ -170,17 +170,12 @@ def sun_hours_argv(program: str, dem: str, output: str, *, date: str,
     (empty: local mean solar time)."""
     if not date:
         raise ProgramError("sun hours need a date")
-    if not step_minutes or float(step_minutes) <= 0:
-        raise ProgramError("the step must be more than 0 minutes")
-    seconds = round(float(step_minutes) * 60)
-    step = f"{seconds // 60}min" if seconds % 60 == 0 else f"{seconds}s"
+    step = _minutes("step", step_minutes)
     args = [program, "sun-hours"] + dem_args(dem, output, band) + ["--date", date]
     if end_date:
         args += ["--end-date", end_date]
     args += ["--step", step]
-    if tz and tz.strip():
-        args += ["--tz", tz.strip()]
-    return args + common_tail(algorithm, soft, extra)
+    return args + _zone(tz) + common_tail(algorithm, soft, extra)
 
 
 def skyview_argv(program: str, dem: str, output: str, *, band: int = 1, directions: int = 32,
@@ -195,6 +190,225 @@ def skyview_argv(program: str, dem: str, output: str, *, band: int = 1, directio
     if max_distance:
         args += ["--max-distance", _number(max_distance)]
     return args + common_tail(None, False, extra)
+
+
+HORIZON_MODES = ("azimuth", "directions")     # one azimuth (one band), or N directions
+HORIZON_METHODS = ("scan", "hull")
+CLEAR_SKIES = ("ineichen", "haurwitz")
+QUERY_SUN_MODES = SUN_MODES + ("series",)     # also --start/--end/--step
+ANIMATE_MODES = ("day", "series")             # --date, or --start/--end/--step
+PROFILE_FORMATS = ("csv", "json", "geojson")  # (pvlib, pvgis, grass: one point; EXTRA)
+QUERY_FORMATS = ("csv", "json", "geojson")
+# the commands that take --progress (a bar over suns, frames, positions or windows)
+PROGRESS_COMMANDS = ("shadow", "hillshade", "sun-hours", "horizon", "skyview", "irradiance",
+                     "animate", "illumination")
+
+
+def _minutes(name: str, minutes: float) -> str:
+    """A step in minutes as the command line takes it: ``15min``, or ``30s``."""
+    if not minutes or float(minutes) <= 0:
+        raise ProgramError(f"the {name} must be more than 0 minutes")
+    seconds = round(float(minutes) * 60)
+    return f"{seconds // 60}min" if seconds % 60 == 0 else f"{seconds}s"
+
+
+def _zone(tz: Optional[str]) -> list:
+    return ["--tz", tz.strip()] if tz and tz.strip() else []
+
+
+def _lift(height_above_ground: Optional[float]) -> list:
+    return (["--height-above-ground", _number(height_above_ground)]
+            if height_above_ground else [])
+
+
+def table_format(output: str, choices: Sequence[str]) -> str:
+    """A table's format from its file's extension (.geojson, .json, else csv)."""
+    ext = os.path.splitext(output or "")[1].lower().lstrip(".")
+    return ext if ext in choices else "csv"
+
+
+def write_points_csv(path: str, points: Iterable) -> int:
+    """The points of ``profile`` and ``query`` as their --points CSV: ``id,x,y`` in the DEM's
+    CRS (``points``: (id, x, y) each). Returns how many."""
+    import csv
+    n = 0
+    with open(path, "w", newline="", encoding="utf-8") as f:
+        w = csv.writer(f)
+        w.writerow(["id", "x", "y"])
+        for pid, x, y in points:
+            w.writerow([str(pid), repr(float(x)), repr(float(y))])
+            n += 1
+    if n == 0:
+        raise ProgramError("no points given")
+    return n
+
+
+def horizon_argv(program: str, dem: str, output: str, *, band: int = 1,
+                 mode: str = "azimuth", azimuth: float = 180.0, directions: int = 32,
+                 distance: Optional[str] = None, method: str = "scan",
+                 max_distance: Optional[float] = None, height_above_ground: float = 0.0,
+                 extra: Iterable[str] = ()) -> list:
+    """``hillshade-rt horizon``: the horizon angle toward one azimuth (one band) or toward each
+    of ``directions`` azimuths (one band each); ``distance``: also the distance raster."""
+    _check_choice("the horizon", mode, HORIZON_MODES)
+    args = [program, "horizon"] + dem_args(dem, output, band)
+    args += (["--azimuth", _number(azimuth)] if mode == "azimuth"
+             else ["--directions", str(int(directions))])
+    if distance:
+        args += ["--distance", distance]
+    args += ["--method", _check_choice("the method", method, HORIZON_METHODS)]
+    if max_distance:
+        args += ["--max-distance", _number(max_distance)]
+    return args + _lift(height_above_ground) + common_tail(None, False, extra)
+
+
+def profile_argv(program: str, dem: str, output: str, *, points: str, band: int = 1,
+                 step: float = 1.0, height_above_ground: float = 0.0,
+                 extra: Iterable[str] = ()) -> list:
+    """``hillshade-rt profile``: the horizon profile of each point (``points``: a CSV or
+    GeoJSON file) every ``step`` degrees, as a table in ``output`` (CSV, JSON or GeoJSON by its
+    extension)."""
+    if not points:
+        raise ProgramError("no points given")
+    if not output:
+        raise ProgramError("no output file given")
+    args = [program, "profile", dem or _no_dem(), "--points", points, "--step", _number(step)]
+    args += _lift(height_above_ground)
+    args += ["--format", table_format(output, PROFILE_FORMATS), "-o", output]
+    args += ["--band", str(int(band))] if band and int(band) != 1 else []
+    return args + common_tail(None, False, extra)
+
+
+def _no_dem():
+    raise ProgramError("no DEM given")
+
+
+def query_argv(program: str, dem: str, output: str, *, points: str, band: int = 1,
+               sun: str = "azimuth", azimuth: Optional[float] = 315.0,
+               elevation: Optional[float] = 45.0, time_: Optional[str] = None,
+               end_time: Optional[str] = None, step_minutes: float = 60.0,
+               tz: Optional[str] = None, height_above_ground: float = 0.0,
+               irradiance: bool = False, extra: Iterable[str] = ()) -> list:
+    """``hillshade-rt query``: whether the sun reaches each point, for one sun (azimuth and
+    elevation, or a time) or a series (``time_`` to ``end_time`` every ``step_minutes``), as a
+    table in ``output`` (CSV, JSON or GeoJSON by its extension)."""
+    _check_choice("the sun", sun, QUERY_SUN_MODES)
+    if not points:
+        raise ProgramError("no points given")
+    if not output:
+        raise ProgramError("no output file given")
+    args = [program, "query", dem or _no_dem(), "--points", points]
+    if sun == "series":
+        if not time_ or not end_time:
+            raise ProgramError("a series of suns needs its first and last time")
+        args += ["--start", time_, "--end", end_time, "--step", _minutes("step", step_minutes),
+                 "--tz", (tz or "").strip() or "UTC"]
+    else:
+        args += sun_args(sun, azimuth, elevation, time_, tz)
+    args += _lift(height_above_ground) + (["--irradiance"] if irradiance else [])
+    args += ["--format", table_format(output, QUERY_FORMATS), "-o", output]
+    args += ["--band", str(int(band))] if band and int(band) != 1 else []
+    return args + common_tail(None, False, extra)
+
+
+def irradiance_argv(program: str, dem: str, output: str, *, date: str,
+                    end_date: Optional[str] = None, step_minutes: float = 15.0,
+                    tz: Optional[str] = None, band: int = 1, clear_sky: str = "ineichen",
+                    linke_turbidity: Optional[float] = None, albedo: float = 0.2,
+                    ghi: Optional[str] = None, mean: bool = False, perez: bool = False,
+                    skyview_directions: int = 32, height_above_ground: float = 0.0,
+                    algorithm: str = "auto", soft: bool = False,
+                    extra: Iterable[str] = ()) -> list:
+    """``hillshade-rt irradiance``: beam, diffuse, reflected and global irradiance (4 bands,
+    Wh/m2, W/m2 with ``mean``) over a day or days up to ``end_date``."""
+    if not date:
+        raise ProgramError("irradiance needs a date")
+    args = [program, "irradiance"] + dem_args(dem, output, band) + ["--date", date]
+    if end_date:
+        args += ["--end-date", end_date]
+    args += ["--step", _minutes("step", step_minutes)] + _zone(tz)
+    args += ["--clear-sky", _check_choice("the clear sky", clear_sky, CLEAR_SKIES)]
+    if linke_turbidity:
+        args += ["--linke-turbidity", _number(linke_turbidity)]
+    args += ["--albedo", _number(albedo)]
+    if ghi:
+        args += ["--ghi", ghi]
+    args += (["--mean"] if mean else []) + (["--perez"] if perez else [])
+    args += ["--skyview-directions", str(int(skyview_directions))] + _lift(height_above_ground)
+    return args + common_tail(algorithm, soft, extra)
+
+
+def animate_argv(program: str, dem: str, output: str, *, band: int = 1, mode: str = "day",
+                 date: Optional[str] = None, start: Optional[str] = None,
+                 end: Optional[str] = None, step_minutes: float = 30.0,
+                 tz: Optional[str] = None, fps: float = 12.0, size: int = 1024,
+                 label: bool = True, algorithm: str = "auto",
+                 extra: Iterable[str] = ()) -> list:
+    """``hillshade-rt animate``: the shadows of a day (``date``, from local midnight) or of a
+    series (``start`` to ``end``) every ``step_minutes`` as a GIF or MP4 (by ``output``'s
+    extension)."""
+    _check_choice("the animation", mode, ANIMATE_MODES)
+    args = [program, "animate"] + dem_args(dem, output, band)
+    if mode == "day":
+        if not date:
+            raise ProgramError("an animation of a day needs the date")
+        args += ["--date", date]
+    else:
+        if not start or not end:
+            raise ProgramError("an animation of a series needs its first and last time")
+        args += ["--start", start, "--end", end]
+    args += ["--step", _minutes("step", step_minutes)] + _zone(tz)
+    args += ["--fps", _number(fps), "--size", str(int(size))]
+    args += [] if label else ["--no-label"]
+    return args + common_tail(algorithm, False, extra)
+
+
+def illumination_argv(program: str, dem: str, output: str, *, subsolar_file: str,
+                      band: int = 1, body: Optional[str] = None,
+                      sun_distance: Optional[float] = None, height_above_ground: float = 0.0,
+                      soft: bool = False, extra: Iterable[str] = ()) -> list:
+    """``hillshade-rt illumination``: a subsolar series (CSV or JPL Horizons table) -> the
+    fraction of the time lit, [the mean visible fraction of the disk with ``soft``], the
+    longest shadow (hours), permanently shadowed."""
+    if not subsolar_file:
+        raise ProgramError("illumination needs a subsolar series file")
+    args = [program, "illumination"] + dem_args(dem, output, band)
+    args += ["--subsolar-file", subsolar_file]
+    if body and body.strip():
+        args += ["--body", body.strip()]
+    if sun_distance:
+        args += ["--sun-distance", _number(sun_distance)]
+    return args + _lift(height_above_ground) + common_tail(None, soft, extra)
+
+
+def with_progress(argv: Sequence[str]) -> list:
+    """``argv`` with ``--progress json`` where its command takes it (last but --overwrite:
+    after the user's extra options, since the plugin reads the lines): the program then writes
+    ``{"progress": F}`` lines that :func:`parse_progress` reads."""
+    argv = list(argv)
+    if len(argv) > 1 and argv[1] in PROGRESS_COMMANDS:
+        at = len(argv) - 1 if argv[-1] == "--overwrite" else len(argv)
+        argv[at:at] = ["--progress", "json"]
+    return argv
+
+
+def parse_progress(line: str) -> Optional[float]:
+    """The percentage (0..100) of one of the program's ``{"progress": F}`` lines; None for any
+    other line."""
+    text = line.strip()
+    if not (text.startswith("{") and '"progress"' in text):
+        return None
+    import json
+    try:
+        value = json.loads(text)
+    except ValueError:
+        return None
+    if not isinstance(value, dict) or set(value) != {"progress"}:
+        return None
+    f = value["progress"]
+    if isinstance(f, bool) or not isinstance(f, (int, float)) or f != f:
+        return None
+    return 100.0 * min(max(float(f), 0.0), 1.0)
 
 
 def child_env(environ: Optional[dict] = None) -> dict:
