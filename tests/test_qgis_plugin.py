@@ -645,3 +645,155 @@ def test_qgis_shadow_mask_loads_styled(qgis, tmp_path):
     lines = qgis_python(qgis, tmp_path, LOAD, DEM)
     assert lines == ["out.tif paletted [(1.0, 120), (0.0, 0)]",
                      "out_soft.tif singlebandgray "], lines
+
+
+# --- the other commands in QGIS: each output equals the command's own
+
+def program(*args) -> None:
+    done = subprocess.run([PROGRAM, *map(str, args)], capture_output=True, text=True,
+                          timeout=600)
+    assert done.returncode == 0, done.stderr
+
+
+def qgis_run(qgis, algorithm, **params) -> dict:
+    """``qgis_process run hillshade_rt:ALGORITHM --json -- NAME=VALUE...``: its report."""
+    done = qgis("run", f"hillshade_rt:{algorithm}", "--json", "--",
+                *[f"{k}={v}" for k, v in params.items()])
+    assert done.returncode == 0, done.stdout + done.stderr
+    return json.loads(done.stdout)
+
+
+def read_bands(path):
+    import rasterio
+    with rasterio.open(path) as ds:
+        return ds.read(), [ds.descriptions, str(ds.nodata), ds.crs, ds.transform]
+
+
+def assert_same_raster(got, want):
+    (a, meta_a), (b, meta_b) = read_bands(got), read_bands(want)
+    assert a.dtype == b.dtype and a.shape == b.shape
+    np.testing.assert_array_equal(a, b)
+    assert meta_a == meta_b
+
+
+POINTS = [("a", 429400.0, 5150600.0), ("b", 429500.5, 5150700.25), ("c", 429300.0, 5150800.0)]
+
+
+def points_files(folder):
+    """The same points as a GeoJSON layer in the DEM's CRS (QGIS's input) and as the
+    program's --points CSV."""
+    geojson, csv = folder / "points.geojson", folder / "points.csv"
+    geojson.write_text(json.dumps({
+        "type": "FeatureCollection",
+        "crs": {"type": "name", "properties": {"name": "urn:ogc:def:crs:EPSG::26915"}},
+        "features": [{"type": "Feature", "properties": {"name": n},
+                      "geometry": {"type": "Point", "coordinates": [x, y]}}
+                     for n, x, y in POINTS]}))
+    cmd.write_points_csv(str(csv), POINTS)
+    return geojson, csv
+
+
+@pytest.mark.qgis
+def test_qgis_horizon_directions_and_distance(qgis, tmp_path):
+    out, dist = tmp_path / "hz.tif", tmp_path / "dist.tif"
+    report = qgis_run(qgis, "horizon", INPUT=qgis.dem, MODE=1, DIRECTIONS=8,
+                      MAX_DISTANCE=150, OUTPUT=out, DISTANCE=dist)
+    assert report["results"] == {"OUTPUT": str(out), "DISTANCE": str(dist)}
+    program("horizon", qgis.dem, tmp_path / "ref.tif", "--directions", 8, "--max-distance",
+            150, "--distance", tmp_path / "ref_dist.tif")
+    assert_same_raster(out, tmp_path / "ref.tif")
+    assert_same_raster(dist, tmp_path / "ref_dist.tif")
+    assert read_bands(out)[0].shape[0] == 8
+    # one azimuth, no distance raster
+    one = tmp_path / "one.tif"
+    report = qgis_run(qgis, "horizon", INPUT=qgis.dem, AZIMUTH=135, METHOD="hull",
+                      OUTPUT=one)
+    assert "--distance" not in report["log"]["info"][0]
+    program("horizon", qgis.dem, tmp_path / "ref1.tif", "--azimuth", 135, "--method", "hull")
+    assert_same_raster(one, tmp_path / "ref1.tif")
+
+
+@pytest.mark.qgis
+def test_qgis_profile_and_query_tables(qgis, tmp_path):
+    """Points of a layer -> the tables of ``profile`` and ``query``, row for row the
+    program's own with the same points."""
+    layer, csv = points_files(tmp_path)
+    out = tmp_path / "profile.csv"
+    qgis_run(qgis, "profile", INPUT=qgis.dem, POINTS=layer, ID_FIELD="name", STEP=30,
+             HEIGHT_ABOVE_GROUND=1.5, OUTPUT=out)
+    program("profile", qgis.dem, "--points", csv, "--step", 30, "--height-above-ground", 1.5,
+            "-o", tmp_path / "ref.csv")
+    rows = out.read_text().splitlines()
+    assert rows == (tmp_path / "ref.csv").read_text().splitlines()
+    assert sum(1 for r in rows if r[:2] in ("a,", "b,", "c,")) == 3 * 12
+
+    out = tmp_path / "query.geojson"
+    qgis_run(qgis, "query", INPUT=qgis.dem, POINTS=layer, ID_FIELD="name", SUN=2,
+             DATETIME="2026-06-21T07:00:00", END_DATETIME="2026-06-21T19:00:00", STEP=120,
+             TIMEZONE="America/Chicago", OUTPUT=out)
+    program("query", qgis.dem, "--points", csv, "--start", "2026-06-21T07:00:00", "--end",
+            "2026-06-21T19:00:00", "--step", "120min", "--tz", "America/Chicago", "-o",
+            tmp_path / "ref.geojson")
+    got = json.loads(out.read_text())
+    assert got == json.loads((tmp_path / "ref.geojson").read_text())
+    assert [f["properties"]["id"] for f in got["features"]] == ["a", "b", "c"]
+    assert len(got["features"][0]["properties"]["lit"]) == 7
+
+
+@pytest.mark.qgis
+def test_qgis_irradiance_equals_program(qgis, tmp_path):
+    out = tmp_path / "irr.tif"
+    qgis_run(qgis, "irradiance", INPUT=qgis.dem, DATE="2026-06-21", STEP=120,
+             TIMEZONE="America/Chicago", ALBEDO=0.3, SKYVIEW_DIRECTIONS=8, MEAN=True,
+             OUTPUT=out)
+    program("irradiance", qgis.dem, tmp_path / "ref.tif", "--date", "2026-06-21", "--step",
+            "120min", "--tz", "America/Chicago", "--albedo", 0.3, "--skyview-directions", 8,
+            "--mean")
+    assert_same_raster(out, tmp_path / "ref.tif")
+
+
+@pytest.mark.qgis
+def test_qgis_animate_equals_program(qgis, tmp_path):
+    out = tmp_path / "day.gif"
+    report = qgis_run(qgis, "animate", INPUT=qgis.dem, DATE="2026-06-21", STEP=180,
+                      TIMEZONE="America/Chicago", SIZE=64, FPS=4, OUTPUT=out)
+    assert report["results"]["OUTPUT"] == str(out)
+    program("animate", qgis.dem, tmp_path / "ref.gif", "--date", "2026-06-21", "--step",
+            "180min", "--tz", "America/Chicago", "--size", 64, "--fps", 4)
+    assert out.read_bytes() == (tmp_path / "ref.gif").read_bytes()
+    assert out.read_bytes()[:6] == b"GIF89a"
+
+
+@pytest.mark.qgis
+def test_qgis_illumination_equals_program(qgis, tmp_path):
+    """A subsolar series on the Earth over the DEM's afternoon."""
+    series = tmp_path / "subsolar.csv"
+    series.write_text("time,lat,lon\n" + "".join(
+        f"2026-06-21T{h:02d}:00:00Z,23.44,{-(h - 12) * 15.0}\n" for h in range(13, 24)))
+    out = tmp_path / "il.tif"
+    qgis_run(qgis, "illumination", INPUT=qgis.dem, SUBSOLAR_FILE=series, SOFT=True,
+             OUTPUT=out)
+    program("illumination", qgis.dem, tmp_path / "ref.tif", "--subsolar-file", series,
+            "--soft")
+    assert_same_raster(out, tmp_path / "ref.tif")
+    assert read_bands(out)[0].shape[0] == 4
+
+
+PROGRESS = r"""
+seen = []
+feedback = QgsProcessingFeedback()
+feedback.progressChanged.connect(seen.append)
+processing.run("hillshade_rt:sunhours", {"INPUT": dem, "DATE": "2026-06-21", "STEP": 60,
+                                         "OUTPUT": out}, feedback=feedback)
+print("PROGRESS", " ".join(format(p, "g") for p in seen))
+"""
+
+
+@pytest.mark.qgis
+def test_qgis_progress_reaches_feedback(qgis, tmp_path):
+    """The program's {"progress": F} lines become the feedback's percentages."""
+    lines = qgis_python(qgis, tmp_path, PROGRESS, DEM)
+    seen = [float(p) for p in lines[-1].split()[1:]]
+    assert lines[-1].startswith("PROGRESS"), lines
+    assert len(seen) >= 5 and seen == sorted(seen) and seen[-1] == 100.0, seen
+    assert (tmp_path / "out" / "out.tif").exists()
