@@ -41,7 +41,7 @@ class HillshadeRtProvider(QgsProcessingProvider):
         return "hillshade-rt"
 
     def longName(self):  # noqa: N802
-        return self.tr("hillshade-rt: terrain shadows, sun hours, sky view factor")
+        return self.tr("hillshade-rt: terrain shadows, sun hours, sky view, horizons, irradiance")
 
     def icon(self):
         return QIcon(os.path.join(os.path.dirname(__file__), "icon.svg"))
