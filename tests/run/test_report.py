@@ -1,4 +1,4 @@
-"""--progress json: the run's progress as lines of JSON on stderr (for programs such as the
+"""``run.report``'s progress, --progress json: the run's progress as lines of JSON on stderr (for programs such as the
 QGIS plugin), instead of tqdm's bar."""
 
 from __future__ import annotations
