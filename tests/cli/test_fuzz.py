@@ -1357,3 +1357,24 @@ def test_fuzz_every_command(command):
     def run(case):
         check_generic(case)
     run()
+
+
+# ---------------------------------------------------------------------------------------------
+# what the fuzzing found, kept as plain cases
+
+def test_fuzz_found_a_nodata_outside_the_heights_type():
+    """--nodata 1e40 on int16 heights: a value the type cannot hold matches no cell, without
+    numpy's RuntimeWarning on stderr (the error line was the second line)."""
+    data = raster_bytes("GTiff", 12, 12, "int16", "utm", None, 0, 0.0, 1, None)
+    case = Case("horizon", ["horizon", IN + "dem.tif", OUT + "o.tif", "--directions", "8",
+                            "--nodata", "1e40", "-q", "--refraction-coefficient", "nan"],
+                {"dem.tif": data}, ["int16 12x12"])
+    bad, r, stderr = run_generic(case)
+    assert not bad and r.exit_code == 1, (bad, stderr)
+    from hillshade_rt.io.dem import heights_into
+    z = np.arange(12, dtype=np.int16).reshape(3, 4)
+    out = np.empty(z.shape, np.float32)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        heights_into(z, 1e40, out)
+    assert np.array_equal(out, z.astype(np.float32))
