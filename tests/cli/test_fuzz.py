@@ -1378,3 +1378,95 @@ def test_fuzz_found_a_nodata_outside_the_heights_type():
         warnings.simplefilter("error")
         heights_into(z, 1e40, out)
     assert np.array_equal(out, z.astype(np.float32))
+
+
+# ---------------------------------------------------------------------------------------------
+# the viewer's HTTP endpoints: random query strings and JSON bodies against a Viewer on a small
+# DEM answer 200, 400 or 404, never 500, with one line on an error, and the server goes on
+
+_Q_VALUES = ["0", "1", "-1", "5.5", "12", "90", "91", "-0.0", "nan", "inf", "-inf", "1e308",
+             "1e-300", "abc", "", "0,0,10,10", "1,2", "5,5,1,1", "-1e9,-1e9,1e9,1e9",
+             "2026-06-21T12:00Z", "2026-06-21T14:30", "2026-06-21", "2026-13-45", "auto",
+             "smap", "brute", "quick", "true", "yes", "%00", "%ff", "\u00e9", "1" * 400]
+_Q_KEYS = ["bbox", "w", "h", "az", "el", "time", "algorithm", "soft", "sunhours", "x", "y",
+           "date", "junk"]
+_PATHS = ["/api/render", "/api/point", "/api/download", "/api/sunpath", "/api/info",
+          "/api/nothing", "/static/../../etc/passwd", "/"]
+_JSON = st.recursive(st.none() | st.booleans() | st.integers(-10 ** 20, 10 ** 20)
+                     | st.floats(allow_nan=True, allow_infinity=True)
+                     | st.sampled_from(_Q_VALUES),
+                     lambda inner: st.lists(inner, max_size=3)
+                     | st.dictionaries(st.sampled_from(["x", "y"]), inner, max_size=2),
+                     max_leaves=4)
+_EDIT_KEYS = ["x", "y", "radius", "delta", "shape", "map_x", "map_y", "lon", "lat"]
+
+
+@pytest.fixture(scope="module")
+def fuzz_viewer(tmp_path_factory):
+    """A viewer (in a thread, on a free port) of a 24 x 24 UTM DEM with voids."""
+    import threading
+
+    from hillshade_rt.io import read_dem
+    from hillshade_rt.run.view import Viewer, make_server
+    path = tmp_path_factory.mktemp("view") / "dem.tif"
+    path.write_bytes(raster_bytes("GTiff", 24, 24, "float32", "utm", -9999.0, 0, 0.05, 1, None))
+    viewer = Viewer(read_dem(str(path)), backend="cpu")
+    srv = make_server(viewer, 0)
+    th = threading.Thread(target=srv.serve_forever, kwargs={"poll_interval": 0.1}, daemon=True)
+    th.start()
+    yield srv
+    srv.shutdown()
+    srv.server_close()
+    viewer.close()
+
+
+def _ask(srv, method, path, body=None):
+    import http.client
+    conn = http.client.HTTPConnection(*srv.server_address[:2], timeout=60)
+    try:
+        conn.request(method, path, body=body,
+                     headers={"Content-Type": "application/json"} if body is not None else {})
+        r = conn.getresponse()
+        return r.status, r.read()
+    finally:
+        conn.close()
+
+
+def _judge_http(srv, method, path, body=None):
+    status, data = _ask(srv, method, path, body)
+    assert status in (200, 400, 404), (method, path, body, status, data[:300])
+    if status != 200:
+        text = data.decode("utf-8", "replace").strip()
+        assert text and "\n" not in text and "Traceback" not in text, (path, text[:300])
+    assert _ask(srv, "GET", "/api/info")[0] == 200       # the server goes on
+
+
+@_settings(60, 0.05)
+@given(path=st.sampled_from(_PATHS),
+       query=st.lists(st.tuples(st.sampled_from(_Q_KEYS), st.sampled_from(_Q_VALUES)),
+                      max_size=6),
+       raw=st.sampled_from(["", "&&==", "a=%zz", "bbox", "=1", "x=1&x=2&y=3"]))
+def test_fuzz_viewer_get(fuzz_viewer, path, query, raw):
+    """GET endpoints with random query strings: 200, 400 or 404, never 500."""
+    from urllib.parse import quote
+    q = "&".join(f"{k}={quote(v, safe='%,:')}" for k, v in query)
+    if "w" not in dict(query) and path == "/api/render":
+        q += "&w=32&h=32"          # small pictures: the default 512² is slow for nothing
+    _judge_http(fuzz_viewer, "GET", path + "?" + q + ("&" + raw if raw else ""))
+
+
+@_settings(50, 0.05)
+@given(path=st.sampled_from(["/api/edit"] * 4 + ["/api/undo", "/api/reset", "/api/nothing"]),
+       body=st.one_of(
+           st.dictionaries(st.sampled_from(_EDIT_KEYS), _JSON, max_size=6),
+           st.fixed_dictionaries({"x": st.sampled_from(["3", "12.5", "-1", "nan", "1e308"]),
+                                  "y": st.sampled_from(["3", "23.9", "24", "inf"]),
+                                  "radius": st.sampled_from(["0", "30", "1e6", "-1", "abc"]),
+                                  "delta": st.sampled_from(["5", "-20", "1e5", "1e300", "nan"]),
+                                  "shape": st.sampled_from(["disk", "flat", "cone", ""])}),
+           _JSON),
+       raw=st.one_of(st.none(), st.binary(max_size=40)))
+def test_fuzz_viewer_edit(fuzz_viewer, path, body, raw):
+    """POST /api/edit (undo, reset) with random JSON bodies or bytes: 200, 400 or 404."""
+    data = raw if raw is not None else json.dumps(body).encode()
+    _judge_http(fuzz_viewer, "POST", path, data)
