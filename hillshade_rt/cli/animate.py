@@ -6,17 +6,17 @@ import click
 
 from .errors import errors_to_click, say
 from ..run.config import PLACE_KEYS
-from .options import (algorithm_option, animation_options, backend_option, curvature_options,
-                      dem_options, overwrite_option, place_options, quiet_option,
-                      progress_option, report_option,
+from .options import (SectionedCommand, algorithm_option, animation_options, backend_option,
+                      curvature_options, dem_options, overwrite_option, place_options,
+                      progress_option, quiet_option, report_option,
                       threads_option, to_read_options, to_run_options)
 
 
-@click.command("animate")
+@click.command("animate", cls=SectionedCommand)
 @click.argument("dem", type=click.Path(dir_okay=False))
 @click.argument("output", type=click.Path(dir_okay=False))
 @animation_options
-@place_options
+@place_options("animate")
 @algorithm_option
 @curvature_options
 @backend_option

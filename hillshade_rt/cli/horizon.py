@@ -5,7 +5,7 @@ from __future__ import annotations
 import click
 
 from .errors import errors_to_click, say
-from .options import (context_option, each_pattern_options,
+from .options import (InternalOption, SectionedCommand, context_option, each_pattern_options,
                       backend_option, dem_options, finite, format_option,
                       height_above_ground_option, horizon_physics_options, max_distance_option,
                       max_memory_option, overwrite_option, preview_option, quiet_option,
@@ -14,7 +14,7 @@ from .options import (context_option, each_pattern_options,
                       window_size_option)
 
 
-@click.command()
+@click.command(cls=SectionedCommand)
 @click.argument("files", metavar="DEM OUTPUT | DEM... --each", nargs=-1, required=True,
                 type=click.Path(dir_okay=False))
 @click.option("--azimuth", type=float, default=None, callback=finite,
@@ -29,7 +29,7 @@ from .options import (context_option, each_pattern_options,
 @click.option("--method", type=click.Choice(["scan", "hull"]), default="scan", show_default=True,
               help="scan: exact per-cell march; hull: convex-hull approximation, much faster.")
 @click.option("--sample-spacing", type=click.IntRange(min=1), default=1, show_default=True,
-              help="scan: use every N-th sample only (the paper's sp; faster, approximate).")
+              cls=InternalOption, help="scan: use every N-th sample only (the paper's sp; faster, approximate).")
 @max_distance_option
 @horizon_physics_options
 @height_above_ground_option("The observer of every cell stands this many metres above it (a "

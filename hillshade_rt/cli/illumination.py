@@ -6,14 +6,14 @@ from __future__ import annotations
 import click
 
 from .errors import errors_to_click, say
-from .options import (backend_option, dem_options, format_option, height_above_ground_option,
+from .options import (SectionedCommand, backend_option, dem_options, format_option, height_above_ground_option,
                       max_memory_option, overwrite_option, physics_options, preview_option,
                       quiet_option, progress_option,
                       report_option, scheduler_option, subsolar_series_options, threads_option,
                       to_read_options, to_run_options, window_size_option)
 
 
-@click.command("illumination")
+@click.command("illumination", cls=SectionedCommand)
 @click.argument("dem", type=click.Path(dir_okay=False))
 @click.argument("output", type=click.Path(dir_okay=False))
 @subsolar_series_options

@@ -7,7 +7,7 @@ import click
 
 from .errors import errors_to_click, say
 from ..run.config import PLACE_KEYS
-from .options import (context_option, each_pattern_options,
+from .options import (SectionedCommand, context_option, each_pattern_options,
                       algorithm_option, backend_option, dem_options, finite, format_option,
                       height_above_ground_option, overwrite_option, physics_options, place_options,
                       preview_option, quiet_option, progress_option, report_option,
@@ -15,7 +15,7 @@ from .options import (context_option, each_pattern_options,
                       to_run_options)
 
 
-@click.command()
+@click.command(cls=SectionedCommand)
 @click.argument("files", metavar="DEM OUTPUT | DEM... --each", nargs=-1, required=True,
                 type=click.Path(dir_okay=False))
 @click.option("--date", "date_", default=None, metavar="YYYY-MM-DD",
@@ -45,7 +45,7 @@ from .options import (context_option, each_pattern_options,
                    "instead of the isotropic one.")
 @click.option("--skyview-directions", type=click.IntRange(4, 360), default=32, show_default=True,
               metavar="N", help="Azimuths of the sky view factor (computed once).")
-@place_options
+@place_options("irradiance")
 @algorithm_option
 @physics_options
 @height_above_ground_option("The receiving surface of every cell stands this many metres "

@@ -12,6 +12,34 @@ from ..errors import HillshadeError
 from ..run.config import READ_KEYS
 
 
+class InternalOption(click.Option):
+    """An expert option (an algorithm's internals, tuning): listed by ``SectionedCommand``'s
+    --help after the everyday options, under "Algorithm internals"."""
+
+    internal = True
+
+
+class SectionedCommand(click.Command):
+    """A command whose --help lists its everyday options first ("Options"), then the expert
+    ones (``InternalOption``: an algorithm's own flags, tuning) under "Algorithm internals"
+    (click has no option groups of its own)."""
+
+    INTERNALS = "Algorithm internals"
+
+    def format_options(self, ctx, formatter):
+        everyday, internal = [], []
+        for param in self.get_params(ctx):
+            rv = param.get_help_record(ctx)
+            if rv is not None:
+                (internal if getattr(param, "internal", False) else everyday).append(rv)
+        if everyday:
+            with formatter.section("Options"):
+                formatter.write_dl(everyday)
+        if internal:
+            with formatter.section(self.INTERNALS):
+                formatter.write_dl(internal)
+
+
 def _stack(f, opts):
     """Apply click options in the order they are listed (the first shows first in --help)."""
     for opt in reversed(opts):
@@ -113,48 +141,83 @@ def backend_option(f):
              "'hillshade-rt[gpu]'); auto: the GPU when numba finds one, else the CPU.")(f)
 
 
-def place_options(f):
-    """How the sun is computed from a time: zone, place, atmosphere, tolerance."""
-    return _stack(f, [
-        click.option("--tz", default=None, metavar="ZONE",
-                     help="IANA zone, e.g. Europe/Zurich, or 'auto' (the zone of the DEM's "
-                          "centre): times written without an offset are local times there "
-                          "(daylight saving included) and outputs are labelled in it; sun-hours: "
-                          "days run midnight to midnight there (default: local mean solar "
-                          "time)."),
-        click.option("--lat", type=float, default=None,
-                     help="Latitude of the sun's observer, degrees (default: the DEM's centre; "
-                          "required for input without a CRS)."),
-        click.option("--lon", type=float, default=None, help="Longitude, degrees east (with --lat)."),
-        click.option("--pressure", type=float, default=None,
-                     help="Air pressure for refraction, hPa (default: standard atmosphere at "
-                          "the DEM's centre height)."),
-        click.option("--temperature", type=float, default=None,
-                     help="Air temperature for refraction, degrees C (default 12)."),
-        click.option("--no-refraction", is_flag=True,
-                     help="True (geometric) sun elevation instead of the apparent one."),
-        click.option("--sun-tolerance", type=float, default=0.05, show_default=True,
-                     help="Degrees the sun's direction may vary across the raster before it is "
-                          "computed per tile."),
-    ])
+_ZONE = ("IANA zone, e.g. Europe/Zurich, or 'auto' (the zone of the DEM's centre, daylight "
+         "saving included)")
+TZ_HELP = {   # --tz's help, per command: what the zone does there
+    "shadow": _ZONE + ": --time, --start and --end written without an offset are local times "
+              "there, and the bands' descriptions and --output-pattern's {time} are in it "
+              "(default: times need an offset, e.g. +02:00 or Z).",
+    "hillshade": _ZONE + ": --time, --start and --end written without an offset are local "
+                 "times there, and the bands' descriptions and --output-pattern's {time} are "
+                 "in it (default: times need an offset, e.g. +02:00 or Z).",
+    "query": _ZONE + ": --time, --start and --end written without an offset are local times "
+             "there, and the rows' times are written in it (default: times need an offset, "
+             "e.g. +02:00 or Z, and are written as given).",
+    "sun-hours": _ZONE + ": --date's day runs midnight to midnight there (default: local mean "
+                 "solar time at the DEM's longitude).",
+    "irradiance": _ZONE + ": --date's days run midnight to midnight there and --start/--end "
+                  "without an offset are local times there (default: local mean solar time "
+                  "at the DEM's longitude).",
+    "animate": _ZONE + ": --date's frames run from midnight to midnight there, --start/--end "
+               "without an offset are local times there, and each frame's label shows its "
+               "local time (default: 'auto').",
+}
 
 
-def sun_options(f):
-    """Where the sun is: given, or from times at the DEM's place (shared by the lighting commands)."""
-    return _stack(place_options(f), [
-        click.option("--azimuth", type=float, default=None,
-                     help="Sun azimuth, degrees clockwise from the raster's north (any value wraps)."),
-        click.option("--elevation", "--altitude", "elevation", type=float, default=None,
-                     help="Sun elevation above the horizon, degrees, > 0 and <= 90."),
-        click.option("--time", "time", multiple=True, metavar="ISO8601",
-                     help="Sun from this instant (e.g. 2026-06-21T14:30:00+02:00) at the DEM's "
-                          "centre; repeat for a series (one band per time)."),
-    ] + _series_options("e.g. 30min, 1h, 1h30min, PT10M") + [
-        click.option("--sun-from-stac", "sun_from_stac", default=None, metavar="ITEM.json",
-                     help="The sun of a satellite scene: its STAC item's view:sun_azimuth and "
-                          "view:sun_elevation (else the sun at the DEM at its datetime); a "
-                          "file, URL or zip member, an item or a collection of one."),
-    ])
+def place_options(command: str):
+    """How the sun is computed from a time: zone, place, atmosphere, tolerance; ``command``
+    (a key of ``TZ_HELP``) says what --tz does there."""
+    def deco(f):
+        return _stack(f, [
+            click.option("--tz", default=None, metavar="ZONE", help=TZ_HELP[command]),
+            click.option("--lat", type=float, default=None,
+                         help="Latitude of the sun's observer, degrees (default: the DEM's "
+                              "centre; required for input without a CRS)."),
+            click.option("--lon", type=float, default=None,
+                         help="Longitude, degrees east (with --lat)."),
+            click.option("--pressure", type=float, default=None,
+                         help="Air pressure for refraction, hPa (default: standard atmosphere "
+                              "at the DEM's centre height)."),
+            click.option("--temperature", type=float, default=None,
+                         help="Air temperature for refraction, degrees C (default 12)."),
+            click.option("--no-refraction", is_flag=True,
+                         help="True (geometric) sun elevation instead of the apparent one."),
+            click.option("--sun-tolerance", type=float, default=0.05, show_default=True,
+                         cls=InternalOption,
+                         help="Degrees the sun's direction may vary across the raster before "
+                              "it is computed per tile."),
+        ])
+    return deco
+
+
+TIME_HELP = {   # --time's help, per command: what each time gives there
+    "shadow": "one band per time",
+    "hillshade": "one band per time",
+    "query": "one row per point and time",
+}
+
+
+def sun_options(command: str):
+    """Where the sun is: given, or from times at the DEM's place (shared by the lighting
+    commands and ``query``; ``command`` names the one, for the help texts)."""
+    def deco(f):
+        return _stack(place_options(command)(f), [
+            click.option("--azimuth", type=float, default=None,
+                         help="Sun azimuth, degrees clockwise from the raster's north (any "
+                              "value wraps)."),
+            click.option("--elevation", "--altitude", "elevation", type=float, default=None,
+                         help="Sun elevation above the horizon, degrees, > 0 and <= 90."),
+            click.option("--time", "time", multiple=True, metavar="ISO8601",
+                         help="Sun from this instant (e.g. 2026-06-21T14:30:00+02:00) at the "
+                              f"DEM's centre; repeat for a series ({TIME_HELP[command]})."),
+        ] + _series_options("e.g. 30min, 1h, 1h30min, PT10M") + [
+            click.option("--sun-from-stac", "sun_from_stac", default=None, metavar="ITEM.json",
+                         help="The sun of a satellite scene: its STAC item's view:sun_azimuth "
+                              "and view:sun_elevation (else the sun at the DEM at its "
+                              "datetime); a file, URL or zip member, an item or a collection "
+                              "of one."),
+        ])
+    return deco
 
 
 def stac_item_option(f):
@@ -393,7 +456,7 @@ def algorithm_option(f):
 
 
 def max_memory_option(f):
-    return click.option("--max-memory", metavar="SIZE", default=None,
+    return click.option("--max-memory", metavar="SIZE", default=None, cls=InternalOption,
                         help="Memory the run may use, e.g. 2GB or 512MiB; a DEM that needs more "
                              "is computed in windows read and written through GDAL (default: "
                              "half of this machine's memory).")(f)
@@ -401,6 +464,7 @@ def max_memory_option(f):
 
 def window_size_option(f):
     return click.option("--window-size", metavar="ROWS[xCOLS]", default=None,
+                        cls=InternalOption,
                         help="Compute in windows of this many output cells, whatever the DEM's "
                              "size (each read with the halo it needs: toward the sun for "
                              "shadows, the rays' reach for horizons).")(f)
@@ -489,7 +553,8 @@ def algorithm_flags(f):
         kind = {"choice": dict(type=click.Choice(opt.choices)),
                 "int": dict(type=click.IntRange(min=opt.min)),
                 "flag": dict(is_flag=True)}[opt.kind]
-        f = click.option(opt.flag, opt.param, default=None, help=opt.help, **kind)(f)
+        f = click.option(opt.flag, opt.param, default=None, help=opt.help, cls=InternalOption,
+                         **kind)(f)
     return f
 
 
@@ -526,6 +591,7 @@ def view_options(f):
         click.option("--no-browser", is_flag=True,
                      help="Do not open the default browser (the URL is printed)."),
         click.option("--tz", default=None, metavar="ZONE",
-                     help="IANA zone of the times shown, e.g. Europe/Zurich (default, or "
-                          "'auto': the zone of the DEM's centre, daylight saving included)."),
+                     help="IANA zone of the page's times (the clock, the date, the sun path), "
+                          "e.g. Europe/Zurich; default: 'auto', the zone of the DEM's centre "
+                          "(daylight saving included; a DEM without a CRS has no times)."),
     ])

@@ -6,15 +6,15 @@ import click
 
 from .errors import errors_to_click, say
 from ..run.config import SUN_KEYS
-from .options import (curvature_options, dem_options, height_above_ground_option,
+from .options import (SectionedCommand, curvature_options, dem_options, height_above_ground_option,
                       light_options, overwrite_option, point_options, quiet_option, sun_options,
                       to_read_options, to_run_options)
 
 
-@click.command()
+@click.command(cls=SectionedCommand)
 @click.argument("dem", type=click.Path(dir_okay=False))
 @point_options
-@sun_options
+@sun_options("query")
 @height_above_ground_option("The observer's height above the terrain at the point, metres "
                             "(a person, a panel).")
 @click.option("--irradiance", is_flag=True,

@@ -7,7 +7,7 @@ import click
 
 from .errors import errors_to_click, say
 from ..run.config import SUN_KEYS
-from .options import (algorithm_flags, algorithm_option, command_line, context_option,
+from .options import (SectionedCommand, algorithm_flags, algorithm_option, command_line, context_option,
                       dem_options, each_option, finite,
                       given, height_above_ground_option, light_options, lightmap_options,
                       physics_options, run_options, stac_item_option, subsolar_options,
@@ -44,10 +44,10 @@ def _shade(cfg, each):
     return shade(cfg)
 
 
-@click.command()
+@click.command(cls=SectionedCommand)
 @click.argument("files", metavar="DEM... [OUTPUT]", nargs=-1, required=True,
                 type=click.Path(dir_okay=False))
-@sun_options
+@sun_options("shadow")
 @algorithm_option
 @algorithm_flags
 @physics_options
@@ -164,10 +164,10 @@ def _subsolar(files, subsolar, subsolar_file, distance, body, light_position, li
                                    subsolar_file=subsolar_file))
 
 
-@click.command()
+@click.command(cls=SectionedCommand)
 @click.argument("files", metavar="DEM... [OUTPUT]", nargs=-1, required=True,
                 type=click.Path(dir_okay=False))
-@sun_options
+@sun_options("hillshade")
 @click.option("--ambient", type=click.FloatRange(0.0, 1.0), default=0.2, show_default=True,
               callback=finite,
               help="Light in shadow and on faces turned away, 0..1.")

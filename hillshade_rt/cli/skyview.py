@@ -5,7 +5,7 @@ from __future__ import annotations
 import click
 
 from .errors import errors_to_click, say
-from .options import (context_option, each_pattern_options,
+from .options import (SectionedCommand, context_option, each_pattern_options,
                       backend_option, dem_options, format_option,
                       height_above_ground_option, horizon_physics_options,
                       max_distance_option, max_memory_option, overwrite_option,
@@ -14,7 +14,7 @@ from .options import (context_option, each_pattern_options,
                       window_size_option)
 
 
-@click.command()
+@click.command(cls=SectionedCommand)
 @click.argument("files", metavar="DEM OUTPUT | DEM... --each", nargs=-1, required=True,
                 type=click.Path(dir_okay=False))
 @click.option("--directions", type=click.IntRange(4, 360), default=32, show_default=True,

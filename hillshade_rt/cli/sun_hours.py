@@ -6,7 +6,7 @@ import click
 
 from .errors import errors_to_click, say
 from ..run.config import PLACE_KEYS
-from .options import (context_option, algorithm_option, backend_option, dem_options,
+from .options import (SectionedCommand, context_option, algorithm_option, backend_option, dem_options,
                       each_pattern_options, format_option,
                       height_above_ground_option, overwrite_option, physics_options, place_options,
                       preview_option, quiet_option, progress_option, report_option,
@@ -14,7 +14,7 @@ from .options import (context_option, algorithm_option, backend_option, dem_opti
                       to_run_options)
 
 
-@click.command("sun-hours")
+@click.command("sun-hours", cls=SectionedCommand)
 @click.argument("files", metavar="DEM OUTPUT | DEM... --each", nargs=-1, required=True,
                 type=click.Path(dir_okay=False))
 @click.option("--date", "date_", required=True, metavar="YYYY-MM-DD", help="The day (or first day).")
@@ -22,7 +22,7 @@ from .options import (context_option, algorithm_option, backend_option, dem_opti
               help="Last day of a range (included); the hours are the total over the range.")
 @click.option("--step", default="10min", show_default=True, metavar="DURATION",
               help="Sampling interval; each sample stands for the interval around it.")
-@place_options
+@place_options("sun-hours")
 @algorithm_option
 @physics_options
 @height_above_ground_option("The sun hours of a point this many metres above every cell (a "

@@ -93,7 +93,8 @@ def heights_into(data: np.ndarray, nodata: float | None, out: np.ndarray,
     mask = np.empty(out.shape, np.bool_)
     bad = False
     if nodata is not None and not math.isnan(nodata):
-        nd = np.asarray(nodata).astype(data.dtype)
+        with np.errstate(invalid="ignore", over="ignore"):   # not in the type: matches nothing
+            nd = np.asarray(nodata).astype(data.dtype)
         if data.dtype.kind == "f" or float(nd) == float(nodata):
             np.equal(data, nd, out=mask)
             bad = True

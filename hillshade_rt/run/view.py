@@ -7,7 +7,7 @@ per overview level (every n-th cell, n a power of two) and algorithm; each reque
 what the page shows:
 
 * ``/``, ``/static/...``: the page (``view_static/``: HTML, JS, CSS and Leaflet, vendored);
-* ``/api/info``: the DEM's size, bounds, CRS, zone (``--tz``, else the IANA zone of the DEM's
+* ``/api/info``: the DEM's file name (not its folder), size, bounds, CRS, zone (``--tz``, else the IANA zone of the DEM's
   centre: ``sun.zone_at``), the default date and time, the algorithms;
 * ``/api/render?bbox=x0,y0,x1,y1&w=&h=&az=&el=|time=&algorithm=&soft=&sunhours=DATE``: a PNG
   (RGBA) of the window ``bbox`` (pixel coordinates of the DEM: x a column, y a row, cell (r, c)
@@ -248,15 +248,20 @@ class Viewer:
     # -- the sun -------------------------------------------------------------------------------
     def sun(self, q: dict) -> dict:
         """The sun a query asks for: ``az`` and ``el`` (degrees), or ``time`` (ISO 8601; without
-        an offset a local time in the viewer's zone) -> {azimuth, elevation, time}."""
+        an offset a local time in the viewer's zone) -> {azimuth, elevation, time}. A given ``el``
+        is the command line's ``--elevation``: > 0 and <= 90 (a time may put the sun below the
+        horizon: night)."""
         from ..geometry import normalize_azimuth
         if "time" in q:
             t = self.parse_time(q["time"])
             s = self.suns([t])[0]
             return {"azimuth": s.azimuth, "elevation": s.elevation, "time": t.isoformat()}
+        from ..geometry import check_elevation
         az, el = number(q, "az", 203.7), number(q, "el", 30.0)
-        if not -90.0 <= el <= 90.0:
-            raise BadRequest(f"el must be within [-90, 90] degrees, got {el}")
+        try:            # as the command line's --elevation: > 0 and <= 90
+            el = check_elevation(el, "el")
+        except HillshadeError as exc:
+            raise BadRequest(str(exc)) from None
         return {"azimuth": normalize_azimuth(az), "elevation": el, "time": None}
 
     def parse_time(self, text: str) -> _dt.datetime:
@@ -305,7 +310,9 @@ class Viewer:
         rows, cols = self.z.shape
         tr = self.dem.transform
         now = _dt.datetime.now(self.tz) if self.tz is not None else None
-        return {"path": self.dem.path, "rows": rows, "cols": cols,
+        # the file's name only: the page needs no more, and a page is no place for the
+        # machine's folders
+        return {"name": os.path.basename(str(self.dem.path)), "rows": rows, "cols": cols,
                 "crs": self.dem.crs_string() if self.dem.crs is not None else None,
                 "transform": list(tr)[:6] if tr is not None else None,
                 "height_range": list(self.zrange),

@@ -13,6 +13,12 @@ Inputs: random bytes (.tif .hgt .raw .png), small real GeoTIFFs/PNGs truncated o
 overwritten, raw grids with random --raw-shape/--raw-dtype/--raw-byteorder, two-tile mosaics, and
 random option values for shadow, hillshade, horizon, info and sun-hours.
 
+Every command (``test_fuzz_every_command``) is also run with random sets of its own options
+(a table per command: well-formed values, and in a third of the cases malformed ones) and side
+files, judged by the generic property: exit 0/1/2/130/143, one error line, no traceback, no
+half-written (.part) file, no output unless exit 0, a bounded run time. The viewer's endpoints
+get random query strings and JSON bodies (``test_fuzz_viewer_*``): 200, 400 or 404, never 500.
+
 Each run is in-process (click's CliRunner) but made to look like a fresh process on stderr:
 Python warnings shown as a fresh interpreter shows them, log records with no handler printed by
 logging's last resort (as tifffile's are in a real run), and anything written to file
@@ -999,3 +1005,474 @@ def test_fuzz_harness_sees_a_traceback_and_leftovers(monkeypatch):
     monkeypatch.setattr(run_local, "in_memory", leave_part)
     bad = run_case(case)[0]
     assert any("new files in the output folder" in b for b in bad), bad
+
+
+# ---------------------------------------------------------------------------------------------
+# every command: random option sets from a table of each command's options, on small real or
+# damaged rasters; judged by the generic property (an exit status of 0/1/2/130/143, one line on
+# an error, no traceback, nothing half-written, no output unless exit 0, a bounded run time)
+
+_RUN_BOUND_S = 120.0      # one run's wall time at most (the slowest draw takes a few seconds)
+_BAD_NUM = ["nan", "inf", "-1", "0", "abc", "", "1e400"]
+_SUBSOLAR_CSV = {
+    "good": b"time,lat,lon\n2027-01-01T00:00Z,1.2,-35.2\n2027-01-01T06:00Z,1.2,-38.3\n"
+            b"2027-01-01T12:00Z,1.2,-41.3\n",
+    "au": b"time,lat,lon,distance_au\n2027-01-01T00:00Z,1.2,-35.2,0.98\n"
+          b"2027-01-01T06:00Z,1.2,-38.3,0.98\n",
+    "decreasing": b"time,lat,lon\n2027-01-02T00:00Z,1.2,-35.2\n2027-01-01T06:00Z,1.2,-38.3\n",
+    "no-offset": b"time,lat,lon\n2027-01-01T00:00,1.2,-35.2\n2027-01-01T06:00,1.2,-38.3\n",
+    "bad-lat": b"time,lat,lon\n2027-01-01T00:00Z,95,-35.2\n2027-01-01T06:00Z,nan,-38.3\n",
+    "header-only": b"time,lat,lon\n",
+    "empty": b"",
+    "garbage": b"\x00\xff\xfe not a csv at all,,,\n\n",
+    "one-row": b"time,lat,lon\n2027-01-01T00:00Z,1.2,-35.2\n",
+}
+_GHI_CSV = {
+    "good": b"time,ghi\n2026-06-21T00:00Z,0\n2026-06-21T12:00Z,900\n2026-06-22T00:00Z,0\n",
+    "dni-dhi": b"time,ghi,dni,dhi\n2026-06-21T00:00Z,0,0,0\n2026-06-22T00:00Z,500,600,100\n",
+    "negative": b"time,ghi\n2026-06-21T00:00Z,-5\n2026-06-22T00:00Z,nan\n",
+    "no-ghi": b"time,x\n2026-06-21T00:00Z,1\n",
+    "garbage": b"\xff\xfe\x00,;\n",
+    "empty": b"",
+}
+_POINTS = {
+    "lonlat.csv": b"id,lon,lat\na,-118.1,34.3\nb,-84.0,36.49\n",
+    "xy.csv": b"name,x,y\np,400300,3799700\n",
+    "bad.csv": b"lon,lat\nabc,def\n",
+    "empty.csv": b"",
+    "points.geojson": b'{"type":"FeatureCollection","features":[{"type":"Feature","geometry":'
+                      b'{"type":"Point","coordinates":[-84.0,36.49]},"properties":{}}]}',
+    "bad.geojson": b'{"type":"FeatureCollection","features":[{"geometry":null}]}',
+    "broken.geojson": b"{not json",
+}
+_TIME_VALUES = _TIMES + _LOCAL_TIMES + _BAD_TIMES
+_DATES = ["2026-06-21", "2026-12-21", "2026-03-29", "21/06/2026", "", "2026-02-30", "0001-01-01",
+          "9999-12-31", "2026-06-21T12:00"]
+_STEPS = ["1h", "2h", "90min", "6h", "PT20M", "0s", "abc", "-5min", "1 fortnight", "1e9h", "1s"]
+
+
+def _v(good, bad=()):
+    """An option's values: (well-formed ones, malformed ones)."""
+    return (list(good), list(bad))
+
+
+_SUN_TABLE = [
+    (["--azimuth"], _v(["203.7", "0", "-720", "1e300"], ["nan", "west"]), 15),
+    (["--elevation"], _v(["12", "45", "90", "1e-300"], ["0", "-5", "91", "nan"]), 15),
+    (["--time"], _v(_TIMES, _LOCAL_TIMES + _BAD_TIMES), 15),
+    (["--tz"], _v(_ZONES + ["auto"], _BAD_ZONES), 5),
+    (["--lat"], _v(["36.3", "-89.9", "90"], ["95", "nan"]), 10),
+    (["--lon"], _v(["-84.1", "200"], ["nan"]), 10),
+    (["--pressure"], _v(["1013", "600"], ["0", "-5", "nan", "1e9"]), 10),
+    (["--temperature"], _v(["12", "-40"], ["-300", "nan", "1e9"]), 10),
+    (["--no-refraction"], None, 10),
+    (["--sun-tolerance"], _v(["0.05", "1e-9", "5"], ["0", "-1", "nan"]), 10),
+]
+_READ_TABLE = [
+    (["--band"], _v(["1"], ["2", "0", "x"]), 12),
+    (["--nodata"], _v(["-9999", "nan", "0"], ["none", "1e40"]), 10),
+    (["-z"], _v(["0.3048", "-1", "1e30"], ["0", "nan"]), 10),
+    (["--pixel-size"], _v(["30", "1,2"], ["0", "-1", "nan", "abc", "30,0"]), 10),
+]
+_OUT_TABLE = [
+    (["--preview"], _v([OUT + "p.png"]), 6),
+    (["--report"], _v([OUT + "r.json"]), 6),
+    (["-q"], None, 2),
+    (["--overwrite"], None, 8),
+    (["--threads"], _v(["1", "2"], ["0"]), 10),
+    (["--co"], _v(["COMPRESS=ZSTD", "FOO=1"], ["FOO", "=1"]), 12),
+    (["-f"], _v(["GTiff", "PNG"], ["NOPE", "MEM"]), 12),
+]
+_PHYS_TABLE = [
+    (["--earth-curvature", "--no-earth-curvature"], None, 10),
+    (["--refraction-coefficient"], _v(["0.13", "0", "-1", "2"], ["nan"]), 12),
+]
+_POINT_TABLE = [
+    (["--at"], _v(["-118.1,34.3", "-84.0,36.49", "0,0"], ["200,95", "abc", "1,2,3", "nan,nan"]),
+     5),
+    (["--at-xy"], _v(["@CENTRE", "400300,3799700", "0,0"], ["x,y", "inf,1"]), 5),
+    (["--points"], _v([IN + n for n in _POINTS], [IN + "missing.csv"]), 5),
+    (["--height-above-ground"], _v(["0", "1.7", "1e9"], ["-1", "nan"]), 6),
+]
+_SERIES = ["--start", "2026-06-21T18:00Z", "--end", "2026-06-21T19:00Z", "--step", "30min"]
+# command -> (positional arguments, base option sets (one drawn: a well-formed run), table of
+# other options: (flags, values or None for a flag, 1 / the share of draws that add it))
+_COMMANDS = {
+    "shadow": (["DEM", "OUT"], [["--azimuth", "203.7", "--elevation", "12"],
+                                ["--time", "2026-06-21T18:00Z"], _SERIES],
+               _SUN_TABLE + _READ_TABLE + _OUT_TABLE + _PHYS_TABLE + [
+        (["--algorithm"], _v(["auto", "smap", "brute", "bounds", "horizon", "sweep"], ["quick"]),
+         4),
+        (["--soft"], None, 6), (["--classes"], None, 6), (["--self-shadow"], None, 6),
+        (["--height-above-ground"], _v(["0", "2"], ["-1", "nan"]), 8),
+        (["--nextv"], _v(["scan", "quad", "binary"]), 12),
+        (["--exact-steps"], _v(["1", "4"], ["0"]), 12),
+        (["--sample-spacing"], _v(["1", "3"], ["0"]), 12), (["--no-pyramid"], None, 12),
+        (["--window-size"], _v(["64", "64x80"], ["0", "abc", "8"]), 8),
+        (["--max-memory"], _v(["4GB", "1kB"], ["0", "abc"]), 10),
+        (["--light-position"], _v(["400300,3799700,900"], ["1,2", "nan,1,2"]), 12),
+        (["--subsolar"], _v(["10,20", "-30,100"], ["95,0", "abc"]), 12),
+        (["--body"], _v(["moon", "mars", "earth", "1000"], ["-1", "pluto"]), 14),
+        (["--output-pattern"], _v([OUT + "o_{index}.tif"], [OUT + "o_{nope}.tif"]), 12),
+        (["--cog"], None, 12),
+    ]),
+    "hillshade": (["DEM", "OUT"], [[], ["--azimuth", "315", "--elevation", "45"],
+                                   ["--time", "2026-06-21T18:00Z"]],
+                  _SUN_TABLE + _READ_TABLE + _OUT_TABLE + _PHYS_TABLE + [
+        (["--ambient"], _v(["0", "0.5", "1"], ["1.5", "nan"]), 6),
+        (["-s"], _v(["1", "111120"], ["0", "nan"]), 8),
+        (["--soft"], None, 6),
+        (["--light-position"], _v(["400300,3799700,900"], ["1,2"]), 12),
+        (["--falloff"], _v(["none", "inverse-square"]), 12), (["--bits"], _v(["8", "16"]), 12),
+    ]),
+    "sun-hours": (["DEM", "OUT"], [["--date", "2026-06-21", "--step", "2h"]],
+                  _READ_TABLE + _OUT_TABLE[:4] + _PHYS_TABLE + _SUN_TABLE[3:] + [
+        (["--date"], _v(["2026-12-21", "2026-03-29"], _DATES[3:]), 6),
+        (["--end-date"], _v(["2026-06-22"], ["2026-06-20", "abc"]), 8),
+        (["--step"], _v(["3h", "90min", "PT20M"], ["0s", "abc", "-5min", "1 fortnight"]), 6),
+        (["--soft"], None, 6), (["--no-self-shadow"], None, 6),
+        (["--height-above-ground"], _v(["0", "2"], ["-1"]), 8),
+    ]),
+    "horizon": (["DEM", "OUT"], [["--azimuth", "163"], ["--directions", "8"]],
+                _READ_TABLE + _OUT_TABLE[:1] + _OUT_TABLE[2:4] + _PHYS_TABLE + [
+        (["--azimuth"], _v(["-720", "1e300"], ["nan", "north"]), 8),
+        (["--distance"], _v([OUT + "d.tif"]), 6),
+        (["--max-distance"], _v(["100", "1e9"], ["0", "-1", "nan"]), 6),
+        (["--method"], _v(["scan", "hull"]), 4), (["--sample-spacing"], _v(["1", "3"], ["0"]), 6),
+        (["--height-above-ground"], _v(["0", "2"], ["-1"]), 8),
+        (["--window-size"], _v(["64", "64x80"], ["0", "8"]), 8),
+    ]),
+    "skyview": (["DEM", "OUT"], [["--directions", "8"], ["--directions", "4"]],
+                _READ_TABLE + _OUT_TABLE[:1] + _OUT_TABLE[2:4] + _PHYS_TABLE + [
+        (["--directions"], _v(["16"], ["3", "0", "1000"]), 8),
+        (["--definition"], _v(["zaksek", "dozier"], ["other"]), 4),
+        (["--terrain-configuration"], None, 6),
+        (["--openness"], _v(["positive", "negative"]), 6),
+        (["--max-distance"], _v(["100", "1e9"], ["0", "nan"]), 6),
+        (["--height-above-ground"], _v(["0", "2"], ["-1"]), 8),
+        (["--window-size"], _v(["64", "64x80"], ["0", "8"]), 8),
+    ]),
+    "irradiance": (["DEM", "OUT"], [["--date", "2026-06-21", "--step", "3h",
+                                     "--skyview-directions", "4"],
+                                    ["--start", "2026-06-21T06:00Z", "--end",
+                                     "2026-06-21T12:00Z", "--step", "2h",
+                                     "--skyview-directions", "4"]],
+                   _READ_TABLE + _OUT_TABLE + _PHYS_TABLE + _SUN_TABLE[3:] + [
+        (["--date"], _v(["2026-12-21"], _DATES[3:]), 10),
+        (["--end-date"], _v(["2026-06-22"], ["2026-06-20", "abc"]), 8),
+        (["--step"], _v(["4h"], ["0s", "abc", "-5min"]), 8),
+        (["--clear-sky"], _v(["ineichen", "haurwitz"]), 6),
+        (["--linke-turbidity"], _v(["3"], ["0", "-1", "nan", "1e9"]), 8),
+        (["--albedo"], _v(["0.2", "0", "1"], ["-0.5", "2", "nan"]), 6),
+        (["--ghi"], _v([IN + "ghi_" + n + ".csv" for n in _GHI_CSV], [IN + "missing.csv"]), 5),
+        (["--mean"], None, 6), (["--perez"], None, 6), (["--soft"], None, 8),
+        (["--skyview-directions"], _v(["8"], ["3", "0"]), 8),
+        (["--algorithm"], _v(["auto", "smap", "brute"]), 8),
+    ]),
+    "query": (["DEM"], [["--at-xy", "@CENTRE", "--azimuth", "203.7", "--elevation", "12"],
+                        ["--at-xy", "@CENTRE", "--time", "2026-06-21T18:00Z"],
+                        ["--at", "-84.0,36.49"] + _SERIES],
+              _SUN_TABLE + _READ_TABLE[:3] + _POINT_TABLE + _PHYS_TABLE + [
+        (["--irradiance"], None, 6),
+        (["--format"], _v(["csv", "json", "geojson"]), 4),
+        (["-o"], _v([OUT + "q.csv", OUT + "q.json", OUT + "q.geojson", OUT + "q.txt"]), 3),
+        (["--light-position"], _v(["400300,3799700,900"], ["1,2"]), 12),
+    ]),
+    "profile": (["DEM"], [["--at-xy", "@CENTRE", "--step", "10"], ["--at", "-84.0,36.49"]],
+                _READ_TABLE[:3] + _POINT_TABLE + _PHYS_TABLE + [
+        (["--step"], _v(["1", "45", "0.5"], ["0", "-1", "nan", "400"]), 3),
+        (["--format"], _v(["csv", "json", "pvlib", "pvgis", "grass", "geojson"]), 3),
+        (["-o"], _v([OUT + "h.csv", OUT + "h.json"]), 3),
+        (["--preview"], _v([OUT + "p.png"]), 8),
+    ]),
+    "illumination": (["DEM", "OUT"], [["--subsolar-file", IN + "sun_good.csv", "--body", "moon"],
+                                      ["--subsolar-file", IN + "sun_au.csv"]],
+                     _READ_TABLE + _OUT_TABLE + _PHYS_TABLE + [
+        (["--subsolar-file"], _v([IN + "sun_" + n + ".csv" for n in _SUBSOLAR_CSV],
+                                 [IN + "missing.csv"]), 4),
+        (["--sun-distance"], _v(["1.5e11"], ["0", "-1", "nan"]), 8),
+        (["--body"], _v(["moon", "mars", "earth", "1737400"], ["-1", "pluto"]), 5),
+        (["--height-above-ground"], _v(["0", "2"], ["-1"]), 8),
+        (["--soft"], None, 6),
+        (["--window-size"], _v(["64", "64x80"], ["0", "8"]), 8),
+    ]),
+    "animate": (["DEM", "OUT:a.gif"], [["--date", "2026-06-21", "--step", "3h", "--size", "16"],
+                                       ["--start", "2026-06-21T18:00Z", "--end",
+                                        "2026-06-21T20:00Z", "--step", "1h", "--size", "16"]],
+                _READ_TABLE + _OUT_TABLE[1:4] + _PHYS_TABLE + _SUN_TABLE[3:] + [
+        (["--date"], _v(["2026-12-21"], _DATES[3:]), 10),
+        (["--step"], _v(["2h", "4h"], ["0s", "abc"]), 8),
+        (["--fps"], _v(["12", "50"], ["0", "-1", "51", "nan"]), 6),
+        (["--size"], _v(["20", "64"], ["15", "0"]), 6),
+        (["--no-label"], None, 6),
+        (["--algorithm"], _v(["auto", "smap", "brute"]), 8),
+    ]),
+    "info": (["DEM"], [[], ["--json"]], _READ_TABLE + [
+        (["--preview"], _v([OUT + "p.png"]), 6), (["--overwrite"], None, 8),
+    ]),
+    "cache": ([], [[], ["--prune"]], []),
+}
+
+
+_OTHER_SUNS = {"--azimuth", "--elevation", "--time", "--light-position", "--subsolar", "--body"}
+_TIMED = {"--tz", "--lat", "--lon", "--pressure", "--temperature", "--no-refraction"}
+
+
+@st.composite
+def command_case(draw, command):
+    """A Case of ``command``: one of its well-formed base option sets, random others of its
+    options (in wild cases now and then malformed values, or an unknown option), on a small
+    raster (real, now and then damaged), with the side files its options name. The choices
+    come from a generator seeded by hypothesis (reproducible with derandomize): its own draws
+    lean toward the first values, which would put every option in every case."""
+    import random
+    rng = random.Random(draw(st.integers(0, 2 ** 32 - 1)))
+    positional, bases, table = _COMMANDS[command]
+    wild = rng.random() < 0.35
+    files: dict[str, bytes] = {}
+    recipe = []
+    argv = [command]
+    centre = "1,1"
+    if "DEM" in positional:
+        if rng.random() < 0.2:
+            data, r, _, _, ext = draw(damaged_input())
+        else:
+            data, r, shape, _, ext = draw(real_raster("GTiff"))
+            centre = f"{400000 + 15 * shape[1]},{3800000 - 15 * shape[0]}"
+        files["dem" + ext] = data
+        recipe.append(r)
+        argv.append(IN + "dem" + ext)
+    for p in positional:
+        if p.startswith("OUT"):
+            argv.append(OUT + (p.split(":")[1] if ":" in p else "o.tif"))
+    argv += rng.choice(bases)
+    base = set(argv)
+    for flags, values, share in table:
+        if rng.random() >= 1.0 / share:
+            continue
+        flag = rng.choice(flags)
+        if not wild and command in ("shadow", "hillshade", "query") and (
+                flag in _OTHER_SUNS or flag in _TIMED and "--azimuth" in base):
+            continue          # well-formed cases: one sun, the base's
+        if values is None:
+            argv.append(flag)
+            continue
+        good, bad = values
+        pool = bad if wild and bad and rng.random() < 0.5 else good
+        argv += [flag, rng.choice(pool)]
+    if wild and rng.random() < 0.15:     # an unknown option, now and then
+        argv.append(rng.choice(["--frobnicate", "-Z", "--elevation="]))
+    argv = [a.replace("@CENTRE", centre) for a in argv]
+    for a in argv:
+        name = a[len(IN):] if a.startswith(IN) else None
+        if name in _POINTS:
+            files[name] = _POINTS[name]
+        elif name and name.startswith("sun_") and name[4:-4] in _SUBSOLAR_CSV:
+            files[name] = _SUBSOLAR_CSV[name[4:-4]]
+        elif name and name.startswith("ghi_") and name[4:-4] in _GHI_CSV:
+            files[name] = _GHI_CSV[name[4:-4]]
+    return Case(command, argv, files, recipe)
+
+
+_LEFTOVER = re.compile(r"\.part|\.scratch|\.tmp", re.I)
+
+
+def run_generic(case: Case) -> list[str]:
+    """Run ``case``; the ways its outcome breaks the generic property."""
+    import time
+
+    from click.testing import CliRunner
+
+    from hillshade_rt.cli import cli
+
+    with tempfile.TemporaryDirectory(prefix="hsfuzz-") as tmp:
+        in_dir, out_dir = os.path.join(tmp, "in"), os.path.join(tmp, "out")
+        os.mkdir(in_dir)
+        os.mkdir(out_dir)
+        for name, data in case.files.items():
+            with open(os.path.join(in_dir, name), "wb") as fh:
+                fh.write(data)
+        before_in = _tree(in_dir)
+        argv = [a.replace(IN, in_dir + os.sep).replace(OUT, out_dir + os.sep) for a in case.argv]
+        # the cache command looks at (and --prune empties) a folder of this run, never the
+        # user's kernel cache; the --context statistics stay in the run's folder too
+        env = {"HILLSHADE_RT_STATS_DIR": os.path.join(tmp, "stats")}
+        if case.command == "cache":
+            env["NUMBA_CACHE_DIR"] = os.path.join(tmp, "numba")
+            os.makedirs(os.path.join(tmp, "numba", "0123456789abcdef"))
+        fd2: list[str] = []
+        t0 = time.monotonic()
+        with _like_a_fresh_process(), _fd2_captured(fd2):
+            r = CliRunner(env=env).invoke(cli, argv, prog_name="hillshade-rt")
+        took = time.monotonic() - t0
+        stderr = r.stderr + fd2[0]
+        new_out = sorted(_tree(out_dir))
+        new_in = sorted(set(_tree(in_dir)) - set(before_in))
+        bad = []
+        if r.exception is not None and not isinstance(r.exception, SystemExit):
+            import traceback
+            tb = "".join(traceback.format_exception(r.exception)).strip().splitlines()
+            bad.append(f"exception {type(r.exception).__name__}: {r.exception} "
+                       f"(raised at {tb[-3].strip() if len(tb) > 2 else '?'})")
+        if "Traceback" in stderr or "Traceback" in r.stdout:
+            bad.append("a traceback printed")
+        if "internal error" in stderr:
+            bad.append(f"an internal error: {stderr.strip().splitlines()[-1]}")
+        if new_in:
+            bad.append(f"new files beside the input: {new_in}")
+        if any(_LEFTOVER.search(n) for n in new_out):
+            bad.append(f"half-written files left: {new_out}")
+        if took > _RUN_BOUND_S:
+            bad.append(f"the run took {took:.0f} s (bound {_RUN_BOUND_S:.0f} s)")
+        if r.exit_code not in (0, 1, 2, 130, 143):
+            bad.append(f"exit status {r.exit_code}")
+        if r.exit_code != 0:
+            lines = stderr.strip().splitlines()
+            if len(lines) != 1 or not lines[0].startswith("hillshade-rt: error:"):
+                bad.append(f"stderr is not one error line: {stderr.strip()[:1000]!r}")
+            if new_out:
+                bad.append(f"exit {r.exit_code} but new files in the output folder: {new_out}")
+        if bad and _COLLECT:
+            _record(case, r, stderr, bad, in_dir)
+        if _COLLECT:
+            with open(os.path.join(_COLLECT, "outcomes.jsonl"), "a", encoding="utf-8") as fh:
+                fh.write(json.dumps([case.command, r.exit_code, round(took, 2), case.shell(),
+                                     (stderr.strip().splitlines() or [""])[-1][:200]]) + "\n")
+        return bad, r, stderr
+
+
+def check_generic(case: Case):
+    bad, r, stderr = run_generic(case)
+    if _COLLECT:
+        return
+    assert not bad, (f"\n{case.shell()}\ninput: {'; '.join(case.recipe)}\nexit {r.exit_code}\n"
+                     f"stderr: {stderr.strip()[:2000]}\nviolations:\n  " + "\n  ".join(bad))
+
+
+_GENERIC_EXAMPLES = {"shadow": 50, "hillshade": 30, "sun-hours": 25, "horizon": 30,
+                     "skyview": 25, "irradiance": 25, "query": 40, "profile": 30,
+                     "illumination": 30, "animate": 20, "info": 20, "cache": 4}
+
+
+@pytest.mark.parametrize("command", sorted(_GENERIC_EXAMPLES))
+def test_fuzz_every_command(command):
+    """Each command with random sets of its options (good, edge and malformed values, side
+    files good and corrupt), on small rasters, some damaged."""
+    @_settings(_GENERIC_EXAMPLES[command], 0.02)
+    @given(case=command_case(command))
+    def run(case):
+        check_generic(case)
+    run()
+
+
+# ---------------------------------------------------------------------------------------------
+# what the fuzzing found, kept as plain cases
+
+def test_fuzz_found_a_nodata_outside_the_heights_type():
+    """--nodata 1e40 on int16 heights: a value the type cannot hold matches no cell, without
+    numpy's RuntimeWarning on stderr (the error line was the second line)."""
+    data = raster_bytes("GTiff", 12, 12, "int16", "utm", None, 0, 0.0, 1, None)
+    case = Case("horizon", ["horizon", IN + "dem.tif", OUT + "o.tif", "--directions", "8",
+                            "--nodata", "1e40", "-q", "--refraction-coefficient", "nan"],
+                {"dem.tif": data}, ["int16 12x12"])
+    bad, r, stderr = run_generic(case)
+    assert not bad and r.exit_code == 1, (bad, stderr)
+    from hillshade_rt.io.dem import heights_into
+    z = np.arange(12, dtype=np.int16).reshape(3, 4)
+    out = np.empty(z.shape, np.float32)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        heights_into(z, 1e40, out)
+    assert np.array_equal(out, z.astype(np.float32))
+
+
+# ---------------------------------------------------------------------------------------------
+# the viewer's HTTP endpoints: random query strings and JSON bodies against a Viewer on a small
+# DEM answer 200, 400 or 404, never 500, with one line on an error, and the server goes on
+
+_Q_VALUES = ["0", "1", "-1", "5.5", "12", "90", "91", "-0.0", "nan", "inf", "-inf", "1e308",
+             "1e-300", "abc", "", "0,0,10,10", "1,2", "5,5,1,1", "-1e9,-1e9,1e9,1e9",
+             "2026-06-21T12:00Z", "2026-06-21T14:30", "2026-06-21", "2026-13-45", "auto",
+             "smap", "brute", "quick", "true", "yes", "%00", "%ff", "\u00e9", "1" * 400]
+_Q_KEYS = ["bbox", "w", "h", "az", "el", "time", "algorithm", "soft", "sunhours", "x", "y",
+           "date", "junk"]
+_PATHS = ["/api/render", "/api/point", "/api/download", "/api/sunpath", "/api/info",
+          "/api/nothing", "/static/../../etc/passwd", "/"]
+_JSON = st.recursive(st.none() | st.booleans() | st.integers(-10 ** 20, 10 ** 20)
+                     | st.floats(allow_nan=True, allow_infinity=True)
+                     | st.sampled_from(_Q_VALUES),
+                     lambda inner: st.lists(inner, max_size=3)
+                     | st.dictionaries(st.sampled_from(["x", "y"]), inner, max_size=2),
+                     max_leaves=4)
+_EDIT_KEYS = ["x", "y", "radius", "delta", "shape", "map_x", "map_y", "lon", "lat"]
+
+
+@pytest.fixture(scope="module")
+def fuzz_viewer(tmp_path_factory):
+    """A viewer (in a thread, on a free port) of a 24 x 24 UTM DEM with voids."""
+    import threading
+
+    from hillshade_rt.io import read_dem
+    from hillshade_rt.run.view import Viewer, make_server
+    path = tmp_path_factory.mktemp("view") / "dem.tif"
+    path.write_bytes(raster_bytes("GTiff", 24, 24, "float32", "utm", -9999.0, 0, 0.05, 1, None))
+    viewer = Viewer(read_dem(str(path)), backend="cpu")
+    srv = make_server(viewer, 0)
+    th = threading.Thread(target=srv.serve_forever, kwargs={"poll_interval": 0.1}, daemon=True)
+    th.start()
+    yield srv
+    srv.shutdown()
+    srv.server_close()
+    viewer.close()
+
+
+def _ask(srv, method, path, body=None):
+    import http.client
+    conn = http.client.HTTPConnection(*srv.server_address[:2], timeout=60)
+    try:
+        conn.request(method, path, body=body,
+                     headers={"Content-Type": "application/json"} if body is not None else {})
+        r = conn.getresponse()
+        return r.status, r.read()
+    finally:
+        conn.close()
+
+
+def _judge_http(srv, method, path, body=None):
+    status, data = _ask(srv, method, path, body)
+    assert status in (200, 400, 404), (method, path, body, status, data[:300])
+    if status != 200:
+        text = data.decode("utf-8", "replace").strip()
+        assert text and "\n" not in text and "Traceback" not in text, (path, text[:300])
+    assert _ask(srv, "GET", "/api/info")[0] == 200       # the server goes on
+
+
+@_settings(60, 0.05)
+@given(path=st.sampled_from(_PATHS),
+       query=st.lists(st.tuples(st.sampled_from(_Q_KEYS), st.sampled_from(_Q_VALUES)),
+                      max_size=6),
+       raw=st.sampled_from(["", "&&==", "a=%zz", "bbox", "=1", "x=1&x=2&y=3"]))
+def test_fuzz_viewer_get(fuzz_viewer, path, query, raw):
+    """GET endpoints with random query strings: 200, 400 or 404, never 500."""
+    from urllib.parse import quote
+    q = "&".join(f"{k}={quote(v, safe='%,:')}" for k, v in query)
+    if "w" not in dict(query) and path == "/api/render":
+        q += "&w=32&h=32"          # small pictures: the default 512² is slow for nothing
+    _judge_http(fuzz_viewer, "GET", path + "?" + q + ("&" + raw if raw else ""))
+
+
+@_settings(50, 0.05)
+@given(path=st.sampled_from(["/api/edit"] * 4 + ["/api/undo", "/api/reset", "/api/nothing"]),
+       body=st.one_of(
+           st.dictionaries(st.sampled_from(_EDIT_KEYS), _JSON, max_size=6),
+           st.fixed_dictionaries({"x": st.sampled_from(["3", "12.5", "-1", "nan", "1e308"]),
+                                  "y": st.sampled_from(["3", "23.9", "24", "inf"]),
+                                  "radius": st.sampled_from(["0", "30", "1e6", "-1", "abc"]),
+                                  "delta": st.sampled_from(["5", "-20", "1e5", "1e300", "nan"]),
+                                  "shape": st.sampled_from(["disk", "flat", "cone", ""])}),
+           _JSON),
+       raw=st.one_of(st.none(), st.binary(max_size=40)))
+def test_fuzz_viewer_edit(fuzz_viewer, path, body, raw):
+    """POST /api/edit (undo, reset) with random JSON bodies or bytes: 200, 400 or 404."""
+    data = raw if raw is not None else json.dumps(body).encode()
+    _judge_http(fuzz_viewer, "POST", path, data)

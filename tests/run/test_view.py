@@ -110,6 +110,9 @@ def test_info(server, dem):
         "the DEM's centre"
     assert "auto" in info["algorithms"] and info["algorithm"] == "auto"
     assert info["height_range"][0] == pytest.approx(float(np.nanmin(dem.heights)))
+    # the file's name, never the machine's folders
+    assert info["name"] == os.path.basename(DEM) and "path" not in info
+    assert os.path.dirname(os.path.abspath(DEM)).encode() not in body
 
 
 @pytest.mark.parametrize("az, el", [(203.7, 12.0), (163.0, 25.0), (290.0, 8.0)])
@@ -218,7 +221,13 @@ def test_download_is_the_mask(server, dem):
 
 @pytest.mark.parametrize("query, words", [
     ("/api/render?az=abc&el=10", "az must be a number"),
-    ("/api/render?az=10&el=95", "el must be within"),
+    ("/api/render?az=10&el=95", "el must be"),
+    # a given sun at or below the horizon: 400, as the command line's --elevation 0 (exit 2)
+    ("/api/download?el=0", "el must be > 0"),
+    ("/api/download?az=10&el=-5", "el must be > 0"),
+    ("/api/render?az=10&el=0", "el must be > 0"),
+    ("/api/point?x=5&y=5&az=10&el=0", "el must be > 0"),
+    ("/api/point?x=5&y=5&el=-0.0", "el must be > 0"),
     ("/api/render?bbox=1,2", "bbox must be"),
     ("/api/render?bbox=5,5,1,1", "bbox must be"),
     ("/api/render?w=0&h=10", "w and h"),

@@ -198,7 +198,7 @@
 
   async function start() {
     info = await (await fetch("/api/info")).json();
-    $("dem").textContent = info.path.split(/[\\/]/).pop() + " (" + info.cols + " x " + info.rows + ")";
+    $("dem").textContent = info.name + " (" + info.cols + " x " + info.rows + ")";
     st.algorithm = info.algorithm;
     for (const a of info.algorithms) {
       const o = document.createElement("option"); o.value = o.textContent = a;
