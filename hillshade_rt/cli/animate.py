@@ -12,8 +12,8 @@ from .options import (algorithm_option, animation_options, backend_option, curva
 
 
 @click.command("animate")
-@click.argument("dem", type=click.Path(dir_okay=False))
-@click.argument("output", type=click.Path(dir_okay=False))
+@click.argument("dem", type=click.Path())
+@click.argument("output", type=click.Path())
 @animation_options
 @place_options
 @algorithm_option

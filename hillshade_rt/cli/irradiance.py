@@ -16,7 +16,7 @@ from .options import (context_option, each_pattern_options,
 
 @click.command()
 @click.argument("files", metavar="DEM OUTPUT | DEM... --each", nargs=-1, required=True,
-                type=click.Path(dir_okay=False))
+                type=click.Path())
 @click.option("--date", "date_", default=None, metavar="YYYY-MM-DD",
               help="The day (or first day), midnight to midnight in --tz (else local mean "
                    "solar time).")

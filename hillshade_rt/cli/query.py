@@ -12,7 +12,7 @@ from .options import (curvature_options, dem_options, height_above_ground_option
 
 
 @click.command()
-@click.argument("dem", type=click.Path(dir_okay=False))
+@click.argument("dem", type=click.Path())
 @point_options
 @sun_options
 @height_above_ground_option("The observer's height above the terrain at the point, metres "

@@ -46,7 +46,7 @@ def _shade(cfg, each):
 
 @click.command()
 @click.argument("files", metavar="DEM... [OUTPUT]", nargs=-1, required=True,
-                type=click.Path(dir_okay=False))
+                type=click.Path())
 @sun_options
 @algorithm_option
 @algorithm_flags
@@ -166,7 +166,7 @@ def _subsolar(files, subsolar, subsolar_file, distance, body, light_position, li
 
 @click.command()
 @click.argument("files", metavar="DEM... [OUTPUT]", nargs=-1, required=True,
-                type=click.Path(dir_okay=False))
+                type=click.Path())
 @sun_options
 @click.option("--ambient", type=click.FloatRange(0.0, 1.0), default=0.2, show_default=True,
               callback=finite,

@@ -15,7 +15,7 @@ from .options import (context_option, algorithm_option, backend_option, dem_opti
 
 @click.command("sun-hours")
 @click.argument("files", metavar="DEM OUTPUT | DEM... --each", nargs=-1, required=True,
-                type=click.Path(dir_okay=False))
+                type=click.Path())
 @click.option("--date", "date_", required=True, metavar="YYYY-MM-DD", help="The day (or first day).")
 @click.option("--end-date", default=None, metavar="YYYY-MM-DD",
               help="Last day of a range (included); the hours are the total over the range.")

@@ -129,12 +129,18 @@ class Claims:
         return path
 
 
+def is_stdout(path: str) -> bool:
+    """Standard output as the command line spells it (``-``) or as GDAL does
+    (``/vsistdout/``, ``/vsistdout_redirect/...``): refused alike, as a usage error."""
+    return path == "-" or path.startswith("/vsistdout")
+
+
 def check_output_path(path: str, overwrite: bool) -> str:
     """Fail early (before any computing) when ``path`` cannot be written."""
     path = os.fspath(path)
-    if path == "-":
-        raise UsageProblem("'-' (standard output) is not supported for outputs: rasters need "
-                           "a file they can seek in; give a file name")
+    if is_stdout(path):
+        raise UsageProblem(f"{path!r} (standard output) is not supported for outputs: rasters "
+                           "need a file they can seek in; give a file name")
     if is_virtual(path):
         if path.startswith("/vsimem/") and virtual_outputs.get():
             return path

@@ -352,3 +352,34 @@ def test_warnings_raised_inside_a_run_are_one_line_each(tmp_path, runner, dem, m
                      "hillshade-rt: warning: Dataset has no geotransform (UserWarning from "
                      "rasterio)"], r.stderr
     assert "site-packages" not in r.stderr
+
+
+# ---------------------------------------------------------------------------------------------
+# exit statuses: a folder as the DEM, standard output as OUTPUT
+
+def _run_of(command, dem, out):
+    return {"shadow": ["shadow", dem, out, "--azimuth", "200", "--elevation", "10"],
+            "sun-hours": ["sun-hours", dem, out, "--date", "2026-06-21", "--step", "6h"],
+            "horizon": ["horizon", dem, out, "--azimuth", "200"]}[command]
+
+
+@pytest.mark.parametrize("command", ["shadow", "sun-hours", "horizon"])
+def test_a_folder_as_the_dem_fails_like_a_missing_file(tmp_path, runner, command):
+    folder = tmp_path / "tiles"
+    folder.mkdir()
+    out = str(tmp_path / "o.tif")
+    r = runner.invoke(cli, _run_of(command, str(folder), out))
+    _one_line(r, 1, f"hillshade-rt: error: {folder}: is a folder, not a raster file")
+    missing = runner.invoke(cli, _run_of(command, str(tmp_path / "absent.tif"), out))
+    _one_line(missing, 1, "absent.tif: no such file")
+    assert not os.path.exists(out)
+
+
+@pytest.mark.parametrize("command", ["shadow", "sun-hours", "horizon"])
+def test_standard_output_as_output_is_one_usage_error_in_every_spelling(tmp_path, runner, dem,
+                                                                         command):
+    before = sorted(os.listdir(tmp_path))
+    for out in ("-", "/vsistdout/"):
+        r = runner.invoke(cli, _run_of(command, dem, out))
+        _one_line(r, 2, f"'{out}' (standard output) is not supported for outputs")
+    _nothing_new(tmp_path, before)
