@@ -325,6 +325,77 @@ def day_samples(first: _dt.date, last: _dt.date, step: str, tz, lon: float,
     return times, weights
 
 
+def daylight_samples(first: _dt.date, last: _dt.date, step: str, tz, site, atmosphere=None,
+                     limit: int = 2_000_000) -> tuple[list[_dt.datetime], list[float]]:
+    """Sun hours' samples: the intervals of :func:`day_samples`, each weighted by the part of
+    it during which the sun's centre is up at ``site`` (its apparent elevation, the SPA's
+    refraction unless ``atmosphere`` turns it off, above 0: the tool's sunrise and sunset), and
+    sampled at the middle of that part (the middle of the interval when the sun is up
+    throughout; of the longest up stretch when it rises and sets inside one interval). An
+    interval without the sun has weight 0 (its time the middle). So on flat open ground the
+    hours are the day length, and nowhere more: a sample lit or not counts at most the time
+    the sun is up within its interval. Sunrise and sunset inside an interval are found by
+    bisection on the SPA (to under a second); the sun checked at each interval's ends and
+    middle, so a sun that rises and sets within half a step (a polar day's edge with a step of
+    hours) is missed, which only ever counts less."""
+    atmosphere = Atmosphere() if atmosphere is None else atmosphere
+    mids, hours = day_samples(first, last, step, tz, site.lon, limit)
+    mid = np.array([t.timestamp() for t in mids], np.float64)
+    half = np.asarray(hours, np.float64) * 1800.0        # half an interval, seconds
+    a, b = mid - half, mid + half
+
+    def up(ts):
+        if ts.size == 0:
+            return np.zeros(0, bool)
+        return solar_position(ts, site.lat, site.lon, site.height, atmosphere)[1] > 0.0
+
+    ua, um, ub = np.split(up(np.concatenate([a, mid, b])), 3)
+    weights = np.where(ua & um & ub, hours, 0.0).astype(np.float64)
+    times = list(mids)
+    edge = np.flatnonzero((ua | um | ub) & ~(ua & um & ub))
+    if edge.size:
+        # each half interval with a change: its crossing by bisection (all edges at once)
+        lo = np.concatenate([a[edge], mid[edge]])
+        hi = np.concatenate([mid[edge], b[edge]])
+        up_lo = np.concatenate([ua[edge], um[edge]])
+        up_hi = np.concatenate([um[edge], ub[edge]])
+        change = up_lo != up_hi
+        x0, x1 = lo[change].copy(), hi[change].copy()
+        u0 = up_lo[change]
+        while x0.size and np.max(x1 - x0) > 0.5:
+            xm = (x0 + x1) / 2.0
+            um_ = up(xm)
+            same = um_ == u0
+            x0 = np.where(same, xm, x0)
+            x1 = np.where(same, x1, xm)
+        cross = np.full(lo.shape, np.nan)
+        cross[change] = (x0 + x1) / 2.0
+        n = edge.size
+        for k, i in enumerate(edge):
+            pieces = []          # the stretches with the sun up, in order, merged when they touch
+            for j in (k, k + n):
+                s0, s1 = lo[j], hi[j]
+                if up_lo[j] and up_hi[j]:
+                    part = (s0, s1)
+                elif up_lo[j]:
+                    part = (s0, cross[j])
+                elif up_hi[j]:
+                    part = (cross[j], s1)
+                else:
+                    continue
+                if pieces and abs(pieces[-1][1] - part[0]) < 1e-6:
+                    pieces[-1] = (pieces[-1][0], part[1])
+                else:
+                    pieces.append(part)
+            if not pieces:
+                continue
+            weights[i] = sum(p1 - p0 for p0, p1 in pieces) / 3600.0
+            p0, p1 = max(pieces, key=lambda p: p[1] - p[0])
+            t = _dt.datetime.fromtimestamp((p0 + p1) / 2.0, UTC)
+            times[i] = t.astimezone(tz) if tz is not None else t
+    return times, [float(w) for w in weights]
+
+
 def iso(t: _dt.datetime) -> str:
     """ISO 8601 with the offset, seconds only when needed."""
     return t.isoformat(timespec="seconds" if t.second or t.microsecond else "minutes")
