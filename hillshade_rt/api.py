@@ -21,13 +21,64 @@ For arrays already in memory use :func:`~hillshade_rt.shadow_mask` or
 from __future__ import annotations
 
 import datetime as _dt
+import functools
 import os
+import re
 
 from .errors import HillshadeError
 from .run.config import PLACE_KEYS, READ_KEYS
 
 # keyword arguments passed on as the run's options of the same name
 _PASSED = PLACE_KEYS + READ_KEYS + ("threads",)
+
+
+# the command line's options that are other keywords here (the rest: --foo-bar -> foo_bar)
+_KEYWORDS = {"--overwrite": "overwrite=True", "--earth-curvature": "curvature=True",
+             "--no-earth-curvature": "curvature=False", "--refraction-coefficient": "refraction_k",
+             "--time": "times", "--scheduler": "client", "--co": "creation_options",
+             "--format": "fmt", "--soft": "soft=True", "--self-shadow": "self_shadow=True",
+             "--no-self-shadow": "self_shadow=False", "--cog": "cog=True", "--each": "each=True",
+             "--mean": "mean=True", "--perez": "perez=True", "--classes": "product='classes'",
+             "--no-refraction": "no_refraction=True", "--output": "output",
+             "--quiet": "progress=False", "--help": "help()"}
+_OPTION = re.compile(r"(?<![\w-])--[a-z][a-z0-9-]*")
+
+
+def _algorithm_keywords() -> dict:
+    """The algorithms' own flags as ``algorithm_options`` entries (from the registry)."""
+    from .algorithms import REGISTRY
+    out = {}
+    for spec in REGISTRY.values():
+        for opt in spec.options:
+            out[opt.flag] = (f"algorithm_options={{'{opt.keyword}': {opt.flag_value!r}}}"
+                             if opt.kind == "flag" else f"algorithm_options['{opt.keyword}']")
+    return out
+
+
+def in_keywords(message: str) -> str:
+    """A message of the run's checks (written for the command line) as Python's: each option
+    named by this API's keyword (``--overwrite`` -> ``overwrite=True``, ``--pixel-size`` ->
+    ``pixel_size``, ``--nextv`` -> ``algorithm_options['nextv']``), OUTPUT as ``output``."""
+    table = {**_algorithm_keywords(), **_KEYWORDS}
+
+    def one(m):
+        flag = m.group(0)
+        return table.get(flag, flag[2:].replace("-", "_"))
+    return re.sub(r"\bOUTPUT\b", "output", _OPTION.sub(one, message))
+
+
+def _keyword_errors(f):
+    """``f`` whose :class:`HillshadeError` says this API's keywords, not the command line's
+    options (its class and attributes kept)."""
+    @functools.wraps(f)
+    def wrapper(*args, **kwargs):
+        try:
+            return f(*args, **kwargs)
+        except HillshadeError as exc:
+            if exc.args and isinstance(exc.args[0], str):
+                exc.args = (in_keywords(exc.args[0]),) + exc.args[1:]
+            raise
+    return wrapper
 
 
 def _iso(t):
@@ -44,6 +95,7 @@ def _stderr(kind: str, message: str) -> None:
     print(message, file=sys.stderr)
 
 
+@_keyword_errors
 def shade(dems, output: str | None = None, *, product: str = "shadow",
           output_pattern: str | None = None, azimuth: float | None = None,
           elevation: float | None = None, times=(), start=None, end=None, step: str | None = None,
@@ -141,6 +193,7 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
         virtual_outputs.reset(token)
 
 
+@_keyword_errors
 def irradiance(dem, output, *, date=None, end_date=None, start=None, end=None,
                step: str = "15min", clear_sky: str | None = None,
                linke_turbidity: float | None = None, albedo: float = 0.2, ghi=None,
@@ -192,6 +245,7 @@ def irradiance(dem, output, *, date=None, end_date=None, start=None, end=None,
         virtual_outputs.reset(token)
 
 
+@_keyword_errors
 def animate(dem, output, *, date=None, start=None, end=None, step: str | None = None,
             fps: float = 12.0, size: int = 1024, label: bool = True, algorithm: str = "auto",
             curvature: bool | None = None, refraction_k: float | None = None,

@@ -143,7 +143,7 @@ def _plain(path: str, lines: list[str]) -> SubsolarSeries:
         if len(r) < len(cols):
             raise HillshadeError(f"{where}: {len(r)} fields, the header has {len(cols)}")
         try:
-            t = parse_time(r[at["time"]], None, f"{where}: time")
+            t = parse_time(r[at["time"]], None, f"{where}: time", spa=False)
         except HillshadeError as exc:
             msg = str(exc)
             raise HillshadeError(msg if msg.startswith(where) else f"{where}: {msg}") from None

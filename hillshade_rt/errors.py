@@ -27,3 +27,8 @@ class Interrupted(KeyboardInterrupt):
     def __init__(self, signum: int):
         super().__init__(signum)
         self.signum = signum
+
+
+class HillshadeWarning(UserWarning):
+    """Something a run's user should know that does not stop it (an extrapolated ΔT, say): its
+    message is one line, which the command line prints as ``hillshade-rt: warning: ...``."""

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .errors import HillshadeError
+from .errors import HillshadeError, HillshadeWarning, UsageProblem
 
 UTC = _dt.timezone.utc
 STANDARD_PRESSURE_HPA = 1013.25
@@ -32,6 +32,11 @@ ATMOS_REFRACT = 0.5667             # the SPA's refraction at sunrise/sunset, deg
 SUN_RADIUS_DEG = 0.533 / 2         # the solar disk: 0.533 degrees across
 DEFAULT_TOLERANCE = 0.05           # degrees: above this the sun is computed per tile
 MAX_TILES = 4096
+# the years NREL's SPA is valid for (Reda & Andreas 2004, NREL/TP-560-34302: "for the period
+# from the year -2000 to 6000"); ΔT (TT - UT) is known for -1999..3000 only (pvlib.spa
+# extrapolates it beyond, with a warning this module turns into one line)
+SPA_YEARS = (-2000, 6000)
+DELTA_T_YEARS = (-1999, 3000)
 
 
 # --------------------------------------------------------------------------------------------
@@ -184,11 +189,12 @@ def localize(naive: _dt.datetime, tz, what: str) -> _dt.datetime:
         f"{local}{_offset(before)} (the first) or {local}{_offset(after)} (the second)")
 
 
-def parse_time(text: str, tz=None, what: str = "--time") -> _dt.datetime:
+def parse_time(text: str, tz=None, what: str = "--time", spa: bool = True) -> _dt.datetime:
     """An ISO 8601 time (``2026-06-21T14:30:00+02:00``, ``...Z``, or local time with ``tz``) as
     an aware datetime. A time with an offset keeps its instant; ``tz`` then only names the zone
     outputs are labelled in. A date without a time of day is refused (it is not an instant:
-    midnight is rarely what was meant). ``what``: the option named in errors."""
+    midnight is rarely what was meant). ``what``: the option named in errors. ``spa``: the sun
+    is computed for it, so its year must be within the SPA's range (:func:`check_year`)."""
     s = str(text).strip()
     try:
         _dt.date.fromisoformat(s)
@@ -202,12 +208,23 @@ def parse_time(text: str, tz=None, what: str = "--time") -> _dt.datetime:
     except ValueError:
         raise HillshadeError(f"{what} {text!r}: not an ISO 8601 time "
                              "(e.g. 2026-06-21T14:30:00+02:00)") from None
+    if spa:
+        check_year(t.year, f"{what} {text!r}")
     if t.tzinfo is None:
         if tz is None:
             raise HillshadeError(f"time {text!r} has no UTC offset: add one (e.g. +02:00 or Z) or "
                                  "name the zone with --tz (e.g. --tz Europe/Zurich)")
         return localize(t, tz, f"{what} {text!r}")
     return t.astimezone(tz) if tz is not None else t
+
+
+def check_year(year: int, what: str) -> None:
+    """Refuse a year outside the SPA's validity (:data:`SPA_YEARS`): :class:`UsageProblem`
+    naming ``what`` (the option and its value)."""
+    lo, hi = SPA_YEARS
+    if not lo <= year <= hi:
+        raise UsageProblem(f"{what}: year {year} is outside the solar position algorithm's range "
+                           f"(NREL SPA: years {lo} to {hi})")
 
 
 _STEP_UNITS = {"s": 1, "sec": 1, "second": 1, "seconds": 1, "m": 60, "min": 60, "mins": 60,
@@ -259,9 +276,11 @@ def time_range(start: _dt.datetime, end: _dt.datetime, step: _dt.timedelta,
 
 def parse_date(text: str, what: str = "--date") -> _dt.date:
     try:
-        return _dt.date.fromisoformat(str(text).strip())
+        day = _dt.date.fromisoformat(str(text).strip())
     except ValueError:
         raise HillshadeError(f"{what} {text!r}: not a date (YYYY-MM-DD)") from None
+    check_year(day.year, f"{what} {text!r}")
+    return day
 
 
 def day_start(day: _dt.date, tz) -> _dt.datetime:
@@ -304,6 +323,77 @@ def day_samples(first: _dt.date, last: _dt.date, step: str, tz, lon: float,
             raise HillshadeError(f"more than {limit} samples: use a longer --step")
         day += one
     return times, weights
+
+
+def daylight_samples(first: _dt.date, last: _dt.date, step: str, tz, site, atmosphere=None,
+                     limit: int = 2_000_000) -> tuple[list[_dt.datetime], list[float]]:
+    """Sun hours' samples: the intervals of :func:`day_samples`, each weighted by the part of
+    it during which the sun's centre is up at ``site`` (its apparent elevation, the SPA's
+    refraction unless ``atmosphere`` turns it off, above 0: the tool's sunrise and sunset), and
+    sampled at the middle of that part (the middle of the interval when the sun is up
+    throughout; of the longest up stretch when it rises and sets inside one interval). An
+    interval without the sun has weight 0 (its time the middle). So on flat open ground the
+    hours are the day length, and nowhere more: a sample lit or not counts at most the time
+    the sun is up within its interval. Sunrise and sunset inside an interval are found by
+    bisection on the SPA (to under a second); the sun checked at each interval's ends and
+    middle, so a sun that rises and sets within half a step (a polar day's edge with a step of
+    hours) is missed, which only ever counts less."""
+    atmosphere = Atmosphere() if atmosphere is None else atmosphere
+    mids, hours = day_samples(first, last, step, tz, site.lon, limit)
+    mid = np.array([t.timestamp() for t in mids], np.float64)
+    half = np.asarray(hours, np.float64) * 1800.0        # half an interval, seconds
+    a, b = mid - half, mid + half
+
+    def up(ts):
+        if ts.size == 0:
+            return np.zeros(0, bool)
+        return solar_position(ts, site.lat, site.lon, site.height, atmosphere)[1] > 0.0
+
+    ua, um, ub = np.split(up(np.concatenate([a, mid, b])), 3)
+    weights = np.where(ua & um & ub, hours, 0.0).astype(np.float64)
+    times = list(mids)
+    edge = np.flatnonzero((ua | um | ub) & ~(ua & um & ub))
+    if edge.size:
+        # each half interval with a change: its crossing by bisection (all edges at once)
+        lo = np.concatenate([a[edge], mid[edge]])
+        hi = np.concatenate([mid[edge], b[edge]])
+        up_lo = np.concatenate([ua[edge], um[edge]])
+        up_hi = np.concatenate([um[edge], ub[edge]])
+        change = up_lo != up_hi
+        x0, x1 = lo[change].copy(), hi[change].copy()
+        u0 = up_lo[change]
+        while x0.size and np.max(x1 - x0) > 0.5:
+            xm = (x0 + x1) / 2.0
+            um_ = up(xm)
+            same = um_ == u0
+            x0 = np.where(same, xm, x0)
+            x1 = np.where(same, x1, xm)
+        cross = np.full(lo.shape, np.nan)
+        cross[change] = (x0 + x1) / 2.0
+        n = edge.size
+        for k, i in enumerate(edge):
+            pieces = []          # the stretches with the sun up, in order, merged when they touch
+            for j in (k, k + n):
+                s0, s1 = lo[j], hi[j]
+                if up_lo[j] and up_hi[j]:
+                    part = (s0, s1)
+                elif up_lo[j]:
+                    part = (s0, cross[j])
+                elif up_hi[j]:
+                    part = (cross[j], s1)
+                else:
+                    continue
+                if pieces and abs(pieces[-1][1] - part[0]) < 1e-6:
+                    pieces[-1] = (pieces[-1][0], part[1])
+                else:
+                    pieces.append(part)
+            if not pieces:
+                continue
+            weights[i] = sum(p1 - p0 for p0, p1 in pieces) / 3600.0
+            p0, p1 = max(pieces, key=lambda p: p[1] - p[0])
+            t = _dt.datetime.fromtimestamp((p0 + p1) / 2.0, UTC)
+            times[i] = t.astimezone(tz) if tz is not None else t
+    return times, [float(w) for w in weights]
 
 
 def iso(t: _dt.datetime) -> str:
@@ -355,11 +445,33 @@ def solar_position(times, lat, lon, height_m=0.0, atmosphere: Atmosphere = Atmos
                                             np.asarray(height_m, np.float64))
     shape = unix.shape
     unix, lat, lon, h = (np.ravel(a) for a in (unix, lat, lon, h))
+    finite = unix[np.isfinite(unix)]
+    if finite.size:
+        span = np.floor(np.array([finite.min(), finite.max()])).astype("datetime64[s]")
+        y0, y1 = (span.astype("datetime64[Y]").astype(np.int64) + 1970).tolist()
+        lo, hi = SPA_YEARS
+        if y0 < lo or y1 > hi:
+            bad = y0 if y0 < lo else y1
+            raise UsageProblem(f"year {bad} is outside the solar position algorithm's range "
+                               f"(NREL SPA: years {lo} to {hi})")
     if delta_t is None:
         dt64 = np.floor(unix).astype("datetime64[s]")
         years = dt64.astype("datetime64[Y]").astype(np.int64) + 1970
         months = dt64.astype("datetime64[M]").astype(np.int64) % 12 + 1
-        delta_t = spa.calculate_deltat(years, months)
+        lo, hi = DELTA_T_YEARS
+        outside = (years < lo) | (years > hi)
+        if outside.any():
+            import warnings
+            with warnings.catch_warnings():         # pvlib's multi-line warning: ours instead
+                warnings.simplefilter("ignore")
+                delta_t = spa.calculate_deltat(years, months)
+            far = years[outside]
+            warnings.warn(HillshadeWarning(
+                f"year {int(far.min()) if far.min() < lo else int(far.max())}: delta T (TT - UT) is "
+                f"known for the years {lo} to {hi} only; pvlib's extrapolation is used, so the "
+                "sun's position there is uncertain"), stacklevel=2)
+        else:
+            delta_t = spa.calculate_deltat(years, months)
     pressure = atmosphere.pressure_at(h)
     zen_app, zen, el_app, el, az, _ = spa.solar_position_numpy(
         unix, lat, lon, h, pressure, float(atmosphere.temperature_c), delta_t, ATMOS_REFRACT, 1)

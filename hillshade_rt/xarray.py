@@ -742,7 +742,7 @@ def sun_hours(da, date, *, end_date=None, step: str = "10min", tz: str | None = 
     from .earth import dem_body
     from .run.config import check_lift
     from .shading import Shader, choose_backend, render
-    from .sun import SUN_RADIUS_DEG, SunRequest, day_samples, parse_date, parse_step
+    from .sun import SUN_RADIUS_DEG, SunRequest, daylight_samples, parse_date, parse_step
     lookup(algorithm)
     algorithm = check_lift(height_above_ground, algorithm, soft)
     lift = float(height_above_ground)
@@ -769,25 +769,25 @@ def sun_hours(da, date, *, end_date=None, step: str = "10min", tz: str | None = 
     if inp.lazy:
         src = _LazySource(inp.heights, inp.grid, inp.transform, inp.crs, inp.path)
         site = req.site(src, other)
-        req.times, weights = day_samples(first, last, step, req.tz, site.lon)
+        req.times, weights = daylight_samples(first, last, step, req.tz, site, req.atmosphere)
         job, stats, suns, _ = _lazy_job(inp, req, algorithm, {}, ran_on, curvature,
                                         refraction_k, "sun", soft, self_shadow, lift)
         hours = inp.heights * np.float32(0.0)      # NaN on voids, 0 elsewhere
         for s, w in zip(suns, weights):
-            if not dark(s):
+            if w > 0 and not dark(s):
                 hours = hours + np.float32(w) * _lazy_render(job, s, stats, inp.heights,
                                                              np.float32)
     else:
         dem = _dem(inp)
         site = req.site(dem, other)
-        req.times, weights = day_samples(first, last, step, req.tz, site.lon)
+        req.times, weights = daylight_samples(first, last, step, req.tz, site, req.atmosphere)
         suns, _ = req.suns(dem, site)
         shader = Shader(dem.heights, dem.grid, algorithm, {}, ran_on, curvature, refraction_k,
                         dem_body(dem, req.lat), dem.height_range(), survey=dem.survey(),
                         lift=lift)
         hours = np.where(np.isnan(dem.heights), np.float32(np.nan), np.float32(0.0))
         for s, w in zip(suns, weights):
-            if not dark(s):
+            if w > 0 and not dark(s):
                 hours += np.float32(w) * render(shader, s, "sun", soft=soft,
                                                 self_shadow=self_shadow)
     attrs = {"product": "sun_hours", "units": "hours of direct sun",

@@ -117,3 +117,36 @@ def test_cli_api_and_array_function_agree_at_default_settings(tmp_path):
     from hillshade_rt.earth import dem_body
     np.testing.assert_array_equal(arr, hr.shadow_mask(d.heights, 135, 15, d.grid,
                                                       body=dem_body(d)))
+
+
+def test_api_errors_name_keywords_not_command_line_options(tmp_path):
+    from hillshade_rt import api
+    from hillshade_rt.errors import UsageProblem
+    dem = write_geotiff(tmp_path / "d.tif", fractal_terrain(40, 40, 3),
+                        Affine(30, 0, 476000, 0, -30, 4400000), CRS.from_epsg(32613))
+    out = tmp_path / "o.tif"
+    out.write_bytes(b"old")
+    with pytest.raises(hr.HillshadeError) as e:
+        hr.shade(dem, out, azimuth=200, elevation=10)
+    assert "use overwrite=True to replace it" in str(e.value) and "--" not in str(e.value)
+    cases = [(dict(azimuth=200, elevation=10, window_size=(16, 16)), "window_size 16x16"),
+             (dict(azimuth=200, elevation=10, algorithm="brute",
+                   algorithm_options={"nextv": "quad"}),
+              "algorithm_options['nextv'] applies to algorithm smap"),
+             (dict(times=["2026-06-21T12:00Z"], lat=45), "lat and lon go together"),
+             (dict(start="2026-06-21T12:00Z"), "start"),
+             (dict(azimuth=200, elevation=10, report=str(dem), overwrite=True),
+              "report is also an input")]
+    for kw, words in cases:
+        with pytest.raises(hr.HillshadeError) as e:
+            hr.shade(dem, tmp_path / "n.tif", **kw)
+        assert words in str(e.value) and "--" not in str(e.value), str(e.value)
+    with pytest.raises(UsageProblem) as e:                 # the class is kept
+        hr.shade(dem, dem, azimuth=200, elevation=10, overwrite=True)
+    assert "output is also an input" in str(e.value)
+    with pytest.raises(hr.HillshadeError) as e:
+        api.irradiance(dem, tmp_path / "i.tif", date="2026-06-21", end_date="2026-06-01")
+    assert "--" not in str(e.value) and "end_date" in str(e.value), str(e.value)
+    assert api.in_keywords("use --earth-curvature or --no-earth-curvature, --co, --time") == \
+        "use curvature=True or curvature=False, creation_options, times"
+    assert not (tmp_path / "n.tif").exists()

@@ -524,3 +524,36 @@ def test_lat_lon_on_a_projected_dem_still_turns_to_grid_north(tmp_path, runner):
     sun = json.loads(rep.read_text())["sun"]
     assert sun["mode"] == "one vector"
     assert sun["azimuth"] - sun["true_azimuth"] == pytest.approx(0.176, abs=0.01)
+
+
+@pytest.mark.parametrize("lat, date", [(0.0, "2026-03-20"), (45.0, "2026-06-21"),
+                                       (45.0, "2026-12-21"), (60.0, "2026-06-21"),
+                                       (-33.9, "2026-06-21"), (52.5, "2026-10-07"),
+                                       (67.0, "2026-12-21"), (69.0, "2026-06-21"),
+                                       (69.0, "2026-12-21")])
+def test_sun_hours_never_exceed_the_day_length(tmp_path, runner, lat, date):
+    """A flat open plain: its sun hours are the time the sun's apparent centre is above the
+    horizon (the tool's sunrise to sunset), found here by sampling pvlib's SPA every 5 s, and
+    never more (samples counting whole steps at both ends gave up to one step more)."""
+    import pandas as pd
+    from pvlib import spa
+    from pvlib.solarposition import spa_python
+
+    lon = 10.3
+    dem = write_geotiff(tmp_path / "flat.tif", np.zeros((10, 12), np.float32),
+                        Affine(10, 0, 0, 0, -10, 0), None)
+    out = tmp_path / "h.tif"
+    r = runner.invoke(cli, ["sun-hours", dem, str(out), "--date", date, "--step", "1h",
+                            "--lat", str(lat), "--lon", str(lon), "-q"])
+    assert r.exit_code == 0, r.output
+    h = read_band(out)
+    assert np.ptp(h) == 0
+    # the day in local mean solar time at lon (no --tz), sampled every 5 s
+    t0 = pd.Timestamp(date, tz="UTC") - pd.Timedelta(hours=lon / 15.0)
+    times = pd.date_range(t0, t0 + pd.Timedelta(days=1), freq="5s", inclusive="left")
+    dt = float(spa.calculate_deltat(np.array([times[0].year]), np.array([times[0].month]))[0])
+    el = spa_python(times, lat, lon, altitude=0.0, pressure=101325.0, temperature=12.0,
+                    delta_t=dt)["apparent_elevation"].to_numpy()
+    length = float((el > 0).sum()) * 5.0 / 3600.0
+    assert float(h[0, 0]) <= length + 10 / 3600.0, (float(h[0, 0]), length)
+    assert float(h[0, 0]) == pytest.approx(length, abs=20 / 3600.0), (float(h[0, 0]), length)

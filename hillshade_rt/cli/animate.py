@@ -13,8 +13,8 @@ from .options import (SectionedCommand, algorithm_option, animation_options, bac
 
 
 @click.command("animate", cls=SectionedCommand)
-@click.argument("dem", type=click.Path(dir_okay=False))
-@click.argument("output", type=click.Path(dir_okay=False))
+@click.argument("dem", type=click.Path())
+@click.argument("output", type=click.Path())
 @animation_options
 @place_options("animate")
 @algorithm_option

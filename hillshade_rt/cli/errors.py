@@ -7,6 +7,7 @@ from __future__ import annotations
 import contextlib
 import functools
 import os
+import re
 import sys
 
 import click
@@ -105,12 +106,62 @@ def _exit_one_line(exc: BaseException):
     sys.exit(1)
 
 
+_SITE = re.compile(r"\S*[/\\](?:site|dist)-packages[/\\](\S+)")
+
+
+def _origin(filename: str) -> str:
+    """The installed package a warning came from, by its file (``pvlib``, ``rasterio``; never
+    a path); "" for any other file."""
+    parts = re.split(r"[/\\]", filename or "")
+    for marker in ("site-packages", "dist-packages"):
+        if marker in parts and parts.index(marker) + 1 < len(parts):
+            return parts[parts.index(marker) + 1].removesuffix(".py")
+    return ""       # ours, or numpy's arithmetic warnings (they name the caller's file)
+
+
+def warning_line(message, category, filename: str) -> str:
+    """A warning as the tool's one line: its message's first line (paths into installed
+    packages cut to the package's part) and, for another package's warning, its kind and
+    origin: ``Deltat is unknown ... (UserWarning from pvlib)``, ``invalid value encountered in
+    divide (RuntimeWarning)``."""
+    from ..errors import HillshadeWarning
+    text = str(message).strip()
+    text = _SITE.sub(r"\1", text.splitlines()[0].strip() if text else "") or category.__name__
+    if issubclass(category, HillshadeWarning):
+        return text
+    origin = _origin(filename)
+    return f"{text} ({category.__name__}{' from ' + origin if origin else ''})"
+
+
+@contextlib.contextmanager
+def warnings_one_line():
+    """While a command runs, every warning that Python's filters let through (pvlib's,
+    rasterio's, numpy's, pyproj's, ours) is said as one line, ``hillshade-rt: warning: ...``,
+    each distinct one once: never the raw multi-line text with a path into site-packages.
+    (``-W error`` and PYTHONWARNINGS still decide which warnings are shown or raised.)"""
+    import warnings
+    seen: set[str] = set()
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        text = warning_line(message, category, filename)
+        if text in seen:
+            return
+        seen.add(text)
+        with contextlib.suppress(Exception):
+            click.echo(f"hillshade-rt: warning: {text}", err=True)
+
+    with warnings.catch_warnings():
+        warnings.showwarning = show
+        yield
+
+
 class OneLineErrors(click.Group):
     """A group whose errors (usage errors included) print as a single line, never a traceback;
-    SIGINT, SIGTERM and SIGHUP stop a run like Ctrl-C (exit 130, 143, 129)."""
+    SIGINT, SIGTERM and SIGHUP stop a run like Ctrl-C (exit 130, 143, 129); warnings are one
+    line each (:func:`warnings_one_line`)."""
 
     def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
-        with signals_stop_runs():
+        with signals_stop_runs(), warnings_one_line():
             with one_line_errors():
                 rv = super().main(args=args, prog_name=prog_name, complete_var=complete_var,
                                   standalone_mode=False, **extra)
@@ -130,7 +181,7 @@ class InAnotherGroup:
             return super().make_context(info_name, args, parent=parent, **extra)
 
     def invoke(self, ctx):
-        with signals_stop_runs():
+        with signals_stop_runs(), warnings_one_line():
             with one_line_errors():
                 return super().invoke(ctx)
 

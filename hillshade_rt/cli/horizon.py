@@ -16,7 +16,7 @@ from .options import (InternalOption, SectionedCommand, context_option, each_pat
 
 @click.command(cls=SectionedCommand)
 @click.argument("files", metavar="DEM OUTPUT | DEM... --each", nargs=-1, required=True,
-                type=click.Path(dir_okay=False))
+                type=click.Path())
 @click.option("--azimuth", type=float, default=None, callback=finite,
               help="Azimuth along which to look, degrees clockwise from north (one band).")
 @click.option("--directions", type=click.IntRange(8, 360), default=None, metavar="N",

@@ -14,8 +14,8 @@ from .options import (SectionedCommand, backend_option, dem_options, format_opti
 
 
 @click.command("illumination", cls=SectionedCommand)
-@click.argument("dem", type=click.Path(dir_okay=False))
-@click.argument("output", type=click.Path(dir_okay=False))
+@click.argument("dem", type=click.Path())
+@click.argument("output", type=click.Path())
 @subsolar_series_options
 @height_above_ground_option("Light a point this many metres above every cell (a lander, a "
                             "rover's panel): its ray starts there.")

@@ -12,7 +12,7 @@ from .options import dem_options, to_read_options
 
 
 @click.command()
-@click.argument("dem", type=click.Path(dir_okay=False))
+@click.argument("dem", type=click.Path())
 @click.option("--json", "as_json", is_flag=True, help="Print JSON instead of text.")
 @click.option("--preview", type=click.Path(dir_okay=False), default=None,
               help="Also write a quick-look PNG of the DEM (shaded relief, lit from the NW).")

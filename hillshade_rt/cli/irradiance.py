@@ -17,7 +17,7 @@ from .options import (SectionedCommand, context_option, each_pattern_options,
 
 @click.command(cls=SectionedCommand)
 @click.argument("files", metavar="DEM OUTPUT | DEM... --each", nargs=-1, required=True,
-                type=click.Path(dir_okay=False))
+                type=click.Path())
 @click.option("--date", "date_", default=None, metavar="YYYY-MM-DD",
               help="The day (or first day), midnight to midnight in --tz (else local mean "
                    "solar time).")

@@ -11,7 +11,7 @@ from .options import (dem_options, height_above_ground_option, horizon_physics_o
 
 
 @click.command()
-@click.argument("dem", type=click.Path(dir_okay=False))
+@click.argument("dem", type=click.Path())
 @point_options
 @height_above_ground_option("The observer's height above the terrain at the point, metres "
                             "(a panel, a mast).")

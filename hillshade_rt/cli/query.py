@@ -12,7 +12,7 @@ from .options import (SectionedCommand, curvature_options, dem_options, height_a
 
 
 @click.command(cls=SectionedCommand)
-@click.argument("dem", type=click.Path(dir_okay=False))
+@click.argument("dem", type=click.Path())
 @point_options
 @sun_options("query")
 @height_above_ground_option("The observer's height above the terrain at the point, metres "

@@ -46,7 +46,7 @@ def _shade(cfg, each):
 
 @click.command(cls=SectionedCommand)
 @click.argument("files", metavar="DEM... [OUTPUT]", nargs=-1, required=True,
-                type=click.Path(dir_okay=False))
+                type=click.Path())
 @sun_options("shadow")
 @algorithm_option
 @algorithm_flags
@@ -108,7 +108,7 @@ def _point_light(files, position, lonlat, lift, soft, self_shadow, classes, algo
     refused = {"--azimuth/--elevation/--time/--start": any(
                    sun[k] for k in SUN_KEYS if k not in PLACE_KEYS),
                "--soft": soft, "--self-shadow": self_shadow, "--classes": classes,
-               "--algorithm": given("algorithm"), "--earth-curvature": curvature is not None,
+               "--algorithm": given("algorithm"), "--earth-curvature": curvature is True,
                "--context": kw.get("context") is not None}
     for k, flag in (("scheduler", "--scheduler"), ("output_pattern", "--output-pattern"),
                     ("cog", "--cog"), ("stac_item", "--stac-item"), ("each", "--each")):
@@ -127,8 +127,8 @@ def _lightmap_refused(kw, soft, curvature, refraction_k) -> dict:
     refused = {"--azimuth/--elevation/--time/--start": any(
                    sun[k] for k in SUN_KEYS if k not in PLACE_KEYS),
                "--soft": soft, "--algorithm": given("algorithm"),
-               "--earth-curvature": curvature is not None,
-               "--refraction-k": refraction_k is not None,
+               "--earth-curvature": curvature is True,
+               "--refraction-coefficient": refraction_k is not None,
                "--backend gpu": kw.get("backend") == "gpu",
                "--context": kw.get("context") is not None}
     for k, flag in (("window_size", "--window-size"), ("max_memory", "--max-memory"),
@@ -166,7 +166,7 @@ def _subsolar(files, subsolar, subsolar_file, distance, body, light_position, li
 
 @click.command(cls=SectionedCommand)
 @click.argument("files", metavar="DEM... [OUTPUT]", nargs=-1, required=True,
-                type=click.Path(dir_okay=False))
+                type=click.Path())
 @sun_options("hillshade")
 @click.option("--ambient", type=click.FloatRange(0.0, 1.0), default=0.2, show_default=True,
               callback=finite,

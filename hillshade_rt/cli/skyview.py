@@ -16,7 +16,7 @@ from .options import (SectionedCommand, context_option, each_pattern_options,
 
 @click.command(cls=SectionedCommand)
 @click.argument("files", metavar="DEM OUTPUT | DEM... --each", nargs=-1, required=True,
-                type=click.Path(dir_okay=False))
+                type=click.Path())
 @click.option("--directions", type=click.IntRange(4, 360), default=32, show_default=True,
               metavar="N", help="Equally spaced azimuths, clockwise from north (4..360).")
 @click.option("--definition", type=click.Choice(["zaksek", "dozier"]), default="zaksek",

@@ -16,7 +16,7 @@ from .options import (SectionedCommand, context_option, algorithm_option, backen
 
 @click.command("sun-hours", cls=SectionedCommand)
 @click.argument("files", metavar="DEM OUTPUT | DEM... --each", nargs=-1, required=True,
-                type=click.Path(dir_okay=False))
+                type=click.Path())
 @click.option("--date", "date_", required=True, metavar="YYYY-MM-DD", help="The day (or first day).")
 @click.option("--end-date", default=None, metavar="YYYY-MM-DD",
               help="Last day of a range (included); the hours are the total over the range.")

@@ -9,7 +9,7 @@ from .options import algorithm_option, backend_option, dem_options, to_read_opti
 
 
 @click.command()
-@click.argument("dem", type=click.Path(dir_okay=False))
+@click.argument("dem", type=click.Path())
 @view_options
 @algorithm_option
 @backend_option

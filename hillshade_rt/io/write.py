@@ -26,7 +26,9 @@ import errno
 import json
 import logging
 import os
+import re
 import signal
+import socket
 import sys
 import tempfile
 import threading
@@ -47,6 +49,7 @@ def reset() -> None:
     """Start a new run's list of published outputs."""
     completed.clear()
     caught.clear()
+    _swept.clear()
     _deferral.update(depth=0, pending=None)
 
 
@@ -126,12 +129,18 @@ class Claims:
         return path
 
 
+def is_stdout(path: str) -> bool:
+    """Standard output as the command line spells it (``-``) or as GDAL does
+    (``/vsistdout/``, ``/vsistdout_redirect/...``): refused alike, as a usage error."""
+    return path == "-" or path.startswith("/vsistdout")
+
+
 def check_output_path(path: str, overwrite: bool) -> str:
     """Fail early (before any computing) when ``path`` cannot be written."""
     path = os.fspath(path)
-    if path == "-":
-        raise UsageProblem("'-' (standard output) is not supported for outputs: rasters need "
-                           "a file they can seek in; give a file name")
+    if is_stdout(path):
+        raise UsageProblem(f"{path!r} (standard output) is not supported for outputs: rasters "
+                           "need a file they can seek in; give a file name")
     if is_virtual(path):
         if path.startswith("/vsimem/") and virtual_outputs.get():
             return path
@@ -153,16 +162,139 @@ def check_output_path(path: str, overwrite: bool) -> str:
 
 def temp_beside(path: str, suffix: str) -> str:
     """A new empty file in the folder ``path`` is written to (through links), hidden, named
-    after it."""
+    after it and after the process writing it (:func:`owner_tag`):
+    ``.NAME.<random>~<owner>.part.EXT``. The temporaries of dead runs in that folder are
+    removed first (:func:`sweep_dead`)."""
     real = target_of(path)
     folder = os.path.dirname(real)
+    sweep_dead(folder)
+    suffix = "~" + owner_tag() + suffix
+    name = os.path.basename(real)
+    room = 255 - 10 - len(os.fsencode(suffix))     # a file name's bytes (the random part: 8)
+    while len(os.fsencode(name)) > max(room, 1):
+        name = name[:-1]
     try:
-        fd, tmp = tempfile.mkstemp(dir=folder, prefix="." + os.path.basename(real) + ".",
-                                   suffix=suffix)
+        fd, tmp = tempfile.mkstemp(dir=folder, prefix="." + name + ".", suffix=suffix)
     except OSError as exc:
         raise os_error(path, exc) from None
     os.close(fd)
     return tmp
+
+
+# --------------------------------------------------------------------------------------------
+# the temporaries of dead runs (SIGKILL, power loss)
+#
+# A temporary's name says who wrote it: ``~PID-START-BOOT-PIDNS@HOST`` before its suffix
+# (``.part.EXT``, ``.scratch.EXT`` and the side-cars GDAL puts beside them): the process id,
+# its start time (clock ticks since boot, /proc/PID/stat), the first 8 characters of the
+# kernel's boot id, the inode of its pid namespace and the host name (characters other than
+# letters, digits and '-' as '_'). A run writing into a folder removes the temporaries whose
+# writer is provably dead: the same host and pid namespace, and another boot, or no process
+# with that id, or one that started at another time (the id reused). Those of another host or
+# namespace, of a live process, or without a tag (older versions) are kept.
+
+_TAGGED = re.compile(r"^\..+\.[A-Za-z0-9_]+~(?P<pid>\d+)-(?P<start>\d+)-(?P<boot>[0-9a-f]*)-"
+                     r"(?P<ns>\d+)@(?P<host>[A-Za-z0-9_-]+)\.(?:part|scratch)(?:\..*)?$")
+_swept: set[str] = set()        # folders swept during this run (reset() forgets them)
+
+
+def _host() -> str:
+    return re.sub(r"[^A-Za-z0-9-]", "_", socket.gethostname() or "localhost")[:64]
+
+
+def _start_time(pid) -> int:
+    """The process's start time in clock ticks since boot (field 22 of /proc/PID/stat); 0
+    where there is no /proc; None when there is no such process."""
+    try:
+        with open(f"/proc/{pid}/stat", "rb") as fh:
+            text = fh.read().decode("ascii", "replace")
+    except FileNotFoundError:
+        return None
+    except OSError:
+        return 0
+    try:
+        return int(text.rsplit(")", 1)[1].split()[19])
+    except (IndexError, ValueError):
+        return 0
+
+
+def _boot_id() -> str:
+    try:
+        with open("/proc/sys/kernel/random/boot_id", encoding="ascii") as fh:
+            return fh.read().strip().replace("-", "")[:8].lower()
+    except OSError:
+        return ""
+
+
+def _pid_ns() -> int:
+    try:
+        return os.stat("/proc/self/ns/pid").st_ino
+    except OSError:
+        return 0
+
+
+_OWNER: dict = {}
+
+
+def owner_tag() -> str:
+    """``PID-START-BOOT-PIDNS@HOST`` of this process (computed once per process)."""
+    pid = os.getpid()
+    if _OWNER.get("pid") != pid:        # a forked child is another writer
+        _OWNER.update(pid=pid, tag=f"{pid}-{_start_time(pid) or 0}-{_boot_id()}-{_pid_ns()}"
+                                   f"@{_host()}")
+    return _OWNER["tag"]
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:         # another user's process
+        return True
+    except OSError:
+        return True
+    return True
+
+
+def writer_dead(name: str) -> bool:
+    """Whether the temporary file ``name`` (a base name) was written by a process that is
+    provably dead: see above. False for names without the tag."""
+    m = _TAGGED.match(name)
+    if m is None or m["host"] != _host():
+        return False
+    if int(m["ns"]) != _pid_ns():
+        return False
+    if m["boot"] and _boot_id() and m["boot"] != _boot_id():
+        return True                 # written before this machine last started
+    pid = int(m["pid"])
+    if not _alive(pid):
+        return True
+    start, now = int(m["start"]), _start_time(pid)
+    return bool(start and now and now != start)     # the id now belongs to another process
+
+
+def sweep_dead(folder: str) -> list[str]:
+    """Remove the temporaries of dead runs in ``folder`` (once per folder per run); returns
+    their paths. Never fails: an unreadable folder or a file gone meanwhile is passed over."""
+    key = os.path.abspath(folder)
+    if key in _swept:
+        return []
+    _swept.add(key)
+    removed = []
+    try:
+        names = os.listdir(folder)
+    except OSError:
+        return removed
+    for name in names:
+        if not name.startswith(".") or "~" not in name or not writer_dead(name):
+            continue
+        p = os.path.join(folder, name)
+        with contextlib.suppress(OSError):
+            if os.path.isfile(p) and not os.path.islink(p):
+                os.remove(p)
+                removed.append(p)
+    return removed
 
 
 def os_error(path: str, exc: OSError) -> HillshadeError:

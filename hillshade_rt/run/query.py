@@ -241,8 +241,8 @@ def light_query(cfg: QueryConfig) -> dict:
     refused = (["--azimuth/--elevation/--time/--start"]
                if any(cfg.sun.get(k) for k in SUN_KEYS if k not in PLACE_KEYS) else [])
     refused += [flag for flag, on in (("--irradiance", cfg.irradiance),
-                                      ("--earth-curvature", cfg.curvature is not None),
-                                      ("--refraction-k", cfg.refraction_k is not None)) if on]
+                                      ("--earth-curvature", cfg.curvature is True),
+                                      ("--refraction-coefficient", cfg.refraction_k is not None)) if on]
     if refused:
         raise UsageProblem(f"a point light does not take {', '.join(refused)}")
     pos = (None if cfg.light_position is None

@@ -1,6 +1,7 @@
 """The ``sun-hours`` run: hours of direct sun per cell of a DEM over a day (or a range of days),
 like WhiteboxTools' TimeInDaylight or GRASS r.sun's insolation time: the sun every step, each lit
-sample counting for its interval. Returns the report."""
+sample counting for the part of its interval with the sun's centre up at the DEM's place
+(``sun.daylight_samples``: never more than the day length there). Returns the report."""
 
 from __future__ import annotations
 
@@ -22,7 +23,7 @@ def sun_hours(cfg: SunHoursConfig) -> dict:
                       write_raster)
     from ..preview import relief_rgb
     from ..shading import choose_backend
-    from ..sun import SUN_RADIUS_DEG, SunRequest, day_samples, parse_date, parse_step
+    from ..sun import SUN_RADIUS_DEG, SunRequest, daylight_samples, parse_date, parse_step
     from ..io.write import Claims
     from ..errors import AllNodata
     from .context import nodata_note
@@ -64,7 +65,8 @@ def sun_hours(cfg: SunHoursConfig) -> dict:
         site = req.site(d, "sun-hours computes the Earth's sun only (light a DEM of another "
                            "body with shadow or hillshade, which take the sun's direction)")
         try:
-            req.times, weights = day_samples(first, last, step, req.tz, site.lon)
+            req.times, weights = daylight_samples(first, last, step, req.tz, site,
+                                                  req.atmosphere)
         except HillshadeError as exc:   # too many samples for the dates and the step
             raise UsageProblem(str(exc)) from None
         suns, sun_info = req.suns(d, site)
@@ -72,7 +74,8 @@ def sun_hours(cfg: SunHoursConfig) -> dict:
         def dark(s):
             top = max([r.elevation for r in s.tiles] if s.tiles else [s.elevation])
             return top + (SUN_RADIUS_DEG if soft else 0.0) <= 0.0
-        return site, suns, sun_info, [(s, w) for s, w in zip(suns, weights) if not dark(s)]
+        return site, suns, sun_info, [(s, w) for s, w in zip(suns, weights)
+                                      if w > 0 and not dark(s)]
 
     algo_stats: dict = {}
     empty = None

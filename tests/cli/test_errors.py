@@ -101,16 +101,17 @@ def test_bad_place_exits_2(tmp_path, runner, dem, command, place, msg):
     assert not os.path.exists(out) and not os.path.exists(out[:-4] + ".gif")
 
 
-def test_api_raises_the_same_messages(tmp_path, dem):
+def test_api_raises_the_same_messages_in_its_keywords(tmp_path, dem):
     out = tmp_path / "o.tif"
-    for kw, msg in [(dict(pixel_size="0"), "--pixel-size"), (dict(raw_shape="abc"), "--raw-shape"),
-                    (dict(times=["2026-06-21T12:00Z"], lat=95, lon=0), "--lat must be"),
-                    (dict(times=["2026-06-21T12:00Z"], lat=45), "go together"),
+    for kw, msg in [(dict(pixel_size="0"), "pixel_size"), (dict(raw_shape="abc"), "raw_shape"),
+                    (dict(times=["2026-06-21T12:00Z"], lat=95, lon=0), "lat must be"),
+                    (dict(times=["2026-06-21T12:00Z"], lat=45), "lat and lon go together"),
                     (dict(times=["2026-06-21"]), "date without a time"),
                     (dict(elevation=91), "(0, 90]")]:
         kw = {"azimuth": 200, "elevation": 10, **kw} if "times" not in kw else kw
-        with pytest.raises(HillshadeError, match=re.escape(msg)):
+        with pytest.raises(HillshadeError, match=re.escape(msg)) as e:
             hr.shade(dem, out, **kw)
+        assert "--" not in str(e.value), e.value
     assert not out.exists()
 
 
@@ -275,3 +276,111 @@ def test_sun_hours_options_are_usage_errors_before_the_dem_is_read(tmp_path, run
     assert r.exit_code == 2, r.output
     assert r.stderr.strip().count("\n") == 0 and "damaged" not in r.stderr
     assert os.listdir(tmp_path) == ["damaged.tif"]
+
+
+# ---------------------------------------------------------------------------------------------
+# years outside the solar position algorithm's range; warnings as one line
+
+FAR = "9999-06-21"
+
+
+@pytest.mark.parametrize("args", [
+    ["shadow", "{dem}", "{out}", "--time", FAR + "T12:00Z", "-q"],
+    ["hillshade", "{dem}", "{out}", "--start", FAR + "T10:00Z", "--end", FAR + "T12:00Z",
+     "--step", "1h", "-q"],
+    ["shadow", "{dem}", "{out}", "--start", "2026-06-21T10:00Z", "--end", FAR + "T12:00Z",
+     "--step", "1h", "-q"],
+    ["sun-hours", "{dem}", "{out}", "--date", FAR, "-q"],
+    ["sun-hours", "{dem}", "{out}", "--date", "2026-06-21", "--end-date", FAR, "-q"],
+    ["irradiance", "{dem}", "{out}", "--date", FAR, "-q"],
+    ["query", "{dem}", "--at-xy", "476300,4399700", "--time", FAR + "T12:00Z"],
+    ["animate", "{dem}", "{gif}", "--date", FAR, "-q"],
+])
+def test_years_outside_the_spa_are_refused(tmp_path, runner, dem, args):
+    out, gif = str(tmp_path / "o.tif"), str(tmp_path / "o.gif")
+    before = sorted(os.listdir(tmp_path))
+    r = runner.invoke(cli, [a.format(dem=dem, out=out, gif=gif) for a in args])
+    _one_line(r, 2, "year 9999 is outside the solar position algorithm's range (NREL SPA: "
+                    "years -2000 to 6000)")
+    assert "site-packages" not in r.stderr and "Warning" not in r.stderr
+    _nothing_new(tmp_path, before)
+
+
+def test_years_outside_the_spa_from_python(tmp_path, dem):
+    import datetime as dt
+    from hillshade_rt.errors import UsageProblem
+    from hillshade_rt.sun import solar_position
+    with pytest.raises(UsageProblem, match="outside the solar position algorithm's range"):
+        hr.shade(dem, tmp_path / "o.tif", times=[FAR + "T12:00Z"])
+    far = dt.datetime(7000, 1, 1, tzinfo=dt.timezone.utc)
+    with pytest.raises(UsageProblem, match="year 7000"):
+        solar_position([far], 45.0, 7.0)
+    assert not (tmp_path / "o.tif").exists()
+
+
+def test_an_extrapolated_delta_t_is_one_line_even_with_q(tmp_path, dem):
+    import subprocess
+    import sys
+    p = subprocess.run([sys.executable, "-m", "hillshade_rt", "shadow", dem,
+                        str(tmp_path / "o.tif"), "--time", "4000-06-21T12:00Z", "-q"],
+                       capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    lines = p.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("hillshade-rt: warning: year 4000: delta T"), \
+        p.stderr
+    assert "site-packages" not in p.stderr and "warnings.warn" not in p.stderr
+
+
+def test_warnings_raised_inside_a_run_are_one_line_each(tmp_path, runner, dem, monkeypatch):
+    import warnings
+    from hillshade_rt import shading
+    real = shading.render
+
+    def noisy(*a, **k):
+        np.log(np.zeros(1))                                         # numpy's RuntimeWarning
+        warnings.warn_explicit("Something odd.\n  with a second line", UserWarning,
+                               "/usr/lib/python3/site-packages/pvlib/spa.py", 1261)
+        warnings.warn_explicit("Dataset has no geotransform", UserWarning,
+                               "/opt/venv/lib/python3.11/site-packages/rasterio/__init__.py", 9)
+        return real(*a, **k)
+    monkeypatch.setattr(shading, "render", noisy)
+    r = runner.invoke(cli, ["shadow", dem, str(tmp_path / "o.tif"), "--azimuth", "200",
+                            "--elevation", "10", "-q"])
+    assert r.exit_code == 0, r.output
+    lines = r.stderr.strip().splitlines()
+    assert lines == ["hillshade-rt: warning: divide by zero encountered in log (RuntimeWarning)",
+                     "hillshade-rt: warning: Something odd. (UserWarning from pvlib)",
+                     "hillshade-rt: warning: Dataset has no geotransform (UserWarning from "
+                     "rasterio)"], r.stderr
+    assert "site-packages" not in r.stderr
+
+
+# ---------------------------------------------------------------------------------------------
+# exit statuses: a folder as the DEM, standard output as OUTPUT
+
+def _run_of(command, dem, out):
+    return {"shadow": ["shadow", dem, out, "--azimuth", "200", "--elevation", "10"],
+            "sun-hours": ["sun-hours", dem, out, "--date", "2026-06-21", "--step", "6h"],
+            "horizon": ["horizon", dem, out, "--azimuth", "200"]}[command]
+
+
+@pytest.mark.parametrize("command", ["shadow", "sun-hours", "horizon"])
+def test_a_folder_as_the_dem_fails_like_a_missing_file(tmp_path, runner, command):
+    folder = tmp_path / "tiles"
+    folder.mkdir()
+    out = str(tmp_path / "o.tif")
+    r = runner.invoke(cli, _run_of(command, str(folder), out))
+    _one_line(r, 1, f"hillshade-rt: error: {folder}: is a folder, not a raster file")
+    missing = runner.invoke(cli, _run_of(command, str(tmp_path / "absent.tif"), out))
+    _one_line(missing, 1, "absent.tif: no such file")
+    assert not os.path.exists(out)
+
+
+@pytest.mark.parametrize("command", ["shadow", "sun-hours", "horizon"])
+def test_standard_output_as_output_is_one_usage_error_in_every_spelling(tmp_path, runner, dem,
+                                                                         command):
+    before = sorted(os.listdir(tmp_path))
+    for out in ("-", "/vsistdout/"):
+        r = runner.invoke(cli, _run_of(command, dem, out))
+        _one_line(r, 2, f"'{out}' (standard output) is not supported for outputs")
+    _nothing_new(tmp_path, before)

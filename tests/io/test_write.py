@@ -644,3 +644,73 @@ def test_signal_held_back_while_stderr_is_redirected_restores_stderr(monkeypatch
             assert os.readlink("/proc/self/fd/2") == before
     finally:
         writes.reset()
+
+
+# ---------------------------------------------------------------------------------------------
+# the temporaries of runs killed with SIGKILL (or a power loss)
+
+_KILLED_WRITER = """
+import sys, time
+from hillshade_rt.io.write import atomic_path
+with atomic_path(sys.argv[1], ".tif") as tmp:
+    with open(tmp, "wb") as fh:
+        fh.write(b"half a raster")
+    print(tmp, flush=True)
+    time.sleep(300)
+"""
+
+
+def _writer(out):
+    """A process that has begun writing ``out`` (its temporary exists) and waits."""
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path))
+    p = subprocess.Popen([sys.executable, "-c", _KILLED_WRITER, str(out)], env=env,
+                         stdout=subprocess.PIPE, text=True)
+    return p, p.stdout.readline().strip()
+
+
+def test_temporaries_of_dead_runs_are_removed_by_the_next_run(tmp_path, runner):
+    out = tmp_path / "out"
+    out.mkdir()
+    killed, dead_tmp = _writer(out / "a.tif")
+    live, live_tmp = _writer(out / "b.tif")
+    try:
+        assert os.path.basename(dead_tmp).startswith(".a.tif.") and ".part.tif" in dead_tmp
+        killed.kill()                                   # SIGKILL: no clean-up of its own
+        killed.wait(30)
+        assert os.path.exists(dead_tmp)
+        # a .part of this very process, one of another host, one whose pid was reused
+        tag = writes.owner_tag()
+        pid, rest = tag.split("-", 1)
+        start = rest.split("-", 1)[0]
+        mine = out / f".c.tif.abcdefgh~{tag}.part.tif"
+        other_host = out / f".d.tif.abcdefgh~{killed.pid}-{rest.split('@')[0]}@elsewhere.part.tif"
+        reused = out / (f".e.tif.abcdefgh~{pid}-{int(start) + 1}-"
+                        f"{rest.split('-', 1)[1]}.part.tif")
+        untagged = out / ".f.tif.abcdefgh.part.tif"     # written by an older version
+        for f in (mine, other_host, reused, untagged):
+            f.write_bytes(b"x")
+        dem = write_geotiff(tmp_path / "dem.tif", fractal_terrain(64, 64, 3, relief=200),
+                            Affine(10, 0, 400000, 0, -10, 3800000), UTM)
+        r = runner.invoke(cli, ["shadow", dem, str(out / "m.tif"), "-q"] + SUN)
+        assert r.exit_code == 0, r.output
+        left = sorted(os.listdir(out))
+        assert os.path.basename(dead_tmp) not in left              # its writer is dead
+        assert not reused.exists()                                 # pid alive, another start
+        for kept in (live_tmp, mine, other_host, untagged):        # not provably dead
+            assert os.path.exists(kept), left
+        assert "m.tif" in left
+    finally:
+        for p in (killed, live):
+            if p.poll() is None:
+                p.kill()
+            p.wait(30)
+
+
+def test_temporary_names_say_their_writer(tmp_path):
+    tmp = writes.temp_beside(str(tmp_path / "x.tif"), ".part.tif")
+    name = os.path.basename(tmp)
+    assert name.startswith(".x.tif.") and name.endswith(".part.tif")
+    assert f"~{os.getpid()}-" in name and "@" in name
+    assert not writes.writer_dead(name)
+    long = writes.temp_beside(str(tmp_path / ("y" * 250)), ".part.tif")
+    assert len(os.path.basename(long)) <= 255 and os.path.basename(long).startswith(".yyy")

@@ -247,7 +247,7 @@ def test_api_each(tmp_path, dems):
     assert isinstance(info.value, HillshadeError) and dems["corrupt"] in str(info.value)
     assert [e["status"] for e in info.value.report["inputs"]] == ["failed", "ok"]
     assert os.path.exists(tmp_path / "b_everest.tif")
-    with pytest.raises(UsageProblem, match="add --each"):
+    with pytest.raises(UsageProblem, match="add each=True"):
         hr.shade([dems["everest"]], output_pattern=str(tmp_path / "{stem}.tif"), azimuth=1,
                  elevation=10)
 

@@ -116,3 +116,18 @@ def test_a_light_inside_the_terrain_is_refused_in_windows(tmp_path, runner, dem)
                             "--window-size", "64"])
     assert r.exit_code == 1 and "inside the terrain" in r.output
     assert not out.exists()
+
+
+@pytest.mark.parametrize("command", ["shadow", "hillshade"])
+def test_no_earth_curvature_is_taken_and_earth_curvature_still_refused(tmp_path, runner, dem,
+                                                                        command):
+    light = ["--light-position", "500300,3999500,900", "-q"]
+    plain, flat, curved = (tmp_path / f"{n}.tif" for n in ("plain", "flat", "curved"))
+    r = runner.invoke(cli, [command, dem, str(plain)] + light)
+    assert r.exit_code == 0, r.output
+    r = runner.invoke(cli, [command, dem, str(flat), "--no-earth-curvature"] + light)
+    assert r.exit_code == 0, r.output
+    assert np.array_equal(read_band(flat), read_band(plain))      # a flat Earth: the same
+    r = runner.invoke(cli, [command, dem, str(curved), "--earth-curvature"] + light)
+    assert r.exit_code == 2 and "--earth-curvature" in r.output, r.output
+    assert not curved.exists()

@@ -415,7 +415,7 @@ def test_a_point_light_between_centres_and_its_incidence_on_a_plane(tmp_path, ru
     (["--light-position", "150,-150,10"], 1, "inside the terrain"),
     (["--light-position", "150,-150,900", "--azimuth", "163", "--elevation", "20"], 2,
      "--azimuth"),
-    (["--light-position", "150,-150,900", "--no-earth-curvature"], 2, "--earth-curvature"),
+    (["--light-position", "150,-150,900", "--earth-curvature"], 2, "--earth-curvature"),
     (["--light-position", "150,-150"], 2, "three numbers"),
     (["--light-position", "150,-150,900", "--light-lonlat", "1,2,900"], 2, "one of them"),
     (["--light-lonlat", "1,2,900"], 1, "CRS"),
@@ -427,3 +427,15 @@ def test_bad_point_light_queries_are_one_line_errors(tmp_path, runner, extra, co
     r = runner.invoke(cli, ["query", dem, "--at-xy", "50,-50", "-o", str(out)] + extra)
     assert r.exit_code == code and words in r.output and "Traceback" not in r.output, r.output
     assert not out.exists()
+
+
+def test_a_point_light_query_takes_no_earth_curvature(tmp_path, runner):
+    dem = write_geotiff(tmp_path / "f.tif", np.full((30, 30), 100.0, np.float32),
+                        Affine(10, 0, 0, 0, -10, 0), None)
+    a, b = tmp_path / "a.csv", tmp_path / "b.csv"
+    base = ["query", dem, "--at-xy", "50,-50", "--light-position", "150,-150,900"]
+    r = runner.invoke(cli, base + ["-o", str(a)])
+    assert r.exit_code == 0, r.output
+    r = runner.invoke(cli, base + ["-o", str(b), "--no-earth-curvature"])
+    assert r.exit_code == 0, r.output
+    assert a.read_text() == b.read_text()

@@ -239,6 +239,10 @@ def test_download_is_the_mask(server, dem):
     ("/api/point?x=nan&y=1", "x must be finite"),
     ("/api/point?y=1", "missing x"),
     ("/api/sunpath?date=", "date must be"),
+    ("/api/render?time=9999-06-21T12:00Z", "outside the solar position algorithm's range"),
+    ("/api/point?x=10&y=10&time=9999-06-21T12:00Z", "year 9999 is outside"),
+    ("/api/sunpath?date=9999-06-21", "year 9999 is outside"),
+    ("/api/render?sunhours=9999-06-21", "year 9999 is outside"),
 ])
 def test_malformed_queries_400_and_the_server_goes_on(server, query, words):
     status, _, body = get(server, query)
