@@ -66,15 +66,15 @@ def test_shade_errors_are_one_line_hillshade_errors(tmp_path, tiles):
     whole, _ = tiles
     out = tmp_path / "o.tif"
     cases = [
-        (dict(azimuth=90), "--azimuth and --elevation go together"),
-        (dict(azimuth=90, elevation=10, max_memory="lots"), "--max-memory"),
+        (dict(azimuth=90), "azimuth and elevation go together"),
+        (dict(azimuth=90, elevation=10, max_memory="lots"), "max_memory"),
         (dict(azimuth=90, elevation=10, algorithm_options={"exact_steps": 4}), "applies to"),
         (dict(azimuth=90, elevation=10, algorithm_options={"speed": 4}), "unknown algorithm"),
         (dict(azimuth=90, elevation=10, product="contours"), "product must be one of"),
         (dict(azimuth=90, elevation=10, client="local:0", window_size=64), "N must be 1"),
         (dict(azimuth=90, elevation=10, product="classes", soft=True), "do not go together"),
         (dict(product="hillshade", scale=-2.0), "must be a positive number"),
-        (dict(product="hillshade", scale=111120.0, pixel_size="1"), "--pixel-size do not go"),
+        (dict(product="hillshade", scale=111120.0, pixel_size="1"), "pixel_size do not go"),
     ]
     for kw, msg in cases:
         with pytest.raises(hr.HillshadeError, match=msg) as e:

@@ -152,6 +152,12 @@ def warnings_one_line():
 
     with warnings.catch_warnings():
         warnings.showwarning = show
+        if not sys.warnoptions:
+            # deprecations are notices to the developers of the code that raised them (here
+            # another package's use of a third one's API), not to the user of a command: as
+            # Python's default filters have it outside __main__ (pytest shows them)
+            for category in (DeprecationWarning, PendingDeprecationWarning):
+                warnings.filterwarnings("ignore", category=category)
         yield
 
 
