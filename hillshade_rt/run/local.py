@@ -100,8 +100,9 @@ def in_memory(inputs, source, scale, req, out, timer, algorithm, options, ran_on
 
 def tiled(inputs, source, scale, req, out, timer, algorithm, options, ran_on,
           curvature, refraction_k, soft, self_shadow, ambient, quiet, *, limit,
-          window_shape, scheduler, per_cell, lift=0.0, area=None):
-    """``source``: the DEM already opened for windows (``ReadOptions.open``). ``lift``:
+          window_shape, scheduler, per_cell, lift=0.0, area=None, worker_timeout=None):
+    """``source``: the DEM already opened for windows (``ReadOptions.open``). ``worker_timeout``:
+    --worker-timeout of a Dask run (``run.dask.DaskSession``). ``lift``:
     --height-above-ground (``plan.Job``: the halos and the march). ``area``: a tile of
     ``source`` (``run.context.Area``, ``--context``): only its cells are lit and written, on
     the tile's grid, their windows read from ``source``."""
@@ -173,7 +174,7 @@ def tiled(inputs, source, scale, req, out, timer, algorithm, options, ran_on,
         from .dask import run_on_dask
         with timer("compute"):
             records, st, extra = run_on_dask(scheduler, job, suns, plans, out, share, n, quiet,
-                                             algo_stats, used, tally)
+                                             algo_stats, used, tally, worker_timeout)
     else:
         from tqdm import tqdm
         total = sum(len(p) for p in plans)

@@ -457,11 +457,13 @@ def region_task(job: HorizonJob, region, product: Product, folder: str,
 
 
 def run_on_dask(scheduler, job: HorizonJob, regs, product: Product, outputs: dict,
-                quiet: bool, share=None, stride: int | None = None) -> tuple[Figures, list, dict]:
+                quiet: bool, share=None, stride: int | None = None,
+                worker_timeout: float | None = None) -> tuple[Figures, list, dict]:
     """Every region as a task; then each output (``outputs``: name -> a function of the VRT
     document of its parts that writes it) assembled through a VRT. Returns (the figures, the
     results' statistics per region, what the report says of the scheduler). The parts' folder
-    beside the first output is removed, also when the run fails."""
+    beside the first output is removed, also when the run fails; the cluster's failures are
+    one-line errors (``run.dask.DaskSession``, ``worker_timeout`` its bound)."""
     from dataclasses import replace
 
     from tqdm import tqdm
@@ -470,20 +472,18 @@ def run_on_dask(scheduler, job: HorizonJob, regs, product: Product, outputs: dic
     from .dask import DaskSession
 
     first = next(iter(outputs.values()))
-    with DaskSession(scheduler, first.path) as session:
+    with DaskSession(scheduler, first.path, worker_timeout) as session:
         client, folder = session.client, session.folder
         workers = session.workers()
         light = replace(job, stats=replace(job.stats, preview=None))    # nothing large
         futures = session.futures
         futures += [client.submit(region_task, light, reg, product, folder, stride,
                                   pure=False) for reg in regs]
-        from distributed import as_completed
         fig, results = Figures(), []
         bar = tqdm(total=len(futures), desc="hillshade-rt (dask)", unit="window", leave=False,
                    disable=True if quiet or len(futures) < 2 else None)
         with bar:
-            for f in as_completed(futures):
-                res = f.result()
+            for _, res in session.completed(futures):
                 fig.add(res["figures"])
                 results.append(res)
                 if share is not None and res["shade"] is not None:

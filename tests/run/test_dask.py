@@ -1,0 +1,269 @@
+"""Dask runs when the cluster fails (run/dask.py): every worker lost, no worker at all, the
+scheduler lost, and each of Dask's failures as one true line. A real scheduler and workers
+run as processes of their own (``python -m dask scheduler|worker``) on 127.0.0.1 and are
+SIGKILLed mid-run; the run must end within its bound, exit 1 with one line naming the cause,
+and leave nothing under the output's name and no parts."""
+
+import contextlib
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+from affine import Affine
+from rasterio.crs import CRS
+
+from hillshade_rt.errors import HillshadeError
+from hillshade_rt.testing import fractal_terrain, repo_root, write_geotiff
+
+pytest.importorskip("distributed")
+
+# a 512 x 512 DEM in 64 x 64 windows: 64 tasks, some seconds on one worker
+SIDE = 512
+WINDOWS = (SIDE // 64) ** 2
+START = 60.0          # the longest wait for the scheduler, a worker, the first part
+BOUND = 3.0           # --worker-timeout of the runs here
+
+
+def _env() -> dict:
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (repo_root(), env.get("PYTHONPATH")) if p)
+    env["HILLSHADE_RT_SERVER"] = "off"       # this process runs it, not a warm server
+    return env
+
+
+def _wait_for(what: str, ready, timeout: float = START, procs=()):
+    """Poll ``ready()`` until it is true (its value returned); fail after ``timeout`` s or when
+    one of ``procs`` has ended."""
+    deadline = time.monotonic() + timeout
+    while True:
+        got = ready()
+        if got:
+            return got
+        for p in procs:
+            if p.poll() is not None:
+                pytest.fail(f"{what}: {p.args[1:4]} ended first (status {p.returncode})")
+        if time.monotonic() > deadline:
+            pytest.fail(f"{what}: not within {timeout} s")
+        time.sleep(0.1)
+
+
+class Cluster:
+    """A scheduler and ``workers`` worker processes (each with its nanny), started in process
+    groups of their own under ``folder``; ``close()`` SIGKILLs whatever is left of them."""
+
+    def __init__(self, folder):
+        self.folder = folder
+        self.procs: dict = {}
+        self.address = None
+
+    def start(self, workers: int) -> None:
+        folder = self.folder
+        info = folder / "scheduler.json"
+        self._start("scheduler", ["scheduler", "--host", "127.0.0.1", "--port", "0",
+                                  "--no-dashboard", "--scheduler-file", str(info)])
+        self.address = _wait_for("the scheduler's address",
+                                 lambda: _address(info), procs=[self.procs["scheduler"]])
+        for i in range(workers):
+            self._start(f"worker{i}", ["worker", self.address, "--nthreads", "1",
+                                       "--no-dashboard", "--host", "127.0.0.1",
+                                       "--death-timeout", "30"])
+        for i in range(workers):
+            log = folder / f"worker{i}.log"
+            _wait_for(f"worker {i} registered", lambda: "Registered to" in log.read_text(),
+                      procs=[self.procs[f"worker{i}"]])
+
+    def _start(self, name: str, args: list) -> None:
+        with open(self.folder / f"{name}.log", "wb") as log:
+            self.procs[name] = subprocess.Popen([sys.executable, "-m", "dask", *args],
+                                                stdout=log, stderr=subprocess.STDOUT,
+                                                env=_env(), start_new_session=True)
+
+    def kill(self, name: str) -> None:
+        """SIGKILL the process group of ``name`` (a worker: its nanny and the worker)."""
+        p = self.procs[name]
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(p.pid, signal.SIGKILL)
+        p.wait(timeout=30)
+
+    def close(self) -> None:
+        for name in list(self.procs):
+            self.kill(name)
+
+
+def _address(info):
+    try:
+        return json.loads(info.read_text())["address"]
+    except (OSError, ValueError, KeyError):
+        return None
+
+
+@contextlib.contextmanager
+def cluster(tmp_path, workers: int = 1):
+    logs = tmp_path / "logs"
+    logs.mkdir()
+    c = Cluster(logs)
+    try:
+        c.start(workers)
+        yield c
+    finally:
+        c.close()
+
+
+@contextlib.contextmanager
+def shadow_run(tmp_path, address: str, *extra):
+    """``hillshade-rt shadow`` of a SIDE x SIDE DEM in 64-cell windows on ``address``, as a
+    process of its own: (the process, the output folder). Killed if still running after."""
+    dem = tmp_path / "dem.tif"
+    write_geotiff(dem, fractal_terrain(SIDE, SIDE, 7, relief=300.0),
+                  Affine(5, 0, 400000, 0, -5, 3800000), CRS.from_epsg(32611))
+    out = tmp_path / "out"
+    out.mkdir()
+    p = subprocess.Popen([sys.executable, "-m", "hillshade_rt", "shadow", str(dem),
+                          str(out / "shadow.tif"), "--azimuth", "200", "--elevation", "20",
+                          "--window-size", "64", "--scheduler", address, "-q", *extra],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=_env(),
+                         start_new_session=True)
+    try:
+        yield p, out
+    finally:
+        if p.poll() is None:
+            os.killpg(p.pid, signal.SIGKILL)
+        p.communicate(timeout=30)
+
+
+def _first_part(out, p) -> None:
+    """Wait until the run has written a part (it is under way)."""
+    def written():
+        return any(name.startswith(".shadow.tif.parts-") and os.listdir(out / name)
+                   for name in os.listdir(out))
+    _wait_for("the first part", written, procs=[p])
+
+
+def _finished(p, within: float):
+    """(exit status, stderr) of ``p``, which must end within ``within`` seconds."""
+    try:
+        _, err = p.communicate(timeout=within)
+    except subprocess.TimeoutExpired:
+        pytest.fail(f"the run did not end within {within} s")
+    return p.returncode, err
+
+
+def _one_line(err: str) -> str:
+    lines = [line for line in err.splitlines() if line.strip()]
+    assert len(lines) == 1, err
+    return lines[0]
+
+
+def test_every_worker_lost_fails_within_the_bound(tmp_path):
+    """The only worker and its nanny SIGKILLed mid-run: the run stops --worker-timeout after,
+    one line naming the scheduler and how far it got; no output, no parts."""
+    with cluster(tmp_path) as c, shadow_run(tmp_path, c.address,
+                                            "--worker-timeout", str(BOUND)) as (p, out):
+        _first_part(out, p)
+        c.kill("worker0")
+        t0 = time.monotonic()
+        status, err = _finished(p, BOUND + 30)
+        took = time.monotonic() - t0
+        line = _one_line(err)
+        assert status == 1, err
+        assert f"no Dask worker left at {c.address}" in line, line
+        assert f"of {WINDOWS} windows done" in line and "--worker-timeout" in line, line
+        assert "internal error" not in line
+        assert BOUND <= took < BOUND + 20, took
+        assert os.listdir(out) == []        # no output, no parts, no temporary file
+
+
+def test_no_worker_at_the_start(tmp_path):
+    """A scheduler without any worker: the run fails after --worker-timeout, one line."""
+    with cluster(tmp_path, workers=0) as c, shadow_run(tmp_path, c.address,
+                                                       "--worker-timeout", "2") as (p, out):
+        status, err = _finished(p, START)
+        line = _one_line(err)
+        assert status == 1, err
+        assert f"no Dask worker at {c.address} (none joined in 2 s" in line, line
+        assert f"0 of {WINDOWS} windows done" in line, line
+        assert os.listdir(out) == []
+
+
+def test_scheduler_lost(tmp_path):
+    """The scheduler SIGKILLed mid-run: exit 1 at once, one line naming it (not an internal
+    error); no output, no parts."""
+    with cluster(tmp_path) as c, shadow_run(tmp_path, c.address) as (p, out):
+        _first_part(out, p)
+        c.kill("scheduler")
+        status, err = _finished(p, 30)
+        line = _one_line(err)
+        assert status == 1, err
+        assert f"lost the Dask scheduler at {c.address}" in line, line
+        assert f"of {WINDOWS} windows done" in line, line
+        assert os.listdir(out) == []
+
+
+# -- each of Dask's failures as the line it makes (run.dask.DaskSession._failure) ---------------
+
+class _Client:
+    def __init__(self, status="running"):
+        self.status = status
+
+
+class _Future:
+    def __init__(self, status):
+        self.status = status
+
+    def cancelled(self):
+        return self.status == "cancelled"
+
+
+def _session(status="running"):
+    from hillshade_rt.run.dask import DaskSession
+    s = object.__new__(DaskSession)       # no cluster: only what _failure reads
+    s.client, s.address = _Client(status), "tcp://127.0.0.1:8786"
+    return s
+
+
+def _line(exc, status="error", client="running"):
+    err = _session(client)._failure(_Future(status), exc, 3, 10, "windows")
+    return err, str(err)
+
+
+def test_failures_of_the_cluster_are_one_true_line_each():
+    from distributed import KilledWorker
+    from distributed.client import FutureCancelledError
+    from distributed.comm import CommClosedError
+
+    err, line = _line(FutureCancelledError("k", "scheduler-connection-lost"), "cancelled",
+                      "connecting")
+    assert isinstance(err, HillshadeError)
+    assert line == "lost the Dask scheduler at tcp://127.0.0.1:8786; 3 of 10 windows done"
+    err, line = _line(FutureCancelledError("k", "cancelled by another client"), "cancelled")
+    assert isinstance(err, HillshadeError) and "cancelled on the scheduler" in line
+    assert "(cancelled by another client)" in line and "\n" not in line
+
+    class Worker:
+        address = "tcp://127.0.0.1:40001"
+    err, line = _line(KilledWorker("shade_piece-1", Worker(), 3))
+    assert isinstance(err, HillshadeError) and "\n" not in line
+    assert "died 4 times (last tcp://127.0.0.1:40001)" in line and "3 of 10" in line
+
+    err, line = _line(ModuleNotFoundError("No module named 'hillshade_rt'"))
+    assert isinstance(err, HillshadeError) and "cannot import" in line
+    assert "No module named 'hillshade_rt'" in line
+    err, line = _line(MemoryError())
+    assert isinstance(err, HillshadeError) and "out of memory" in line
+
+    # fetching a result when the scheduler's connection broke, or a worker's
+    err, line = _line(CommClosedError("in <TCP ...>: Stream is closed"), "finished",
+                      "connecting")
+    assert line.startswith("lost the Dask scheduler at tcp://127.0.0.1:8786")
+    err, line = _line(OSError("Timed out trying to connect"), "finished")
+    assert isinstance(err, HillshadeError)
+    assert "lost the connection to the Dask cluster" in line and "\n" not in line
+
+    # a task's own failure stays what it is: its HillshadeError, or a bug (internal error)
+    for exc in (HillshadeError("x.tif: cannot read"), ValueError("a bug"),
+                OSError(28, "No space left on device")):
+        assert _line(exc)[0] is exc
