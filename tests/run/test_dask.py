@@ -17,12 +17,13 @@ from affine import Affine
 from rasterio.crs import CRS
 
 from hillshade_rt.errors import HillshadeError
-from hillshade_rt.testing import fractal_terrain, repo_root, write_geotiff
+from hillshade_rt.testing import (LUNAR_SOUTH_POLAR_STEREO, fractal_terrain, repo_root,
+                                  toy_lunar_subsolar, write_geotiff, write_subsolar_csv)
 
 pytest.importorskip("distributed")
 
-# a 512 x 512 DEM in 64 x 64 windows: 64 tasks, some seconds on one worker
-SIDE = 512
+# a 1024 x 1024 DEM in 64 x 64 windows: 256 tasks, some seconds on one worker
+SIDE = 1024
 WINDOWS = (SIDE // 64) ** 2
 START = 60.0          # the longest wait for the scheduler, a worker, the first part
 BOUND = 3.0           # --worker-timeout of the runs here
@@ -114,11 +115,12 @@ def cluster(tmp_path, workers: int = 1):
 
 
 @contextlib.contextmanager
-def shadow_run(tmp_path, address: str, *extra):
-    """``hillshade-rt shadow`` of a SIDE x SIDE DEM in 64-cell windows on ``address``, as a
-    process of its own: (the process, the output folder). Killed if still running after."""
+def shadow_run(tmp_path, address: str, *extra, side: int = SIDE):
+    """``hillshade-rt shadow`` of a ``side`` x ``side`` DEM in 64-cell windows on ``address``,
+    as a process of its own: (the process, the output folder). Killed if still running
+    after."""
     dem = tmp_path / "dem.tif"
-    write_geotiff(dem, fractal_terrain(SIDE, SIDE, 7, relief=300.0),
+    write_geotiff(dem, fractal_terrain(side, side, 7, relief=300.0),
                   Affine(5, 0, 400000, 0, -5, 3800000), CRS.from_epsg(32611))
     out = tmp_path / "out"
     out.mkdir()
@@ -152,6 +154,15 @@ def _finished(p, within: float):
     return p.returncode, err
 
 
+def _done(line: str) -> int:
+    """N of "...; N of WINDOWS windows done" (fewer than all: the run was under way)."""
+    import re
+    m = re.search(rf"; (\d+) of {WINDOWS} windows done$", line)
+    assert m, line
+    assert int(m.group(1)) < WINDOWS, line
+    return int(m.group(1))
+
+
 def _one_line(err: str) -> str:
     lines = [line for line in err.splitlines() if line.strip()]
     assert len(lines) == 1, err
@@ -171,7 +182,7 @@ def test_every_worker_lost_fails_within_the_bound(tmp_path):
         line = _one_line(err)
         assert status == 1, err
         assert f"no Dask worker left at {c.address}" in line, line
-        assert f"of {WINDOWS} windows done" in line and "--worker-timeout" in line, line
+        assert _done(line) < WINDOWS and "--worker-timeout" in line, line
         assert "internal error" not in line
         assert BOUND <= took < BOUND + 20, took
         assert os.listdir(out) == []        # no output, no parts, no temporary file
@@ -185,8 +196,45 @@ def test_no_worker_at_the_start(tmp_path):
         line = _one_line(err)
         assert status == 1, err
         assert f"no Dask worker at {c.address} (none joined in 2 s" in line, line
-        assert f"0 of {WINDOWS} windows done" in line, line
+        assert _done(line) == 0, line
         assert os.listdir(out) == []
+
+
+def test_no_worker_in_the_horizon_skyview_and_illumination_runs(tmp_path, runner):
+    """Their windows (and times) as tasks go through the same watch: a scheduler without a
+    worker fails each after --worker-timeout, one line, nothing written."""
+    from hillshade_rt.cli import cli
+    z = fractal_terrain(128, 128, 3, relief=300.0)
+    dem = write_geotiff(tmp_path / "dem.tif", z, Affine(5, 0, 400000, 0, -5, 3800000),
+                        CRS.from_epsg(32611))
+    polar = write_geotiff(tmp_path / "polar.tif", z, Affine(20, 0, -1280, 0, -20, 1280),
+                          LUNAR_SOUTH_POLAR_STEREO)
+    csv = write_subsolar_csv(tmp_path / "sun.csv",
+                             toy_lunar_subsolar(6, 20.0, phase_deg=270.0))
+    out = tmp_path / "out"
+    out.mkdir()
+    with cluster(tmp_path, workers=0) as c:
+        dask = ["--window-size", "64", "--scheduler", c.address, "--worker-timeout", "1"]
+        for args, what in ((["horizon", dem, str(out / "h.tif"), "--azimuth", "200"], "windows"),
+                           (["skyview", dem, str(out / "s.tif"), "--directions", "8"],
+                            "windows"),
+                           (["illumination", polar, str(out / "i.tif"), "--subsolar-file", csv],
+                            "tasks")):
+            r = runner.invoke(cli, args + dask + ["-q"])
+            assert r.exit_code == 1, (args[0], r.output)
+            line = _one_line(r.stderr)
+            assert f"no Dask worker at {c.address} (none joined in 1 s" in line, line
+            assert f"0 of " in line and f" {what} done" in line, line
+            assert os.listdir(out) == [], args[0]
+
+
+def test_a_run_on_an_outside_cluster_says_nothing_else(tmp_path):
+    """All well on a scheduler and worker of their own: exit 0, nothing on stderr (the client
+    closed quietly), the output and no parts."""
+    with cluster(tmp_path) as c, shadow_run(tmp_path, c.address, side=256) as (p, out):
+        status, err = _finished(p, START)
+        assert (status, err) == (0, ""), err
+        assert os.listdir(out) == ["shadow.tif"]
 
 
 def test_scheduler_lost(tmp_path):
@@ -199,7 +247,7 @@ def test_scheduler_lost(tmp_path):
         line = _one_line(err)
         assert status == 1, err
         assert f"lost the Dask scheduler at {c.address}" in line, line
-        assert f"of {WINDOWS} windows done" in line, line
+        assert _done(line) < WINDOWS, line
         assert os.listdir(out) == []
 
 
