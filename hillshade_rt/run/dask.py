@@ -65,6 +65,11 @@ POLL_SECONDS = 1.0
 # the reason the client gives the futures it cancels when its connection to the scheduler breaks
 # (distributed.Client._reconnect)
 SCHEDULER_LOST = "scheduler-connection-lost"
+# a result's fetch that fails on a closed connection: tried this many times (the client's own
+# gather reschedules a result whose worker died), each after waiting this long for the client
+# to say whether the scheduler is gone
+COMM_RETRIES = 3
+SETTLE_SECONDS = 2.0
 
 
 class DaskSession:
@@ -82,14 +87,23 @@ class DaskSession:
         from .config import DEFAULT_WORKER_TIMEOUT
         self.scheduler = scheduler
         self.worker_timeout = float(worker_timeout or DEFAULT_WORKER_TIMEOUT)
-        self.client, self.cluster = client_for(scheduler)
+        self.folder = tempfile.mkdtemp(dir=os.path.dirname(os.path.abspath(dest)),
+                                       prefix="." + os.path.basename(dest) + ".parts-")
+        try:
+            self.client, self.cluster = client_for(scheduler)
+        except BaseException:
+            _remove(self.folder)
+            raise
         self.owned = self.client is not scheduler        # ours to close
+        # a cluster's failures are this run's one line: what distributed logs about them on
+        # the way (a gather rescheduled, a reconnection given up, a worker restarted, its
+        # loop's unretrieved task errors) is not said too; a caller's own client keeps its logs
+        self._muted = _dask_logs_muted(self.client) if self.owned else contextlib.nullcontext()
+        self._muted.__enter__()
         try:
             self.address = self.client.scheduler.address
         except AttributeError:
             self.address = str(scheduler)
-        self.folder = tempfile.mkdtemp(dir=os.path.dirname(os.path.abspath(dest)),
-                                       prefix="." + os.path.basename(dest) + ".parts-")
         self.futures: list = []
         self._none_since = None       # when the scheduler was first seen without a worker
         self._mute_since = None       # when it first did not answer
@@ -104,15 +118,15 @@ class DaskSession:
                 # a message to the scheduler (batched), never a wait: it may be gone
                 self.client.cancel(self.futures)
         _remove(self.folder)
-        # a client that lost its scheduler logs its reconnection's end as errors when closed:
-        # the run's failure is already said, in one line
-        with (_dask_logs_muted() if exc_type is not None else contextlib.nullcontext()):
+        try:
             if self.owned:
                 with contextlib.suppress(Exception):
                     self.client.close(timeout=PROBE_SECONDS)
             if self.cluster is not None:
                 with contextlib.suppress(Exception):
                     self.cluster.close(timeout=PROBE_SECONDS)
+        finally:
+            self._muted.__exit__(None, None, None)
         return False
 
     def workers(self) -> int:
@@ -158,15 +172,26 @@ class DaskSession:
     def _result(self, f, done: int, total: int, what: str, poll: float):
         """``f``'s result; the wait bounded as the cluster's health is (its result's worker
         may die before it is fetched: Dask then computes it again)."""
-        from distributed import TimeoutError as DaskTimeout
+        comm_errors = 0
         while True:
             try:
                 return f.result(timeout=poll)
-            except (DaskTimeout, TimeoutError):
-                self._check(done, total, what)
             except HillshadeError:
                 raise
             except Exception as exc:    # noqa: BLE001 -- the cluster's failure, or a task's
+                own = f.status in ("error", "cancelled")      # the task's outcome
+                # distributed.TimeoutError is TimeoutError: the wait's, unless the task raised it
+                if isinstance(exc, TimeoutError) and not own:
+                    self._check(done, total, what)
+                    continue
+                # a connection closed while fetching (CommClosedError is an OSError): the
+                # scheduler's, which the client notices at once, or a worker's, tried again
+                if isinstance(exc, OSError) and not own:
+                    comm_errors += 1
+                    self._settle()
+                    if self.client.status == "running" and comm_errors < COMM_RETRIES:
+                        self._check(done, total, what)
+                        continue
                 err = self._failure(f, exc, done, total, what)
                 if err is exc:
                     raise
@@ -194,7 +219,7 @@ class DaskSession:
                 f"{f' (last {last})' if last else ''}, killed or out of memory "
                 f"(see the workers' logs; distributed.scheduler.allowed-failures){tail}")
         if f.status == "error":             # raised by the task on its worker
-            if isinstance(exc, ImportError):
+            if isinstance(exc, ImportError) and _importable_here(exc):
                 return HillshadeError(f"a Dask worker cannot import what the task needs "
                                       f"({_first_line(exc)}): install hillshade-rt where the "
                                       f"workers run{tail}")
@@ -209,16 +234,22 @@ class DaskSession:
                                   f"({_first_line(exc)}){tail}")
         return exc
 
+    def _settle(self) -> None:
+        """Give the client a moment to notice that its connection to the scheduler broke (it
+        then stops 'running')."""
+        deadline = time.monotonic() + SETTLE_SECONDS
+        while self.client.status == "running" and time.monotonic() < deadline:
+            time.sleep(0.05)
+
     def _workers_now(self) -> int | None:
         """How many workers the scheduler has (None: it did not answer in time)."""
-        from distributed import TimeoutError as DaskTimeout
         if self.client.status != "running":
             return None
         try:
             ident = self.client.sync(self.client.scheduler.identity, n_workers=0,
                                      callback_timeout=PROBE_SECONDS)
             return int(ident["n_workers"])
-        except (DaskTimeout, TimeoutError, OSError, RuntimeError, KeyError, TypeError):
+        except (OSError, RuntimeError, KeyError, TypeError):    # TimeoutError is an OSError
             return None
 
     def _check(self, done: int, total: int, what: str) -> None:
@@ -251,19 +282,42 @@ class DaskSession:
 
 
 @contextlib.contextmanager
-def _dask_logs_muted():
-    """distributed's loggers silent for the block (their levels restored after)."""
+def _dask_logs_muted(client):
+    """distributed's loggers silent for the block, and the exceptions of tasks that ``client``'s
+    event loop would report (asyncio's "Task exception was never retrieved"); both restored
+    after."""
     import logging
     names = ["distributed"] + [n for n in list(logging.root.manager.loggerDict)
                                if n.startswith("distributed.")]
     levels = {n: logging.getLogger(n).level for n in names}
     for n in names:
         logging.getLogger(n).setLevel(logging.CRITICAL + 1)
+    loop = previous = None
+    with contextlib.suppress(Exception):
+        loop = client.loop.asyncio_loop
+        previous = loop.get_exception_handler()
+        loop.set_exception_handler(lambda loop, context: None)
     try:
         yield
     finally:
         for n, level in levels.items():
             logging.getLogger(n).setLevel(level)
+        if loop is not None:
+            with contextlib.suppress(Exception):
+                loop.set_exception_handler(previous)
+
+
+def _importable_here(exc: ImportError) -> bool:
+    """Whether the module a worker could not import is there for this process (the workers'
+    environment lacks it), not missing everywhere (a bug)."""
+    import importlib.util
+    name = getattr(exc, "name", None)
+    if not name:
+        return False
+    try:
+        return importlib.util.find_spec(name.split(".")[0]) is not None
+    except (ImportError, ValueError):
+        return False
 
 
 def _first_line(exc: BaseException) -> str:

@@ -297,9 +297,15 @@ def test_failures_of_the_cluster_are_one_true_line_each():
     assert isinstance(err, HillshadeError) and "\n" not in line
     assert "died 4 times (last tcp://127.0.0.1:40001)" in line and "3 of 10" in line
 
-    err, line = _line(ModuleNotFoundError("No module named 'hillshade_rt'"))
+    err, line = _line(ModuleNotFoundError("No module named 'hillshade_rt'",
+                                          name="hillshade_rt"))
     assert isinstance(err, HillshadeError) and "cannot import" in line
     assert "No module named 'hillshade_rt'" in line
+    missing = ModuleNotFoundError("No module named 'hillshade_rt.nothere'",
+                                  name="hillshade_rt.nothere")
+    assert _line(missing)[0] is not missing      # the package is here: the workers lack it
+    bug = ModuleNotFoundError("No module named 'no_such_package'", name="no_such_package")
+    assert _line(bug)[0] is bug                  # missing here too: a bug
     err, line = _line(MemoryError())
     assert isinstance(err, HillshadeError) and "out of memory" in line
 
@@ -313,5 +319,49 @@ def test_failures_of_the_cluster_are_one_true_line_each():
 
     # a task's own failure stays what it is: its HillshadeError, or a bug (internal error)
     for exc in (HillshadeError("x.tif: cannot read"), ValueError("a bug"),
-                OSError(28, "No space left on device")):
+                OSError(28, "No space left on device"), TimeoutError("the task's own")):
         assert _line(exc)[0] is exc
+
+
+def test_a_result_waits_in_bounded_steps_and_a_tasks_timeout_is_its_error(monkeypatch):
+    """Fetching a result: each wait of the client's times out after a poll and the cluster is
+    looked at again (a result whose worker died is computed again); a TimeoutError the task
+    raised itself is its error, not a wait to repeat forever."""
+    class Future(_Future):
+        def __init__(self, status, outcomes):
+            super().__init__(status)
+            self.outcomes = list(outcomes)
+
+        def result(self, timeout=None):
+            assert timeout is not None          # never an unbounded wait
+            got = self.outcomes.pop(0)
+            if isinstance(got, BaseException):
+                raise got
+            return got
+
+    s, looks = _session(), []
+    s._check = lambda *args: looks.append(args)
+    f = Future("finished", [TimeoutError(), TimeoutError(), {"stats": 1}])
+    assert s._result(f, 3, 10, "windows", 0.1) == {"stats": 1}
+    assert looks == [(3, 10, "windows")] * 2
+    own = TimeoutError("the task's own")
+    with pytest.raises(TimeoutError) as got:
+        s._result(Future("error", [own]), 3, 10, "windows", 0.1)
+    assert got.value is own
+
+    # a connection closed while fetching: tried again (a worker's), named after the retries;
+    # the scheduler's (the client no longer running): named at once
+    from distributed.comm import CommClosedError
+    import hillshade_rt.run.dask as rd
+    monkeypatch.setattr(rd, "SETTLE_SECONDS", 0.0)
+    closed = CommClosedError("in <TCP (closed) ConnectionPool.gather>: Stream is closed")
+    f = Future("finished", [closed, {"stats": 2}])
+    assert s._result(f, 3, 10, "windows", 0.1) == {"stats": 2}
+    f = Future("finished", [closed] * rd.COMM_RETRIES)
+    with pytest.raises(HillshadeError, match="lost the connection to the Dask cluster at "
+                                             "tcp://127.0.0.1:8786 .*Stream is closed"):
+        s._result(f, 3, 10, "windows", 0.1)
+    s.client.status = "connecting"
+    with pytest.raises(HillshadeError, match="^lost the Dask scheduler at tcp://127.0.0.1:8786; "
+                                             "3 of 10 windows done$"):
+        s._result(Future("finished", [closed]), 3, 10, "windows", 0.1)
