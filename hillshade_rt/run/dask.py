@@ -47,8 +47,16 @@ def client_for(scheduler):
         if n < 1:
             raise HillshadeError(f"--scheduler {scheduler!r}: N must be 1 or more")
         threads = max(1, (os.cpu_count() or 1) // n)
-        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                               dashboard_address=None, env={"NUMBA_NUM_THREADS": str(threads)})
+        import logging
+        import warnings
+        with warnings.catch_warnings():
+            # the scheduler's HTTP server (no dashboard) moves off a busy port: nothing to say
+            warnings.filterwarnings("ignore", message="Port .* is already in use")
+            # the workers' logs (a task's failure, a restart) go to this run's stderr: the
+            # run says what failed, in one line
+            cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                                   dashboard_address=None, silence_logs=logging.CRITICAL,
+                                   env={"NUMBA_NUM_THREADS": str(threads)})
         return Client(cluster), cluster
     try:
         return Client(scheduler, timeout="20s"), None
@@ -377,7 +385,9 @@ def shade_piece(job, piece, path: str, nodata, stride: int | None = None) -> dic
         prof["crs"] = src.crs
     if src.transform is not None:
         prof["transform"] = src.transform @ Affine.translation(h0, g0)
-    with atomic_path(path, ".tif") as tmp, warnings.catch_warnings():
+    # overwrite: Dask runs a task again when its worker died before saying it was done; the
+    # part it wrote then is the same
+    with atomic_path(path, ".tif", overwrite=True) as tmp, warnings.catch_warnings():
         warnings.simplefilter("ignore", NotGeoreferencedWarning)
         with gdal_checked(path), rasterio.open(tmp, "w", **prof) as dst:
             dst.write(arr, 1)

@@ -433,7 +433,8 @@ def region_task(job: HorizonJob, region, product: Product, folder: str,
         warnings.simplefilter("ignore", NotGeoreferencedWarning)
         dsts = {}
         for name, count in product.outputs(n).items():
-            tmp = stack.enter_context(atomic_path(paths[name], ".tif"))
+            # overwrite: a task run again (its worker died) writes the same part again
+            tmp = stack.enter_context(atomic_path(paths[name], ".tif", overwrite=True))
             stack.enter_context(gdal_checked(paths[name]))
             dsts[name] = stack.enter_context(rasterio.open(tmp, "w", count=count, **prof))
 

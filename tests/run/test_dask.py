@@ -188,6 +188,31 @@ def test_every_worker_lost_fails_within_the_bound(tmp_path):
         assert os.listdir(out) == []        # no output, no parts, no temporary file
 
 
+def test_workers_killed_and_restarted_by_their_nannies_the_run_goes_on(tmp_path, runner):
+    """local:2, both worker processes SIGKILLed mid-run: their nannies (in the run's process)
+    start new ones, which take the windows over, rewriting the parts the dead ones had
+    written; the run ends well, says nothing, and its output is the one-process run's."""
+    import psutil
+
+    from hillshade_rt.cli import cli
+    from hillshade_rt.testing import read_band
+    with shadow_run(tmp_path, "local:2", "--worker-timeout", "30") as (p, out):
+        _first_part(out, p)
+        workers = [c for c in psutil.Process(p.pid).children()
+                   if "spawn_main" in " ".join(c.cmdline())]
+        assert len(workers) == 2
+        for w in workers:
+            w.send_signal(signal.SIGKILL)
+        status, err = _finished(p, START)
+        assert (status, err) == (0, ""), err
+        assert os.listdir(out) == ["shadow.tif"]
+    ref = tmp_path / "ref.tif"
+    r = runner.invoke(cli, ["shadow", str(tmp_path / "dem.tif"), str(ref), "--azimuth", "200",
+                            "--elevation", "20", "-q"])
+    assert r.exit_code == 0, r.output
+    assert (read_band(ref) == read_band(out / "shadow.tif")).all()
+
+
 def test_no_worker_at_the_start(tmp_path):
     """A scheduler without any worker: the run fails after --worker-timeout, one line."""
     with cluster(tmp_path, workers=0) as c, shadow_run(tmp_path, c.address,
