@@ -221,7 +221,8 @@ class DaskSession:
         if isinstance(exc, KilledWorker):
             last = getattr(getattr(exc, "last_worker", None), "address", None)
             n = getattr(exc, "allowed_failures", None)
-            times = f"{n + 1} times" if isinstance(n, int) else "repeatedly"
+            times = (("once" if n == 0 else f"{n + 1} times") if isinstance(n, int)
+                     else "repeatedly")
             return HillshadeError(
                 f"Dask gave up on a task: the worker running it died {times}"
                 f"{f' (last {last})' if last else ''}, killed or out of memory "

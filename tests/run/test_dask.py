@@ -390,3 +390,28 @@ def test_a_result_waits_in_bounded_steps_and_a_tasks_timeout_is_its_error(monkey
     with pytest.raises(HillshadeError, match="^lost the Dask scheduler at tcp://127.0.0.1:8786; "
                                              "3 of 10 windows done$"):
         s._result(Future("finished", [closed]), 3, 10, "windows", 0.1)
+
+
+def test_a_task_whose_workers_keep_dying_is_named_when_dask_gives_up(tmp_path):
+    """A real KilledWorker (the task kills its worker; allowed-failures 0): one line naming
+    it, the parts' folder removed, the caller's client left open."""
+    import logging
+
+    import dask
+    from distributed import Client, LocalCluster
+
+    from hillshade_rt.run.dask import DaskSession
+    with dask.config.set({"distributed.scheduler.allowed-failures": 0}), \
+            LocalCluster(n_workers=1, threads_per_worker=1, processes=True,
+                         dashboard_address=None, silence_logs=logging.CRITICAL) as lc, \
+            Client(lc) as client:
+        with pytest.raises(HillshadeError) as got:
+            with DaskSession(client, str(tmp_path / "out.tif"), 30.0) as s:
+                s.futures.append(client.submit(os._exit, 3, pure=False))
+                list(s.completed(s.futures))
+        line = str(got.value)
+        assert line.startswith("Dask gave up on a task: the worker running it died once")
+        assert "killed or out of memory" in line and line.endswith("; 0 of 1 windows done")
+        assert "\n" not in line
+        assert client.status == "running"
+    assert os.listdir(tmp_path) == []
