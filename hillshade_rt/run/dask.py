@@ -95,6 +95,8 @@ class DaskSession:
         from .config import DEFAULT_WORKER_TIMEOUT
         self.scheduler = scheduler
         self.worker_timeout = float(worker_timeout or DEFAULT_WORKER_TIMEOUT)
+        # one question to the scheduler, or closing the client: never beyond the bound either
+        self.probe = min(PROBE_SECONDS, self.worker_timeout)
         self.folder = tempfile.mkdtemp(dir=os.path.dirname(os.path.abspath(dest)),
                                        prefix="." + os.path.basename(dest) + ".parts-")
         try:
@@ -129,10 +131,10 @@ class DaskSession:
         try:
             if self.owned:
                 with contextlib.suppress(Exception):
-                    self.client.close(timeout=PROBE_SECONDS)
+                    self.client.close(timeout=self.probe)
             if self.cluster is not None:
                 with contextlib.suppress(Exception):
-                    self.cluster.close(timeout=PROBE_SECONDS)
+                    self.cluster.close()
         finally:
             self._muted.__exit__(None, None, None)
         return False
@@ -256,7 +258,7 @@ class DaskSession:
             return None
         try:
             ident = self.client.sync(self.client.scheduler.identity, n_workers=0,
-                                     callback_timeout=PROBE_SECONDS)
+                                     callback_timeout=self.probe)
             return int(ident["n_workers"])
         except (OSError, RuntimeError, KeyError, TypeError):    # TimeoutError is an OSError
             return None
@@ -267,12 +269,13 @@ class DaskSession:
         tail = f"; {done} of {total} {what} done"
         if self.client.status != "running":
             raise HillshadeError(f"lost the Dask scheduler at {self.address}{tail}")
+        asked = time.monotonic()
         n = self._workers_now()
         now = time.monotonic()
         if n is None:
             if self.client.status != "running":
                 raise HillshadeError(f"lost the Dask scheduler at {self.address}{tail}")
-            self._mute_since = self._mute_since or now
+            self._mute_since = self._mute_since or asked
             if now - self._mute_since >= self.worker_timeout:
                 raise HillshadeError(f"lost the Dask scheduler at {self.address} (no answer "
                                      f"for {now - self._mute_since:.0f} s){tail}")

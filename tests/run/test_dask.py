@@ -276,6 +276,24 @@ def test_scheduler_lost(tmp_path):
         assert os.listdir(out) == []
 
 
+def test_a_scheduler_that_stops_answering_is_lost_within_the_bound(tmp_path):
+    """The scheduler stopped (SIGSTOP: its connections stay open, nothing answers): the run
+    ends within a few --worker-timeout, one line naming it; no output, no parts."""
+    with cluster(tmp_path) as c, shadow_run(tmp_path, c.address,
+                                            "--worker-timeout", str(BOUND)) as (p, out):
+        _first_part(out, p)
+        os.killpg(c.procs["scheduler"].pid, signal.SIGSTOP)
+        t0 = time.monotonic()
+        status, err = _finished(p, 4 * BOUND + 30)
+        took = time.monotonic() - t0
+        line = _one_line(err)
+        assert status == 1, err
+        assert f"lost the Dask scheduler at {c.address} (no answer for" in line, line
+        assert _done(line) < WINDOWS, line
+        assert took < 4 * BOUND + 10, took
+        assert os.listdir(out) == []
+
+
 # -- each of Dask's failures as the line it makes (run.dask.DaskSession._failure) ---------------
 
 class _Client:
