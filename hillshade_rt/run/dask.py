@@ -66,8 +66,9 @@ def client_for(scheduler):
                              ) from None
 
 
-# how long one question to the scheduler (its worker count) may take, and the longest wait for
-# anything between two looks at the cluster
+# how long one question to the scheduler (its worker count; at most --worker-timeout) and
+# closing the client may take, and the longest wait for anything between two looks at the
+# cluster
 PROBE_SECONDS = 10.0
 POLL_SECONDS = 1.0
 # the reason the client gives the futures it cancels when its connection to the scheduler breaks
@@ -95,7 +96,7 @@ class DaskSession:
         from .config import DEFAULT_WORKER_TIMEOUT
         self.scheduler = scheduler
         self.worker_timeout = float(worker_timeout or DEFAULT_WORKER_TIMEOUT)
-        # one question to the scheduler, or closing the client: never beyond the bound either
+        # one question to the scheduler: never beyond the bound either
         self.probe = min(PROBE_SECONDS, self.worker_timeout)
         self.folder = tempfile.mkdtemp(dir=os.path.dirname(os.path.abspath(dest)),
                                        prefix="." + os.path.basename(dest) + ".parts-")
@@ -131,7 +132,7 @@ class DaskSession:
         try:
             if self.owned:
                 with contextlib.suppress(Exception):
-                    self.client.close(timeout=self.probe)
+                    self.client.close(timeout=PROBE_SECONDS)
             if self.cluster is not None:
                 with contextlib.suppress(Exception):
                     self.cluster.close()
