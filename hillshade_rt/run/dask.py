@@ -12,6 +12,12 @@ the run fails or is interrupted.
 numba parallelises inside a task over the worker's cores; tasks of one worker process run one at
 a time (a lock), so give workers one thread each (``dask worker --nthreads 1``); ``local:N``
 starts such a cluster here.
+
+When the cluster fails the run fails in one line naming the cause (``DaskSession.completed``):
+the scheduler lost or silent, no worker for ``--worker-timeout`` seconds (none at the start, or
+every one lost; a worker that comes back in time takes over, and a task run again rewrites its
+part), a task Dask gave up on after its workers kept dying, tasks cancelled on the scheduler.
+Every wait on the cluster is bounded.
 """
 
 from __future__ import annotations
