@@ -26,7 +26,7 @@ import os
 import re
 
 from .errors import HillshadeError
-from .run.config import PLACE_KEYS, READ_KEYS
+from .run.config import DEFAULT_WORKER_TIMEOUT, PLACE_KEYS, READ_KEYS
 
 # keyword arguments passed on as the run's options of the same name
 _PASSED = PLACE_KEYS + READ_KEYS + ("threads",)
@@ -104,7 +104,8 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
           curvature: bool | None = None, refraction_k: float | None = None,
           backend: str = "auto", max_memory=None, window_size=None, cog: bool = False,
           fmt: str | None = None, creation_options=None,
-          client=None, overwrite: bool = False, report: str | None = None,
+          client=None, worker_timeout: float = DEFAULT_WORKER_TIMEOUT,
+          overwrite: bool = False, report: str | None = None,
           preview: str | None = None, progress: bool = False,
           height_above_ground: float = 0.0, sun_from_stac: str | None = None,
           stac_item: str | None = None, context=None, each: bool = False, **more) -> dict:
@@ -125,9 +126,11 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
     ``max_memory`` (bytes or "2GB"), ``window_size`` ((rows, cols), an int, or "2048x2048"):
     windows as ``--max-memory``/``--window-size``. ``client``: a ``distributed.Client`` (or a
     scheduler address, or "local:N"): windows and times run as Dask tasks on it; the client is
-    left open. ``context``: a raster (VRT, mosaic) on the grid of ``dems`` (one tile) whose
-    heights its rays see, as ``--context``: the output covers the tile and equals the same
-    cells of the whole raster's output. Further keywords are the command line's options of the
+    left open. ``worker_timeout``: seconds the run waits while the scheduler has no worker (none
+    at the start, or every one lost) before it fails, as ``--worker-timeout``. ``context``: a
+    raster (VRT, mosaic) on the grid of ``dems`` (one tile) whose heights its rays see, as
+    ``--context``: the output covers the tile and equals the same cells of the whole raster's
+    output. Further keywords are the command line's options of the
     same name (``tz``,
     ``lat``, ``lon``, ``band``, ``nodata``, ``z_factor``, ``pixel_size``, ``raw_shape``, ...).
 
@@ -174,7 +177,8 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
                        context=None if context is None else os.fspath(context))
     run = RunOptions(backend=backend, threads=more.get("threads"), report_path=report,
                      overwrite=overwrite, quiet=not progress, fmt=fmt, preview=preview,
-                     say=_stderr, creation_options=creation_options)
+                     say=_stderr, creation_options=creation_options,
+                     worker_timeout=worker_timeout)
     hill = product == "hillshade"
     cfg = ShadeConfig(files, product, sun, default_sun=(315.0, 45.0) if hill else None,
                       algorithm=algorithm, options=options, curvature=curvature,

@@ -9,7 +9,7 @@ import math
 import click
 
 from ..errors import HillshadeError
-from ..run.config import READ_KEYS
+from ..run.config import DEFAULT_WORKER_TIMEOUT, READ_KEYS
 
 
 class InternalOption(click.Option):
@@ -480,10 +480,18 @@ def max_distance_option(f):
 
 
 def scheduler_option(f):
-    return click.option("--scheduler", metavar="ADDRESS", default=None,
-                        help="Run the windows as Dask tasks: a dask.distributed scheduler "
-                             "(tcp://host:8786) or 'local[:N]' (N worker processes here). Needs "
-                             "hillshade-rt[dask] and DEM paths the workers can read.")(f)
+    """--scheduler and its --worker-timeout (``run.config.RunOptions.worker_timeout``)."""
+    return _stack(f, [
+        click.option("--scheduler", metavar="ADDRESS", default=None,
+                     help="Run the windows as Dask tasks: a dask.distributed scheduler "
+                          "(tcp://host:8786) or 'local[:N]' (N worker processes here). Needs "
+                          "hillshade-rt[dask] and DEM paths the workers can read."),
+        click.option("--worker-timeout", type=click.FloatRange(min=0.0, min_open=True),
+                     default=DEFAULT_WORKER_TIMEOUT, show_default=True, metavar="SECONDS",
+                     callback=finite,
+                     help="With --scheduler: fail when the scheduler has had no worker for "
+                          "this long (none at the start, or every one lost during the run)."),
+    ])
 
 
 EACH_HELP = ("Each DEM on its own (different grids, CRSs, sizes welcome), into its own file "
@@ -566,10 +574,11 @@ def to_read_options(kw: dict):
 
 def to_run_options(kw: dict, say):
     """The options every run takes (backend, threads, report, overwrite, quiet, format,
-    preview), popped from ``kw`` where given, as ``run.RunOptions``."""
+    preview, --scheduler's --worker-timeout), popped from ``kw`` where given, as
+    ``run.RunOptions``."""
     from ..run.config import RunOptions
     keys = ("backend", "threads", "report_path", "overwrite", "quiet", "progress", "fmt",
-            "preview", "creation_options")
+            "preview", "creation_options", "worker_timeout")
     return RunOptions(say=say, **{k: kw.pop(k) for k in keys if k in kw})
 
 

@@ -31,6 +31,10 @@ MIN_WINDOW_SIDE = 64
 
 PRODUCTS = ("shadow", "classes", "hillshade")
 
+# --worker-timeout: how long a Dask run waits without any worker (none at the start, or every
+# one lost) before it fails; long enough for a worker to restart or an autoscaler to add one
+DEFAULT_WORKER_TIMEOUT = 60.0
+
 
 @dataclass
 class ReadOptions:
@@ -114,10 +118,22 @@ class RunOptions:
     # --co NAME=VALUE: GDAL creation options of the rasters written, over the tool's defaults
     # ({NAME: VALUE}, io.parse_creation_options)
     creation_options: dict = field(default_factory=dict)
+    # --worker-timeout: seconds a Dask run (--scheduler) waits without any worker, at the start
+    # or after every worker is lost, before it fails (run.dask.DaskSession)
+    worker_timeout: float = DEFAULT_WORKER_TIMEOUT
 
     def __post_init__(self):
+        import math
         from ..io.raster import parse_creation_options
         self.creation_options = parse_creation_options(self.creation_options)
+        try:
+            t = float(self.worker_timeout)
+        except (TypeError, ValueError):
+            t = math.nan
+        if not (math.isfinite(t) and t > 0):
+            raise UsageProblem(f"--worker-timeout must be a positive number of seconds, got "
+                               f"{self.worker_timeout!r}")
+        self.worker_timeout = t
 
 
 @dataclass

@@ -368,7 +368,8 @@ def _in_windows(cfg, src, azimuths, ran_on, max_distance, timer, *, wshape, limi
                 fig, _, extra = run_on_dask(cfg.scheduler, job, regs, product,
                                             _vrt_outputs(cfg, src, azimuths, tags, dist_tags),
                                             ro.quiet, share, n if ro.preview else None,
-                                            progress_mode=ro.progress)
+                                            progress_mode=ro.progress,
+                                            worker_timeout=ro.worker_timeout)
         else:
             fig = Figures()
             w, wd = _writers(cfg, geom, azimuths, tags, dist_tags)

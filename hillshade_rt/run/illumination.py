@@ -470,7 +470,7 @@ def _run_regions(src, regs, phys, suns, hours, cfg, quiet):
         return
     from .dask import DaskSession
     output = cfg.output if cfg.output is not None else cfg.files[-1]
-    with DaskSession(cfg.scheduler, output) as session:
+    with DaskSession(cfg.scheduler, output, cfg.run.worker_timeout) as session:
         n_chunks = cfg.chunks or max(1, session.workers())
         chunks = _chunks(len(suns), n_chunks)
         futs = {}
@@ -484,9 +484,8 @@ def _run_regions(src, regs, phys, suns, hours, cfg, quiet):
                        mode=cfg.run.progress)
         with bar:
             done = {}
-            from distributed import as_completed
-            for f in as_completed(list(futs.values())):
-                done[f.key] = f.result()
+            for f, res in session.completed(list(futs.values()), "tasks"):
+                done[f.key] = res
                 bar.update(1)
         for ri, reg in enumerate(regs):
             acc, counts = None, {"positions": 0, "dark": 0}

@@ -101,8 +101,10 @@ def in_memory(inputs, source, scale, req, out, timer, algorithm, options, ran_on
 
 def tiled(inputs, source, scale, req, out, timer, algorithm, options, ran_on,
           curvature, refraction_k, soft, self_shadow, ambient, quiet, *, limit,
-          window_shape, scheduler, per_cell, lift=0.0, area=None, progress_mode="bar"):
-    """``source``: the DEM already opened for windows (``ReadOptions.open``). ``lift``:
+          window_shape, scheduler, per_cell, lift=0.0, area=None, progress_mode="bar",
+          worker_timeout=None):
+    """``source``: the DEM already opened for windows (``ReadOptions.open``). ``worker_timeout``:
+    --worker-timeout of a Dask run (``run.dask.DaskSession``). ``lift``:
     --height-above-ground (``plan.Job``: the halos and the march). ``area``: a tile of
     ``source`` (``run.context.Area``, ``--context``): only its cells are lit and written, on
     the tile's grid, their windows read from ``source``."""
@@ -174,7 +176,8 @@ def tiled(inputs, source, scale, req, out, timer, algorithm, options, ran_on,
         from .dask import run_on_dask
         with timer("compute"):
             records, st, extra = run_on_dask(scheduler, job, suns, plans, out, share, n, quiet,
-                                             algo_stats, used, tally, progress_mode)
+                                             algo_stats, used, tally, progress_mode,
+                                             worker_timeout)
     else:
         from .report import progress_total
         bar = progress_total(sum(len(p) for p in plans), quiet, "hillshade-rt", "window",

@@ -433,7 +433,8 @@ def region_task(job: HorizonJob, region, product: Product, folder: str,
         warnings.simplefilter("ignore", NotGeoreferencedWarning)
         dsts = {}
         for name, count in product.outputs(n).items():
-            tmp = stack.enter_context(atomic_path(paths[name], ".tif"))
+            # overwrite: a task run again (its worker died) writes the same part again
+            tmp = stack.enter_context(atomic_path(paths[name], ".tif", overwrite=True))
             stack.enter_context(gdal_checked(paths[name]))
             dsts[name] = stack.enter_context(rasterio.open(tmp, "w", count=count, **prof))
 
@@ -458,11 +459,13 @@ def region_task(job: HorizonJob, region, product: Product, folder: str,
 
 def run_on_dask(scheduler, job: HorizonJob, regs, product: Product, outputs: dict,
                 quiet: bool, share=None, stride: int | None = None,
-                progress_mode: str = "bar") -> tuple[Figures, list, dict]:
+                progress_mode: str = "bar",
+                worker_timeout: float | None = None) -> tuple[Figures, list, dict]:
     """Every region as a task; then each output (``outputs``: name -> a function of the VRT
     document of its parts that writes it) assembled through a VRT. Returns (the figures, the
     results' statistics per region, what the report says of the scheduler). The parts' folder
-    beside the first output is removed, also when the run fails."""
+    beside the first output is removed, also when the run fails; the cluster's failures are
+    one-line errors (``run.dask.DaskSession``, ``worker_timeout`` its bound)."""
     from dataclasses import replace
 
     from ..io.vrt import VrtSource
@@ -470,20 +473,18 @@ def run_on_dask(scheduler, job: HorizonJob, regs, product: Product, outputs: dic
     from .dask import DaskSession
 
     first = next(iter(outputs.values()))
-    with DaskSession(scheduler, first.path) as session:
+    with DaskSession(scheduler, first.path, worker_timeout) as session:
         client, folder = session.client, session.folder
         workers = session.workers()
         light = replace(job, stats=replace(job.stats, preview=None))    # nothing large
         futures = session.futures
         futures += [client.submit(region_task, light, reg, product, folder, stride,
                                   pure=False) for reg in regs]
-        from distributed import as_completed
         fig, results = Figures(), []
         bar = progress_total(len(futures), quiet, "hillshade-rt (dask)", "window",
                              progress_mode)
         with bar:
-            for f in as_completed(futures):
-                res = f.result()
+            for _, res in session.completed(futures):
                 fig.add(res["figures"])
                 results.append(res)
                 if share is not None and res["shade"] is not None:

@@ -129,6 +129,7 @@ def _shade(cfg, src, windowed, inputs, output, req, pattern, wshape, limit, clai
                     cfg.curvature, cfg.refraction_k, soft, cfg.self_shadow, cfg.ambient,
                     ro.quiet, limit=limit, window_shape=wshape, scheduler=cfg.scheduler,
                     per_cell=per_cell, lift=cfg.height_above_ground, progress_mode=ro.progress,
+                    worker_timeout=ro.worker_timeout,
                     **({} if area is None else {"area": area}))
             except AllNodata:      # (raised before any output is opened): all nodata then
                 empty = (src if area is None else area.tile).path

@@ -298,7 +298,8 @@ def _in_windows(cfg, definition, src, ran_on, max_distance, timer, *, wshape, li
             with timer("compute"):
                 fig, parts, extra = run_on_dask(cfg.scheduler, job, regs, product,
                                                 {"result": out}, ro.quiet,
-                                                progress_mode=ro.progress)
+                                                progress_mode=ro.progress,
+                                                worker_timeout=ro.worker_timeout)
             for lo, total, count in parts:
                 st.lo, st.total, st.count = min(st.lo, lo), st.total + total, st.count + count
         else:
