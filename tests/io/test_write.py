@@ -662,7 +662,9 @@ with atomic_path(sys.argv[1], ".tif") as tmp:
 
 def _writer(out):
     """A process that has begun writing ``out`` (its temporary exists) and waits."""
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path))
+    import hillshade_rt
+    # this checkout's package (a worktree's, where the venv's editable install points elsewhere)
+    env = dict(os.environ, PYTHONPATH=os.path.dirname(os.path.dirname(hillshade_rt.__file__)))
     p = subprocess.Popen([sys.executable, "-c", _KILLED_WRITER, str(out)], env=env,
                          stdout=subprocess.PIPE, text=True)
     return p, p.stdout.readline().strip()
