@@ -29,6 +29,7 @@ Only numpy is imported here; rasterio and the peers are imported by the function
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import statistics
@@ -41,8 +42,8 @@ import numpy as np
 __all__ = [
     "BENCH_REAL_DEMS", "SMALL_REAL_DEMS", "box_terrain", "data_path", "fractal_terrain",
     "median_seconds", "peer_doshade", "peer_topocalc", "peer_whitebox", "read_band", "real_dems",
-    "reference_mask", "repo_root", "ridges", "roughness", "smooth_facets", "spectral",
-    "spectral_f64", "split_geotiff", "tiled", "write_geotiff", "write_ridges_dem",
+    "reference_mask", "repo_root", "ridges", "roughness", "serving", "smooth_facets",
+    "spectral", "spectral_f64", "split_geotiff", "tiled", "write_geotiff", "write_ridges_dem",
 ]
 
 
@@ -561,6 +562,23 @@ LUNAR_SOUTH_POLAR_STEREO = ("+proj=stere +lat_0=-90 +lat_ts=-90 +lon_0=0 +k=1 +x
 MOON_GEOGRAPHIC = "+proj=longlat +R=1737400 +no_defs"
 MOON_NORTH_POLAR = ("+proj=stere +lat_0=90 +lon_0=0 +k=1 +x_0=0 +y_0=0 +R=1737400 +units=m "
                     "+no_defs")
+
+
+@contextlib.contextmanager
+def serving(viewer):
+    """``viewer`` (``run.view.Viewer``) served on a free local port in a thread: yields the
+    HTTP server (``server_address``, ``url``); afterwards the server and the viewer are shut."""
+    import threading
+
+    from .run.view import make_server
+    srv = make_server(viewer, 0)
+    threading.Thread(target=srv.serve_forever, kwargs={"poll_interval": 0.1}, daemon=True).start()
+    try:
+        yield srv
+    finally:
+        srv.shutdown()
+        srv.server_close()
+        viewer.close()
 
 
 def memory_dem(z, transform, crs):

@@ -874,8 +874,13 @@ def _check_success(case, r, in_dir, out_dir, new_out) -> list[str]:
     return bad
 
 
-def run_case(case: Case) -> list[str]:
-    """Run ``case`` through the CLI; the list of ways its outcome breaks the property."""
+@contextlib.contextmanager
+def _invoked(case: Case, env: dict | None = None, before=None):
+    """``case`` run through the CLI in a temporary folder (its side files in ``in/``, outputs
+    to ``out/``): yields (result, stderr, in_dir, out_dir, new files in out/, new files in in/,
+    seconds), the folder still there. ``before(tmp, env)``: set up ``env`` inside the folder."""
+    import time
+
     from click.testing import CliRunner
 
     from hillshade_rt.cli import cli
@@ -889,24 +894,69 @@ def run_case(case: Case) -> list[str]:
                 fh.write(data)
         before_in = _tree(in_dir)
         argv = [a.replace(IN, in_dir + os.sep).replace(OUT, out_dir + os.sep) for a in case.argv]
+        env = dict(env or {})
+        if before is not None:
+            before(tmp, env)
         fd2: list[str] = []
+        t0 = time.monotonic()
         with _like_a_fresh_process(), _fd2_captured(fd2):
-            r = CliRunner().invoke(cli, argv, prog_name="hillshade-rt")
+            r = CliRunner(env=env).invoke(cli, argv, prog_name="hillshade-rt")
+        took = time.monotonic() - t0
         stderr = r.stderr + fd2[0]
         new_out = sorted(_tree(out_dir))
         new_in = sorted(set(_tree(in_dir)) - set(before_in))
-        bad = []
-        if r.exception is not None and not isinstance(r.exception, SystemExit):
-            import traceback
-            tb = "".join(traceback.format_exception(r.exception)).strip().splitlines()
-            bad.append(f"exception {type(r.exception).__name__}: {r.exception} "
-                       f"(raised at {tb[-3].strip() if len(tb) > 2 else '?'})")
-        if "Traceback" in stderr or "Traceback" in r.stdout:
-            bad.append("a traceback printed")
-        if "internal error" in stderr:   # a bug, reported in one line (HILLSHADE_RT_DEBUG=1)
-            bad.append(f"an internal error: {stderr.strip().splitlines()[-1]}")
-        if new_in:
-            bad.append(f"new files beside the input: {new_in}")
+        yield r, stderr, in_dir, out_dir, new_out, new_in, took
+
+
+def _violations_of_any_run(r, stderr, new_in) -> list[str]:
+    """What no run may do: raise, print a traceback or an internal error, write beside its
+    inputs."""
+    bad = []
+    if r.exception is not None and not isinstance(r.exception, SystemExit):
+        import traceback
+        tb = "".join(traceback.format_exception(r.exception)).strip().splitlines()
+        bad.append(f"exception {type(r.exception).__name__}: {r.exception} "
+                   f"(raised at {tb[-3].strip() if len(tb) > 2 else '?'})")
+    if "Traceback" in stderr or "Traceback" in r.stdout:
+        bad.append("a traceback printed")
+    if "internal error" in stderr:   # a bug, reported in one line (HILLSHADE_RT_DEBUG=1)
+        bad.append(f"an internal error: {stderr.strip().splitlines()[-1]}")
+    if new_in:
+        bad.append(f"new files beside the input: {new_in}")
+    return bad
+
+
+def _violations_of_a_failure(r, stderr, new_out) -> list[str]:
+    """A failed run: one error line, nothing new in the output folder."""
+    bad = []
+    lines = stderr.strip().splitlines()
+    if len(lines) != 1 or not lines[0].startswith("hillshade-rt: error:"):
+        bad.append(f"stderr is not one error line: {stderr.strip()[:1000]!r}")
+    if new_out:
+        bad.append(f"exit {r.exit_code} but new files in the output folder: {new_out}")
+    return bad
+
+
+def _collect(case, r, stderr, bad, in_dir, *outcome) -> None:
+    """With HILLSHADE_FUZZ_COLLECT: the case's violations and outcome written down."""
+    if bad:
+        _record(case, r, stderr, bad, in_dir)
+    with open(os.path.join(_COLLECT, "outcomes.jsonl"), "a", encoding="utf-8") as fh:
+        fh.write(json.dumps([case.command, r.exit_code, *outcome,
+                             (stderr.strip().splitlines() or [""])[-1][:200]]) + "\n")
+
+
+def _assert_no_violation(case, bad, r, stderr) -> None:
+    if _COLLECT:
+        return
+    assert not bad, (f"\n{case.shell()}\ninput: {'; '.join(case.recipe)}\nexit {r.exit_code}\n"
+                     f"stderr: {stderr.strip()[:2000]}\nviolations:\n  " + "\n  ".join(bad))
+
+
+def run_case(case: Case) -> list[str]:
+    """Run ``case`` through the CLI; the list of ways its outcome breaks the property."""
+    with _invoked(case) as (r, stderr, in_dir, out_dir, new_out, new_in, _):
+        bad = _violations_of_any_run(r, stderr, new_in)
         if r.exit_code == 0:
             bad += _check_success(case, r, in_dir, out_dir, new_out)
             if case.malformed:
@@ -914,20 +964,12 @@ def run_case(case: Case) -> list[str]:
         else:
             if r.exit_code not in (1, 2):
                 bad.append(f"exit status {r.exit_code}")
-            lines = stderr.strip().splitlines()
-            if len(lines) != 1 or not lines[0].startswith("hillshade-rt: error:"):
-                bad.append(f"stderr is not one error line: {stderr.strip()[:1000]!r}")
-            if new_out:
-                bad.append(f"exit {r.exit_code} but new files in the output folder: {new_out}")
+            bad += _violations_of_a_failure(r, stderr, new_out)
             if case.malformed and r.exit_code != 2:
                 bad.append(f"exit {r.exit_code} for a malformed command line "
                            f"({'; '.join(case.malformed)}), expected 2")
-        if bad and _COLLECT:
-            _record(case, r, stderr, bad, in_dir)
         if _COLLECT:
-            with open(os.path.join(_COLLECT, "outcomes.jsonl"), "a", encoding="utf-8") as fh:
-                fh.write(json.dumps([case.command, r.exit_code, (stderr.strip().splitlines()
-                                                                 or [""])[-1][:200]]) + "\n")
+            _collect(case, r, stderr, bad, in_dir)
         return bad, r, stderr
 
 
@@ -951,10 +993,7 @@ def _record(case, r, stderr, bad, in_dir):
 
 def check(case: Case):
     bad, r, stderr = run_case(case)
-    if _COLLECT:
-        return
-    assert not bad, (f"\n{case.shell()}\ninput: {'; '.join(case.recipe)}\nexit {r.exit_code}\n"
-                     f"stderr: {stderr.strip()[:2000]}\nviolations:\n  " + "\n  ".join(bad))
+    _assert_no_violation(case, bad, r, stderr)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -1277,49 +1316,22 @@ def command_case(draw, command):
 _LEFTOVER = re.compile(r"\.part|\.scratch|\.tmp", re.I)
 
 
-def run_generic(case: Case) -> list[str]:
-    """Run ``case``; the ways its outcome breaks the generic property."""
-    import time
-
-    from click.testing import CliRunner
-
-    from hillshade_rt.cli import cli
-
-    with tempfile.TemporaryDirectory(prefix="hsfuzz-") as tmp:
-        in_dir, out_dir = os.path.join(tmp, "in"), os.path.join(tmp, "out")
-        os.mkdir(in_dir)
-        os.mkdir(out_dir)
-        for name, data in case.files.items():
-            with open(os.path.join(in_dir, name), "wb") as fh:
-                fh.write(data)
-        before_in = _tree(in_dir)
-        argv = [a.replace(IN, in_dir + os.sep).replace(OUT, out_dir + os.sep) for a in case.argv]
-        # the cache command looks at (and --prune empties) a folder of this run, never the
-        # user's kernel cache; the --context statistics stay in the run's folder too
-        env = {"HILLSHADE_RT_STATS_DIR": os.path.join(tmp, "stats")}
+def _cache_folders(case: Case):
+    """The cache command looks at (and --prune empties) a folder of this run, never the
+    user's kernel cache; the --context statistics stay in the run's folder too."""
+    def before(tmp, env):
+        env["HILLSHADE_RT_STATS_DIR"] = os.path.join(tmp, "stats")
         if case.command == "cache":
             env["NUMBA_CACHE_DIR"] = os.path.join(tmp, "numba")
             os.makedirs(os.path.join(tmp, "numba", "0123456789abcdef"))
-        fd2: list[str] = []
-        t0 = time.monotonic()
-        with _like_a_fresh_process(), _fd2_captured(fd2):
-            r = CliRunner(env=env).invoke(cli, argv, prog_name="hillshade-rt")
-        took = time.monotonic() - t0
-        stderr = r.stderr + fd2[0]
-        new_out = sorted(_tree(out_dir))
-        new_in = sorted(set(_tree(in_dir)) - set(before_in))
-        bad = []
-        if r.exception is not None and not isinstance(r.exception, SystemExit):
-            import traceback
-            tb = "".join(traceback.format_exception(r.exception)).strip().splitlines()
-            bad.append(f"exception {type(r.exception).__name__}: {r.exception} "
-                       f"(raised at {tb[-3].strip() if len(tb) > 2 else '?'})")
-        if "Traceback" in stderr or "Traceback" in r.stdout:
-            bad.append("a traceback printed")
-        if "internal error" in stderr:
-            bad.append(f"an internal error: {stderr.strip().splitlines()[-1]}")
-        if new_in:
-            bad.append(f"new files beside the input: {new_in}")
+    return before
+
+
+def run_generic(case: Case) -> list[str]:
+    """Run ``case``; the ways its outcome breaks the generic property."""
+    with _invoked(case, before=_cache_folders(case)) as (r, stderr, in_dir, _, new_out, new_in,
+                                                         took):
+        bad = _violations_of_any_run(r, stderr, new_in)
         if any(_LEFTOVER.search(n) for n in new_out):
             bad.append(f"half-written files left: {new_out}")
         if took > _RUN_BOUND_S:
@@ -1327,26 +1339,15 @@ def run_generic(case: Case) -> list[str]:
         if r.exit_code not in (0, 1, 2, 130, 143):
             bad.append(f"exit status {r.exit_code}")
         if r.exit_code != 0:
-            lines = stderr.strip().splitlines()
-            if len(lines) != 1 or not lines[0].startswith("hillshade-rt: error:"):
-                bad.append(f"stderr is not one error line: {stderr.strip()[:1000]!r}")
-            if new_out:
-                bad.append(f"exit {r.exit_code} but new files in the output folder: {new_out}")
-        if bad and _COLLECT:
-            _record(case, r, stderr, bad, in_dir)
+            bad += _violations_of_a_failure(r, stderr, new_out)
         if _COLLECT:
-            with open(os.path.join(_COLLECT, "outcomes.jsonl"), "a", encoding="utf-8") as fh:
-                fh.write(json.dumps([case.command, r.exit_code, round(took, 2), case.shell(),
-                                     (stderr.strip().splitlines() or [""])[-1][:200]]) + "\n")
+            _collect(case, r, stderr, bad, in_dir, round(took, 2), case.shell())
         return bad, r, stderr
 
 
 def check_generic(case: Case):
     bad, r, stderr = run_generic(case)
-    if _COLLECT:
-        return
-    assert not bad, (f"\n{case.shell()}\ninput: {'; '.join(case.recipe)}\nexit {r.exit_code}\n"
-                     f"stderr: {stderr.strip()[:2000]}\nviolations:\n  " + "\n  ".join(bad))
+    _assert_no_violation(case, bad, r, stderr)
 
 
 _GENERIC_EXAMPLES = {"shadow": 50, "hillshade": 30, "sun-hours": 25, "horizon": 30,
@@ -1410,20 +1411,13 @@ _EDIT_KEYS = ["x", "y", "radius", "delta", "shape", "map_x", "map_y", "lon", "la
 @pytest.fixture(scope="module")
 def fuzz_viewer(tmp_path_factory):
     """A viewer (in a thread, on a free port) of a 24 x 24 UTM DEM with voids."""
-    import threading
-
     from hillshade_rt.io import read_dem
-    from hillshade_rt.run.view import Viewer, make_server
+    from hillshade_rt.run.view import Viewer
+    from hillshade_rt.testing import serving
     path = tmp_path_factory.mktemp("view") / "dem.tif"
     path.write_bytes(raster_bytes("GTiff", 24, 24, "float32", "utm", -9999.0, 0, 0.05, 1, None))
-    viewer = Viewer(read_dem(str(path)), backend="cpu")
-    srv = make_server(viewer, 0)
-    th = threading.Thread(target=srv.serve_forever, kwargs={"poll_interval": 0.1}, daemon=True)
-    th.start()
-    yield srv
-    srv.shutdown()
-    srv.server_close()
-    viewer.close()
+    with serving(Viewer(read_dem(str(path)), backend="cpu")) as srv:
+        yield srv
 
 
 def _ask(srv, method, path, body=None):

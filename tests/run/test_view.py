@@ -10,7 +10,6 @@ import signal
 import socket
 import subprocess
 import sys
-import threading
 import time
 import urllib.error
 import urllib.request
@@ -21,8 +20,8 @@ import pytest
 
 from hillshade_rt.arrays import shadow_mask
 from hillshade_rt.io import read_dem
-from hillshade_rt.run.view import Viewer, make_server, png_bytes
-from hillshade_rt.testing import data_path
+from hillshade_rt.run.view import Viewer, png_bytes
+from hillshade_rt.testing import data_path, serving
 
 DEM = data_path("everest_srtm3_voids_crop200.tif")     # EPSG:4326, 19.5 % voids
 
@@ -34,14 +33,8 @@ def dem():
 
 @pytest.fixture(scope="module")
 def server(dem):
-    viewer = Viewer(dem)
-    srv = make_server(viewer, 0)
-    th = threading.Thread(target=srv.serve_forever, kwargs={"poll_interval": 0.1}, daemon=True)
-    th.start()
-    yield srv
-    srv.shutdown()
-    srv.server_close()
-    viewer.close()
+    with serving(Viewer(dem)) as srv:
+        yield srv
 
 
 def get(server, path):
@@ -322,10 +315,7 @@ def test_a_dem_without_a_crs_has_no_times(tmp_path):
     z = fractal_terrain(64, 80, seed=9).astype(np.float32)
     path = write_geotiff(tmp_path / "plain.tif", z)
     dem = ReadOptions(pixel_size="5").read(path)
-    viewer = Viewer(dem)
-    srv = make_server(viewer, 0)
-    threading.Thread(target=srv.serve_forever, kwargs={"poll_interval": 0.1}, daemon=True).start()
-    try:
+    with serving(Viewer(dem)) as srv:
         info = json.loads(get(srv, "/api/info")[2])
         assert info["has_time"] is False and info["zone"] is None and info["date"] is None
         status, _, body = get(srv, "/api/render?time=2026-06-21T12:00")
@@ -334,10 +324,6 @@ def test_a_dem_without_a_crs_has_no_times(tmp_path):
         pic, _ = render(srv, az=163, el=20, bbox="0,0,80,64", w=80, h=64)
         # the plain-Python reference of the model (no curvature on a 0.5 km raster)
         assert np.array_equal(shadow_of(pic), reference_mask(z, 5.0, 5.0, 163.0, 20.0))
-    finally:
-        srv.shutdown()
-        srv.server_close()
-        viewer.close()
 
 
 def test_every_page_file_is_package_data():
@@ -444,15 +430,9 @@ def post(server, path, obj=None, raw=None):
 @pytest.fixture
 def edit_server():
     """A viewer of its own (edits change its heights) on the Everest DEM."""
-    dem = read_dem(DEM)
-    viewer = Viewer(dem)
-    srv = make_server(viewer, 0)
-    th = threading.Thread(target=srv.serve_forever, kwargs={"poll_interval": 0.1}, daemon=True)
-    th.start()
-    yield srv, viewer
-    srv.shutdown()
-    srv.server_close()
-    viewer.close()
+    viewer = Viewer(read_dem(DEM))
+    with serving(viewer) as srv:
+        yield srv, viewer
 
 
 def disk_edit(z, grid, r, c, radius, delta, flat=False):
