@@ -88,10 +88,15 @@ def folder_problem(path: str, uid: int | None = None) -> str | None:
         return f"{path} is a symbolic link"
     if not stat.S_ISDIR(st.st_mode):
         return f"{path} is not a folder"
+    return _not_private(path, st, uid, "700")
+
+
+def _not_private(path: str, st, uid: int, mode: str) -> str | None:
+    """Why ``st`` (``path``'s lstat) is not the user ``uid``'s alone (None when it is)."""
     if st.st_uid != uid:
         return f"{path} is owned by uid {st.st_uid}, not {uid}"
     if st.st_mode & 0o077:
-        return f"{path} has mode {stat.S_IMODE(st.st_mode):o}, not 700"
+        return f"{path} has mode {stat.S_IMODE(st.st_mode):o}, not {mode}"
     return None
 
 
@@ -104,11 +109,7 @@ def socket_problem(path: str, uid: int | None = None) -> str | None:
         return f"{path}: {exc.strerror}"
     if not stat.S_ISSOCK(st.st_mode):
         return f"{path} is not a socket"
-    if st.st_uid != uid:
-        return f"{path} is owned by uid {st.st_uid}, not {uid}"
-    if st.st_mode & 0o077:
-        return f"{path} has mode {stat.S_IMODE(st.st_mode):o}, not 600"
-    return None
+    return _not_private(path, st, uid, "600")
 
 
 def make_folder(path: str) -> str | None:

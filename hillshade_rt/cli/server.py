@@ -77,11 +77,12 @@ def _sources_stamp() -> tuple:
 
 
 class Worker:
-    def __init__(self, master: "Master"):
+    def __init__(self, master: "Master", check_kernels: bool = False):
         ours, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
         self.channel = ours
         self.proc = subprocess.Popen(
-            [sys.executable, "-m", "hillshade_rt.cli.worker", str(theirs.fileno())],
+            [sys.executable, "-m", "hillshade_rt.cli.worker", str(theirs.fileno())]
+            + (["--check-kernels"] if check_kernels else []),
             pass_fds=[theirs.fileno()], cwd="/", stdin=subprocess.DEVNULL,
             env=dict(master.environ))
         theirs.close()
@@ -107,6 +108,7 @@ class Master:
         self.stamp_checked = time.monotonic()
         self.listener = None
         self.inode = None
+        self.kernels_checked = False
 
     # -- the socket -------------------------------------------------------------------------
     def bind(self) -> None:
@@ -141,11 +143,13 @@ class Master:
     # -- workers ----------------------------------------------------------------------------
     def spawn(self) -> None:
         try:
-            w = Worker(self)
+            # the first worker makes sure this install's kernels are all cached (once)
+            w = Worker(self, check_kernels=not self.kernels_checked)
         except OSError as exc:
             log(f"cannot start a worker: {exc}")
             self.failures += 1
             return
+        self.kernels_checked = True
         self.workers.append(w)
         self.sel.register(w.channel, selectors.EVENT_READ, ("worker", w))
         log(f"worker {w.proc.pid} starting")

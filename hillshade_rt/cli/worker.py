@@ -44,19 +44,19 @@ def log(message: str) -> None:
           flush=True)
 
 
-def warm_up() -> None:
+def warm_up(check_kernels: bool) -> None:
     """Import what the commands import and load the default kernels, by running the default
-    commands on small DEMs (a projected and a geographic one) in a temporary folder; the
-    kernels numba's cache lacks are compiled first (``python -m hillshade_rt.warm``, said in
-    the log)."""
+    commands on small DEMs (a projected and a geographic one) in a temporary folder.
+    ``check_kernels`` (the master's first worker): the kernels numba's cache lacks are compiled
+    first (``python -m hillshade_rt.warm``, said in the log); the workers after it (others of
+    the pool, replacements) need not look again."""
     import tempfile
 
-    import subprocess
-
     from .group import run
-    # the kernels numba's cache lacks for this install, compiled first (nothing when all are)
-    subprocess.run([sys.executable, "-m", "hillshade_rt.warm"], stdin=subprocess.DEVNULL,
-                   check=False)
+    if check_kernels:
+        import subprocess
+        subprocess.run([sys.executable, "-m", "hillshade_rt.warm"], stdin=subprocess.DEVNULL,
+                       check=False)
     import numpy as np
     import rasterio
     from rasterio.transform import from_origin
@@ -210,7 +210,7 @@ def main(argv=None) -> int:
     for s in SIGNALS:
         signal.signal(s, _late)
     try:
-        warm_up()
+        warm_up("--check-kernels" in argv[1:])
     except BaseException as exc:        # noqa: BLE001 -- said in the log; the master sees us end
         log(f"warm-up failed: {type(exc).__name__}: {exc}")
         return 1
