@@ -210,12 +210,12 @@ def test_no_cycles_in_package():
 # the layers, top to bottom (docs/architecture.md): a module imports only modules of its own
 # layer or of the layers below (its own layer: the cycle test keeps that one-way)
 LAYERS = [
-    # warm runs the commands themselves (their kernels compiled as they use them)
-    ("hillshade_rt.__main__", "hillshade_rt.warm"),
+    # warm runs the commands themselves (their kernels compiled as they use them); testing
+    # serves the tests and benchmarks, which use every layer (nothing in the package imports it)
+    ("hillshade_rt.__main__", "hillshade_rt.warm", "hillshade_rt.testing"),
     ("hillshade_rt.cli",),
     ("hillshade_rt.api", "hillshade_rt.xarray"),
     ("hillshade_rt.run",),
-    ("hillshade_rt.testing",),
     ("hillshade_rt.arrays", "hillshade_rt.run.plan", "hillshade_rt.irradiance"),
     ("hillshade_rt.shading",),
     ("hillshade_rt.io", "hillshade_rt.earth", "hillshade_rt.bodysun", "hillshade_rt.gpu",
