@@ -8,7 +8,7 @@ import math
 import numpy as np
 
 from .algorithms import lookup
-from .errors import HillshadeError
+from .errors import AllNodata, HillshadeError
 from .geometry import Grid, check_elevation, equal_azimuths, heights_and_grid, normalize_azimuth
 from .shading import choose_backend
 
@@ -392,7 +392,7 @@ def irradiance(heights, times, spacing: float | tuple[float, float] | Grid | Non
     if ghi is None and (dni is not None or dhi is not None):
         raise HillshadeError("dni and dhi go with ghi")
     if not np.isfinite(z).any():
-        raise HillshadeError("every height is nodata")
+        raise AllNodata("every height is nodata")
     height = altitude if altitude is not None else centre_height_of(z)[0]
     if hasattr(heights, "heights") and hasattr(heights, "crs"):
         site = dem_site(heights, lat, lon)

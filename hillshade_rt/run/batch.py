@@ -31,12 +31,9 @@ from dataclasses import dataclass
 from typing import Callable
 
 from .. import __version__
-from ..errors import HillshadeError, UsageProblem
+from ..errors import AllNodata, HillshadeError, UsageProblem
 
 STEM = "stem"
-# a DEM whose every cell is nodata: the words of the read's error (io.source, run.plan,
-# run.irradiance); a run that writes its all-nodata output itself reports no valid cell
-_EMPTY_WORDS = ("every cell is nodata", "every height is nodata")
 
 
 class BatchFailed(HillshadeError):
@@ -188,8 +185,9 @@ def _label(path: str) -> str:
 
 
 def _is_empty(exc_or_report) -> bool:
+    """A run that ended on a DEM whose every cell is nodata, or whose report says so."""
     if isinstance(exc_or_report, BaseException):
-        return any(w in str(exc_or_report) for w in _EMPTY_WORDS)
+        return isinstance(exc_or_report, AllNodata)
     rep = exc_or_report
     cells = rep.get("cells") if isinstance(rep, dict) else None
     return bool(rep.get("empty")) or (isinstance(cells, dict) and cells.get("valid") == 0)
