@@ -31,6 +31,20 @@ def code_counts(a: np.ndarray) -> np.ndarray:
     return _count_rows(a)
 
 
+@njit(cache=True)
+def _row_range(row):
+    """(valid cells, lowest, highest valid height) of one row (a function of its own: numba's
+    parfor analysis of Python >= 3.12 bytecode fails on scalars updated in a loop nested in a
+    prange, numba issue 10132)."""
+    a, b, c = 0, np.inf, -np.inf
+    for h in row:
+        if h == h:
+            a += 1
+            b = min(b, h)
+            c = max(c, h)
+    return a, b, c
+
+
 @njit(parallel=True, cache=True)
 def valid_range(z):
     """(valid cells, lowest, highest valid height) of 2-D heights in one pass, parallel over
@@ -40,13 +54,7 @@ def valid_range(z):
     lo = np.full(rows, np.inf)
     hi = np.full(rows, -np.inf)
     for r in prange(rows):
-        a, b, c = 0, np.inf, -np.inf
-        for h in z[r]:
-            if h == h:
-                a += 1
-                b = min(b, h)
-                c = max(c, h)
-        n[r], lo[r], hi[r] = a, b, c
+        n[r], lo[r], hi[r] = _row_range(z[r])
     return n.sum(), lo.min() if rows else np.inf, hi.max() if rows else -np.inf
 
 

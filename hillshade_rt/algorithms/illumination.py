@@ -72,20 +72,28 @@ def accumulate_soft(frac, dt, soft):
 @njit(parallel=True, cache=True)
 def any_sun_up(z, slat, clat, slon, clon, a, e2, sx, sy, sz, lift):
     """How many valid cells see the sun's centre above their horizon (0: a dark position)."""
-    rows, cols = z.shape
-    n = 0
+    rows = z.shape[0]
+    n = np.zeros(rows, np.int64)
     for r in prange(rows):
-        k = 0
-        for c in range(cols):
-            h = z[r, c]
-            if math.isnan(h):
-                continue
-            e, nn, u = cell_sun(float(slat[r, c]), float(clat[r, c]), float(slon[r, c]),
-                                float(clon[r, c]), a, e2, sx, sy, sz, float(h) + lift)
-            if u > 0.0:
-                k += 1
-        n += k
-    return n
+        n[r] = _row_sun_up(z, r, slat, clat, slon, clon, a, e2, sx, sy, sz, lift)
+    return n.sum()
+
+
+@njit(cache=True)
+def _row_sun_up(z, r, slat, clat, slon, clon, a, e2, sx, sy, sz, lift):
+    """How many valid cells of row ``r`` see the sun's centre above their horizon (a function
+    of its own: numba's parfor analysis of Python >= 3.12 bytecode fails on a counter in a loop
+    nested in a prange, numba issue 10132)."""
+    k = 0
+    for c in range(z.shape[1]):
+        h = z[r, c]
+        if math.isnan(h):
+            continue
+        e, nn, u = cell_sun(float(slat[r, c]), float(clat[r, c]), float(slon[r, c]),
+                            float(clon[r, c]), a, e2, sx, sy, sz, float(h) + lift)
+        if u > 0.0:
+            k += 1
+    return k
 
 
 @njit(parallel=True, cache=True)
