@@ -106,7 +106,7 @@ bench-gpu: $(VENV)/.installed-gpu
 # One prepared script for a lent GPU (a few minutes): the GPU tests on the device instead of the
 # simulator, then the GPU benchmark (4096^2 and the real DEMs, a 100-sun series).
 gpu-check: $(VENV)/.installed-gpu $(VENV)/.installed-test
-	NUMBA_ENABLE_CUDASIM=0 $(BIN)/python -m pytest -q -x tests/test_gpu.py
+	NUMBA_ENABLE_CUDASIM=0 $(BIN)/python -m pytest -q -k "gpu or cuda" tests
 	$(BIN)/python benchmarks/bench_gpu.py --sizes 1024,4096
 
 # Peers: insolation (doshade), whitebox-workflows, topocalc (needs numpy and cython at build time,

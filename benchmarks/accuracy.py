@@ -13,7 +13,7 @@ import sys
 import numpy as np
 
 from hillshade_rt.algorithms import brute, horizon, sweep
-from hillshade_rt.geometry import sun_rays
+from hillshade_rt.model.geometry import sun_rays
 from hillshade_rt.io import read_dem
 
 SUNS = [(203.7, 3.0), (163.0, 10.0), (291.3, 5.0), (77.7, 20.0), (17.5, 1.5), (130.0, 30.0),

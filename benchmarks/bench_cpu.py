@@ -22,7 +22,7 @@ import numpy as np
 
 from hillshade_rt import read_dem
 from hillshade_rt.algorithms import ALGORITHMS
-from hillshade_rt.geometry import Grid, sun_rays
+from hillshade_rt.model.geometry import Grid, sun_rays
 from hillshade_rt.testing import SMALL_REAL_DEMS, median_seconds, real_dems, smooth_facets
 
 

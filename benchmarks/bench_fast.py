@@ -28,10 +28,10 @@ import numba
 import numpy as np
 
 from hillshade_rt import read_dem
-from hillshade_rt.earth import dem_body
-from hillshade_rt.shading import Shader
-from hillshade_rt.geometry import Grid
-from hillshade_rt.sun import SunOver
+from hillshade_rt.model.earth import dem_body
+from hillshade_rt.engine.shader import Shader
+from hillshade_rt.model.geometry import Grid
+from hillshade_rt.model.sun import SunOver
 from hillshade_rt.testing import real_dems, spectral, tiled
 
 
@@ -100,8 +100,8 @@ def main(argv=None):
     import tempfile
     import rasterio
     from rasterio.transform import from_origin
-    from hillshade_rt.shading import render
-    from hillshade_rt.sun import dem_site, parse_time, sun_over
+    from hillshade_rt.engine.shader import render
+    from hillshade_rt.model.sun import dem_site, parse_time, sun_over
     with tempfile.TemporaryDirectory() as tmp:
         path = os.path.join(tmp, "d.tif")
         with rasterio.open(path, "w", driver="GTiff", width=2048, height=2048, count=1,

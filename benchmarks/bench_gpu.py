@@ -24,9 +24,10 @@ import time
 
 import numpy as np
 
-from hillshade_rt import gpu, read_dem
+from hillshade_rt.engine import gpu
+from hillshade_rt import read_dem
 from hillshade_rt.algorithms import ALGORITHMS
-from hillshade_rt.geometry import Grid, sun_rays
+from hillshade_rt.model.geometry import Grid, sun_rays
 from hillshade_rt.testing import SMALL_REAL_DEMS, fractal_terrain, real_dems
 
 EXACT = ("auto", "brute", "smap", "horizon")

@@ -33,8 +33,8 @@ import numpy as np
 from hillshade_rt import read_dem
 from hillshade_rt.algorithms import horizon as hz
 from hillshade_rt.algorithms.pyramid import MaxPyramid
-from hillshade_rt.arrays import shadow_mask, sky_view
-from hillshade_rt.geometry import Grid, equal_azimuths, sun_rays
+from hillshade_rt.engine.arrays import shadow_mask, sky_view
+from hillshade_rt.model.geometry import Grid, equal_azimuths, sun_rays
 from hillshade_rt.testing import real_dems, spectral
 
 CELL = 30.0

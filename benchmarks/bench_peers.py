@@ -25,7 +25,7 @@ import numpy as np
 
 from hillshade_rt import read_dem
 from hillshade_rt.algorithms import brute, horizon, smap, sweep
-from hillshade_rt.geometry import Grid, sun_rays
+from hillshade_rt.model.geometry import Grid, sun_rays
 from hillshade_rt.testing import (median_seconds, peer_doshade, peer_topocalc, peer_whitebox,
                                   real_dems, smooth_facets)
 

@@ -39,7 +39,7 @@ import numpy as np
 from hillshade_rt import read_dem
 from hillshade_rt.algorithms import brute, point
 from hillshade_rt.algorithms.horizon import bilinear
-from hillshade_rt.geometry import Grid, sun_rays
+from hillshade_rt.model.geometry import Grid, sun_rays
 from hillshade_rt.testing import real_dems, spectral
 
 CELL = 30.0

@@ -32,7 +32,7 @@ def main():
 
     from hillshade_rt import read_dem, sun_at_points
     from hillshade_rt.algorithms import brute
-    from hillshade_rt.geometry import sun_rays
+    from hillshade_rt.model.geometry import sun_rays
     from hillshade_rt.run.query import irradiance
 
     d = read_dem(DEM)

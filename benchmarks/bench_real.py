@@ -43,7 +43,7 @@ import numpy as np
 
 from hillshade_rt import read_dem
 from hillshade_rt.algorithms import auto, bounds, brute, horizon, smap, sweep
-from hillshade_rt.geometry import Grid, sun_rays
+from hillshade_rt.model.geometry import Grid, sun_rays
 from hillshade_rt.testing import (peer_doshade, peer_whitebox, real_dems, roughness,
                                   smooth_facets, spectral, tiled)
 

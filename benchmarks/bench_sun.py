@@ -36,9 +36,9 @@ def main():
     args = ap.parse_args()
 
     from hillshade_rt import read_dem
-    from hillshade_rt.shading import Shader, render
-    from hillshade_rt.earth import dem_body
-    from hillshade_rt.sun import dem_site, parse_time, sun_over
+    from hillshade_rt.engine.shader import Shader, render
+    from hillshade_rt.model.earth import dem_body
+    from hillshade_rt.model.sun import dem_site, parse_time, sun_over
 
     d = read_dem(DEM)
     site = dem_site(d)

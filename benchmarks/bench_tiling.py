@@ -39,7 +39,7 @@ def main():
     ap.add_argument("--elevations", default="20,12")
     args = ap.parse_args()
     from hillshade_rt.testing import write_ridges_dem
-    from hillshade_rt.run.plan import GDAL_CACHE_MB, bytes_per_cell, format_size
+    from hillshade_rt.engine.windows import GDAL_CACHE_MB, bytes_per_cell, format_size
 
     work = tempfile.mkdtemp(prefix="hillshade-bench-tiling-")
     dem = os.path.join(work, "dem.tif")

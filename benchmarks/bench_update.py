@@ -28,9 +28,9 @@ import time
 import numpy as np
 
 from hillshade_rt import read_dem
-from hillshade_rt.geometry import Grid
-from hillshade_rt.shading import Shader, render
-from hillshade_rt.sun import SunOver
+from hillshade_rt.model.geometry import Grid
+from hillshade_rt.engine.shader import Shader, render
+from hillshade_rt.model.sun import SunOver
 from hillshade_rt.testing import real_dems, spectral
 
 SUNS = [(163.0, 3.0), (203.7, 8.0), (290.0, 20.0)]

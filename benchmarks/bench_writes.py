@@ -20,10 +20,10 @@ import numpy as np
 import rasterio
 
 from hillshade_rt import io as hio
-from hillshade_rt.earth import dem_body
-from hillshade_rt.shading import Shader, render
-from hillshade_rt.geometry import Grid
-from hillshade_rt.sun import SunOver
+from hillshade_rt.model.earth import dem_body
+from hillshade_rt.engine.shader import Shader, render
+from hillshade_rt.model.geometry import Grid
+from hillshade_rt.model.sun import SunOver
 from hillshade_rt.testing import real_dems, spectral_f64
 
 EXAMPLE = real_dems(["bigtujunga_srtm30m_utm11n_1197x643.tif"])[0][0]

@@ -39,17 +39,17 @@ def crop_reference(dem, crop, azimuth, elevation, pad):
     import rasterio
     from rasterio.windows import Window
 
-    from hillshade_rt.shading import Shader, render
+    from hillshade_rt.engine.shader import Shader, render
 
-    from hillshade_rt.earth import dem_body
-    from hillshade_rt.sun import SunOver
+    from hillshade_rt.model.earth import dem_body
+    from hillshade_rt.model.sun import SunOver
     r0, r1, c0, c1 = crop
     with rasterio.open(dem) as ds:
         a0, a1 = max(0, r0 - pad), min(ds.height, r1 + pad)
         b0, b1 = max(0, c0 - pad), min(ds.width, c1 + pad)
         z = ds.read(1, window=Window(b0, a0, b1 - b0, a1 - a0))
     from hillshade_rt.io import open_dem
-    from hillshade_rt.run.plan import window_grid
+    from hillshade_rt.engine.windows import window_grid
     g = window_grid(open_dem(dem).grid, (a0, a1, b0, b1))   # the DEM's own spacing (UTM)
     sh = Shader(z, g, "smap", {}, "cpu", False)
     m = render(sh, SunOver(None, azimuth, elevation), "shadow")
@@ -64,7 +64,7 @@ def main():
     ap.add_argument("--elevation", type=float, default=12.0)
     ap.add_argument("--workdir", default=None, help="keep the DEM here between runs")
     args = ap.parse_args()
-    from hillshade_rt.run.plan import format_size, parse_size
+    from hillshade_rt.engine.windows import format_size, parse_size
 
     work = args.workdir or tempfile.mkdtemp(prefix="hillshade-bigdem-")
     os.makedirs(work, exist_ok=True)

@@ -9,13 +9,14 @@ from ._lazy import lazy_names
 
 __version__ = "0.1.0"
 
-_EXPORTS = {"HillshadeError": "errors", "Grid": "geometry", "sun_rays": "geometry",
-            "Dem": "io", "read_dem": "io", "shadow_mask": "arrays", "horizon_angles": "arrays",
-            "is_shadowed": "arrays", "sky_view": "arrays", "horizon_profile": "arrays",
-            "sun_at_points": "arrays",
-            "Shader": "shading", "render": "shading",
-            "solar_position": "sun", "parse_time": "sun", "sun_over": "sun", "shade": "api",
-            "animate": "api"}
+_EXPORTS = {"HillshadeError": "errors", "Grid": "model.geometry", "sun_rays": "model.geometry",
+            "solar_position": "model.sun", "parse_time": "model.sun", "sun_over": "model.sun",
+            "Dem": "io", "read_dem": "io",
+            "shadow_mask": "engine.arrays", "horizon_angles": "engine.arrays",
+            "is_shadowed": "engine.arrays", "sky_view": "engine.arrays",
+            "horizon_profile": "engine.arrays", "sun_at_points": "engine.arrays",
+            "Shader": "engine.shader", "render": "engine.shader",
+            "shade": "api", "animate": "api"}
 
 __all__ = list(_EXPORTS) + ["__version__"]
 

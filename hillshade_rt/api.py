@@ -15,7 +15,7 @@ message; nothing is left half-written.
     >>> rep["processing"]["windows"], rep["processing"]["bytes_read_beyond_output_fraction"]
 
 For arrays already in memory use :func:`~hillshade_rt.shadow_mask` or
-:class:`~hillshade_rt.shading.Shader` instead.
+:class:`~hillshade_rt.engine.shader.Shader` instead.
 """
 
 from __future__ import annotations
@@ -147,7 +147,7 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
     from .run.batch import check_pattern, shade_each
     from .algorithms import algorithm_for, options_for
     from .run.config import PRODUCTS
-    from .sun import DEFAULT_TOLERANCE
+    from .model.sun import DEFAULT_TOLERANCE
     from .io.write import virtual_outputs
     if product not in PRODUCTS:
         raise HillshadeError(f"product must be one of {', '.join(PRODUCTS)}, got {product!r}")
@@ -218,10 +218,10 @@ def irradiance(dem, output, *, date=None, end_date=None, start=None, end=None,
     ``nodata``, ``threads``, ...); ``fmt`` and ``creation_options`` as for :func:`shade`;
     ``context`` as ``--context`` (the DEM a tile of that raster). Returns the report. For
     heights in memory:
-    :func:`hillshade_rt.arrays.irradiance`."""
+    :func:`hillshade_rt.engine.arrays.irradiance`."""
     from .run import ReadOptions, RunOptions
     from .run.irradiance import IrradianceConfig, irradiance as run_irradiance
-    from .sun import DEFAULT_TOLERANCE
+    from .model.sun import DEFAULT_TOLERANCE
     from .io.write import virtual_outputs
     unknown = set(more) - set(_PASSED)
     if unknown:
@@ -262,7 +262,7 @@ def animate(dem, output, *, date=None, start=None, end=None, step: str | None = 
     (``tz``, ``lat``, ``lon``, ``band``, ``nodata``, ``threads``, ...). Returns the report."""
     from .run import ReadOptions, RunOptions
     from .run.animate import AnimateConfig, animate as run_animate
-    from .sun import DEFAULT_TOLERANCE
+    from .model.sun import DEFAULT_TOLERANCE
     unknown = set(more) - set(_PASSED)
     if unknown:
         raise TypeError(f"animate() got unexpected keyword argument(s) "

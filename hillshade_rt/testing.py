@@ -587,7 +587,7 @@ def memory_dem(z, transform, crs):
     it, without a file (the per-cell suns' tests)."""
     from rasterio.crs import CRS
 
-    from .geometry import grid_from_transform
+    from .model.geometry import grid_from_transform
     from .io.dem import Dem
     c = CRS.from_user_input(crs)
     z = np.asarray(z, np.float32)

@@ -190,7 +190,7 @@ def _points(values: dict) -> None:
     """``arrays.is_shadowed``: points tested against SMap's tables."""
     import numpy as np
 
-    from .arrays import is_shadowed
+    from .engine.arrays import is_shadowed
     from .io import read_dem
     dem = read_dem(values["utm"])
     is_shadowed(dem, np.array([[10.5, 20.25, 1800.0]]), 203.7, 10.0)
@@ -201,9 +201,9 @@ def _dynamic(values: dict) -> None:
     halo, a small one (one thread) and a large one (the parallel march)."""
     import numpy as np
 
-    from .geometry import Grid
-    from .shading import Shader, render
-    from .sun import SunOver
+    from .model.geometry import Grid
+    from .engine.shader import Shader, render
+    from .model.sun import SunOver
     i = np.arange(300)
     z = (300.0 * np.add.outer(np.sin(0.37 * i), np.cos(0.53 * i)) + 1500.0).astype(np.float32)
     sh = Shader(z, Grid.uniform(300, 300, 30.0), "auto", {}, "cpu", True)
@@ -286,7 +286,7 @@ def kernels() -> list:
     for info in pkgutil.iter_modules(algorithms.__path__):
         if not info.name.startswith("_"):
             importlib.import_module(f"{algorithms.__name__}.{info.name}")
-    importlib.import_module(f"{__package__}.run.plan")
+    importlib.import_module(f"{__package__}.engine.windows")
     return [k for k in _jitcache.KERNELS if _jitcache.compiled_alone(k)]
 
 

@@ -7,7 +7,7 @@ are regularly spaced. Its CRS is ``crs=``, else rioxarray's ``da.rio.crs``, else
 ``da.attrs["crs"]``; its transform rioxarray's ``da.rio.transform()`` (from the coordinates
 where the stored one disagrees with them). Without a CRS the ground
 spacing must be given (``spacing=``: metres per cell, ``d`` or ``(dx, dy)``), as the array API
-(``hillshade_rt.arrays``) requires. Nodata (``da.rio.nodata``, ``_FillValue``, or ``nodata=``),
+(``hillshade_rt.engine.arrays``) requires. Nodata (``da.rio.nodata``, ``_FillValue``, or ``nodata=``),
 NaN and infinities are voids.
 
 Every result is a DataArray on the input's x/y coordinates with its CRS and transform written by
@@ -17,7 +17,7 @@ sun (the GeoTIFF tags of the command line). The computation is the command line'
 a lattice, per tile where it varies across the raster).
 
 A **Dask-backed** DataArray gives a lazy, Dask-backed result, computed window by window as the
-command line's windowed runs do (``run.plan``): each output region's window holds the region
+command line's windowed runs do (``engine.windows``): each output region's window holds the region
 and the halo **toward the sun** that can shadow it (from the heights' block ranges), so the
 windows are exactly what the planner reads, whatever the input's chunks (a chunk smaller than
 the halo is fine: a task reads the slices of every chunk its window covers). One pass over the
@@ -41,7 +41,7 @@ import xarray as xr
 
 from . import __version__
 from .errors import HillshadeError
-from .geometry import Grid
+from .model.geometry import Grid
 
 # one numba computation at a time in this process (Dask's threads would otherwise call the
 # parallel kernels concurrently, which numba's default threading layer does not allow)
@@ -235,7 +235,7 @@ def _dem(inp: _Input):
 
 @dataclass(eq=False)
 class _LazySource:
-    """A Dask-backed input as the windowed runs see a DEM (``run.plan.Job``, ``sun.dem_site``):
+    """A Dask-backed input as the windowed runs see a DEM (``engine.windows.Job``, ``sun.dem_site``):
     its shape, grid, transform, CRS, and the centre height read from the centre only."""
 
     heights: object
@@ -249,7 +249,7 @@ class _LazySource:
         return tuple(self.heights.shape)
 
     def centre_height(self) -> tuple[float, str]:
-        from .sun import centre_height_of
+        from .model.sun import centre_height_of
         rows, cols = self.shape
         r, c = rows // 2, cols // 2
         r0, c0 = max(0, r - 128), max(0, c - 128)
@@ -261,7 +261,7 @@ class _LazySource:
 
 @dataclass(frozen=True)
 class _Frame:
-    """What ``run.plan.Job`` reads of its DEM: the shape and the grid. Not the Dask array
+    """What ``engine.windows.Job`` reads of its DEM: the shape and the grid. Not the Dask array
     itself: Dask looks inside a task's dataclass arguments, and the whole input would become a
     dependency of every window's task."""
 
@@ -271,7 +271,7 @@ class _Frame:
 
 def _block_range(block):
     """(lowest, highest valid height, valid cells) of each STAT_BLOCK² block of ``block``."""
-    from .run.plan import STAT_BLOCK as B
+    from .engine.windows import STAT_BLOCK as B
     rows, cols = block.shape
     nr, nc = -(-rows // B), -(-cols // B)
     z = np.full((nr * B, nc * B), np.nan, np.float32)
@@ -286,9 +286,9 @@ def _block_range(block):
 
 
 def _block_stats(z):
-    """``run.plan.BlockStats`` of a Dask array of heights: the statistics pass of a windowed
+    """``engine.windows.BlockStats`` of a Dask array of heights: the statistics pass of a windowed
     run, as one Dask reduction (computed now: the windows depend on it)."""
-    from .run.plan import STAT_BLOCK as B, BlockStats
+    from .engine.windows import STAT_BLOCK as B, BlockStats
     size = 8 * B
     zz = z.rechunk((size, size))
     parts = zz.map_blocks(_block_range, dtype=np.float32, new_axis=2,
@@ -355,7 +355,7 @@ def _utc64(t: _dt.datetime) -> np.datetime64:
 
 def _sun_attrs(sun) -> dict:
     """The command line's tags of one sun (``run.outputs.sun_tags``) as numbers and texts."""
-    from .sun import iso
+    from .model.sun import iso
     d = {"sun_azimuth": float(sun.azimuth), "sun_elevation": float(sun.elevation),
          "night": "yes" if sun.night else "no"}
     if sun.time is not None:
@@ -368,7 +368,7 @@ def _sun_attrs(sun) -> dict:
 def _series_dim(suns):
     """The ``time`` dimension of a series: UTC times, with each sun's azimuth, elevation and
     the time with its offset as coordinates along it."""
-    from .sun import iso
+    from .model.sun import iso
     t = [_utc64(s.time) for s in suns]
     return ("time", {"time": ("time", np.array(t, "datetime64[ns]")),
                      "sun_azimuth": ("time", np.array([s.azimuth for s in suns])),
@@ -428,8 +428,8 @@ def _lazy_render(job, sun, stats, z, dtype):
 def _lazy_job(inp: _Input, req, algorithm, options, ran_on, curvature, refraction_k, kind,
               soft, self_shadow, lift):
     """(job, block statistics, suns, sun info) of a Dask-backed input."""
-    from .earth import dem_body
-    from .run.plan import Job
+    from .model.earth import dem_body
+    from .engine.windows import Job
     src = _LazySource(inp.heights, inp.grid, inp.transform, inp.crs, inp.path)
     stats = _block_stats(inp.heights)
     if stats.valid == 0:
@@ -448,7 +448,7 @@ def _lazy_job(inp: _Input, req, algorithm, options, ran_on, curvature, refractio
 
 def _request(azimuth, elevation, time, tz, lat, lon, pressure, temperature, refraction,
              sun_tolerance):
-    from .sun import DEFAULT_TOLERANCE, SunRequest
+    from .model.sun import DEFAULT_TOLERANCE, SunRequest
     direction = azimuth is not None or elevation is not None
     if direction and time is not None:
         raise HillshadeError("give the sun one way: azimuth and elevation, or time")
@@ -498,9 +498,9 @@ def _lighting(da, kind, azimuth, elevation, time, tz, lat, lon, crs, spacing, no
               backend, curvature, refraction_k, lift, soft, self_shadow, pressure, temperature,
               refraction, sun_tolerance, options):
     from .algorithms import lookup
-    from .products import product
+    from .engine.products import product
     from .run.config import check_lift
-    from .shading import choose_backend
+    from .engine.shader import choose_backend
     lookup(algorithm)
     algorithm = check_lift(lift, algorithm, soft)
     lift = float(lift)
@@ -520,8 +520,8 @@ def _lighting(da, kind, azimuth, elevation, time, tz, lat, lon, crs, spacing, no
         import dask.array as dka
         stack = dka.stack
     else:
-        from .earth import dem_body
-        from .shading import Shader, render
+        from .model.earth import dem_body
+        from .engine.shader import Shader, render
         dem = _dem(inp)
         suns, info = req.suns(dem)
         shader = Shader(dem.heights, dem.grid, algorithm, options, ran_on, curvature,
@@ -553,8 +553,8 @@ def horizon(da, azimuth, *, crs=None, spacing=None, nodata: float | None = None,
     ``max_distance``, else to the raster's edge), curvature and body decided for the whole
     raster: the in-memory angles (``method="hull"``, an approximation over the whole raster:
     one task)."""
-    from .arrays import horizon_angles
-    from .geometry import normalize_azimuth
+    from .engine.arrays import horizon_angles
+    from .model.geometry import normalize_azimuth
     series = not np.isscalar(azimuth)
     azimuths = [normalize_azimuth(float(a)) for a in np.atleast_1d(azimuth)]
     if not azimuths:
@@ -599,7 +599,7 @@ def skyview(da, *, directions: int = 32, definition: str = "zaksek", openness: s
     (``arrays.sky_view``). A Dask-backed input gives a lazy result: with ``max_distance``, one
     task per chunk with the cells within it all round; without, one task over the whole
     raster (every direction reaches its edges)."""
-    from .arrays import sky_view
+    from .engine.arrays import sky_view
     inp = _input(da, crs, spacing, nodata)
 
     def compute(z):
@@ -608,7 +608,7 @@ def skyview(da, *, directions: int = 32, definition: str = "zaksek", openness: s
                         refraction_k=refraction_k, openness=openness,
                         max_distance=max_distance, height_above_ground=height_above_ground)
     if inp.lazy and max_distance is not None:   # windows: each chunk and max_distance around
-        from .geometry import equal_azimuths
+        from .model.geometry import equal_azimuths
         n = int(directions)
         if n < 1:
             raise HillshadeError(f"directions must be 1 or more, got {directions}")
@@ -632,7 +632,7 @@ def _horizon_settings(inp: _Input, curvature, method: str):
     """(curvature, body) of the horizon products over the whole raster, decided once for its
     windows as ``shading.horizon_shader`` decides them for the whole (curvature "auto": on for
     the scan of a raster more than 1 km across; the body at the DEM's centre)."""
-    from .earth import dem_body
+    from .model.earth import dem_body
     if curvature in ("auto", None):
         rows, cols = inp.shape
         dx, dy = inp.grid.centre_spacing()
@@ -643,8 +643,8 @@ def _horizon_settings(inp: _Input, curvature, method: str):
 
 def _horizon_window(z, window, *, grid, azimuth, method, sample_spacing, backend, curvature,
                     refraction_k, body, max_distance, lift):
-    from .arrays import horizon_angles
-    from .run.plan import window_grid
+    from .engine.arrays import horizon_angles
+    from .engine.windows import window_grid
     return horizon_angles(z, azimuth, window_grid(grid, window), method, sample_spacing,
                           backend, curvature=curvature, refraction_k=refraction_k, body=body,
                           max_distance=max_distance, height_above_ground=lift)
@@ -652,8 +652,8 @@ def _horizon_window(z, window, *, grid, azimuth, method, sample_spacing, backend
 
 def _skyview_window(z, window, *, grid, directions, definition, curvature, refraction_k, body,
                     openness, max_distance, lift):
-    from .arrays import sky_view
-    from .run.plan import window_grid
+    from .engine.arrays import sky_view
+    from .engine.windows import window_grid
     return sky_view(z, window_grid(grid, window), directions, definition, curvature=curvature,
                     refraction_k=refraction_k, body=body, openness=openness,
                     max_distance=max_distance, height_above_ground=lift)
@@ -680,7 +680,7 @@ def _lazy_reach(inp: _Input, azimuths, max_distance, part):
     import dask
     import dask.array as dka
 
-    from .shading import halo_bounds
+    from .engine.shader import halo_bounds
     z = inp.heights
     reach = math.inf if max_distance is None else float(max_distance)
     task = dask.delayed(_reach_part, pure=True)
@@ -739,10 +739,10 @@ def sun_hours(da, date, *, end_date=None, step: str = "10min", tz: str | None = 
     away from the sun get none. A Dask-backed input: each sample's windows as in
     :func:`shadow`, summed lazily."""
     from .algorithms import lookup
-    from .earth import dem_body
+    from .model.earth import dem_body
     from .run.config import check_lift
-    from .shading import Shader, choose_backend, render
-    from .sun import SUN_RADIUS_DEG, SunRequest, daylight_samples, parse_date, parse_step
+    from .engine.shader import Shader, choose_backend, render
+    from .model.sun import SUN_RADIUS_DEG, SunRequest, daylight_samples, parse_date, parse_step
     lookup(algorithm)
     algorithm = check_lift(height_above_ground, algorithm, soft)
     lift = float(height_above_ground)
@@ -755,7 +755,7 @@ def sun_hours(da, date, *, end_date=None, step: str = "10min", tz: str | None = 
     if last < first:
         raise HillshadeError("end_date is before date")
     parse_step(step)
-    from .sun import DEFAULT_TOLERANCE
+    from .model.sun import DEFAULT_TOLERANCE
     req = SunRequest.at_place([], tz, lat, lon, pressure, temperature, not refraction,
                               DEFAULT_TOLERANCE if sun_tolerance is None else sun_tolerance)
     inp = _input(da, crs, spacing, nodata)

@@ -114,7 +114,7 @@ def test_cli_api_and_array_function_agree_at_default_settings(tmp_path):
     # the same mask
     with pytest.raises(hr.HillshadeError, match="spacing"):
         hr.shadow_mask(d.heights, 135, 15)
-    from hillshade_rt.earth import dem_body
+    from hillshade_rt.model.earth import dem_body
     np.testing.assert_array_equal(arr, hr.shadow_mask(d.heights, 135, 15, d.grid,
                                                       body=dem_body(d)))
 

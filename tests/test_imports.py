@@ -21,8 +21,9 @@ PACKAGE = "hillshade_rt"
 ALGORITHMS = "hillshade_rt.algorithms"
 # what the algorithms may import from above their own package
 # (``_preload``: numba's start-up, which ``_jitcache`` sets up for every kernel)
-BELOW_ALGORITHMS = {"hillshade_rt", "hillshade_rt.errors", "hillshade_rt.geometry",
-                    "hillshade_rt.sun", "hillshade_rt._preload"}
+BELOW_ALGORITHMS = {"hillshade_rt", "hillshade_rt.errors", "hillshade_rt.model",
+                    "hillshade_rt.model.geometry", "hillshade_rt.model.sun",
+                    "hillshade_rt._preload"}
 
 
 def modules() -> dict[str, pathlib.Path]:
@@ -128,9 +129,9 @@ def test_graph_sees_deferred_and_relative_imports():
     parent package (gpu -> algorithms, through algorithms._cuda)."""
     edges = graph()
     assert "hillshade_rt.algorithms._cuda" in edges["hillshade_rt.algorithms.brute"]
-    assert "hillshade_rt.algorithms.frames" in edges["hillshade_rt.gpu"]
+    assert "hillshade_rt.algorithms.frames" in edges["hillshade_rt.engine.gpu"]
     assert "hillshade_rt.algorithms.brute" in edges["hillshade_rt.algorithms.sweep"]
-    assert "hillshade_rt.algorithms" in edges["hillshade_rt.gpu"]
+    assert "hillshade_rt.algorithms" in edges["hillshade_rt.engine.gpu"]
     assert "hillshade_rt.algorithms" not in edges["hillshade_rt.algorithms.brute"]   # its own
     assert cycles({"a": {"b"}, "b": {"a", "c"}, "c": {"b"}, "d": {"d"}}) == [
         ("a", "b"), ("b", "c"), ("d",)]
@@ -146,7 +147,7 @@ def test_algorithms_never_import_gpu_or_the_layers_above():
 
 
 def test_no_cycle_inside_algorithms_or_with_gpu():
-    edges = _within(graph(), lambda m: _in_algorithms(m) or m == "hillshade_rt.gpu")
+    edges = _within(graph(), lambda m: _in_algorithms(m) or m == "hillshade_rt.engine.gpu")
     assert cycles(edges) == []
 
 
@@ -213,19 +214,25 @@ LAYERS = [
     # warm runs the commands themselves (their kernels compiled as they use them); testing
     # serves the tests and benchmarks, which use every layer (nothing in the package imports it)
     ("hillshade_rt.__main__", "hillshade_rt.warm", "hillshade_rt.testing"),
+    # the front doors
     ("hillshade_rt.cli",),
     ("hillshade_rt.api", "hillshade_rt.xarray"),
+    # whole runs, files in and out
     ("hillshade_rt.run",),
-    ("hillshade_rt.arrays", "hillshade_rt.run.plan", "hillshade_rt.irradiance"),
-    ("hillshade_rt.shading",),
-    ("hillshade_rt.io", "hillshade_rt.earth", "hillshade_rt.bodysun", "hillshade_rt.gpu",
-     "hillshade_rt.preview", "hillshade_rt.animation",
-     "hillshade_rt.products"),
+    # engine/: three layers of its own (the array API, the window job and the irradiance
+    # physics over the shader, over the GPU runtime, products and per-cell suns)
+    ("hillshade_rt.engine.arrays", "hillshade_rt.engine.windows",
+     "hillshade_rt.engine.irradiance"),
+    ("hillshade_rt.engine.shader",),
+    ("hillshade_rt.engine", "hillshade_rt.io", "hillshade_rt.pictures"),
     ("hillshade_rt.algorithms",),
-    ("hillshade_rt.sun", "hillshade_rt.ephemeris"),
-    ("hillshade_rt.geometry",),
+    ("hillshade_rt.model",),
     ("hillshade_rt.errors", "hillshade_rt._preload", "hillshade_rt._lazy", "hillshade_rt"),
 ]
+
+# the modules that may sit loose in hillshade_rt/ (every other module lives in its layer's folder)
+LOOSE = {"__init__", "__main__", "_lazy", "_preload", "errors", "api", "warm", "testing",
+         "xarray"}
 
 
 def layer_of(module: str) -> int:
@@ -262,3 +269,15 @@ def test_no_click_below_the_command_line():
                      else [])
             bad += [f"{name}:{node.lineno}" for n in names if n.split(".")[0] == "click"]
     assert not bad
+
+
+def test_the_folders_are_the_layers():
+    """No module sits loose beside the layers' folders (only the package's entry points, its
+    errors and the top layer's modules), and every folder of the package is a layer of
+    ``LAYERS`` (or lies inside one) and is named in docs/architecture.md."""
+    loose = sorted(p.stem for p in ROOT.glob("*.py") if p.stem not in LOOSE)
+    assert not loose, f"modules outside the layers' folders: {loose}"
+    doc = (ROOT.parent / "docs" / "architecture.md").read_text(encoding="utf-8")
+    for folder in sorted(p.parent.name for p in ROOT.glob("*/__init__.py")):
+        layer_of(f"{PACKAGE}.{folder}")
+        assert f"{folder}/" in doc, f"docs/architecture.md does not describe {folder}/"

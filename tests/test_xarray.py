@@ -13,7 +13,7 @@ import xarray as xr
 
 import hillshade_rt.xarray as hx
 from hillshade_rt import HillshadeError
-from hillshade_rt.arrays import shadow_mask
+from hillshade_rt.engine.arrays import shadow_mask
 from hillshade_rt.testing import data_path
 
 LIDAR = data_path("lidar_dem_1m_utm15n_400x400.tif")      # UTM 15N, 1 m, 31 m of relief
@@ -264,7 +264,7 @@ def test_the_command_line_and_the_api_do_not_import_xarray():
     start-up does not pay for them."""
     import subprocess
     import sys
-    code = ("import sys, hillshade_rt, hillshade_rt.cli, hillshade_rt.api, hillshade_rt.arrays\n"
+    code = ("import sys, hillshade_rt, hillshade_rt.cli, hillshade_rt.api, hillshade_rt.engine.arrays\n"
             "print(sorted(m for m in ('xarray', 'rioxarray') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.strip()

@@ -18,7 +18,7 @@ thread by thread (slow: small grids only). The tests use it.
 
 This module sits below the algorithms (it imports none of them at import time, and nothing
 above ``algorithms/`` but ``errors``), so that they can import it; the device runtime that finds
-a GPU and keeps a DEM on it (``hillshade_rt.gpu``) sits above them and imports from here.
+a GPU and keeps a DEM on it (``hillshade_rt.engine.gpu``) sits above them and imports from here.
 """
 
 from __future__ import annotations

@@ -31,7 +31,7 @@ import math
 import numba
 import numpy as np
 
-from ..geometry import SunRays
+from ..model.geometry import SunRays
 from . import bounds, brute
 from .counts import valid_range
 from .pyramid import BUILD_NS   # the pyramid's build, per cell of the raster (voids too)

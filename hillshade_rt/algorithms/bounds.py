@@ -56,11 +56,11 @@ import math
 import numpy as np
 from numba import prange
 
-from ..geometry import SunRays
+from ..model.geometry import SunRays
 from . import brute
 from ._jitcache import njit
 from .counts import z_range
-from .field import lattice_scale, ray_of
+from .per_cell_sun import lattice_scale, ray_of
 from .frames import Frame, frame_of, reach, steps_over
 from .sweep import load_lines, store_lines, strip_bounds, wave_block, wave_steps
 from .sweep import strip_count as sweep_strips
@@ -552,7 +552,7 @@ def _field_line(fld, v, p0, p1, L, P, FS, FR, FC, FOK, FN, IX, XP, PF, DXL, DYL,
     ``_field_args``), indexed by position, in the frame of the heights less the potential: s,
     rise - its gradient along the ray, curv - its second difference; ``FOK``: the sun is up,
     the ray in the frame's octant and within the ranges the bounds were made for; ``FN``:
-    night (the sun at or below the horizon). The same arithmetic as ``field.cell_ray``, cell
+    night (the sun at or below the horizon). The same arithmetic as ``per_cell_sun.cell_ray``, cell
     for cell, with the lattice's values hoisted out of each run of cells between two of its
     nodes, over views that start at 0 (numba then drops its negative-index wrap, which made
     the loop gather and scatter: 8 ns a cell, 1 ns now). ``XP``, ``PF``: each position's DEM
@@ -651,7 +651,7 @@ def _field_run_j(XP, PF, dxr, dyr, s_pos, k0, tl, q00, q01, q10, q11, cs, rs, cc
 @njit(cache=True, inline="always", error_model="numpy")
 def _field_ray(e, no, up, dxr, dyr, cs, rs, ccoef, fv, fp, A, B, fdom, fsd, sgn, s_lo, s_hi,
                r_lo, r_hi, c_lo, c_hi, i, FS, FR, FC, FOK, FN):
-    """One cell of ``_field_line``: its ray (``field.ray_of``) in the lessened frame, at i."""
+    """One cell of ``_field_line``: its ray (``per_cell_sun.ray_of``) in the lessened frame, at i."""
     night, dc, sd, so, rise, curv = ray_of(e, no, up, dxr, dyr, cs, rs, ccoef)
     sp = sgn * so
     q = A + sp * B
@@ -763,7 +763,7 @@ def _bounds_sweep(z, L, P, dom_col, flip_line, flip_pos, s_lo, s_hi, d_up, d_lo,
 
 def _field_args(vec=None, grid=None, curv_coef=0.0, f=None, L=1, fit=None, place=None):
     """The field tuple of the kernels: (use, lattice, dx, dy, col sign, row sign, curvature,
-    r0, c0, rows, cols (``field.sun_args``, ``place``), frame dom_col, frame step_dom,
+    r0, c0, rows, cols (``per_cell_sun.sun_args``, ``place``), frame dom_col, frame step_dom,
     flip_line, flip_pos, L, A, B, s_lo, s_hi, r_lo, r_hi, c_lo, c_hi) (``fit``:
     ``_field_fit``'s A, B and ranges); unused without a field (the same types: one compiled
     sweep)."""
@@ -771,14 +771,14 @@ def _field_args(vec=None, grid=None, curv_coef=0.0, f=None, L=1, fit=None, place
         i0, i1 = np.int64(0), np.int64(1)
         return (False, np.zeros((2, 2, 3)), np.ones(1), np.ones(1), 1.0, -1.0, 0.0, i0, i0, i1,
                 i1, False, i1, False, False, i1, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-    from .field import sun_args
+    from .per_cell_sun import sun_args
     return (True, *sun_args(grid, vec, curv_coef, place), bool(f.dom_col), np.int64(f.sd),
             bool(f.flip_line), bool(f.flip_pos), np.int64(L), *(float(x) for x in fit))
 
 
 def _field_fit(sample: np.ndarray, L: int, P: int):
     """(A, B, s range, rise range, curv range, potential range) of a sun per cell from the rays
-    ``field.field_sample`` took (line v, position p, s, rise, curv).
+    ``per_cell_sun.field_sample`` took (line v, position p, s, rise, curv).
 
     A time-based sun rises toward the sun by about the arc the ground covers, the Earth's
     curvature seen from the sky: across a 61 km DEM at 5 deg its rays' rise per step varies by
@@ -936,11 +936,11 @@ def shadow_mask_field(z: np.ndarray, grid, vec: np.ndarray, curv_coef: float = 0
                       zmax: float | None = None, stats: dict | None = None, pyramid=True,
                       zrange: tuple[float, float] | None = None, place=None) -> np.ndarray:
     """``shadow_mask`` with every cell's own sun (``field``: the lattice ``vec``; ``place`` as
-    for ``field.sun_args``): the bounds made for the range of the cells' rays over the heights
+    for ``per_cell_sun.sun_args``): the bounds made for the range of the cells' rays over the heights
     less the field's potential (``_field_fit``), each cell its own ray for its exact samples
     and lookup, undecided cells the field's exact march. The mask equals
-    ``field.shadow_mask``'s."""
-    from . import field
+    ``per_cell_sun.shadow_mask``'s."""
+    from . import per_cell_sun
     if z.dtype != np.float32 or z.ndim != 2:
         raise TypeError("heights must be a 2-D float32 array")
     out = np.empty(z.shape, np.uint8)
@@ -950,15 +950,15 @@ def shadow_mask_field(z: np.ndarray, grid, vec: np.ndarray, curv_coef: float = 0
         return out
     zmax = float(zhi) if zmax is None else float(zmax)
     rows, cols = z.shape
-    sun = field.sun_args(grid, vec, curv_coef, place)
-    _, dc, sd, so, ri, _ = field.cell_ray(rows // 2, cols // 2, *sun)
+    sun = per_cell_sun.sun_args(grid, vec, curv_coef, place)
+    _, dc, sd, so, ri, _ = per_cell_sun.cell_ray(rows // 2, cols // 2, *sun)
     f = Frame(dom_col=bool(dc), flip_line=sd < 0, flip_pos=so < 0, s=abs(so), so=so, sd=int(sd),
               rise=ri, step_m=0.0)
     L, P = (cols, rows) if f.dom_col else (rows, cols)
     # the rays of every 16th line and position (all on a small raster): their fit and ranges;
     # a cell whose ray falls outside the ranges is left to the exact march
     step = 1 if rows * cols <= 1 << 16 else 16
-    sample = field.field_sample(rows, cols, *sun, f.dom_col, np.int64(sd), f.flip_line,
+    sample = per_cell_sun.field_sample(rows, cols, *sun, f.dom_col, np.int64(sd), f.flip_line,
                                 f.flip_pos, np.int64(step))
     K = EXACT_STEPS
     if len(sample) and L > 1 and P > 1 and np.isfinite(sample[:, 3]).all():
@@ -971,7 +971,7 @@ def shadow_mask_field(z: np.ndarray, grid, vec: np.ndarray, curv_coef: float = 0
                                        (A, B, s_lo, s_hi, r_lo, r_hi, c_lo, c_hi), place))
     else:
         out[...] = np.where(np.isnan(z), np.uint8(255), np.uint8(UNDECIDED))
-    left = field.refine(z, grid, vec, curv_coef, zmax, out, UNDECIDED,
+    left = per_cell_sun.refine(z, grid, vec, curv_coef, zmax, out, UNDECIDED,
                         _pyramid_for_open(out, pyramid, steps_over(zmax - zmin, ri, L)), place)
     if stats is not None:
         stats["undecided_fraction"] = left / max(1, out.size)

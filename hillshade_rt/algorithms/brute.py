@@ -18,7 +18,7 @@ import math
 import numpy as np
 from numba import prange
 
-from ..geometry import SunRays
+from ..model.geometry import SunRays
 from ._cuda import cuda, kernel
 from ._jitcache import njit
 from .counts import any_code

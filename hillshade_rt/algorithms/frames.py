@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..geometry import SunRays
+from ..model.geometry import SunRays
 from ._cuda import cuda, kernel
 from ._jitcache import njit
 

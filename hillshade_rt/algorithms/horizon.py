@@ -37,7 +37,7 @@ import math
 import numpy as np
 from numba import prange
 
-from ..geometry import SunRays
+from ..model.geometry import SunRays
 from ._cuda import cuda, kernel
 from ._jitcache import njit
 from .frames import frame_of, uniform_rays

@@ -1,7 +1,7 @@
 """Per-ray arithmetic of the terrain model, written once as plain Python functions.
 
 Every algorithm and backend uses these. They are ``njit`` functions, so CPU kernels call them
-directly; ``hillshade_rt.gpu`` compiles the same source (``.py_func``) with
+directly; ``hillshade_rt.engine.gpu`` compiles the same source (``.py_func``) with
 ``numba.cuda.jit(device=True)`` for the CUDA kernels. Keep them free of anything a CUDA device
 function cannot do (no allocation, no exceptions, no Python objects).
 

@@ -51,7 +51,7 @@ import numpy as np
 from numba import prange
 
 from ..errors import HillshadeError
-from ..geometry import Grid, SunRays, heights_and_grid, sun_rays
+from ..model.geometry import Grid, SunRays, heights_and_grid, sun_rays
 from ._cuda import cuda, kernel
 from ._jitcache import njit
 from .frames import Frame, frame_of, reach, uniform_rays
@@ -796,7 +796,7 @@ def canonical_place(frame: Frame, window, shape) -> tuple[int, tuple[int, int]]:
 
 
 class BandCarry:
-    """SMap tables carried from window to window of a tiled run (``run.plan``), so that the lines
+    """SMap tables carried from window to window of a tiled run (``engine.windows``), so that the lines
     two windows share are coloured and scanned once.
 
     The planner orders the windows of a band of positions away from the sun, each spanning the

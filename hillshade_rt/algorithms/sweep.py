@@ -76,7 +76,7 @@ import numba
 import numpy as np
 from numba import prange
 
-from ..geometry import SunRays
+from ..model.geometry import SunRays
 from . import brute
 from ._cuda import cuda, kernel
 from ._jitcache import njit

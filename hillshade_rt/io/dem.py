@@ -1,5 +1,5 @@
 """A DEM in memory (:class:`Dem`): float32 heights with NaN for nodata (the z-factor applied), the
-geotransform and CRS of the source, and its :class:`~hillshade_rt.geometry.Grid` (ground spacing
+geotransform and CRS of the source, and its :class:`~hillshade_rt.model.geometry.Grid` (ground spacing
 per row); and the two conversions every read shares: a source's values into such heights
 (:func:`heights_into`) and its geotransform into a grid (:func:`grid_of`)."""
 
@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import HillshadeError
-from ..geometry import Grid, grid_from_transform, orientation
+from ..model.geometry import Grid, grid_from_transform, orientation
 from .crs import crs_name, crs_string
 
 
@@ -50,7 +50,7 @@ class Dem:
 
     def centre_height(self) -> tuple[float, str]:
         """The observer's height for suns from times (``sun.centre_height_of``)."""
-        from ..sun import centre_height_of
+        from ..model.sun import centre_height_of
         return centre_height_of(self.heights)
 
     def height_range(self) -> tuple[float, float]:

@@ -36,7 +36,7 @@ import numpy as np
 
 from .._preload import while_numba_starts
 from ..errors import AllNodata, HillshadeError, UsageProblem
-from ..geometry import Grid
+from ..model.geometry import Grid
 from . import raw as _raw
 from .dem import Dem, check_transform, grid_of, heights_into, to_heights
 from .gdal import check_band, has_tiff_magic, open_raster, read_error
@@ -357,7 +357,7 @@ class DemSource:
 
     def centre_height(self) -> tuple[float, str]:
         """The height at the centre, as ``sun.dem_site`` takes it, read from the centre only."""
-        from ..sun import centre_height_of
+        from ..model.sun import centre_height_of
         rows, cols = self.shape
         r, c = rows // 2, cols // 2
         r0, c0 = max(0, r - 128), max(0, c - 128)

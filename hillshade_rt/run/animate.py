@@ -49,7 +49,7 @@ class AnimateConfig:
 
     def check(self) -> str:
         """The options' combinations (UsageProblem) and the output's format (".gif"/".mp4")."""
-        from ..animation import check_output
+        from ..pictures.animation import check_output
         series = self.start is not None or self.end is not None
         if (self.date is not None) == series:
             raise UsageProblem("give the times one way: --date, or --start and --end "
@@ -62,7 +62,7 @@ class AnimateConfig:
 def times_of(cfg: AnimateConfig):
     """The SunRequest with its times (a series), or without (a day: :func:`day_times` fills
     them in once the DEM's place is known); too many frames refused before the DEM is read."""
-    from ..sun import AUTO_ZONE, SunRequest, parse_date, parse_step
+    from ..model.sun import AUTO_ZONE, SunRequest, parse_date, parse_step
     step = cfg.step or DEFAULT_STEP
     # the labels' local time: --tz, else the zone of the DEM's centre (--tz auto)
     place = dict(cfg.place)
@@ -92,7 +92,7 @@ def day_times(day: _dt.date, step: str, tz, lon: float) -> list[_dt.datetime]:
     """Local midnight of ``day``, then every ``step`` (elapsed time) before the next midnight:
     in zone ``tz`` (a day of a clock change has 23 or 25 hours), or in local mean solar time at
     ``lon`` when ``tz`` is None (UTC instants)."""
-    from ..sun import UTC, day_start, parse_step
+    from ..model.sun import UTC, day_start, parse_step
     dt = parse_step(step)
     one = _dt.timedelta(days=1)
     if tz is not None:
@@ -108,13 +108,15 @@ def animate(cfg: AnimateConfig) -> dict:
     import numba
     import numpy as np
 
-    from ..animation import (draw_label, frame_indices, label_text, relief_levels, step_of,
-                             subsample, write_gif, write_mp4)
-    from ..earth import dem_body
+    from ..pictures.animation import (
+        draw_label, frame_indices, label_text, relief_levels, step_of, subsample, write_gif,
+        write_mp4
+    )
+    from ..model.earth import dem_body
     from ..io import input_label, write_json
     from ..io.write import Claims, atomic_path
-    from ..shading import Shader, choose_backend, render
-    from ..sun import parse_date
+    from ..engine.shader import Shader, choose_backend, render
+    from ..model.sun import parse_date
     from .notes import compile_note
     from .report import Timer, progress
 

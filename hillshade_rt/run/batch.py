@@ -359,10 +359,10 @@ def shade_each(cfg) -> dict:
     ``files`` and ``output_pattern`` holding ``{stem}``; each DEM shaded by ``run.shade`` as
     the single-DEM call would (a pattern left with no field is that call's OUTPUT: one band
     per sun; one with ``{time}``, ``{index}``, ... its ``--output-pattern``)."""
-    from ..sun import SunRequest
+    from ..model.sun import SunRequest
     from .config import parse_window_size
     from .outputs import OutputPattern
-    from .plan import parse_size
+    from ..engine.windows import parse_size
     from .shade import shade
     from .stac import sun_from_item
 
@@ -393,7 +393,7 @@ def shade_each(cfg) -> dict:
                                          output_pattern=out if as_pattern else None))
 
     def empty(dem, out, as_pattern):
-        from ..products import product
+        from ..engine.products import product
         prod = product(cfg.kind, cfg.soft)
         s, _ = sun_from_item(cfg.sun, True, cfg.run.say)
         req = SunRequest.from_options(**s, default_sun=cfg.default_sun)
@@ -455,7 +455,7 @@ def single_each(command: str, cfg, dems, pattern, run_one, bands: Callable[[], i
 
 def sun_hours_each(cfg, dems, pattern) -> dict:
     """``sun-hours --each``: each DEM's hours of direct sun, its own sun from its own place."""
-    from ..sun import SunRequest, parse_date, parse_step
+    from ..model.sun import SunRequest, parse_date, parse_step
     from .sun_hours import sun_hours
 
     def preflight():

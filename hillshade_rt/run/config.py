@@ -173,7 +173,7 @@ class ShadeConfig:
         height above the ground, ``algorithm`` becomes the one that marches it
         (``algorithms.for_lift``: auto -> brute)."""
         import math
-        from ..products import product
+        from ..engine.products import product
         if self.kind not in PRODUCTS:
             raise HillshadeError(f"product must be one of {', '.join(PRODUCTS)}, got {self.kind!r}")
         product(self.kind, self.soft)     # classes are hard only
@@ -257,7 +257,7 @@ class HorizonConfig:
     def azimuths(self) -> list[float]:
         """The azimuths of the bands: ``azimuth``, or the ``directions`` ones; exactly one of
         the two (a usage error otherwise)."""
-        from ..geometry import equal_azimuths, normalize_azimuth
+        from ..model.geometry import equal_azimuths, normalize_azimuth
         if (self.azimuth is None) == (self.directions is None):
             raise UsageProblem("give --azimuth A (one direction) or --directions N, one of them")
         if self.directions is not None:
@@ -290,7 +290,7 @@ def inputs_and_output(files, output, pattern):
 
 def parse_window_size(text):
     """--window-size ROWS[xCOLS] as (rows, cols) (also an int or a pair); a malformed or too
-    small size is a usage error. (``run.plan.plan`` itself takes any window shape.)"""
+    small size is a usage error. (``engine.windows.plan`` itself takes any window shape.)"""
     if text is None:
         return None
     if isinstance(text, int):
@@ -313,7 +313,7 @@ def parse_window_size(text):
 
 def apply_scale(d, scale):
     """gdaldem's -s: ground spacing = the transform's pixel size times ``scale``."""
-    from ..geometry import Grid, orientation
+    from ..model.geometry import Grid, orientation
     if d.transform is None:
         raise UsageProblem("--scale needs a georeferenced DEM; use --pixel-size")
     cs, rs = orientation(d.transform)

@@ -3,7 +3,7 @@
 A Makefile runs one process per tile; each tile's rays must still see the terrain of its
 neighbours. With ``--context`` (a VRT or mosaic of the tiles on the same grid) the output covers
 the tile only (its shape, transform and CRS) while its heights, and those its rays cross, are
-read from the context, in the windowed runs' windows: ``run.plan`` (shadows, hillshade, sun
+read from the context, in the windowed runs' windows: ``engine.windows`` (shadows, hillshade, sun
 hours: the region and its halo toward the sun) and ``run.reach`` (horizons, sky view: the rays'
 reach, ``--max-distance`` or the context's edge); irradiance uses both (its beam's shadows per
 sun, its Dozier sky view). The regions of those runs are cut to the tile
@@ -11,7 +11,7 @@ sun, its Dozier sky view). The regions of those runs are cut to the tile
 
 Everything the whole raster's run decides from the whole raster is decided from the context:
 the height range and extent (Earth curvature "auto", the halos' bound: one streaming pass of
-block statistics, ``run.plan.block_stats``, kept between runs by ``run.statscache``), the body and its latitude, the place of the sun
+block statistics, ``engine.windows.block_stats``, kept between runs by ``run.statscache``), the body and its latitude, the place of the sun
 and the suns per tile of the raster (``sun.sun_over`` over the context's shape), so that the
 tile's cells get the bits the whole context's run gives them.
 """
@@ -61,10 +61,10 @@ class Area:
         return [(r0 + a0, r1 + a0, c0 + b0, c1 + b0) for r0, r1, c0, c1 in regs]
 
     def block_stats(self):
-        """The context's block statistics (``run.plan.BlockStats``), from the cache of earlier
+        """The context's block statistics (``engine.windows.BlockStats``), from the cache of earlier
         runs when the context has not changed since (``run.statscache``), else one pass over
         it (then cached); how: ``statistics`` (the reports' ``statistics_pass``)."""
-        from .plan import STAT_BLOCK
+        from ..engine.windows import STAT_BLOCK
         from .statscache import cached_block_stats
         bs, self.statistics = cached_block_stats(self.source, STAT_BLOCK)
         return bs

@@ -1,7 +1,7 @@
 """Windows and times as Dask tasks (``--scheduler``; needs ``pip install 'hillshade-rt[dask]'``).
 
-Each task gets the small :class:`~hillshade_rt.run.plan.Job` and one
-:class:`~hillshade_rt.run.plan.Piece`; it opens the DEM itself (the path, or a mosaic's VRT
+Each task gets the small :class:`~hillshade_rt.engine.windows.Job` and one
+:class:`~hillshade_rt.engine.windows.Piece`; it opens the DEM itself (the path, or a mosaic's VRT
 document, must be readable by the workers), reads the piece's window with its halo, lights it and
 writes its region to a GeoTIFF of its own in a folder beside the output. Nothing large passes
 through the scheduler: a task returns counts, timings and a few preview cells. When every task is
@@ -362,9 +362,9 @@ def shade_piece(job, piece, path: str, nodata, stride: int | None = None) -> dic
     from rasterio.errors import NotGeoreferencedWarning
 
     from ..io import DEFLATE_LEVEL, atomic_path, gdal_checked
-    from ..preview import every_nth
-    from ..products import product
-    from .plan import GDAL_CACHE_MB
+    from ..pictures.preview import every_nth
+    from ..engine.products import product
+    from ..engine.windows import GDAL_CACHE_MB
     import warnings
 
     t0 = time.perf_counter()
@@ -411,12 +411,12 @@ def run_on_dask(scheduler, job, suns, plans, out, share, stride, quiet, algo_sta
     """Run every (sun, piece) as a task and assemble the outputs; returns (records, last stats,
     report figures). ``out`` is the command's output description (bands or files);
     ``worker_timeout``: ``DaskSession``'s."""
-    from ..products import merge_stats
+    from ..engine.products import merge_stats
     from .outputs import sun_tags
     from .report import progress_total
     from ..io import copy_vrt
     from ..io.vrt import VrtSource, vrt_xml
-    from .plan import marched_per_cell
+    from ..engine.windows import marched_per_cell
 
     dest = out.output or (out.tile_paths[0][0] if out.tile_paths else out.paths[0])
     with DaskSession(scheduler, dest, worker_timeout) as session:

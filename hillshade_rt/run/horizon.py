@@ -42,7 +42,7 @@ def check_height(height) -> float:
 
 def memory_limit(max_memory) -> int:
     """--max-memory in bytes (default: half of this machine's memory)."""
-    from .plan import default_max_memory, parse_size
+    from ..engine.windows import default_max_memory, parse_size
     try:
         return parse_size(max_memory) if max_memory is not None else default_max_memory()
     except HillshadeError as exc:
@@ -59,7 +59,7 @@ def horizon(cfg: HorizonConfig) -> dict:
 
     from ..io import check_output_format, output_driver
     from ..io.write import Claims
-    from ..shading import choose_backend
+    from ..engine.shader import choose_backend
     from .local import needs_windows
     from .notes import compile_note
     from .report import Timer
@@ -206,11 +206,11 @@ def _in_memory(cfg, src, azimuths, ran_on, max_distance, timer, **_):
     import numpy as np
 
     from ..algorithms import horizon as hz
-    from ..earth import dem_body
-    from ..geometry import Grid, sun_rays
+    from ..model.earth import dem_body
+    from ..model.geometry import Grid, sun_rays
     from ..io import write_png
-    from ..preview import relief_rgb
-    from ..shading import horizon_shader, warm_up
+    from ..pictures.preview import relief_rgb
+    from ..engine.shader import horizon_shader, warm_up
 
     ro, method, sample_spacing = cfg.run, cfg.method, cfg.sample_spacing
     lift = float(cfg.height_above_ground)
@@ -228,7 +228,7 @@ def _in_memory(cfg, src, azimuths, ran_on, max_distance, timer, **_):
                                       d.grid.row_sign), az, 45.0)
         gpu_dem = None
         if ran_on == "gpu":
-            from ..gpu import GpuDem
+            from ..engine.gpu import GpuDem
             hz.horizon_angles_gpu(GpuDem(np.eye(4, dtype=np.float32)), small, method,
                                   sample_spacing)
             gpu_dem = GpuDem(d.heights)
@@ -295,8 +295,8 @@ def horizon_job(src, azimuths, ran_on, curvature, refraction_k, method, bstats, 
     ``body``: the run's (default: the DEM's, ``earth.dem_body``)."""
     import numpy as np
 
-    from ..earth import dem_body
-    from ..shading import horizon_shader
+    from ..model.earth import dem_body
+    from ..engine.shader import horizon_shader
     from .reach import HorizonJob
     # the Shader looks at the raster's shape only: a zero-stride stand-in, no memory
     shader = horizon_shader(np.broadcast_to(np.float32(0.0), src.shape), src.grid, ran_on,
@@ -305,7 +305,7 @@ def horizon_job(src, azimuths, ran_on, curvature, refraction_k, method, bstats, 
     curvs = [shader.curvature_used_for(a, 45.0) for a in azimuths]
     gpu = None
     if ran_on == "gpu":
-        from ..gpu import GpuDem
+        from ..engine.gpu import GpuDem
         gpu = GpuDem
     return HorizonJob(src, list(azimuths), curvs, (bstats.zmin, bstats.zmax), bstats, invert,
                       int(sample_spacing), float(max_distance), 0, gpu,
@@ -318,7 +318,7 @@ def prepare_windows(src, job, limit, wshape, timer, area=None):
     import numpy as np
 
     from ..algorithms.horizon import Marches, ScanWindow
-    from ..geometry import Grid, sun_rays
+    from ..model.geometry import Grid, sun_rays
     from .reach import plan_regions
     regs, mem = plan_regions(src.shape if area is None else area.shape, limit, wshape)
     if area is not None:
@@ -337,11 +337,11 @@ def _in_windows(cfg, src, azimuths, ran_on, max_distance, timer, *, wshape, limi
     """``area``: the tile of ``src`` to make (``--context``; its windows read from ``src``)."""
     import numpy as np
 
-    from ..geometry import Grid
+    from ..model.geometry import Grid
     from ..io import write_png
-    from ..preview import every_nth, relief_rgb
+    from ..pictures.preview import every_nth, relief_rgb
     from .local import bounded_gdal_cache
-    from .plan import block_stats
+    from ..engine.windows import block_stats
     from .reach import Figures, Product, region_outputs
 
     ro = cfg.run

@@ -128,7 +128,7 @@ def light_series(z, frames, grid, phys: Physics, suns, hours, tick=None) -> tupl
     sums on the host."""
     from ..algorithms import illumination as ill, subsolar
     from ..algorithms.pyramid import pyramid_args
-    from ..bodysun import sun_radius_deg
+    from ..engine.cell_suns import sun_radius_deg
     sums = _sums(z.shape, phys.soft)
     counts = {"positions": 0, "dark": 0}
     if not np.isfinite(z).any():
@@ -136,7 +136,7 @@ def light_series(z, frames, grid, phys: Physics, suns, hours, tick=None) -> tupl
     zmax = float(np.nanmax(z))
     fr = frames.args()
     if phys.backend == "gpu":
-        from ..gpu import GpuDem
+        from ..engine.gpu import GpuDem
         g = GpuDem(z)
         frd = tuple(g.upload(a) for a in fr)
     else:
@@ -218,8 +218,8 @@ def _region_inputs(src, rd, region: Region):
     """(heights, frames, grid) of a region's read bounds through the reader ``rd``."""
     from affine import Affine
 
-    from ..bodysun import CellFrames
-    from ..geometry import grid_from_transform
+    from ..engine.cell_suns import CellFrames
+    from ..model.geometry import grid_from_transform
     r0, r1, c0, c1 = region.read
     z = np.empty((r1 - r0, c1 - c0), np.float32)
     rd.read(region.read, z)
@@ -238,8 +238,8 @@ def plan_windows(src, phys: Physics, suns, window_shape) -> tuple[list, float]:
     """The regions of a windowed run (each window's halo from the relief) and the DEM's
     highest height; the heights read once window by window for the figures."""
     from ..algorithms import illumination as ill
-    from ..bodysun import CellFrames
-    from ..geometry import grid_from_transform
+    from ..engine.cell_suns import CellFrames
+    from ..model.geometry import grid_from_transform
     from .reach import regions
     rows, cols = src.shape
     cores = regions(src.shape, window_shape)
@@ -299,9 +299,9 @@ def illumination(cfg: IllumConfig) -> dict:
     """Write the illumination bands of the DEM over the series; returns the report."""
     import numba
 
-    from ..bodysun import CellFrames, body_from_option, mean_sun_distance, sun_vector
-    from ..earth import dem_body, refraction_for
-    from ..ephemeris import read_subsolar
+    from ..engine.cell_suns import CellFrames, body_from_option, mean_sun_distance, sun_vector
+    from ..model.earth import dem_body, refraction_for
+    from ..model.ephemeris import read_subsolar
     from ..io import BandWriter, input_label, write_json
     from ..io.write import Claims
     from .config import parse_window_size
@@ -346,14 +346,14 @@ def illumination(cfg: IllumConfig) -> dict:
         curvature = True if cfg.curvature is None else bool(cfg.curvature)
         k = refraction_for(body, cfg.refraction_k) if curvature else -1.0
         e2 = 1.0 - (body.b * body.b) / (body.a * body.a)
-        from ..gpu import resolve_backend
+        from ..engine.gpu import resolve_backend
         backend = resolve_backend(ro.backend or "auto")
         phys = Physics(float(body.a), e2, k, float(cfg.height_above_ground), bool(cfg.soft),
                        float(body.b * body.b / body.a), backend)
         windowed = window_shape is not None
         if not windowed:
             from .local import needs_windows
-            from .plan import window_budget
+            from ..engine.windows import window_budget
             windowed = needs_windows(src, limit, BYTES_PER_CELL)
             if windowed:
                 from .reach import region_shape
@@ -438,9 +438,9 @@ def _preview(src, output, ro) -> None:
     """--preview: the relief coloured by the fraction of the time lit (purple the least, yellow
     the most: stretched between the 2nd and 98th percentiles), both read back at most 2048
     cells a side."""
-    from ..geometry import Grid
+    from ..model.geometry import Grid
     from ..io import read_decimated, write_png
-    from ..preview import relief_rgb, scaled
+    from ..pictures.preview import relief_rgb, scaled
     rows, cols = src.shape
     n = max(1, math.ceil(max(rows, cols) / 2048))
     shape = ((rows + n - 1) // n, (cols + n - 1) // n)

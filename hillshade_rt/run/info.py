@@ -15,7 +15,7 @@ def describe(dem: str, read: ReadOptions, preview: str | None = None,
     d = read.read(dem)
     if preview is not None:
         from ..io import write_png
-        from ..preview import relief_rgb
+        from ..pictures.preview import relief_rgb
         write_png(preview, relief_rgb(d.heights, d.grid), overwrite)
     rows, cols = d.shape
     dx, dy = d.grid.centre_spacing()

@@ -1,12 +1,12 @@
 """The ``irradiance`` run: beam, diffuse, reflected and global irradiance per cell of a DEM over
 a period (Wh/m², or the mean W/m²), four float32 bands; the formulas are
-``hillshade_rt.irradiance``'s (the user's page: docs/irradiance.md).
+``hillshade_rt.engine.irradiance``'s (the user's page: docs/irradiance.md).
 
 The sun is sampled as ``sun-hours`` samples it (every step, each sample at the middle of its
 interval, weighted by the interval's hours; per tile on large rasters; nights skipped), the same
 suns light the cast shadows (``shading.render``) and feed the clear-sky model. The DEM is held
 in memory; with ``--context`` the DEM is a tile of a larger raster (``run.context``): the
-cast shadows and the incidence come from the context's windows (``run.plan.Job``, the regions
+cast shadows and the incidence come from the context's windows (``engine.windows.Job``, the regions
 cut to the tile), the sky view from the windowed horizon march (``run.reach``, the rays to the
 context's edge), so that every cell gets the bits the whole context's run gives it.
 """
@@ -57,7 +57,7 @@ class IrradianceConfig:
 
     def check(self):
         """The options' combinations and values (UsageProblem: exit status 2)."""
-        from ..irradiance import CLEAR_SKY_MODELS, check_options
+        from ..engine.irradiance import CLEAR_SKY_MODELS, check_options
         by_date = self.date is not None or self.end_date is not None
         by_time = self.start is not None or self.end is not None
         if by_date == by_time:
@@ -87,11 +87,11 @@ class IrradianceConfig:
 def irradiance(cfg: IrradianceConfig) -> dict:
     import numba
 
-    from .. import irradiance as ir
+    from ..engine import irradiance as ir
     from ..io import check_output_format, output_driver
     from ..io.write import Claims
-    from ..shading import choose_backend
-    from ..sun import UTC, SunRequest, parse_date, parse_step
+    from ..engine.shader import choose_backend
+    from ..model.sun import UTC, SunRequest, parse_date, parse_step
     from .notes import compile_note
     from .report import Timer
 
@@ -166,12 +166,12 @@ def _run(cfg, d, area, req, step, series, ran_on, lift, timer, first, last, peri
     is open: the suns, the sky, the sky view, the sums, the output and the report."""
     import numpy as np
 
-    from .. import irradiance as ir
-    from ..earth import dem_body
+    from ..engine import irradiance as ir
+    from ..model.earth import dem_body
     from ..io import BandWriter, input_label, write_json, write_png
-    from ..preview import relief_rgb, scaled
-    from ..shading import Shader
-    from ..sun import day_samples, iso
+    from ..pictures.preview import relief_rgb, scaled
+    from ..engine.shader import Shader
+    from ..model.sun import day_samples, iso
     from .report import progress
 
     ro, output = cfg.run, cfg.output
@@ -317,7 +317,7 @@ def _run(cfg, d, area, req, step, series, ran_on, lift, timer, first, last, peri
 def _in_context(cfg, area, suns, weights, sky, work, ran_on, curvature, body, lift, timer,
                 algo_stats, bar):
     """The four bands of the tile of ``area`` (``--context``): each sun's cast shadows and
-    incidence from the context's windows (``run.plan.Job``, product "sun", the regions cut to
+    incidence from the context's windows (``engine.windows.Job``, product "sun", the regions cut to
     the tile), Dozier's sky view from the windowed horizon march (``run.reach``: the rays to
     the context's edge), the slopes from the tile and a cell around it; then the same sums,
     cell by cell, as a run of the whole context in memory (``irradiance.sums``). Returns
@@ -326,14 +326,15 @@ def _in_context(cfg, area, suns, weights, sky, work, ran_on, curvature, body, li
 
     import numpy as np
 
-    from .. import irradiance as ir
+    from ..engine import irradiance as ir
     from ..algorithms.relief import incidence
-    from ..earth import curvature_report
-    from ..geometry import equal_azimuths
+    from ..model.earth import curvature_report
+    from ..model.geometry import equal_azimuths
     from .horizon import horizon_job, memory_limit, prepare_windows
     from .local import bounded_gdal_cache
-    from .plan import (Job, WindowCache, bytes_per_cell, default_max_memory, window_budget,
-                       window_grid)
+    from ..engine.windows import (
+        Job, WindowCache, bytes_per_cell, default_max_memory, window_budget, window_grid
+    )
     from .reach import Figures, Product, region_outputs
 
     src = area.source
@@ -408,7 +409,7 @@ def _all_nodata(cfg, timer) -> dict:
     """A DEM whose every cell is nodata: the four bands all -9999, a note; the report."""
     import numpy as np
 
-    from .. import irradiance as ir
+    from ..engine import irradiance as ir
     from ..io import BandWriter, input_label, write_json
     from .context import nodata_note
     ro = cfg.run
@@ -435,8 +436,8 @@ def _all_nodata(cfg, timer) -> dict:
 
 def _period(cfg, tz, step):
     """(t0, t1, times, weights) of --start..--end, local times in ``tz``, shown in it."""
-    from .. import irradiance as ir
-    from ..sun import parse_time
+    from ..engine import irradiance as ir
+    from ..model.sun import parse_time
     t0, t1 = parse_time(cfg.start, tz, "--start"), parse_time(cfg.end, tz, "--end")
     if tz is not None:     # shown in the zone of --tz
         t0, t1 = t0.astimezone(tz), t1.astimezone(tz)

@@ -75,14 +75,14 @@ def light_shadow(cfg: LightConfig) -> dict:
     in windows (``--window-size``, or a DEM larger than ``--max-memory`` allows; ``_windows``)."""
     import numpy as np
 
-    from ..arrays import point_light_mask
+    from ..engine.arrays import point_light_mask
     from ..io import check_output_format, input_label, output_driver, write_json, write_png, \
         write_raster
     from ..io.write import Claims
-    from ..preview import relief_rgb
+    from ..pictures.preview import relief_rgb
     from .config import parse_window_size
     from .local import needs_windows
-    from .plan import bytes_per_cell, default_max_memory, parse_size
+    from ..engine.windows import bytes_per_cell, default_max_memory, parse_size
     from .report import Timer
 
     ro = cfg.run
@@ -178,9 +178,9 @@ def _windows(src, row, col, zl, lift, wshape, limit, per_cell, output, tags, ro,
 
     from ..algorithms import point
     from ..algorithms.horizon import bilinear
-    from ..gpu import GpuDem, resolve_backend
+    from ..engine.gpu import GpuDem, resolve_backend
     from ..io.raster import BandWriter
-    from .plan import window_budget
+    from ..engine.windows import window_budget
 
     lift = float(lift)
     if not (math.isfinite(lift) and lift >= 0.0):

@@ -82,7 +82,7 @@ def light_cell(d, x: float, y: float) -> tuple[float, float]:
 def reference_distance(z, row: float, col: float, height: float) -> float:
     """The light's height above the ground beneath it (bilinear at its place, or at the nearest
     point of the raster's cell centres when it is off them): inverse-square's distance of 1."""
-    from ..arrays import ground_height
+    from ..engine.arrays import ground_height
     rows, cols = z.shape
     r = min(max(row, 0.0), rows - 1.0)
     c = min(max(col, 0.0), cols - 1.0)
@@ -107,7 +107,7 @@ def point_light_relief(d, x: float, y: float, z: float, *, ambient: float = 0.2,
     ``arrays.point_light_mask``; given, it is used as is), ``row``, ``col`` (the light's cell),
     ``d_ref`` (inverse-square's distance of 1; None without falloff)."""
     from ..algorithms.lightmap import direct_light, encode
-    from ..arrays import point_light_mask
+    from ..engine.arrays import point_light_mask
     if falloff not in FALLOFFS:
         raise UsageProblem(f"--falloff must be one of {', '.join(FALLOFFS)}, got {falloff!r}")
     if not (0.0 <= ambient <= 1.0):
@@ -133,7 +133,7 @@ def lightmap(cfg: LightmapConfig) -> dict:
     from ..io import check_output_format, input_label, output_driver, write_json, write_png, \
         write_raster
     from ..io.write import Claims
-    from ..preview import relief_rgb
+    from ..pictures.preview import relief_rgb
     from .config import apply_scale
     from .report import Timer
 

@@ -13,10 +13,10 @@ from .config import apply_scale
 
 
 def bounded_gdal_cache():
-    """GDAL's block cache held to ``run.plan.GDAL_CACHE_MB`` (its default, 5 % of the machine's
+    """GDAL's block cache held to ``engine.windows.GDAL_CACHE_MB`` (its default, 5 % of the machine's
     memory, would break --max-memory on its own)."""
     import rasterio
-    from .plan import GDAL_CACHE_MB
+    from ..engine.windows import GDAL_CACHE_MB
     return rasterio.Env(GDAL_CACHEMAX=GDAL_CACHE_MB)
 
 
@@ -24,7 +24,7 @@ def needs_windows(src, limit, per_cell) -> bool:
     """Whether shading the opened DEM ``src`` whole would need more than ``limit`` bytes (a
     DEM that can be read whole only, from standard input or a TIFF only tifffile reads, is
     read whole, as before)."""
-    from .plan import window_budget
+    from ..engine.windows import window_budget
     if src.whole_only is not None:
         return False
     try:
@@ -42,10 +42,10 @@ def in_memory(inputs, source, scale, req, out, timer, algorithm, options, ran_on
     ``lift``: --height-above-ground (``shading.Shader``)."""
     import numpy as np
 
-    from ..shading import Shader, render
+    from ..engine.shader import Shader, render
 
-    from ..earth import dem_body
-    from ..preview import relief_rgb
+    from ..model.earth import dem_body
+    from ..pictures.preview import relief_rgb
     from .outputs import sun_tags
     from .report import progress
 
@@ -105,21 +105,23 @@ def tiled(inputs, source, scale, req, out, timer, algorithm, options, ran_on,
           worker_timeout=None):
     """``source``: the DEM already opened for windows (``ReadOptions.open``). ``worker_timeout``:
     --worker-timeout of a Dask run (``run.dask.DaskSession``). ``lift``:
-    --height-above-ground (``plan.Job``: the halos and the march). ``area``: a tile of
+    --height-above-ground (``windows.Job``: the halos and the march). ``area``: a tile of
     ``source`` (``run.context.Area``, ``--context``): only its cells are lit and written, on
     the tile's grid, their windows read from ``source``."""
     import math
 
     import numpy as np
 
-    from ..earth import dem_body
-    from ..geometry import Grid
-    from ..earth import curvature_report
-    from ..preview import every_nth, relief_rgb
-    from ..products import merge_stats
+    from ..model.earth import dem_body
+    from ..model.geometry import Grid
+    from ..model.earth import curvature_report
+    from ..pictures.preview import every_nth, relief_rgb
+    from ..engine.products import merge_stats
     from .outputs import sun_tags
-    from .plan import (MIN_WINDOW_CELLS, Job, MemoryTooSmall, Tally, WindowCache, block_stats,
-                         format_size, marched_per_cell, memory_needed, window_budget)
+    from ..engine.windows import (
+        MIN_WINDOW_CELLS, Job, MemoryTooSmall, Tally, WindowCache, block_stats, format_size,
+        marched_per_cell, memory_needed, window_budget
+    )
 
     kind = out.kind
     with timer("read"):

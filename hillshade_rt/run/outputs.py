@@ -10,7 +10,7 @@ import string
 
 from .. import __version__
 from ..errors import HillshadeError
-from ..sun import SunOver, iso
+from ..model.sun import SunOver, iso
 
 
 def tile_name(path: str) -> str:

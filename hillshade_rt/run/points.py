@@ -138,7 +138,7 @@ def on_ground(points, d, height_above_ground: float = 0.0) -> list[dict]:
     bilinearly at it: ``arrays.ground_height``) and ``observer`` (``height_above_ground`` above
     that); a point outside the DEM's cell centres, or whose ground needs a nodata cell, is an
     error."""
-    from ..arrays import ground_height
+    from ..engine.arrays import ground_height
     rows, cols = d.shape
     for p in points:
         if not (-1e-9 <= p["row"] <= rows - 1 + 1e-9 and -1e-9 <= p["col"] <= cols - 1 + 1e-9):

@@ -70,8 +70,8 @@ class ProfileConfig:
 
 def profile(cfg: ProfileConfig) -> dict:
     """Compute and write the profiles; returns the document (what ``json`` writes)."""
-    from ..earth import dem_body
-    from ..arrays import observer_profiles
+    from ..model.earth import dem_body
+    from ..engine.arrays import observer_profiles
     from ..io.write import Claims
 
     if cfg.fmt not in FORMATS:
@@ -113,7 +113,7 @@ def profile(cfg: ProfileConfig) -> dict:
     write_text(cfg.output, render(doc, cfg.fmt), cfg.run.overwrite)
     if cfg.run.preview is not None:     # the first point's horizon as its observer sees it
         from ..io import write_png
-        from ..preview import panorama_rgb
+        from ..pictures.preview import panorama_rgb
         write_png(cfg.run.preview, panorama_rgb(azimuths, ang[0]), cfg.run.overwrite)
     if not cfg.run.quiet and cfg.output is not None:
         cfg.run.say("summary", f"hillshade-rt: {cfg.output}: {len(points)} point(s) x "

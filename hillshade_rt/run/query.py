@@ -109,10 +109,10 @@ def output_format(fmt: str | None, output: str | None) -> str:
 def sun_at(sun, shape, row: float, col: float) -> tuple[float, float]:
     """(grid azimuth, elevation) in degrees of ``sun`` (a ``sun.SunOver``) at (row, col) of a
     raster of ``shape``: what the shadow mask gives that cell. Per cell (``fieldwise``): the
-    lattice's unit vectors interpolated there as ``algorithms.field`` interpolates them; per
+    lattice's unit vectors interpolated there as ``algorithms.per_cell_sun`` interpolates them; per
     tile: the tile's; else the one vector."""
     if sun.fieldwise:
-        from ..algorithms.field import lattice_at, lattice_scale
+        from ..algorithms.per_cell_sun import lattice_at, lattice_scale
         n = sun.lattice.shape[0]
         e, no, up = lattice_at(float(row), float(col), lattice_scale(n, shape[0]),
                                lattice_scale(n, shape[1]), sun.lattice)
@@ -130,10 +130,10 @@ def query(cfg: QueryConfig) -> dict:
     """Answer ``cfg`` and write it; returns the document (what ``json`` writes). Bad input
     raises ``HillshadeError`` (``UsageProblem`` for a bad command line) before anything is
     written."""
-    from ..arrays import sun_at_points
-    from ..earth import dem_body
+    from ..engine.arrays import sun_at_points
+    from ..model.earth import dem_body
     from ..io.write import Claims
-    from ..sun import SunRequest, iso
+    from ..model.sun import SunRequest, iso
     from .config import check_lift
 
     if cfg.light_position is not None or cfg.light_lonlat is not None:
@@ -229,7 +229,7 @@ def light_query(cfg: QueryConfig) -> dict:
     sun's options, --irradiance and the curvature options are usage errors; a light inside the
     terrain is an error. Nothing is written on failure."""
     from ..algorithms.lightmap import light_at_points
-    from ..arrays import ground_height
+    from ..engine.arrays import ground_height
     from ..io.write import Claims
     from .config import PLACE_KEYS, SUN_KEYS, check_lift
     from .light import parse_triple
@@ -309,7 +309,7 @@ def irradiance(points, site, times, res) -> tuple[np.ndarray, np.ndarray]:
     import pandas as pd
     from pvlib import atmosphere, clearsky, irradiance as pvirr
 
-    from ..sun import UTC
+    from ..model.sun import UTC
     index = pd.DatetimeIndex([t.astimezone(UTC) for t in times])
     el = res["elevation"]
     alt = np.asarray(res["observer_m"], np.float64)[:, None]

@@ -224,8 +224,8 @@ class HorizonJob:
     def rays(self, i: int, rows: tuple[int, int]):
         """Direction ``i``'s rays of raster rows ``rows`` (what the in-memory run's rays hold
         for those rows)."""
-        from ..geometry import sun_rays
-        from .plan import window_grid
+        from ..model.geometry import sun_rays
+        from ..engine.windows import window_grid
         g = window_grid(self.source.grid, (rows[0], rows[1], 0, self.source.shape[1]))
         return sun_rays(g, self.azimuths[i], 45.0, self.curvatures[i])
 
@@ -326,7 +326,7 @@ class HorizonJob:
 def plan_regions(shape, limit: int | None, window_shape) -> tuple[list, dict]:
     """(the regions, the memory figures) of a windowed horizon run: ``window_shape``
     (--window-size) or regions as large as ``limit`` bytes (--max-memory) allow."""
-    from .plan import window_budget
+    from ..engine.windows import window_budget
     if window_shape is not None:
         rshape, mem = region_shape(shape, 0, window_shape), None
     else:
@@ -367,7 +367,7 @@ def region_outputs(job: HorizonJob, rd, region, product: Product, put) -> Figure
                 put("distance", i, dist)
         return job.region(rd, region, on_direction, product.distance)
     from ..algorithms.skyview import Sum
-    from .plan import window_grid
+    from ..engine.windows import window_grid
     sums = []
 
     def on_window(z, window, inner):
@@ -411,8 +411,8 @@ def region_task(job: HorizonJob, region, product: Product, folder: str,
     from rasterio.errors import NotGeoreferencedWarning
 
     from ..io import DEFLATE_LEVEL, atomic_path, gdal_checked
-    from ..preview import every_nth
-    from .plan import GDAL_CACHE_MB
+    from ..pictures.preview import every_nth
+    from ..engine.windows import GDAL_CACHE_MB
 
     r0, r1, c0, c1 = region
     src = job.source

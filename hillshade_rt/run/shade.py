@@ -19,9 +19,9 @@ def shade(cfg: ShadeConfig) -> dict:
     import numba
 
     from ..io.write import Claims, reset
-    from ..shading import choose_backend
-    from ..sun import SunRequest
-    from .plan import bytes_per_cell, default_max_memory, parse_size
+    from ..engine.shader import choose_backend
+    from ..model.sun import SunRequest
+    from ..engine.windows import bytes_per_cell, default_max_memory, parse_size
     from .local import needs_windows
     from .outputs import OutputPattern
     from .report import Timer
@@ -85,7 +85,7 @@ def _shade(cfg, src, windowed, inputs, output, req, pattern, wshape, limit, clai
     import numba
 
     from ..io import check_output_format, input_label, output_driver, write_json, write_png
-    from ..products import product
+    from ..engine.products import product
     from ..errors import AllNodata
     from .context import nodata_note
     from .local import all_nodata, bounded_gdal_cache, in_memory, mean_stats, tiled

@@ -99,7 +99,7 @@ def skyview(cfg: SkyviewConfig) -> dict:
 
     from ..io import check_output_format, output_driver
     from ..io.write import Claims
-    from ..shading import choose_backend
+    from ..engine.shader import choose_backend
     from .horizon import check_height, check_max_distance, memory_limit
     from .local import needs_windows
     from .report import Timer
@@ -202,9 +202,9 @@ class _Stats:
 def _in_memory(cfg, definition, src, ran_on, max_distance, timer, **_):
     from ..algorithms import horizon as hz
     from ..algorithms.skyview import Sum, floor_deg, inverted
-    from ..earth import dem_body
-    from ..geometry import equal_azimuths
-    from ..shading import horizon_shader
+    from ..model.earth import dem_body
+    from ..model.geometry import equal_azimuths
+    from ..engine.shader import horizon_shader
 
     with timer("read"):
         d = src.read()
@@ -215,7 +215,7 @@ def _in_memory(cfg, definition, src, ran_on, max_distance, timer, **_):
         z = np.negative(d.heights)
     gpu_dem = None
     if ran_on == "gpu":
-        from ..gpu import GpuDem
+        from ..engine.gpu import GpuDem
         gpu_dem = GpuDem(z)
     n = int(cfg.directions)
     azimuths = equal_azimuths(360.0 / n)
@@ -268,10 +268,10 @@ def _in_windows(cfg, definition, src, ran_on, max_distance, timer, *, wshape, li
                 area=None):
     """``area``: the tile of ``src`` to make (``--context``; its windows read from ``src``)."""
     from ..algorithms.skyview import inverted
-    from ..geometry import equal_azimuths
+    from ..model.geometry import equal_azimuths
     from .horizon import horizon_job, prepare_windows
     from .local import bounded_gdal_cache
-    from .plan import block_stats
+    from ..engine.windows import block_stats
     from .reach import Figures, Product, VrtOutput, region_outputs, run_on_dask
 
     ro = cfg.run
@@ -328,7 +328,7 @@ def _in_windows(cfg, definition, src, ran_on, max_distance, timer, *, wshape, li
         processing["context"] = area.report()
     relief = None
     if ro.preview is not None:     # the every-n-th heights of the statistics pass
-        from ..geometry import Grid
+        from ..model.geometry import Grid
         n, pv = bstats.stride, bstats.preview
         relief = (pv, Grid(pv.shape[0], pv.shape[1], src.grid.dx[::n] * n,
                            src.grid.dy[::n] * n, src.grid.col_sign, src.grid.row_sign,
@@ -340,7 +340,7 @@ def _preview(cfg, z, grid) -> None:
     """--preview: the relief coloured by the product (read back from the output at the
     relief's size; low purple, high yellow, stretched between the 2nd and 98th percentiles)."""
     from ..io import read_decimated, write_png
-    from ..preview import relief_rgb, scaled
+    from ..pictures.preview import relief_rgb, scaled
     values = read_decimated(cfg.output, z.shape)
     write_png(cfg.run.preview, relief_rgb(z, grid, ramp=scaled(values)), cfg.run.overwrite)
 

@@ -39,7 +39,7 @@ def sun_from_item(sun: dict, quiet: bool = True, say=None):
                                f"({scene.keys[0]}, {scene.keys[1]})")
         sun.update(azimuth=scene.azimuth, elevation=scene.elevation)
     else:
-        from ..sun import iso
+        from ..model.sun import iso
         sun["time"] = (iso(scene.time),)
         if not quiet and say is not None:
             say("note", f"{path}: item {scene.id} has no view:sun_azimuth/view:sun_elevation: "
@@ -59,7 +59,7 @@ def to_grid_north(req, scene, dem):
 
     import numpy as np
 
-    from ..sun import dem_site
+    from ..model.sun import dem_site
     if scene is None or not scene.has_angles:
         return req
     conv = 0.0
@@ -100,7 +100,7 @@ def note_if_apart(scene, src, say) -> None:
 
 def scene_tags(scene) -> dict:
     """The output's tags saying where its sun came from."""
-    from ..sun import iso
+    from ..model.sun import iso
     tags = {"SUN_SOURCE": "STAC item (" + ("angles: " + ", ".join(scene.keys) if scene.has_angles
                                           else "datetime, sun computed at the DEM") + ")",
             "STAC_ITEM": scene.id}

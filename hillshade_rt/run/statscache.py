@@ -1,7 +1,7 @@
 """The block statistics of a ``--context`` raster kept between runs.
 
 Every run of a tile with ``--context`` needs the context's 256 x 256 block height ranges
-(``run.plan.block_stats``: the halos' bound, Earth curvature "auto"), one streaming pass over
+(``engine.windows.block_stats``: the halos' bound, Earth curvature "auto"), one streaming pass over
 the whole context. A Makefile of N tiles would read the context N times; with this cache the
 first run reads it and stores the ranges, the others read a few kilobytes.
 
@@ -115,11 +115,11 @@ def store(folder: str, path: str, key: dict, lo, hi, valid: int) -> bool:
 
 
 def cached_block_stats(source, block: int):
-    """``(run.plan.BlockStats, what the report says)``: the block statistics of ``source``
+    """``(engine.windows.BlockStats, what the report says)``: the block statistics of ``source``
     from the cache, or from one pass over it (then stored). The report's dict: ``cache``
     ("hit", "stored", "off", "not cached: ..."), ``bytes_read`` (0 on a hit), ``file``."""
     from ..errors import AllNodata
-    from .plan import BlockStats, block_stats
+    from ..engine.windows import BlockStats, block_stats
     rows, cols = source.shape
     full = rows * cols * source.itemsize
     folder = stats_root()

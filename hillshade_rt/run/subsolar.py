@@ -80,15 +80,16 @@ def subsolar_shadow(cfg: SubsolarConfig) -> dict:
     """Write the per-cell-sun cast-shadow mask of the DEM; returns the report."""
     import numpy as np
 
-    from ..arrays import subsolar_mask
-    from ..bodysun import CellFrames, body_from_option, cell_suns, mean_sun_distance, \
-        sun_radius_deg, sun_vector
-    from ..earth import dem_body
+    from ..engine.arrays import subsolar_mask
+    from ..engine.cell_suns import (
+        CellFrames, body_from_option, cell_suns, mean_sun_distance, sun_radius_deg, sun_vector
+    )
+    from ..model.earth import dem_body
     from ..errors import HillshadeError
     from ..io import check_output_format, output_driver, write_png, write_raster
     from ..io.write import Claims
-    from ..preview import relief_rgb
-    from ..products import product
+    from ..pictures.preview import relief_rgb
+    from ..engine.products import product
     from .report import Timer
 
     ro = cfg.run
@@ -106,7 +107,7 @@ def subsolar_shadow(cfg: SubsolarConfig) -> dict:
                         ro.creation_options)
     series = None
     if point is None:
-        from ..ephemeris import read_subsolar
+        from ..model.ephemeris import read_subsolar
         if ro.preview is not None:
             raise UsageProblem("--preview shows one sun: not with --subsolar-file")
         series = read_subsolar(cfg.subsolar_file)  # a bad file: nothing read, nothing written
@@ -167,11 +168,11 @@ def _series(cfg: SubsolarConfig, d, output: str, series, body, default_distance:
     the masks computed into one reused buffer; a progress bar. Returns the report."""
     import numpy as np
 
-    from ..arrays import subsolar_mask
-    from ..bodysun import CellFrames, sun_vector
+    from ..engine.arrays import subsolar_mask
+    from ..engine.cell_suns import CellFrames, sun_vector
     from ..errors import HillshadeError
     from ..io import BandWriter
-    from ..sun import iso
+    from ..model.sun import iso
     from .report import progress
 
     ro = cfg.run
@@ -242,7 +243,7 @@ def _band(arr, soft: bool, prod):
 def _report(cfg: SubsolarConfig, d, output: str, body, curvature: bool, timer, **sun) -> dict:
     """The report of a ``--subsolar`` or ``--subsolar-file`` run (``sun``: the keys of the
     sun(s)), written to --report."""
-    from ..earth import refraction_for
+    from ..model.earth import refraction_for
     from ..io import input_label, write_json
     ro = cfg.run
     rep = {"input": input_label(d.path), "output": os.path.abspath(output),

@@ -16,14 +16,14 @@ def sun_hours(cfg: SunHoursConfig) -> dict:
     import numba
     import numpy as np
 
-    from ..shading import Shader, render
+    from ..engine.shader import Shader, render
 
-    from ..earth import dem_body
+    from ..model.earth import dem_body
     from ..io import (check_output_format, input_label, output_driver, write_json, write_png,
                       write_raster)
-    from ..preview import relief_rgb
-    from ..shading import choose_backend
-    from ..sun import SUN_RADIUS_DEG, SunRequest, daylight_samples, parse_date, parse_step
+    from ..pictures.preview import relief_rgb
+    from ..engine.shader import choose_backend
+    from ..model.sun import SUN_RADIUS_DEG, SunRequest, daylight_samples, parse_date, parse_step
     from ..io.write import Claims
     from ..errors import AllNodata
     from .context import nodata_note
@@ -167,16 +167,17 @@ def sun_hours(cfg: SunHoursConfig) -> dict:
 
 def _in_context(cfg, area, work, ran_on, req, timer, algo_stats):
     """Sun hours of the tile of ``area`` (``--context``): each sun's windows of the context
-    (``run.plan.Job``, product "sun"), cut to the tile, added in the order of the suns as a
+    (``engine.windows.Job``, product "sun"), cut to the tile, added in the order of the suns as a
     run in memory adds them (the same float32 sums). (hours, height range, curvature)."""
     import math
 
     import numpy as np
 
-    from ..earth import curvature_report, dem_body
+    from ..model.earth import curvature_report, dem_body
     from .local import bounded_gdal_cache
-    from .plan import Job, WindowCache, bytes_per_cell, default_max_memory, \
-        window_budget
+    from ..engine.windows import (
+        Job, WindowCache, bytes_per_cell, default_max_memory, window_budget
+    )
     from .report import progress
     src = area.source
     lift = float(cfg.height_above_ground)

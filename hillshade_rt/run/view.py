@@ -2,7 +2,7 @@
 
 A small HTTP server from the standard library (``http.server.ThreadingHTTPServer``: no
 dependency; the viewer is local and single-user, so a thread per request is plenty), bound to
-127.0.0.1 only. The DEM is read once and a :class:`~hillshade_rt.shading.Shader` prepared once
+127.0.0.1 only. The DEM is read once and a :class:`~hillshade_rt.engine.shader.Shader` prepared once
 per overview level (every n-th cell, n a power of two) and algorithm; each request shades only
 what the page shows:
 
@@ -89,7 +89,7 @@ class ViewConfig:
     say: object = say_nothing
 
     def check(self) -> None:
-        from ..sun import zone
+        from ..model.sun import zone
         if not (0 <= int(self.port) <= 65535):
             raise UsageProblem(f"--port must be 0..65535, got {self.port}")
         try:
@@ -146,8 +146,8 @@ class Viewer:
     def __init__(self, dem, algorithm: str = "auto", backend: str = "cpu",
                  tz: str | None = None, options: dict | None = None):
         from ..algorithms import lookup
-        from ..earth import dem_body
-        from ..sun import dem_site, is_auto, zone, zone_at
+        from ..model.earth import dem_body
+        from ..model.sun import dem_site, is_auto, zone, zone_at
         lookup(algorithm)
         self.dem = dem
         self.z = dem.heights
@@ -222,7 +222,7 @@ class Viewer:
     # -- levels and shaders --------------------------------------------------------------------
     def level(self, n: int):
         """(heights, grid) of every ``n``-th cell (kept)."""
-        from ..geometry import Grid
+        from ..model.geometry import Grid
         if n == 1:
             return self.z, self.grid
         if n not in self._levels:
@@ -233,7 +233,7 @@ class Viewer:
         return self._levels[n]
 
     def shader(self, n: int, algorithm: str):
-        from ..shading import Shader
+        from ..engine.shader import Shader
         key = (n, algorithm)
         if key not in self._shaders:
             z, g = self.level(n)
@@ -251,12 +251,12 @@ class Viewer:
         an offset a local time in the viewer's zone) -> {azimuth, elevation, time}. A given ``el``
         is the command line's ``--elevation``: > 0 and <= 90 (a time may put the sun below the
         horizon: night)."""
-        from ..geometry import normalize_azimuth
+        from ..model.geometry import normalize_azimuth
         if "time" in q:
             t = self.parse_time(q["time"])
             s = self.suns([t])[0]
             return {"azimuth": s.azimuth, "elevation": s.elevation, "time": t.isoformat()}
-        from ..geometry import check_elevation
+        from ..model.geometry import check_elevation
         az, el = number(q, "az", 203.7), number(q, "el", 30.0)
         try:            # as the command line's --elevation: > 0 and <= 90
             el = check_elevation(el, "el")
@@ -265,7 +265,7 @@ class Viewer:
         return {"azimuth": normalize_azimuth(az), "elevation": el, "time": None}
 
     def parse_time(self, text: str) -> _dt.datetime:
-        from ..sun import parse_time
+        from ..model.sun import parse_time
         if self.site is None:
             raise BadRequest("this DEM has no place on Earth (no CRS): give az and el")
         try:
@@ -276,7 +276,7 @@ class Viewer:
             raise BadRequest(str(exc)) from None
 
     def suns(self, times):
-        from ..sun import sun_over
+        from ..model.sun import sun_over
         return sun_over(self.site, self.z.shape, times)
 
     def day_times(self, day: _dt.date, step_min: int = 10):
@@ -298,7 +298,7 @@ class Viewer:
     def zone_label(self, day: _dt.date | None = None) -> str | None:
         """The viewer's zone with its offset at noon of ``day`` (default today), e.g.
         ``Europe/Zurich (UTC+02:00, CEST)``."""
-        from ..sun import zone_label
+        from ..model.sun import zone_label
         if self.tz is None:
             return None
         when = (_dt.datetime.combine(day, _dt.time(12), self.tz) if day is not None else None)
@@ -405,7 +405,7 @@ class Viewer:
         window alone with its halo toward the sun, or, when that halo window holds more than
         half the raster, the whole raster (its pyramid and survey kept from sun to sun) -- the
         same cells either way."""
-        from ..sun import SUN_RADIUS_DEG, Region
+        from ..model.sun import SUN_RADIUS_DEG, Region
         rows, cols = sh.z.shape
         region = Region(rs, cs, az, el)
         low = el - SUN_RADIUS_DEG if soft else el      # the lowest ray the product marches
@@ -423,7 +423,7 @@ class Viewer:
     def sun_hours(self, sh, rs, cs, day: _dt.date):
         """Hours of direct sun of ``day`` (every 30 minutes) over rows ``rs``, columns ``cs``
         of the shader's level, and the most any cell could get (the sun above the horizon)."""
-        from ..sun import Region
+        from ..model.sun import Region
         if self.site is None:
             raise BadRequest("this DEM has no place on Earth (no CRS): no sun hours")
         times = self.day_times(day, 30)
@@ -440,8 +440,8 @@ class Viewer:
 
     def _point(self, q: dict) -> dict:
         """Height, lit or not and the horizon profile at (x, y) (pixel coordinates)."""
-        from ..arrays import ground_height, horizon_profile
-        from ..sun import Region
+        from ..engine.arrays import ground_height, horizon_profile
+        from ..model.sun import Region
         rows, cols = self.z.shape
         x, y = number(q, "x"), number(q, "y")
         r, c = int(math.floor(y)), int(math.floor(x))
@@ -614,9 +614,9 @@ class Viewer:
     def _download(self, q: dict) -> tuple[bytes, str]:
         """The whole DEM's mask for the query's sun at full resolution as GeoTIFF bytes."""
         from ..io.raster import write_raster
-        from ..products import product
-        from ..shading import render
-        from ..sun import SunOver
+        from ..engine.products import product
+        from ..engine.shader import render
+        from ..model.sun import SunOver
         algorithm, soft, sun = self.algorithm_of(q), flag(q, "soft"), self.sun(q)
         data = render(self.shader(1, algorithm),
                       SunOver(None, sun["azimuth"], sun["elevation"]), "shadow", soft=soft)
@@ -833,7 +833,7 @@ def make_server(viewer: Viewer, port: int = 0) -> Server:
 def view(cfg: ViewConfig) -> None:
     """Read the DEM, prepare it, serve the viewer until interrupted (Ctrl-C: the server is
     closed and the interruption goes on up: the command line exits 130)."""
-    from ..shading import choose_backend
+    from ..engine.shader import choose_backend
     cfg.check()
     backend = choose_backend(cfg.backend, cfg.algorithm, {})
     dem = cfg.read.read(cfg.dem)

@@ -10,7 +10,7 @@ from hypothesis import given, settings, strategies as st
 from hillshade_rt.testing import box_terrain, data_path, fractal_terrain, reference_mask
 from hillshade_rt.algorithms import brute, horizon, smap, sweep
 from hillshade_rt.algorithms.frames import frame_of
-from hillshade_rt.geometry import Grid, sun_rays
+from hillshade_rt.model.geometry import Grid, sun_rays
 from hillshade_rt.io import read_dem
 import hillshade_rt
 from hillshade_rt import is_shadowed

@@ -8,7 +8,7 @@ import pytest
 
 from hillshade_rt.algorithms import horizon as hz
 from hillshade_rt.errors import HillshadeError
-from hillshade_rt.geometry import Grid, sun_rays
+from hillshade_rt.model.geometry import Grid, sun_rays
 from hillshade_rt.testing import fractal_terrain, reference_horizon
 
 AZIMUTHS = (163.0, 203.7, 290.0, 0.0, 45.0)

@@ -7,7 +7,7 @@ import numpy as np
 
 from hillshade_rt.algorithms.picture import gradients, rgba
 from hillshade_rt.algorithms.relief import incidence, sun_vector
-from hillshade_rt.geometry import Grid
+from hillshade_rt.model.geometry import Grid
 from hillshade_rt.testing import fractal_terrain
 
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from hillshade_rt.algorithms import brute, point
-from hillshade_rt.geometry import Grid, sun_rays
+from hillshade_rt.model.geometry import Grid, sun_rays
 from hillshade_rt.algorithms.horizon import bilinear
 from hillshade_rt.algorithms.pyramid import MaxPyramid
 from hillshade_rt.testing import fractal_terrain, spectral
@@ -121,7 +121,7 @@ def test_the_array_api_takes_the_light_in_the_dems_crs(tmp_path):
     mask at the light's fractional cell; a light below the ground is an error."""
     from affine import Affine
     from rasterio.crs import CRS
-    from hillshade_rt.arrays import point_light_mask
+    from hillshade_rt.engine.arrays import point_light_mask
     from hillshade_rt.errors import HillshadeError
     from hillshade_rt.io import read_dem
     from hillshade_rt.testing import write_geotiff

@@ -20,7 +20,7 @@ from hillshade_rt import read_dem
 from hillshade_rt.algorithms import auto, bounds, brute, smap
 from hillshade_rt.algorithms.frames import uniform_rays
 from hillshade_rt.algorithms.pyramid import MaxPyramid, _levels
-from hillshade_rt.geometry import Grid, curvature_per_m2, sun_rays
+from hillshade_rt.model.geometry import Grid, curvature_per_m2, sun_rays
 from hillshade_rt.testing import data_path, reference_mask, spectral, repo_root
 
 SETTINGS = settings(max_examples=int(os.environ.get("HILLSHADE_PYRAMID_EXAMPLES", "400")),
@@ -268,7 +268,7 @@ def test_code_counts_equal_bincount():
 
 
 def _lattice(az0, el0, daz, del_, n=9):
-    from hillshade_rt.algorithms.field import lattice_vectors
+    from hillshade_rt.algorithms.per_cell_sun import lattice_vectors
     i, j = np.meshgrid(np.linspace(-1, 1, n), np.linspace(-1, 1, n), indexing="ij")
     return lattice_vectors(az0 + daz * j + 0.3 * daz * i * j, el0 + del_ * i)
 
@@ -279,7 +279,7 @@ def test_per_cell_sun_is_each_cells_own_ray(az0, el0, curved):
     """Item 6: every cell marched with its own interpolated sun equals, cell by cell, the plain
     march of that cell with the ray ``cell_ray`` gives it (a night cell is shadowed); the
     direction varies by several degrees here, far more than a time-based sun does."""
-    from hillshade_rt.algorithms import field
+    from hillshade_rt.algorithms import per_cell_sun
     from hillshade_rt.algorithms.raymath import ray_is_blocked
     z = _terrain("spectral", 23, 31, 4, 400.0)
     z[4:6, 7:9] = np.nan
@@ -289,26 +289,26 @@ def test_per_cell_sun_is_each_cells_own_ray(az0, el0, curved):
     vec = _lattice(az0, el0, 4.0, 2.5)
     c = curvature_per_m2(2e4, 0.13) if curved else 0.0
     zmax = float(np.nanmax(z))
-    got = field.shadow_mask(z, grid, vec, c)
-    plain = field.shadow_mask(z, grid, vec, c, pyramid=False)
+    got = per_cell_sun.shadow_mask(z, grid, vec, c)
+    plain = per_cell_sun.shadow_mask(z, grid, vec, c, pyramid=False)
     for r in range(23):
         for col in range(31):
             if np.isnan(z[r, col]):
                 assert got[r, col] == 255
                 continue
-            night, dc, sd, so, ri, cv = field.cell_ray.py_func(
+            night, dc, sd, so, ri, cv = per_cell_sun.cell_ray.py_func(
                 r, col, vec, grid.dx, grid.dy, 1.0, -1.0, c, 0, 0, 23, 31)
             want = 1 if night else int(ray_is_blocked(z, r, col, dc, sd, so, ri, cv, zmax, 0.0))
             assert got[r, col] == want == plain[r, col], (r, col)
 
 
 def test_per_cell_sun_with_one_direction_is_the_fixed_sun():
-    from hillshade_rt.algorithms import field
+    from hillshade_rt.algorithms import per_cell_sun
     z = _terrain("spectral", 40, 50, 6, 500.0)
     grid = Grid.uniform(40, 50, 30.0)
     for az, el in [(163.0, 4.0), (203.7, 12.0), (290.0, 2.0)]:
         vec = _lattice(az, el, 0.0, 0.0)
-        got = field.shadow_mask(z, grid, vec)
+        got = per_cell_sun.shadow_mask(z, grid, vec)
         ref = _plain(z, sun_rays(grid, az, el))
         # the same direction, computed through unit vectors: at most a rounding tie apart
         assert np.count_nonzero(got != ref) <= 2
@@ -318,8 +318,8 @@ def test_time_based_sun_uses_the_per_cell_field():
     """A time-based sun over a large DEM: the engine marches every cell with its own sun in one
     pass (no tiles), and the mask agrees with the per-tile one but where the two approximations
     of the sun differ (cells at the edge of a shadow)."""
-    from hillshade_rt.shading import Shader, render
-    from hillshade_rt.sun import Site, parse_time, sun_over
+    from hillshade_rt.engine.shader import Shader, render
+    from hillshade_rt.model.sun import Site, parse_time, sun_over
     from pyproj import CRS, Transformer
     z = _terrain("spectral", 300, 400, 12, 2500.0)
     grid = Grid.uniform(300, 400, 150.0)   # 60 km across
@@ -351,7 +351,7 @@ def test_time_based_sun_uses_the_per_cell_field():
                                          (44.0, 0.3, 1.0), (89.0, 5.0, 3.0)])
 @pytest.mark.parametrize("curved", [False, True])
 def test_bounds_with_a_per_cell_sun_equal_the_field_march(az0, el0, daz, curved):
-    from hillshade_rt.algorithms import field
+    from hillshade_rt.algorithms import per_cell_sun
     for seed, shape in [(4, (23, 31)), (9, (60, 45))]:
         z = _terrain("spectral", *shape, seed, 600.0)
         z[4:6, 7:9] = np.nan
@@ -360,7 +360,7 @@ def test_bounds_with_a_per_cell_sun_equal_the_field_march(az0, el0, daz, curved)
                     np.full(shape[0], 30.0), 1, -1, "per row")
         vec = _lattice(az0, el0, daz, 0.5 * daz)
         c = curvature_per_m2(2e4, 0.13) if curved else 0.0
-        ref = field.shadow_mask(z, grid, vec, c, pyramid=False)
+        ref = per_cell_sun.shadow_mask(z, grid, vec, c, pyramid=False)
         st_ = {}
         np.testing.assert_array_equal(bounds.shadow_mask_field(z, grid, vec, c, stats=st_), ref)
         assert 0 <= st_["undecided_fraction"] <= 1
@@ -373,7 +373,7 @@ def test_horizon_scan_over_the_pyramid_is_the_plain_scan(case):
     raise the maximum), and with a floor and a cap (soft shadows) they give the same visible
     fraction of the sun's disk."""
     from hillshade_rt.algorithms import horizon
-    from hillshade_rt.sun import SUN_RADIUS_DEG, disk_fraction
+    from hillshade_rt.model.sun import SUN_RADIUS_DEG, disk_fraction
     z, grid, az, el, curv = case
     if not np.isfinite(z).any():
         return

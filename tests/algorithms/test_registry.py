@@ -58,7 +58,7 @@ def test_keywords_and_flags_are_unique():
 
 def test_auto_picks_only_its_candidates():
     from hillshade_rt.algorithms import auto
-    from hillshade_rt.geometry import Grid, sun_rays
+    from hillshade_rt.model.geometry import Grid, sun_rays
     candidates = {n for n, s in REGISTRY.items() if s.auto_candidate}
     assert candidates == {"bounds", "brute"}
     grid = Grid.uniform(300, 300, 30.0)
@@ -216,8 +216,8 @@ def test_lookup_names_the_known_algorithms():
 
 
 def test_planner_and_engine_read_the_registry():
-    from hillshade_rt.shading import field_method
-    from hillshade_rt.run.plan import bytes_per_cell
+    from hillshade_rt.engine.shader import field_method
+    from hillshade_rt.engine.windows import bytes_per_cell
     assert {n: bytes_per_cell(n) for n in REGISTRY} == {
         "auto": 13, "bounds": 13, "brute": 13, "smap": 15, "horizon": 19, "sweep": 12}
     assert bytes_per_cell("nonesuch") == 20

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 from affine import Affine
 
-from hillshade_rt import arrays, bodysun
+from hillshade_rt.engine import arrays, cell_suns
 from hillshade_rt.algorithms.pyramid import MaxPyramid
-from hillshade_rt.earth import dem_body
+from hillshade_rt.model.earth import dem_body
 from hillshade_rt.errors import HillshadeError
 from hillshade_rt.testing import (MOON_GEOGRAPHIC, MOON_NORTH_POLAR, fractal_terrain, memory_dem,
                                   reference_mask)
@@ -90,11 +90,11 @@ def test_equals_the_plain_reference_with_each_cells_own_sun(crs, transform, cent
     sub = _subsolar_at(*centre, *sun)
     dem = memory_dem(z, transform, crs)
     body = dem_body(dem)
-    fr = bodysun.CellFrames.of_dem(dem)
-    s = bodysun.sun_vector(body, *sub)
+    fr = cell_suns.CellFrames.of_dem(dem)
+    s = cell_suns.sun_vector(body, *sub)
     m = arrays.subsolar_mask(dem, *sub, curvature=False, frames=fr, sun_xyz=s)
-    az, el = bodysun.cell_suns(fr, body, s, z)
-    gaz = bodysun.grid_azimuth(fr, az)
+    az, el = cell_suns.cell_suns(fr, body, s, z)
+    gaz = cell_suns.grid_azimuth(fr, az)
     assert 3.0 < el[np.isfinite(z)].min() and el.max() < 40.0
     assert np.ptp(gaz) > 1e-4                              # the suns differ from cell to cell
     g = dem.grid
@@ -114,11 +114,11 @@ def test_small_window_equals_the_directional_mask_at_its_centre_sun():
     dem = memory_dem(z, Affine(20.0, 0, 250000.0, 0, -20.0, 5200000.0), "EPSG:32633")
     body = dem_body(dem)
     sub = (-12.0, -48.0)
-    fr = bodysun.CellFrames.of_dem(dem)
-    s = bodysun.sun_vector(body, *sub)
+    fr = cell_suns.CellFrames.of_dem(dem)
+    s = cell_suns.sun_vector(body, *sub)
     m = arrays.subsolar_mask(dem, *sub, curvature=False, frames=fr, sun_xyz=s)
-    az, el = bodysun.cell_suns(fr, body, s, z)
-    gaz = bodysun.grid_azimuth(fr, az)
+    az, el = cell_suns.cell_suns(fr, body, s, z)
+    gaz = cell_suns.grid_azimuth(fr, az)
     caz, cel = gaz[15, 15], el[15, 15]
     assert np.ptp(gaz) < 0.01 and np.ptp(el) < 0.01
     assert abs(caz % 90) > 5 and 5 < cel < 60                # a non-special sun
@@ -131,7 +131,7 @@ def test_many_suns_with_frames_and_pyramid_prepared_once():
     z = fractal_terrain(30, 33, 3, relief=2000.0)
     z[3:5, 7:9] = np.nan
     dem = memory_dem(z, Affine(0.01, 0, -5.0, 0, -0.01, 10.0), MOON_GEOGRAPHIC)
-    fr = bodysun.CellFrames.of_dem(dem)
+    fr = cell_suns.CellFrames.of_dem(dem)
     pyr = MaxPyramid(dem.heights)
     for sun in ((163.0, 8.0), (203.7, 12.0), (290.0, 6.0)):
         sub = _subsolar_at(9.85, -4.835, *sun)
@@ -165,7 +165,7 @@ def test_bad_input():
 
 def test_gpu_twin_equals_cpu():
     """The CUDA kernel (the simulator here) gives the CPU's mask, curvature on and off."""
-    from hillshade_rt import gpu
+    from hillshade_rt.engine import gpu
     ok, what = gpu.status()
     if not ok:
         pytest.skip(what)
@@ -182,15 +182,15 @@ def test_gpu_twin_equals_cpu():
 def test_soft_on_a_flat_sphere_is_the_disk_above_the_astronomical_horizon():
     """Across the terminator (0.02 degree cells on the lunar sphere) the visible fraction is
     the disk above each cell's horizontal plane: sun.disk_fraction(0, el, asin(R_sun / d))."""
-    from hillshade_rt.sun import disk_fraction
+    from hillshade_rt.model.sun import disk_fraction
     dem = memory_dem(np.zeros((10, 60), np.float32), Affine(0.02, 0, -0.6, 0, -0.02, 10.1),
                      MOON_GEOGRAPHIC)
     body = dem_body(dem)
     sub = (3.0, 90.53)                       # the terminator at lon 0, lat 10
     f = arrays.subsolar_mask(dem, *sub, soft=True)
-    fr = bodysun.CellFrames.of_dem(dem)
-    _, el = bodysun.cell_suns(fr, body, bodysun.sun_vector(body, *sub), dem.heights)
-    radius = bodysun.sun_radius_deg(bodysun.AU)
+    fr = cell_suns.CellFrames.of_dem(dem)
+    _, el = cell_suns.cell_suns(fr, body, cell_suns.sun_vector(body, *sub), dem.heights)
+    radius = cell_suns.sun_radius_deg(cell_suns.AU)
     assert abs(radius - 0.2666) < 1e-3
     want = disk_fraction(0.0, el, radius)
     assert f.dtype == np.float32
@@ -202,7 +202,7 @@ def test_soft_on_a_flat_sphere_is_the_disk_above_the_astronomical_horizon():
 def test_soft_agrees_with_the_hard_mask_and_the_plain_horizon():
     """On relief: fraction > 1/2 exactly where the hard mask is lit; the partly lit cells'
     fractions are the disk above the plain reference's horizon along the cell's own ray."""
-    from hillshade_rt.sun import disk_fraction
+    from hillshade_rt.model.sun import disk_fraction
     from hillshade_rt.testing import reference_horizon
     z = fractal_terrain(24, 30, 4, relief=600.0)
     z[2, 3] = np.nan
@@ -214,10 +214,10 @@ def test_soft_agrees_with_the_hard_mask_and_the_plain_horizon():
     valid = np.isfinite(z)
     assert np.isnan(f[~valid]).all() and (hard[~valid] == 255).all()
     np.testing.assert_array_equal(f[valid] > 0.5, hard[valid] == 0)
-    fr = bodysun.CellFrames.of_dem(dem)
-    az, el = bodysun.cell_suns(fr, body, bodysun.sun_vector(body, *sub), z)
-    gaz = bodysun.grid_azimuth(fr, az)
-    radius = bodysun.sun_radius_deg(bodysun.AU)
+    fr = cell_suns.CellFrames.of_dem(dem)
+    az, el = cell_suns.cell_suns(fr, body, cell_suns.sun_vector(body, *sub), z)
+    gaz = cell_suns.grid_azimuth(fr, az)
+    radius = cell_suns.sun_radius_deg(cell_suns.AU)
     g = dem.grid
     partial = np.argwhere((f > 0) & (f < 1))
     assert len(partial) >= 5
@@ -228,7 +228,7 @@ def test_soft_agrees_with_the_hard_mask_and_the_plain_horizon():
 
 def test_soft_gpu_twin_equals_cpu():
     """The CUDA soft kernel (the simulator here) against the CPU's, far and near suns."""
-    from hillshade_rt import gpu
+    from hillshade_rt.engine import gpu
     ok, what = gpu.status()
     if not ok:
         pytest.skip(what)

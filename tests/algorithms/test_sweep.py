@@ -20,7 +20,7 @@ import pytest
 
 import hillshade_rt
 from hillshade_rt.algorithms import ALGORITHMS, brute, horizon, sweep
-from hillshade_rt.geometry import Grid, grid_from_transform, sun_rays
+from hillshade_rt.model.geometry import Grid, grid_from_transform, sun_rays
 from hillshade_rt.testing import fractal_terrain, repo_root
 
 ALGOS = ("brute", "smap", "horizon", "sweep")
@@ -70,7 +70,7 @@ def test_read_only_heights_give_the_writable_mask(tmp_path, algorithm):
 
 
 def test_read_only_heights_on_the_gpu_simulator(tmp_path):
-    from hillshade_rt import gpu
+    from hillshade_rt.engine import gpu
     ok, what = gpu.status()
     assert ok, what       # numba-cuda's simulator comes with the test extras (test_gpu.py)
     z = _heights(15, 19, 3)
@@ -96,7 +96,7 @@ def test_read_only_sweep_kernels_are_cached(tmp_path):
     code = (
         "import json, numpy as np\n"
         "from hillshade_rt.algorithms import sweep\n"
-        "from hillshade_rt.geometry import Grid, sun_rays\n"
+        "from hillshade_rt.model.geometry import Grid, sun_rays\n"
         "z = np.random.default_rng(1).random((48, 56), dtype=np.float32) * 100\n"
         "z.setflags(write=False)\n"
         "for g in (Grid.uniform(48, 56, 30.0, 20.0),\n"
@@ -255,7 +255,7 @@ def test_uniform_rays_take_the_line_passes_unchanged():
 def test_gpu_sweep_sends_the_same_cells_to_the_exact_march():
     """The GPU twin shares the per-cell body and the per-row floor: on a grid whose dx changes
     fast (rows of both dominant axes, chains that drift) it gives the CPU's mask."""
-    from hillshade_rt import gpu
+    from hillshade_rt.engine import gpu
     ok, what = gpu.status()
     assert ok, what       # numba-cuda's simulator comes with the test extras (test_gpu.py)
     z = fractal_terrain(22, 26, seed=11, relief=400.0, octaves=4)

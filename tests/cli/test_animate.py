@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from hillshade_rt.animation import shadowed_pixels
+from hillshade_rt.pictures.animation import shadowed_pixels
 from hillshade_rt.cli import cli
 from hillshade_rt.testing import data_path, read_band
 

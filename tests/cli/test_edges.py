@@ -10,7 +10,7 @@ from affine import Affine
 from rasterio.crs import CRS
 
 from hillshade_rt.cli import cli
-from hillshade_rt.geometry import WGS84_A, WGS84_B, grid_from_transform, radius_in_azimuth
+from hillshade_rt.model.geometry import WGS84_A, WGS84_B, grid_from_transform, radius_in_azimuth
 from hillshade_rt.testing import fractal_terrain, write_geotiff
 
 UTM32N = CRS.from_epsg(32632)
@@ -117,7 +117,7 @@ def test_global_lunar_grid_shadows_exact_in_border_rows():
     """Every exact algorithm against the plain-Python reference (given the closed-form spacing)
     on a global lunar-like grid, border rows included (a check skipping them cannot see the
     pole rows' spacing)."""
-    from hillshade_rt.arrays import shadow_mask
+    from hillshade_rt.engine.arrays import shadow_mask
     from hillshade_rt.testing import reference_mask
     rows = 36
     tr, cell, lat = _global_eqc(rows)

@@ -309,7 +309,7 @@ def test_years_outside_the_spa_are_refused(tmp_path, runner, dem, args):
 def test_years_outside_the_spa_from_python(tmp_path, dem):
     import datetime as dt
     from hillshade_rt.errors import UsageProblem
-    from hillshade_rt.sun import solar_position
+    from hillshade_rt.model.sun import solar_position
     with pytest.raises(UsageProblem, match="outside the solar position algorithm's range"):
         hr.shade(dem, tmp_path / "o.tif", times=[FAR + "T12:00Z"])
     far = dt.datetime(7000, 1, 1, tzinfo=dt.timezone.utc)
@@ -333,8 +333,8 @@ def test_an_extrapolated_delta_t_is_one_line_even_with_q(tmp_path, dem):
 
 def test_warnings_raised_inside_a_run_are_one_line_each(tmp_path, runner, dem, monkeypatch):
     import warnings
-    from hillshade_rt import shading
-    real = shading.render
+    from hillshade_rt.engine import shader
+    real = shader.render
 
     def noisy(*a, **k):
         np.log(np.zeros(1))                                         # numpy's RuntimeWarning
@@ -343,7 +343,7 @@ def test_warnings_raised_inside_a_run_are_one_line_each(tmp_path, runner, dem, m
         warnings.warn_explicit("Dataset has no geotransform", UserWarning,
                                "/opt/venv/lib/python3.11/site-packages/rasterio/__init__.py", 9)
         return real(*a, **k)
-    monkeypatch.setattr(shading, "render", noisy)
+    monkeypatch.setattr(shader, "render", noisy)
     r = runner.invoke(cli, ["shadow", dem, str(tmp_path / "o.tif"), "--azimuth", "200",
                             "--elevation", "10", "-q"])
     assert r.exit_code == 0, r.output

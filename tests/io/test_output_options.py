@@ -97,7 +97,7 @@ def test_co_in_memory_and_in_windows(tmp_path, runner, how):
     default file."""
     import json
 
-    from hillshade_rt.run import plan as tiling
+    from hillshade_rt.engine import windows as tiling
     ref, out, rep = tmp_path / "ref.tif", tmp_path / "out.tif", tmp_path / "r.json"
     assert runner.invoke(cli, ["shadow", LIDAR, str(ref), "-q"] + SUN).exit_code == 0
     # room for the process, GDAL's cache and about 1 MB of windows: the DEM needs more

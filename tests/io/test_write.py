@@ -304,7 +304,7 @@ def test_sigterm_of_a_single_output_leaves_nothing(tmp_path):
 def test_interrupt_surfacing_as_systemerror_is_still_an_interrupt(tmp_path, runner, monkeypatch):
     """A signal handler's exception raised while numba's dispatcher runs comes out as
     SystemError ('returned a result with an exception set'): still exit 130, one line."""
-    from hillshade_rt import shading
+    from hillshade_rt.engine import shader
 
     def render(*a, **k):
         try:
@@ -312,18 +312,18 @@ def test_interrupt_surfacing_as_systemerror_is_still_an_interrupt(tmp_path, runn
         except KeyboardInterrupt as exc:
             raise SystemError("CPUDispatcher(<function _pieces_table>) returned a result with "
                               "an exception set") from exc
-    monkeypatch.setattr(shading, "render", render)
+    monkeypatch.setattr(shader, "render", render)
     r = runner.invoke(cli, ["shadow", LIDAR, str(tmp_path / "m.tif")] + SUN)
     assert r.exit_code == 130 and r.stderr.strip().count("\n") == 0
     assert "interrupted (SIGINT)" in r.stderr and os.listdir(tmp_path) == []
 
 
 def test_internal_errors_are_one_line(tmp_path, runner, monkeypatch):
-    from hillshade_rt import shading
+    from hillshade_rt.engine import shader
 
     def render(*a, **k):
         raise ZeroDivisionError("boom")
-    monkeypatch.setattr(shading, "render", render)
+    monkeypatch.setattr(shader, "render", render)
     line = one_line_error(runner.invoke(cli, ["shadow", LIDAR, str(tmp_path / "m.tif")] + SUN))
     assert "internal error" in line and "ZeroDivisionError" in line
     assert os.listdir(tmp_path) == []
@@ -394,14 +394,14 @@ def test_publish_without_hard_links_still_does_not_clobber(tmp_path, monkeypatch
 
 
 def test_output_appearing_during_the_run_is_kept(tmp_path, runner, monkeypatch):
-    from hillshade_rt import shading
+    from hillshade_rt.engine import shader
     out = tmp_path / "m.tif"
-    real = shading.render
+    real = shader.render
 
     def render(*a, **k):
         out.write_bytes(b"another run's result")
         return real(*a, **k)
-    monkeypatch.setattr(shading, "render", render)
+    monkeypatch.setattr(shader, "render", render)
     line = one_line_error(runner.invoke(cli, ["shadow", LIDAR, str(out)] + SUN))
     assert "appeared" in line and out.read_bytes() == b"another run's result"
     assert os.listdir(tmp_path) == ["m.tif"]

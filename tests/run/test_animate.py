@@ -1,4 +1,4 @@
-"""The animation's frames (hillshade_rt.animation) and the animate run's times."""
+"""The animation's frames (hillshade_rt.pictures.animation) and the animate run's times."""
 
 import datetime as dt
 from zoneinfo import ZoneInfo
@@ -10,8 +10,9 @@ from PIL import Image
 from rasterio.crs import CRS
 
 import hillshade_rt as hr
-from hillshade_rt.animation import (LEVELS, PALETTE, draw_label, frame_indices, label_text,
-                                    shadowed_pixels, step_of, write_gif)
+from hillshade_rt.pictures.animation import (
+    LEVELS, PALETTE, draw_label, frame_indices, label_text, shadowed_pixels, step_of, write_gif
+)
 from hillshade_rt.errors import UsageProblem
 from hillshade_rt.run.animate import AnimateConfig, animate, day_times
 from hillshade_rt.testing import fractal_terrain, write_geotiff

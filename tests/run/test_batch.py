@@ -266,16 +266,16 @@ def test_kernels_warmed_once_per_kind_of_grid(tmp_path, dems, monkeypatch):
     """One process, one warm-up per kind of run (here: a projected and a geographic grid), not
     one per DEM; a later run of the same kind in the process (a server's worker) none."""
     import hillshade_rt as hr
-    from hillshade_rt import shading
+    from hillshade_rt.engine import shader
     calls = []
-    real = shading.Shader._warm_up
+    real = shader.Shader._warm_up
 
     def counted(self, *a, **k):
         calls.append(self.grid.method)
         return real(self, *a, **k)
 
-    monkeypatch.setattr(shading.Shader, "_warm_up", counted)
-    monkeypatch.setattr(shading, "_WARMED", set())      # what earlier tests warmed aside
+    monkeypatch.setattr(shader.Shader, "_warm_up", counted)
+    monkeypatch.setattr(shader, "_WARMED", set())      # what earlier tests warmed aside
     twin = str(tmp_path / "in" / "everest2.tif")
     with open(dems["everest"], "rb") as fi, open(twin, "wb") as fo:
         fo.write(fi.read())

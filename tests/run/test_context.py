@@ -233,7 +233,7 @@ def test_reads_only_the_tiles_windows(tmp_path, monkeypatch):
     """A tile in the middle of a context 8 x 8 tiles large: the windows lit are the tile and its
     halo toward the sun (recorded), a small share of the context; far away cells do not
     matter (made voids, the same mask)."""
-    from hillshade_rt.run import plan
+    from hillshade_rt.engine import windows
     from hillshade_rt.testing import fractal_terrain
     n, side = 1024, 128
     z = fractal_terrain(n, n, 7, relief=60.0).astype(np.float32) + 500.0
@@ -243,12 +243,12 @@ def test_reads_only_the_tiles_windows(tmp_path, monkeypatch):
     tile = write_geotiff(tmp_path / "tile.tif", z[r0:r0 + side, c0:c0 + side],
                          t @ Affine.translation(c0, r0), "EPSG:32611", -9999.0)
     seen = []
-    get = plan.WindowCache.get
+    get = windows.WindowCache.get
 
     def spy(self, window):
         seen.append(window)
         return get(self, window)
-    monkeypatch.setattr(plan.WindowCache, "get", spy)
+    monkeypatch.setattr(windows.WindowCache, "get", spy)
     rep = api.shade(tile, tmp_path / "m.tif", azimuth=203.7, elevation=20.0, context=ctx)
     assert seen
     for a, b, c, e in seen:        # the sun is south-south-west: the halo runs down and left

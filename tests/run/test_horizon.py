@@ -211,7 +211,7 @@ def test_max_memory_switches_to_windows(tmp_path):
     """A --max-memory the DEM does not fit runs in windows, within that memory, with the bits
     of the run in memory."""
     from hillshade_rt.run import HorizonConfig, horizon
-    from hillshade_rt.run import plan as tiling
+    from hillshade_rt.engine import windows as tiling
     from hillshade_rt.run.config import RunOptions
     path = _fractal_dem(tmp_path, 400, 400)
     reps = {}

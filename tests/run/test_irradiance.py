@@ -17,10 +17,10 @@ import rasterio
 from affine import Affine
 from rasterio.crs import CRS
 
-from hillshade_rt.arrays import horizon_angles, irradiance, shadow_mask
+from hillshade_rt.engine.arrays import horizon_angles, irradiance, shadow_mask
 from hillshade_rt.cli import cli
 from hillshade_rt.errors import HillshadeError
-from hillshade_rt.sun import Atmosphere, day_samples, disk_fraction, solar_position, zone
+from hillshade_rt.model.sun import Atmosphere, day_samples, disk_fraction, solar_position, zone
 from hillshade_rt.testing import box_terrain, fractal_terrain, read_band, repo_root, write_geotiff
 
 # pvlib 0.16 asks pandas 3 for DatetimeIndex.dayofyear (deprecated there), inside pvlib

@@ -12,10 +12,10 @@ import pytest
 from affine import Affine
 from rasterio.crs import CRS
 
-from hillshade_rt import gpu
-from hillshade_rt.algorithms import brute, field
+from hillshade_rt.engine import gpu
+from hillshade_rt.algorithms import brute, per_cell_sun
 from hillshade_rt.cli import cli
-from hillshade_rt.geometry import Grid, sun_rays
+from hillshade_rt.model.geometry import Grid, sun_rays
 from hillshade_rt.io import read_dem
 from hillshade_rt.testing import (data_path, fractal_terrain, read_band, reference_mask,
                                   wall_contacts, wall_terrain, write_geotiff)
@@ -103,7 +103,7 @@ def test_lift_is_monotone_and_an_observer_above_every_summit_is_lit():
 def test_per_cell_sun_and_gpu_twins_take_the_lift():
     """The per-cell sun's march (a sun that varies across the raster) and the CUDA kernels
     (run here in numba's simulator) with a lift: the same mask as brute on the CPU."""
-    from hillshade_rt.algorithms.field import lattice_vectors
+    from hillshade_rt.algorithms.per_cell_sun import lattice_vectors
     z = fractal_terrain(17, 21, 5, relief=150.0)
     z[6:8, 9:11] = np.nan
     grid = Grid.uniform(17, 21, 30.0, 20.0)
@@ -117,8 +117,8 @@ def test_per_cell_sun_and_gpu_twins_take_the_lift():
         np.testing.assert_array_equal(
             brute.shadow_mask_gpu(g, rays, g.zmax, pyramid=False, lift=4.0), cpu)
         vec = lattice_vectors(np.full((3, 3), az), np.full((3, 3), 12.0))   # one direction
-        np.testing.assert_array_equal(field.shadow_mask(z, grid, vec, lift=4.0), cpu)
-        np.testing.assert_array_equal(field.shadow_mask_gpu(g, grid, vec, 0.0, g.zmax,
+        np.testing.assert_array_equal(per_cell_sun.shadow_mask(z, grid, vec, lift=4.0), cpu)
+        np.testing.assert_array_equal(per_cell_sun.shadow_mask_gpu(g, grid, vec, 0.0, g.zmax,
                                                             lift=4.0), cpu)
 
 

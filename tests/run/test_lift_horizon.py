@@ -12,10 +12,10 @@ import pytest
 from affine import Affine
 from rasterio.crs import CRS
 
-from hillshade_rt import gpu
+from hillshade_rt.engine import gpu
 from hillshade_rt.algorithms import horizon as hz
 from hillshade_rt.cli import cli
-from hillshade_rt.geometry import Grid, sun_rays
+from hillshade_rt.model.geometry import Grid, sun_rays
 from hillshade_rt.io import read_dem
 from hillshade_rt.testing import (data_path, fractal_terrain, read_band, reference_horizon,
                                   wall_contacts, wall_terrain, write_geotiff)

@@ -9,7 +9,7 @@ import pytest
 from affine import Affine
 from rasterio.crs import CRS
 
-from hillshade_rt.arrays import point_light_mask
+from hillshade_rt.engine.arrays import point_light_mask
 from hillshade_rt.cli import cli
 from hillshade_rt.io import read_dem
 from hillshade_rt.run.lightmap import point_light_relief

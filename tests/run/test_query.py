@@ -13,7 +13,7 @@ from affine import Affine
 from rasterio.crs import CRS
 
 import hillshade_rt as hr
-from hillshade_rt.arrays import point_light_mask
+from hillshade_rt.engine.arrays import point_light_mask
 from hillshade_rt.cli import cli
 from hillshade_rt.io import read_dem
 from hillshade_rt.testing import data_path, fractal_terrain, read_band, write_geotiff
@@ -325,10 +325,10 @@ def test_points_files_without_coordinates_or_on_nodata(tmp_path, runner):
 def test_the_sun_at_a_point_is_the_masks_sun_for_that_cell():
     """``run.query.sun_at``: per cell, the lattice interpolated as the per-cell march does it
     (the same ray: dominant axis, step, direction); per tile, the tile's; else the one sun."""
-    from hillshade_rt.algorithms.field import cell_ray, lattice_vectors
-    from hillshade_rt.geometry import Grid, sun_rays
+    from hillshade_rt.algorithms.per_cell_sun import cell_ray, lattice_vectors
+    from hillshade_rt.model.geometry import Grid, sun_rays
     from hillshade_rt.run.query import sun_at
-    from hillshade_rt.sun import Region, SunOver
+    from hillshade_rt.model.sun import Region, SunOver
     i, j = np.meshgrid(np.linspace(-0.5, 0.5, 9), np.linspace(-0.5, 0.5, 9), indexing="ij")
     lat = lattice_vectors(203.7 + 3.0 * j + 0.5 * i, 12.0 + 1.5 * i)
     tiles = [Region(slice(0, 50), slice(0, 80), 200.0, 11.0),

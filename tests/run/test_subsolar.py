@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from affine import Affine
 
-from hillshade_rt.arrays import subsolar_mask
+from hillshade_rt.engine.arrays import subsolar_mask
 from hillshade_rt.cli import cli
 from hillshade_rt.io import read_dem
 from hillshade_rt.testing import MOON_GEOGRAPHIC, fractal_terrain, read_band, write_geotiff

@@ -14,8 +14,8 @@ from rasterio.crs import CRS
 
 from hillshade_rt.cli import cli
 from hillshade_rt.errors import HillshadeError
-from hillshade_rt.sun import SunRequest
-from hillshade_rt.sun import day_samples, iso, parse_step, parse_time, time_range, zone
+from hillshade_rt.model.sun import SunRequest
+from hillshade_rt.model.sun import day_samples, iso, parse_step, parse_time, time_range, zone
 from hillshade_rt.testing import data_path, read_band, write_geotiff
 
 UTC = dt.timezone.utc

@@ -18,7 +18,7 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 import pytest
 
-from hillshade_rt.arrays import shadow_mask
+from hillshade_rt.engine.arrays import shadow_mask
 from hillshade_rt.io import read_dem
 from hillshade_rt.run.view import Viewer, png_bytes
 from hillshade_rt.testing import data_path, serving
@@ -151,7 +151,7 @@ def test_window_partly_and_wholly_outside(server, dem):
 
 
 def test_time_gives_the_sun_of_that_time(server, dem):
-    from hillshade_rt.sun import dem_site, parse_time, sun_over
+    from hillshade_rt.model.sun import dem_site, parse_time, sun_over
     rows, cols = dem.shape
     pic, h = render(server, time="2026-06-21T16:30", bbox=f"0,0,{cols},{rows}", w=cols, h=rows)
     t = parse_time("2026-06-21T16:30+05:45")

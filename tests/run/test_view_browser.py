@@ -18,7 +18,7 @@ import time
 import numpy as np
 import pytest
 
-from hillshade_rt.arrays import shadow_mask
+from hillshade_rt.engine.arrays import shadow_mask
 from hillshade_rt.io import read_dem
 from hillshade_rt.run.view import Viewer, make_server
 from hillshade_rt.testing import repo_root

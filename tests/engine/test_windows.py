@@ -10,13 +10,13 @@ import pytest
 from affine import Affine
 from rasterio.crs import CRS
 
-from hillshade_rt.run import plan as tiling
+from hillshade_rt.engine import windows as tiling
 from hillshade_rt.cli import cli
-from hillshade_rt.shading import Shader, render
-from hillshade_rt.earth import dem_body
+from hillshade_rt.engine.shader import Shader, render
+from hillshade_rt.model.earth import dem_body
 from hillshade_rt.errors import HillshadeError
 from hillshade_rt.io import open_dem, read_dem
-from hillshade_rt.sun import SunOver
+from hillshade_rt.model.sun import SunOver
 from hillshade_rt.testing import (data_path, fractal_terrain, read_band, split_geotiff,
                                   write_geotiff)
 
@@ -453,8 +453,8 @@ def test_each_cells_own_sun_in_windows_equals_in_memory(tmp_path, runner, when):
 def _varying_sun(shape, az0, el0, daz, del_, n_tiles=2):
     """A SunOver whose direction varies by ``daz`` / ``del_`` degrees across a raster of
     ``shape`` (a 9 x 9 lattice; tiles of n_tiles x n_tiles, each its centre's sun)."""
-    from hillshade_rt.algorithms.field import lattice_vectors
-    from hillshade_rt.sun import Region
+    from hillshade_rt.algorithms.per_cell_sun import lattice_vectors
+    from hillshade_rt.model.sun import Region
     i, j = np.meshgrid(np.linspace(-0.5, 0.5, 9), np.linspace(-0.5, 0.5, 9), indexing="ij")
     az, el = az0 + daz * j + 0.2 * daz * i, el0 + del_ * i
     rows, cols = shape

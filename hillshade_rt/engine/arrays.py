@@ -7,10 +7,12 @@ import math
 
 import numpy as np
 
-from .algorithms import lookup
-from .errors import AllNodata, HillshadeError
-from .geometry import Grid, check_elevation, equal_azimuths, heights_and_grid, normalize_azimuth
-from .shading import choose_backend
+from ..algorithms import lookup
+from ..errors import AllNodata, HillshadeError
+from ..model.geometry import (
+    Grid, check_elevation, equal_azimuths, heights_and_grid, normalize_azimuth
+)
+from .shader import choose_backend
 
 
 def _dem_parts(heights, spacing, body):
@@ -21,14 +23,14 @@ def _dem_parts(heights, spacing, body):
         heights = dem.heights
         spacing = dem.grid if spacing is None else spacing
         if body is None:
-            from .earth import dem_body
+            from ..model.earth import dem_body
             body = dem_body(dem)
     if spacing is None:
         raise HillshadeError("give the ground spacing of the heights: a Grid (e.g. "
                              "read_dem(path).grid), d or (dx, dy) metres per cell")
     z, grid = heights_and_grid(heights, spacing)
     if body is None:
-        from .earth import mean_earth
+        from ..model.earth import mean_earth
         body = mean_earth()
     return z, grid, body
 
@@ -54,7 +56,7 @@ def shadow_mask(heights, azimuth: float, elevation: float,
     on the GPU also ``stats["gpu"]`` (device, kernel and transfer times, bytes moved).
     backend: ``"cpu"``, ``"gpu"`` or ``"auto"`` (the GPU when numba-cuda finds a CUDA device and
     the options have a GPU kernel, else the CPU). To keep a DEM on the GPU for many suns, use
-    :class:`hillshade_rt.gpu.GpuDem`.
+    :class:`hillshade_rt.engine.gpu.GpuDem`.
     curvature: True, False or "auto" (the default, as the command line: on when rays can run
     longer than 1 km); refraction_k: terrestrial refraction (default 0.13 on the Earth); body:
     an ``earth.Body`` (default: a DEM's from its CRS, an array's the Earth's mean sphere);
@@ -63,8 +65,8 @@ def shadow_mask(heights, azimuth: float, elevation: float,
     options: passed to the algorithm (smap: ``nextv``, ``better_nextv``; horizon: ``method``,
     ``sample_spacing``; sweep: ``exact_steps``).
     """
-    from .shading import Shader, render
-    from .sun import SunOver
+    from .shader import Shader, render
+    from ..model.sun import SunOver
     z, grid, body = _dem_parts(heights, spacing, body)
     lookup(algorithm)     # an unknown name: the error lists the known ones
     azimuth, elevation = normalize_azimuth(azimuth), check_elevation(elevation)
@@ -92,8 +94,8 @@ def horizon_angles(heights, azimuth: float,
     across; ``max_distance`` (metres, the scan): terrain farther along a ray is ignored;
     ``height_above_ground`` (metres, >= 0): the horizon seen from that high above each cell;
     ``heights``, ``spacing`` and ``body`` as for :func:`shadow_mask`."""
-    from .algorithms import horizon as hz
-    from .shading import horizon_shader
+    from ..algorithms import horizon as hz
+    from .shader import horizon_shader
     z, grid, body = _dem_parts(heights, spacing, body)
     azimuth = normalize_azimuth(azimuth)
     lift = _lift(height_above_ground)
@@ -123,7 +125,7 @@ def is_shadowed(heights, points, azimuth: float, elevation: float,
     heights in the DEM's units; above, on or off the terrain), whether the ray toward the sun
     passes strictly below the terrain (no curvature). Uses an SMap; build
     ``algorithms.smap.SMap`` yourself to query one sun many times."""
-    from .algorithms.smap import SMap
+    from ..algorithms.smap import SMap
     z, grid, _ = _dem_parts(heights, spacing, None)
     return SMap(z, azimuth, elevation, grid).is_shadowed(points)
 
@@ -141,8 +143,8 @@ def sky_view(heights, spacing: float | tuple[float, float] | Grid | None = None,
     terrain farther along a ray is ignored (Yokoyama's L). ``height_above_ground``: the
     horizons seen from that many metres above each cell. ``heights``, ``spacing``,
     ``curvature``, ``body`` as for :func:`horizon_angles`."""
-    from .algorithms.skyview import definition_of, floor_deg, inverted, sky_view as _sky_view
-    from .shading import horizon_shader
+    from ..algorithms.skyview import definition_of, floor_deg, inverted, sky_view as _sky_view
+    from .shader import horizon_shader
     name = definition_of(definition, openness)
     if openness is not None and definition != "zaksek":
         raise HillshadeError("openness is a product of its own: give it without definition")
@@ -150,7 +152,7 @@ def sky_view(heights, spacing: float | tuple[float, float] | Grid | None = None,
     n = int(directions)
     if n < 1:
         raise HillshadeError(f"directions must be 1 or more, got {directions}")
-    from .algorithms import horizon as hz
+    from ..algorithms import horizon as hz
     shader = horizon_shader(z, grid, "cpu", curvature, refraction_k, body)
     zm = np.negative(z) if inverted(name) else z    # negative openness: the horizons of -z
     pyramid = shader.pyramid(zm, True)           # one for every direction
@@ -173,7 +175,7 @@ def horizon_profile(heights, rows, cols, spacing: float | tuple[float, float] | 
     nothing ahead)), as ``hillshade-rt profile``. ``heights``, ``spacing``, ``curvature``,
     ``body`` as for :func:`horizon_angles`; a point outside the cell centres or on nodata is
     an error."""
-    from .algorithms import horizon as hz
+    from ..algorithms import horizon as hz
     z, grid, body = _dem_parts(heights, spacing, body)
     rr = np.atleast_1d(np.asarray(rows, np.float64))
     cc = np.atleast_1d(np.asarray(cols, np.float64))
@@ -195,8 +197,8 @@ def observer_profiles(z: np.ndarray, grid: Grid, rows: np.ndarray, cols: np.ndar
     placed (float32 heights ``z`` on ``grid``; fractional ``rows``, ``cols``; ``observer``
     heights): (azimuths every ``step`` degrees, angles, distances, whether the rays are
     curved)."""
-    from .algorithms import horizon as hz
-    from .shading import horizon_shader
+    from ..algorithms import horizon as hz
+    from .shader import horizon_shader
     if not (0.0 < step <= 90.0):
         raise HillshadeError(f"step must be in (0, 90] degrees, got {step}")
     azimuths = equal_azimuths(step)
@@ -255,9 +257,9 @@ def sun_at_points(heights, rows, cols, azimuth, elevation,
     makes one row per point and sun."""
     import numba
 
-    from .algorithms import horizon as hz
-    from .geometry import SunRays, ray_steps, sincos_deg, sun_rays
-    from .shading import Shader
+    from ..algorithms import horizon as hz
+    from ..model.geometry import SunRays, ray_steps, sincos_deg, sun_rays
+    from .shader import Shader
     z, grid, body = _dem_parts(heights, spacing, body)
     rr = np.atleast_1d(np.asarray(rows, np.float64))
     cc = np.atleast_1d(np.asarray(cols, np.float64))
@@ -349,7 +351,7 @@ def irradiance(heights, times, spacing: float | tuple[float, float] | Grid | Non
                refraction: bool = True, pressure: float | None = None,
                temperature: float = 12.0, sun_tolerance: float | None = None) -> dict:
     """Beam, diffuse, reflected and global irradiance on every cell, as ``hillshade-rt
-    irradiance`` (formulas: ``hillshade_rt.irradiance``, docs/irradiance.md): a dict of float32
+    irradiance`` (formulas: ``hillshade_rt.engine.irradiance``, docs/irradiance.md): a dict of float32
     arrays under "beam", "diffuse", "reflected", "global" (NaN on voids).
 
     ``times``: aware datetimes (or ISO 8601 strings with an offset). Without ``weights`` each
@@ -370,9 +372,10 @@ def irradiance(heights, times, spacing: float | tuple[float, float] | Grid | Non
     import datetime as _dt
     import math
     from . import irradiance as ir
-    from .shading import Shader
-    from .sun import (DEFAULT_TOLERANCE, Atmosphere, Site, centre_height_of, dem_site,
-                      parse_time, sun_over)
+    from .shader import Shader
+    from ..model.sun import (
+        DEFAULT_TOLERANCE, Atmosphere, Site, centre_height_of, dem_site, parse_time, sun_over
+    )
     z, grid, body = _dem_parts(heights, spacing, body)
     lookup(algorithm)
     ir.check_options(albedo, linke_turbidity, sky_view_directions)
@@ -441,8 +444,8 @@ def point_light_mask(heights, x: float, y: float, z: float, *,
     (``x`` the fractional column, ``y`` the row, cell centres at whole numbers). ``backend``
     as for :func:`shadow_mask` (``auto``: the GPU when there is one); ``pyramid`` False marches
     without the maximum-height pyramid (the same mask); ``stats`` gets ``backend``."""
-    from .algorithms import point
-    from .algorithms.horizon import bilinear
+    from ..algorithms import point
+    from ..algorithms.horizon import bilinear
     if hasattr(heights, "heights") and hasattr(heights, "transform"):
         z_arr, t = heights.heights, heights.transform
         if t is None:
@@ -492,15 +495,15 @@ def subsolar_mask(dem, lat: float, lon: float, *, sun_distance: float | None = N
     more than 1 km across); the rays curve with the body's radius of curvature in their
     azimuth at each cell, bent back by terrestrial refraction (``refraction_k``, default 0.13 on
     the Earth, 0 elsewhere: ``earth.refraction_for``); the sun's elevation itself is geometric.
-    frames (``bodysun.CellFrames``), pyramid (``algorithms.pyramid.MaxPyramid``) and
+    frames (``cell_suns.CellFrames``), pyramid (``algorithms.pyramid.MaxPyramid``) and
     ``sun_xyz``: prepared once for many suns (frames and pyramid are the costly parts; pass the
     ``body`` as an ``earth.Body`` too: finding the CRS's costs ~10 ms a call).
     soft: the visible fraction of the solar disk instead (float32 0..1, NaN nodata; the disk's
     angular radius asin(R_sun / distance), the horizon from the cell's own ray).
     """
-    from . import bodysun
-    from .algorithms import pyramid as pyr_mod, subsolar
-    from .earth import dem_body, refraction_for
+    from . import cell_suns
+    from ..algorithms import pyramid as pyr_mod, subsolar
+    from ..model.earth import dem_body, refraction_for
     if not (hasattr(dem, "heights") and hasattr(dem, "transform")):
         raise HillshadeError("subsolar_mask takes a DEM from read_dem (its transform and CRS "
                              "place every cell on the body)")
@@ -510,12 +513,12 @@ def subsolar_mask(dem, lat: float, lon: float, *, sun_distance: float | None = N
     if z.dtype != np.float32:
         z = z.astype(np.float32)
     if body is None or isinstance(body, (str, int, float)):
-        body = bodysun.body_from_option(None if body is None else str(body), dem_body(dem))
+        body = cell_suns.body_from_option(None if body is None else str(body), dem_body(dem))
     lift = _lift(height_above_ground)
     if sun_xyz is None:
-        sun_xyz = bodysun.sun_vector(body, lat, lon, sun_distance)
+        sun_xyz = cell_suns.sun_vector(body, lat, lon, sun_distance)
     if frames is None:
-        frames = bodysun.CellFrames.of_dem(dem)
+        frames = cell_suns.CellFrames.of_dem(dem)
     if frames.shape != z.shape:
         raise HillshadeError(f"frames are {frames.shape} but heights are {z.shape}")
     grid = dem.grid
@@ -526,7 +529,7 @@ def subsolar_mask(dem, lat: float, lon: float, *, sun_distance: float | None = N
         raise HillshadeError(f"curvature must be True, False or 'auto', got {curvature!r}")
     k = refraction_for(body, refraction_k) if curvature else -1.0
     e2 = 1.0 - (body.b * body.b) / (body.a * body.a)
-    radius = bodysun.sun_radius_deg(float(np.linalg.norm(sun_xyz)))
+    radius = cell_suns.sun_radius_deg(float(np.linalg.norm(sun_xyz)))
     if backend == "gpu":
         from .gpu import GpuDem
         g = GpuDem(z)

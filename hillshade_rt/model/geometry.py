@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import HillshadeError
+from ..errors import HillshadeError
 
 
 @dataclass(frozen=True)

@@ -1,4 +1,4 @@
-"""The array API (``hillshade_rt.arrays``): the commands' results on arrays in memory."""
+"""The array API (``hillshade_rt.engine.arrays``): the commands' results on arrays in memory."""
 
 import json
 
@@ -48,8 +48,8 @@ def test_flat_plane_horizon_is_zero_or_the_curvature_dip():
     Earth's curvature (and refraction k = 0.13) the nearest sample is the horizon, the ground
     there lying d²(1 - k)/2R below the observer: β = atan(-(1 - k) d / 2R), d = one step."""
     import math
-    from hillshade_rt.arrays import horizon_angles
-    from hillshade_rt.earth import EARTH_MEAN_RADIUS
+    from hillshade_rt.engine.arrays import horizon_angles
+    from hillshade_rt.model.earth import EARTH_MEAN_RADIUS
     z = np.zeros((200, 200), np.float32)
     az = 163.0
     flat = horizon_angles(z, az, 30.0, curvature=False)
@@ -66,7 +66,7 @@ def test_height_above_ground_in_the_array_api_is_the_commands(tmp_path, runner):
     """shadow_mask, horizon_angles and sky_view take height_above_ground as the commands'
     --height-above-ground (a DEM from read_dem, its grid and body), and a higher observer
     sees no more shadow, no higher horizon, no less sky."""
-    from hillshade_rt.arrays import horizon_angles, shadow_mask, sky_view
+    from hillshade_rt.engine.arrays import horizon_angles, shadow_mask, sky_view
     from hillshade_rt.io import read_dem
     dem = data_path("everest_srtm3_voids_crop200.tif")
     d = read_dem(dem)

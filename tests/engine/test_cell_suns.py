@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 from affine import Affine
 
-from hillshade_rt import bodysun
-from hillshade_rt.earth import Body, dem_body
+from hillshade_rt.engine import cell_suns
+from hillshade_rt.model.earth import Body, dem_body
 from hillshade_rt.errors import HillshadeError, UsageProblem
 from hillshade_rt.testing import MOON_GEOGRAPHIC, MOON_NORTH_POLAR, memory_dem
 
@@ -16,46 +16,46 @@ FAR = 1e16   # a sun so far that parallax is below 1e-8 degrees on the Moon
 
 
 def test_body_from_option():
-    moon = bodysun.body_from_option("moon")
+    moon = cell_suns.body_from_option("moon")
     assert (moon.a, moon.b, moon.earth) == (1737400.0, 1737400.0, False)
-    mars = bodysun.body_from_option("Mars")
+    mars = cell_suns.body_from_option("Mars")
     assert (mars.a, mars.b) == (3396190.0, 3396190.0)
     mola = Body(3396190.0, 3376200.0, 12.0, False, "MOLA")
-    m2 = bodysun.body_from_option("mars", mola)
+    m2 = cell_suns.body_from_option("mars", mola)
     assert (m2.a, m2.b, m2.lat) == (3396190.0, 3376200.0, 12.0)
-    earth = bodysun.body_from_option("earth")
+    earth = cell_suns.body_from_option("earth")
     assert earth.earth and earth.b < earth.a
-    r = bodysun.body_from_option("2500000")
+    r = cell_suns.body_from_option("2500000")
     assert (r.a, r.b, r.earth) == (2500000.0, 2500000.0, False)
-    assert bodysun.body_from_option(None, mola) is mola
+    assert cell_suns.body_from_option(None, mola) is mola
     for bad in ("venus", "-3", "nan"):
         with pytest.raises(UsageProblem):
-            bodysun.body_from_option(bad)
-    assert bodysun.mean_sun_distance(mars) == 227939200000.0
-    assert bodysun.mean_sun_distance(moon) == bodysun.AU == bodysun.mean_sun_distance(earth)
-    assert bodysun.mean_sun_distance(r) == bodysun.AU
+            cell_suns.body_from_option(bad)
+    assert cell_suns.mean_sun_distance(mars) == 227939200000.0
+    assert cell_suns.mean_sun_distance(moon) == cell_suns.AU == cell_suns.mean_sun_distance(earth)
+    assert cell_suns.mean_sun_distance(r) == cell_suns.AU
 
 
 def test_sun_vector():
-    moon = bodysun.body_from_option("moon")
-    s = bodysun.sun_vector(moon, 20.0, -130.0, 2e11)
+    moon = cell_suns.body_from_option("moon")
+    s = cell_suns.sun_vector(moon, 20.0, -130.0, 2e11)
     phi, lam = math.radians(20.0), math.radians(-130.0)
     want = 2e11 * np.array([math.cos(phi) * math.cos(lam), math.cos(phi) * math.sin(lam),
                             math.sin(phi)])
     np.testing.assert_allclose(s, want, rtol=1e-12)
     # on an ellipsoid: |S| is the distance and the sun is at the subsolar point's zenith
-    earth = bodysun.body_from_option("earth")
-    s = bodysun.sun_vector(earth, 37.0, 12.0)
-    assert math.isclose(float(np.linalg.norm(s)), bodysun.AU, rel_tol=1e-12)
-    fr = bodysun.CellFrames(*(np.array([[v]], np.float32) for v in (
+    earth = cell_suns.body_from_option("earth")
+    s = cell_suns.sun_vector(earth, 37.0, 12.0)
+    assert math.isclose(float(np.linalg.norm(s)), cell_suns.AU, rel_tol=1e-12)
+    fr = cell_suns.CellFrames(*(np.array([[v]], np.float32) for v in (
         math.sin(math.radians(37.0)), math.cos(math.radians(37.0)), math.sin(math.radians(12.0)),
         math.cos(math.radians(12.0)), 1.0, 0.0)))
-    _, el = bodysun.cell_suns(fr, earth, s)
+    _, el = cell_suns.cell_suns(fr, earth, s)
     assert el[0, 0] > 90.0 - 1e-4
     with pytest.raises(HillshadeError, match="latitude"):
-        bodysun.sun_vector(moon, 95.0, 0.0)
+        cell_suns.sun_vector(moon, 95.0, 0.0)
     with pytest.raises(HillshadeError, match="exceed the body's radius"):
-        bodysun.sun_vector(moon, 10.0, 0.0, 1.0e6)
+        cell_suns.sun_vector(moon, 10.0, 0.0, 1.0e6)
 
 
 def _lonlat(dem):
@@ -79,9 +79,9 @@ def test_cell_suns_on_a_sphere(crs, transform):
     dem = memory_dem(np.zeros((60, 60), np.float32), transform, crs)
     body = dem_body(dem)
     lat_s, lon_s = 31.0, 57.3
-    fr = bodysun.CellFrames.of_dem(dem)
+    fr = cell_suns.CellFrames.of_dem(dem)
     assert fr.nbytes == 24 * 60 * 60
-    az, el = bodysun.cell_suns(fr, body, bodysun.sun_vector(body, lat_s, lon_s, FAR))
+    az, el = cell_suns.cell_suns(fr, body, cell_suns.sun_vector(body, lat_s, lon_s, FAR))
     lon, lat = _lonlat(dem)
     p, l = np.radians(lat), np.radians(lon)
     ps, ls = math.radians(lat_s), math.radians(lon_s)
@@ -106,7 +106,7 @@ def test_theta_is_the_grid_azimuth_of_true_north(crs, transform, geod):
     also with columns running west and rows north)."""
     from pyproj import CRS, Geod, Transformer
     dem = memory_dem(np.zeros((40, 40), np.float32), transform, crs)
-    fr = bodysun.CellFrames.of_dem(dem)
+    fr = cell_suns.CellFrames.of_dem(dem)
     theta = np.degrees(np.arctan2(fr.sth.astype(float), fr.cth.astype(float)))
     assert np.abs(theta).max() > 1.0          # the test means something
     lon, lat = _lonlat(dem)
@@ -117,14 +117,14 @@ def test_theta_is_the_grid_azimuth_of_true_north(crs, transform, geod):
         lon1, lat1, _ = Geod(**geod).fwd(lon, lat, np.full(lon.shape, a), np.full(lon.shape, 1.0))
         x1, y1 = to_crs.transform(lon1, lat1)
         grid_az = np.degrees(np.arctan2(np.asarray(x1) - x0, np.asarray(y1) - y0))
-        d = (bodysun.grid_azimuth(fr, a) - grid_az + 180.0) % 360.0 - 180.0
+        d = (cell_suns.grid_azimuth(fr, a) - grid_az + 180.0) % 360.0 - 180.0
         assert np.abs(d).max() < 1e-3, a
 
 
 def test_geographic_theta_is_zero_and_frames_match_lonlat():
     dem = memory_dem(np.zeros((7, 9), np.float32), Affine(0.25, 0, 10.0, 0, -0.25, -40.0),
                      MOON_GEOGRAPHIC)
-    fr = bodysun.CellFrames.of_dem(dem)
+    fr = cell_suns.CellFrames.of_dem(dem)
     assert (fr.cth == 1).all() and (fr.sth == 0).all()
     lon, lat = _lonlat(dem)
     np.testing.assert_allclose(np.degrees(np.arcsin(fr.slat.astype(float))), lat, atol=1e-4)
@@ -134,4 +134,4 @@ def test_geographic_theta_is_zero_and_frames_match_lonlat():
 
 def test_frames_need_a_crs():
     with pytest.raises(HillshadeError, match="CRS"):
-        bodysun.CellFrames.from_transform(Affine(1, 0, 0, 0, -1, 0), None, (3, 3))
+        cell_suns.CellFrames.from_transform(Affine(1, 0, 0, 0, -1, 0), None, (3, 3))

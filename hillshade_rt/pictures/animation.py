@@ -19,8 +19,8 @@ import math
 
 import numpy as np
 
-from .errors import HillshadeError, UsageProblem
-from .geometry import Grid
+from ..errors import HillshadeError, UsageProblem
+from ..model.geometry import Grid
 from .preview import TINT
 
 LEVELS = 80                   # grey levels of the relief (0.25 .. 1 of white)
@@ -64,7 +64,7 @@ def subsample(z: np.ndarray, grid: Grid, n: int) -> tuple[np.ndarray, Grid]:
 def relief_levels(zs: np.ndarray, grid: Grid, azimuth: float, elevation: float) -> np.ndarray:
     """uint8 grey level (0 .. LEVELS-1) per cell of ``zs``: 0.25 + 0.75 cos i, lit from
     ``azimuth``, ``elevation`` (at least 5 degrees: a low sun would make the picture black)."""
-    from .algorithms.relief import incidence
+    from ..algorithms.relief import incidence
     cosi = np.clip(np.nan_to_num(incidence(zs, grid, azimuth, max(elevation, 5.0)), nan=0.0),
                    0.0, 1.0)
     return np.rint(cosi * (LEVELS - 1)).astype(np.uint8)

@@ -20,8 +20,8 @@ import time
 
 import numpy as np
 
-from .algorithms._cuda import INSTALL_HINT, grid_2d, kernel, numba_cuda, simulator_enabled
-from .errors import HillshadeError
+from ..algorithms._cuda import INSTALL_HINT, grid_2d, kernel, numba_cuda, simulator_enabled
+from ..errors import HillshadeError
 
 PINNED_MIN_BYTES = 1 << 20   # transfers at least this large go through page-locked host memory
 
@@ -129,7 +129,7 @@ class GpuDem:
         if z.dtype != np.float32 or z.ndim != 2:
             raise TypeError("heights must be a 2-D float32 array")
         if zrange is None:
-            from .algorithms.counts import z_range
+            from ..algorithms.counts import z_range
             zrange = z_range(z)
         self.zmin, self.zmax, self.void = float(zrange[0]), float(zrange[1]), bool(zrange[2])
         self.shape = z.shape
@@ -245,7 +245,7 @@ class GpuDem:
         """The maximum-height pyramid's kernel arguments (``algorithms.pyramid``) on the device,
         built on the host and uploaded once for all suns; with ``use`` False, the plain march's
         placeholders."""
-        from .algorithms import pyramid
+        from ..algorithms import pyramid
         if not use:
             if getattr(self, "_no_pyramid", None) is None:
                 self._no_pyramid = tuple(self.upload(a) for a in pyramid.NO_PYRAMID[:3]) + (
@@ -268,7 +268,7 @@ class GpuDem:
         patched on the host and only those uploaded. The host array the GpuDem was made of is
         written too (``shading.Shader.update`` has done so already: the same array). ``zrange``
         (lowest, highest, any void) of the edited DEM when the caller knows it, else computed."""
-        from .algorithms import frames
+        from ..algorithms import frames
         heights = np.ascontiguousarray(heights, dtype=np.float32)
         h, w = heights.shape
         rows, cols = self.shape
@@ -296,7 +296,7 @@ class GpuDem:
                         self._pyramid[0][a:b].copy_to_device(data[a:b], stream=self.stream)
             self.stream.synchronize()
         if zrange is None:
-            from .algorithms.counts import z_range
+            from ..algorithms.counts import z_range
             zrange = z_range(self._host_z)
         self.zmin, self.zmax, self.void = float(zrange[0]), float(zrange[1]), bool(zrange[2])
 
@@ -304,7 +304,7 @@ class GpuDem:
         """The heights in the canonical (line, position) order of ``frame`` (``frames.Frame``),
         as a contiguous device array: lines are contiguous, so kernels that walk along them read
         coalesced memory. Kept for the next sun position in the same octant."""
-        from .algorithms import frames
+        from ..algorithms import frames
         key = (frame.dom_col, frame.flip_line, frame.flip_pos)
         if key != self._canon_key:
             rows, cols = self.shape
@@ -320,7 +320,7 @@ class GpuDem:
                     stats: dict | None = None, **options) -> np.ndarray:
         """The mask for one sun (``geometry.sun_rays``) by ``algorithm``; the heights stay on the
         device for the next call."""
-        from .algorithms import REGISTRY, gpu_unsupported
+        from ..algorithms import REGISTRY, gpu_unsupported
         why = gpu_unsupported(algorithm, options)
         if why:
             raise HillshadeError(why)

@@ -11,7 +11,7 @@ import math
 
 import numpy as np
 
-from .geometry import Grid
+from ..model.geometry import Grid
 
 TINT = np.array([0.30, 0.42, 0.85], np.float32)   # what a cell fully in shadow is multiplied by
 SUN = np.array([1.0, 0.86, 0.45], np.float32)     # warm tint for sun hours
@@ -29,7 +29,7 @@ def relief_rgb(z: np.ndarray, grid: Grid, azimuth: float = 315.0, elevation: flo
     shade: 0..1 per cell (1 = in shadow), tinted blue; warm: 0..1 per cell (e.g. sun hours over
     their maximum), from dark to warm; ramp: 0..1 per cell coloured with ``RAMP`` (low purple,
     high yellow) over the relief. All full-size; NaN is treated as a void."""
-    from .algorithms.relief import incidence
+    from ..algorithms.relief import incidence
 
     rows, cols = z.shape
     n = max(1, math.ceil(max(rows, cols) / max_side))

@@ -26,9 +26,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .earth import Body
-from .errors import HillshadeError, UsageProblem
-from .geometry import WGS84_A, WGS84_B
+from ..model.earth import Body
+from ..errors import HillshadeError, UsageProblem
+from ..model.geometry import WGS84_A, WGS84_B
 
 AU = 149597870700.0
 SUN_RADIUS_M = 695700000.0
@@ -144,7 +144,7 @@ class CellFrames:
         way, clamped at the poles, so that a cell on a pole takes its longitude's meridian)."""
         from pyproj import CRS as PCRS, Transformer
 
-        from .geometry import orientation
+        from ..model.geometry import orientation
         if crs is None or transform is None:
             raise HillshadeError("per-cell suns need a DEM with a geotransform and a CRS")
         orientation(transform)
@@ -200,7 +200,7 @@ def cell_suns(frames: CellFrames, body: Body, sun_xyz, heights=None, lift: float
     az = np.empty(shape, np.float64)
     el = np.empty(shape, np.float64)
     sx, sy, sz = (float(v) for v in sun_xyz)
-    from .algorithms.subsolar import cell_suns_cpu
+    from ..algorithms.subsolar import cell_suns_cpu
     cell_suns_cpu(frames.slat, frames.clat, frames.slon, frames.clon, z, float(body.a), _e2(body), sx, sy, sz, float(lift), az, el)
     return az, el
 

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .errors import HillshadeError, HillshadeWarning, UsageProblem
+from ..errors import HillshadeError, HillshadeWarning, UsageProblem
 
 UTC = _dt.timezone.utc
 STANDARD_PRESSURE_HPA = 1013.25
@@ -620,13 +620,13 @@ class SunOver:
     tiles: list[Region] | None = None
     tile_deviation_deg: float = 0.0  # estimated largest deviation inside one tile
     # the SPA's n x n lattice over the raster as unit vectors (east, north, up; grid azimuth and
-    # apparent elevation): each cell's own sun, interpolated (algorithms.field)
+    # apparent elevation): each cell's own sun, interpolated (algorithms.per_cell_sun)
     lattice: np.ndarray | None = None
     field_deviation_deg: float | None = None   # interpolated vs SPA at the tile centres
 
     @property
     def fieldwise(self) -> bool:
-        """Whether each cell may take its own sun from the lattice (``algorithms.field``): the
+        """Whether each cell may take its own sun from the lattice (``algorithms.per_cell_sun``): the
         sun varies across the raster and is up at every node, so at every cell (the
         interpolated vector is a convex combination of the nodes': it stays above the lowest
         node's elevation and within the nodes' azimuths). Where it is down somewhere (the
@@ -692,7 +692,7 @@ def _angle(u, v):
 
 
 def _field_deviation(lattice, rows, cols, r, c, spa_vectors) -> float:
-    """Largest angle (deg) between the interpolated sun of ``algorithms.field`` and the SPA's at
+    """Largest angle (deg) between the interpolated sun of ``algorithms.per_cell_sun`` and the SPA's at
     the places (r, c): how well the lattice stands for the SPA between its nodes."""
     worst = 0.0
     for k in range(len(r)):

@@ -15,10 +15,10 @@ import sys
 import numpy as np
 import pytest
 
-from hillshade_rt import gpu
+from hillshade_rt.engine import gpu
 from hillshade_rt.algorithms import ALGORITHMS, GPU_ALGORITHMS, horizon
 from hillshade_rt.errors import HillshadeError
-from hillshade_rt.geometry import Grid, sun_rays
+from hillshade_rt.model.geometry import Grid, sun_rays
 from hillshade_rt.testing import box_terrain, fractal_terrain, read_band, write_geotiff
 
 AZIMUTHS = (0.0, 45.0, 90.0, 135.0, 163.0, 203.7, 270.0, 315.0)
@@ -339,8 +339,8 @@ def test_kernels_compile_for_a_real_gpu():
 def test_gpu_curvature_soft_and_tiles_equal_cpu():
     """Earth curvature (brute and the horizon scan march the curved ray on the device), soft
     shadows (horizon angles on the device) and a per-tile sun, through the Shader, GPU vs CPU."""
-    from hillshade_rt.shading import Shader, render
-    from hillshade_rt.sun import Region, SunOver
+    from hillshade_rt.engine.shader import Shader, render
+    from hillshade_rt.model.sun import Region, SunOver
 
     z = fractal_terrain(16, 18, 7, relief=2000.0)
     z[4, 5] = np.nan
@@ -369,7 +369,7 @@ def test_pyramid_march_on_the_gpu_equals_the_plain_march():
     geographic grid), Earth curvature, non-special azimuths; ``pyramid=False`` on the GPU is the
     plain march too."""
     from hillshade_rt.algorithms import brute
-    from hillshade_rt.geometry import curvature_per_m2
+    from hillshade_rt.model.geometry import curvature_per_m2
     rng = np.random.default_rng(3)
     z = (rng.random((20, 26)) * 300).astype(np.float32)
     z[5:7, 8:11] = np.nan
@@ -395,7 +395,7 @@ def test_point_light_gpu_equals_cpu(pyramid):
     arrays.point_light_mask(backend="gpu") is that kernel."""
     from hillshade_rt.algorithms import point
     from hillshade_rt.algorithms.horizon import bilinear
-    from hillshade_rt.arrays import point_light_mask
+    from hillshade_rt.engine.arrays import point_light_mask
     z = _terrain(19, 23, seed=8)
     g = gpu.GpuDem(z)
     lights = [(9.3, 11.6, 400.0), (4.2, 17.5, float(bilinear(z, 4.2, 17.5)) + 3.0),

@@ -3,7 +3,7 @@ shaded relief and sun hours on top of the algorithms.
 
 A :class:`Shader` holds the heights, their ground geometry and everything that does not depend on
 the sun (height range, numba kernels compiled, the heights uploaded to the GPU, the Earth's radius
-for curvature). Each sun is a :class:`~hillshade_rt.sun.SunOver`: one vector for the raster, or
+for curvature). Each sun is a :class:`~hillshade_rt.model.sun.SunOver`: one vector for the raster, or
 one per tile when the sun's direction varies across a large raster; a tile is computed on its own
 window plus the halo toward the sun that can shadow it (the rays of its cells rise above the
 highest cell within that distance), so a tile's cells get exactly what a run of the whole raster
@@ -24,11 +24,11 @@ import math
 
 import numpy as np
 
-from .algorithms import REGISTRY, lookup
-from .errors import HillshadeError
-from .earth import Body, curvature_coefficient, curvature_report, refraction_for
-from .geometry import Grid, SunRays, sun_rays
-from .sun import SUN_RADIUS_DEG, Region, SunOver, disk_fraction
+from ..algorithms import REGISTRY, lookup
+from ..errors import HillshadeError
+from ..model.earth import Body, curvature_coefficient, curvature_report, refraction_for
+from ..model.geometry import Grid, SunRays, sun_rays
+from ..model.sun import SUN_RADIUS_DEG, Region, SunOver, disk_fraction
 
 # a tile whose window (tile + halo) holds more than this many times its own cells is marched by
 # brute over its own cells only (exact), instead of running the algorithm over the whole window
@@ -118,7 +118,7 @@ def warm_up(algorithm: str, grid: Grid | None = None, azimuth: float = 203.7,
 def choose_backend(backend: str, algorithm: str, options: dict) -> str:
     """'cpu' or 'gpu' for a request: ``auto`` takes the GPU only when there is a real device and
     the options have GPU kernels; ``gpu`` with options that have none is an error."""
-    from .algorithms import gpu_unsupported
+    from ..algorithms import gpu_unsupported
     from .gpu import resolve_backend
     why = gpu_unsupported(algorithm, options)
     if backend == "gpu" and why:
@@ -137,7 +137,7 @@ class Shader:
     the highest cell or leaves the raster). refraction_k: terrestrial refraction coefficient
     (default 0.13 on the Earth, 0 elsewhere).
 
-    A window of a larger raster (``run.plan``): ``zrange`` and ``extent_m`` are the whole raster's
+    A window of a larger raster (``engine.windows``): ``zrange`` and ``extent_m`` are the whole raster's
     (so that curvature "auto" decides as for the whole), and ``halo_ready`` says that ``z``
     already holds the halo of every region asked for: each region is computed on all of ``z``.
     ``local_range``: bounds of the window's heights (known from the statistics pass; else
@@ -159,7 +159,7 @@ class Shader:
                  halo_ready: bool = False, local_range: tuple[float, float] | None = None,
                  carry=None, place=None, sun_field: bool = True,
                  survey: tuple[int, float, float] | None = None, lift: float = 0.0):
-        from .algorithms import for_lift
+        from ..algorithms import for_lift
         lookup(algorithm)       # an unknown name: a HillshadeError listing the known ones
         lift = float(lift)
         if not (math.isfinite(lift) and lift >= 0.0):
@@ -188,8 +188,8 @@ class Shader:
                            and np.isfinite(z).any() else (self.zmin, self.zmax))
         self.local_range = local_range
         self.carry, self.place = carry, place
-        # suns that vary across the raster: every cell's own sun (algorithms.field) instead of
-        # one per tile, in memory and in windows alike (``run.plan.Job.pieces``); False: tiles
+        # suns that vary across the raster: every cell's own sun (algorithms.per_cell_sun) instead of
+        # one per tile, in memory and in windows alike (``engine.windows.Job.pieces``); False: tiles
         self.sun_field = sun_field
         self._gpu = None
         self._pyramid = None     # the maximum-height pyramid of the whole raster, built once
@@ -222,7 +222,7 @@ class Shader:
         Returns the new ``version`` (the number of updates so far). A product rendered at
         version v can be brought up to date with ``render(..., previous=(product, v))``, which
         re-shades only the cells the edits since v can have changed."""
-        from .algorithms.counts import valid_range
+        from ..algorithms.counts import valid_range
         if self.halo_ready or self.place is not None or self.carry is not None:
             raise HillshadeError("update: this Shader lights a window of a larger raster; "
                                  "make a Shader of the whole DEM to edit it")
@@ -342,7 +342,7 @@ class Shader:
 
     def _warm_up(self, azimuth: float, elevation: float, soft: bool, incidence: bool,
                  field: bool) -> None:
-        from .algorithms.counts import code_counts
+        from ..algorithms.counts import code_counts
         el = min(max(elevation, 1.0), 89.0)
         if self.backend != "cpu":
             for name in (("brute",) if self.algorithm == "auto" else (self.algorithm,)):
@@ -361,7 +361,7 @@ class Shader:
             lattice = None
             if field and field_method(self.algorithm, self.options, soft):
                 from types import SimpleNamespace
-                from .algorithms.field import lattice_vectors
+                from ..algorithms.per_cell_sun import lattice_vectors
                 gi, gj = np.meshgrid(np.linspace(-0.2, 0.2, 3), np.linspace(-0.2, 0.2, 3),
                                      indexing="ij")
                 lattice = SimpleNamespace(azimuth=azimuth, elevation=el,
@@ -376,7 +376,7 @@ class Shader:
                     sh.cast_field(lattice, {})
             code_counts(np.zeros((64, 64), np.uint8))    # the report's counts (>= 64 rows)
         if incidence:
-            from .algorithms.relief import incidence as inc
+            from ..algorithms.relief import incidence as inc
             small4 = Grid.uniform(4, 4, *self.grid.centre_spacing(), self.grid.col_sign,
                                   self.grid.row_sign)
             inc(np.zeros((4, 4), np.float32), small4, azimuth, elevation)
@@ -445,7 +445,7 @@ class Shader:
         """The maximum-height pyramid of ``z`` (kept for the next suns when ``z`` is the whole
         raster; built only when a march first uses it), or False when the options ask for the
         plain march."""
-        from .algorithms.pyramid import MaxPyramid
+        from ..algorithms.pyramid import MaxPyramid
         if self.options.get("pyramid", True) is False:
             return False
         if not whole:
@@ -459,7 +459,7 @@ class Shader:
         ``algorithms.auto.choose`` picks (counted in ``stats``, else ``self.stats``)."""
         if self.algorithm != "auto":
             return self.algorithm
-        from .algorithms import auto
+        from ..algorithms import auto
         if whole:
             if self._survey is None:
                 self._survey = auto.survey(z)
@@ -472,8 +472,8 @@ class Shader:
 
     def cast(self, region: Region, stats: dict | None = None) -> np.ndarray:
         """uint8 cast-shadow mask of ``region`` (1 shadow, 0 lit, 255 void)."""
-        from .algorithms import auto, brute
-        from .algorithms.frames import uniform_rays
+        from ..algorithms import auto, brute
+        from ..algorithms.frames import uniform_rays
         sub = self.z[region.rows, region.cols]
         if region.elevation <= 0:     # night
             return np.where(np.isnan(sub), np.uint8(255), np.uint8(1)).astype(np.uint8)
@@ -483,7 +483,7 @@ class Shader:
         zmax = self.local_range[1] if whole else float(np.nanmax(z))
         algorithm = self.choose(z, whole, rays, stats)
         options = dict(self.options)
-        # a carrier is only given for smap on the CPU (run.plan.Job.carrier); it needs one ray
+        # a carrier is only given for smap on the CPU (engine.windows.Job.carrier); it needs one ray
         carried = self.carry is not None and whole and uniform_rays(rays)
         by_brute = (not carried and self.backend == "cpu" and z.size > sub.size
                     and (auto.tile_by_brute(z.size, sub.size, (self.zmin, zmax), rays)
@@ -524,7 +524,7 @@ class Shader:
 
     def field_ok(self, sun: SunOver, soft: bool) -> bool:
         """Whether a sun that varies across the raster is marched with every cell's own
-        direction (``algorithms.field``) instead of tile by tile: hard shadows of an exact
+        direction (``algorithms.per_cell_sun``) instead of tile by tile: hard shadows of an exact
         march-based method (soft shadows, smap, the horizon scan, sweep and the plain march,
         ``--no-pyramid``, keep the tiles)."""
         return self.sun_field and sun.fieldwise and field_method(self.algorithm, self.options,
@@ -532,7 +532,7 @@ class Shader:
 
     def field_place(self):
         """(r0, c0, rows, cols): where ``z`` lies in the raster the sun's lattice spans (a
-        window of a larger raster, ``run.plan``), for ``algorithms.field``."""
+        window of a larger raster, ``engine.windows``), for ``algorithms.per_cell_sun``."""
         if self.place is None:
             return (0, 0, *self.z.shape)
         (r0, _, c0, _), shape = self.place
@@ -543,15 +543,15 @@ class Shader:
         on ``sun.lattice`` (1 shadow, 0 lit, 255 void; a cell whose sun is below the horizon
         is in shadow). The method and the curvature are the raster's centre sun's
         (``sun.azimuth``, ``sun.elevation``), in a window as on the whole raster."""
-        from .algorithms import field
+        from ..algorithms import per_cell_sun
         c = self.curvature_used_for(sun.azimuth, max(sun.elevation, 1e-6))
         zmax = self.local_range[1]
         place = self.field_place()
         if self.backend == "gpu":
-            out = field.shadow_mask_gpu(self._gpu_dem(self.z, True), self.grid, sun.lattice, c,
+            out = per_cell_sun.shadow_mask_gpu(self._gpu_dem(self.z, True), self.grid, sun.lattice, c,
                                         zmax, place, self.lift)
         else:
-            from .algorithms import bounds
+            from ..algorithms import bounds
             # the method for the centre's sun (auto: its estimate), with every cell's own ray
             name = self.choose(self.z, True, sun_rays(self.grid, sun.azimuth,
                                                       min(max(sun.elevation, 1e-6), 90.0)),
@@ -561,7 +561,7 @@ class Shader:
                                                self.pyramid(self.z, True), self.local_range,
                                                place)
             else:
-                out = field.shadow_mask(self.z, self.grid, sun.lattice, c, zmax,
+                out = per_cell_sun.shadow_mask(self.z, self.grid, sun.lattice, c, zmax,
                                         self.pyramid(self.z, True), place, self.lift)
         if stats is not None:
             stats["sun_field"] = stats.get("sun_field", 0) + 1
@@ -570,7 +570,7 @@ class Shader:
     def visible_fraction(self, region: Region) -> np.ndarray:
         """float32 visible fraction (0..1) of the solar disk over ``region`` (NaN on voids),
         from the exact horizon angle toward the sun against its elevation +- its radius."""
-        from .algorithms import horizon as hz
+        from ..algorithms import horizon as hz
         sub = self.z[region.rows, region.cols]
         if region.elevation + SUN_RADIUS_DEG <= 0:
             return np.where(np.isnan(sub), np.float32(np.nan), np.float32(0.0)).astype(np.float32)
@@ -593,7 +593,7 @@ class Shader:
 
     def incidence(self, region: Region) -> np.ndarray:
         """cos of the incidence angle of the sun of ``region`` on its cells (float32, NaN voids)."""
-        from .algorithms.relief import incidence
+        from ..algorithms.relief import incidence
         return incidence(self.z, self.grid, region.azimuth, region.elevation, region.rows,
                          region.cols)
 
@@ -610,7 +610,7 @@ KINDS = ("shadow", "classes", "hillshade", "sun")
 
 def field_method(algorithm: str, options: dict, soft: bool) -> bool:
     """Whether this method marches each cell with its own sun when the sun varies across the
-    raster (``Shader.field_ok``; ``run.plan.Job.pieces`` plans such windows)."""
+    raster (``Shader.field_ok``; ``engine.windows.Job.pieces`` plans such windows)."""
     spec = REGISTRY.get(algorithm)
     return (not soft and spec is not None and spec.field_march
             and options.get("pyramid", True) is not False)
@@ -681,7 +681,7 @@ def rerender(shader: Shader, sun: SunOver, kind: str, soft: bool, self_shadow: b
 
     The number of cells made again is added to ``stats["rerendered_cells"]`` (full renders
     count in ``stats["rerender_full"]``); ``stats`` None: ``shader.stats``."""
-    from .algorithms import brute
+    from ..algorithms import brute
     counts = shader.stats if stats is None else stats
     prev, since = previous
     edits = shader.edits_since(since)

@@ -9,8 +9,9 @@ from pyproj import CRS as PCRS, Geod
 from rasterio.crs import CRS
 
 from hillshade_rt import HillshadeError
-from hillshade_rt.geometry import (check_elevation, grid_from_transform, normalize_azimuth,
-                                   sincos_deg, sun_rays, Grid)
+from hillshade_rt.model.geometry import (
+    check_elevation, grid_from_transform, normalize_azimuth, sincos_deg, sun_rays, Grid
+)
 
 
 def test_normalize_azimuth():

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import UsageProblem
+from ..errors import UsageProblem
 
 
 @dataclass(frozen=True)
@@ -63,7 +63,7 @@ def product(kind: str, soft: bool = False) -> Product:
 
 def mask_stats(mask: np.ndarray) -> dict:
     """Counts of shadow / lit / nodata cells of a uint8 mask (1 / 0 / 255)."""
-    from .algorithms.counts import code_counts
+    from ..algorithms.counts import code_counts
     counts = code_counts(mask)
     shadow, lit, nodata = int(counts[1]), int(counts[0]), int(counts[255])
     valid = shadow + lit
@@ -76,7 +76,7 @@ def product_stats(kind: str, soft: bool, arr: np.ndarray) -> dict:
     if kind == "shadow" and not soft:
         return mask_stats(arr)
     if kind == "classes":
-        from .algorithms.counts import code_counts
+        from ..algorithms.counts import code_counts
         counts = code_counts(arr)
         shadow, lit, nodata = int(counts[1] + counts[2]), int(counts[0]), int(counts[255])
         valid = shadow + lit

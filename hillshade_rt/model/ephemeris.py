@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import HillshadeError
+from ..errors import HillshadeError
 
 AU_M = 149597870700.0
 

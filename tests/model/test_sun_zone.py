@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from affine import Affine
 
-from hillshade_rt.sun import SunRequest, dem_site, zone_at, zone_label
+from hillshade_rt.model.sun import SunRequest, dem_site, zone_at, zone_label
 from hillshade_rt.testing import fractal_terrain, memory_dem, repo_root
 
 UTC = dt.timezone.utc
@@ -63,7 +63,7 @@ def test_the_open_ocean_has_nautical_zones(lon, lat, name, hours):
 
 
 def test_without_zone_data_the_nearest_whole_hour(monkeypatch):
-    import hillshade_rt.sun as sun
+    import hillshade_rt.model.sun as sun
     monkeypatch.setattr(sun, "zone_name_at", lambda lon, lat: None)
     tz, name = zone_at(86.9, 27.9)        # Everest: UTC+5:45 in Nepal, 6 h by its longitude
     assert name == "Etc/GMT-6" and offset(tz, dt.datetime(2026, 1, 1, tzinfo=UTC)) == \

@@ -4,7 +4,7 @@ one-line errors naming the line."""
 import numpy as np
 import pytest
 
-from hillshade_rt.ephemeris import AU_M, read_subsolar, subsolar_point
+from hillshade_rt.model.ephemeris import AU_M, read_subsolar, subsolar_point
 from hillshade_rt.errors import HillshadeError
 
 

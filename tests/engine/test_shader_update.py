@@ -15,9 +15,9 @@ from hillshade_rt.algorithms import REGISTRY
 from hillshade_rt.algorithms.brute import march_box, shadow_mask
 from hillshade_rt.algorithms.pyramid import MaxPyramid
 from hillshade_rt.errors import HillshadeError
-from hillshade_rt.geometry import Grid, sun_rays
-from hillshade_rt.shading import Shader, render
-from hillshade_rt.sun import SunOver
+from hillshade_rt.model.geometry import Grid, sun_rays
+from hillshade_rt.engine.shader import Shader, render
+from hillshade_rt.model.sun import SunOver
 from hillshade_rt.testing import fractal_terrain
 
 
@@ -237,7 +237,7 @@ def test_a_sun_at_night_or_per_tile_renders_in_full():
 # -- the GPU (numba's CUDA simulator unless NUMBA_ENABLE_CUDASIM=0) ---------------------------
 
 def test_gpudem_update_uploads_only_the_window_and_matches_a_new_upload():
-    from hillshade_rt import gpu
+    from hillshade_rt.engine import gpu
     from hillshade_rt.algorithms import frames
     z = fractal_terrain(13, 17, 4, relief=80.0)
     g = gpu.GpuDem(z)

@@ -37,7 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import HillshadeError
+from ..errors import HillshadeError
 
 CLEAR_SKY_MODELS = ("ineichen", "haurwitz")
 SKY_MODELS = ("isotropic", "perez")
@@ -199,7 +199,7 @@ def read_series(path: str, tz=None):
     offset, or local times in zone ``tz``), strictly increasing; values in W/m². Returns
     (unix seconds, ghi, dni or None, dhi or None)."""
     import csv
-    from .sun import parse_time
+    from ..model.sun import parse_time
     name = os.path.basename(path)
     try:
         fh = open(path, newline="", encoding="utf-8-sig")
@@ -262,7 +262,7 @@ def series_at(times, unix, *columns, path: str = "the series"):
     """Each of ``columns`` (values at ``unix`` seconds) linearly interpolated at the sample
     ``times``; a sample outside the series' first..last time is an error (nothing is
     extrapolated)."""
-    from .sun import iso
+    from ..model.sun import iso
     ts = np.array([t.timestamp() for t in times], np.float64)
     if ts.size and (ts.min() < unix[0] or ts.max() > unix[-1]):
         show = times[0].tzinfo
@@ -310,10 +310,10 @@ def dozier_view(z, grid, directions: int, backend: str = "cpu", curvature="auto"
     exact horizon in ``directions`` azimuths, as ``hillshade-rt skyview --definition dozier``
     (curvature "auto": on for a raster more than 1 km across); the horizons seen from ``lift``
     metres above each cell (--height-above-ground), the surface's slope and aspect the cell's."""
-    from .algorithms import horizon as hz
-    from .algorithms.skyview import sky_view
-    from .geometry import equal_azimuths
-    from .shading import horizon_shader
+    from ..algorithms import horizon as hz
+    from ..algorithms.skyview import sky_view
+    from ..model.geometry import equal_azimuths
+    from .shader import horizon_shader
     shader = horizon_shader(z, grid, backend, curvature, refraction_k, body)
     if backend == "gpu":
         from .gpu import GpuDem
@@ -333,7 +333,7 @@ def dozier_view(z, grid, directions: int, backend: str = "cpu", curvature="auto"
 
 def slope_terms(z, grid) -> tuple[np.ndarray, np.ndarray]:
     """(cos S, sin S) of every cell's slope S (Horn's normals, float64, NaN voids)."""
-    from .algorithms.relief import incidence
+    from ..algorithms.relief import incidence
     cos_s = incidence(z, grid, 0.0, 90.0).astype(np.float64)
     return cos_s, np.sqrt(np.maximum(1.0 - cos_s * cos_s, 0.0))
 
@@ -352,7 +352,7 @@ def cos_incidence(shader, sun) -> np.ndarray:
 
 def is_dark(sun, soft: bool) -> bool:
     """The sun (or its disk, with ``soft``) is below the horizon everywhere: nothing is lit."""
-    from .sun import SUN_RADIUS_DEG
+    from ..model.sun import SUN_RADIUS_DEG
     top = max([r.elevation for r in sun.tiles] if sun.tiles else [sun.elevation])
     return top + (SUN_RADIUS_DEG if soft else 0.0) <= 0.0
 
@@ -370,7 +370,7 @@ def accumulate(shader, suns, weights, sky: Sky, vd: np.ndarray, albedo: float, *
     shadows (``shading.render``) are computed only for samples with the sun up and light to
     cast; ``timer`` (``run.report.Timer``-like) times them as "shadows" and the rest as
     "irradiance"; ``progress`` wraps the loop (a progress bar)."""
-    from .shading import render
+    from .shader import render
 
     def direct(s, timed):
         with timed("shadows"):

@@ -1,11 +1,11 @@
 """Compile every CUDA kernel of hillshade-rt to PTX for a real GPU, on a machine without one.
 
-numba's CUDA simulator (tests/test_gpu.py) runs the kernels as Python: it proves the arithmetic,
+numba's CUDA simulator (tests/engine/test_gpu.py) runs the kernels as Python: it proves the arithmetic,
 not that numba-cuda can type and compile them. This script runs the real GPU drivers
 (``GpuDem.shadow_mask`` for every algorithm, horizon angles) with a stand-in for the device
 runtime: arrays stay numpy arrays, and each kernel launch compiles the kernel with numba-cuda's
 compiler and NVVM for compute capability 9.0 (H100) with the launch's own argument types instead
-of running it. Run by tests/test_gpu.py in a subprocess (NUMBA_ENABLE_CUDASIM=0); prints one
+of running it. Run by tests/engine/test_gpu.py in a subprocess (NUMBA_ENABLE_CUDASIM=0); prints one
 JSON line: kernel name -> {"ptx_bytes", "fma"} (fused multiply-adds in the PTX).
 """
 
@@ -25,9 +25,9 @@ def main() -> int:
     import numba.cuda.dispatcher as dispatcher
     from numba import cuda
 
-    from hillshade_rt import gpu
+    from hillshade_rt.engine import gpu
     from hillshade_rt.algorithms import GPU_ALGORITHMS, _cuda, horizon, point
-    from hillshade_rt.geometry import Grid, sun_rays
+    from hillshade_rt.model.geometry import Grid, sun_rays
 
     # device functions are compiled for "the current device": make that an H100 without a GPU
     dispatcher.get_current_device = lambda: types.SimpleNamespace(compute_capability=CC)

@@ -11,12 +11,13 @@ from affine import Affine
 from rasterio.crs import CRS
 
 from hillshade_rt.cli import cli
-from hillshade_rt.shading import Shader, render
-from hillshade_rt.earth import Body
+from hillshade_rt.engine.shader import Shader, render
+from hillshade_rt.model.earth import Body
 from hillshade_rt.errors import HillshadeError
-from hillshade_rt.geometry import Grid, curvature_per_m2, grid_from_transform, sun_rays
-from hillshade_rt.sun import (Atmosphere, Region, SunOver, disk_fraction, parse_step, parse_time,
-                              solar_position, zone)
+from hillshade_rt.model.geometry import Grid, curvature_per_m2, grid_from_transform, sun_rays
+from hillshade_rt.model.sun import (
+    Atmosphere, Region, SunOver, disk_fraction, parse_step, parse_time, solar_position, zone
+)
 from hillshade_rt.testing import fractal_terrain, read_band, write_geotiff
 
 # a 3 km square of 30 m cells near the SPA report's site (Golden, Colorado), UTM 13N
@@ -128,7 +129,7 @@ def test_time_sun_matches_given_sun_in_grid_terms(tmp_path, runner):
 def test_sun_per_tile_equals_each_tiles_own_sun():
     """A 3 x 3 degree geographic DEM: the sun differs across it by more than the tolerance, so
     it is computed per tile; every tile's cells equal a whole-raster run with that tile's sun."""
-    from hillshade_rt.sun import Site, sun_over
+    from hillshade_rt.model.sun import Site, sun_over
     rows, cols = 90, 90
     z = fractal_terrain(rows, cols, 11, relief=6000.0)
     tr = Affine(3.0 / cols, 0, 7.0, 0, -3.0 / rows, 47.5)

@@ -44,9 +44,9 @@ from ..algorithms._jitcache import njit
 
 from ..algorithms import REGISTRY
 from ..errors import AllNodata, HillshadeError
-from ..geometry import Grid
+from ..model.geometry import Grid
 from ..io.source import READ_CHUNK, DemSource, Reader
-from ..preview import every_nth
+from ..pictures.preview import every_nth
 
 STAT_BLOCK = 256          # cells per side of the blocks whose height range bounds the halos
 ALIGN = 256               # output regions are multiples of the output's block size
@@ -318,7 +318,7 @@ def window_for(bounds, shape, grid: Grid, azimuth: float, elevation: float, curv
     ranges, tightened until it stops shrinking) and ``margin`` cells all round. ``lift``: the
     rays start that many metres above their cells (``--height-above-ground``): they clear the
     terrain sooner, the halo is shorter."""
-    from ..shading import halo_bounds, reach_m
+    from .shader import halo_bounds, reach_m
     low, _ = stats.range_over(bounds)
     if not math.isfinite(low):          # voids only: nothing to shade, nothing to read around
         return halo_bounds(bounds, shape, grid, azimuth, 0.0, margin)
@@ -375,7 +375,7 @@ def plan(shape, grid: Grid, azimuth: float, elevation: float, curv: float, stats
     ``azimuths``: the lowest and highest azimuth of the cells' rays (a sun per cell): each
     window then holds the halos of both and of ``azimuth``, so every ray in between.
     ``lift``: the rays start that many metres above their cells (``window_for``)."""
-    from ..shading import halo_bounds, reach_m
+    from .shader import halo_bounds, reach_m
     rows, cols = shape
     b = bounds or (0, rows, 0, cols)
     br, bc = b[1] - b[0], b[3] - b[2]
@@ -556,11 +556,11 @@ class Job:
 
     @property
     def k(self) -> float:
-        from ..earth import refraction_for
+        from ..model.earth import refraction_for
         return refraction_for(self.body, self.refraction_k)
 
     def curv(self, azimuth: float, elevation: float) -> float:
-        from ..earth import curvature_coefficient
+        from ..model.earth import curvature_coefficient
         return curvature_coefficient(self.curvature, self.body, self.k, self.extent_m,
                                      self.zrange, azimuth, elevation)
 
@@ -581,7 +581,7 @@ class Job:
         return BandCarry(most)
 
     def shader(self, z: np.ndarray, window, local_range=None, carry=None):
-        from ..shading import Shader
+        from .shader import Shader
         return Shader(z, window_grid(self.source.grid, window), self.algorithm, self.options,
                       self.backend, self.curvature, self.refraction_k, self.body, self.zrange,
                       extent_m=self.extent_m, halo_ready=True, local_range=local_range,
@@ -604,8 +604,8 @@ class Job:
         return arr, sh.incidence(region)
 
     def _light(self, z, piece, stats, curvature_used, carry):
-        from ..shading import render_region
-        from ..sun import Region
+        from .shader import render_region
+        from ..model.sun import Region
         sh = self.shader(z, piece.window, piece.zrange,
                          carry if carry is not None else self.carrier())
         rows, cols = piece.inner()
@@ -626,8 +626,8 @@ class Job:
         carried along strips); False for independent tasks (Dask), which carry nothing.
         ``area`` (r0, r1, c0, c1): only the cells there (a tile of the raster, ``--context``):
         the sun's regions cut to it, their windows read from the whole raster."""
-        from ..shading import field_method
-        from ..sun import SUN_RADIUS_DEG
+        from .shader import field_method
+        from ..model.sun import SUN_RADIUS_DEG
         out = []
         shape = self.source.shape
         # a sun per cell, as ``Shader.field_ok`` decides in memory
@@ -662,7 +662,7 @@ class Job:
 
     def warm_up(self, sun) -> None:
         """Compile (or load from numba's cache) what the windows will run."""
-        from ..shading import Shader
+        from .shader import Shader
         z = np.zeros((4, 4), np.float32)     # the kernels' argument types; the grid's spacing
         sh = Shader(z, self.source.grid, self.algorithm, self.options, self.backend,
                     self.curvature, self.refraction_k, self.body, self.zrange,

@@ -2,8 +2,8 @@
 
 import numpy as np
 
-from hillshade_rt.geometry import Grid
-from hillshade_rt.preview import RAMP, panorama_rgb, ramp_colours, relief_rgb, scaled
+from hillshade_rt.model.geometry import Grid
+from hillshade_rt.pictures.preview import RAMP, panorama_rgb, ramp_colours, relief_rgb, scaled
 
 
 def test_ramp_runs_from_its_first_to_its_last_colour():

@@ -1,0 +1,1 @@
+"""Pictures of a run: shaded-relief previews and animations."""
