@@ -12,7 +12,7 @@ For each terrain (a power-law spectral fractal, beta 3.2, 30 m cells, 2 km of re
   5-10 deg over most cells);
 * **off-raster**: just beyond the north-east corner, 30 % of the relief over the highest cell;
 
-the point light over the pyramid (``algorithms.point``, the default) is timed against ``brute``
+the point light over the pyramid (``algorithms.point_light``, the default) is timed against ``brute``
 over the pyramid (``algorithms.brute``, the directional mask of the same family: one exact ray
 per cell) for the light's **equivalent sun**: its azimuth from the raster's centre and the
 median, over the cells, of its elevation seen from each cell. Both build their pyramid in the
@@ -37,7 +37,7 @@ import numba
 import numpy as np
 
 from hillshade_rt import read_dem
-from hillshade_rt.algorithms import brute, point
+from hillshade_rt.algorithms import brute, point_light
 from hillshade_rt.algorithms.horizon import bilinear
 from hillshade_rt.model.geometry import Grid, sun_rays
 from hillshade_rt.testing import real_dems, spectral
@@ -111,8 +111,8 @@ def main(argv=None):
           f"numba {numba.__version__}; medians of {a.repeat} alternated rounds, compute only "
           "(pyramids built in each call)\n")
     warm = spectral(64, 3.2, seed=1)
-    point.shadow_mask(warm, 10.0, 20.0, 3000.0)
-    point.shadow_mask(warm, 10.0, 20.0, 3000.0, pyramid=False)
+    point_light.shadow_mask(warm, 10.0, 20.0, 3000.0)
+    point_light.shadow_mask(warm, 10.0, 20.0, 3000.0, pyramid=False)
     brute.shadow_mask(warm, sun_rays(Grid.uniform(64, 64, CELL), 203.7, 7.0, 0.0))
     print("| terrain | light | equivalent sun (az, el) | shadow % | point light (s) | "
           "brute, same sun (s) | point / brute | plain march (s) | plain / point |")
@@ -123,16 +123,16 @@ def main(argv=None):
         for name, row, col, height in lights(z, dx, dy):
             az, el = equivalent_sun(z, dx, dy, row, col, height)
             rays = sun_rays(grid, az, el, 0.0)
-            t = alternated({"point": lambda: point.shadow_mask(z, row, col, height),
+            t = alternated({"point": lambda: point_light.shadow_mask(z, row, col, height),
                             "brute": lambda: brute.shadow_mask(z, rays)}, a.repeat)
-            m = point.shadow_mask(z, row, col, height)
+            m = point_light.shadow_mask(z, row, col, height)
             share = 100.0 * float((m == 1).sum()) / max(1, int((m != 255).sum()))
             if a.no_plain:
                 plain = "–"
                 ratio = "–"
             else:
                 t0 = time.perf_counter()
-                p = point.shadow_mask(z, row, col, height, pyramid=False)
+                p = point_light.shadow_mask(z, row, col, height, pyramid=False)
                 tp = time.perf_counter() - t0
                 assert np.array_equal(p, m), (label, name)      # the same mask
                 plain, ratio = f"{tp:.3f}", f"{tp / t['point']:.1f}x"

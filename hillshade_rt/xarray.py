@@ -235,7 +235,7 @@ def _dem(inp: _Input):
 
 @dataclass(eq=False)
 class _LazySource:
-    """A Dask-backed input as the windowed runs see a DEM (``engine.windows.Job``, ``sun.dem_site``):
+    """A Dask-backed input as the windowed runs see a DEM (``engine.windows.WindowLighting``, ``sun.dem_site``):
     its shape, grid, transform, CRS, and the centre height read from the centre only."""
 
     heights: object
@@ -261,7 +261,7 @@ class _LazySource:
 
 @dataclass(frozen=True)
 class _Frame:
-    """What ``engine.windows.Job`` reads of its DEM: the shape and the grid. Not the Dask array
+    """What ``engine.windows.WindowLighting`` reads of its DEM: the shape and the grid. Not the Dask array
     itself: Dask looks inside a task's dataclass arguments, and the whole input would become a
     dependency of every window's task."""
 
@@ -400,7 +400,7 @@ def _mosaic(blocks):
 
 def _lazy_render(job, sun, stats, z, dtype):
     """One sun's product over the raster as a lazy Dask array: one task per window of the
-    planner (``Job.pieces``: regions of about the input's chunk size, each window with its halo
+    planner (``WindowLighting.pieces``: regions of about the input's chunk size, each window with its halo
     toward the sun), each reading its window from ``z`` (slices of the input's chunks)."""
     import dask
     import dask.array as dka
@@ -429,7 +429,7 @@ def _lazy_job(inp: _Input, req, algorithm, options, ran_on, curvature, refractio
               soft, self_shadow, lift):
     """(job, block statistics, suns, sun info) of a Dask-backed input."""
     from .model.earth import dem_body
-    from .engine.windows import Job
+    from .engine.windows import WindowLighting
     src = _LazySource(inp.heights, inp.grid, inp.transform, inp.crs, inp.path)
     stats = _block_stats(inp.heights)
     if stats.valid == 0:
@@ -437,7 +437,7 @@ def _lazy_job(inp: _Input, req, algorithm, options, ran_on, curvature, refractio
     suns, info = req.suns(src)
     rows, cols = inp.shape
     dx, dy = inp.grid.centre_spacing()
-    job = Job(_Frame(inp.shape, inp.grid), algorithm, options, ran_on, curvature, refraction_k,
+    job = WindowLighting(_Frame(inp.shape, inp.grid), algorithm, options, ran_on, curvature, refraction_k,
               dem_body(src, req.lat), (stats.zmin, stats.zmax),
               math.hypot(cols * dx, rows * dy), kind, soft, self_shadow, 0.2, lift)
     return job, stats, suns, info

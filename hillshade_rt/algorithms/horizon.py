@@ -18,7 +18,7 @@ sample only (the paper's ``sp``): faster, approximate (figures in docs/algorithm
 ``max_distance`` M (metres) ends each ray at its last sample within M of ground distance
 (k <= floor(M / step_m), the row's metres per step). One march (``_march``) serves the raster in
 memory and windows of it (``Marches``: a region's rays carried from window to window, state and
-all, for rasters larger than memory: ``run.reach``), with the same bits.
+all, for rasters larger than memory: ``run.horizon_windows``), with the same bits.
 
 ``hull`` (fast, O(N log N)): Dozier & Frew's idea as in topocalc: along one straight line in the sun
 direction the horizon of every point follows from the upper convex hull of the samples ahead of
@@ -478,7 +478,7 @@ def horizon_angles_gpu(g, rays: SunRays, method: str = "scan", sample_spacing: i
 
 
 # ---------------------------------------------------------------------------------------------
-# the scan in windows (rasters larger than memory: ``run.reach``)
+# the scan in windows (rasters larger than memory: ``run.horizon_windows``)
 
 @njit(cache=True, inline="always")
 def _span_cell(zw, pyr, off, widths, nlev, wr0, wc0, h0, i, j, r, c, n_rows, n_cols, q0, dom_col,

@@ -110,7 +110,7 @@ def encode(direct: np.ndarray, ambient: float, bits: int = 8) -> np.ndarray:
 def _blocked_from(z, row0, col0, h0, row_l, col_l, height_l):
     """True when the line from the point (``row0``, ``col0``, fractional) at height ``h0`` to
     the light passes strictly below the terrain where it crosses the grid lines of its dominant
-    axis strictly between the two (``algorithms.point``'s model; from a cell centre the same
+    axis strictly between the two (``algorithms.point_light``'s model; from a cell centre the same
     crossings and the same arithmetic)."""
     rows, cols = z.shape
     drow = row_l - row0

@@ -297,7 +297,7 @@ def _pair_at(Z, v, j, fl, frr):
 
 @njit(cache=True)
 def _is_black_fast(Z, v, e, rise, tol, npc, oc, op, on, fr, has_prev, has_next):
-    """Piece test with the line's precomputed pieces. Returns 1 Black, 0 White, -1 undecided (a
+    """PlannedWindow test with the line's precomputed pieces. Returns 1 Black, 0 White, -1 undecided (a
     pair is outside the raster or void: the general test must decide)."""
     for i in range(npc):
         ok, cl, cr = _pair_at(Z, v, e + oc[i], fr[i, 0], fr[i, 1])

@@ -98,11 +98,11 @@ def shadow(files, algorithm, curvature, refraction_k, soft, self_shadow, classes
 
 def _point_light(files, position, lonlat, lift, soft, self_shadow, classes, algorithm, curvature,
                  kw):
-    """``shadow --light-position/--light-lonlat``: -> ``run.light.LightConfig`` ->
-    ``run.light`` (which refuses what a point light does not take yet)."""
+    """``shadow --light-position/--light-lonlat``: -> ``run.point_light.LightConfig`` ->
+    ``run.point_light`` (which refuses what a point light does not take yet)."""
     from ..algorithms import options_from_cli
     from ..run.config import PLACE_KEYS
-    from ..run.light import LightConfig, light_shadow
+    from ..run.point_light import LightConfig, light_shadow
     options_from_cli(kw)                       # the algorithms' own flags: none applies here
     sun = {k: kw.pop(k) for k in SUN_KEYS}
     refused = {"--azimuth/--elevation/--time/--start": any(

@@ -439,12 +439,12 @@ def point_light_mask(heights, x: float, y: float, z: float, *,
     """Cast-shadow mask (uint8: 1 shadow, 0 lit, 255 nodata) of a DEM from ``read_dem`` lit by
     a point light at (``x``, ``y``) in the DEM's CRS and ``z`` metres above its datum (a lamp,
     a mast's floodlight, a near sun: issue 21): each cell's ray runs straight to the light and
-    ends there (``algorithms.point``). A light inside the terrain is an error; one above a cell
+    ends there (``algorithms.point_light``). A light inside the terrain is an error; one above a cell
     lights it. ``heights`` may also be an array with the light given in array coordinates
     (``x`` the fractional column, ``y`` the row, cell centres at whole numbers). ``backend``
     as for :func:`shadow_mask` (``auto``: the GPU when there is one); ``pyramid`` False marches
     without the maximum-height pyramid (the same mask); ``stats`` gets ``backend``."""
-    from ..algorithms import point
+    from ..algorithms import point_light
     from ..algorithms.horizon import bilinear
     if hasattr(heights, "heights") and hasattr(heights, "transform"):
         z_arr, t = heights.heights, heights.transform
@@ -472,11 +472,11 @@ def point_light_mask(heights, x: float, y: float, z: float, *,
     if ran_on == "gpu":
         from .gpu import GpuDem
         g = GpuDem(z_arr)
-        out = point.shadow_mask_gpu(g, row, col, float(z), lift, pyramid)
+        out = point_light.shadow_mask_gpu(g, row, col, float(z), lift, pyramid)
         if stats is not None:
             stats["gpu"] = g.report()
         return out
-    return point.shadow_mask(z_arr, row, col, float(z), lift, pyramid)
+    return point_light.shadow_mask(z_arr, row, col, float(z), lift, pyramid)
 
 
 def subsolar_mask(dem, lat: float, lon: float, *, sun_distance: float | None = None,

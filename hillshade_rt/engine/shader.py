@@ -189,7 +189,7 @@ class Shader:
         self.local_range = local_range
         self.carry, self.place = carry, place
         # suns that vary across the raster: every cell's own sun (algorithms.per_cell_sun) instead of
-        # one per tile, in memory and in windows alike (``engine.windows.Job.pieces``); False: tiles
+        # one per tile, in memory and in windows alike (``engine.windows.WindowLighting.pieces``); False: tiles
         self.sun_field = sun_field
         self._gpu = None
         self._pyramid = None     # the maximum-height pyramid of the whole raster, built once
@@ -483,7 +483,7 @@ class Shader:
         zmax = self.local_range[1] if whole else float(np.nanmax(z))
         algorithm = self.choose(z, whole, rays, stats)
         options = dict(self.options)
-        # a carrier is only given for smap on the CPU (engine.windows.Job.carrier); it needs one ray
+        # a carrier is only given for smap on the CPU (engine.windows.WindowLighting.carrier); it needs one ray
         carried = self.carry is not None and whole and uniform_rays(rays)
         by_brute = (not carried and self.backend == "cpu" and z.size > sub.size
                     and (auto.tile_by_brute(z.size, sub.size, (self.zmin, zmax), rays)
@@ -610,7 +610,7 @@ KINDS = ("shadow", "classes", "hillshade", "sun")
 
 def field_method(algorithm: str, options: dict, soft: bool) -> bool:
     """Whether this method marches each cell with its own sun when the sun varies across the
-    raster (``Shader.field_ok``; ``engine.windows.Job.pieces`` plans such windows)."""
+    raster (``Shader.field_ok``; ``engine.windows.WindowLighting.pieces`` plans such windows)."""
     spec = REGISTRY.get(algorithm)
     return (not soft and spec is not None and spec.field_march
             and options.get("pyramid", True) is not False)

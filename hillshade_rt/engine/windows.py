@@ -271,7 +271,7 @@ def block_stats(source: DemSource, block: int = STAT_BLOCK,
 # plan
 
 @dataclass(frozen=True)
-class Piece:
+class PlannedWindow:
     """One unit of work: output ``region`` and the ``window`` read for it (r0, r1, c0, c1), lit
     by the sun at ``azimuth``/``elevation``."""
 
@@ -359,7 +359,7 @@ def plan(shape, grid: Grid, azimuth: float, elevation: float, curv: float, stats
          bounds: tuple[int, int, int, int] | None = None, align: int = ALIGN,
          halo_elevation: float | None = None, night: bool = False,
          carry: bool = False, azimuths: tuple[float, float] | None = None,
-         lift: float = 0.0) -> list[Piece]:
+         lift: float = 0.0) -> list[PlannedWindow]:
     """Cut ``bounds`` (default: the raster) into regions whose windows hold at most
     ``budget_cells`` cells (or regions of ``window_shape``), ordered from the sun's side so that
     each window's halo was read by the window before.
@@ -443,12 +443,12 @@ def plan(shape, grid: Grid, azimuth: float, elevation: float, curv: float, stats
         for s0 in range(0, len(wins), inner):
             wins[s0:s0 + inner] = _strip_windows(wins[s0:s0 + inner], cols_inner,
                                                  (east if cols_inner else north) > 1e-12)
-    return [Piece(reg, win, azimuth, elevation, _finite(stats.range_over(win)))
+    return [PlannedWindow(reg, win, azimuth, elevation, _finite(stats.range_over(win)))
             for reg, win in zip(regions, wins)]
 
 
 def marched_per_cell(pieces) -> bool:
-    """Whether the pieces of one sun march each cell with its own sun (``Job.pieces``): the
+    """Whether the pieces of one sun march each cell with its own sun (``WindowLighting.pieces``): the
     report's ``sun.mode`` "per cell"."""
     return any(p.sun is not None for p in pieces)
 
@@ -533,7 +533,7 @@ def window_grid(grid: Grid, window) -> Grid:
 # lighting windows
 
 @dataclass
-class Job:
+class WindowLighting:
     """What lights a window, the same for every window of a run (picklable: Dask tasks get it).
 
     ``zrange`` and ``extent_m`` are the whole raster's, so that every window decides Earth
@@ -587,14 +587,14 @@ class Job:
                       extent_m=self.extent_m, halo_ready=True, local_range=local_range,
                       carry=carry, place=(window, self.source.shape), lift=self.lift)
 
-    def light(self, z: np.ndarray, piece: Piece, stats: dict | None = None,
+    def light(self, z: np.ndarray, piece: PlannedWindow, stats: dict | None = None,
               curvature_used: set | None = None, carry=None) -> np.ndarray:
         """The product over ``piece.region`` from its window's heights ``z``. ``carry``: the
         run's ``carrier()``, for windows lit in plan order (a fresh one otherwise: SMap then
         still masks the region only)."""
         return self._light(z, piece, stats, curvature_used, carry)[0]
 
-    def light_incidence(self, z: np.ndarray, piece: Piece, stats: dict | None = None,
+    def light_incidence(self, z: np.ndarray, piece: PlannedWindow, stats: dict | None = None,
                         curvature_used: set | None = None,
                         carry=None) -> tuple[np.ndarray, np.ndarray]:
         """(``light``'s product, the cos of the incidence of the piece's sun on the region's
@@ -620,7 +620,7 @@ class Job:
 
     def pieces(self, sun, stats: BlockStats, budget_cells: int,
                window_shape: tuple[int, int] | None = None, in_order: bool = True,
-               area: tuple[int, int, int, int] | None = None) -> list[Piece]:
+               area: tuple[int, int, int, int] | None = None) -> list[PlannedWindow]:
         """The pieces of one sun (per-tile suns: each tile's, cut further to fit).
         ``in_order``: the windows are lit one after the other in this order (SMap tables are
         carried along strips); False for independent tasks (Dask), which carry nothing.
@@ -672,7 +672,7 @@ class Job:
 
 
 @dataclass
-class Tally:
+class WindowedRunStats:
     """What a tiled run did: windows, cells lit, bytes read and carried."""
 
     windows: int = 0
@@ -684,7 +684,7 @@ class Tally:
     largest_window: tuple[int, int] = (0, 0)
     carry: object = None                  # the run's smap.BandCarry, if any
 
-    def add(self, piece: Piece):
+    def add(self, piece: PlannedWindow):
         self.windows += 1
         self.region_cells += piece.region_cells
         self.window_cells += piece.cells

@@ -249,7 +249,7 @@ class HorizonConfig:
     directions: int | None = None     # N azimuths clockwise from north, 0 first: N bands
     distance: str | None = None       # a second raster: metres to each cell's horizon point
     max_distance: float | None = None  # metres: terrain farther along a ray is ignored
-    max_memory: object = None          # windows (run.reach) when the DEM needs more
+    max_memory: object = None          # windows (run.horizon_windows) when the DEM needs more
     window_size: object = None         # windows of this many output cells, whatever the size
     scheduler: object = None           # the windows as Dask tasks
     height_above_ground: float = 0.0   # metres: the observer of every cell stands this high

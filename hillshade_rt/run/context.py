@@ -4,7 +4,7 @@ A Makefile runs one process per tile; each tile's rays must still see the terrai
 neighbours. With ``--context`` (a VRT or mosaic of the tiles on the same grid) the output covers
 the tile only (its shape, transform and CRS) while its heights, and those its rays cross, are
 read from the context, in the windowed runs' windows: ``engine.windows`` (shadows, hillshade, sun
-hours: the region and its halo toward the sun) and ``run.reach`` (horizons, sky view: the rays'
+hours: the region and its halo toward the sun) and ``run.horizon_windows`` (horizons, sky view: the rays'
 reach, ``--max-distance`` or the context's edge); irradiance uses both (its beam's shadows per
 sun, its Dozier sky view). The regions of those runs are cut to the tile
 (:meth:`Area.clip`) and written at the tile's coordinates (:meth:`Area.local`).
@@ -55,7 +55,7 @@ class Area:
         return region[0] - a0, region[1] - a0, region[2] - b0, region[3] - b0
 
     def regions(self, regs):
-        """Regions of the tile (its rows and columns, e.g. ``run.reach.plan_regions`` of its
+        """Regions of the tile (its rows and columns, e.g. ``run.horizon_windows.plan_regions`` of its
         shape) in the context's coordinates."""
         a0, _, b0, _ = self.bounds
         return [(r0 + a0, r1 + a0, c0 + b0, c1 + b0) for r0, r1, c0, c1 in regs]

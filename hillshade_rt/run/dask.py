@@ -1,7 +1,7 @@
 """Windows and times as Dask tasks (``--scheduler``; needs ``pip install 'hillshade-rt[dask]'``).
 
-Each task gets the small :class:`~hillshade_rt.engine.windows.Job` and one
-:class:`~hillshade_rt.engine.windows.Piece`; it opens the DEM itself (the path, or a mosaic's VRT
+Each task gets the small :class:`~hillshade_rt.engine.windows.WindowLighting` and one
+:class:`~hillshade_rt.engine.windows.PlannedWindow`; it opens the DEM itself (the path, or a mosaic's VRT
 document, must be readable by the workers), reads the piece's window with its halo, lights it and
 writes its region to a GeoTIFF of its own in a folder beside the output. Nothing large passes
 through the scheduler: a task returns counts, timings and a few preview cells. When every task is
@@ -96,7 +96,7 @@ class DaskSession:
     by someone else. Leaving it on a failure or an interruption cancels the futures; leaving it
     in any case removes the folder and closes the client and cluster it started (a client
     given by the caller stays open). Shared by the shadow runs, the horizon runs
-    (``run.reach``) and the illumination runs."""
+    (``run.horizon_windows``) and the illumination runs."""
 
     def __init__(self, scheduler, dest: str, worker_timeout: float | None = None):
         from .config import DEFAULT_WORKER_TIMEOUT

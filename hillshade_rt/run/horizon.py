@@ -1,6 +1,6 @@
 """The ``horizon`` run: the horizon angle toward one azimuth (or N) of every cell of a DEM
 (float32 degrees above the horizontal, -9999 nodata), in memory or, for a DEM larger than
-``--max-memory`` or with ``--window-size``, in windows (``run.reach``: exact, the same bits).
+``--max-memory`` or with ``--window-size``, in windows (``run.horizon_windows``: exact, the same bits).
 Returns the report."""
 
 from __future__ import annotations
@@ -297,7 +297,7 @@ def horizon_job(src, azimuths, ran_on, curvature, refraction_k, method, bstats, 
 
     from ..model.earth import dem_body
     from ..engine.shader import horizon_shader
-    from .reach import HorizonJob
+    from .horizon_windows import HorizonJob
     # the Shader looks at the raster's shape only: a zero-stride stand-in, no memory
     shader = horizon_shader(np.broadcast_to(np.float32(0.0), src.shape), src.grid, ran_on,
                             curvature, refraction_k, dem_body(src) if body is None else body,
@@ -319,7 +319,7 @@ def prepare_windows(src, job, limit, wshape, timer, area=None):
 
     from ..algorithms.horizon import Marches, ScanWindow
     from ..model.geometry import Grid, sun_rays
-    from .reach import plan_regions
+    from .horizon_windows import plan_regions
     regs, mem = plan_regions(src.shape if area is None else area.shape, limit, wshape)
     if area is not None:
         regs = area.regions(regs)
@@ -342,7 +342,7 @@ def _in_windows(cfg, src, azimuths, ran_on, max_distance, timer, *, wshape, limi
     from ..pictures.preview import every_nth, relief_rgb
     from .local import bounded_gdal_cache
     from ..engine.windows import block_stats
-    from .reach import Figures, Product, region_outputs
+    from .horizon_windows import Figures, Product, region_outputs
 
     ro = cfg.run
     az = azimuths[0]
@@ -363,7 +363,7 @@ def _in_windows(cfg, src, azimuths, ran_on, max_distance, timer, *, wshape, limi
         share = np.zeros(bstats.preview.shape, np.float32) if ro.preview else None
         extra = {}
         if cfg.scheduler is not None:
-            from .reach import run_on_dask
+            from .horizon_windows import run_on_dask
             with timer("compute"):
                 fig, _, extra = run_on_dask(cfg.scheduler, job, regs, product,
                                             _vrt_outputs(cfg, src, azimuths, tags, dist_tags),
@@ -441,7 +441,7 @@ def _all_nodata(cfg, geom, azimuths, ran_on, max_distance, timer):
 
 def _vrt_outputs(cfg, src, azimuths, tags, dist_tags) -> dict:
     """The outputs of a run on Dask (``reach.VrtOutput``), as ``_writers`` writes them."""
-    from .reach import VrtOutput
+    from .horizon_windows import VrtOutput
     ro = cfg.run
     many = cfg.directions is not None
     texts = [_band_text(cfg, a) for a in azimuths]

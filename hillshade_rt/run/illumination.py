@@ -240,7 +240,7 @@ def plan_windows(src, phys: Physics, suns, window_shape) -> tuple[list, float]:
     from ..algorithms import illumination as ill
     from ..engine.cell_suns import CellFrames
     from ..model.geometry import grid_from_transform
-    from .reach import regions
+    from .horizon_windows import regions
     rows, cols = src.shape
     cores = regions(src.shape, window_shape)
     lows, zmax = [], -math.inf
@@ -356,7 +356,7 @@ def illumination(cfg: IllumConfig) -> dict:
             from ..engine.windows import window_budget
             windowed = needs_windows(src, limit, BYTES_PER_CELL)
             if windowed:
-                from .reach import region_shape
+                from .horizon_windows import region_shape
                 window_shape = region_shape(src.shape, window_budget(limit, BYTES_PER_CELL)[0])
         names = band_names(cfg.soft)
         counts = {"positions": 0, "dark": 0}

@@ -6,8 +6,8 @@ The sun is sampled as ``sun-hours`` samples it (every step, each sample at the m
 interval, weighted by the interval's hours; per tile on large rasters; nights skipped), the same
 suns light the cast shadows (``shading.render``) and feed the clear-sky model. The DEM is held
 in memory; with ``--context`` the DEM is a tile of a larger raster (``run.context``): the
-cast shadows and the incidence come from the context's windows (``engine.windows.Job``, the regions
-cut to the tile), the sky view from the windowed horizon march (``run.reach``, the rays to the
+cast shadows and the incidence come from the context's windows (``engine.windows.WindowLighting``, the regions
+cut to the tile), the sky view from the windowed horizon march (``run.horizon_windows``, the rays to the
 context's edge), so that every cell gets the bits the whole context's run gives it.
 """
 
@@ -317,8 +317,8 @@ def _run(cfg, d, area, req, step, series, ran_on, lift, timer, first, last, peri
 def _in_context(cfg, area, suns, weights, sky, work, ran_on, curvature, body, lift, timer,
                 algo_stats, bar):
     """The four bands of the tile of ``area`` (``--context``): each sun's cast shadows and
-    incidence from the context's windows (``engine.windows.Job``, product "sun", the regions cut to
-    the tile), Dozier's sky view from the windowed horizon march (``run.reach``: the rays to
+    incidence from the context's windows (``engine.windows.WindowLighting``, product "sun", the regions cut to
+    the tile), Dozier's sky view from the windowed horizon march (``run.horizon_windows``: the rays to
     the context's edge), the slopes from the tile and a cell around it; then the same sums,
     cell by cell, as a run of the whole context in memory (``irradiance.sums``). Returns
     (bands, Vd, the curvature's report, the report's ``processing``)."""
@@ -333,9 +333,9 @@ def _in_context(cfg, area, suns, weights, sky, work, ran_on, curvature, body, li
     from .horizon import horizon_job, memory_limit, prepare_windows
     from .local import bounded_gdal_cache
     from ..engine.windows import (
-        Job, WindowCache, bytes_per_cell, default_max_memory, window_budget, window_grid
+        WindowLighting, WindowCache, bytes_per_cell, default_max_memory, window_budget, window_grid
     )
-    from .reach import Figures, Product, region_outputs
+    from .horizon_windows import Figures, Product, region_outputs
 
     src = area.source
     rows, cols = src.shape
@@ -345,7 +345,7 @@ def _in_context(cfg, area, suns, weights, sky, work, ran_on, curvature, body, li
         with timer("prepare"):
             bstats = area.block_stats()     # (the context's, kept between runs)
             dx, dy = src.grid.centre_spacing()
-            job = Job(src, cfg.algorithm, {}, ran_on, curvature, cfg.refraction_k, body,
+            job = WindowLighting(src, cfg.algorithm, {}, ran_on, curvature, cfg.refraction_k, body,
                       (bstats.zmin, bstats.zmax), math.hypot(cols * dx, rows * dy), "sun",
                       cfg.soft, False, 0.2, lift)
             budget = window_budget(default_max_memory(),

@@ -14,7 +14,7 @@ brighter: a lightmap whose brightest cells stay in range however near the light 
 brightness halves at 1.41 d_ref. The kernels: ``algorithms.lightmap``.
 
 In memory, on the CPU, as the point light's shadow: what it does not take yet is a usage error
-(``run.light.LightConfig``'s ``refused``)."""
+(``run.point_light.LightConfig``'s ``refused``)."""
 
 from __future__ import annotations
 
@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 from .. import __version__
 from ..errors import HillshadeError, UsageProblem
-from .light import LightConfig
+from .point_light import LightConfig
 
 FALLOFFS = ("none", "inverse-square")
 BITS = (8, 16)

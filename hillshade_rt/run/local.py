@@ -35,7 +35,7 @@ def needs_windows(src, limit, per_cell) -> bool:
     return rows * cols > budget
 
 
-def in_memory(inputs, source, scale, req, out, timer, algorithm, options, ran_on,
+def shade_in_memory(inputs, source, scale, req, out, timer, algorithm, options, ran_on,
               curvature, refraction_k, soft, self_shadow, ambient, quiet, *, lift=0.0,
               progress_mode="bar", **_):
     """``source``: the DEM already opened (``ReadOptions.open``; read here, not opened again).
@@ -99,13 +99,13 @@ def in_memory(inputs, source, scale, req, out, timer, algorithm, options, ran_on
             "processing": {"mode": "in memory", "cells": int(d.heights.size)}}
 
 
-def tiled(inputs, source, scale, req, out, timer, algorithm, options, ran_on,
+def shade_in_windows(inputs, source, scale, req, out, timer, algorithm, options, ran_on,
           curvature, refraction_k, soft, self_shadow, ambient, quiet, *, limit,
           window_shape, scheduler, per_cell, lift=0.0, area=None, progress_mode="bar",
           worker_timeout=None):
     """``source``: the DEM already opened for windows (``ReadOptions.open``). ``worker_timeout``:
     --worker-timeout of a Dask run (``run.dask.DaskSession``). ``lift``:
-    --height-above-ground (``windows.Job``: the halos and the march). ``area``: a tile of
+    --height-above-ground (``windows.WindowLighting``: the halos and the march). ``area``: a tile of
     ``source`` (``run.context.Area``, ``--context``): only its cells are lit and written, on
     the tile's grid, their windows read from ``source``."""
     import math
@@ -119,7 +119,7 @@ def tiled(inputs, source, scale, req, out, timer, algorithm, options, ran_on,
     from ..engine.products import merge_stats
     from .outputs import sun_tags
     from ..engine.windows import (
-        MIN_WINDOW_CELLS, Job, MemoryTooSmall, Tally, WindowCache, block_stats, format_size,
+        MIN_WINDOW_CELLS, WindowLighting, MemoryTooSmall, WindowedRunStats, WindowCache, block_stats, format_size,
         marched_per_cell, memory_needed, window_budget
     )
 
@@ -131,7 +131,7 @@ def tiled(inputs, source, scale, req, out, timer, algorithm, options, ran_on,
     rows, cols = src.shape
     geom = src if area is None else area.tile      # what the outputs are georeferenced like
     bounds = None if area is None else area.bounds
-    tally = Tally()
+    tally = WindowedRunStats()
     with timer("prepare"):   # one pass for the height ranges; solar positions; compilation
         if area is None:
             bstats = block_stats(src, preview_side=2048 if out.preview else None)
@@ -143,7 +143,7 @@ def tiled(inputs, source, scale, req, out, timer, algorithm, options, ran_on,
         suns, sun_info = req.suns(src)
         out.plan(suns, inputs, src.tiles if area is None else None)
         dx, dy = src.grid.centre_spacing()
-        job = Job(src, algorithm, options, ran_on, "auto" if curvature is None else curvature,
+        job = WindowLighting(src, algorithm, options, ran_on, "auto" if curvature is None else curvature,
                   refraction_k, dem_body(src, req.lat), zrange, math.hypot(cols * dx, rows * dy),
                   kind, soft, self_shadow, ambient, lift)
         # a limit too small: measured now, after the preparation (the process has grown), the

@@ -232,7 +232,7 @@ def light_query(cfg: QueryConfig) -> dict:
     from ..engine.arrays import ground_height
     from ..io.write import Claims
     from .config import PLACE_KEYS, SUN_KEYS, check_lift
-    from .light import parse_triple
+    from .point_light import parse_triple
     from .lightmap import light_cell, light_xy
 
     fmt = output_format(cfg.fmt, cfg.output)

@@ -1,6 +1,6 @@
 """The ``shadow`` / ``hillshade`` run: one DEM (or a mosaic of several), one or more suns, one
 output per sun (bands of OUTPUT, or files of --output-pattern). In memory when the run fits
---max-memory, else in windows (``run.local.tiled``), on Dask workers with a scheduler. The command
+--max-memory, else in windows (``run.local.shade_in_windows``), on Dask workers with a scheduler. The command
 line and ``api.shade`` both call :func:`shade` with a :class:`~.config.ShadeConfig`; it returns the
 report (what ``--report`` writes).
 """
@@ -88,7 +88,8 @@ def _shade(cfg, src, windowed, inputs, output, req, pattern, wshape, limit, clai
     from ..engine.products import product
     from ..errors import AllNodata
     from .context import nodata_note
-    from .local import all_nodata, bounded_gdal_cache, in_memory, mean_stats, tiled
+    from .local import (all_nodata, bounded_gdal_cache, mean_stats, shade_in_memory,
+                        shade_in_windows)
     from .notes import compile_note, note_to_show
     from .outputs import Outputs
     from .report import build_report, shown_paths, summary_line
@@ -124,7 +125,7 @@ def _shade(cfg, src, windowed, inputs, output, req, pattern, wshape, limit, clai
             try:
                 if area is not None:
                     area.check_valid()
-                run = (tiled if windowed else in_memory)(
+                run = (shade_in_windows if windowed else shade_in_memory)(
                     inputs, src, cfg.scale, req, out, timer, algorithm, options, ran_on,
                     cfg.curvature, cfg.refraction_k, soft, cfg.self_shadow, cfg.ambient,
                     ro.quiet, limit=limit, window_shape=wshape, scheduler=cfg.scheduler,

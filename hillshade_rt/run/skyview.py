@@ -23,7 +23,7 @@ Each direction is the ``horizon`` scan (exact on the model, curvature as for ``h
 time). At the raster's edge there is no terrain beyond it: a border cell sees open sky toward the
 outside (a larger DEM around the area of interest fixes that). Distances are ground metres
 throughout (per row on geographic DEMs). A DEM larger than ``--max-memory``, or any DEM with
-``--window-size``, is computed in windows (``run.reach``): the same bits.
+``--window-size``, is computed in windows (``run.horizon_windows``): the same bits.
 """
 
 from __future__ import annotations
@@ -272,7 +272,7 @@ def _in_windows(cfg, definition, src, ran_on, max_distance, timer, *, wshape, li
     from .horizon import horizon_job, prepare_windows
     from .local import bounded_gdal_cache
     from ..engine.windows import block_stats
-    from .reach import Figures, Product, VrtOutput, region_outputs, run_on_dask
+    from .horizon_windows import Figures, Product, VrtOutput, region_outputs, run_on_dask
 
     ro = cfg.run
     n = int(cfg.directions)

@@ -167,7 +167,7 @@ def sun_hours(cfg: SunHoursConfig) -> dict:
 
 def _in_context(cfg, area, work, ran_on, req, timer, algo_stats):
     """Sun hours of the tile of ``area`` (``--context``): each sun's windows of the context
-    (``engine.windows.Job``, product "sun"), cut to the tile, added in the order of the suns as a
+    (``engine.windows.WindowLighting``, product "sun"), cut to the tile, added in the order of the suns as a
     run in memory adds them (the same float32 sums). (hours, height range, curvature)."""
     import math
 
@@ -176,7 +176,7 @@ def _in_context(cfg, area, work, ran_on, req, timer, algo_stats):
     from ..model.earth import curvature_report, dem_body
     from .local import bounded_gdal_cache
     from ..engine.windows import (
-        Job, WindowCache, bytes_per_cell, default_max_memory, window_budget
+        WindowLighting, WindowCache, bytes_per_cell, default_max_memory, window_budget
     )
     from .report import progress
     src = area.source
@@ -187,7 +187,7 @@ def _in_context(cfg, area, work, ran_on, req, timer, algo_stats):
             bstats = area.block_stats()     # (the context's, kept between runs)
             rows, cols = src.shape
             dx, dy = src.grid.centre_spacing()
-            job = Job(src, cfg.algorithm, {}, ran_on,
+            job = WindowLighting(src, cfg.algorithm, {}, ran_on,
                       "auto" if cfg.curvature is None else cfg.curvature, cfg.refraction_k,
                       dem_body(src, req.lat), (bstats.zmin, bstats.zmax),
                       math.hypot(cols * dx, rows * dy), "sun", cfg.soft, cfg.self_shadow, 0.2,

@@ -1033,7 +1033,7 @@ def test_fuzz_harness_sees_a_traceback_and_leftovers(monkeypatch):
 
     def boom(*a, **k):
         raise ZeroDivisionError("planted")
-    monkeypatch.setattr(run_local, "in_memory", boom)
+    monkeypatch.setattr(run_local, "shade_in_memory", boom)
     bad = run_case(case)[0]
     assert any("ZeroDivisionError" in b for b in bad), bad
 
@@ -1041,7 +1041,7 @@ def test_fuzz_harness_sees_a_traceback_and_leftovers(monkeypatch):
         out_dir = os.path.dirname(a[3].output)
         open(os.path.join(out_dir, ".o.tif.x.part.tif"), "wb").close()
         raise HillshadeError("planted")
-    monkeypatch.setattr(run_local, "in_memory", leave_part)
+    monkeypatch.setattr(run_local, "shade_in_memory", leave_part)
     bad = run_case(case)[0]
     assert any("new files in the output folder" in b for b in bad), bad
 

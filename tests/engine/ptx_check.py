@@ -26,7 +26,7 @@ def main() -> int:
     from numba import cuda
 
     from hillshade_rt.engine import gpu
-    from hillshade_rt.algorithms import GPU_ALGORITHMS, _cuda, horizon, point
+    from hillshade_rt.algorithms import GPU_ALGORITHMS, _cuda, horizon, point_light
     from hillshade_rt.model.geometry import Grid, sun_rays
 
     # device functions are compiled for "the current device": make that an H100 without a GPU
@@ -91,10 +91,10 @@ def main() -> int:
         for name in GPU_ALGORITHMS:
             g.shadow_mask(rays, name)
         horizon.horizon_angles_gpu(g, rays)
-        point.shadow_mask_gpu(g, 3.7, 20.2, 80.0, 1.5)
-        point.shadow_mask_gpu(g, 3.7, 20.2, 80.0, pyramid=False)
+        point_light.shadow_mask_gpu(g, 3.7, 20.2, 80.0, 1.5)
+        point_light.shadow_mask_gpu(g, 3.7, 20.2, 80.0, pyramid=False)
         horizon.horizon_angles_gpu(g, rays, max_distance=250.0)
-        # the scan in windows (run.reach): a region's rays through a window on the device
+        # the scan in windows (run.horizon_windows): a region's rays through a window on the device
         m = horizon.Marches(z[2:6, 3:9], (2, 6, 3, 9), rays, z.shape, 50.0)
         m.march(horizon.ScanWindow(z[0:8].copy(), (0, 8, 0, 14), z.shape, True, gpu.GpuDem))
     # dynamic terrain: a window of new heights put into place (GpuDem.update)

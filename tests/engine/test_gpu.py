@@ -128,7 +128,7 @@ def test_horizon_angles_equal_cpu(dem):
 
 
 def test_horizon_windows_equal_cpu(dem):
-    """The scan in windows (run.reach): a region's rays carried through windows on the device
+    """The scan in windows (run.horizon_windows): a region's rays carried through windows on the device
     give the CPU's state and angles, which are the march in memory's."""
     z, _ = dem
     rows, cols = z.shape
@@ -276,7 +276,7 @@ def test_cli_horizon_gpu(tmp_path, runner):
     ("skyview", ["--directions", "6", "--openness", "negative"]),
 ])
 def test_cli_horizon_windows_on_the_gpu(tmp_path, runner, command, args):
-    """The windowed run (run.reach) marching on the device gives the CPU's run in memory."""
+    """The windowed run (run.horizon_windows) marching on the device gives the CPU's run in memory."""
     from hillshade_rt.cli import cli
     dem = _tile(tmp_path)
     for name, extra in (("cpu", ["--backend", "cpu"]),
@@ -393,7 +393,7 @@ def test_point_light_gpu_equals_cpu(pyramid):
     """The point light's CUDA kernel (one per-cell body with the CPU's): the same mask on a small
     DEM with voids, for lights high, low (descending rays), off the raster, with a lift; and
     arrays.point_light_mask(backend="gpu") is that kernel."""
-    from hillshade_rt.algorithms import point
+    from hillshade_rt.algorithms import point_light
     from hillshade_rt.algorithms.horizon import bilinear
     from hillshade_rt.engine.arrays import point_light_mask
     z = _terrain(19, 23, seed=8)
@@ -402,17 +402,17 @@ def test_point_light_gpu_equals_cpu(pyramid):
               (-6.1, 30.7, 120.0), (25.4, -3.3, 60.0)]
     for light in lights:
         for lift in (0.0, 2.0):
-            cpu = point.shadow_mask(z, *light, lift=lift, pyramid=pyramid)
-            out = point.shadow_mask_gpu(g, *light, lift=lift, pyramid=pyramid)
+            cpu = point_light.shadow_mask(z, *light, lift=lift, pyramid=pyramid)
+            out = point_light.shadow_mask_gpu(g, *light, lift=lift, pyramid=pyramid)
             np.testing.assert_array_equal(out, cpu, err_msg=f"{light} lift {lift}")
     for light in lights[1:3]:           # a window with its halo, the raster's arithmetic
-        h = point.halo((0, 8, 12, 23), light[0], light[1], z.shape)
+        h = point_light.halo((0, 8, 12, 23), light[0], light[1], z.shape)
         w = np.ascontiguousarray(z[h[0]:h[1], h[2]:h[3]])
-        out = point.shadow_mask_gpu(gpu.GpuDem(w), *light, pyramid=pyramid, origin=(h[0], h[2]),
+        out = point_light.shadow_mask_gpu(gpu.GpuDem(w), *light, pyramid=pyramid, origin=(h[0], h[2]),
                                     shape=z.shape)
-        np.testing.assert_array_equal(out, point.shadow_mask(w, *light, pyramid=pyramid,
+        np.testing.assert_array_equal(out, point_light.shadow_mask(w, *light, pyramid=pyramid,
                                                              origin=(h[0], h[2]), shape=z.shape))
     stats = {}
     got = point_light_mask(z, 17.5, 4.2, lights[1][2], backend="gpu", stats=stats)
-    np.testing.assert_array_equal(got, point.shadow_mask(z, 4.2, 17.5, lights[1][2]))
+    np.testing.assert_array_equal(got, point_light.shadow_mask(z, 4.2, 17.5, lights[1][2]))
     assert stats["backend"] == "gpu" and (got == 1).any() and (got == 0).any()

@@ -32,7 +32,7 @@ def _tiled(path, azimuth, elevation, algorithm, window_shape, kind="shadow", sof
     stats = tiling.block_stats(src)
     rows, cols = src.shape
     dx, dy = src.grid.centre_spacing()
-    job = tiling.Job(src, algorithm, options or {}, "cpu", curvature, None, dem_body(src),
+    job = tiling.WindowLighting(src, algorithm, options or {}, "cpu", curvature, None, dem_body(src),
                      (stats.zmin, stats.zmax), math.hypot(cols * dx, rows * dy), kind, soft,
                      kind != "shadow", 0.2)
     pieces = job.pieces(sun or SunOver(None, azimuth, elevation), stats, 1 << 40, window_shape)
@@ -388,14 +388,14 @@ def test_series_and_varying_suns_in_windows(tmp_path, runner, method, mode):
 def test_interrupt_leaves_no_output(tmp_path, runner, monkeypatch):
     out = tmp_path / "m.tif"
     calls = []
-    real = tiling.Job.light
+    real = tiling.WindowLighting.light
 
     def light(self, *a, **k):
         calls.append(1)
         if len(calls) == 3:
             raise KeyboardInterrupt
         return real(self, *a, **k)
-    monkeypatch.setattr(tiling.Job, "light", light)
+    monkeypatch.setattr(tiling.WindowLighting, "light", light)
     r = _run(runner, ["shadow", LIDAR, str(out), "--azimuth", "163", "--elevation", "10",
                       "--window-size", "100", "--cog"])
     assert r.exit_code == 130 and "no output written" in r.stderr

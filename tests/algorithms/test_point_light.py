@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from hillshade_rt.algorithms import brute, point
+from hillshade_rt.algorithms import brute, point_light
 from hillshade_rt.model.geometry import Grid, sun_rays
 from hillshade_rt.algorithms.horizon import bilinear
 from hillshade_rt.algorithms.pyramid import MaxPyramid
@@ -21,7 +21,7 @@ def test_a_wall_shadows_to_d_h_over_l_minus_h(row_l):
     h, L, D = 30.0, 80.0, 20.0
     z = np.zeros((90, 100), np.float32)
     z[:, 50] = h
-    m = point.shadow_mask(z, row_l, 50.0 + D, L)
+    m = point_light.shadow_mask(z, row_l, 50.0 + D, L)
     reach = D * h / (L - h)                     # 12 columns
     for r in range(90):
         for c in range(0, 50):
@@ -36,12 +36,12 @@ def test_a_wall_shadows_to_d_h_over_l_minus_h(row_l):
 def test_a_light_right_above_lights_the_cell_and_beyond_the_light_nothing_shadows():
     z = fractal_terrain(40, 40, 3, relief=50.0)
     top = float(z.max()) + 10.0
-    m = point.shadow_mask(z, 20.0, 20.0, top)
+    m = point_light.shadow_mask(z, 20.0, 20.0, top)
     assert m[20, 20] == 0
     # a light on the ground far below every cell, in a pit: the terrain beyond it casts nothing
     z2 = np.zeros((30, 30), np.float32)
     z2[:, 25] = 100.0                         # a wall beyond the light (light at column 20)
-    m2 = point.shadow_mask(z2, 15.0, 20.0, 5.0)
+    m2 = point_light.shadow_mask(z2, 15.0, 20.0, 5.0)
     assert not m2[:, :20].any()
 
 
@@ -56,7 +56,7 @@ def test_a_far_light_is_the_directional_sun(az, el):
     rc, cc = 59.5, 64.5
     e = far * math.sin(math.radians(az)) * math.cos(math.radians(el))
     n = far * math.cos(math.radians(az)) * math.cos(math.radians(el))
-    m = point.shadow_mask(z, rc - n / dy, cc + e / dx, far * math.sin(math.radians(el)))
+    m = point_light.shadow_mask(z, rc - n / dy, cc + e / dx, far * math.sin(math.radians(el)))
     ref = brute.shadow_mask(z, sun_rays(Grid.uniform(120, 130, dx, dy), az, el, 0.0))
     assert np.array_equal(m, ref)
     assert 0.05 < (ref == 1).mean() < 0.95
@@ -107,11 +107,11 @@ def test_equals_the_plain_python_reference(light):
     an independent plain-Python march (all but rounding ties: none here)."""
     z = fractal_terrain(44, 50, 11, relief=300.0)
     z[30, 5] = np.nan
-    got = point.shadow_mask(z, *light)
+    got = point_light.shadow_mask(z, *light)
     ref = _reference(z, *light)
     assert (got != ref).sum() == 0
-    assert np.array_equal(point.shadow_mask(z, *light, pyramid=False), ref)
-    assert np.array_equal(point.shadow_mask(z, *light, lift=2.5),
+    assert np.array_equal(point_light.shadow_mask(z, *light, pyramid=False), ref)
+    assert np.array_equal(point_light.shadow_mask(z, *light, lift=2.5),
                           _reference(z, *light, lift=2.5))
     assert 0.02 < (ref == 1).mean() < 0.98 or light[2] > 800
 
@@ -131,7 +131,7 @@ def test_the_array_api_takes_the_light_in_the_dems_crs(tmp_path):
     d = read_dem(path)
     x, y = 500000 + 10 * (33.25 + 0.5), 4000000 - 10 * (21.5 + 0.5)
     got = point_light_mask(d, x, y, 260.0)
-    assert np.array_equal(got, point.shadow_mask(d.heights, 21.5, 33.25, 260.0))
+    assert np.array_equal(got, point_light.shadow_mask(d.heights, 21.5, 33.25, 260.0))
     assert (got == 1).any() and (got == 0).any()
     with pytest.raises(HillshadeError, match="inside the terrain"):
         point_light_mask(d, x, y, float(np.nanmin(z)) - 1.0)
@@ -165,9 +165,9 @@ def test_the_pyramid_march_is_the_plain_march(lift):
         z[0, 17] = np.nan
         pyr = MaxPyramid(z)
         for light in _lights(z):
-            plain = point.shadow_mask(z, *light, lift=lift, pyramid=False)
-            assert np.array_equal(point.shadow_mask(z, *light, lift=lift), plain), light
-            assert np.array_equal(point.shadow_mask(z, *light, lift=lift, pyramid=pyr), plain)
+            plain = point_light.shadow_mask(z, *light, lift=lift, pyramid=False)
+            assert np.array_equal(point_light.shadow_mask(z, *light, lift=lift), plain), light
+            assert np.array_equal(point_light.shadow_mask(z, *light, lift=lift, pyramid=pyr), plain)
             shadowed.append(float((plain == 1).mean()))
     assert sum(0.05 < s < 0.95 for s in shadowed) >= len(shadowed) // 2   # not all trivial
 
@@ -177,7 +177,7 @@ def test_the_pyramid_march_equals_the_reference_with_lights_low_and_off_the_rast
     z[20, 30] = np.nan
     for light in ((20.4, 11.2, float(bilinear(z, 20.4, 11.2)) + 2.0), (-9.5, 70.3, 20.0),
                   (60.1, -4.4, 35.0)):
-        assert np.array_equal(point.shadow_mask(z, *light), _reference(z, *light)), light
+        assert np.array_equal(point_light.shadow_mask(z, *light), _reference(z, *light)), light
 
 
 @pytest.mark.parametrize("pyramid", [True, False])
@@ -192,7 +192,7 @@ def test_a_descending_ray_is_shadowed_by_a_wall_just_before_a_low_light(pyramid)
     z[:, 98] = 3.5
     z[:64, 20] = 60.0
     z[64:, 25] = 60.0
-    m = point.shadow_mask(z, 64.0, 100.0, 2.0, pyramid=pyramid)
+    m = point_light.shadow_mask(z, 64.0, 100.0, 2.0, pyramid=pyramid)
     assert (m[:64, 20] == 1).all() and (m[64:, 25] == 0).all()
     west = m[64, :98]                          # the ground west of the wall, a ridge
     assert (west[np.arange(98) != 25] == 1).all() and west[25] == 0
@@ -207,14 +207,14 @@ def test_a_window_with_its_halo_gives_the_whole_rasters_cells():
     z[70:73, 80:84] = np.nan
     for light in ((71.3, 90.6, float(bilinear(z, 71.3, 90.6)) + 3.0), (-25.2, 200.7, 140.0),
                   (160.4, -8.9, 60.0)):
-        whole = point.shadow_mask(z, *light)
+        whole = point_light.shadow_mask(z, *light)
         for pyramid in (True, False):
             got = np.full(z.shape, 7, np.uint8)
             for r0 in range(0, 150, 64):
                 for c0 in range(0, 170, 48):
                     region = (r0, min(150, r0 + 64), c0, min(170, c0 + 48))
-                    a, b, c, d = point.halo(region, light[0], light[1], z.shape)
-                    m = point.shadow_mask(np.ascontiguousarray(z[a:b, c:d]), *light,
+                    a, b, c, d = point_light.halo(region, light[0], light[1], z.shape)
+                    m = point_light.shadow_mask(np.ascontiguousarray(z[a:b, c:d]), *light,
                                           pyramid=pyramid, origin=(a, c), shape=z.shape)
                     got[region[0]:region[1], region[2]:region[3]] = \
                         m[region[0] - a:region[1] - a, region[2] - c:region[3] - c]

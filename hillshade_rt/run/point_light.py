@@ -1,5 +1,5 @@
 """The ``shadow --light-position`` / ``--light-lonlat`` run: a DEM lit by a point light (issue
-21, item 1; ``algorithms.point``): each cell's ray runs straight to the light and ends there.
+21, item 1; ``algorithms.point_light``): each cell's ray runs straight to the light and ends there.
 Hard shadows, exact (the march over the maximum-height pyramid), on the CPU or the GPU
 (``--backend``), in memory or in windows (``--window-size``, or a DEM larger than
 ``--max-memory`` allows: each window read with its halo toward the light, ``_windows``). The
@@ -169,14 +169,14 @@ def light_shadow(cfg: LightConfig) -> dict:
 
 def _windows(src, row, col, zl, lift, wshape, limit, per_cell, output, tags, ro, timer, st):
     """The mask in windows of ``src`` (an open ``io.DemSource``), each read with its halo: the box
-    of the window and the light's cell (``algorithms.point.halo``), lit with the raster's ray
+    of the window and the light's cell (``algorithms.point_light.halo``), lit with the raster's ray
     arithmetic (the same cells as in memory, bit for bit) and its region written by
     ``io.raster.BandWriter``. Windows of ``wshape``, else squares a quarter of what
     ``--max-memory`` allows (the halo reaches to the light: it may be larger). Returns
     (shadowed cells, valid cells, the report's processing)."""
     import numpy as np
 
-    from ..algorithms import point
+    from ..algorithms import point_light
     from ..algorithms.horizon import bilinear
     from ..engine.gpu import GpuDem, resolve_backend
     from ..io.raster import BandWriter
@@ -210,17 +210,17 @@ def _windows(src, row, col, zl, lift, wshape, limit, per_cell, output, tags, ro,
         for r0 in range(0, rows, wshape[0]):
             for c0 in range(0, cols, wshape[1]):
                 region = (r0, min(rows, r0 + wshape[0]), c0, min(cols, c0 + wshape[1]))
-                h = point.halo(region, row, col, (rows, cols))
+                h = point_light.halo(region, row, col, (rows, cols))
                 with timer("read"):
                     z = np.empty((h[1] - h[0], h[3] - h[2]), np.float32)
                     rd.read(h, z)
                 largest = max(largest, z.size)
                 with timer("compute"):
                     if ran_on == "gpu":     # the window's heights only: a DEM on the device
-                        m = point.shadow_mask_gpu(GpuDem(z), row, col, zl, lift,
+                        m = point_light.shadow_mask_gpu(GpuDem(z), row, col, zl, lift,
                                                   origin=(h[0], h[2]), shape=(rows, cols))
                     else:
-                        m = point.shadow_mask(z, row, col, zl, lift, origin=(h[0], h[2]),
+                        m = point_light.shadow_mask(z, row, col, zl, lift, origin=(h[0], h[2]),
                                               shape=(rows, cols))
                     part = np.ascontiguousarray(m[region[0] - h[0]:region[1] - h[0],
                                                   region[2] - h[2]:region[3] - h[2]])
