@@ -47,8 +47,8 @@ MAX_LEVELS = 15
 class MaxPyramid:
     """The pyramid of one DEM, built at its first use (``args``): ``data`` (float32, all levels,
     flat), ``offsets`` (int64, start of level l at ``offsets[l]``), ``widths`` (int64, blocks per
-    row of level l), ``nlev``. A caller can hand one to every method that might march (the
-    engine keeps one per raster); only a march pays for it, once."""
+    row of level l), ``nlev``. A caller can hand one to every method that might march
+    (``shading.Shader`` keeps one per raster); only a march pays for it, once."""
 
     __slots__ = ("_z", "_built", "shape")
 
