@@ -13,7 +13,7 @@ NaN and infinities are voids.
 Every result is a DataArray on the input's x/y coordinates with its CRS and transform written by
 rioxarray, a ``time`` dimension for a series of times, and attributes naming the product and the
 sun (the GeoTIFF tags of the command line). The computation is the command line's: the same
-``shading.Shader`` and ``render``, the sun from ``--time`` through ``sun.SunRequest`` (the SPA on
+``engine.shader.Shader`` and ``render``, the sun from ``--time`` through ``sun.SunRequest`` (the SPA on
 a lattice, per tile where it varies across the raster).
 
 A **Dask-backed** DataArray gives a lazy, Dask-backed result, computed window by window as the
@@ -473,22 +473,81 @@ def shadow(da, azimuth: float | None = None, elevation: float | None = None, *, 
            pressure: float | None = None, temperature: float | None = None,
            refraction: bool = True, sun_tolerance: float | None = None,
            **options) -> xr.DataArray:
-    """Cast shadows of the DataArray ``da`` (heights), as ``hillshade-rt shadow``: uint8 1
-    shadow, 0 lit, 255 nodata (``soft``: float32 visible fraction of the solar disk, NaN
-    nodata).
+    """Cast shadows of the DataArray ``da``, as ``hillshade-rt shadow``.
 
-    The sun: ``azimuth`` and ``elevation`` (degrees, grid azimuth clockwise from north), or
-    ``time``: one time (ISO 8601 text with an offset or an aware datetime; a naive one in
-    ``tz``; naive numpy datetime64 and pandas times in ``tz``, else UTC as xarray's time
-    coordinates) or a sequence of them (a list, a DatetimeIndex, ``ds.time.values``), which
-    gives a ``time`` dimension. The sun of a time
-    is the SPA's at the DEM's centre (``lat``/``lon`` elsewhere, or for a DataArray without a
-    CRS), per tile where it varies across the raster, as on the command line (``pressure``,
-    ``temperature``, ``refraction``, ``sun_tolerance``).
-    ``crs``, ``spacing``, ``nodata``: see the module's notes. ``algorithm``, ``backend``,
-    ``curvature``, ``refraction_k``, ``height_above_ground``, ``options``: as
-    ``arrays.shadow_mask``; ``self_shadow``: surfaces facing away from the sun count as
-    shadow."""
+    A Dask-backed input gives a lazy, Dask-backed result, computed window by window (see the
+    module's notes).
+
+    Parameters
+    ----------
+    da : xarray.DataArray
+        Heights in metres (the accessor's own DataArray for ``da.hrt``): 2-D, or with a ``band``
+        dimension of size 1, on regularly spaced x/y coordinates; NumPy- or Dask-backed.
+    azimuth : float, optional
+        Sun azimuth, degrees (grid azimuth, clockwise from north); with ``elevation``.
+    elevation : float, optional
+        Sun elevation above the horizon, degrees, 0 < elevation <= 90; with ``azimuth``.
+    time : str, datetime or sequence, optional
+        Instead of ``azimuth``/``elevation``: one time (ISO 8601 text with an offset or an aware
+        datetime; a naive one in ``tz``; naive numpy datetime64 and pandas times in ``tz``, else
+        UTC as xarray's time coordinates) or a sequence of them (a list, a DatetimeIndex,
+        ``ds.time.values``), which gives a ``time`` dimension. The sun of a time is the SPA's at
+        the DEM's centre, per tile where it varies across the raster, as on the command line.
+    tz : str, optional
+        IANA time zone of naive times (e.g. "Europe/Vienna").
+    lat, lon : float, optional
+        The place of the sun, degrees (elsewhere than the DEM's centre, or for a DataArray
+        without a CRS).
+    crs : optional
+        The CRS (anything rasterio takes); else rioxarray's ``da.rio.crs``, else
+        ``da.attrs["crs"]``.
+    spacing : float or (float, float), optional
+        Ground metres per cell, ``d`` or ``(dx, dy)``; required without a CRS.
+    nodata : float, optional
+        Nodata value (else ``da.rio.nodata`` or ``_FillValue``); NaN and infinities are voids
+        too.
+    algorithm : str, default "auto"
+        As :func:`hillshade_rt.engine.arrays.shadow_mask`.
+    backend : {"auto", "cpu", "gpu"}, default "auto"
+        As :func:`hillshade_rt.engine.arrays.shadow_mask`.
+    curvature : bool or "auto", default "auto"
+        Earth curvature of the rays; ``auto``: on when rays can run longer than 1 km.
+    refraction_k : float, optional
+        Terrestrial refraction coefficient (dimensionless); default 0.13 on the Earth, 0 on other
+        bodies.
+    height_above_ground : float, default 0.0
+        Metres (>= 0) above every cell that its ray starts from.
+    soft : bool, default False
+        float32 visible fraction of the solar disk instead of the hard mask.
+    self_shadow : bool, default False
+        Surfaces facing away from the sun count as shadow.
+    pressure : float, optional
+        Air pressure, hPa, for the refraction (default the standard atmosphere at the place's
+        height).
+    temperature : float, optional
+        Air temperature, °C, for the refraction (default 12).
+    refraction : bool, default True
+        Apparent sun elevation (the SPA's refraction).
+    sun_tolerance : float, optional
+        Degrees: the sun is computed per tile where its direction varies by more than this
+        across the raster (default 0.05).
+    **options
+        Passed to the algorithm, as :func:`hillshade_rt.engine.arrays.shadow_mask`.
+
+    Returns
+    -------
+    xarray.DataArray
+        On ``da``'s x/y coordinates with its CRS and transform, attributes naming the product and
+        the sun: uint8 1 shadow, 0 lit, 255 nodata (``soft``: float32 visible fraction 0..1, NaN
+        nodata); a ``time`` dimension for a sequence of times.
+
+    Raises
+    ------
+    HillshadeError
+        The sun given both ways, neither way or half (``azimuth`` without ``elevation``); a
+        DataArray that is not 2-D on regular coordinates; no CRS and no ``spacing``; an
+        unknown algorithm or a bad option.
+    """
     return _lighting(da, "shadow", azimuth, elevation, time, tz, lat, lon, crs, spacing, nodata,
                      algorithm, backend, curvature, refraction_k, height_above_ground, soft,
                      self_shadow, pressure, temperature, refraction, sun_tolerance, options)
@@ -546,13 +605,55 @@ def horizon(da, azimuth, *, crs=None, spacing=None, nodata: float | None = None,
             curvature="auto", refraction_k: float | None = None,
             max_distance: float | None = None,
             height_above_ground: float = 0.0) -> xr.DataArray:
-    """Horizon angle (float32 degrees, NaN on voids, -90 where no terrain lies ahead) of every
-    cell toward ``azimuth`` (one, or a sequence: an ``azimuth`` dimension), as
-    ``hillshade-rt horizon`` (``arrays.horizon_angles``). A Dask-backed input gives a lazy
-    result, one task per chunk whose window holds every cell toward the azimuth (within
-    ``max_distance``, else to the raster's edge), curvature and body decided for the whole
-    raster: the in-memory angles (``method="hull"``, an approximation over the whole raster:
-    one task)."""
+    """Horizon angle of every cell toward ``azimuth``, as ``hillshade-rt horizon``.
+
+    As :func:`hillshade_rt.engine.arrays.horizon_angles`. A Dask-backed input gives a lazy result, one
+    task per chunk whose window holds every cell toward the azimuth (within ``max_distance``,
+    else to the raster's edge), curvature and body decided for the whole raster: the in-memory
+    angles (``method="hull"``, an approximation over the whole raster: one task).
+
+    Parameters
+    ----------
+    da : xarray.DataArray
+        Heights in metres (the accessor's own DataArray for ``da.hrt``): 2-D, or with a ``band``
+        dimension of size 1, on regularly spaced x/y coordinates; NumPy- or Dask-backed.
+    azimuth : float or sequence of float
+        Degrees clockwise from the raster's north; a sequence gives an ``azimuth`` dimension.
+    crs : optional
+        The CRS (anything rasterio takes); else rioxarray's ``da.rio.crs``, else
+        ``da.attrs["crs"]``.
+    spacing : float or (float, float), optional
+        Ground metres per cell, ``d`` or ``(dx, dy)``; required without a CRS.
+    nodata : float, optional
+        Nodata value (else ``da.rio.nodata`` or ``_FillValue``); NaN and infinities are voids
+        too.
+    method : {"scan", "hull"}, default "scan"
+        ``scan`` is exact on the model; ``hull`` the faster approximation.
+    sample_spacing : int, default 1
+        The scan takes every n-th sample only (n > 1: faster, approximate).
+    backend : {"auto", "cpu", "gpu"}, default "auto"
+        As :func:`hillshade_rt.engine.arrays.shadow_mask`.
+    curvature : bool or "auto", default "auto"
+        Earth curvature of the rays; ``auto``: on for the scan of a raster more than 1 km across.
+    refraction_k : float, optional
+        Terrestrial refraction coefficient (dimensionless); default 0.13 on the Earth.
+    max_distance : float, optional
+        Metres of ground distance: terrain farther along a ray is ignored.
+    height_above_ground : float, default 0.0
+        Metres (>= 0): the horizon seen from that high above each cell.
+
+    Returns
+    -------
+    xarray.DataArray
+        float32 degrees above the horizontal, NaN on voids, -90 where no terrain lies ahead, on
+        ``da``'s x/y coordinates (an ``azimuth`` dimension for a sequence of azimuths).
+
+    Raises
+    ------
+    HillshadeError
+        No azimuth, a non-finite one, no CRS and no ``spacing``, a negative height above the
+        ground.
+    """
     from .engine.arrays import horizon_angles
     from .model.geometry import normalize_azimuth
     series = not np.isscalar(azimuth)
@@ -593,12 +694,54 @@ def skyview(da, *, directions: int = 32, definition: str = "zaksek", openness: s
             crs=None, spacing=None, nodata: float | None = None, curvature="auto",
             refraction_k: float | None = None, max_distance: float | None = None,
             height_above_ground: float = 0.0) -> xr.DataArray:
-    """Sky view factor (float32 0..1, NaN on voids) from the exact horizon in ``directions``
-    azimuths, ``definition`` "zaksek" or "dozier"; ``openness`` "positive" or "negative":
-    Yokoyama's openness in degrees instead; as ``hillshade-rt skyview``
-    (``arrays.sky_view``). A Dask-backed input gives a lazy result: with ``max_distance``, one
-    task per chunk with the cells within it all round; without, one task over the whole
-    raster (every direction reaches its edges)."""
+    """Sky view factor (or openness) of every cell, as ``hillshade-rt skyview``.
+
+    From the exact horizon in ``directions`` azimuths (:func:`hillshade_rt.engine.arrays.sky_view`). A
+    Dask-backed input gives a lazy result: with ``max_distance``, one task per chunk with the
+    cells within it all round; without, one task over the whole raster (every direction reaches
+    its edges).
+
+    Parameters
+    ----------
+    da : xarray.DataArray
+        Heights in metres (the accessor's own DataArray for ``da.hrt``): 2-D, or with a ``band``
+        dimension of size 1, on regularly spaced x/y coordinates; NumPy- or Dask-backed.
+    directions : int, default 32
+        Number of azimuths, equally spaced over 360 degrees (>= 1).
+    definition : {"zaksek", "dozier"}, default "zaksek"
+        Zakšek et al.'s 1 - mean sin of the clipped horizon elevation, or Dozier & Frew's
+        cosine-weighted view from the tilted surface.
+    openness : {"positive", "negative"}, optional
+        Yokoyama's openness in degrees instead.
+    crs : optional
+        The CRS (anything rasterio takes); else rioxarray's ``da.rio.crs``, else
+        ``da.attrs["crs"]``.
+    spacing : float or (float, float), optional
+        Ground metres per cell, ``d`` or ``(dx, dy)``; required without a CRS.
+    nodata : float, optional
+        Nodata value (else ``da.rio.nodata`` or ``_FillValue``); NaN and infinities are voids
+        too.
+    curvature : bool or "auto", default "auto"
+        Earth curvature of the rays; ``auto``: on when rays can run longer than 1 km.
+    refraction_k : float, optional
+        Terrestrial refraction coefficient (dimensionless); default 0.13 on the Earth.
+    max_distance : float, optional
+        Metres of ground distance: terrain farther along a ray is ignored (Yokoyama's L).
+    height_above_ground : float, default 0.0
+        Metres (>= 0): the horizons seen from that high above each cell.
+
+    Returns
+    -------
+    xarray.DataArray
+        float32 on ``da``'s x/y coordinates: the sky view factor (dimensionless, 0..1), or with
+        ``openness`` degrees; NaN on voids.
+
+    Raises
+    ------
+    HillshadeError
+        ``directions`` < 1, an unknown definition or openness, ``openness`` with
+        ``definition="dozier"``, no CRS and no ``spacing``, a negative height above the ground.
+    """
     from .engine.arrays import sky_view
     inp = _input(da, crs, spacing, nodata)
 
@@ -731,13 +874,76 @@ def sun_hours(da, date, *, end_date=None, step: str = "10min", tz: str | None = 
               self_shadow: bool | None = None, height_above_ground: float = 0.0,
               pressure: float | None = None, temperature: float | None = None,
               refraction: bool = True, sun_tolerance: float | None = None) -> xr.DataArray:
-    """Hours of direct sun per cell (float32, NaN on voids) over ``date`` (ISO text or a
-    ``datetime.date``) to ``end_date``, the sun every ``step`` ("10min", "1h30min", "PT30M"),
-    as ``hillshade-rt sun-hours``: each sample with the sun up counts for its interval; the day
-    runs midnight to midnight in ``tz`` (default: local mean solar time at the DEM's
-    longitude). ``self_shadow`` (default: on for an observer on the ground): surfaces facing
-    away from the sun get none. A Dask-backed input: each sample's windows as in
-    :func:`shadow`, summed lazily."""
+    """Hours of direct sun per cell over one day or several, as ``hillshade-rt sun-hours``.
+
+    Each sample with the sun up counts for its interval. A Dask-backed input: each sample's
+    windows as in :func:`shadow`, summed lazily. Earth only (a DEM of another body is lit with
+    :func:`shadow`, which takes the sun's direction).
+
+    Parameters
+    ----------
+    da : xarray.DataArray
+        Heights in metres (the accessor's own DataArray for ``da.hrt``): 2-D, or with a ``band``
+        dimension of size 1, on regularly spaced x/y coordinates; NumPy- or Dask-backed.
+    date : str or datetime.date
+        The first day (ISO 8601 text or a date).
+    end_date : str or datetime.date, optional
+        The last day (default ``date``).
+    step : str, default "10min"
+        Time between sun samples ("10min", "1h30min", "PT30M").
+    tz : str, optional
+        IANA time zone of the days (midnight to midnight there); default local mean solar time
+        at the DEM's longitude.
+    lat, lon : float, optional
+        The place of the sun, degrees (elsewhere than the DEM's centre, or for a DataArray
+        without a CRS).
+    crs : optional
+        The CRS (anything rasterio takes); else rioxarray's ``da.rio.crs``, else
+        ``da.attrs["crs"]``.
+    spacing : float or (float, float), optional
+        Ground metres per cell, ``d`` or ``(dx, dy)``; required without a CRS.
+    nodata : float, optional
+        Nodata value (else ``da.rio.nodata`` or ``_FillValue``); NaN and infinities are voids
+        too.
+    algorithm : str, default "auto"
+        As :func:`hillshade_rt.engine.arrays.shadow_mask`.
+    backend : {"auto", "cpu", "gpu"}, default "auto"
+        As :func:`hillshade_rt.engine.arrays.shadow_mask`.
+    curvature : bool or "auto", default "auto"
+        Earth curvature of the rays; ``auto``: on when rays can run longer than 1 km.
+    refraction_k : float, optional
+        Terrestrial refraction coefficient (dimensionless); default 0.13 on the Earth, 0 on other
+        bodies.
+    soft : bool, default False
+        Count the visible fraction of the solar disk instead of lit/unlit.
+    self_shadow : bool, optional
+        Surfaces facing away from the sun get no sun (default: on for an observer on the
+        ground, off with ``height_above_ground``).
+    height_above_ground : float, default 0.0
+        Metres (>= 0) above every cell that its ray starts from.
+    pressure : float, optional
+        Air pressure, hPa, for the refraction (default the standard atmosphere at the place's
+        height).
+    temperature : float, optional
+        Air temperature, °C, for the refraction (default 12).
+    refraction : bool, default True
+        Apparent sun elevation (the SPA's refraction).
+    sun_tolerance : float, optional
+        Degrees: the sun is computed per tile where its direction varies by more than this
+        across the raster (default 0.05).
+
+    Returns
+    -------
+    xarray.DataArray
+        float32 hours of direct sun, NaN on voids, on ``da``'s x/y coordinates, with attributes
+        naming the days, the step and the samples.
+
+    Raises
+    ------
+    HillshadeError
+        An unparsable date or step, ``end_date`` before ``date``, no CRS and no ``spacing``, an
+        unknown algorithm, a DEM of another body.
+    """
     from .algorithms import lookup
     from .model.earth import dem_body
     from .run.config import check_lift

@@ -6,8 +6,8 @@ after an upgrade or an edit). So the kernels are cached in a folder named after 
 source file of this package folder: any change to any of them starts a fresh cache.
 
 The kernel modules take ``njit`` from here, not from numba: the folder is chosen when the
-decorator runs, so a module gets it however it is imported (``from .algorithms.counts import
-...`` straight from ``io.py`` as much as through the registry), and importing the registry
+decorator runs, so a module gets it however it is imported (``from ..algorithms.counts import
+...`` straight from ``io/dem.py`` as much as through the registry), and importing the registry
 (``algorithms/__init__.py``) need not import every kernel module first.
 """
 

@@ -1,10 +1,10 @@
 """``bounds``: exact shadows from guaranteed bounds of every cell's horizon, the pyramid march
 for the few cells the bounds leave open.
 
-The flag-map sweep of seed 001 (``sweep``) stores for each cell what its ray met and lets the
-next rays interpolate it: fast, and wrong where a thin ridge passes between two neighbouring
-rays. Here the stored values are made **conservative**, so that a cell is decided only when no
-ray between the stored ones could decide it otherwise:
+The flag-map sweep of "Faster Ray Traced Terrain Shadow Maps" [1]_ (``sweep``) stores for each cell
+what its ray met and lets the next rays interpolate it: fast, and wrong where a thin ridge passes
+between two neighbouring rays. Here the stored values are made **conservative**, so that a cell is
+decided only when no ray between the stored ones could decide it otherwise:
 
 * In the canonical frame (``frames``: the sun toward increasing line index, positions growing by
   ``s`` per step) let ``S(v, x)`` be the lowest height at position x of line v from which a ray
@@ -34,7 +34,7 @@ meets no terrain). Beyond the raster S is -inf (no terrain). Earth curvature: a 
 bounds up K steps along its ray, after which its next j steps rise j r + (2Kj + j^2) c. The
 upper bound follows a straight ray rising r + (2K + 1) c per step (no more than the curved one
 over any j steps), the lower bound one rising at least as much as the curved one over every j
-whose terrain could still reach it (``_drop_and_margin``).
+whose terrain could still reach it (``_drops``).
 
 Rays that differ per row (geographic CRS) or per cell (a sun per cell): the bins follow the
 slowest ray; a faster one drifts ahead of its tube by the slopes' spread per line. In blocks of
@@ -47,6 +47,14 @@ widened one bin per line). Each cell's exact samples and lookup use its own ray.
 dominant axis is the other one (near a diagonal) are left undecided.
 
 Parallel as the sweep's wavefront: strips of positions, each a block of lines behind the next.
+
+References
+----------
+.. [1] "Faster Ray Traced Terrain Shadow Maps," tutorial, Freeworld3D (no author or date given in
+       the text).
+.. [2] A. Tevs, I. Ihrke, H.-P. Seidel, "Maximum mipmaps for fast, accurate, and scalable dynamic
+       height field rendering," in Proc. 2008 Symp. on Interactive 3D Graphics and Games (I3D '08),
+       pp. 183-190, 2008. :doi:`10.1145/1342250.1342279`
 """
 
 from __future__ import annotations

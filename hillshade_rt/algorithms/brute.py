@@ -1,16 +1,24 @@
 """``brute``: exhaustive ray casting, the reference every other algorithm is tested against.
 
-For every valid cell, march the ray toward the sun grid line by grid line (``raymath``) until it is
-blocked, leaves the raster, or rises above the highest cell. Exact on the terrain model by
-construction (docs/model.md). Parallel over rows.
+For every valid cell, march the ray toward the sun grid line by grid line (``raymath``), as the
+source tutorials do [1]_ [2]_, until it is blocked, leaves the raster, or rises above the highest
+cell. Exact on the terrain model by construction (docs/model.md). Parallel over rows.
 
-By default the march skips, over the DEM's maximum-height pyramid (``pyramid``), every block
+By default the march skips, over the DEM's maximum-height pyramid (``pyramid``, [3]_), every block
 lower than the ray: the same samples decide, the others are never taken, so the mask is the plain
 march's cell for cell. ``pyramid=False`` (``--no-pyramid``) is the plain march, O(N * L) for rays
 of L steps: the reference the benchmarks measure everything against.
 
 Output codes: 1 shadow, 0 lit, 255 nodata (a void cell is neither lit nor shadowed; rays crossing a
 void skip it, so a void casts no shadow).
+
+References
+----------
+.. [1] M. Marghidanu, "Fast Computation of Terrain Shadow Maps," GameDev.net, 2002.
+.. [2] T. A. Franke, "Static Terrain Shadowmapping," tutorial (no date given in the text).
+.. [3] A. Tevs, I. Ihrke, H.-P. Seidel, "Maximum mipmaps for fast, accurate, and scalable dynamic
+       height field rendering," in Proc. 2008 Symp. on Interactive 3D Graphics and Games (I3D '08),
+       pp. 183-190, 2008. :doi:`10.1145/1342250.1342279`
 """
 
 import math

@@ -35,7 +35,7 @@ def code_counts(a: np.ndarray) -> np.ndarray:
 def _row_range(row):
     """(valid cells, lowest, highest valid height) of one row (a function of its own: numba's
     parfor analysis of Python >= 3.12 bytecode fails on scalars updated in a loop nested in a
-    prange, numba issue 10132)."""
+    prange: https://github.com/numba/numba/issues/10132)."""
     a, b, c = 0, np.inf, -np.inf
     for h in row:
         if h == h:

@@ -1,8 +1,8 @@
 """Octant mapping: views of a DEM in which the sun lies toward increasing line index.
 
-The published algorithms fix the light's dominant axis and direction (Sakalauskas: ``L_v = 1``).
-Here every one of the eight octants is mapped onto that case with numpy *views* (a transpose and
-reversed strides), never copies:
+The published algorithms fix the light's dominant axis and direction (Sakalauskas [1]_:
+``L_v = 1``). Here every one of the eight octants is mapped onto that case with numpy *views* (a
+transpose and reversed strides), never copies:
 
 * canonical **lines** are the grid lines the rays cross one per step (rows or columns of the DEM),
   numbered so that the sun lies toward increasing line index;
@@ -12,6 +12,12 @@ A ray from canonical cell ``(v0, p0)`` crosses line ``v0 + k`` at position ``p0 
 ``k * rise``. ``Frame`` converts indices both ways; ``view(a)`` applies the same mapping to any
 array of the DEM's shape (the heights, an output mask), so a kernel can write its result straight
 into the caller's array.
+
+References
+----------
+.. [1] T. Sakalauskas, "Hybrid Terrain Shadow Ray Casting," in WSCG 2008 Communication Papers, 16th
+       Int. Conf. in Central Europe on Computer Graphics, Visualization and Computer Vision, Plzeň:
+       UNION Agency, pp. 175-182, 2008.
 """
 
 from __future__ import annotations

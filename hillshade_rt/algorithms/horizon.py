@@ -1,4 +1,4 @@
-"""``horizon``: single-azimuth horizon mapping (Aslandere, Flatken & Gerndt, seed 002).
+"""``horizon``: single-azimuth horizon mapping (Aslandere, Flatken & Gerndt [1]_).
 
 For every cell, the horizon angle β along the sun's azimuth only (their eq. 3-5),
 
@@ -20,14 +20,23 @@ sample only (the paper's ``sp``): faster, approximate (figures in docs/algorithm
 memory and windows of it (``Marches``: a region's rays carried from window to window, state and
 all, for rasters larger than memory: ``run.horizon_windows``), with the same bits.
 
-``hull`` (fast, O(N log N)): Dozier & Frew's idea as in topocalc: along one straight line in the sun
-direction the horizon of every point follows from the upper convex hull of the samples ahead of
-it, built incrementally from the sun's edge. The lines used are those through whole offsets
-``o = p - s*v`` of the canonical frame; their samples are exactly the model's. A cell lies on such
-a line only when ``s*v`` is whole (on the axes and diagonals: always, and there ``hull`` equals
-``scan``); otherwise its tangent of β is interpolated linearly between the two lines that bracket
-it, i.e. the horizon of rays shifted sideways by less than a cell. Its error against the exact
-model is measured in docs/algorithms.md. Needs one ray direction for the whole raster.
+``hull`` (fast, O(N log N)): Dozier & Frew's idea [2]_ as in topocalc: along one straight line in
+the sun direction the horizon of every point follows from the upper convex hull of the samples
+ahead of it, built incrementally from the sun's edge. The lines used are those through whole
+offsets ``o = p - s*v`` of the canonical frame; their samples are exactly the model's. A cell lies
+on such a line only when ``s*v`` is whole (on the axes and diagonals: always, and there ``hull``
+equals ``scan``); otherwise its tangent of β is interpolated linearly between the two lines that
+bracket it, i.e. the horizon of rays shifted sideways by less than a cell. Its error against the
+exact model is measured in docs/algorithms.md. Needs one ray direction for the whole raster.
+
+References
+----------
+.. [1] T. Aslandere, M. Flatken, A. Gerndt, "A Real-Time Physically Based Algorithm for Hard
+       Shadows on Dynamic Height-Fields," German Aerospace Center (DLR), Simulation and Software
+       Technology (no date given in the paper).
+.. [2] J. Dozier, J. Frew, "Rapid calculation of terrain parameters for radiation modeling from
+       digital elevation data," IEEE Trans. Geosci. Remote Sens., vol. 28, no. 5, pp. 963-969,
+       1990. :doi:`10.1109/36.58986`
 """
 
 from __future__ import annotations

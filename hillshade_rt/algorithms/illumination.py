@@ -1,4 +1,4 @@
-"""The illumination run's per-position accumulators (issue 21, item 4): every subsolar position
+"""The illumination run's per-position accumulators: every subsolar position
 of a series lights the DEM once (``subsolar.shadow_mask`` / ``soft_fraction`` into reused
 buffers) and these kernels fold its mask into per-cell sums, in time order:
 
@@ -83,7 +83,7 @@ def any_sun_up(z, slat, clat, slon, clon, a, e2, sx, sy, sz, lift):
 def _row_sun_up(z, r, slat, clat, slon, clon, a, e2, sx, sy, sz, lift):
     """How many valid cells of row ``r`` see the sun's centre above their horizon (a function
     of its own: numba's parfor analysis of Python >= 3.12 bytecode fails on a counter in a loop
-    nested in a prange, numba issue 10132)."""
+    nested in a prange: https://github.com/numba/numba/issues/10132)."""
     k = 0
     for c in range(z.shape[1]):
         h = z[r, c]

@@ -1,8 +1,8 @@
-"""Lambert shading by a point light (issue 21, items 1 and 5): ``hillshade --light-position``
+"""Lambert shading by a point light: ``hillshade --light-position``
 and its lightmaps, and the light seen from points (``query --light-position``).
 
 Per valid cell (row r, column c, height h, lifted by ``lift``): N the unit surface normal of
-Horn's method exactly as the directional hillshade computes it (``relief.horn_gradient``, the
+Horn's method [1]_ exactly as the directional hillshade computes it (``relief.horn_gradient``, the
 row's own ground spacing, the same edges and voids); V the vector from the cell's 3-D position
 to the light in ground metres (grid east: (col_l - c) dx[r] col_sign; grid north:
 (row_l - r) dy[r] row_sign; up: height_l - h - lift; the spacing of the cell's row for the whole
@@ -19,6 +19,11 @@ the ground) faces it: direct = lit. Voids: NaN.
 ``encode`` turns direct light into the hillshade's integers, as the directional hillshade does:
 1 + round(levels x (ambient + (1 - ambient) x direct)), 0 on voids; levels 254 (uint8, 1..255)
 or 65534 (uint16, 1..65535).
+
+References
+----------
+.. [1] B. K. P. Horn, "Hill shading and the reflectance map," Proc. IEEE, vol. 69, no. 1,
+       pp. 14-47, 1981. :doi:`10.1109/PROC.1981.11918`
 """
 
 from __future__ import annotations

@@ -1,9 +1,15 @@
 """Pictures of a window in one pass (``hillshade-rt view``): the relief's brightness from the
-sun's incidence on surface gradients computed once (``gradients``, Horn's method as
+sun's incidence on surface gradients computed once (``gradients``, Horn's method [1]_ as
 ``relief.incidence``), a two-colour mix by a 0..1 value per cell (shadow, sun hours), voids and
 pixels outside the raster transparent, each pixel taking its cell (nearest): the colour
 arithmetic, the incidence and the resampling fused, parallel over the picture's rows (numpy's
-temporaries and a separate incidence pass took 4-8x longer on a 1024² view)."""
+temporaries and a separate incidence pass took 4-8x longer on a 1024² view).
+
+References
+----------
+.. [1] B. K. P. Horn, "Hill shading and the reflectance map," Proc. IEEE, vol. 69, no. 1,
+       pp. 14-47, 1981. :doi:`10.1109/PROC.1981.11918`
+"""
 
 import math
 

@@ -1,6 +1,6 @@
-"""A point light (issue 21, item 1): the light at a position instead of a direction, as the source
-documents place the sun ("B = coordinates of the sun position projection ... L = A - C", seed
-003; "draw a straight line from the sun to the point of interest", seed 004).
+"""A point light: the light at a position instead of a direction, as the source documents place
+the sun ("B = coordinates of the sun position projection ... L = A - C" [1]_; "draw a straight
+line from the sun to the point of interest" [2]_).
 
 The model (docs/model.md) with the ray ending at the light: from each cell centre (row r, column
 c, height h0 + lift) the straight line to the light at fractional (``row_l``, ``col_l``) and
@@ -32,6 +32,14 @@ ray leaves the raster; it stops early once the ray is above the highest cell, fo
 at its current sample, for a descending one at its last sample (then before it starts).
 One per-cell body (``point_is_blocked``) for the CPU kernel (rows in parallel) and the CUDA
 kernel (``shadow_mask_gpu``: one thread per cell), as ``brute``.
+
+References
+----------
+.. [1] M. Marghidanu, "Fast Computation of Terrain Shadow Maps," GameDev.net, 2002.
+.. [2] T. A. Franke, "Static Terrain Shadowmapping," tutorial (no date given in the text).
+.. [3] A. Tevs, I. Ihrke, H.-P. Seidel, "Maximum mipmaps for fast, accurate, and scalable dynamic
+       height field rendering," in Proc. 2008 Symp. on Interactive 3D Graphics and Games (I3D '08),
+       pp. 183-190, 2008. :doi:`10.1145/1342250.1342279`
 """
 
 from __future__ import annotations

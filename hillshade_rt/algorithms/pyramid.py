@@ -1,5 +1,5 @@
 """The maximum-height pyramid and the exact march that skips over it ("maximum mipmaps", Tevs,
-Ihrke & Seidel 2008, adapted to the terrain model of docs/model.md).
+Ihrke & Seidel 2008 [1]_, adapted to the terrain model of docs/model.md).
 
 **The pyramid.** Level l (1 <= l <= ``nlev``) cuts the raster into blocks of 2^l x 2^l cells;
 block (i, j) stores the highest valid height among the cells of rows ``[i*2^l, (i+1)*2^l]`` and
@@ -25,6 +25,12 @@ pyramid is in raster coordinates, the ray's own geometry is used throughout).
 The level to try first follows the last one that worked (one level up after a skip, down while a
 block is not lower): along a clear ray the skips grow geometrically, near the terrain it is the
 plain march plus one pyramid read per step.
+
+References
+----------
+.. [1] A. Tevs, I. Ihrke, H.-P. Seidel, "Maximum mipmaps for fast, accurate, and scalable dynamic
+       height field rendering," in Proc. 2008 Symp. on Interactive 3D Graphics and Games (I3D '08),
+       pp. 183-190, 2008. :doi:`10.1145/1342250.1342279`
 """
 
 import math
@@ -41,8 +47,8 @@ MAX_LEVELS = 15
 class MaxPyramid:
     """The pyramid of one DEM, built at its first use (``args``): ``data`` (float32, all levels,
     flat), ``offsets`` (int64, start of level l at ``offsets[l]``), ``widths`` (int64, blocks per
-    row of level l), ``nlev``. A caller can hand one to every method that might march (the
-    engine keeps one per raster); only a march pays for it, once."""
+    row of level l), ``nlev``. A caller can hand one to every method that might march
+    (``engine.shader.Shader`` keeps one per raster); only a march pays for it, once."""
 
     __slots__ = ("_z", "_built", "shape")
 
@@ -80,9 +86,9 @@ class MaxPyramid:
         return _patch(z, data, off, widths, nlev, r0, r1, c0, c1)
 
 
-# what a few marches cost (ns on 2 cores, issue 18's benchmarks): the pyramid's build per cell of
-# the raster, and per cell whose ray grazes the terrain (the cells the bounds leave open march
-# their whole reach) a plain step, or a march over the pyramid (about brute's longest)
+# what a few marches cost (ns on 2 cores, measured: docs/benchmarks.md): the pyramid's build
+# per cell of the raster, and per cell whose ray grazes the terrain (the cells the bounds leave
+# open march their whole reach) a plain step, or a march over the pyramid (about brute's longest)
 BUILD_NS = 2.8
 PLAIN_NS_PER_STEP = 0.4
 PYRAMID_MARCH_NS = 68.0

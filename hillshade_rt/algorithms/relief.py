@@ -1,4 +1,4 @@
-"""Surface normals (Horn's method, like ``gdaldem``) and the sun's incidence on them.
+"""Surface normals (Horn's method [1]_, like ``gdaldem``) and the sun's incidence on them.
 
 ``incidence`` gives cos(i) = L . N for every cell of a window: L the unit vector toward the sun
 (grid east, grid north, up), N the unit surface normal from Horn's 3 x 3 weighted differences
@@ -9,6 +9,11 @@ centre and the opposite neighbour (2e - opposite); a corner with its opposite mi
 from the plane through the centre and its two edge neighbours; an edge neighbour with nothing
 opposite takes the centre's height. So every valid cell gets a normal, exact on a plane up to the
 raster's corners (gdaldem's ``-compute_edges`` extrapolates likewise). A void cell gets NaN.
+
+References
+----------
+.. [1] B. K. P. Horn, "Hill shading and the reflectance map," Proc. IEEE, vol. 69, no. 1,
+       pp. 14-47, 1981. :doi:`10.1109/PROC.1981.11918`
 """
 
 import math

@@ -1,11 +1,26 @@
 """What a cell's horizons in N directions add up to (the definitions: ``run.skyview``'s
-docstring and docs/skyview.md): Zakšek's sky view factor 1 - mean sin γ, Dozier & Frew's
-cosine-weighted view from the tilted surface, and Yokoyama's positive and negative openness.
+docstring and docs/skyview.md): Zakšek's sky view factor 1 - mean sin γ [1]_, Dozier & Frew's
+cosine-weighted view from the tilted surface [2]_ [3]_, and Yokoyama's positive and negative
+openness [4]_.
 
 One function per definition adds one direction's horizon angles to a running sum, cell by cell
 (numba: the same scalar arithmetic whatever the array's shape, so a window of a raster gets the
 bits a run in memory gives its cells); :class:`Sum` holds the sums of a raster or of one window
 and says the result. One direction's angles are in memory at a time.
+
+References
+----------
+.. [1] K. Zakšek, K. Oštir, Ž. Kokalj, "Sky-View Factor as a Relief Visualization Technique,"
+       Remote Sensing, vol. 3, no. 2, pp. 398-415, 2011. :doi:`10.3390/rs3020398`
+.. [2] J. Dozier, J. Frew, "Rapid calculation of terrain parameters for radiation modeling from
+       digital elevation data," IEEE Trans. Geosci. Remote Sens., vol. 28, no. 5, pp. 963-969,
+       1990. :doi:`10.1109/36.58986`
+.. [3] J. Dozier, "Revisiting Topographic Horizons in the Era of Big Data and Parallel Computing,"
+       IEEE Geosci. Remote Sens. Lett., vol. 19, art. 8024605, 2022.
+       :doi:`10.1109/LGRS.2021.3125278`
+.. [4] R. Yokoyama, M. Shirasawa, R. J. Pike, "Visualizing topography by openness: A new
+       application of image processing to digital elevation models," Photogramm. Eng. Remote Sens.,
+       vol. 68, no. 3, pp. 257-265, 2002.
 """
 
 from __future__ import annotations

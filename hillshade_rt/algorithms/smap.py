@@ -1,4 +1,4 @@
-"""``smap``: Sakalauskas' hybrid terrain shadow ray casting (seed 000), exact on the model.
+"""``smap``: Sakalauskas' hybrid terrain shadow ray casting [1]_, exact on the model.
 
 The idea: along a ray, the terrain-minus-ray difference ``g_k`` reaches its maximum at a
 *silhouette* sample (higher than the ray's previous sample by more than the rise per step, and not
@@ -41,6 +41,12 @@ Computed with a monotone stack per beam; exact; measured in docs/benchmarks.md.
 Rays must be the same for every row (one sun direction in pixel units: projected CRSs, raw grids).
 With per-row spacing (geographic CRSs) the beams of different rows do not coincide; ``shadow_mask``
 then marches each cell's ray like ``brute`` and says so in ``stats["note"]``.
+
+References
+----------
+.. [1] T. Sakalauskas, "Hybrid Terrain Shadow Ray Casting," in WSCG 2008 Communication Papers, 16th
+       Int. Conf. in Central Europe on Computer Graphics, Visualization and Computer Vision, Plzeň:
+       UNION Agency, pp. 175-182, 2008.
 """
 
 from __future__ import annotations

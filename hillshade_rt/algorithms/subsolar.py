@@ -1,4 +1,4 @@
-"""Per-cell suns (issue 21, item 2; ``bodysun``): every cell lit by the sun as seen from its own
+"""Per-cell suns (``bodysun``): every cell lit by the sun as seen from its own
 place on the body, the sun given by its position S in the body-fixed frame (its subsolar point
 and distance).
 

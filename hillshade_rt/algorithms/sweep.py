@@ -1,11 +1,12 @@
-"""``sweep``: the flag-map propagation ("Faster Ray Traced Terrain Shadow Maps", seed 001).
+"""``sweep``: the flag-map propagation ("Faster Ray Traced Terrain Shadow Maps" [1]_).
 
-The tutorial's idea: process cells from the sun's side and let every cell store what its own ray
-met, so that a later ray reaching an already visited cell reuses that instead of marching on.
-What each cell stores here is the **left-over height** of its ray, in absolute form: ``S``, the
-lowest height at the cell's position from which a ray toward the sun clears every sample ahead
-(``S - h`` is the most by which the cell's own ray passes under the terrain, negative when it
-clears; ``zfloor``, a height below the lowest cell, when it never meets terrain). It obeys an exact recurrence along a ray:
+The tutorial's idea (an acceleration of the brute march of [2]_): process cells from the sun's side
+and let every cell store what its own ray met, so that a later ray reaching an already visited cell
+reuses that instead of marching on. What each cell stores here is the **left-over height** of its
+ray, in absolute form: ``S``, the lowest height at the cell's position from which a ray toward the
+sun clears every sample ahead (``S - h`` is the most by which the cell's own ray passes under the
+terrain, negative when it clears; ``zfloor``, a height below the lowest cell, when it never meets
+terrain). It obeys an exact recurrence along a ray:
 
     S(cell) = max( max_{k<=K} (T_k - k*rise) , S(K-th sample point) - K*rise )
 
@@ -32,14 +33,13 @@ void-heavy DEMs (4-29 % of the cells on SRTM Everest, 0.2-0.7 % on New Zealand's
 
 **Rays that differ per row** (geographic CRS; equirectangular and other projected grids whose
 spacing is not uniform). A stored S is that of the ray of its own row, so a cell's S is really
-computed along a chain of rays, K steps each with the geometry of the row where the block
-starts. Two kinds of cells therefore go to the exact march (``_trusted_floor``, a height floor
-per row): every cell of a row whose own dominant axis is not the frame's (toward the poles dx
-shrinks and a sun from 163 deg moves more columns than rows per metre; re-expressed in the
-centre row's lines its samples would not be the model's and would skip terrain: issue 17's
-errors of up to 25-67 deg), and the cells whose chain drifts, within the reach of their own
-ray, more than ``DRIFT_CELLS`` sideways or ``DRIFT_RISE`` (relative) in height from it. Uniform
-rays never take this path.
+computed along a chain of rays, K steps each with the geometry of the row where the block starts.
+Two kinds of cells therefore go to the exact march (``_trusted_floor``, a height floor per row):
+every cell of a row whose own dominant axis is not the frame's (toward the poles dx shrinks and a
+sun from 163 deg moves more columns than rows per metre; re-expressed in the centre row's lines its
+samples would not be the model's and would skip terrain: errors of up to 25-67 deg were measured),
+and the cells whose chain drifts, within the reach of their own ray, more than ``DRIFT_CELLS``
+sideways or ``DRIFT_RISE`` (relative) in height from it. Uniform rays never take this path.
 
 Speed. With one ray direction for the raster (projected CRS) every cell of a line has the same
 sample offsets and interpolation fractions, so each exact sample and the stored-value lookup is
@@ -66,6 +66,12 @@ sun) holds on per-row grids too: on a global lunar grid (equirectangular and lon
 1737.4 km sphere, 0.5 deg, +-88 deg, 9 suns) 0 wrong cells (before the per-row checks: 0.57 %,
 2.97 % at the worst sun, 5.5 % at |lat| >= 80, up to 24.8 deg), on WGS84 60-85 N 0.006 %, worst
 sun 0.055 %, 0.60 deg (before: 0.17 %, 1.34 %, 3.93 deg); tests/algorithms/test_sweep.py.
+
+References
+----------
+.. [1] "Faster Ray Traced Terrain Shadow Maps," tutorial, Freeworld3D (no author or date given in
+       the text).
+.. [2] M. Marghidanu, "Fast Computation of Terrain Shadow Maps," GameDev.net, 2002.
 """
 
 from __future__ import annotations

@@ -1,5 +1,9 @@
 """The array API: shadows and horizons of heights already in memory (numpy arrays), one
-function per operation."""
+function per operation.
+
+Units throughout: heights and distances in metres, angles in degrees (azimuths clockwise from
+the raster's north), irradiance in W/m² (Wh/m² summed over hours).
+"""
 
 from __future__ import annotations
 
@@ -40,30 +44,65 @@ def shadow_mask(heights, azimuth: float, elevation: float,
                 algorithm: str = "auto", stats: dict | None = None, backend: str = "auto", *,
                 curvature="auto", refraction_k: float | None = None, body=None,
                 height_above_ground: float = 0.0, **options) -> np.ndarray:
-    """Cast-shadow mask of a DEM: uint8, 1 = shadow, 0 = lit, 255 = nodata; with the command
-    line's defaults (the same mask as ``hillshade-rt shadow`` for the same DEM and sun).
+    """Cast-shadow mask of a DEM, as ``hillshade-rt shadow`` gives it.
 
-    heights: 2-D array, row 0 the northern edge (NaN = nodata), or a DEM from ``read_dem``
-    (then its grid and its body are the defaults). Converted to float32 once if it is not
-    float32 already; a float32 array is used in place, never copied.
-    azimuth, elevation: degrees (clockwise from north; above the horizon, 0 < E <= 90).
-    spacing: required for an array: ground metres per cell, ``d``, ``(dx, dy)`` or a
-    :class:`Grid` (per-row spacing, orientation) such as ``read_dem(...).grid``.
-    algorithm: one of ``algorithms.REGISTRY``: ``auto`` (default: the fastest exact method), ``bounds``,
-    ``brute`` (exact reference), ``smap`` (exact),
-    ``horizon`` (exact with its default ``method="scan"``), ``sweep`` (approximate).
-    stats: optional dict that receives the algorithm's figures (e.g. smap's ``black_fraction``);
-    on the GPU also ``stats["gpu"]`` (device, kernel and transfer times, bytes moved).
-    backend: ``"cpu"``, ``"gpu"`` or ``"auto"`` (the GPU when numba-cuda finds a CUDA device and
-    the options have a GPU kernel, else the CPU). To keep a DEM on the GPU for many suns, use
-    :class:`hillshade_rt.engine.gpu.GpuDem`.
-    curvature: True, False or "auto" (the default, as the command line: on when rays can run
-    longer than 1 km); refraction_k: terrestrial refraction (default 0.13 on the Earth); body:
-    an ``earth.Body`` (default: a DEM's from its CRS, an array's the Earth's mean sphere);
-    height_above_ground: metres (>= 0) above every cell its ray starts from, as
-    ``--height-above-ground`` (``auto`` then runs brute; another algorithm is an error).
-    options: passed to the algorithm (smap: ``nextv``, ``better_nextv``; horizon: ``method``,
-    ``sample_spacing``; sweep: ``exact_steps``).
+    With the command line's defaults: the same mask as ``hillshade-rt shadow`` for the same DEM
+    and sun.
+
+    Parameters
+    ----------
+    heights : numpy.ndarray or Dem
+        2-D heights in metres (row 0 the northern edge, NaN nodata), or a DEM from
+        :func:`~hillshade_rt.io.read_dem` (its grid and its body are then the defaults).
+        Converted to float32 once if it is not float32 already; a float32 array is used in
+        place, never copied.
+    azimuth : float
+        Sun azimuth, degrees clockwise from the raster's north (any real value wraps).
+    elevation : float
+        Sun elevation above the horizon, degrees, 0 < elevation <= 90.
+    spacing : float, (float, float) or Grid, optional
+        Required for an array: the ground spacing, metres per cell ``d``, ``(dx, dy)`` metres,
+        or a :class:`~hillshade_rt.model.geometry.Grid` (per-row spacing, orientation) such as
+        ``read_dem(...).grid``.
+    algorithm : str, default "auto"
+        One of ``algorithms.REGISTRY``: ``auto`` (the fastest exact method), ``bounds``,
+        ``brute`` (the exact reference), ``smap`` (exact), ``horizon`` (exact with its default
+        ``method="scan"``), ``sweep`` (approximate).
+    stats : dict, optional
+        Receives the algorithm's figures (e.g. smap's ``black_fraction``); on the GPU also
+        ``stats["gpu"]`` (device, ``kernel_ms`` and ``transfer_ms`` in milliseconds, bytes moved).
+    backend : {"auto", "cpu", "gpu"}, default "auto"
+        ``auto``: the GPU when numba-cuda finds a CUDA device and the options have a GPU
+        kernel, else the CPU.
+        To keep a DEM on the GPU for many suns, use :class:`hillshade_rt.engine.gpu.GpuDem`.
+    curvature : bool or "auto", default "auto"
+        Earth curvature of the rays; ``auto`` (as the command line): on when rays can run
+        longer than 1 km.
+    refraction_k : float, optional
+        Terrestrial refraction coefficient (dimensionless); default 0.13 on the Earth, 0 on
+        other bodies.
+    body : earth.Body, optional
+        The body the DEM lies on (its radius of curvature, metres); default a DEM's from its
+        CRS, an array's the Earth's mean sphere.
+    height_above_ground : float, default 0.0
+        Metres (>= 0) above every cell that its ray starts from, as ``--height-above-ground``.
+        ``auto`` then runs brute; another algorithm is an error.
+    **options
+        Passed to the algorithm (smap: ``nextv``, ``better_nextv``; horizon: ``method``,
+        ``sample_spacing``; sweep: ``exact_steps``).
+
+    Returns
+    -------
+    numpy.ndarray
+        uint8, the heights' shape: 1 shadow, 0 lit, 255 nodata (all 255 when every height is
+        nodata).
+
+    Raises
+    ------
+    HillshadeError
+        No spacing for an array, an unknown algorithm or option, an elevation outside (0, 90],
+        a non-finite azimuth, ``backend="gpu"`` without a GPU kernel for the options, a negative
+        height above the ground.
     """
     from .shader import Shader, render
     from ..model.sun import SunOver
@@ -87,13 +126,55 @@ def horizon_angles(heights, azimuth: float,
                    curvature="auto", refraction_k: float | None = None,
                    body=None, max_distance: float | None = None,
                    height_above_ground: float = 0.0) -> np.ndarray:
-    """Horizon angle (degrees, float32) of every cell toward ``azimuth``: lit by a sun at that
-    azimuth iff angle <= its elevation. NaN on voids, -90 where no terrain lies ahead.
-    ``method="scan"`` is exact on the model; ``"hull"`` is the faster approximation. As
-    ``hillshade-rt horizon``: curvature "auto" is on for the scan of a raster more than 1 km
-    across; ``max_distance`` (metres, the scan): terrain farther along a ray is ignored;
-    ``height_above_ground`` (metres, >= 0): the horizon seen from that high above each cell;
-    ``heights``, ``spacing`` and ``body`` as for :func:`shadow_mask`."""
+    """Horizon angle of every cell toward ``azimuth``, as ``hillshade-rt horizon``.
+
+    A cell is lit by a sun at that azimuth iff its angle <= the sun's elevation.
+
+    Parameters
+    ----------
+    heights : numpy.ndarray or Dem
+        2-D heights in metres (row 0 the northern edge, NaN nodata), or a DEM from
+        :func:`~hillshade_rt.io.read_dem` (its grid and its body are then the defaults).
+        Converted to float32 once if it is not float32 already; a float32 array is used in
+        place, never copied.
+    azimuth : float
+        Degrees clockwise from the raster's north (any real value wraps).
+    spacing : float, (float, float) or Grid, optional
+        Required for an array: the ground spacing, metres per cell ``d``, ``(dx, dy)`` metres,
+        or a :class:`~hillshade_rt.model.geometry.Grid` (per-row spacing, orientation) such as
+        ``read_dem(...).grid``.
+    method : {"scan", "hull"}, default "scan"
+        ``scan`` is exact on the model; ``hull`` is the faster approximation.
+    sample_spacing : int, default 1
+        The scan takes every n-th sample only (n > 1: faster, approximate).
+    backend : {"auto", "cpu", "gpu"}, default "auto"
+        ``auto``: the GPU when numba-cuda finds a CUDA device and the options have a GPU
+        kernel, else the CPU.
+    curvature : bool or "auto", default "auto"
+        Earth curvature of the rays; ``auto``: on for the scan of a raster more than 1 km
+        across.
+    refraction_k : float, optional
+        Terrestrial refraction coefficient (dimensionless); default 0.13 on the Earth, 0 on
+        other bodies.
+    body : earth.Body, optional
+        The body the DEM lies on (its radius of curvature, metres); default a DEM's from its
+        CRS, an array's the Earth's mean sphere.
+    max_distance : float, optional
+        Metres of ground distance (the scan): terrain farther along a ray is ignored.
+    height_above_ground : float, default 0.0
+        Metres (>= 0): the horizon seen from that high above each cell.
+
+    Returns
+    -------
+    numpy.ndarray
+        float32 degrees above the horizontal, the heights' shape; NaN on voids, -90 where no
+        terrain lies ahead.
+
+    Raises
+    ------
+    HillshadeError
+        No spacing for an array, a non-finite azimuth, a negative height above the ground.
+    """
     from ..algorithms import horizon as hz
     from .shader import horizon_shader
     z, grid, body = _dem_parts(heights, spacing, body)
@@ -121,10 +202,41 @@ def _lift(height_above_ground) -> float:
 
 def is_shadowed(heights, points, azimuth: float, elevation: float,
                 spacing: float | tuple[float, float] | Grid | None = None) -> np.ndarray:
-    """For 3-D points ``(row, col, height)`` in array coordinates (cell centres at whole row/col,
-    heights in the DEM's units; above, on or off the terrain), whether the ray toward the sun
-    passes strictly below the terrain (no curvature). Uses an SMap; build
-    ``algorithms.smap.SMap`` yourself to query one sun many times."""
+    """Whether the ray toward the sun from each of some 3-D points passes below the terrain.
+
+    The ray passes strictly below the terrain (no curvature). Uses an SMap; build
+    ``algorithms.smap.SMap`` yourself to query one sun many times.
+
+    Parameters
+    ----------
+    heights : numpy.ndarray or Dem
+        2-D heights in metres (row 0 the northern edge, NaN nodata), or a DEM from
+        :func:`~hillshade_rt.io.read_dem` (its grid and its body are then the defaults).
+        Converted to float32 once if it is not float32 already; a float32 array is used in
+        place, never copied.
+    points : array_like, shape (N, 3)
+        ``(row, col, height)`` in array coordinates (cell centres at whole rows and columns),
+        heights in metres (the DEM's units); above, on or off the terrain.
+    azimuth : float
+        Sun azimuth, degrees clockwise from the raster's north.
+    elevation : float
+        Sun elevation above the horizon, degrees, 0 < elevation <= 90.
+    spacing : float, (float, float) or Grid, optional
+        Required for an array: the ground spacing, metres per cell ``d``, ``(dx, dy)`` metres,
+        or a :class:`~hillshade_rt.model.geometry.Grid` (per-row spacing, orientation) such as
+        ``read_dem(...).grid``.
+
+    Returns
+    -------
+    numpy.ndarray
+        bool, shape (N,): True where the point is in shadow.
+
+    Raises
+    ------
+    HillshadeError
+        No spacing for an array, points not an (N, 3) array of finite numbers, an elevation
+        outside (0, 90], a grid whose spacing varies per row (geographic CRS).
+    """
     from ..algorithms.smap import SMap
     z, grid, _ = _dem_parts(heights, spacing, None)
     return SMap(z, azimuth, elevation, grid).is_shadowed(points)
@@ -135,14 +247,54 @@ def sky_view(heights, spacing: float | tuple[float, float] | Grid | None = None,
              refraction_k: float | None = None, body=None, openness: str | None = None,
              max_distance: float | None = None,
              height_above_ground: float = 0.0) -> np.ndarray:
-    """Sky view factor of every cell (float32 0..1, NaN on voids) from its exact horizon in
-    ``directions`` azimuths, as ``hillshade-rt skyview``: ``definition`` "zaksek" (1 - mean sin
-    of the horizon elevation clipped at the horizontal) or "dozier" (cosine-weighted, from the
-    tilted surface). ``openness`` "positive" or "negative": Yokoyama's openness instead
-    (float32 degrees; NaN where no direction has terrain ahead). ``max_distance``: metres,
-    terrain farther along a ray is ignored (Yokoyama's L). ``height_above_ground``: the
-    horizons seen from that many metres above each cell. ``heights``, ``spacing``,
-    ``curvature``, ``body`` as for :func:`horizon_angles`."""
+    """Sky view factor (or openness) of every cell, as ``hillshade-rt skyview``.
+
+    From each cell's exact horizon in ``directions`` azimuths.
+
+    Parameters
+    ----------
+    heights : numpy.ndarray or Dem
+        2-D heights in metres (row 0 the northern edge, NaN nodata), or a DEM from
+        :func:`~hillshade_rt.io.read_dem` (its grid and its body are then the defaults).
+        Converted to float32 once if it is not float32 already; a float32 array is used in
+        place, never copied.
+    spacing : float, (float, float) or Grid, optional
+        Required for an array: the ground spacing, metres per cell ``d``, ``(dx, dy)`` metres,
+        or a :class:`~hillshade_rt.model.geometry.Grid` (per-row spacing, orientation) such as
+        ``read_dem(...).grid``.
+    directions : int, default 32
+        Number of azimuths, equally spaced over 360 degrees (>= 1).
+    definition : {"zaksek", "dozier"}, default "zaksek"
+        ``zaksek``: 1 - mean sin of the horizon elevation clipped at the horizontal (Zakšek et
+        al. 2011); ``dozier``: cosine-weighted, from the tilted surface (Dozier & Frew 1990).
+    curvature : bool or "auto", default "auto"
+        Earth curvature of the rays; ``auto`` (as the command line): on when rays can run
+        longer than 1 km.
+    refraction_k : float, optional
+        Terrestrial refraction coefficient (dimensionless); default 0.13 on the Earth, 0 on
+        other bodies.
+    body : earth.Body, optional
+        The body the DEM lies on (its radius of curvature, metres); default a DEM's from its
+        CRS, an array's the Earth's mean sphere.
+    openness : {"positive", "negative"}, optional
+        Yokoyama's openness instead (with the default ``definition`` only).
+    max_distance : float, optional
+        Metres of ground distance: terrain farther along a ray is ignored (Yokoyama's L).
+    height_above_ground : float, default 0.0
+        Metres (>= 0): the horizons seen from that high above each cell.
+
+    Returns
+    -------
+    numpy.ndarray
+        float32, the heights' shape: the sky view factor (dimensionless, 0..1, NaN on voids), or
+        with ``openness`` degrees (NaN where no direction has terrain ahead).
+
+    Raises
+    ------
+    HillshadeError
+        No spacing for an array, an unknown definition or openness, ``openness`` with
+        ``definition="dozier"``, ``directions`` < 1, a negative height above the ground.
+    """
     from ..algorithms.skyview import definition_of, floor_deg, inverted, sky_view as _sky_view
     from .shader import horizon_shader
     name = definition_of(definition, openness)
@@ -168,13 +320,51 @@ def sky_view(heights, spacing: float | tuple[float, float] | Grid | None = None,
 def horizon_profile(heights, rows, cols, spacing: float | tuple[float, float] | Grid | None = None,
                     height_above_ground=0.0, step: float = 1.0, *, curvature="auto",
                     refraction_k: float | None = None, body=None):
-    """Horizon profiles of points in array coordinates (fractional ``rows``, ``cols``: cell
-    centres at whole numbers), the observer ``height_above_ground`` above the terrain
-    interpolated bilinearly there, every ``step`` degrees clockwise from north: (azimuths,
-    angles in degrees (points x azimuths; -90: nothing ahead), distances in metres (NaN:
-    nothing ahead)), as ``hillshade-rt profile``. ``heights``, ``spacing``, ``curvature``,
-    ``body`` as for :func:`horizon_angles`; a point outside the cell centres or on nodata is
-    an error."""
+    """Horizon profiles of points, as ``hillshade-rt profile``.
+
+    Parameters
+    ----------
+    heights : numpy.ndarray or Dem
+        2-D heights in metres (row 0 the northern edge, NaN nodata), or a DEM from
+        :func:`~hillshade_rt.io.read_dem` (its grid and its body are then the defaults).
+        Converted to float32 once if it is not float32 already; a float32 array is used in
+        place, never copied.
+    rows, cols : array_like
+        Fractional array coordinates of the points (cell centres at whole numbers), same length.
+    spacing : float, (float, float) or Grid, optional
+        Required for an array: the ground spacing, metres per cell ``d``, ``(dx, dy)`` metres,
+        or a :class:`~hillshade_rt.model.geometry.Grid` (per-row spacing, orientation) such as
+        ``read_dem(...).grid``.
+    height_above_ground : float or array_like, default 0.0
+        Metres of the observer above the terrain, interpolated bilinearly at the point (one for
+        all points or one per point).
+    step : float, default 1.0
+        Degrees between azimuths, clockwise from north, 0 < step <= 90.
+    curvature : bool or "auto", default "auto"
+        Earth curvature of the rays; ``auto`` (as the command line): on when rays can run
+        longer than 1 km.
+    refraction_k : float, optional
+        Terrestrial refraction coefficient (dimensionless); default 0.13 on the Earth, 0 on
+        other bodies.
+    body : earth.Body, optional
+        The body the DEM lies on (its radius of curvature, metres); default a DEM's from its
+        CRS, an array's the Earth's mean sphere.
+
+    Returns
+    -------
+    azimuths : numpy.ndarray
+        Degrees clockwise from north, every ``step``.
+    angles : numpy.ndarray
+        Horizon elevation, degrees, points x azimuths (-90: nothing ahead).
+    distances : numpy.ndarray
+        Ground metres to the horizon point, points x azimuths (NaN: nothing ahead).
+
+    Raises
+    ------
+    HillshadeError
+        No spacing for an array, ``rows`` and ``cols`` of different lengths, a point outside the
+        cell centres or on nodata, a step outside (0, 90].
+    """
     from ..algorithms import horizon as hz
     z, grid, body = _dem_parts(heights, spacing, body)
     rr = np.atleast_1d(np.asarray(rows, np.float64))
@@ -193,10 +383,46 @@ def horizon_profile(heights, rows, cols, spacing: float | tuple[float, float] | 
 def observer_profiles(z: np.ndarray, grid: Grid, rows: np.ndarray, cols: np.ndarray,
                       observer: np.ndarray, step: float, *, curvature="auto",
                       refraction_k: float | None = None, body=None):
-    """The core of :func:`horizon_profile` and ``hillshade-rt profile``, for observers already
-    placed (float32 heights ``z`` on ``grid``; fractional ``rows``, ``cols``; ``observer``
-    heights): (azimuths every ``step`` degrees, angles, distances, whether the rays are
-    curved)."""
+    """The core of :func:`horizon_profile` and ``hillshade-rt profile``, for placed observers.
+
+    Parameters
+    ----------
+    z : numpy.ndarray
+        float32 heights in metres (NaN nodata).
+    grid : Grid
+        Their ground geometry.
+    rows, cols : numpy.ndarray
+        Fractional array coordinates of the observers.
+    observer : numpy.ndarray
+        The observers' heights, metres (the DEM's datum).
+    step : float
+        Degrees between azimuths, 0 < step <= 90.
+    curvature : bool or "auto", default "auto"
+        Earth curvature of the rays; ``auto`` (as the command line): on when rays can run
+        longer than 1 km.
+    refraction_k : float, optional
+        Terrestrial refraction coefficient (dimensionless); default 0.13 on the Earth, 0 on
+        other bodies.
+    body : earth.Body, optional
+        The body the DEM lies on (its radius of curvature, metres); default a DEM's from its
+        CRS, an array's the Earth's mean sphere.
+
+    Returns
+    -------
+    azimuths : list of float
+        Degrees clockwise from north, every ``step``.
+    angles : numpy.ndarray
+        Horizon elevation, degrees, observers x azimuths (-90: nothing ahead).
+    distances : numpy.ndarray
+        Ground metres to the horizon point (NaN: nothing ahead).
+    curved : bool
+        Whether the rays were curved.
+
+    Raises
+    ------
+    HillshadeError
+        A step outside (0, 90].
+    """
     from ..algorithms import horizon as hz
     from .shader import horizon_shader
     if not (0.0 < step <= 90.0):
@@ -210,10 +436,24 @@ def observer_profiles(z: np.ndarray, grid: Grid, rows: np.ndarray, cols: np.ndar
 
 
 def ground_height(heights: np.ndarray, row: float, col: float) -> float:
-    """The terrain at fractional (``row``, ``col``; cell centres at whole numbers): bilinear
-    between the cell centres around it, only those with a weight (a cell centre is its own
-    height, a point on the line between two centres their interpolation, whatever lies beside
-    them); NaN outside the cell centres or where a centre it needs is nodata."""
+    """The terrain height at a fractional (row, col) of the heights.
+
+    Bilinear between the cell centres around it, only those with a weight (a cell centre is its
+    own height, a point on the line between two centres their interpolation, whatever lies
+    beside them).
+
+    Parameters
+    ----------
+    heights : numpy.ndarray
+        2-D heights, metres (NaN nodata).
+    row, col : float
+        Fractional array coordinates (cell centres at whole numbers).
+
+    Returns
+    -------
+    float
+        Metres; NaN outside the cell centres or where a centre it needs is nodata.
+    """
     z = heights
     rows, cols = z.shape
     if not (0.0 <= row <= rows - 1 and 0.0 <= col <= cols - 1):
@@ -232,29 +472,62 @@ def sun_at_points(heights, rows, cols, azimuth, elevation,
                   spacing: float | tuple[float, float] | Grid | None = None,
                   height_above_ground=0.0, *, curvature="auto",
                   refraction_k: float | None = None, body=None) -> dict:
-    """Whether the sun reaches observers at points, as ``hillshade-rt query``: for each point
-    (fractional ``rows``, ``cols`` in array coordinates, cell centres at whole numbers; the
-    observer ``height_above_ground`` metres (>= 0, one for all or one per point) above the
-    terrain interpolated bilinearly there) and each sun, the exact horizon toward the sun's
-    azimuth (the model's march from the point: ``algorithms.horizon.profile``) against the
-    sun's elevation.
+    """Whether the sun reaches observers at points, as ``hillshade-rt query``.
 
-    ``azimuth``, ``elevation``: degrees (grid azimuth clockwise from north; elevation above the
-    horizontal, <= 0 is night); m suns shared by every point (scalars or 1-D), or one sun per
-    point and column (2-D, points x m). Curvature is decided for each sun as ``shadow_mask``
-    decides it (``curvature`` "auto": on when the rays can run longer than 1 km), so that at a
-    cell centre with no height above the ground ``lit`` is the shadow mask's value for that
-    cell (up to the rounding of the angle where the horizon is within ~1e-12 degrees of the
-    sun). ``heights``, ``spacing``, ``body`` as for :func:`shadow_mask`. A point outside the
-    cell centres or beside nodata is an error.
+    For each point and each sun: the exact horizon toward the sun's azimuth (the model's march
+    from the point: ``algorithms.horizon.profile``) against the sun's elevation. Curvature is
+    decided for each sun as :func:`shadow_mask` decides it, so that at a cell centre with no
+    height above the ground ``lit`` is the shadow mask's value for that cell (up to the rounding
+    of the angle where the horizon is within ~1e-12 degrees of the sun).
 
-    Returns a dict of numpy arrays, points x suns unless said: ``azimuth``, ``elevation`` (the
-    suns), ``horizon_deg`` (-90: no terrain ahead inside the raster), ``distance_m`` (ground
-    metres to the horizon point; NaN: none), ``margin_deg`` (elevation - horizon), ``lit``
-    (bool: the sun is up and margin >= 0: a ray that grazes the terrain is lit, as in the
-    mask), ``curved`` (bool: the rays were curved), and per point ``ground_m``,
-    ``observer_m``. ``pandas.DataFrame({k: v.ravel() for k, v in r.items() if v.ndim == 2})``
-    makes one row per point and sun."""
+    Parameters
+    ----------
+    heights : numpy.ndarray or Dem
+        2-D heights in metres (row 0 the northern edge, NaN nodata), or a DEM from
+        :func:`~hillshade_rt.io.read_dem` (its grid and its body are then the defaults).
+        Converted to float32 once if it is not float32 already; a float32 array is used in
+        place, never copied.
+    rows, cols : array_like
+        1-D fractional array coordinates of the points (cell centres at whole numbers).
+    azimuth, elevation : float or array_like
+        The suns, degrees: grid azimuth clockwise from north, elevation above the horizontal
+        (within [-90, 90]; <= 0 is night). m suns shared by every point (scalars or 1-D), or one
+        sun per point and column (2-D, points x m).
+    spacing : float, (float, float) or Grid, optional
+        Required for an array: the ground spacing, metres per cell ``d``, ``(dx, dy)`` metres,
+        or a :class:`~hillshade_rt.model.geometry.Grid` (per-row spacing, orientation) such as
+        ``read_dem(...).grid``.
+    height_above_ground : float or array_like, default 0.0
+        Metres (>= 0) of the observer above the terrain interpolated bilinearly at the point, one
+        for all or one per point.
+    curvature : bool or "auto", default "auto"
+        Earth curvature of the rays; ``auto`` (as the command line): on when rays can run
+        longer than 1 km.
+    refraction_k : float, optional
+        Terrestrial refraction coefficient (dimensionless); default 0.13 on the Earth, 0 on
+        other bodies.
+    body : earth.Body, optional
+        The body the DEM lies on (its radius of curvature, metres); default a DEM's from its
+        CRS, an array's the Earth's mean sphere.
+
+    Returns
+    -------
+    dict of numpy.ndarray
+        Points x suns unless said: ``azimuth``, ``elevation`` (the suns, degrees),
+        ``horizon_deg`` (degrees; -90: no terrain ahead inside the raster), ``distance_m``
+        (ground metres to the horizon point; NaN: none), ``margin_deg`` (elevation - horizon,
+        degrees), ``lit`` (bool: the sun is up and margin >= 0: a ray that grazes the terrain is
+        lit, as in the mask), ``curved`` (bool: the rays were curved), and per point ``ground_m``
+        and ``observer_m`` (metres). ``pandas.DataFrame({k: v.ravel() for k, v in r.items() if
+        v.ndim == 2})`` makes one row per point and sun.
+
+    Raises
+    ------
+    HillshadeError
+        No spacing for an array, rows and cols not 1-D of one length, suns of the wrong shape or
+        not finite, an elevation outside [-90, 90], a negative height above the ground, a point
+        outside the cell centres or beside nodata.
+    """
     import numba
 
     from ..algorithms import horizon as hz
@@ -350,25 +623,88 @@ def irradiance(heights, times, spacing: float | tuple[float, float] | Grid | Non
                curvature="auto", refraction_k: float | None = None, body=None,
                refraction: bool = True, pressure: float | None = None,
                temperature: float = 12.0, sun_tolerance: float | None = None) -> dict:
-    """Beam, diffuse, reflected and global irradiance on every cell, as ``hillshade-rt
-    irradiance`` (formulas: ``hillshade_rt.engine.irradiance``, docs/irradiance.md): a dict of float32
-    arrays under "beam", "diffuse", "reflected", "global" (NaN on voids).
+    """Beam, diffuse, reflected and global irradiance on every cell, as ``hillshade-rt irradiance``.
 
-    ``times``: aware datetimes (or ISO 8601 strings with an offset). Without ``weights`` each
-    array is a (times, rows, cols) stack of W/m² at each time; with ``weights`` (hours per
-    time, e.g. from ``sun.day_samples``) the sums of W/m² times hours: Wh/m² (``mean``: divided
-    by the hours, W/m²). ``lat``/``lon``: the place (required for an array; a DEM from
-    ``read_dem`` has its own, per tile on large rasters); ``altitude``: metres (default the
-    centre cell's height). The open sky: pvlib's ``clear_sky`` model ("ineichen" with
-    ``linke_turbidity``, None: pvlib's climatological lookup; or "haurwitz"), or measured
-    ``ghi`` (W/m², one per time) with ``dni`` and ``dhi`` (else split by Erbs). ``perez``: the
-    Perez (1990) sky instead of the isotropic one; ``soft``: the visible fraction of the solar
-    disk instead of hard shadows; ``sky_view_directions``: azimuths of the sky view factor.
-    The sun: NREL SPA, apparent (``refraction``, at ``pressure`` hPa, default the standard
-    atmosphere at ``altitude``, and ``temperature`` C), one vector for an array, per tile where
-    it varies by more than ``sun_tolerance`` degrees across a georeferenced DEM.
-    ``heights``, ``spacing``, ``algorithm``, ``backend``, ``curvature``, ``body`` as for
-    :func:`shadow_mask`."""
+    Formulas: ``hillshade_rt.engine.irradiance``, docs/irradiance.md.
+
+    Parameters
+    ----------
+    heights : numpy.ndarray or Dem
+        2-D heights in metres (row 0 the northern edge, NaN nodata), or a DEM from
+        :func:`~hillshade_rt.io.read_dem` (its grid and its body are then the defaults).
+        Converted to float32 once if it is not float32 already; a float32 array is used in
+        place, never copied.
+    times : str, datetime or sequence of them
+        Aware datetimes, or ISO 8601 strings with a UTC offset.
+    spacing : float, (float, float) or Grid, optional
+        Required for an array: the ground spacing, metres per cell ``d``, ``(dx, dy)`` metres,
+        or a :class:`~hillshade_rt.model.geometry.Grid` (per-row spacing, orientation) such as
+        ``read_dem(...).grid``.
+    lat, lon : float, optional
+        The place, degrees (required for an array; a DEM from ``read_dem`` has its own, per tile
+        on large rasters).
+    weights : array_like, optional
+        Hours each time stands for (>= 0, one per time, e.g. from ``sun.day_samples``).
+    mean : bool, default False
+        With ``weights``: divide the sums by the hours (W/m²).
+    altitude : float, optional
+        The place's height, metres (default the centre cell's height).
+    clear_sky : {"ineichen", "haurwitz"}, default "ineichen"
+        pvlib's clear-sky model of the open sky.
+    linke_turbidity : float, optional
+        Linke turbidity (dimensionless) for ``ineichen``; None: pvlib's climatological lookup.
+    ghi, dni, dhi : array_like, optional
+        A measured sky instead, W/m², one value per time: ``ghi`` alone (split into DNI and DHI by
+        Erbs) or with ``dni`` and ``dhi``.
+    albedo : float, default 0.2
+        Ground reflectance (dimensionless, 0..1).
+    perez : bool, default False
+        The Perez (1990) sky instead of the isotropic one.
+    soft : bool, default False
+        The visible fraction of the solar disk instead of hard shadows.
+    sky_view_directions : int, default 32
+        Azimuths of the sky view factor.
+    algorithm : str, default "auto"
+        As for :func:`shadow_mask`.
+    backend : {"auto", "cpu", "gpu"}, default "auto"
+        ``auto``: the GPU when numba-cuda finds a CUDA device and the options have a GPU
+        kernel, else the CPU.
+    curvature : bool or "auto", default "auto"
+        Earth curvature of the rays; ``auto`` (as the command line): on when rays can run
+        longer than 1 km.
+    refraction_k : float, optional
+        Terrestrial refraction coefficient (dimensionless); default 0.13 on the Earth, 0 on
+        other bodies.
+    body : earth.Body, optional
+        The body the DEM lies on (its radius of curvature, metres); default a DEM's from its
+        CRS, an array's the Earth's mean sphere.
+    refraction : bool, default True
+        Apparent sun elevation (the SPA's refraction).
+    pressure : float, optional
+        Air pressure, hPa (default the standard atmosphere at ``altitude``).
+    temperature : float, default 12.0
+        Air temperature, °C.
+    sun_tolerance : float, optional
+        Degrees: on a georeferenced DEM the sun is computed per tile where its direction varies
+        by more than this across the raster (default 0.05).
+
+    Returns
+    -------
+    dict of numpy.ndarray
+        float32 arrays under "beam", "diffuse", "reflected", "global" (NaN on voids). Without
+        ``weights``: (times, rows, cols) stacks of W/m² at each time; with ``weights``: the sums
+        of W/m² times hours, Wh/m² (``mean``: W/m²), the heights' shape.
+
+    Raises
+    ------
+    HillshadeError
+        No spacing for an array; no times, naive times, weights not one number of hours >= 0 per
+        time, ``mean`` without weights or with no hours; ``dni``/``dhi`` without ``ghi``, ``ghi``
+        not one value per time; no ``lat``/``lon`` for an array, or out of range; bad options
+        (albedo, turbidity, directions, algorithm).
+    AllNodata
+        Every height is nodata.
+    """
     import datetime as _dt
     import math
     from . import irradiance as ir
@@ -436,14 +772,43 @@ def irradiance(heights, times, spacing: float | tuple[float, float] | Grid | Non
 def point_light_mask(heights, x: float, y: float, z: float, *,
                      height_above_ground: float = 0.0, backend: str = "auto",
                      pyramid=True, stats: dict | None = None) -> np.ndarray:
-    """Cast-shadow mask (uint8: 1 shadow, 0 lit, 255 nodata) of a DEM from ``read_dem`` lit by
-    a point light at (``x``, ``y``) in the DEM's CRS and ``z`` metres above its datum (a lamp,
-    a mast's floodlight, a near sun: issue 21): each cell's ray runs straight to the light and
-    ends there (``algorithms.point_light``). A light inside the terrain is an error; one above a cell
-    lights it. ``heights`` may also be an array with the light given in array coordinates
-    (``x`` the fractional column, ``y`` the row, cell centres at whole numbers). ``backend``
-    as for :func:`shadow_mask` (``auto``: the GPU when there is one); ``pyramid`` False marches
-    without the maximum-height pyramid (the same mask); ``stats`` gets ``backend``."""
+    """Cast-shadow mask of a DEM lit by a point light (``algorithms.point_light``).
+
+    A lamp, a mast's floodlight, a near sun: each cell's ray runs straight to the light and ends
+    there. A light above a cell lights it.
+
+    Parameters
+    ----------
+    heights : Dem or numpy.ndarray
+        A DEM from :func:`~hillshade_rt.io.read_dem` (the light in its CRS), or an array of
+        heights in metres (the light in array coordinates).
+    x, y : float
+        The light's position: in the DEM's CRS units; for an array, ``x`` the fractional column,
+        ``y`` the row (cell centres at whole numbers).
+    z : float
+        The light's height, metres above the DEM's datum.
+    height_above_ground : float, default 0.0
+        Metres (>= 0) above every cell that its ray starts from.
+    backend : {"auto", "cpu", "gpu"}, default "auto"
+        ``auto``: the GPU when numba-cuda finds a CUDA device and the options have a GPU
+        kernel, else the CPU.
+    pyramid : bool, default True
+        False marches without the maximum-height pyramid (the same mask).
+    stats : dict, optional
+        Receives ``backend`` (and on the GPU ``gpu``: ``kernel_ms``, ``transfer_ms`` in
+        milliseconds, bytes moved).
+
+    Returns
+    -------
+    numpy.ndarray
+        uint8, the heights' shape: 1 shadow, 0 lit, 255 nodata.
+
+    Raises
+    ------
+    HillshadeError
+        A DEM without a geotransform, a position that is not finite, a light inside the
+        terrain, a negative height above the ground.
+    """
     from ..algorithms import point_light
     from ..algorithms.horizon import bilinear
     if hasattr(heights, "heights") and hasattr(heights, "transform"):
@@ -483,23 +848,58 @@ def subsolar_mask(dem, lat: float, lon: float, *, sun_distance: float | None = N
                   body=None, height_above_ground: float = 0.0, curvature=True,
                   refraction_k: float | None = None, frames=None, pyramid=None,
                   sun_xyz=None, soft: bool = False, backend: str = "cpu") -> np.ndarray:
-    """Cast-shadow mask (uint8: 1 shadow, 0 lit, 255 nodata) of a DEM from ``read_dem`` lit by
-    the sun whose subsolar point is (``lat``, ``lon``, degrees on the body) at ``sun_distance``
-    metres from the body's centre (default the body's mean distance): every cell with its own
-    sun direction from its own place on the body (issue 21; ``bodysun``,
-    ``algorithms.subsolar``). A cell whose sun is at or below its horizon is in shadow (the
-    body hides the sun: the terminator).
+    """Cast-shadow mask of a DEM lit by the sun given by its subsolar point.
 
-    body: an ``earth.Body`` or ``--body``'s text ('moon', 'mars', 'earth', a radius in metres);
-    default the DEM's CRS's. curvature: True (default), False or "auto" (on when the raster is
-    more than 1 km across); the rays curve with the body's radius of curvature in their
-    azimuth at each cell, bent back by terrestrial refraction (``refraction_k``, default 0.13 on
-    the Earth, 0 elsewhere: ``earth.refraction_for``); the sun's elevation itself is geometric.
-    frames (``cell_suns.CellFrames``), pyramid (``algorithms.pyramid.MaxPyramid``) and
-    ``sun_xyz``: prepared once for many suns (frames and pyramid are the costly parts; pass the
-    ``body`` as an ``earth.Body`` too: finding the CRS's costs ~10 ms a call).
-    soft: the visible fraction of the solar disk instead (float32 0..1, NaN nodata; the disk's
-    angular radius asin(R_sun / distance), the horizon from the cell's own ray).
+    Every cell with its own sun direction from its own place on the body (``bodysun``,
+    ``algorithms.subsolar``). A cell whose sun is at or below its horizon is in shadow (the
+    body hides the sun: the terminator). The sun's elevation itself is geometric (no
+    refraction).
+
+    Parameters
+    ----------
+    dem : Dem
+        A DEM from :func:`~hillshade_rt.io.read_dem` with a geotransform and a CRS (heights in
+        metres).
+    lat, lon : float
+        The subsolar point, degrees on the body.
+    sun_distance : float, optional
+        Metres from the body's centre to the sun (default the body's mean distance).
+    body : earth.Body or str, optional
+        Or ``--body``'s text ('moon', 'mars', 'earth', a radius in metres); default the DEM's
+        CRS's.
+    height_above_ground : float, default 0.0
+        Metres (>= 0) above every cell that its ray starts from.
+    curvature : bool or "auto", default True
+        The rays curve with the body's radius of curvature in their azimuth at each cell;
+        ``auto``: on when the raster is more than 1 km across.
+    refraction_k : float, optional
+        Terrestrial refraction coefficient bending the rays back (dimensionless); default 0.13
+        on the Earth, 0 elsewhere (``earth.refraction_for``).
+    frames : bodysun.CellFrames, optional
+        Prepared once for many suns (costly).
+    pyramid : algorithms.pyramid.MaxPyramid, optional
+        Prepared once for many suns (costly).
+    sun_xyz : array_like, optional
+        The sun's position in the body-fixed frame, metres (else from ``lat``, ``lon`` and
+        ``sun_distance``). With prepared parts pass ``body`` as an ``earth.Body`` too: finding
+        the CRS's costs about 10 ms a call.
+    soft : bool, default False
+        The visible fraction of the solar disk instead (the disk's angular radius
+        asin(R_sun / distance), the horizon from the cell's own ray).
+    backend : {"cpu", "gpu", "auto"}, default "cpu"
+        ``auto`` runs on the CPU.
+
+    Returns
+    -------
+    numpy.ndarray
+        The DEM's shape: uint8, 1 shadow, 0 lit, 255 nodata; with ``soft`` float32, 0..1, NaN
+        nodata.
+
+    Raises
+    ------
+    HillshadeError
+        Not a DEM from ``read_dem``, or one without a geotransform or CRS; frames of another
+        shape; a bad ``curvature``, ``backend`` or ``body``; a negative height above the ground.
     """
     from . import cell_suns
     from ..algorithms import pyramid as pyr_mod, subsolar

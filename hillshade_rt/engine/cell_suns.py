@@ -1,4 +1,4 @@
-"""Per-cell suns on a body (issue 21, item 2): the sun given by its subsolar point (latitude,
+"""Per-cell suns on a body: the sun given by its subsolar point (latitude,
 longitude on the body) and its distance, each cell's own sun direction from the cell's own place
 on the body's ellipsoid (or sphere).
 

@@ -10,8 +10,9 @@ the DEM's place:
                                                    1/0 from the exact cast-shadow mask, or the
                                                    visible fraction of the solar disk (soft)
 * diffuse   = DHI · Vd                              isotropic sky; Vd: Dozier's sky view factor
-                                                   of the tilted surface, computed once
-            or Perez (1990), per time:
+                                                   of the tilted surface [1]_ [2]_, computed
+                                                   once
+            or Perez (1990) [3]_, per time:
               max(0, DHI · [(1 - F1) · Vd + F1 · max(cos i, 0) · lit / b
                             + F2 · sin S · min(1, Vd / ((1 + cos S) / 2))])
 * reflected = GHI · albedo · (1 - Vd)               1 - Vd: the terrain's configuration factor
@@ -21,11 +22,37 @@ and the energy is the sum of w_t times each (Wh/m²). On an open plane of slope 
 (1 + cos S) / 2 and 1 - Vd is (1 - cos S) / 2, so every band is pvlib's
 ``get_total_irradiance`` (isotropic, or Perez) for that plane.
 
-The open sky's irradiance comes from pvlib's clear-sky models (Ineichen with a Linke turbidity,
-given or pvlib's climatological lookup; Haurwitz, GHI only, split by Erbs) or from a measured
-series (a CSV of time, ghi[, dni, dhi], interpolated linearly in time; GHI alone split by
-Erbs). The sun is the project's (``sun``: NREL SPA, apparent elevation unless refraction is
-off), the same suns as ``sun-hours``: its zenith at the DEM's centre feeds the clear-sky model.
+The open sky's irradiance comes from pvlib's clear-sky models [8]_ (Ineichen [4]_ with a Linke
+turbidity, given or pvlib's climatological lookup; Haurwitz [5]_, GHI only, split by Erbs [6]_) or
+from a measured series (a CSV of time, ghi[, dni, dhi], interpolated linearly in time; GHI alone
+split by Erbs). Perez's air mass is Kasten & Young's [7]_. The sun is the project's (``sun``: NREL
+SPA, apparent elevation unless refraction is off), the same suns as ``sun-hours``: its zenith at
+the DEM's centre feeds the clear-sky model.
+
+References
+----------
+.. [1] J. Dozier, J. Frew, "Rapid calculation of terrain parameters for radiation modeling from
+       digital elevation data," IEEE Trans. Geosci. Remote Sens., vol. 28, no. 5, pp. 963-969,
+       1990. :doi:`10.1109/36.58986`
+.. [2] J. Dozier, "Revisiting Topographic Horizons in the Era of Big Data and Parallel Computing,"
+       IEEE Geosci. Remote Sens. Lett., vol. 19, art. 8024605, 2022.
+       :doi:`10.1109/LGRS.2021.3125278`
+.. [3] R. Perez, P. Ineichen, R. Seals, J. Michalsky, R. Stewart, "Modeling daylight availability
+       and irradiance components from direct and global irradiance," Solar Energy, vol. 44, no. 5,
+       pp. 271-289, 1990. :doi:`10.1016/0038-092X(90)90055-H`
+.. [4] P. Ineichen, R. Perez, "A new airmass independent formulation for the Linke turbidity
+       coefficient," Solar Energy, vol. 73, no. 3, pp. 151-157, 2002.
+       :doi:`10.1016/S0038-092X(02)00045-2`
+.. [5] B. Haurwitz, "Insolation in Relation to Cloudiness and Cloud Density," Journal of
+       Meteorology, vol. 2, pp. 154-166, 1945.
+.. [6] D. G. Erbs, S. A. Klein, J. A. Duffie, "Estimation of the diffuse radiation fraction for
+       hourly, daily and monthly-average global radiation," Solar Energy, vol. 28, no. 4,
+       pp. 293-302, 1982. :doi:`10.1016/0038-092X(82)90302-4`
+.. [7] F. Kasten, A. T. Young, "Revised optical air mass tables and approximation formula," Applied
+       Optics, vol. 28, no. 22, pp. 4735-4738, 1989. :doi:`10.1364/AO.28.004735`
+.. [8] W. F. Holmgren, C. W. Hansen, M. A. Mikofski, "pvlib python: a python package for modeling
+       solar energy systems," Journal of Open Source Software, vol. 3, no. 29, p. 884, 2018.
+       :doi:`10.21105/joss.00884`
 """
 
 from __future__ import annotations
@@ -367,7 +394,7 @@ def accumulate(shader, suns, weights, sky: Sky, vd: np.ndarray, albedo: float, *
     each a (times, rows, cols) stack of W/m² at each sun, else the sums of W/m² times
     ``weights`` (hours): Wh/m². ``suns``: ``sun.SunOver`` per sample (the shadows' and the
     incidence's suns), ``sky`` the open sky at each, ``vd`` Dozier's sky view factor. The cast
-    shadows (``shading.render``) are computed only for samples with the sun up and light to
+    shadows (``engine.shader.render``) are computed only for samples with the sun up and light to
     cast; ``timer`` (``run.report.Timer``-like) times them as "shadows" and the rest as
     "irradiance"; ``progress`` wraps the loop (a progress bar)."""
     from .shader import render

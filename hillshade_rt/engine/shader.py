@@ -130,27 +130,67 @@ def choose_backend(backend: str, algorithm: str, options: dict) -> str:
 _WARMED: set = set()     # Shader.warm_up: the kinds of calls warmed in this process
 
 class Shader:
-    """A DEM ready to be lit: ``z`` float32 heights (NaN voids, used in place), ``grid`` its
-    geometry. ``backend`` 'cpu' or 'gpu' (already resolved: ``shadow.choose_backend``).
+    """A DEM ready to be lit by any number of suns (:func:`render`).
 
-    curvature: True, False or "auto" (on when a ray can run longer than 1 km before it rises above
-    the highest cell or leaves the raster). refraction_k: terrestrial refraction coefficient
-    (default 0.13 on the Earth, 0 elsewhere).
+    A window of a larger raster (``engine.windows``): ``zrange`` and ``extent_m`` are the whole
+    raster's (so that curvature "auto" decides as for the whole), and ``halo_ready`` says that
+    ``z`` already holds the halo of every region asked for: each region is computed on all of
+    ``z``. With a lift the cast shadows are marched by an algorithm that takes one
+    (``algorithms.for_lift``: ``auto`` runs brute, an algorithm that cannot is an error); the
+    halos toward the sun are shortened by it (a ray that starts higher clears the terrain
+    sooner); soft shadows take it through the horizon scan's own lift
+    (:meth:`visible_fraction`).
 
-    A window of a larger raster (``engine.windows``): ``zrange`` and ``extent_m`` are the whole raster's
-    (so that curvature "auto" decides as for the whole), and ``halo_ready`` says that ``z``
-    already holds the halo of every region asked for: each region is computed on all of ``z``.
-    ``local_range``: bounds of the window's heights (known from the statistics pass; else
-    computed); ``carry`` (a ``smap.BandCarry``, for ``smap`` on the CPU) and ``place`` (the window
-    and the raster's shape) let SMap reuse the tables of the window before and mask only the
-    region.
+    Parameters
+    ----------
+    z : numpy.ndarray
+        2-D float32 heights in metres, NaN voids, used in place (:meth:`update` edits it).
+    grid : Grid
+        Their ground geometry (metres per cell, per row).
+    algorithm : str, default "auto"
+        One of ``algorithms.REGISTRY``.
+    options : dict, optional
+        The algorithm's options (as :func:`hillshade_rt.engine.arrays.shadow_mask`'s ``**options``).
+    backend : {"cpu", "gpu"}, default "cpu"
+        Already resolved (:func:`choose_backend`).
+    curvature : bool or "auto", default "auto"
+        Earth curvature of the rays; ``auto``: on when a ray can run longer than 1 km before it
+        rises above the highest cell or leaves the raster.
+    refraction_k : float, optional
+        Terrestrial refraction coefficient (dimensionless); default 0.13 on the Earth, 0
+        elsewhere.
+    body : earth.Body, optional
+        The body (its ellipsoid axes in metres, the DEM's latitude in degrees); default WGS84
+        at 45 degrees latitude.
+    zrange : (float, float), optional
+        Lowest and highest valid height of the whole raster, metres (default ``z``'s).
+    extent_m : float, optional
+        The whole raster's diagonal, ground metres (default ``z``'s).
+    halo_ready : bool, default False
+        ``z`` already holds the halo toward the sun of every region asked for.
+    local_range : (float, float), optional
+        Lowest and highest height of this window, metres (known from the statistics pass; else
+        computed).
+    carry : smap.BandCarry, optional
+        For ``smap`` on the CPU: the tables of the window before, reused.
+    place : optional
+        The window and the raster's shape, with ``carry``: SMap masks only the region.
+    sun_field : bool, default True
+        Suns that vary across the raster: every cell's own sun direction
+        (``algorithms.per_cell_sun``) instead of one per tile.
+    survey : (int, float, float), optional
+        The read's (valid cells, lowest, highest height in metres) of ``z``, when the caller has
+        it (saves a pass).
+    lift : float, default 0.0
+        Metres (>= 0) above every cell that its ray starts from (an observer, a panel above each
+        cell: ``--height-above-ground``; 0 the ground itself).
 
-    ``lift``: metres above every cell its ray starts from (an observer, a panel above each
-    cell: ``--height-above-ground``; >= 0, 0 the ground itself). With a lift the cast shadows
-    are marched by an algorithm that takes one (``algorithms.for_lift``: ``auto`` runs brute,
-    an algorithm that cannot is an error); the halos toward the sun are shortened by it (a ray
-    that starts higher clears the terrain sooner); soft shadows take it through the horizon
-    scan's own lift (:meth:`visible_fraction`)."""
+    Raises
+    ------
+    HillshadeError
+        An unknown algorithm, a lift that is not a finite number >= 0 or that the algorithm
+        cannot take, a bad ``curvature`` or refraction coefficient.
+    """
 
     def __init__(self, z: np.ndarray, grid: Grid, algorithm: str = "auto",
                  options: dict | None = None, backend: str = "cpu", curvature="auto",
@@ -327,7 +367,7 @@ class Shader:
         measure computing. On the CPU by lighting a small rough terrain through this very path
         (the same calls and argument types: the algorithm, or both methods of ``auto`` and its
         survey; the pyramid, refinements, soft horizons, the report's counts), on a grid with
-        the same pattern of spacing; on the GPU through ``shadow.warm_up``. Once per process
+        the same pattern of spacing; on the GPU through ``engine.shader.warm_up``. Once per process
         for each kind of call (a batch of DEMs, a warm server's worker: many runs)."""
         # what decides the kernels and their argument types, the sun's octant included (the
         # frames' views)
@@ -619,22 +659,54 @@ def field_method(algorithm: str, options: dict, soft: bool) -> bool:
 def render(shader: Shader, sun: SunOver, kind: str = "shadow", *, soft: bool = False,
            self_shadow: bool = False, ambient: float = 0.2, stats: dict | None = None,
            previous: tuple[np.ndarray, int] | None = None) -> np.ndarray:
-    """What one sun makes of the DEM, over the whole raster (tile by tile when the sun is per
-    tile):
+    """What one sun makes of the DEM, over the whole raster.
 
-    * ``shadow``: uint8 1 shadow / 0 lit / 255 void (``self_shadow``: surfaces facing away count
-      as shadow); with ``soft`` float32 visible fraction of the solar disk (0..1, NaN on voids;
-      ``self_shadow`` zeroes faces turned away);
-    * ``classes``: uint8 0 lit, 1 self-shadow (facing away), 2 cast shadow, 255 void;
-    * ``hillshade``: uint8 shaded relief 1..255 (0 void): 1 + 254 * (ambient + (1 - ambient) *
-      max(0, cos i) * lit), lit 1/0 (or the visible fraction with ``soft``);
-    * ``sun``: float32 direct sun 0..1 (lit, or the visible fraction with ``soft``; ``self_shadow``
-      zeroes faces turned away), NaN on voids: what sun hours add up.
+    Tile by tile when the sun is per tile. With ``previous`` after :meth:`Shader.update`, only
+    the cells the edits since then can have changed are made again (``rerender``), the rest
+    copied from it (it is not modified); the result is the product a new Shader of the edited
+    DEM gives.
 
-    ``previous``: (product, version), what this call made for the same sun, kind and options
-    when ``shader.version`` was ``version``; after ``Shader.update`` only the cells the edits
-    since then can have changed are made again (``rerender``), the rest copied from it (it is
-    not modified). The result is the product a new Shader of the edited DEM gives.
+    Parameters
+    ----------
+    shader : Shader
+        The prepared DEM.
+    sun : sun.SunOver
+        The sun: one direction (azimuth and elevation in degrees) for the raster, or one per
+        tile.
+    kind : {"shadow", "classes", "hillshade", "sun"}, default "shadow"
+        The product (see Returns).
+    soft : bool, default False
+        The visible fraction of the solar disk instead of hard shadows (not with ``classes``).
+    self_shadow : bool, default False
+        Surfaces facing away from the sun count as shadow (``shadow``), or get no sun (``sun``,
+        soft ``shadow``).
+    ambient : float, default 0.2
+        The hillshade's ambient light (dimensionless, 0..1).
+    stats : dict, optional
+        Receives the algorithm's figures.
+    previous : (numpy.ndarray, int), optional
+        ``(product, version)``: what this call made for the same sun, kind and options when
+        ``shader.version`` was ``version``.
+
+    Returns
+    -------
+    numpy.ndarray
+        The raster's shape:
+
+        * ``shadow``: uint8 1 shadow / 0 lit / 255 void; with ``soft`` float32 visible fraction
+          of the solar disk (0..1, NaN on voids);
+        * ``classes``: uint8 0 lit, 1 self-shadow (facing away), 2 cast shadow, 255 void;
+        * ``hillshade``: uint8 shaded relief 1..255 (0 void): 1 + 254 * (ambient + (1 - ambient)
+          * max(0, cos i) * lit), i the sun's incidence angle, lit 1/0 (or the visible fraction
+          with ``soft``);
+        * ``sun``: float32 direct sun 0..1 (lit, or the visible fraction with ``soft``), NaN on
+          voids: what sun hours add up (times the hours of each sample).
+
+    Raises
+    ------
+    HillshadeError
+        An unknown ``kind``, ``classes`` with ``soft``, a ``previous`` version this Shader never
+        had.
     """
     if kind not in KINDS:
         raise HillshadeError(f"unknown product {kind!r}")

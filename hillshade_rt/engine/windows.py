@@ -21,7 +21,7 @@ reads it whole.
 3. **Order and carry.** Windows run from the sun's side, so that the halo of a window is part of
    the window before it; the heights two consecutive windows share are carried over in memory,
    not read again.
-4. Each window is lit by the same code as an in-memory run (``engine.Shader`` with the whole
+4. Each window is lit by the same code as an in-memory run (``engine.shader.Shader`` with the whole
    raster's height range and extent, so Earth curvature decides alike), and its region written
    into the output, a GeoTIFF written through a temporary file (``io.raster.BandWriter``).
 
@@ -339,7 +339,7 @@ def window_for(bounds, shape, grid: Grid, azimuth: float, elevation: float, curv
 
 def halo_cells(grid: Grid, azimuth: float, reach: float, rows: tuple[int, int],
                margin: int = 1) -> tuple[int, int]:
-    """(rows, columns) a window adds to a region of these rows (as ``engine.halo_bounds``, before
+    """(rows, columns) a window adds to a region of these rows (as ``shading.halo_bounds``, before
     clipping to the raster)."""
     east = math.sin(math.radians(azimuth)) * grid.col_sign
     north = math.cos(math.radians(azimuth)) * grid.row_sign

@@ -442,10 +442,37 @@ def _bad_tile(src: DemSource, bounds) -> HillshadeError | None:
 # opening
 
 def open_dem(paths, options: DemOptions | None = None, *, windows: bool = False) -> DemSource:
-    """The DEM at ``paths`` (one path, or several shaded as one mosaic) opened and checked,
-    not read (see the module's notes). ``windows``: it will be read in windows, so what can be
-    read whole only is refused now: standard input before it is read (a usage error), a TIFF
-    only tifffile opens (GDAL's reason)."""
+    """The DEM at ``paths`` opened and checked, not read (see the module's notes).
+
+    Parameters
+    ----------
+    paths : str, os.PathLike or sequence of them
+        One path (a local file, any dataset name GDAL opens, ``-`` for standard input), or
+        several shaded as one mosaic.
+    options : DemOptions, optional
+        How to read it: ``band`` (1-based), ``nodata`` (overrides the file's), ``pixel_size``
+        ((dx, dy) metres, overrides the geotransform's spacing; required without
+        georeferencing), ``z_factor`` (heights times it, to metres), ``raw_shape`` (rows, cols),
+        ``raw_dtype``, ``raw_byteorder``.
+    windows : bool, default False
+        It will be read in windows, so what can be read whole only is refused now: standard
+        input before it is read (a usage error), a TIFF only tifffile opens (GDAL's reason).
+
+    Returns
+    -------
+    DemSource
+        Its shape, transform, CRS, nodata, value type and :class:`~hillshade_rt.model.geometry.Grid`
+        (ground metres per cell); :meth:`DemSource.read` reads it whole, :meth:`DemSource.reader`
+        in windows. A context manager (closes the dataset it holds).
+
+    Raises
+    ------
+    HillshadeError
+        No DEM given, a path that does not exist or cannot be opened, bad options (band, z-factor,
+        pixel size, raw layout), several raw grids as one mosaic, an unusable geotransform.
+    UsageProblem
+        Standard input with ``windows`` or in a mosaic.
+    """
     opts = options or DemOptions()
     paths = [os.fspath(p) for p in ([paths] if isinstance(paths, (str, os.PathLike)) else paths)]
     if not paths:
@@ -504,14 +531,45 @@ def read_dem(path, *, band: int = 1, nodata: float | None = None,
              pixel_size: tuple[float, float] | None = None, z_factor: float = 1.0,
              raw_shape: tuple[int, int] | None = None, raw_dtype: str | None = None,
              raw_byteorder: str | None = None) -> Dem:
-    """Read the DEM at ``path`` whole: ``open_dem(path, DemOptions(...)).read()``, the dataset
-    closed afterwards.
+    """Read the DEM at ``path`` whole.
 
-    ``path``: a local file, any dataset name GDAL opens (``/vsizip/a.zip/dem.tif``,
-    ``zip://a.zip!dem.tif``, ``/vsigzip/…``, ``/vsimem/…``, ``/vsicurl/…``, ``NETCDF:f.nc:z``),
-    or ``-``: all of standard input, read into memory (any format GDAL reads, or raw with the
-    ``raw_*`` options). ``pixel_size`` (metres) overrides the spacing from the geotransform; it
-    is required when the input has no georeferencing.
+    ``open_dem(path, DemOptions(...)).read()``, the dataset closed afterwards.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        A local file, any dataset name GDAL opens (``/vsizip/a.zip/dem.tif``,
+        ``zip://a.zip!dem.tif``, ``/vsigzip/…``, ``/vsimem/…``, ``/vsicurl/…``,
+        ``NETCDF:f.nc:z``), or ``-``: all of standard input, read into memory (any format GDAL
+        reads, or raw with the ``raw_*`` options).
+    band : int, default 1
+        The band to read, 1-based.
+    nodata : float, optional
+        Nodata value in the file's units, overriding the file's.
+    pixel_size : (float, float), optional
+        (dx, dy) ground metres per cell, overriding the spacing from the geotransform; required
+        when the input has no georeferencing.
+    z_factor : float, default 1.0
+        Heights times this factor (finite, non-zero), e.g. 0.3048 for feet to metres.
+    raw_shape : (int, int), optional
+        (rows, cols) of a raw grid.
+    raw_dtype : str, optional
+        Value type of a raw grid: "int16", "uint16", "int32", "float32" or "float64".
+    raw_byteorder : str, optional
+        Byte order of a raw grid, "little" or "big" (default big for .hgt tiles, else little).
+
+    Returns
+    -------
+    Dem
+        ``heights`` (float32 metres, NaN nodata, the z-factor applied), ``grid`` (ground metres
+        per cell), ``transform``, ``crs``, ``nodata`` and the source's details.
+
+    Raises
+    ------
+    HillshadeError
+        A path that does not exist or cannot be read, bad options, an unusable geotransform.
+    AllNodata
+        Every cell is nodata.
     """
     opts = DemOptions(band, nodata, pixel_size, z_factor, raw_shape, raw_dtype, raw_byteorder)
     with open_dem(path, opts) as src:

@@ -1,4 +1,4 @@
-"""Subsolar series (issue 21, item 2): where the sun stands over a body at each time, read from a
+"""Subsolar series: where the sun stands over a body at each time, read from a
 file the user made with an ephemeris (no ephemeris is bundled; docs/subsolar.md says how to get a
 table from JPL Horizons).
 

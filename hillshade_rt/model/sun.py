@@ -6,12 +6,22 @@
   repeated span and, for a repeated one, the two offsets to choose from.
 * Series (:func:`time_range`) and sun-hours days (:func:`day_samples`) step in elapsed time,
   computed in UTC; their times are shown in the zone with each instant's own offset.
-* The solar position is NREL's Solar Position Algorithm (Reda & Andreas 2004) as implemented by
-  ``pvlib.spa`` (its numpy version): topocentric azimuth (clockwise from true north) and
-  elevation, apparent (with the SPA's refraction) unless refraction is turned off.
+* The solar position is NREL's Solar Position Algorithm (Reda & Andreas 2004 [1]_ [2]_) as
+  implemented by ``pvlib.spa`` (its numpy version) [3]_: topocentric azimuth (clockwise from true
+  north) and elevation, apparent (with the SPA's refraction) unless refraction is turned off.
 * A DEM's sun is computed at its centre, converted from true north to the raster's grid north
   (meridian convergence of its projection), and, where the direction differs across the raster by
   more than a tolerance, per tile (:func:`sun_over`).
+
+References
+----------
+.. [1] I. Reda, A. Andreas, "Solar position algorithm for solar radiation applications," Solar
+       Energy, vol. 76, no. 5, pp. 577-589, 2004. :doi:`10.1016/j.solener.2003.12.003`
+.. [2] I. Reda, A. Andreas, "Solar Position Algorithm for Solar Radiation Applications," National
+       Renewable Energy Laboratory, Technical Report NREL/TP-560-34302.
+.. [3] W. F. Holmgren, C. W. Hansen, M. A. Mikofski, "pvlib python: a python package for modeling
+       solar energy systems," Journal of Open Source Software, vol. 3, no. 29, p. 884, 2018.
+       :doi:`10.21105/joss.00884`
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The ``illumination`` run (issue 21, item 4): a DEM on a body lit by every position of a
+"""The ``illumination`` run: a DEM on a body lit by every position of a
 subsolar series (``ephemeris.read_subsolar``: a plain CSV or a JPL Horizons table), every cell
 with its own sun (``bodysun``, ``algorithms.subsolar``). One float32 GeoTIFF, NaN nodata:
 

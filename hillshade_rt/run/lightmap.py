@@ -1,4 +1,4 @@
-"""The ``hillshade --light-position`` / ``--light-lonlat`` run (issue 21, items 1 and 5): shaded
+"""The ``hillshade --light-position`` / ``--light-lonlat`` run: shaded
 relief lit by a point light, and lightmaps for terrain artists (``-f PNG``, 8 or 16 bits).
 
 Per cell, as the directional hillshade: ambient + (1 - ambient) x max(0, N . L) x lit, written

@@ -124,7 +124,7 @@ class Outputs:
         self._scratch: list[str] = []
 
     def plan(self, suns, inputs, tiles=None):
-        """The files of each sun. ``tiles``: a mosaic's input tiles (``Source.tiles``); with a
+        """The files of each sun. ``tiles``: a mosaic's input tiles (``DemSource.tiles``); with a
         pattern naming ``{tile}`` each sun's mosaic is written to a scratch file beside the
         outputs and cut into one file per tile (``finish``)."""
         from ..io import check_output_format, output_driver

@@ -1,5 +1,5 @@
-"""The ``shadow --light-position`` / ``--light-lonlat`` run: a DEM lit by a point light (issue
-21, item 1; ``algorithms.point_light``): each cell's ray runs straight to the light and ends there.
+"""The ``shadow --light-position`` / ``--light-lonlat`` run: a DEM lit by a point light
+(``algorithms.point_light``): each cell's ray runs straight to the light and ends there.
 Hard shadows, exact (the march over the maximum-height pyramid), on the CPU or the GPU
 (``--backend``), in memory or in windows (``--window-size``, or a DEM larger than
 ``--max-memory`` allows: each window read with its halo toward the light, ``_windows``). The

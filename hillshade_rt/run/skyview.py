@@ -1,22 +1,22 @@
 """The ``skyview`` run: the sky view factor (or the openness) of every cell from its horizon in
 N directions.
 
-* ``zaksek`` (Zakšek, Oštir & Kokalj 2011; HORAYZON's "visible sky fraction"): 1 - mean over the
-  directions of sin(γ), γ the horizon elevation clipped at the horizontal (the sky is the upper
-  hemisphere: terrain below the horizontal hides none of it). A flat plane: 1; a plane of slope
-  S: 1 - S/π (S in radians, continuous directions).
-* ``dozier`` (Dozier & Frew 1990; Dozier 2022, eq. for Vd): the cosine-weighted view of the sky
-  from the tilted surface, (1/2π) ∫ [cos S sin² H + sin S cos(φ - A) (H - sin H cos H)] dφ, H the
-  horizon's zenith angle (π/2 - γ), S and A the cell's slope and aspect (Horn's normals, as the
-  hillshade's): a plane of slope S gives (1 + cos S)/2, the rest, (1 - cos S)/2, being the
-  terrain it faces: ``terrain_configuration`` writes that share, 1 - Vd (the view factor of
-  the terrain, for reflected light).
-* ``--openness positive`` (Yokoyama, Shirasawa & Pike 2002): the mean over the directions of the
-  horizon's zenith angle 90° - β, β NOT clipped (a cell that looks down on everything ahead has
+* ``zaksek`` (Zakšek, Oštir & Kokalj 2011 [1]_; HORAYZON's "visible sky fraction"): 1 - mean over
+  the directions of sin(γ), γ the horizon elevation clipped at the horizontal (the sky is the upper
+  hemisphere: terrain below the horizontal hides none of it). A flat plane: 1; a plane of slope S:
+  1 - S/π (S in radians, continuous directions).
+* ``dozier`` (Dozier & Frew 1990 [2]_; Dozier 2022 [3]_, eq. for Vd): the cosine-weighted view of
+  the sky from the tilted surface, (1/2π) ∫ [cos S sin² H + sin S cos(φ - A) (H - sin H cos H)] dφ,
+  H the horizon's zenith angle (π/2 - γ), S and A the cell's slope and aspect (Horn's normals, as
+  the hillshade's): a plane of slope S gives (1 + cos S)/2, the rest, (1 - cos S)/2, being the
+  terrain it faces: ``terrain_configuration`` writes that share, 1 - Vd (the view factor of the
+  terrain, for reflected light).
+* ``--openness positive`` (Yokoyama, Shirasawa & Pike 2002 [4]_): the mean over the directions of
+  the horizon's zenith angle 90° - β, β NOT clipped (a cell that looks down on everything ahead has
   a horizon below the horizontal, an openness above 90°); ``negative``: the same of the inverted
-  terrain -z, 90° + the angle down to the lowest terrain ahead (high in valleys and pits).
-  Degrees. Yokoyama's L is ``--max-distance`` (default: the whole raster). Directions with no
-  terrain ahead (within L) are left out of the mean; a cell with none at all is nodata.
+  terrain -z, 90° + the angle down to the lowest terrain ahead (high in valleys and pits). Degrees.
+  Yokoyama's L is ``--max-distance`` (default: the whole raster). Directions with no terrain ahead
+  (within L) are left out of the mean; a cell with none at all is nodata.
 
 Each direction is the ``horizon`` scan (exact on the model, curvature as for ``horizon``,
 ``--max-distance`` as there), accumulated as it is made (one direction's angles in memory at a
@@ -24,6 +24,20 @@ time). At the raster's edge there is no terrain beyond it: a border cell sees op
 outside (a larger DEM around the area of interest fixes that). Distances are ground metres
 throughout (per row on geographic DEMs). A DEM larger than ``--max-memory``, or any DEM with
 ``--window-size``, is computed in windows (``run.horizon_windows``): the same bits.
+
+References
+----------
+.. [1] K. Zakšek, K. Oštir, Ž. Kokalj, "Sky-View Factor as a Relief Visualization Technique,"
+       Remote Sensing, vol. 3, no. 2, pp. 398-415, 2011. :doi:`10.3390/rs3020398`
+.. [2] J. Dozier, J. Frew, "Rapid calculation of terrain parameters for radiation modeling from
+       digital elevation data," IEEE Trans. Geosci. Remote Sens., vol. 28, no. 5, pp. 963-969,
+       1990. :doi:`10.1109/36.58986`
+.. [3] J. Dozier, "Revisiting Topographic Horizons in the Era of Big Data and Parallel Computing,"
+       IEEE Geosci. Remote Sens. Lett., vol. 19, art. 8024605, 2022.
+       :doi:`10.1109/LGRS.2021.3125278`
+.. [4] R. Yokoyama, M. Shirasawa, R. J. Pike, "Visualizing topography by openness: A new
+       application of image processing to digital elevation models," Photogramm. Eng. Remote Sens.,
+       vol. 68, no. 3, pp. 257-265, 2002.
 """
 
 from __future__ import annotations

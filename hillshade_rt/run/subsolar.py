@@ -1,4 +1,4 @@
-"""The ``shadow --subsolar LAT,LON`` run (issue 21, item 2; ``arrays.subsolar_mask``): the sun
+"""The ``shadow --subsolar LAT,LON`` run (``arrays.subsolar_mask``): the sun
 given by its subsolar point on the DEM's body (``--body`` overrides the CRS's) and its distance
 (``--sun-distance``, default the body's mean distance), every cell lit by its own sun; or a
 series of them (``--subsolar-file F``, ``ephemeris.read_subsolar``): one band per time, the

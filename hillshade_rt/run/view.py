@@ -1,4 +1,4 @@
-"""``hillshade-rt view``: a local web viewer of a DEM's shadows (issue 22).
+"""``hillshade-rt view``: a local web viewer of a DEM's shadows.
 
 A small HTTP server from the standard library (``http.server.ThreadingHTTPServer``: no
 dependency; the viewer is local and single-user, so a thread per request is plenty), bound to
