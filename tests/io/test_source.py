@@ -168,12 +168,12 @@ def test_a_source_pickles_without_its_dataset(tmp_path):
         copy.close()
 
 
-_ALLOWED = {"errors", "geometry", "sun", "_preload", "_lazy", "algorithms", "io"}
+_ALLOWED = {"errors", "model", "_preload", "_lazy", "algorithms", "io"}
 
 
 def test_the_io_layer_imports_only_the_layers_below_it():
-    """hillshade_rt.io may import errors, geometry, sun, _preload and algorithms (deferred
-    imports included), never engine, tiling, cli, runner, report, distributed or api."""
+    """hillshade_rt.io may import errors, model, _preload and algorithms (deferred imports
+    included), never engine, pictures, run, cli, api or xarray."""
     import hillshade_rt.io as pkg
     folder = os.path.dirname(pkg.__file__)
     bad = []

@@ -13,6 +13,7 @@ from affine import Affine
 from rasterio.crs import CRS
 
 import hillshade_rt as hr
+from hillshade_rt.engine import arrays
 from hillshade_rt.engine.arrays import point_light_mask
 from hillshade_rt.cli import cli
 from hillshade_rt.io import read_dem
@@ -358,7 +359,7 @@ def test_a_point_light_at_cell_centres_is_its_mask(tmp_path, runner, lift):
     geometry of the light seen from the centre."""
     d, cells = _cells(LIDAR, 400, seed=21)
     x, y = (float(v) for v in d.transform @ (211.3 + 0.5, 143.8 + 0.5))   # col, row
-    zl = hr.arrays.ground_height(d.heights, 143.8, 211.3) + 8.0     # a lamp 8 m up
+    zl = arrays.ground_height(d.heights, 143.8, 211.3) + 8.0     # a lamp 8 m up
     pts = _points_csv(tmp_path, d, cells)
     doc = _query(runner, [LIDAR, "--points", pts, "--light-position", f"{x!r},{y!r},{zl!r}",
                           "--height-above-ground", str(lift)])
