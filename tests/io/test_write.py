@@ -571,6 +571,7 @@ def test_gdal_errors_of_another_thread_are_not_ours():
     assert "mine.tif" in str(exc.value) and "theirs" in str(exc.value)
 
 
+@pytest.mark.slow      # six runs of the program, each interrupted after its first file
 def test_interrupts_at_random_moments_of_a_per_tile_series_are_always_one_line(tmp_path):
     """The issue's case: Ctrl-C during --start/--end/--step runs on a UTM DEM with per-tile suns
     printed a SystemError traceback in 4 of 9 runs. Here 6 runs, each signalled at a random
