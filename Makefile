@@ -7,11 +7,12 @@ OUTDIR ?= out
 EXAMPLE_DEM := examples/bigtujunga_srtm30m_utm11n_1197x643.tif
 EXAMPLE_OUT := $(OUTDIR)/bigtujunga_shadow.tif
 
-.PHONY: run test install install-test bench bench-sun bench-tiling bench-big bench-gpu bench-peers bench-horizon docs-pictures docs-animation docs-viewer bench-writes bench-real bench-real-quick bench-fast bench-point bench-view bench-update bench-illumination gpu-check clean clean-cache bench-startup bench-batch help qgis-plugin docs-qgis
+.PHONY: run test test-fast install install-test bench bench-sun bench-tiling bench-big bench-gpu bench-peers bench-horizon docs-pictures docs-animation docs-viewer bench-writes bench-real bench-real-quick bench-fast bench-point bench-view bench-update bench-illumination gpu-check clean clean-cache bench-startup bench-batch help qgis-plugin docs-qgis
 
 help:
 	@echo "make run    - set up .venv, shade the bundled example DEM, print where the mask went"
 	@echo "make test   - set up .venv with test extras and run the test suite"
+	@echo "make test-fast - the same without the tests marked slow (a few minutes on 2 cores)"
 	@echo "make bench  - run the benchmarks (writes docs/benchmarks.md figures to stdout)"
 	@echo "make bench-sun - time series, per-tile suns, curvature, soft shadows, sun hours"
 	@echo "make bench-tiling - Mpix/s in memory vs in windows vs Dask (2 workers)"
@@ -68,6 +69,10 @@ run: $(VENV)/.installed
 
 test: $(VENV)/.installed-test
 	$(BIN)/python -m pytest -q
+
+# the tests not marked slow (each under ~1.5 s): a few minutes on 2 cores; make test runs all
+test-fast: $(VENV)/.installed-test
+	$(BIN)/python -m pytest -q -m "not slow"
 
 bench: $(VENV)/.installed
 	MALLOC_MMAP_THRESHOLD_=131072 $(BIN)/python benchmarks/bench_cpu.py

@@ -105,8 +105,10 @@ def merge_stats(a: dict | None, b: dict) -> dict:
             va, vb = a.get(k), b.get(k)
             out[k] = None if va is None or vb is None else va + vb
     if out.get("shadow_cells") is not None:
+        # no part with a fraction (a hillshade's: none, as product_stats says): none merged
+        known = a.get("shadow_fraction") is not None or b.get("shadow_fraction") is not None
         valid = out["shadow_cells"] + out["lit_cells"]
-        out["shadow_fraction"] = out["shadow_cells"] / valid if valid else None
+        out["shadow_fraction"] = out["shadow_cells"] / valid if valid and known else None
     else:   # float products: the shadow fraction is 1 - the mean, weighted by valid cells
         na, nb = a.get("valid_cells") or 0, b.get("valid_cells") or 0
         fa, fb = a.get("shadow_fraction"), b.get("shadow_fraction")

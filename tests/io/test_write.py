@@ -553,16 +553,25 @@ def test_dev_shm_is_a_place_to_write(runner):
 
 
 def test_gdal_errors_of_another_thread_are_not_ours():
+    """A GDAL error logged by another thread while our block runs does not fail our write; the
+    same message logged by this thread does (so the first half is not passing by accident)."""
     import logging
     import threading
     log = logging.getLogger("rasterio._env")
+    msg = "GDAL signalled an error: err_no=1, msg='theirs'"
+    logged = []
     with writes.gdal_checked("mine.tif"):
-        t = threading.Thread(target=lambda: log.info(
-            "GDAL signalled an error: err_no=1, msg='theirs'"))
+        t = threading.Thread(target=lambda: (log.info(msg), logged.append(True)))
         t.start()
         t.join()
+    assert logged == [True]                  # the other thread did log while the block ran
+    with pytest.raises(HillshadeError) as exc:
+        with writes.gdal_checked("mine.tif"):
+            log.info(msg)
+    assert "mine.tif" in str(exc.value) and "theirs" in str(exc.value)
 
 
+@pytest.mark.slow      # six runs of the program, each interrupted after its first file
 def test_interrupts_at_random_moments_of_a_per_tile_series_are_always_one_line(tmp_path):
     """The issue's case: Ctrl-C during --start/--end/--step runs on a UTM DEM with per-tile suns
     printed a SystemError traceback in 4 of 9 runs. Here 6 runs, each signalled at a random
