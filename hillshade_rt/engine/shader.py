@@ -28,7 +28,8 @@ from ..algorithms import REGISTRY, lookup
 from ..errors import HillshadeError
 from ..model.earth import Body, curvature_coefficient, curvature_report, refraction_for
 from ..model.geometry import Grid, SunRays, sun_rays
-from ..model.sun import SUN_RADIUS_DEG, Region, SunOver, disk_fraction
+from ..model.solar import SUN_RADIUS_DEG, disk_fraction
+from ..model.sun import Region, SunOver
 
 # a tile whose window (tile + halo) holds more than this many times its own cells is marched by
 # brute over its own cells only (exact), instead of running the algorithm over the whole window

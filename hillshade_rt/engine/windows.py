@@ -627,7 +627,7 @@ class WindowLighting:
         ``area`` (r0, r1, c0, c1): only the cells there (a tile of the raster, ``--context``):
         the sun's regions cut to it, their windows read from the whole raster."""
         from .shader import field_method
-        from ..model.sun import SUN_RADIUS_DEG
+        from ..model.solar import SUN_RADIUS_DEG
         out = []
         shape = self.source.shape
         # a sun per cell, as ``Shader.field_ok`` decides in memory

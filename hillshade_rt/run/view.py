@@ -8,7 +8,7 @@ what the page shows:
 
 * ``/``, ``/static/...``: the page (``view_static/``: HTML, JS, CSS and Leaflet, vendored);
 * ``/api/info``: the DEM's file name (not its folder), size, bounds, CRS, zone (``--tz``, else the IANA zone of the DEM's
-  centre: ``sun.zone_at``), the default date and time, the algorithms;
+  centre: ``times.zone_at``), the default date and time, the algorithms;
 * ``/api/render?bbox=x0,y0,x1,y1&w=&h=&az=&el=|time=&algorithm=&soft=&sunhours=DATE``: a PNG
   (RGBA) of the window ``bbox`` (pixel coordinates of the DEM: x a column, y a row, cell (r, c)
   the square [c, c+1) x [r, r+1)) at ``w`` x ``h``: relief lit by the sun, cast shadows tinted
@@ -89,7 +89,7 @@ class ViewConfig:
     say: object = say_nothing
 
     def check(self) -> None:
-        from ..model.sun import zone
+        from ..model.times import zone
         if not (0 <= int(self.port) <= 65535):
             raise UsageProblem(f"--port must be 0..65535, got {self.port}")
         try:
@@ -147,7 +147,8 @@ class Viewer:
                  tz: str | None = None, options: dict | None = None):
         from ..algorithms import lookup
         from ..model.earth import dem_body
-        from ..model.sun import dem_site, is_auto, zone, zone_at
+        from ..model.site import dem_site
+        from ..model.times import is_auto, zone, zone_at
         lookup(algorithm)
         self.dem = dem
         self.z = dem.heights
@@ -265,7 +266,7 @@ class Viewer:
         return {"azimuth": normalize_azimuth(az), "elevation": el, "time": None}
 
     def parse_time(self, text: str) -> _dt.datetime:
-        from ..model.sun import parse_time
+        from ..model.times import parse_time
         if self.site is None:
             raise BadRequest("this DEM has no place on Earth (no CRS): give az and el")
         try:
@@ -298,7 +299,7 @@ class Viewer:
     def zone_label(self, day: _dt.date | None = None) -> str | None:
         """The viewer's zone with its offset at noon of ``day`` (default today), e.g.
         ``Europe/Zurich (UTC+02:00, CEST)``."""
-        from ..model.sun import zone_label
+        from ..model.times import zone_label
         if self.tz is None:
             return None
         when = (_dt.datetime.combine(day, _dt.time(12), self.tz) if day is not None else None)
@@ -405,7 +406,8 @@ class Viewer:
         window alone with its halo toward the sun, or, when that halo window holds more than
         half the raster, the whole raster (its pyramid and survey kept from sun to sun) -- the
         same cells either way."""
-        from ..model.sun import SUN_RADIUS_DEG, Region
+        from ..model.solar import SUN_RADIUS_DEG
+        from ..model.sun import Region
         rows, cols = sh.z.shape
         region = Region(rs, cs, az, el)
         low = el - SUN_RADIUS_DEG if soft else el      # the lowest ray the product marches

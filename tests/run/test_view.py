@@ -151,7 +151,9 @@ def test_window_partly_and_wholly_outside(server, dem):
 
 
 def test_time_gives_the_sun_of_that_time(server, dem):
-    from hillshade_rt.model.sun import dem_site, parse_time, sun_over
+    from hillshade_rt.model.site import dem_site
+    from hillshade_rt.model.sun import sun_over
+    from hillshade_rt.model.times import parse_time
     rows, cols = dem.shape
     pic, h = render(server, time="2026-06-21T16:30", bbox=f"0,0,{cols},{rows}", w=cols, h=rows)
     t = parse_time("2026-06-21T16:30+05:45")
