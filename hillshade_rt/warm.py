@@ -168,7 +168,7 @@ def _view(values: dict) -> None:
     """The viewer's requests (``hillshade-rt view``): pictures of every kind, a point, an edit
     and its undo, a download."""
     from .io import read_dem
-    from .run.view import Viewer
+    from .run.viewer import Viewer
     viewer = Viewer(read_dem(values["utm"]))
     try:
         for q in ({"az": "203.7", "el": "10"}, {"az": "163", "el": "12", "soft": "1"},
