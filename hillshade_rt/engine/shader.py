@@ -172,7 +172,7 @@ class Shader:
     local_range : (float, float), optional
         Lowest and highest height of this window, metres (known from the statistics pass; else
         computed).
-    carry : smap.BandCarry, optional
+    carry : engine.windows.BandCarry, optional
         For ``smap`` on the CPU: the tables of the window before, reused.
     place : optional
         The window and the raster's shape, with ``carry``: SMap masks only the region.
