@@ -38,11 +38,9 @@ import re
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from numba import prange
-
-from ..algorithms._jitcache import njit
 
 from ..algorithms import REGISTRY
+from ..algorithms.counts import block_range
 from ..errors import AllNodata, HillshadeError
 from ..model.geometry import Grid
 from ..io.source import READ_CHUNK, DemSource, Reader
@@ -182,34 +180,6 @@ def window_budget(max_memory: int, per_cell: int) -> tuple[int, dict]:
 # ---------------------------------------------------------------------------------------------
 # statistics pass
 
-@njit(parallel=True, cache=True)
-def _block_range(z, B, bmin, bmax):
-    """Lowest and highest valid height of each B x B block of ``z`` (rows of blocks in ``bmin``,
-    ``bmax``; +inf / -inf for a block of voids); returns the count of valid cells."""
-    nbr, nbc = bmin.shape
-    rows, cols = z.shape
-    counts = np.zeros(nbr * nbc, np.int64)
-    for k in prange(nbr * nbc):
-        i = k // nbc
-        j = k % nbc
-        lo = np.inf
-        hi = -np.inf
-        n = 0
-        for r in range(i * B, min(rows, (i + 1) * B)):
-            for c in range(j * B, min(cols, (j + 1) * B)):
-                h = z[r, c]
-                if not math.isnan(h):
-                    n += 1
-                    if h < lo:
-                        lo = h
-                    if h > hi:
-                        hi = h
-        bmin[i, j] = lo
-        bmax[i, j] = hi
-        counts[k] = n
-    return counts.sum()
-
-
 @dataclass
 class BlockStats:
     """Height range per ``block`` x ``block`` cells (``lo``/``hi``: +inf/-inf for void blocks)."""
@@ -257,7 +227,7 @@ def block_stats(source: DemSource, block: int = STAT_BLOCK,
                 c1 = min(cols, c0 + cw)
                 z = buf[:r1 - r0, :c1 - c0]
                 rd.read((r0, r1, c0, c1), z)
-                valid += int(_block_range(z, block, lo[i:i + 1, c0 // block:-(-c1 // block)],
+                valid += int(block_range(z, block, lo[i:i + 1, c0 // block:-(-c1 // block)],
                                           hi[i:i + 1, c0 // block:-(-c1 // block)]))
                 if pv is not None:
                     sub, (a, b) = every_nth(z, r0, c0, stride)
