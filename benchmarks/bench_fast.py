@@ -101,7 +101,9 @@ def main(argv=None):
     import rasterio
     from rasterio.transform import from_origin
     from hillshade_rt.engine.shader import render
-    from hillshade_rt.model.sun import dem_site, parse_time, sun_over
+    from hillshade_rt.model.site import dem_site
+    from hillshade_rt.model.sun import sun_over
+    from hillshade_rt.model.times import parse_time
     with tempfile.TemporaryDirectory() as tmp:
         path = os.path.join(tmp, "d.tif")
         with rasterio.open(path, "w", driver="GTiff", width=2048, height=2048, count=1,

@@ -38,7 +38,9 @@ def main():
     from hillshade_rt import read_dem
     from hillshade_rt.engine.shader import Shader, render
     from hillshade_rt.model.earth import dem_body
-    from hillshade_rt.model.sun import dem_site, parse_time, sun_over
+    from hillshade_rt.model.site import dem_site
+    from hillshade_rt.model.sun import sun_over
+    from hillshade_rt.model.times import parse_time
 
     d = read_dem(DEM)
     site = dem_site(d)

@@ -21,7 +21,9 @@ import urllib.request
 import numpy as np
 
 from hillshade_rt.io import read_dem
-from hillshade_rt.run.view import Viewer, make_server, png_bytes
+from hillshade_rt.pictures.png import png_bytes
+from hillshade_rt.run.view_server import make_server
+from hillshade_rt.run.viewer import Viewer
 from hillshade_rt.testing import memory_dem, real_dems, spectral
 
 SUNS = [(163.0, 10.0), (203.7, 25.0), (290.0, 45.0), (40.0, 5.0), (120.0, 60.0), (250.0, 15.0)]

@@ -10,7 +10,7 @@ from ._lazy import lazy_names
 __version__ = "0.1.0"
 
 _EXPORTS = {"HillshadeError": "errors", "Grid": "model.geometry", "sun_rays": "model.geometry",
-            "solar_position": "model.sun", "parse_time": "model.sun", "sun_over": "model.sun",
+            "solar_position": "model.solar", "parse_time": "model.times", "sun_over": "model.sun",
             "Dem": "io", "read_dem": "io",
             "shadow_mask": "engine.arrays", "horizon_angles": "engine.arrays",
             "is_shadowed": "engine.arrays", "sky_view": "engine.arrays",

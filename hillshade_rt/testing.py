@@ -564,13 +564,37 @@ MOON_NORTH_POLAR = ("+proj=stere +lat_0=90 +lon_0=0 +k=1 +x_0=0 +y_0=0 +R=173740
                     "+no_defs")
 
 
+def http_get(server, path: str):
+    """(status, headers, body) of GET ``path`` on ``server`` (``serving``'s): an HTTP error's
+    status and body too."""
+    import urllib.error
+    import urllib.request
+    try:
+        with urllib.request.urlopen(server.url.rstrip("/") + path, timeout=60) as r:
+            return r.status, dict(r.headers), r.read()
+    except urllib.error.HTTPError as e:
+        return e.code, dict(e.headers), e.read()
+
+
+def png_pixels(png: bytes) -> np.ndarray:
+    """(h, w, 4) uint8 of a PNG, read by GDAL (not by the viewer's encoder)."""
+    import warnings
+
+    from rasterio.errors import NotGeoreferencedWarning
+    from rasterio.io import MemoryFile
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", NotGeoreferencedWarning)
+        with MemoryFile(png) as mf, mf.open() as ds:
+            return np.moveaxis(ds.read(), 0, -1)
+
+
 @contextlib.contextmanager
 def serving(viewer):
-    """``viewer`` (``run.view.Viewer``) served on a free local port in a thread: yields the
+    """``viewer`` (``run.viewer.Viewer``) served on a free local port in a thread: yields the
     HTTP server (``server_address``, ``url``); afterwards the server and the viewer are shut."""
     import threading
 
-    from .run.view import make_server
+    from .run.view_server import make_server
     srv = make_server(viewer, 0)
     threading.Thread(target=srv.serve_forever, kwargs={"poll_interval": 0.1}, daemon=True).start()
     try:

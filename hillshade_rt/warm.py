@@ -168,7 +168,7 @@ def _view(values: dict) -> None:
     """The viewer's requests (``hillshade-rt view``): pictures of every kind, a point, an edit
     and its undo, a download."""
     from .io import read_dem
-    from .run.view import Viewer
+    from .run.viewer import Viewer
     viewer = Viewer(read_dem(values["utm"]))
     try:
         for q in ({"az": "203.7", "el": "10"}, {"az": "163", "el": "12", "soft": "1"},
@@ -276,8 +276,8 @@ def _write_dems(folder: str) -> dict:
 # which kernels this install has, and which of them are cached
 
 def kernels() -> list:
-    """Every numba kernel of the package (the dispatchers of ``_jitcache.njit``), its modules
-    imported."""
+    """Every numba kernel of the package (the dispatchers of ``_jitcache.njit``, all in
+    ``algorithms/``), its modules imported."""
     import importlib
     import pkgutil
 
@@ -286,7 +286,6 @@ def kernels() -> list:
     for info in pkgutil.iter_modules(algorithms.__path__):
         if not info.name.startswith("_"):
             importlib.import_module(f"{algorithms.__name__}.{info.name}")
-    importlib.import_module(f"{__package__}.engine.windows")
     return [k for k in _jitcache.KERNELS if _jitcache.compiled_alone(k)]
 
 

@@ -249,7 +249,7 @@ class _LazySource:
         return tuple(self.heights.shape)
 
     def centre_height(self) -> tuple[float, str]:
-        from .model.sun import centre_height_of
+        from .model.site import centre_height_of
         rows, cols = self.shape
         r, c = rows // 2, cols // 2
         r0, c0 = max(0, r - 128), max(0, c - 128)
@@ -355,7 +355,7 @@ def _utc64(t: _dt.datetime) -> np.datetime64:
 
 def _sun_attrs(sun) -> dict:
     """The command line's tags of one sun (``run.outputs.sun_tags``) as numbers and texts."""
-    from .model.sun import iso
+    from .model.times import iso
     d = {"sun_azimuth": float(sun.azimuth), "sun_elevation": float(sun.elevation),
          "night": "yes" if sun.night else "no"}
     if sun.time is not None:
@@ -368,7 +368,7 @@ def _sun_attrs(sun) -> dict:
 def _series_dim(suns):
     """The ``time`` dimension of a series: UTC times, with each sun's azimuth, elevation and
     the time with its offset as coordinates along it."""
-    from .model.sun import iso
+    from .model.times import iso
     t = [_utc64(s.time) for s in suns]
     return ("time", {"time": ("time", np.array(t, "datetime64[ns]")),
                      "sun_azimuth": ("time", np.array([s.azimuth for s in suns])),
@@ -948,7 +948,9 @@ def sun_hours(da, date, *, end_date=None, step: str = "10min", tz: str | None = 
     from .model.earth import dem_body
     from .run.config import check_lift
     from .engine.shader import Shader, choose_backend, render
-    from .model.sun import SUN_RADIUS_DEG, SunRequest, daylight_samples, parse_date, parse_step
+    from .model.solar import SUN_RADIUS_DEG, daylight_samples
+    from .model.sun import SunRequest
+    from .model.times import parse_date, parse_step
     lookup(algorithm)
     algorithm = check_lift(height_above_ground, algorithm, soft)
     lift = float(height_above_ground)

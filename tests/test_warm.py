@@ -115,3 +115,20 @@ def test_groups_name_every_command_that_computes():
     assert commands >= {"shadow", "hillshade", "sun-hours", "horizon", "skyview", "irradiance",
                         "query", "profile", "illumination", "animate"}
     assert warm._view in warm.GROUPS["lights"]
+
+
+def test_every_kernel_lives_in_algorithms():
+    """Every numba kernel of the package is in algorithms/ (its cache folder is keyed on a digest
+    of algorithms/*.py, and the warm-up imports those modules to list them): the engine's
+    modules, imported too, add none (the windowed runs' block ranges: counts.block_range)."""
+    import importlib
+    import pkgutil
+
+    from hillshade_rt import engine
+    for info in pkgutil.iter_modules(engine.__path__):
+        importlib.import_module(f"{engine.__name__}.{info.name}")
+    listed = warm.kernels()
+    outside = {k.py_func.__module__ for k in _jitcache.KERNELS
+               if not k.py_func.__module__.startswith("hillshade_rt.algorithms.")}
+    assert not outside
+    assert "block_range" in {k.py_func.__name__ for k in listed}

@@ -134,7 +134,7 @@ light_loading()
 # what is stale, and pruning it (``hillshade-rt cache``)
 #
 # Each version of the kernels compiles into a new ``<root>/<digest>`` folder and the old ones
-# stay; numba's own ``cache=True`` (``engine/windows.py``: ``__pycache__`` beside the module, or
+# stay; numba's own ``cache=True`` (``__pycache__`` beside the module, or
 # ``$NUMBA_CACHE_DIR/run_<sha1 of its folder>``) leaves the index and data files of a function
 # that moved to another line when its file was edited. An index file (``*.nbi``) holds numba's
 # version, then the source's stamp (numba >= 0.59: the SHA-256 of the file's bytes; before:

@@ -1,7 +1,10 @@
 """Counting passes, parallel and without temporaries: a product's codes (the report's cell
 counts, without the int64 copy of every cell that ``np.bincount`` makes of a uint8 array), a
-DEM's valid cells and height range (``auto``'s survey, ``sweep``, ``bounds``, the GPU), and the
-read's nodata-to-NaN pass that finds them on the way (``clean_heights``)."""
+DEM's valid cells and height range (``auto``'s survey, ``sweep``, ``bounds``, the GPU) and its
+height range per block (``block_range``: the windowed runs' statistics pass), and the read's
+nodata-to-NaN pass that finds them on the way (``clean_heights``)."""
+
+import math
 
 import numpy as np
 from numba import prange
@@ -62,6 +65,35 @@ def z_range(z):
     """(lowest, highest valid height, whether there are voids) in one pass, no temporaries."""
     n, lo, hi = valid_range(z)
     return float(lo), float(hi), bool(n < z.size)
+
+
+@njit(parallel=True, cache=True)
+def block_range(z, B, bmin, bmax):
+    """Lowest and highest valid height of each B x B block of ``z`` (rows of blocks in ``bmin``,
+    ``bmax``; +inf / -inf for a block of voids); returns the count of valid cells (the windowed
+    runs' statistics pass, ``engine.windows.block_stats``)."""
+    nbr, nbc = bmin.shape
+    rows, cols = z.shape
+    counts = np.zeros(nbr * nbc, np.int64)
+    for k in prange(nbr * nbc):
+        i = k // nbc
+        j = k % nbc
+        lo = np.inf
+        hi = -np.inf
+        n = 0
+        for r in range(i * B, min(rows, (i + 1) * B)):
+            for c in range(j * B, min(cols, (j + 1) * B)):
+                h = z[r, c]
+                if not math.isnan(h):
+                    n += 1
+                    if h < lo:
+                        lo = h
+                    if h > hi:
+                        hi = h
+        bmin[i, j] = lo
+        bmax[i, j] = hi
+        counts[k] = n
+    return counts.sum()
 
 
 @njit(cache=True)

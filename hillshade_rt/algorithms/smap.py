@@ -801,9 +801,16 @@ def canonical_place(frame: Frame, window, shape) -> tuple[int, tuple[int, int]]:
     return (n - hi if frame.flip_line else lo), pos
 
 
-class BandCarry:
-    """SMap tables carried from window to window of a tiled run (``engine.windows``), so that the lines
-    two windows share are coloured and scanned once.
+def carried_mask(z: np.ndarray, rays: SunRays, zmax: float, zabs: float, window, shape,
+                 inner: tuple[slice, slice], carry) -> tuple[np.ndarray, int]:
+    """SMap on one window of a tiled run with the tables carried from the window before, so that
+    the lines two windows share are coloured and scanned once: (uint8 mask of the window ``z``
+    (DEM order; ``window`` (r0, r1, c0, c1) of a raster of ``shape``) with the cells of ``inner``
+    decided (1 shadow, 0 lit, 255 void) and the others 0, the lines coloured). ``zabs``: the
+    largest height magnitude of the whole raster (one tolerance for every window). ``carry``
+    (``engine.windows.BandCarry``) holds the table: ``key``, ``base``, ``L`` of the lines it
+    holds, ``table(rows, E)`` its buffer as a rows x E table (the carried lines kept when it
+    grows); they are updated here.
 
     The planner orders the windows of a band of positions away from the sun, each spanning the
     same positions and reaching at least as far toward the sun as the next one. A window's lines
@@ -817,73 +824,35 @@ class BandCarry:
 
     Equal, cell for cell, to ``shadow_mask`` on each window (tests: tiled runs at 163, 203.7 and
     291 degrees against the in-memory run; all eight octants with voids against brute)."""
-
-    def __init__(self, capacity: int = 0):
-        # flat int32 buffer; the current J is its first L * (P + 2) items. ``capacity``: the
-        # largest table to come (the planner knows it), so that it is never grown while the
-        # carried lines are held (which would hold two tables at once)
-        self.buf = np.empty(capacity, np.int32) if capacity else None
-        self.key = None
-        self.base = 0
-        self.L = 0
-        self.lines_carried = 0
-        self.lines_coloured = 0
-        self.cells_coloured = 0
-
-    def figures(self, cells_output: int) -> dict:
-        """For a report: SMap elements coloured (each line of a strip about once) against the
-        output's cells, and lines coloured vs reused."""
-        return {"smap_cells_coloured": self.cells_coloured,
-                "smap_coloured_beyond_output_fraction":
-                    self.cells_coloured / cells_output - 1.0 if cells_output else 0.0,
-                "smap_lines_coloured": self.lines_coloured,
-                "smap_lines_carried": self.lines_carried}
-
-    def _table(self, rows: int, E: int) -> np.ndarray:
-        if self.buf is None or self.buf.size < rows * E:
-            old, self.buf = self.buf, np.empty(rows * E, np.int32)
-            if old is not None and self.key is not None:     # keep the carried lines
-                self.buf[:self.L * E] = old[:self.L * E]
-        return self.buf[:rows * E].reshape(rows, E)
-
-    def mask(self, z: np.ndarray, rays: SunRays, zmax: float, zabs: float, window,
-             shape, inner: tuple[slice, slice]) -> np.ndarray:
-        """uint8 mask of the window ``z`` (DEM order; ``window`` (r0, r1, c0, c1) of a raster of
-        ``shape``) with the cells of ``inner`` decided (1 shadow, 0 lit, 255 void) and the others
-        0. ``zabs``: the largest height magnitude of the whole raster (one tolerance for every
-        window)."""
-        f = frame_of(rays)
-        base, positions = canonical_place(f, window, shape)
-        tol = tolerance(zabs, f.rise)
-        Z = f.view(z)
-        L, P = Z.shape
-        E = P + 2
-        key = (f.dom_col, f.flip_line, f.flip_pos, f.s, f.rise, positions, P)
-        fresh = L
-        if self.key == key:
-            lo, hi = max(base, self.base + 1), base + L
-            if lo < hi and self.base + self.L >= hi:
-                J = self._table(max(L, self.L), E)
-                _move_lines(J, lo - self.base, lo - base, hi - lo, self.base - base)
-                fresh = lo - base
-        self.key = None if fresh == L else key
-        J = self._table(L, E)
-        sv = f.s * (np.arange(L, dtype=np.float64) + base)
-        shift = np.floor(sv).astype(np.int64)
-        frac = sv - shift
-        if fresh > 0:
-            _colour_pass(Z, f.s, f.rise, tol, frac, _pieces_table(f.s, frac[:fresh]), J, 0, fresh)
-        _nextv_scan(J, shift, min(fresh, L - 1))
-        self.key, self.base, self.L = key, base, L
-        self.lines_coloured += fresh
-        self.cells_coloured += fresh * P
-        self.lines_carried += L - fresh
-        out = np.zeros(z.shape, np.uint8)
-        rs, cs = inner
-        _mask_kernel(z, *NO_PYRAMID, J, frac, f.dom_col, np.int64(f.sd), f.so, f.rise,
-                     f.flip_line, f.flip_pos, float(zmax), out, rs.start, rs.stop, cs.start,
-                     cs.stop)
-        return out
+    f = frame_of(rays)
+    base, positions = canonical_place(f, window, shape)
+    tol = tolerance(zabs, f.rise)
+    Z = f.view(z)
+    L, P = Z.shape
+    E = P + 2
+    key = (f.dom_col, f.flip_line, f.flip_pos, f.s, f.rise, positions, P)
+    fresh = L
+    if carry.key == key:
+        lo, hi = max(base, carry.base + 1), base + L
+        if lo < hi and carry.base + carry.L >= hi:
+            J = carry.table(max(L, carry.L), E)
+            _move_lines(J, lo - carry.base, lo - base, hi - lo, carry.base - base)
+            fresh = lo - base
+    carry.key = None if fresh == L else key
+    J = carry.table(L, E)
+    sv = f.s * (np.arange(L, dtype=np.float64) + base)
+    shift = np.floor(sv).astype(np.int64)
+    frac = sv - shift
+    if fresh > 0:
+        _colour_pass(Z, f.s, f.rise, tol, frac, _pieces_table(f.s, frac[:fresh]), J, 0, fresh)
+    _nextv_scan(J, shift, min(fresh, L - 1))
+    carry.key, carry.base, carry.L = key, base, L
+    out = np.zeros(z.shape, np.uint8)
+    rs, cs = inner
+    _mask_kernel(z, *NO_PYRAMID, J, frac, f.dom_col, np.int64(f.sd), f.so, f.rise,
+                 f.flip_line, f.flip_pos, float(zmax), out, rs.start, rs.stop, cs.start,
+                 cs.stop)
+    return out, fresh
 
 
 def shadow_mask(z: np.ndarray, rays: SunRays, zmax: float | None = None, stats: dict | None = None,

@@ -171,7 +171,7 @@ def _soft_cell(z, pyr, off, widths, nlev, r, c, slat, clat, slon, clon, cth, sth
     """The visible fraction of the solar disk (angular radius ``radius_deg``) at cell (r, c):
     0 when the ray toward the disk's top edge is blocked (or the top is below the horizon), 1
     when the ray toward its bottom edge is free and above the horizon, else the disk above the
-    horizon angle (the terrain's, or the astronomical 0 if higher) as ``sun.disk_fraction``."""
+    horizon angle (the terrain's, or the astronomical 0 if higher) as ``solar.disk_fraction``."""
     h = z[r, c]
     if math.isnan(h):
         out[r, c] = np.float32(np.nan)

@@ -644,7 +644,7 @@ def irradiance(heights, times, spacing: float | tuple[float, float] | Grid | Non
         The place, degrees (required for an array; a DEM from ``read_dem`` has its own, per tile
         on large rasters).
     weights : array_like, optional
-        Hours each time stands for (>= 0, one per time, e.g. from ``sun.day_samples``).
+        Hours each time stands for (>= 0, one per time, e.g. from ``times.day_samples``).
     mean : bool, default False
         With ``weights``: divide the sums by the hours (W/m²).
     altitude : float, optional
@@ -709,9 +709,10 @@ def irradiance(heights, times, spacing: float | tuple[float, float] | Grid | Non
     import math
     from . import irradiance as ir
     from .shader import Shader
-    from ..model.sun import (
-        DEFAULT_TOLERANCE, Atmosphere, Site, centre_height_of, dem_site, parse_time, sun_over
-    )
+    from ..model.site import Site, centre_height_of, dem_site
+    from ..model.solar import Atmosphere
+    from ..model.sun import DEFAULT_TOLERANCE, sun_over
+    from ..model.times import parse_time
     z, grid, body = _dem_parts(heights, spacing, body)
     lookup(algorithm)
     ir.check_options(albedo, linke_turbidity, sky_view_directions)

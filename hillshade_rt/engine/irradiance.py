@@ -107,7 +107,7 @@ def period_samples(start: _dt.datetime, end: _dt.datetime, step: _dt.timedelta,
                    limit: int = 2_000_000) -> tuple[list[_dt.datetime], list[float]]:
     """The period ``start``..``end`` (aware datetimes) cut into intervals of ``step`` (elapsed
     time; the last one shorter when the step does not divide the period), a sample at the middle
-    of each, its weight the interval in hours (as ``sun.day_samples`` cuts days). Each time is
+    of each, its weight the interval in hours (as ``times.day_samples`` cuts days). Each time is
     shown in ``start``'s zone."""
     u0, u1 = start.astimezone(_dt.timezone.utc), end.astimezone(_dt.timezone.utc)
     if u1 <= u0:
@@ -226,7 +226,7 @@ def read_series(path: str, tz=None):
     offset, or local times in zone ``tz``), strictly increasing; values in W/m². Returns
     (unix seconds, ghi, dni or None, dhi or None)."""
     import csv
-    from ..model.sun import parse_time
+    from ..model.times import parse_time
     name = os.path.basename(path)
     try:
         fh = open(path, newline="", encoding="utf-8-sig")
@@ -289,7 +289,7 @@ def series_at(times, unix, *columns, path: str = "the series"):
     """Each of ``columns`` (values at ``unix`` seconds) linearly interpolated at the sample
     ``times``; a sample outside the series' first..last time is an error (nothing is
     extrapolated)."""
-    from ..model.sun import iso
+    from ..model.times import iso
     ts = np.array([t.timestamp() for t in times], np.float64)
     if ts.size and (ts.min() < unix[0] or ts.max() > unix[-1]):
         show = times[0].tzinfo
@@ -379,7 +379,7 @@ def cos_incidence(shader, sun) -> np.ndarray:
 
 def is_dark(sun, soft: bool) -> bool:
     """The sun (or its disk, with ``soft``) is below the horizon everywhere: nothing is lit."""
-    from ..model.sun import SUN_RADIUS_DEG
+    from ..model.solar import SUN_RADIUS_DEG
     top = max([r.elevation for r in sun.tiles] if sun.tiles else [sun.elevation])
     return top + (SUN_RADIUS_DEG if soft else 0.0) <= 0.0
 

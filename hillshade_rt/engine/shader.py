@@ -28,7 +28,8 @@ from ..algorithms import REGISTRY, lookup
 from ..errors import HillshadeError
 from ..model.earth import Body, curvature_coefficient, curvature_report, refraction_for
 from ..model.geometry import Grid, SunRays, sun_rays
-from ..model.sun import SUN_RADIUS_DEG, Region, SunOver, disk_fraction
+from ..model.solar import SUN_RADIUS_DEG, disk_fraction
+from ..model.sun import Region, SunOver
 
 # a tile whose window (tile + halo) holds more than this many times its own cells is marched by
 # brute over its own cells only (exact), instead of running the algorithm over the whole window
@@ -171,7 +172,7 @@ class Shader:
     local_range : (float, float), optional
         Lowest and highest height of this window, metres (known from the statistics pass; else
         computed).
-    carry : smap.BandCarry, optional
+    carry : engine.windows.BandCarry, optional
         For ``smap`` on the CPU: the tables of the window before, reused.
     place : optional
         The window and the raster's shape, with ``carry``: SMap masks only the region.

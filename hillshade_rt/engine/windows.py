@@ -38,11 +38,9 @@ import re
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from numba import prange
-
-from ..algorithms._jitcache import njit
 
 from ..algorithms import REGISTRY
+from ..algorithms.counts import block_range
 from ..errors import AllNodata, HillshadeError
 from ..model.geometry import Grid
 from ..io.source import READ_CHUNK, DemSource, Reader
@@ -182,34 +180,6 @@ def window_budget(max_memory: int, per_cell: int) -> tuple[int, dict]:
 # ---------------------------------------------------------------------------------------------
 # statistics pass
 
-@njit(parallel=True, cache=True)
-def _block_range(z, B, bmin, bmax):
-    """Lowest and highest valid height of each B x B block of ``z`` (rows of blocks in ``bmin``,
-    ``bmax``; +inf / -inf for a block of voids); returns the count of valid cells."""
-    nbr, nbc = bmin.shape
-    rows, cols = z.shape
-    counts = np.zeros(nbr * nbc, np.int64)
-    for k in prange(nbr * nbc):
-        i = k // nbc
-        j = k % nbc
-        lo = np.inf
-        hi = -np.inf
-        n = 0
-        for r in range(i * B, min(rows, (i + 1) * B)):
-            for c in range(j * B, min(cols, (j + 1) * B)):
-                h = z[r, c]
-                if not math.isnan(h):
-                    n += 1
-                    if h < lo:
-                        lo = h
-                    if h > hi:
-                        hi = h
-        bmin[i, j] = lo
-        bmax[i, j] = hi
-        counts[k] = n
-    return counts.sum()
-
-
 @dataclass
 class BlockStats:
     """Height range per ``block`` x ``block`` cells (``lo``/``hi``: +inf/-inf for void blocks)."""
@@ -257,7 +227,7 @@ def block_stats(source: DemSource, block: int = STAT_BLOCK,
                 c1 = min(cols, c0 + cw)
                 z = buf[:r1 - r0, :c1 - c0]
                 rd.read((r0, r1, c0, c1), z)
-                valid += int(_block_range(z, block, lo[i:i + 1, c0 // block:-(-c1 // block)],
+                valid += int(block_range(z, block, lo[i:i + 1, c0 // block:-(-c1 // block)],
                                           hi[i:i + 1, c0 // block:-(-c1 // block)]))
                 if pv is not None:
                     sub, (a, b) = every_nth(z, r0, c0, stride)
@@ -366,7 +336,7 @@ def plan(shape, grid: Grid, azimuth: float, elevation: float, curv: float, stats
 
     The regions form strips along the axis the sun moves along more (cells per step); within a
     strip the inner loop walks away from the sun. ``carry``: the algorithm carries its tables
-    along a strip (SMap, ``smap.BandCarry``): the windows of a strip then span the same cells
+    along a strip (SMap, ``BandCarry``): the windows of a strip then span the same cells
     across it and each reaches at least as far toward the sun as the next, and the sizes are
     chosen for the fewest cells coloured (each strip's halo once) rather than the fewest read.
 
@@ -466,7 +436,7 @@ def _finite(zr):
 def _strip_windows(wins, lines_are_cols: bool, sun_high: bool):
     """The windows of one strip (in the order they are lit) made to span the same cells across
     the strip and to reach, each, at least as far toward the sun as the next: the shape
-    ``smap.BandCarry`` needs. They stay within the planner's bound (same region width, halo on
+    ``BandCarry`` needs. They stay within the planner's bound (same region width, halo on
     the same side)."""
     w = [list(x) for x in wins]
     a, b = (0, 1) if lines_are_cols else (2, 3)        # the positions' axis
@@ -529,6 +499,57 @@ def window_grid(grid: Grid, window) -> Grid:
                 grid.method)
 
 
+class BandCarry:
+    """SMap's tables carried from window to window of a tiled run, so that the lines two
+    windows share are coloured and scanned once (``algorithms.smap.carried_mask``: the planner's
+    order makes a window's lines toward the sun the window before's): one buffer, the table it
+    holds (``key``, ``base``, ``L``) and the run's figures."""
+
+    def __init__(self, capacity: int = 0):
+        # flat int32 buffer; the current J is its first L * (P + 2) items. ``capacity``: the
+        # largest table to come (the planner knows it), so that it is never grown while the
+        # carried lines are held (which would hold two tables at once)
+        self.buf = np.empty(capacity, np.int32) if capacity else None
+        self.key = None
+        self.base = 0
+        self.L = 0
+        self.lines_carried = 0
+        self.lines_coloured = 0
+        self.cells_coloured = 0
+
+    def figures(self, cells_output: int) -> dict:
+        """For a report: SMap elements coloured (each line of a strip about once) against the
+        output's cells, and lines coloured vs reused."""
+        return {"smap_cells_coloured": self.cells_coloured,
+                "smap_coloured_beyond_output_fraction":
+                    self.cells_coloured / cells_output - 1.0 if cells_output else 0.0,
+                "smap_lines_coloured": self.lines_coloured,
+                "smap_lines_carried": self.lines_carried}
+
+    def table(self, rows: int, E: int) -> np.ndarray:
+        """The buffer as a ``rows`` x ``E`` table (grown when too small, the carried lines
+        kept)."""
+        if self.buf is None or self.buf.size < rows * E:
+            old, self.buf = self.buf, np.empty(rows * E, np.int32)
+            if old is not None and self.key is not None:     # keep the carried lines
+                self.buf[:self.L * E] = old[:self.L * E]
+        return self.buf[:rows * E].reshape(rows, E)
+
+    def mask(self, z: np.ndarray, rays, zmax: float, zabs: float, window,
+             shape, inner: tuple[slice, slice]) -> np.ndarray:
+        """uint8 mask of the window ``z`` (DEM order; ``window`` (r0, r1, c0, c1) of a raster of
+        ``shape``) with the cells of ``inner`` decided (1 shadow, 0 lit, 255 void) and the others
+        0, by SMap with the tables carried. ``zabs``: the largest height magnitude of the whole
+        raster (one tolerance for every window)."""
+        from ..algorithms.smap import carried_mask
+        out, fresh = carried_mask(z, rays, zmax, zabs, window, shape, inner, self)
+        L = self.L                    # the window's lines (positions: the rest of its cells)
+        self.lines_coloured += fresh
+        self.cells_coloured += fresh * (z.size // L if L else 0)
+        self.lines_carried += L - fresh
+        return out
+
+
 # ---------------------------------------------------------------------------------------------
 # lighting windows
 
@@ -573,7 +594,6 @@ class WindowLighting:
     def carrier(self, plans=()):
         """A fresh carrier of tables for a run of windows (None when nothing is carried), its
         buffer sized for the largest window of ``plans`` (lists of pieces)."""
-        from ..algorithms.smap import BandCarry
         if not self.carries:
             return None
         most = max(((p.window[1] - p.window[0] + 2) * (p.window[3] - p.window[2] + 2)
@@ -627,7 +647,7 @@ class WindowLighting:
         ``area`` (r0, r1, c0, c1): only the cells there (a tile of the raster, ``--context``):
         the sun's regions cut to it, their windows read from the whole raster."""
         from .shader import field_method
-        from ..model.sun import SUN_RADIUS_DEG
+        from ..model.solar import SUN_RADIUS_DEG
         out = []
         shape = self.source.shape
         # a sun per cell, as ``Shader.field_ok`` decides in memory
@@ -682,7 +702,7 @@ class WindowedRunStats:
     bytes_carried: int = 0
     stats_pass_bytes: int = 0
     largest_window: tuple[int, int] = (0, 0)
-    carry: object = None                  # the run's smap.BandCarry, if any
+    carry: object = None                  # the run's BandCarry, if any
 
     def add(self, piece: PlannedWindow):
         self.windows += 1

@@ -14,7 +14,7 @@ _BODIES = {"the Moon": 1737400.0, "Mars": 3396190.0, "Mars (mean)": 3389500.0,
 def body_name(a_m: float) -> str | None:
     """The body whose radius is ``a_m`` (within 0.2 %), the Earth for the semi-major axes of its
     ellipsoids (``sun.EARTH_A_RANGE``)."""
-    from ..model.sun import EARTH_A_RANGE
+    from ..model.site import EARTH_A_RANGE
     if EARTH_A_RANGE[0] <= a_m <= EARTH_A_RANGE[1]:
         return "the Earth"
     for name, r in _BODIES.items():

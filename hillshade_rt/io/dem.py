@@ -49,8 +49,8 @@ class Dem:
         return self.survey()[0]
 
     def centre_height(self) -> tuple[float, str]:
-        """The observer's height for suns from times (``sun.centre_height_of``)."""
-        from ..model.sun import centre_height_of
+        """The observer's height for suns from times (``site.centre_height_of``)."""
+        from ..model.site import centre_height_of
         return centre_height_of(self.heights)
 
     def height_range(self) -> tuple[float, float]:

@@ -356,8 +356,8 @@ class DemSource:
         return sorted(set(out))
 
     def centre_height(self) -> tuple[float, str]:
-        """The height at the centre, as ``sun.dem_site`` takes it, read from the centre only."""
-        from ..model.sun import centre_height_of
+        """The height at the centre, as ``site.dem_site`` takes it, read from the centre only."""
+        from ..model.site import centre_height_of
         rows, cols = self.shape
         r, c = rows // 2, cols // 2
         r0, c0 = max(0, r - 128), max(0, c - 128)

@@ -69,7 +69,7 @@ class Body:
 def dem_body(dem, lat: float | None = None) -> Body:
     """The :class:`Body` of a DEM: its CRS's ellipsoid when that is not the Earth's (the Moon,
     Mars), WGS84 otherwise, at the DEM's centre latitude (or ``lat``)."""
-    from .sun import EARTH_A_RANGE
+    from .site import EARTH_A_RANGE
     if dem.crs is None or dem.transform is None:
         if lat is not None:
             return Body(lat=lat, source="WGS84 at --lat")

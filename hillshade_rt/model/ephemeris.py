@@ -117,7 +117,7 @@ def _finite(text: str, where: str, what: str) -> float:
 
 
 def _plain(path: str, lines: list[str]) -> SubsolarSeries:
-    from .sun import parse_time
+    from .times import parse_time
     name = os.path.basename(path)
     rows = [(i + 1, r) for i, r in enumerate(csv.reader(lines))
             if r and any(c.strip() for c in r) and not r[0].lstrip().startswith("#")]

@@ -62,7 +62,8 @@ class AnimateConfig:
 def times_of(cfg: AnimateConfig):
     """The SunRequest with its times (a series), or without (a day: :func:`day_times` fills
     them in once the DEM's place is known); too many frames refused before the DEM is read."""
-    from ..model.sun import AUTO_ZONE, SunRequest, parse_date, parse_step
+    from ..model.sun import SunRequest
+    from ..model.times import AUTO_ZONE, parse_date, parse_step
     step = cfg.step or DEFAULT_STEP
     # the labels' local time: --tz, else the zone of the DEM's centre (--tz auto)
     place = dict(cfg.place)
@@ -92,7 +93,7 @@ def day_times(day: _dt.date, step: str, tz, lon: float) -> list[_dt.datetime]:
     """Local midnight of ``day``, then every ``step`` (elapsed time) before the next midnight:
     in zone ``tz`` (a day of a clock change has 23 or 25 hours), or in local mean solar time at
     ``lon`` when ``tz`` is None (UTC instants)."""
-    from ..model.sun import UTC, day_start, parse_step
+    from ..model.times import UTC, day_start, parse_step
     dt = parse_step(step)
     one = _dt.timedelta(days=1)
     if tz is not None:
@@ -116,7 +117,7 @@ def animate(cfg: AnimateConfig) -> dict:
     from ..io import input_label, write_json
     from ..io.write import Claims, atomic_path
     from ..engine.shader import Shader, choose_backend, render
-    from ..model.sun import parse_date
+    from ..model.times import parse_date
     from .notes import compile_note
     from .report import Timer, progress
 

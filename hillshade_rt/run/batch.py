@@ -455,7 +455,8 @@ def single_each(command: str, cfg, dems, pattern, run_one, bands: Callable[[], i
 
 def sun_hours_each(cfg, dems, pattern) -> dict:
     """``sun-hours --each``: each DEM's hours of direct sun, its own sun from its own place."""
-    from ..model.sun import SunRequest, parse_date, parse_step
+    from ..model.sun import SunRequest
+    from ..model.times import parse_date, parse_step
     from .sun_hours import sun_hours
 
     def preflight():

@@ -91,7 +91,8 @@ def irradiance(cfg: IrradianceConfig) -> dict:
     from ..io import check_output_format, output_driver
     from ..io.write import Claims
     from ..engine.shader import choose_backend
-    from ..model.sun import UTC, SunRequest, parse_date, parse_step
+    from ..model.sun import SunRequest
+    from ..model.times import UTC, parse_date, parse_step
     from .notes import compile_note
     from .report import Timer
 
@@ -171,7 +172,7 @@ def _run(cfg, d, area, req, step, series, ran_on, lift, timer, first, last, peri
     from ..io import BandWriter, input_label, write_json, write_png
     from ..pictures.preview import relief_rgb, scaled
     from ..engine.shader import Shader
-    from ..model.sun import day_samples, iso
+    from ..model.times import day_samples, iso
     from .report import progress
 
     ro, output = cfg.run, cfg.output
@@ -437,7 +438,7 @@ def _all_nodata(cfg, timer) -> dict:
 def _period(cfg, tz, step):
     """(t0, t1, times, weights) of --start..--end, local times in ``tz``, shown in it."""
     from ..engine import irradiance as ir
-    from ..model.sun import parse_time
+    from ..model.times import parse_time
     t0, t1 = parse_time(cfg.start, tz, "--start"), parse_time(cfg.end, tz, "--end")
     if tz is not None:     # shown in the zone of --tz
         t0, t1 = t0.astimezone(tz), t1.astimezone(tz)

@@ -10,7 +10,8 @@ import string
 
 from .. import __version__
 from ..errors import HillshadeError
-from ..model.sun import SunOver, iso
+from ..model.sun import SunOver
+from ..model.times import iso
 
 
 def tile_name(path: str) -> str:

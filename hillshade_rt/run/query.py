@@ -133,7 +133,8 @@ def query(cfg: QueryConfig) -> dict:
     from ..engine.arrays import sun_at_points
     from ..model.earth import dem_body
     from ..io.write import Claims
-    from ..model.sun import SunRequest, iso
+    from ..model.sun import SunRequest
+    from ..model.times import iso
     from .config import check_lift
 
     if cfg.light_position is not None or cfg.light_lonlat is not None:
@@ -309,7 +310,7 @@ def irradiance(points, site, times, res) -> tuple[np.ndarray, np.ndarray]:
     import pandas as pd
     from pvlib import atmosphere, clearsky, irradiance as pvirr
 
-    from ..model.sun import UTC
+    from ..model.times import UTC
     index = pd.DatetimeIndex([t.astimezone(UTC) for t in times])
     el = res["elevation"]
     alt = np.asarray(res["observer_m"], np.float64)[:, None]

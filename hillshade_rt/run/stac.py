@@ -39,7 +39,7 @@ def sun_from_item(sun: dict, quiet: bool = True, say=None):
                                f"({scene.keys[0]}, {scene.keys[1]})")
         sun.update(azimuth=scene.azimuth, elevation=scene.elevation)
     else:
-        from ..model.sun import iso
+        from ..model.times import iso
         sun["time"] = (iso(scene.time),)
         if not quiet and say is not None:
             say("note", f"{path}: item {scene.id} has no view:sun_azimuth/view:sun_elevation: "
@@ -50,7 +50,7 @@ def sun_from_item(sun: dict, quiet: bool = True, say=None):
 def to_grid_north(req, scene, dem):
     """The SunRequest ``req`` of an item's angles with the azimuth turned from true north (the
     view extension's) to the DEM's grid north by the meridian convergence at its centre, as
-    suns from times are (``sun.dem_site``); ``true_azimuth`` keeps the item's. A DEM without a
+    suns from times are (``site.dem_site``); ``true_azimuth`` keeps the item's. A DEM without a
     CRS, or not on the Earth: the raster's north is taken as true north. ``dem``: anything
     with ``crs``, ``transform``, ``shape`` and ``path`` (a ``DemSource``, a ``Dem``); nothing
     is read."""
@@ -59,7 +59,7 @@ def to_grid_north(req, scene, dem):
 
     import numpy as np
 
-    from ..model.sun import dem_site
+    from ..model.site import dem_site
     if scene is None or not scene.has_angles:
         return req
     conv = 0.0
@@ -100,7 +100,7 @@ def note_if_apart(scene, src, say) -> None:
 
 def scene_tags(scene) -> dict:
     """The output's tags saying where its sun came from."""
-    from ..model.sun import iso
+    from ..model.times import iso
     tags = {"SUN_SOURCE": "STAC item (" + ("angles: " + ", ".join(scene.keys) if scene.has_angles
                                           else "datetime, sun computed at the DEM") + ")",
             "STAC_ITEM": scene.id}

@@ -172,7 +172,7 @@ def _series(cfg: SubsolarConfig, d, output: str, series, body, default_distance:
     from ..engine.cell_suns import CellFrames, sun_vector
     from ..errors import HillshadeError
     from ..io import BandWriter
-    from ..model.sun import iso
+    from ..model.times import iso
     from .report import progress
 
     ro = cfg.run

@@ -1,7 +1,7 @@
 """The ``sun-hours`` run: hours of direct sun per cell of a DEM over a day (or a range of days),
 like WhiteboxTools' TimeInDaylight or GRASS r.sun's insolation time: the sun every step, each lit
 sample counting for the part of its interval with the sun's centre up at the DEM's place
-(``sun.daylight_samples``: never more than the day length there). Returns the report."""
+(``solar.daylight_samples``: never more than the day length there). Returns the report."""
 
 from __future__ import annotations
 
@@ -23,7 +23,9 @@ def sun_hours(cfg: SunHoursConfig) -> dict:
                       write_raster)
     from ..pictures.preview import relief_rgb
     from ..engine.shader import choose_backend
-    from ..model.sun import SUN_RADIUS_DEG, SunRequest, daylight_samples, parse_date, parse_step
+    from ..model.solar import SUN_RADIUS_DEG, daylight_samples
+    from ..model.sun import SunRequest
+    from ..model.times import parse_date, parse_step
     from ..io.write import Claims
     from ..errors import AllNodata
     from .context import nodata_note

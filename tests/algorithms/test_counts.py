@@ -1,4 +1,4 @@
-"""The counting passes against numpy: codes, valid ranges, the nodata pass."""
+"""The counting passes against numpy: codes, valid ranges, block ranges, the nodata pass."""
 
 import numpy as np
 import pytest
@@ -59,3 +59,22 @@ def test_code_tests_equal_numpy():
         assert counts.count_code(a, np.uint8(code)) == int((a == code).sum())
         assert counts.any_code(a, code) == bool((a == code).any())
         assert counts.any_code(a[:, ::2], code) == bool((a[:, ::2] == code).any())   # numpy path
+
+
+@pytest.mark.parametrize("shape, B", [((37, 53), 8), ((64, 64), 16), ((5, 300), 7), ((1, 1), 4)])
+def test_block_range_equals_numpy_per_block(shape, B):
+    """Each B x B block's lowest and highest valid height (ragged blocks at the edges), +inf /
+    -inf for a block of voids, and the count of valid cells."""
+    z = _heights(*shape, seed=B)
+    z[:B, :B] = np.nan                              # the first block: voids only
+    nbr, nbc = -(-shape[0] // B), -(-shape[1] // B)
+    lo, hi = np.empty((nbr, nbc), np.float32), np.empty((nbr, nbc), np.float32)
+    n = counts.block_range(z, B, lo, hi)
+    assert n == np.count_nonzero(~np.isnan(z))
+    for i in range(nbr):
+        for j in range(nbc):
+            blk = z[i * B:(i + 1) * B, j * B:(j + 1) * B]
+            if np.isnan(blk).all():
+                assert lo[i, j] == np.inf and hi[i, j] == -np.inf
+            else:
+                assert lo[i, j] == np.nanmin(blk) and hi[i, j] == np.nanmax(blk)

@@ -319,7 +319,9 @@ def test_time_based_sun_uses_the_per_cell_field():
     pass (no tiles), and the mask agrees with the per-tile one but where the two approximations
     of the sun differ (cells at the edge of a shadow)."""
     from hillshade_rt.engine.shader import Shader, render
-    from hillshade_rt.model.sun import Site, parse_time, sun_over
+    from hillshade_rt.model.site import Site
+    from hillshade_rt.model.sun import sun_over
+    from hillshade_rt.model.times import parse_time
     from pyproj import CRS, Transformer
     z = _terrain("spectral", 300, 400, 12, 2500.0)
     grid = Grid.uniform(300, 400, 150.0)   # 60 km across
@@ -373,7 +375,7 @@ def test_horizon_scan_over_the_pyramid_is_the_plain_scan(case):
     raise the maximum), and with a floor and a cap (soft shadows) they give the same visible
     fraction of the sun's disk."""
     from hillshade_rt.algorithms import horizon
-    from hillshade_rt.model.sun import SUN_RADIUS_DEG, disk_fraction
+    from hillshade_rt.model.solar import SUN_RADIUS_DEG, disk_fraction
     z, grid, az, el, curv = case
     if not np.isfinite(z).any():
         return

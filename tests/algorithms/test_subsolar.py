@@ -181,8 +181,8 @@ def test_gpu_twin_equals_cpu():
 
 def test_soft_on_a_flat_sphere_is_the_disk_above_the_astronomical_horizon():
     """Across the terminator (0.02 degree cells on the lunar sphere) the visible fraction is
-    the disk above each cell's horizontal plane: sun.disk_fraction(0, el, asin(R_sun / d))."""
-    from hillshade_rt.model.sun import disk_fraction
+    the disk above each cell's horizontal plane: solar.disk_fraction(0, el, asin(R_sun / d))."""
+    from hillshade_rt.model.solar import disk_fraction
     dem = memory_dem(np.zeros((10, 60), np.float32), Affine(0.02, 0, -0.6, 0, -0.02, 10.1),
                      MOON_GEOGRAPHIC)
     body = dem_body(dem)
@@ -202,7 +202,7 @@ def test_soft_on_a_flat_sphere_is_the_disk_above_the_astronomical_horizon():
 def test_soft_agrees_with_the_hard_mask_and_the_plain_horizon():
     """On relief: fraction > 1/2 exactly where the hard mask is lit; the partly lit cells'
     fractions are the disk above the plain reference's horizon along the cell's own ray."""
-    from hillshade_rt.model.sun import disk_fraction
+    from hillshade_rt.model.solar import disk_fraction
     from hillshade_rt.testing import reference_horizon
     z = fractal_terrain(24, 30, 4, relief=600.0)
     z[2, 3] = np.nan

@@ -309,7 +309,7 @@ def test_years_outside_the_spa_are_refused(tmp_path, runner, dem, args):
 def test_years_outside_the_spa_from_python(tmp_path, dem):
     import datetime as dt
     from hillshade_rt.errors import UsageProblem
-    from hillshade_rt.model.sun import solar_position
+    from hillshade_rt.model.solar import solar_position
     with pytest.raises(UsageProblem, match="outside the solar position algorithm's range"):
         hr.shade(dem, tmp_path / "o.tif", times=[FAR + "T12:00Z"])
     far = dt.datetime(7000, 1, 1, tzinfo=dt.timezone.utc)

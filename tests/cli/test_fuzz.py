@@ -1412,7 +1412,7 @@ _EDIT_KEYS = ["x", "y", "radius", "delta", "shape", "map_x", "map_y", "lon", "la
 def fuzz_viewer(tmp_path_factory):
     """A viewer (in a thread, on a free port) of a 24 x 24 UTM DEM with voids."""
     from hillshade_rt.io import read_dem
-    from hillshade_rt.run.view import Viewer
+    from hillshade_rt.run.viewer import Viewer
     from hillshade_rt.testing import serving
     path = tmp_path_factory.mktemp("view") / "dem.tif"
     path.write_bytes(raster_bytes("GTiff", 24, 24, "float32", "utm", -9999.0, 0, 0.05, 1, None))

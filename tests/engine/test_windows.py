@@ -96,6 +96,15 @@ def test_smap_tables_carried_in_every_octant(tmp_path, azimuth):
     n_lines = z.shape[1] if lines_are_cols else z.shape[0]
     assert len(pieces) >= 20 and carry.lines_carried > 0
     assert carry.lines_coloured <= len(strips) * n_lines + len(pieces)
+    # each line coloured is a window's positions (its extent across the lines) of cells
+    across = [p.window[1] - p.window[0] if lines_are_cols else p.window[3] - p.window[2]
+              for p in pieces]
+    assert min(across) * carry.lines_coloured <= carry.cells_coloured
+    assert carry.cells_coloured <= max(across) * carry.lines_coloured
+    fig = carry.figures(z.size)
+    assert fig["smap_lines_carried"] == carry.lines_carried > 0
+    assert fig["smap_coloured_beyond_output_fraction"] == pytest.approx(
+        carry.cells_coloured / z.size - 1.0)
     assert 0.05 < np.mean(whole == 1) < 0.9
     np.testing.assert_array_equal(tiled, whole)
 

@@ -1,7 +1,6 @@
-"""Sun from time (SPA), zones, night, series, sun hours; Earth curvature, soft shadows,
-self-shadow and classes, shaded relief, previews."""
+"""Suns over a DEM from times (grid north, night, per tile), series, sun hours; Earth curvature,
+soft shadows, self-shadow and classes, shaded relief, previews."""
 
-import datetime as dt
 import json
 import math
 
@@ -13,11 +12,10 @@ from rasterio.crs import CRS
 from hillshade_rt.cli import cli
 from hillshade_rt.engine.shader import Shader, render
 from hillshade_rt.model.earth import Body
-from hillshade_rt.errors import HillshadeError
 from hillshade_rt.model.geometry import Grid, curvature_per_m2, grid_from_transform, sun_rays
-from hillshade_rt.model.sun import (
-    Atmosphere, Region, SunOver, disk_fraction, parse_step, parse_time, solar_position, zone
-)
+from hillshade_rt.model.solar import disk_fraction
+from hillshade_rt.model.sun import Region, SunOver
+from hillshade_rt.model.times import parse_time
 from hillshade_rt.testing import fractal_terrain, read_band, write_geotiff
 
 # a 3 km square of 30 m cells near the SPA report's site (Golden, Colorado), UTM 13N
@@ -30,43 +28,7 @@ def _dem(tmp_path, z, transform=GOLDEN, crs=UTM13, name="dem.tif"):
 
 
 # ---------------------------------------------------------------------------------------------
-# the solar position
-
-def test_spa_worked_example():
-    """The SPA report's example (Reda & Andreas 2004, table A4.1): 17 Oct 2003 12:30:30 at
-    UTC-7, 39.742476 N 105.1786 W, 1830.14 m, 820 mbar, 11 C, delta T 67 s."""
-    t = parse_time("2003-10-17T12:30:30-07:00")
-    az, el, zen = solar_position([t], 39.742476, -105.1786, 1830.14,
-                                 Atmosphere(True, 820.0, 11.0), delta_t=67.0)
-    assert zen[0] == pytest.approx(50.11162, abs=1e-5)
-    assert az[0] == pytest.approx(194.34024, abs=1e-5)
-    assert el[0] == pytest.approx(90.0 - 50.11162, abs=1e-5)
-    # without refraction the sun is lower (the SPA's e0)
-    _, el0, _ = solar_position([t], 39.742476, -105.1786, 1830.14,
-                               Atmosphere(False, 820.0, 11.0), delta_t=67.0)
-    assert 0.005 < el[0] - el0[0] < 0.05
-
-
-def test_times_offsets_zones_and_dst():
-    zurich = zone("Europe/Zurich")
-    summer = parse_time("2026-06-21T14:30", zurich)
-    assert summer == parse_time("2026-06-21T12:30:00Z") == parse_time("2026-06-21T14:30+02:00")
-    winter = parse_time("2026-01-15T14:30", zurich)   # CET: +01:00
-    assert winter.utcoffset() == dt.timedelta(hours=1)
-    assert winter == parse_time("2026-01-15T13:30Z")
-    with pytest.raises(HillshadeError, match="no UTC offset"):
-        parse_time("2026-06-21T14:30")
-    with pytest.raises(HillshadeError, match="does not exist"):
-        parse_time("2026-03-29T02:30", zurich)          # clocks jump 02:00 -> 03:00
-    with pytest.raises(HillshadeError, match="happens twice"):
-        parse_time("2026-10-25T02:30", zurich)          # 02:00-03:00 twice
-    with pytest.raises(HillshadeError, match="IANA"):
-        zone("Mars/Olympus")
-    assert parse_step("1h30min") == dt.timedelta(minutes=90)
-    assert parse_step("PT10M") == parse_step("10min") == dt.timedelta(minutes=10)
-    with pytest.raises(HillshadeError):
-        parse_step("soon")
-
+# suns over a DEM from times
 
 def test_same_instant_in_two_offsets_gives_one_mask(tmp_path, runner):
     dem = _dem(tmp_path, fractal_terrain(90, 110, 3, relief=400.0))
@@ -129,7 +91,8 @@ def test_time_sun_matches_given_sun_in_grid_terms(tmp_path, runner):
 def test_sun_per_tile_equals_each_tiles_own_sun():
     """A 3 x 3 degree geographic DEM: the sun differs across it by more than the tolerance, so
     it is computed per tile; every tile's cells equal a whole-raster run with that tile's sun."""
-    from hillshade_rt.model.sun import Site, sun_over
+    from hillshade_rt.model.site import Site
+    from hillshade_rt.model.sun import sun_over
     rows, cols = 90, 90
     z = fractal_terrain(rows, cols, 11, relief=6000.0)
     tr = Affine(3.0 / cols, 0, 7.0, 0, -3.0 / rows, 47.5)
@@ -165,7 +128,7 @@ def test_series_bands_and_pattern(tmp_path, runner):
     assert r.exit_code == 0, r.output
     with rasterio.open(out) as ds:
         # equal steps in elapsed time across the daylight-saving change: 00:30 +01:00 to
-        # 04:00 +02:00 is 2.5 hours, so three times, none after --end (tests/run/test_times.py)
+        # 04:00 +02:00 is 2.5 hours, so three times, none after --end (tests/model/test_times.py)
         assert ds.count == 3
         assert ds.descriptions == ("2026-03-29T00:30+01:00", "2026-03-29T01:30+01:00",
                                    "2026-03-29T03:30+02:00")
@@ -188,33 +151,6 @@ def test_series_bands_and_pattern(tmp_path, runner):
                             "--time", "2026-06-21T09:00Z", "--time", "2026-06-21T15:00Z"])
     assert r.exit_code == 1 and "same file name" in r.stderr
     assert not list(tmp_path.glob("q_*"))
-
-
-def test_sun_hours_on_flat_terrain_equal_day_length(tmp_path, runner):
-    import pandas as pd
-    from pvlib.solarposition import sun_rise_set_transit_spa
-
-    dem = _dem(tmp_path, np.full((20, 30), 1700.0, np.float32))
-    out, rep = tmp_path / "h.tif", tmp_path / "h.json"
-    step_min = 10
-    r = runner.invoke(cli, ["sun-hours", dem, str(out), "--date", "2026-06-21",
-                            "--step", f"{step_min}min", "--tz", "America/Denver",
-                            "--report", str(rep), "-q"])
-    assert r.exit_code == 0, r.output
-    h = read_band(out)
-    doc = json.loads(rep.read_text())
-    lat, lon = doc["site"]["latitude"], doc["site"]["longitude"]
-    day = pd.DatetimeIndex([pd.Timestamp("2026-06-21 12:00", tz="America/Denver")])
-    rs = sun_rise_set_transit_spa(day, lat, lon)
-    length = (rs["sunset"].iloc[0] - rs["sunrise"].iloc[0]).total_seconds() / 3600.0
-    assert np.ptp(h) == 0
-    assert abs(float(h[0, 0]) - length) <= step_min / 60.0
-    assert 14.5 < length < 15.5
-    # a range of days adds up
-    r = runner.invoke(cli, ["sun-hours", dem, str(tmp_path / "h3.tif"), "--date", "2026-06-20",
-                            "--end-date", "2026-06-22", "--step", "20min", "-q"])
-    assert r.exit_code == 0
-    assert float(read_band(tmp_path / "h3.tif")[0, 0]) == pytest.approx(3 * length, abs=1.0)
 
 
 def test_sun_hours_shadowed_valley_gets_fewer_hours(tmp_path, runner):
@@ -527,34 +463,3 @@ def test_lat_lon_on_a_projected_dem_still_turns_to_grid_north(tmp_path, runner):
     assert sun["azimuth"] - sun["true_azimuth"] == pytest.approx(0.176, abs=0.01)
 
 
-@pytest.mark.parametrize("lat, date", [(0.0, "2026-03-20"), (45.0, "2026-06-21"),
-                                       (45.0, "2026-12-21"), (60.0, "2026-06-21"),
-                                       (-33.9, "2026-06-21"), (52.5, "2026-10-07"),
-                                       (67.0, "2026-12-21"), (69.0, "2026-06-21"),
-                                       (69.0, "2026-12-21")])
-def test_sun_hours_never_exceed_the_day_length(tmp_path, runner, lat, date):
-    """A flat open plain: its sun hours are the time the sun's apparent centre is above the
-    horizon (the tool's sunrise to sunset), found here by sampling pvlib's SPA every 5 s, and
-    never more (samples counting whole steps at both ends gave up to one step more)."""
-    import pandas as pd
-    from pvlib import spa
-    from pvlib.solarposition import spa_python
-
-    lon = 10.3
-    dem = write_geotiff(tmp_path / "flat.tif", np.zeros((10, 12), np.float32),
-                        Affine(10, 0, 0, 0, -10, 0), None)
-    out = tmp_path / "h.tif"
-    r = runner.invoke(cli, ["sun-hours", dem, str(out), "--date", date, "--step", "1h",
-                            "--lat", str(lat), "--lon", str(lon), "-q"])
-    assert r.exit_code == 0, r.output
-    h = read_band(out)
-    assert np.ptp(h) == 0
-    # the day in local mean solar time at lon (no --tz), sampled every 5 s
-    t0 = pd.Timestamp(date, tz="UTC") - pd.Timedelta(hours=lon / 15.0)
-    times = pd.date_range(t0, t0 + pd.Timedelta(days=1), freq="5s", inclusive="left")
-    dt = float(spa.calculate_deltat(np.array([times[0].year]), np.array([times[0].month]))[0])
-    el = spa_python(times, lat, lon, altitude=0.0, pressure=101325.0, temperature=12.0,
-                    delta_t=dt)["apparent_elevation"].to_numpy()
-    length = float((el > 0).sum()) * 5.0 / 3600.0
-    assert float(h[0, 0]) <= length + 10 / 3600.0, (float(h[0, 0]), length)
-    assert float(h[0, 0]) == pytest.approx(length, abs=20 / 3600.0), (float(h[0, 0]), length)

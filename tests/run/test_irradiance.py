@@ -20,7 +20,8 @@ from rasterio.crs import CRS
 from hillshade_rt.engine.arrays import horizon_angles, irradiance, shadow_mask
 from hillshade_rt.cli import cli
 from hillshade_rt.errors import HillshadeError
-from hillshade_rt.model.sun import Atmosphere, day_samples, disk_fraction, solar_position, zone
+from hillshade_rt.model.solar import Atmosphere, disk_fraction, solar_position
+from hillshade_rt.model.times import day_samples, zone
 from hillshade_rt.testing import box_terrain, fractal_terrain, read_band, repo_root, write_geotiff
 
 # pvlib 0.16 asks pandas 3 for DatetimeIndex.dayofyear (deprecated there), inside pvlib
@@ -178,7 +179,7 @@ def test_beam_under_cast_shadows_is_the_masks_sum():
 
 def test_soft_beam_is_the_visible_fraction_of_the_disk():
     """With soft, the beam on a flat cell is DNI sin(E) times the visible fraction of the solar
-    disk above the cell's horizon toward the sun (arrays.horizon_angles, sun.disk_fraction):
+    disk above the cell's horizon toward the sun (arrays.horizon_angles, solar.disk_fraction):
     0..1 in the penumbra, where the hard beam is all or nothing."""
     lat, lon, alt = 46.0, 7.5, 0.0
     z = box_terrain(60, 60, 20.0, 45, 55, 5, 15)     # a block near the south-west corner

@@ -20,7 +20,8 @@ import pytest
 
 from hillshade_rt.engine.arrays import shadow_mask
 from hillshade_rt.io import read_dem
-from hillshade_rt.run.view import Viewer, make_server
+from hillshade_rt.run.view_server import make_server
+from hillshade_rt.run.viewer import Viewer
 from hillshade_rt.testing import repo_root
 
 pytestmark = pytest.mark.browser
@@ -96,7 +97,7 @@ def picture(drv) -> np.ndarray:
 
 
 def cells_of(lo, hi, n_px):
-    """Each pixel's cell along one axis: as the server maps them (run.view.pixel_cells)."""
+    """Each pixel's cell along one axis: as the server maps them (run.viewer.pixel_cells)."""
     return np.floor(lo + (np.arange(n_px) + 0.5) * ((hi - lo) / n_px)).astype(np.int64)
 
 
