@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 from .. import __version__
 from ..errors import UsageProblem
-from .config import ReadOptions, RunOptions
+from .config import ReadOptions, RunOptions, set_threads
 
 
 @dataclass
@@ -94,6 +94,7 @@ def subsolar_shadow(cfg: SubsolarConfig) -> dict:
 
     ro = cfg.run
     dem, output, point = cfg.check()
+    set_threads(ro)
     if cfg.body is not None:
         body_from_option(cfg.body)              # a bad --body: exit 2 before anything is read
     timer = Timer()
