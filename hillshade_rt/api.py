@@ -207,7 +207,7 @@ def irradiance(dem, output, *, date=None, end_date=None, start=None, end=None,
                backend: str = "auto", fmt: str | None = None, creation_options=None,
                overwrite: bool = False, report: str | None = None,
                preview: str | None = None, progress: bool = False, context=None,
-               **more) -> dict:
+               height_above_ground: float = 0.0, **more) -> dict:
     """``hillshade-rt irradiance`` as a function: the beam, diffuse, reflected and global
     irradiance on every cell of the DEM at ``dem`` over a period, written to ``output`` (4
     float32 bands, Wh/m², or W/m² with ``mean``). The period: ``date`` (a date or
@@ -216,7 +216,9 @@ def irradiance(dem, output, *, date=None, end_date=None, start=None, end=None,
     ``ghi``, the path of a measured series (CSV: time, ghi[, dni, dhi]). Further keywords are
     the command line's options of the same name (``tz``, ``lat``, ``lon``, ``band``,
     ``nodata``, ``threads``, ...); ``fmt`` and ``creation_options`` as for :func:`shade`;
-    ``context`` as ``--context`` (the DEM a tile of that raster). Returns the report. For
+    ``context`` as ``--context`` (the DEM a tile of that raster); ``height_above_ground`` as
+    ``--height-above-ground`` (metres: the receiving surface stands this high). Returns the
+    report. For
     heights in memory:
     :func:`hillshade_rt.engine.arrays.irradiance`."""
     from .run import ReadOptions, RunOptions
@@ -241,7 +243,7 @@ def irradiance(dem, output, *, date=None, end_date=None, start=None, end=None,
                            text(start), text(end), step, clear_sky, linke_turbidity, albedo,
                            None if ghi is None else os.fspath(ghi), mean, soft, perez,
                            skyview_directions, place, algorithm, curvature, refraction_k,
-                           read, run)
+                           read, run, height_above_ground=height_above_ground)
     token = virtual_outputs.set(True)    # /vsimem/ outputs are fine from Python
     try:
         return run_irradiance(cfg)

@@ -150,3 +150,15 @@ def test_api_errors_name_keywords_not_command_line_options(tmp_path):
     assert api.in_keywords("use --earth-curvature or --no-earth-curvature, --co, --time") == \
         "use curvature=True or curvature=False, creation_options, times"
     assert not (tmp_path / "n.tif").exists()
+
+
+def test_irradiance_takes_height_above_ground(tmp_path, monkeypatch):
+    """The command's --height-above-ground is a keyword of api.irradiance, passed to the run."""
+    from hillshade_rt import api
+    from hillshade_rt.run import irradiance as run_irradiance
+
+    seen = []
+    monkeypatch.setattr(run_irradiance, "irradiance", lambda cfg: seen.append(cfg) or {})
+    api.irradiance(tmp_path / "d.tif", tmp_path / "o.tif", date="2026-06-21",
+                   height_above_ground=2)
+    assert seen[0].height_above_ground == 2

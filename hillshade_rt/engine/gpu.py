@@ -91,23 +91,35 @@ def status() -> tuple[bool, str]:
     return res
 
 
-def resolve_backend(backend: str) -> str:
-    """'cpu' or 'gpu' for a requested backend: ``auto`` is the GPU when numba finds a real CUDA
-    device (never the simulator), else the CPU; ``gpu`` without one is an error naming what is
-    missing."""
-    if backend == "cpu":
+def resolve_backend(backend: str, algorithm: str | None = None,
+                    options: dict | None = None) -> str:
+    """'cpu' or 'gpu' for a requested backend: the one rule of every run.
+
+    ``auto`` is the GPU when numba finds a real CUDA device (never the simulator) and the
+    algorithm with its options has GPU kernels (``algorithms.gpu_unsupported``; no algorithm:
+    a run whose kernels all have a GPU twin, such as the per-cell sun of a subsolar point),
+    else the CPU; ``gpu`` without a device, or with options that have no GPU kernels, is an
+    error naming what is missing.
+    """
+    if backend not in ("cpu", "gpu", "auto"):
+        raise HillshadeError(f"backend must be cpu, gpu or auto, got {backend!r}")
+    why = None
+    if algorithm is not None:
+        from ..algorithms import gpu_unsupported
+        why = gpu_unsupported(algorithm, options or {})
+    if backend == "gpu" and why:
+        raise HillshadeError(f"{why}; use --backend cpu")
+    if backend == "cpu" or why:
         return "cpu"
     if backend == "auto":
         if simulator_enabled():
             return "cpu"
         ok, _ = status()
         return "gpu" if ok else "cpu"
-    if backend == "gpu":
-        ok, what = status()
-        if not ok:
-            raise HillshadeError(what)
-        return "gpu"
-    raise HillshadeError(f"backend must be cpu, gpu or auto, got {backend!r}")
+    ok, what = status()
+    if not ok:
+        raise HillshadeError(what)
+    return "gpu"
 
 
 # ------------------------------------------------------------------------------------------

@@ -117,15 +117,9 @@ def warm_up(algorithm: str, grid: Grid | None = None, azimuth: float = 203.7,
 
 
 def choose_backend(backend: str, algorithm: str, options: dict) -> str:
-    """'cpu' or 'gpu' for a request: ``auto`` takes the GPU only when there is a real device and
-    the options have GPU kernels; ``gpu`` with options that have none is an error."""
-    from ..algorithms import gpu_unsupported
+    """'cpu' or 'gpu' for a request (:func:`.gpu.resolve_backend`, the one rule)."""
     from .gpu import resolve_backend
-    why = gpu_unsupported(algorithm, options)
-    if backend == "gpu" and why:
-        raise HillshadeError(f"{why}; use --backend cpu")
-    chosen = resolve_backend(backend)
-    return "cpu" if why else chosen
+    return resolve_backend(backend, algorithm, options)
 
 
 _WARMED: set = set()     # Shader.warm_up: the kinds of calls warmed in this process

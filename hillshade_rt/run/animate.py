@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 
 from .. import __version__
 from ..errors import HillshadeError, UsageProblem
-from .config import ReadOptions, RunOptions
+from .config import ReadOptions, RunOptions, set_threads
 
 DEFAULT_STEP = "30min"
 MAX_FRAMES = 2000
@@ -129,8 +129,7 @@ def animate(cfg: AnimateConfig) -> dict:
     if ro.report_path is not None:
         claims.claim(ro.report_path, "--report")
     req = times_of(cfg)
-    if ro.threads is not None:
-        numba.set_num_threads(min(ro.threads, numba.config.NUMBA_NUM_THREADS))
+    set_threads(ro)
     ran_on = choose_backend(ro.backend, cfg.algorithm, {})
     with timer("read"):
         d = cfg.read.read(cfg.dem)

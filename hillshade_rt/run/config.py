@@ -96,6 +96,17 @@ class ReadOptions:
             return src.read()
 
 
+def set_threads(ro: "RunOptions") -> int:
+    """Set numba's thread count from ``ro.threads`` (``--threads``; None: all cores, numba's
+    ``NUMBA_NUM_THREADS``), capped at what numba started with; returns the count in use. Every
+    run calls this one function, so that no command accepts ``--threads`` and ignores it."""
+    import numba
+
+    if ro.threads is not None:
+        numba.set_num_threads(min(ro.threads, numba.config.NUMBA_NUM_THREADS))
+    return numba.get_num_threads()
+
+
 def say_nothing(kind: str, message: str) -> None:
     """The default ``say`` of a run: silent."""
 

@@ -11,7 +11,7 @@ import os
 
 from .. import __version__
 from ..errors import AllNodata, HillshadeError, UsageProblem
-from .config import HorizonConfig, parse_window_size
+from .config import HorizonConfig, parse_window_size, set_threads
 
 # bytes per cell of a run in memory: heights, the pyramid, one direction's angles and distances
 # and their copies on the way to the file
@@ -91,8 +91,7 @@ def horizon(cfg: HorizonConfig) -> dict:
                            "whole line ahead)")
     wshape = parse_window_size(cfg.window_size)
     limit = memory_limit(cfg.max_memory)
-    if ro.threads is not None:
-        numba.set_num_threads(min(ro.threads, numba.config.NUMBA_NUM_THREADS))
+    set_threads(ro)
     ran_on = choose_backend(ro.backend, "horizon", {"method": method})
     if not ro.quiet:
         note = compile_note("horizon", ran_on)

@@ -34,7 +34,7 @@ import numpy as np
 
 from .. import __version__
 from ..errors import HillshadeError, UsageProblem
-from .config import ReadOptions, RunOptions
+from .config import ReadOptions, RunOptions, set_threads
 
 BYTES_PER_CELL = 96     # heights 4, frames 24, pyramid ~6, mask 1, soft 4, sums 5 x 8 + 1
 _LOCK = threading.Lock()   # one numba computation at a time per worker process
@@ -314,8 +314,7 @@ def illumination(cfg: IllumConfig) -> dict:
     limit = memory_limit(cfg.max_memory)      # default: half of this machine's memory
     if cfg.body is not None:
         body_from_option(cfg.body)              # a bad --body: exit 2 before anything is read
-    if ro.threads is not None:
-        numba.set_num_threads(min(ro.threads, numba.config.NUMBA_NUM_THREADS))
+    set_threads(ro)
     timer = Timer()
     claims = Claims([dem, cfg.subsolar_file], ro.overwrite)
     claims.claim(output, "OUTPUT")

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 
 from .. import __version__
 from ..errors import HillshadeError, UsageProblem
-from .config import ReadOptions, RunOptions
+from .config import ReadOptions, RunOptions, set_threads
 
 
 # formats that cannot hold the four float32 bands (pictures; ASCII and Surfer grids, one band)
@@ -129,8 +129,7 @@ def irradiance(cfg: IrradianceConfig) -> dict:
     series = None
     if cfg.ghi is not None and not req.auto_tz:   # a bad file fails the run (exit 1) before
         series = ir.read_series(cfg.ghi, req.tz)  # the DEM is read (--tz auto: once it is)
-    if ro.threads is not None:
-        numba.set_num_threads(min(ro.threads, numba.config.NUMBA_NUM_THREADS))
+    set_threads(ro)
     ran_on = choose_backend(ro.backend, cfg.algorithm, {})
     if not ro.quiet:
         note = compile_note(cfg.algorithm, ran_on, True)

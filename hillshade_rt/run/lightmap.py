@@ -134,11 +134,12 @@ def lightmap(cfg: LightmapConfig) -> dict:
         write_raster
     from ..io.write import Claims
     from ..pictures.preview import relief_rgb
-    from .config import apply_scale
+    from .config import apply_scale, set_threads
     from .report import Timer
 
     ro = cfg.run
     dem, output, position, lonlat = cfg.check()
+    set_threads(ro)
     timer = Timer()
     claims = Claims([dem], ro.overwrite)
     claims.claim(output, "OUTPUT")

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 from .. import __version__
 from ..errors import HillshadeError, UsageProblem
-from .config import ReadOptions, RunOptions
+from .config import ReadOptions, RunOptions, set_threads
 
 
 @dataclass
@@ -87,6 +87,7 @@ def light_shadow(cfg: LightConfig) -> dict:
 
     ro = cfg.run
     dem, output, position, lonlat = cfg.check()
+    set_threads(ro)
     wshape = parse_window_size(cfg.window_size)
     try:
         limit = (parse_size(cfg.max_memory) if cfg.max_memory is not None

@@ -11,7 +11,7 @@ import contextlib
 import os
 
 from ..errors import HillshadeError, UsageProblem
-from .config import ShadeConfig, inputs_and_output, parse_window_size
+from .config import ShadeConfig, inputs_and_output, parse_window_size, set_threads
 
 def shade(cfg: ShadeConfig) -> dict:
     """Run ``cfg``; returns the report. Bad input raises ``HillshadeError`` (``UsageProblem``
@@ -60,8 +60,7 @@ def shade(cfg: ShadeConfig) -> dict:
             claims.claim(extra, what)
     if pattern is not None:
         pattern = OutputPattern(pattern)
-    if ro.threads is not None:
-        numba.set_num_threads(min(ro.threads, numba.config.NUMBA_NUM_THREADS))
+    set_threads(ro)
     ran_on = choose_backend(ro.backend, algorithm, options)
     per_cell = bytes_per_cell(algorithm, kind, soft, cfg.self_shadow)
     if cfg.read.context is not None:    # a tile of the context: its windows, in the context

@@ -50,7 +50,7 @@ import numpy as np
 
 from .. import __version__
 from ..errors import UsageProblem
-from .config import ReadOptions, RunOptions, parse_window_size
+from .config import ReadOptions, RunOptions, parse_window_size, set_threads
 
 from ..algorithms.skyview import DEFINITIONS, OPENNESS  # (the definitions, once)
 
@@ -133,8 +133,7 @@ def skyview(cfg: SkyviewConfig) -> dict:
         claims.claim(ro.preview, "--preview")
     check_output_format(cfg.output, output_driver(cfg.output, ro.fmt), "float32", 1, True,
                         ro.creation_options)
-    if ro.threads is not None:
-        numba.set_num_threads(min(ro.threads, numba.config.NUMBA_NUM_THREADS))
+    set_threads(ro)
     ran_on = choose_backend(ro.backend, "horizon", {"method": "scan"})
     from ..errors import AllNodata
     if cfg.read.context is not None:    # a tile of the context: its windows, in the context

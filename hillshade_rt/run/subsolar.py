@@ -3,7 +3,8 @@ given by its subsolar point on the DEM's body (``--body`` overrides the CRS's) a
 (``--sun-distance``, default the body's mean distance), every cell lit by its own sun; or a
 series of them (``--subsolar-file F``, ``ephemeris.read_subsolar``): one band per time, the
 cells' frames and the pyramid prepared once. In memory; hard shadows or --soft (the visible fraction of the solar disk, whose radius is
-asin(R_sun / distance)); the CPU, or the GPU with ``--backend gpu``. What it does not take yet
+asin(R_sun / distance)); the CPU, or the GPU (``--backend gpu``, or ``auto`` on a real
+device). What it does not take yet
 (--azimuth/--time, a point light, --classes, --self-shadow, --algorithm, windows, Dask) is a
 usage error that says so."""
 
@@ -15,7 +16,7 @@ from dataclasses import dataclass, field
 
 from .. import __version__
 from ..errors import UsageProblem
-from .config import ReadOptions, RunOptions
+from .config import ReadOptions, RunOptions, set_threads
 
 
 @dataclass
@@ -94,6 +95,9 @@ def subsolar_shadow(cfg: SubsolarConfig) -> dict:
 
     ro = cfg.run
     dem, output, point = cfg.check()
+    set_threads(ro)
+    from ..engine.gpu import resolve_backend
+    backend = resolve_backend(ro.backend)   # the one rule: auto takes a real GPU
     if cfg.body is not None:
         body_from_option(cfg.body)              # a bad --body: exit 2 before anything is read
     timer = Timer()
@@ -123,7 +127,8 @@ def subsolar_shadow(cfg: SubsolarConfig) -> dict:
                            f"{body.source}), got {distance:g} m")
     curvature = True if cfg.curvature is None else bool(cfg.curvature)
     if series is not None:
-        return _series(cfg, d, output, series, body, distance, curvature, prod, timer)
+        return _series(cfg, d, output, series, body, distance, curvature, prod, timer,
+                       backend)
     lat, lon = point
     s = sun_vector(body, lat, lon, distance)
     with timer("compute"):
@@ -131,7 +136,7 @@ def subsolar_shadow(cfg: SubsolarConfig) -> dict:
         arr = subsolar_mask(d, lat, lon, body=body, height_above_ground=cfg.height_above_ground,
                             curvature=curvature, refraction_k=cfg.refraction_k, frames=frames,
                             sun_xyz=s, soft=bool(cfg.soft),
-                            backend="gpu" if ro.backend == "gpu" else "cpu")
+                            backend=backend)
         az, el = cell_suns(frames, body, s, d.heights, float(cfg.height_above_ground))
     arr, valid, share = _band(arr, bool(cfg.soft), prod)
     shade = np.where(valid, 1.0 - arr, 0.0) if cfg.soft else np.where(arr == 1, 1.0, 0.0)
@@ -147,7 +152,8 @@ def subsolar_shadow(cfg: SubsolarConfig) -> dict:
                      co=ro.creation_options)
         if ro.preview is not None:
             write_png(ro.preview, relief_rgb(d.heights, d.grid, shade=shade), ro.overwrite)
-    rep = _report(cfg, d, output, body, curvature, timer, subsolar={"lat": lat, "lon": lon},
+    rep = _report(cfg, d, output, body, curvature, timer, backend,
+                  subsolar={"lat": lat, "lon": lon},
                   sun_distance_m=distance,
                   sun={"elevation_deg": [float(el_v.min()), float(el_v.max())],
                        "azimuth_deg": [float(az_v.min()), float(az_v.max())],
@@ -162,7 +168,7 @@ def subsolar_shadow(cfg: SubsolarConfig) -> dict:
 
 
 def _series(cfg: SubsolarConfig, d, output: str, series, body, default_distance: float,
-            curvature: bool, prod, timer) -> dict:
+            curvature: bool, prod, timer, backend: str) -> dict:
     """``shadow --subsolar-file F``: one band per position of the series (description: its UTC
     time; tags: the subsolar point and the distance), the frames and the pyramid made once,
     the masks computed into one reused buffer; a progress bar. Returns the report."""
@@ -188,7 +194,6 @@ def _series(cfg: SubsolarConfig, d, output: str, series, body, default_distance:
             "SUBSOLAR_FILE": os.path.basename(series.path),
             "BODY": body.source,
             "HEIGHT_ABOVE_GROUND_M": f"{float(cfg.height_above_ground):g}"}
-    backend = "gpu" if ro.backend == "gpu" else "cpu"
     shares = []
     with timer("compute"):
         frames = CellFrames.of_dem(d)
@@ -215,7 +220,7 @@ def _series(cfg: SubsolarConfig, d, output: str, series, body, default_distance:
                 w.write(i + 1, band, description=iso(times[i]),
                         tags={"TIME": iso(times[i]), "SUBSOLAR": f"lat {lat:g} lon {lon:g}",
                               "SUN_DISTANCE_M": f"{dist[i]:.6g}"})
-    rep = _report(cfg, d, output, body, curvature, timer,
+    rep = _report(cfg, d, output, body, curvature, timer, backend,
                   subsolar_file=os.path.abspath(series.path), times=[iso(t) for t in times],
                   subsolar=[{"lat": float(a), "lon": float(b)}
                             for a, b in zip(series.lat, series.lon)],
@@ -240,7 +245,8 @@ def _band(arr, soft: bool, prod):
     return arr, valid, float((arr[valid] == 1).mean()) if valid.any() else 0.0
 
 
-def _report(cfg: SubsolarConfig, d, output: str, body, curvature: bool, timer, **sun) -> dict:
+def _report(cfg: SubsolarConfig, d, output: str, body, curvature: bool, timer, backend: str,
+            **sun) -> dict:
     """The report of a ``--subsolar`` or ``--subsolar-file`` run (``sun``: the keys of the
     sun(s)), written to --report."""
     from ..model.earth import refraction_for
@@ -253,7 +259,7 @@ def _report(cfg: SubsolarConfig, d, output: str, body, curvature: bool, timer, *
                          "refraction_k": refraction_for(body, cfg.refraction_k)
                          if curvature else None},
            "soft": bool(cfg.soft), "height_above_ground_m": float(cfg.height_above_ground),
-           "backend": "gpu" if ro.backend == "gpu" else "cpu",
+           "backend": backend,
            "algorithm": "subsolar (pyramid march, a sun per cell)",
            "seconds": dict(timer.seconds, total=timer.total()), "version": __version__}
     if ro.report_path is not None:

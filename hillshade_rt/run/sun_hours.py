@@ -9,7 +9,7 @@ import os
 
 from .. import __version__
 from ..errors import HillshadeError, UsageProblem
-from .config import SunHoursConfig
+from .config import SunHoursConfig, set_threads
 
 
 def sun_hours(cfg: SunHoursConfig) -> dict:
@@ -53,8 +53,7 @@ def sun_hours(cfg: SunHoursConfig) -> dict:
         raise UsageProblem(str(exc)) from None
     if last < first:
         raise UsageProblem("--end-date is before --date")
-    if ro.threads is not None:
-        numba.set_num_threads(min(ro.threads, numba.config.NUMBA_NUM_THREADS))
+    set_threads(ro)
     ran_on = choose_backend(ro.backend, algorithm, {})
     if not ro.quiet:
         note = compile_note(algorithm, ran_on, self_shadow)
