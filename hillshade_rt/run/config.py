@@ -195,6 +195,15 @@ class ShadeConfig:
             if self.read.pixel_size is not None:
                 raise UsageProblem("--scale and --pixel-size do not go together")
 
+    def lighting(self, backend: str):
+        """How the terrain is lit (``engine.lighting.Lighting``), on ``backend`` (chosen);
+        after :meth:`check`."""
+        from ..engine.lighting import Lighting
+        return Lighting(algorithm=self.algorithm, options=self.options, backend=backend,
+                        curvature=self.curvature, refraction_k=self.refraction_k,
+                        soft=self.soft, self_shadow=self.self_shadow, ambient=self.ambient,
+                        lift=self.height_above_ground)
+
 
 @dataclass
 class SunHoursConfig:
@@ -223,6 +232,14 @@ class SunHoursConfig:
         self.algorithm = check_lift(self.height_above_ground, self.algorithm, self.soft)
         if self.self_shadow is None:
             self.self_shadow = self.height_above_ground == 0.0
+
+    def lighting(self, backend: str):
+        """How the terrain is lit (``engine.lighting.Lighting``), on ``backend`` (chosen);
+        after :meth:`check`."""
+        from ..engine.lighting import Lighting
+        return Lighting(algorithm=self.algorithm, backend=backend, curvature=self.curvature,
+                        refraction_k=self.refraction_k, soft=self.soft,
+                        self_shadow=self.self_shadow, lift=self.height_above_ground)
 
 
 def check_lift(height: float, algorithm: str, soft: bool) -> str:
