@@ -429,6 +429,7 @@ def _lazy_job(inp: _Input, req, algorithm, options, ran_on, curvature, refractio
               soft, self_shadow, lift):
     """(job, block statistics, suns, sun info) of a Dask-backed input."""
     from .model.earth import dem_body
+    from .engine.lighting import Lighting
     from .engine.windows import WindowLighting
     src = _LazySource(inp.heights, inp.grid, inp.transform, inp.crs, inp.path)
     stats = _block_stats(inp.heights)
@@ -437,9 +438,11 @@ def _lazy_job(inp: _Input, req, algorithm, options, ran_on, curvature, refractio
     suns, info = req.suns(src)
     rows, cols = inp.shape
     dx, dy = inp.grid.centre_spacing()
-    job = WindowLighting(_Frame(inp.shape, inp.grid), algorithm, options, ran_on, curvature, refraction_k,
-              dem_body(src, req.lat), (stats.zmin, stats.zmax),
-              math.hypot(cols * dx, rows * dy), kind, soft, self_shadow, 0.2, lift)
+    lighting = Lighting(algorithm=algorithm, options=options, backend=ran_on,
+                        curvature=curvature, refraction_k=refraction_k, soft=soft,
+                        self_shadow=self_shadow, lift=lift)
+    job = WindowLighting(_Frame(inp.shape, inp.grid), lighting, dem_body(src, req.lat),
+                         (stats.zmin, stats.zmax), math.hypot(cols * dx, rows * dy), kind)
     return job, stats, suns, info
 
 

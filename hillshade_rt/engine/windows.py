@@ -42,6 +42,7 @@ import numpy as np
 from ..algorithms import REGISTRY
 from ..algorithms.counts import block_range
 from ..errors import AllNodata, HillshadeError
+from .lighting import Lighting
 from ..model.geometry import Grid
 from ..io.source import READ_CHUNK, DemSource, Reader
 from ..pictures.preview import every_nth
@@ -561,19 +562,22 @@ class WindowLighting:
     curvature as a run on the whole raster would."""
 
     source: DemSource
-    algorithm: str = "auto"
-    options: dict = field(default_factory=dict)
-    backend: str = "cpu"
-    curvature: object = "auto"
-    refraction_k: float | None = None
+    lighting: Lighting = field(default_factory=Lighting)   # how the terrain is lit
     body: object = None
     zrange: tuple[float, float] = (0.0, 0.0)
     extent_m: float = 0.0
     kind: str = "shadow"
-    soft: bool = False
-    self_shadow: bool = False
-    ambient: float = 0.2
-    lift: float = 0.0             # --height-above-ground: the rays start this far up
+
+    # the lighting's settings, read through (the job passes ``lighting`` whole to its Shaders)
+    algorithm = property(lambda self: self.lighting.algorithm)
+    options = property(lambda self: self.lighting.options)
+    backend = property(lambda self: self.lighting.backend)
+    curvature = property(lambda self: self.lighting.curvature)
+    refraction_k = property(lambda self: self.lighting.refraction_k)
+    soft = property(lambda self: self.lighting.soft)
+    self_shadow = property(lambda self: self.lighting.self_shadow)
+    ambient = property(lambda self: self.lighting.ambient)
+    lift = property(lambda self: self.lighting.lift)
 
     @property
     def k(self) -> float:
@@ -601,11 +605,10 @@ class WindowLighting:
         return BandCarry(most)
 
     def shader(self, z: np.ndarray, window, local_range=None, carry=None):
-        from .shader import Shader
-        return Shader(z, window_grid(self.source.grid, window), self.algorithm, self.options,
-                      self.backend, self.curvature, self.refraction_k, self.body, self.zrange,
-                      extent_m=self.extent_m, halo_ready=True, local_range=local_range,
-                      carry=carry, place=(window, self.source.shape), lift=self.lift)
+        return self.lighting.shader(z, window_grid(self.source.grid, window), body=self.body,
+                                    zrange=self.zrange, extent_m=self.extent_m,
+                                    halo_ready=True, local_range=local_range, carry=carry,
+                                    place=(window, self.source.shape))
 
     def light(self, z: np.ndarray, piece: PlannedWindow, stats: dict | None = None,
               curvature_used: set | None = None, carry=None) -> np.ndarray:
@@ -682,11 +685,9 @@ class WindowLighting:
 
     def warm_up(self, sun) -> None:
         """Compile (or load from numba's cache) what the windows will run."""
-        from .shader import Shader
         z = np.zeros((4, 4), np.float32)     # the kernels' argument types; the grid's spacing
-        sh = Shader(z, self.source.grid, self.algorithm, self.options, self.backend,
-                    self.curvature, self.refraction_k, self.body, self.zrange,
-                    extent_m=self.extent_m, lift=self.lift)
+        sh = self.lighting.shader(z, self.source.grid, body=self.body, zrange=self.zrange,
+                                  extent_m=self.extent_m)
         sh.warm_up(sun.azimuth, max(sun.elevation, 1.0), soft=self.soft, field=sun.fieldwise,
                    incidence=self.self_shadow or self.kind != "shadow")
 

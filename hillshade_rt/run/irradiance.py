@@ -332,6 +332,7 @@ def _in_context(cfg, area, suns, weights, sky, work, ran_on, curvature, body, li
     from ..model.geometry import equal_azimuths
     from .horizon import horizon_job, memory_limit, prepare_windows
     from .local import bounded_gdal_cache
+    from ..engine.lighting import Lighting
     from ..engine.windows import (
         WindowLighting, WindowCache, bytes_per_cell, default_max_memory, window_budget, window_grid
     )
@@ -345,9 +346,10 @@ def _in_context(cfg, area, suns, weights, sky, work, ran_on, curvature, body, li
         with timer("prepare"):
             bstats = area.block_stats()     # (the context's, kept between runs)
             dx, dy = src.grid.centre_spacing()
-            job = WindowLighting(src, cfg.algorithm, {}, ran_on, curvature, cfg.refraction_k, body,
-                      (bstats.zmin, bstats.zmax), math.hypot(cols * dx, rows * dy), "sun",
-                      cfg.soft, False, 0.2, lift)
+            lighting = Lighting(algorithm=cfg.algorithm, backend=ran_on, curvature=curvature,
+                                refraction_k=cfg.refraction_k, soft=cfg.soft, lift=lift)
+            job = WindowLighting(src, lighting, body, (bstats.zmin, bstats.zmax),
+                                 math.hypot(cols * dx, rows * dy), "sun")
             budget = window_budget(default_max_memory(),
                                    bytes_per_cell(cfg.algorithm, "sun", cfg.soft))[0]
             if work:

@@ -118,6 +118,7 @@ def shade_in_windows(inputs, source, scale, req, out, timer, algorithm, options,
     from ..pictures.preview import every_nth, relief_rgb
     from ..engine.products import merge_stats
     from .outputs import sun_tags
+    from ..engine.lighting import Lighting
     from ..engine.windows import (
         MIN_WINDOW_CELLS, WindowLighting, MemoryTooSmall, WindowedRunStats, WindowCache, block_stats, format_size,
         marched_per_cell, memory_needed, window_budget
@@ -143,9 +144,11 @@ def shade_in_windows(inputs, source, scale, req, out, timer, algorithm, options,
         suns, sun_info = req.suns(src)
         out.plan(suns, inputs, src.tiles if area is None else None)
         dx, dy = src.grid.centre_spacing()
-        job = WindowLighting(src, algorithm, options, ran_on, "auto" if curvature is None else curvature,
-                  refraction_k, dem_body(src, req.lat), zrange, math.hypot(cols * dx, rows * dy),
-                  kind, soft, self_shadow, ambient, lift)
+        lighting = Lighting(algorithm=algorithm, options=options, backend=ran_on,
+                            curvature=curvature, refraction_k=refraction_k, soft=soft,
+                            self_shadow=self_shadow, ambient=ambient, lift=lift)
+        job = WindowLighting(src, lighting, dem_body(src, req.lat), zrange,
+                             math.hypot(cols * dx, rows * dy), kind)
         # a limit too small: measured now, after the preparation (the process has grown), the
         # error says the smallest --max-memory that would do: room for the largest window the
         # plan needs, or for the whole DEM where it could be shaded in memory

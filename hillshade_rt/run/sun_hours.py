@@ -188,11 +188,9 @@ def _in_context(cfg, area, work, ran_on, req, timer, algo_stats):
             bstats = area.block_stats()     # (the context's, kept between runs)
             rows, cols = src.shape
             dx, dy = src.grid.centre_spacing()
-            job = WindowLighting(src, cfg.algorithm, {}, ran_on,
-                      "auto" if cfg.curvature is None else cfg.curvature, cfg.refraction_k,
-                      dem_body(src, req.lat), (bstats.zmin, bstats.zmax),
-                      math.hypot(cols * dx, rows * dy), "sun", cfg.soft, cfg.self_shadow, 0.2,
-                      lift)
+            job = WindowLighting(src, cfg.lighting(ran_on), dem_body(src, req.lat),
+                                 (bstats.zmin, bstats.zmax), math.hypot(cols * dx, rows * dy),
+                                 "sun")
             budget = window_budget(default_max_memory(),
                                    bytes_per_cell(cfg.algorithm, "sun", cfg.soft,
                                                   cfg.self_shadow))[0]

@@ -12,6 +12,7 @@ from rasterio.crs import CRS
 
 from hillshade_rt.engine import windows as tiling
 from hillshade_rt.cli import cli
+from hillshade_rt.engine.lighting import Lighting
 from hillshade_rt.engine.shader import Shader, render
 from hillshade_rt.model.earth import dem_body
 from hillshade_rt.errors import HillshadeError
@@ -32,9 +33,10 @@ def _tiled(path, azimuth, elevation, algorithm, window_shape, kind="shadow", sof
     stats = tiling.block_stats(src)
     rows, cols = src.shape
     dx, dy = src.grid.centre_spacing()
-    job = tiling.WindowLighting(src, algorithm, options or {}, "cpu", curvature, None, dem_body(src),
-                     (stats.zmin, stats.zmax), math.hypot(cols * dx, rows * dy), kind, soft,
-                     kind != "shadow", 0.2)
+    lighting = Lighting(algorithm=algorithm, options=options or {}, backend="cpu",
+                        curvature=curvature, soft=soft, self_shadow=kind != "shadow")
+    job = tiling.WindowLighting(src, lighting, dem_body(src), (stats.zmin, stats.zmax),
+                                math.hypot(cols * dx, rows * dy), kind)
     pieces = job.pieces(sun or SunOver(None, azimuth, elevation), stats, 1 << 40, window_shape)
     out = None
     carry = job.carrier([pieces])
