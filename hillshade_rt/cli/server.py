@@ -76,6 +76,10 @@ def _sources_stamp() -> tuple:
     return tuple(sorted(found))
 
 
+# seconds the idle timeout waits at least while no caller has seen a worker ready (a `serve
+# start` descheduled on a loaded machine still finds its server)
+SEEN_GRACE = 30.0
+
 class Worker:
     def __init__(self, master: "Master", check_kernels: bool = False):
         ours, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
@@ -103,6 +107,10 @@ class Master:
         self.failures = 0
         self.started = time.time()
         self.last = time.monotonic()
+        # whether a caller has seen a worker ready (a status answer with one, or a job): until
+        # then the idle timeout waits at least SEEN_GRACE s, so that `serve start` on a busy
+        # machine does not find a server already stopped idle before it could look
+        self.seen = False
         self.stopping = None
         self.stamp = _sources_stamp()
         self.stamp_checked = time.monotonic()
@@ -276,7 +284,11 @@ class Master:
         if req.get("proto") != client.PROTOCOL:
             self.answer(conn, {"type": "refused", "why": "protocol"})
         elif kind == "status":
-            self.answer(conn, self.status())
+            st = self.status()
+            if not self.seen and st["workers"]["idle"] + st["workers"]["busy"] > 0:
+                self.seen = True
+                self.last = time.monotonic()     # idle counts from when the starter knew
+            self.answer(conn, st)
         elif kind == "stop":
             self.answer(conn, dict(self.status(), type="stopping"))
             self.stop("asked to stop")
@@ -290,6 +302,7 @@ class Master:
                 self.stop("the package's sources changed")
             else:
                 self.last = time.monotonic()
+                self.seen = True
                 self.pending.append((time.monotonic() + self.queue_wait, conn, fds, req))
                 self.assign()
                 return
@@ -325,7 +338,8 @@ class Master:
     def idle(self) -> bool:
         return (not self.pending and not any(w.state == "busy" for w in self.workers)
                 and self.idle_timeout > 0
-                and time.monotonic() - self.last >= self.idle_timeout)
+                and time.monotonic() - self.last >= (self.idle_timeout if self.seen else
+                                                     max(self.idle_timeout, SEEN_GRACE)))
 
     def run(self) -> int:
         wake_r, wake_w = os.pipe2(os.O_NONBLOCK | os.O_CLOEXEC)
