@@ -28,8 +28,9 @@ import re
 from .errors import HillshadeError
 from .run.config import DEFAULT_WORKER_TIMEOUT, PLACE_KEYS, READ_KEYS
 
-# keyword arguments passed on as the run's options of the same name
-_PASSED = PLACE_KEYS + READ_KEYS + ("threads",)
+# keyword arguments taken through ``**more``: the run's options of the same name (the
+# command line's --tz, --lat, ..., the DEM's --band, --nodata, ..., --threads)
+FORWARDED = PLACE_KEYS + READ_KEYS + ("threads",)
 
 
 # the command line's options that are other keywords here (the rest: --foo-bar -> foo_bar)
@@ -85,6 +86,21 @@ def _iso(t):
     return t.isoformat() if isinstance(t, _dt.datetime) else t
 
 
+def _progress(progress) -> dict:
+    """``RunOptions``' ``quiet`` and ``progress`` of the ``progress`` keyword: False (as
+    ``--quiet``: nothing on stderr), True or "bar" (the bar and the summary line), "json" (as
+    ``--progress json``: only the ``{"progress": F}`` lines, for a program reading stderr)."""
+    from .run.report import PROGRESS_MODES
+    if progress in (False, None):
+        return dict(quiet=True, progress="bar")
+    if progress is True:
+        return dict(quiet=False, progress="bar")
+    if progress not in PROGRESS_MODES:
+        raise HillshadeError(f"progress must be True, False or one of "
+                             f"{', '.join(map(repr, PROGRESS_MODES))}, got {progress!r}")
+    return dict(quiet=progress == "json", progress=progress)
+
+
 def _stderr(kind: str, message: str) -> None:
     """``say`` with ``progress=True``: the command line's lines on stderr."""
     import sys
@@ -108,7 +124,10 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
           overwrite: bool = False, report: str | None = None,
           preview: str | None = None, progress: bool = False,
           height_above_ground: float = 0.0, sun_from_stac: str | None = None,
-          stac_item: str | None = None, context=None, each: bool = False, **more) -> dict:
+          stac_item: str | None = None, context=None, each: bool = False,
+          light_position=None, light_lonlat=None, falloff: str | None = None,
+          bits: int | None = None, subsolar=None, subsolar_file=None,
+          sun_distance: float | None = None, body: str | None = None, **more) -> dict:
     """Shade DEM file(s) into ``output`` (one band per sun) or ``output_pattern`` files.
 
     ``dems``: a path or a list of paths (tiles on one grid, shaded as one surface; with
@@ -134,6 +153,19 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
     same name (``tz``,
     ``lat``, ``lon``, ``band``, ``nodata``, ``z_factor``, ``pixel_size``, ``raw_shape``, ...).
 
+    A point light instead of the sun, as ``--light-position``/``--light-lonlat``:
+    ``light_position`` (x, y, z: the DEM's CRS, metres above the datum) or ``light_lonlat``
+    (lon, lat, z: WGS84 degrees), numbers or "A,B,C" texts; every cell's ray runs to the light
+    (``run.point_light``); with ``product="hillshade"`` the light's shaded relief
+    (``run.lightmap``), ``falloff`` ("none", "inverse-square") and ``bits`` (8, 16) as
+    ``--falloff``/``--bits``. Every cell its own sun on the DEM's body, as ``--subsolar``:
+    ``subsolar`` (lat, lon or "LAT,LON") or ``subsolar_file`` (a series, one band per time),
+    ``sun_distance`` (metres) and ``body`` ("moon", "mars", "earth" or a radius in metres;
+    default the CRS's) as ``--sun-distance``/``--body`` (``run.subsolar``; product "shadow").
+    These runs take one DEM and refuse what they do not take yet, as the command line does.
+    ``progress``: False (nothing on stderr, as ``--quiet``), True or "bar" (the progress bar
+    and the summary line), "json" (only ``{"progress": F}`` lines, as ``--progress json``).
+
     ``each``: many unrelated DEMs (any grid, CRS, size) in one call, each shaded on its own
     into ``output_pattern`` with ``{stem}`` (the input's file name without its extension), as
     ``--each``: the report lists each input's status (``ok``, ``empty``: every cell nodata,
@@ -151,7 +183,7 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
     from .io.write import virtual_outputs
     if product not in PRODUCTS:
         raise HillshadeError(f"product must be one of {', '.join(PRODUCTS)}, got {product!r}")
-    unknown = set(more) - set(_PASSED)
+    unknown = set(more) - set(FORWARDED)
     if unknown:
         raise TypeError(f"shade() got unexpected keyword argument(s) {', '.join(sorted(unknown))}")
     files = [os.fspath(dems)] if isinstance(dems, (str, os.PathLike)) else [os.fspath(p)
@@ -164,6 +196,29 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
         raise HillshadeError("give output or output_pattern")
     if scale is not None and product != "hillshade":
         raise HillshadeError("scale applies to product='hillshade'")
+    if any(v is not None for v in (subsolar, subsolar_file, sun_distance, body, light_position,
+                                   light_lonlat, falloff, bits)):
+        token = virtual_outputs.set(True)
+        try:
+            return _other_light(
+                files, output, product, dict(
+                    azimuth=azimuth, elevation=elevation, times=times, start=start, end=end,
+                    step=step, sun_from_stac=sun_from_stac, soft=soft, self_shadow=self_shadow,
+                    algorithm=algorithm, algorithm_options=algorithm_options,
+                    curvature=curvature, refraction_k=refraction_k, ambient=ambient,
+                    scale=scale, height_above_ground=height_above_ground,
+                    max_memory=max_memory, window_size=window_size, client=client,
+                    output_pattern=output_pattern, cog=cog, stac_item=stac_item,
+                    context=context, each=each, light_position=light_position,
+                    light_lonlat=light_lonlat, falloff=falloff, bits=bits, subsolar=subsolar,
+                    subsolar_file=subsolar_file, sun_distance=sun_distance, body=body),
+                ReadOptions(**{k: more[k] for k in READ_KEYS if k in more}),
+                RunOptions(backend=backend, threads=more.get("threads"), report_path=report,
+                           overwrite=overwrite, **_progress(progress), fmt=fmt,
+                           preview=preview, say=_stderr, creation_options=creation_options,
+                           worker_timeout=worker_timeout))
+        finally:
+            virtual_outputs.reset(token)
     given = dict(algorithm_options or {})
     algorithm = algorithm_for(algorithm, given)
     options = options_for(algorithm, given)
@@ -176,7 +231,7 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
     read = ReadOptions(**{k: more[k] for k in READ_KEYS if k in more},
                        context=None if context is None else os.fspath(context))
     run = RunOptions(backend=backend, threads=more.get("threads"), report_path=report,
-                     overwrite=overwrite, quiet=not progress, fmt=fmt, preview=preview,
+                     overwrite=overwrite, **_progress(progress), fmt=fmt, preview=preview,
                      say=_stderr, creation_options=creation_options,
                      worker_timeout=worker_timeout)
     hill = product == "hillshade"
@@ -197,8 +252,73 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
         virtual_outputs.reset(token)
 
 
+def _other_light(files, output, product, kw, read, run) -> dict:
+    """:func:`shade` with a point light (``run.point_light``; ``run.lightmap`` for
+    ``product="hillshade"``) or every cell's own sun (``run.subsolar``), as the ``shadow`` and
+    ``hillshade`` commands run them: ``kw`` the keywords given to :func:`shade`; what these runs
+    do not take yet (a keyword away from its default) is refused, named as the command line's
+    option (``in_keywords`` names it as the keyword)."""
+    from .errors import UsageProblem
+    output = None if output is None else os.fspath(output)
+    hill, classes = product == "hillshade", product == "classes"
+    subsolar = any(kw[k] is not None for k in ("subsolar", "subsolar_file", "sun_distance",
+                                               "body"))
+    light = kw["light_position"] is not None or kw["light_lonlat"] is not None
+    sun_given = any(kw[k] not in (None, (), [], "") for k in ("azimuth", "elevation", "times",
+                                                               "start", "end", "step",
+                                                               "sun_from_stac"))
+    refused = {"--azimuth/--elevation/--time/--start": sun_given,
+               "--algorithm": kw["algorithm"] != "auto" or bool(kw["algorithm_options"]),
+               "--context": kw["context"] is not None,
+               "--scheduler": kw["client"] is not None,
+               "--output-pattern": kw["output_pattern"] is not None, "--cog": kw["cog"],
+               "--stac-item": kw["stac_item"] is not None, "--each": kw["each"]}
+    if subsolar:
+        if hill:
+            raise UsageProblem("--subsolar, --subsolar-file, --sun-distance and --body go with "
+                               "the shadow product")
+        from .run.subsolar import SubsolarConfig, subsolar_shadow
+        refused.update({"--light-position/--light-lonlat": light,
+                        "--self-shadow": kw["self_shadow"], "--classes": classes,
+                        "--window-size": kw["window_size"] is not None,
+                        "--max-memory": kw["max_memory"] is not None})
+        if kw["falloff"] is not None or kw["bits"] is not None:
+            raise UsageProblem("--falloff and --bits go with the hillshade product")
+        return subsolar_shadow(SubsolarConfig(
+            files=files, output=output, subsolar=kw["subsolar"],
+            sun_distance=kw["sun_distance"], body=kw["body"],
+            height_above_ground=kw["height_above_ground"], soft=kw["soft"],
+            curvature=kw["curvature"], refraction_k=kw["refraction_k"], read=read, run=run,
+            refused=refused, subsolar_file=None if kw["subsolar_file"] is None
+            else os.fspath(kw["subsolar_file"])))
+    if not light:
+        raise UsageProblem("--falloff and --bits go with a point light (--light-position or "
+                           "--light-lonlat)")
+    if hill:
+        from .run.lightmap import LightmapConfig, lightmap
+        refused.update({"--soft": kw["soft"], "--earth-curvature": kw["curvature"] is True,
+                        "--refraction-coefficient": kw["refraction_k"] is not None,
+                        "--backend gpu": run.backend == "gpu",
+                        "--window-size": kw["window_size"] is not None,
+                        "--max-memory": kw["max_memory"] is not None})
+        return lightmap(LightmapConfig(
+            files=files, output=output, position=kw["light_position"],
+            lonlat=kw["light_lonlat"], height_above_ground=kw["height_above_ground"],
+            read=read, run=run, refused=refused, ambient=kw["ambient"], scale=kw["scale"],
+            falloff=kw["falloff"] or "none", bits=int(kw["bits"] or 8)))
+    if kw["falloff"] is not None or kw["bits"] is not None:
+        raise UsageProblem("--falloff and --bits go with the hillshade product")
+    from .run.point_light import LightConfig, light_shadow
+    refused.update({"--soft": kw["soft"], "--self-shadow": kw["self_shadow"],
+                    "--classes": classes, "--earth-curvature": kw["curvature"] is True})
+    return light_shadow(LightConfig(
+        files=files, output=output, position=kw["light_position"], lonlat=kw["light_lonlat"],
+        height_above_ground=kw["height_above_ground"], window_size=kw["window_size"],
+        max_memory=kw["max_memory"], read=read, run=run, refused=refused))
+
+
 @_keyword_errors
-def irradiance(dem, output, *, date=None, end_date=None, start=None, end=None,
+def irradiance(dem, output=None, *, date=None, end_date=None, start=None, end=None,
                step: str = "15min", clear_sky: str | None = None,
                linke_turbidity: float | None = None, albedo: float = 0.2, ghi=None,
                mean: bool = False, soft: bool = False, perez: bool = False,
@@ -207,7 +327,8 @@ def irradiance(dem, output, *, date=None, end_date=None, start=None, end=None,
                backend: str = "auto", fmt: str | None = None, creation_options=None,
                overwrite: bool = False, report: str | None = None,
                preview: str | None = None, progress: bool = False, context=None,
-               height_above_ground: float = 0.0, **more) -> dict:
+               height_above_ground: float = 0.0, each: bool = False,
+               output_pattern: str | None = None, **more) -> dict:
     """``hillshade-rt irradiance`` as a function: the beam, diffuse, reflected and global
     irradiance on every cell of the DEM at ``dem`` over a period, written to ``output`` (4
     float32 bands, Wh/m², or W/m² with ``mean``). The period: ``date`` (a date or
@@ -217,36 +338,42 @@ def irradiance(dem, output, *, date=None, end_date=None, start=None, end=None,
     the command line's options of the same name (``tz``, ``lat``, ``lon``, ``band``,
     ``nodata``, ``threads``, ...); ``fmt`` and ``creation_options`` as for :func:`shade`;
     ``context`` as ``--context`` (the DEM a tile of that raster); ``height_above_ground`` as
-    ``--height-above-ground`` (metres: the receiving surface stands this high). Returns the
-    report. For
+    ``--height-above-ground`` (metres: the receiving surface stands this high). ``each``:
+    ``dem`` a list of unrelated DEMs, each on its own into ``output_pattern``'s ``{stem}``, as
+    ``--each`` (no ``output``; the report lists each input's status, as :func:`shade`'s).
+    ``progress`` as for :func:`shade`. Returns the report. For
     heights in memory:
     :func:`hillshade_rt.engine.arrays.irradiance`."""
     from .run import ReadOptions, RunOptions
     from .run.irradiance import IrradianceConfig, irradiance as run_irradiance
+    from .run.batch import irradiance_each, split_files
     from .model.sun import DEFAULT_TOLERANCE
     from .io.write import virtual_outputs
-    unknown = set(more) - set(_PASSED)
+    unknown = set(more) - set(FORWARDED)
     if unknown:
         raise TypeError(f"irradiance() got unexpected keyword argument(s) "
                         f"{', '.join(sorted(unknown))}")
 
     def text(v):
         return None if v is None else str(v.isoformat() if hasattr(v, "isoformat") else v)
+    dems = [dem] if isinstance(dem, (str, os.PathLike)) else list(dem)
+    dem, output = split_files(dems + ([] if output is None else [output]), each,
+                              output_pattern, "irradiance")
     place = {k: more.get(k, d) for k, d in zip(PLACE_KEYS, (None,) * 5 + (False,
                                                                           DEFAULT_TOLERANCE))}
     read = ReadOptions(**{k: more[k] for k in READ_KEYS if k in more},
                        context=None if context is None else os.fspath(context))
     run = RunOptions(backend=backend, threads=more.get("threads"), report_path=report,
-                     overwrite=overwrite, quiet=not progress, fmt=fmt, preview=preview,
+                     overwrite=overwrite, **_progress(progress), fmt=fmt, preview=preview,
                      say=_stderr, creation_options=creation_options)
-    cfg = IrradianceConfig(os.fspath(dem), os.fspath(output), text(date), text(end_date),
+    cfg = IrradianceConfig(dem, output, text(date), text(end_date),
                            text(start), text(end), step, clear_sky, linke_turbidity, albedo,
                            None if ghi is None else os.fspath(ghi), mean, soft, perez,
                            skyview_directions, place, algorithm, curvature, refraction_k,
                            read, run, height_above_ground=height_above_ground)
     token = virtual_outputs.set(True)    # /vsimem/ outputs are fine from Python
     try:
-        return run_irradiance(cfg)
+        return irradiance_each(cfg, dem, output_pattern) if each else run_irradiance(cfg)
     finally:
         virtual_outputs.reset(token)
 
@@ -265,7 +392,7 @@ def animate(dem, output, *, date=None, start=None, end=None, step: str | None = 
     from .run import ReadOptions, RunOptions
     from .run.animate import AnimateConfig, animate as run_animate
     from .model.sun import DEFAULT_TOLERANCE
-    unknown = set(more) - set(_PASSED)
+    unknown = set(more) - set(FORWARDED)
     if unknown:
         raise TypeError(f"animate() got unexpected keyword argument(s) "
                         f"{', '.join(sorted(unknown))}")
@@ -276,7 +403,7 @@ def animate(dem, output, *, date=None, start=None, end=None, step: str | None = 
                                                                           DEFAULT_TOLERANCE))}
     read = ReadOptions(**{k: more[k] for k in READ_KEYS if k in more})
     run = RunOptions(backend=backend, threads=more.get("threads"), report_path=report,
-                     overwrite=overwrite, quiet=not progress, say=_stderr)
+                     overwrite=overwrite, **_progress(progress), say=_stderr)
     return run_animate(AnimateConfig(os.fspath(dem), os.fspath(output), text(date), text(start),
                                      text(end), step, place, fps, size, label, algorithm,
                                      curvature, refraction_k, read, run))

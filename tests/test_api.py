@@ -162,3 +162,124 @@ def test_irradiance_takes_height_above_ground(tmp_path, monkeypatch):
     api.irradiance(tmp_path / "d.tif", tmp_path / "o.tif", date="2026-06-21",
                    height_above_ground=2)
     assert seen[0].height_above_ground == 2
+
+
+# The command line's parameters (click's param.name) that are another keyword of the API, each
+# with why; every other parameter of the command must be a keyword of the function of the
+# same name (test_api_takes_every_option_of_its_command).
+RENAMED = {
+    "files": None,        # the positional DEM... [OUTPUT]: the function's dems/dem and output
+    "date_": "date",      # click's name keeps the command's body off datetime.date
+    "time": "times",      # one or many times: a list in Python, --time repeated on the line
+    "report_path": "report",
+    "scheduler": "client",      # a distributed.Client (or an address, "local:N")
+    "quiet": "progress",        # --quiet is progress=False
+    "classes": "product",       # --classes is product="classes"
+}
+# the shadow command's algorithm flags (--nextv, --no-pyramid, ...): algorithm_options entries
+ALGORITHM_FLAGS = {"no_pyramid", "nextv", "better_nextv", "horizon_method", "sample_spacing",
+                   "exact_steps"}
+# each API function and the commands it stands for
+FRONT_DOORS = {"shade": ("shadow", "hillshade"), "irradiance": ("irradiance",),
+               "animate": ("animate",)}
+
+
+def _keywords(function) -> set:
+    """The keywords ``function`` accepts: its named parameters, and ``api.FORWARDED`` (the
+    documented set it passes on) when it takes ``**more``."""
+    import inspect
+
+    from hillshade_rt import api
+    params = inspect.signature(function).parameters.values()
+    named = {p.name for p in params if p.kind is not p.VAR_KEYWORD}
+    more = any(p.kind is p.VAR_KEYWORD for p in params)
+    return named | (set(api.FORWARDED) if more else set())
+
+
+def test_api_takes_every_option_of_its_command():
+    """Every option of ``shadow``/``hillshade``, ``irradiance`` and ``animate`` is a keyword of
+    ``shade``, ``irradiance``, ``animate`` (or one of RENAMED's), read from the click commands
+    themselves: an option added to a command without its keyword fails here."""
+    from hillshade_rt import api
+    from hillshade_rt.cli import cli
+    from hillshade_rt.algorithms import OPTIONS
+    assert ALGORITHM_FLAGS == {opt.param for _, opt in OPTIONS.values()}
+    missing = {}
+    for name, commands in FRONT_DOORS.items():
+        function = getattr(api, name)
+        assert getattr(hr, name) is function               # exported at the top
+        accepted = _keywords(function)
+        for command in commands:
+            for param in cli.commands[command].params:
+                keyword = ("algorithm_options" if param.name in ALGORITHM_FLAGS
+                           else RENAMED.get(param.name, param.name))
+                if keyword is not None and keyword not in accepted:
+                    missing.setdefault(name, []).append(f"{command} {param.opts[0]}")
+    assert not missing, missing
+    # RENAMED names only real parameters (a stale entry would hide nothing but mislead)
+    every = {p.name for c in ("shadow", "hillshade", "irradiance", "animate")
+             for p in cli.commands[c].params}
+    assert set(RENAMED) <= every and ALGORITHM_FLAGS <= every
+
+
+def test_point_light_subsolar_and_irradiance_each_as_the_command_line(tmp_path):
+    """The keywords the API gained run what their options run: a point light's shadow and
+    lightmap, every cell's own sun, irradiance of each DEM: files equal to the command's."""
+    from click.testing import CliRunner
+
+    from hillshade_rt.cli import cli
+    z = fractal_terrain(48, 56, 5, relief=300.0)
+    dem = write_geotiff(tmp_path / "d.tif", z, Affine(30, 0, 476000, 0, -30, 4400000),
+                        CRS.from_epsg(32613))
+    top = float(z[23, 33]) + 20.0          # 20 m above the cell under the light
+    light = f"477000,4399300,{top}"
+    runs = [(["shadow", "--light-position", light], dict(light_position=light)),
+            (["hillshade", "--light-position", light, "--falloff", "inverse-square",
+              "--bits", "16"],
+             dict(product="hillshade", light_position=(477000, 4399300, top),
+                  falloff="inverse-square", bits=16)),
+            (["shadow", "--subsolar", "5.5,-17.3", "--body", "moon"],
+             dict(subsolar=(5.5, -17.3), body="moon"))]
+    for i, (args, kw) in enumerate(runs):
+        cli_out, api_out = tmp_path / f"cli{i}.tif", tmp_path / f"api{i}.tif"
+        r = CliRunner().invoke(cli, [args[0], dem, str(cli_out), "-q"] + args[1:])
+        assert r.exit_code == 0, r.output
+        rep = hr.shade(dem, api_out, **kw)
+        a, b = read_band(cli_out), read_band(api_out)
+        np.testing.assert_array_equal(a, b)
+        assert len(np.unique(a)) > 1 and isinstance(rep, dict), args
+    with pytest.raises(hr.HillshadeError, match="a point light does not take soft=True"):
+        hr.shade(dem, tmp_path / "x.tif", light_position=light, soft=True)
+    with pytest.raises(hr.HillshadeError, match="falloff and bits go with a point light"):
+        hr.shade(dem, tmp_path / "x.tif", product="hillshade", falloff="inverse-square")
+    # irradiance --each: each DEM into the pattern's {stem}, as the command writes it
+    other = write_geotiff(tmp_path / "e.tif", z[::-1].copy(),
+                          Affine(30, 0, 476000, 0, -30, 4400000), CRS.from_epsg(32613))
+    period = dict(start="2026-06-21T10:00Z", end="2026-06-21T20:00Z", step="2h")
+    rep = hr.irradiance([dem, other], each=True, progress=False,
+                        output_pattern=str(tmp_path / "api_{stem}.tif"), **period)
+    r = CliRunner().invoke(cli, ["irradiance", dem, other, "--each", "-q", "--output-pattern",
+                                 str(tmp_path / "cli_{stem}.tif"), "--start", period["start"],
+                                 "--end", period["end"], "--step", "2h"])
+    assert r.exit_code == 0, r.output
+    for stem in ("d", "e"):
+        np.testing.assert_array_equal(read_band(tmp_path / f"api_{stem}.tif"),
+                                      read_band(tmp_path / f"cli_{stem}.tif"))
+    assert json.dumps(rep) and not (tmp_path / "x.tif").exists()
+    with pytest.raises(hr.HillshadeError, match="output_pattern goes with each"):
+        hr.irradiance(dem, tmp_path / "x.tif", output_pattern="o.tif", **period)
+
+
+def test_progress_json_lines_and_quiet(tmp_path, capsys):
+    """progress="json" is --progress json: only {"progress": F} lines on stderr, ending at 1.0;
+    progress=False is --quiet: nothing."""
+    dem = write_geotiff(tmp_path / "d.tif", fractal_terrain(40, 40, 3),
+                        Affine(30, 0, 476000, 0, -30, 4400000), CRS.from_epsg(32613))
+    times = ["2026-06-21T15:00Z", "2026-06-21T18:30Z"]
+    hr.shade(dem, tmp_path / "a.tif", times=times, progress="json")
+    lines = capsys.readouterr().err.splitlines()
+    assert lines and [json.loads(x)["progress"] for x in lines][-1] == 1.0
+    hr.shade(dem, tmp_path / "b.tif", times=times, progress=False)
+    assert capsys.readouterr().err == ""
+    with pytest.raises(hr.HillshadeError, match="progress must be"):
+        hr.shade(dem, tmp_path / "c.tif", times=times, progress="dots")

@@ -53,14 +53,22 @@ def imports_of(source: str) -> set[str]:
 
 
 def own_module_source(name: str) -> str | None:
-    """The source of the package's module ``name`` (hillshade_rt.xarray), else None."""
+    """The source of the package's module ``name``, else None; of a package (hillshade_rt.xarray)
+    the sources of all its modules, which its names import."""
     rel = name.split(".")[1:]
-    for path in (os.path.join(ROOT, PACKAGE, *rel) + ".py",
-                 os.path.join(ROOT, PACKAGE, *rel, "__init__.py")):
-        if os.path.isfile(path):
-            with open(path, encoding="utf-8") as f:
-                return f.read()
-    return None
+    path = os.path.join(ROOT, PACKAGE, *rel) + ".py"
+    if os.path.isfile(path):
+        with open(path, encoding="utf-8") as f:
+            return f.read()
+    folder = os.path.join(ROOT, PACKAGE, *rel)
+    if not os.path.isfile(os.path.join(folder, "__init__.py")):
+        return None
+    sources = []
+    for here, _, files in sorted(os.walk(folder)):
+        for file in sorted(f for f in files if f.endswith(".py")):
+            with open(os.path.join(here, file), encoding="utf-8") as f:
+                sources.append(f.read())
+    return "\n".join(sources)
 
 
 def third_party(names: set[str]) -> set[str]:

@@ -231,8 +231,7 @@ LAYERS = [
 ]
 
 # the modules that may sit loose in hillshade_rt/ (every other module lives in its layer's folder)
-LOOSE = {"__init__", "__main__", "_lazy", "_preload", "errors", "api", "warm", "testing",
-         "xarray"}
+LOOSE = {"__init__", "__main__", "_lazy", "_preload", "errors", "api", "warm", "testing"}
 
 
 def layer_of(module: str) -> int:
