@@ -106,7 +106,7 @@ class AlgorithmSpec:
     (an upper bound measured by benchmarks/bigdem.py; the planner adds the product's).
     ``kernel_modules``: the modules whose CPU kernels a run compiles (``_jitcache.cached``: the
     first run's note). ``field_march``: it can march each cell with its own sun when the sun
-    varies across the raster (``shading.field_method``). ``lift``: its ``shadow_mask`` (and
+    varies across the raster (``engine.shader.field_method``). ``lift``: its ``shadow_mask`` (and
     ``shadow_mask_gpu``, and the per-cell sun's march) take ``lift``, the metres above each cell
     its ray starts from (``--height-above-ground``; :func:`for_lift`)."""
 

@@ -1,10 +1,10 @@
-"""Per-cell suns (``bodysun``): every cell lit by the sun as seen from its own
+"""Per-cell suns (``engine.cell_suns``): every cell lit by the sun as seen from its own
 place on the body, the sun given by its position S in the body-fixed frame (its subsolar point
 and distance).
 
 For each valid cell: its place P on the ellipsoid at its height (plus ``lift``), v = S - P in
 the cell's east/north/up frame (``cell_sun``: dot products with the per-cell sin/cos of
-``bodysun.CellFrames``, no trigonometry per cell); v.up <= 0: the sun is below the cell's
+``engine.cell_suns.CellFrames``, no trigonometry per cell); v.up <= 0: the sun is below the cell's
 horizon, the body itself hides it (shadow). Else the horizontal direction (true east, north) is
 turned by theta (the grid azimuth of true north) into grid east/north and becomes a ray in pixel
 units exactly as ``geometry.ray_steps`` makes one (the row's dx, dy, col_sign, row_sign); its

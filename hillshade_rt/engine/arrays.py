@@ -851,7 +851,7 @@ def subsolar_mask(dem, lat: float, lon: float, *, sun_distance: float | None = N
                   sun_xyz=None, soft: bool = False, backend: str = "cpu") -> np.ndarray:
     """Cast-shadow mask of a DEM lit by the sun given by its subsolar point.
 
-    Every cell with its own sun direction from its own place on the body (``bodysun``,
+    Every cell with its own sun direction from its own place on the body (``engine.cell_suns``,
     ``algorithms.subsolar``). A cell whose sun is at or below its horizon is in shadow (the
     body hides the sun: the terminator). The sun's elevation itself is geometric (no
     refraction).
@@ -876,7 +876,7 @@ def subsolar_mask(dem, lat: float, lon: float, *, sun_distance: float | None = N
     refraction_k : float, optional
         Terrestrial refraction coefficient bending the rays back (dimensionless); default 0.13
         on the Earth, 0 elsewhere (``earth.refraction_for``).
-    frames : bodysun.CellFrames, optional
+    frames : engine.cell_suns.CellFrames, optional
         Prepared once for many suns (costly).
     pyramid : algorithms.pyramid.MaxPyramid, optional
         Prepared once for many suns (costly).

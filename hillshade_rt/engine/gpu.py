@@ -278,7 +278,7 @@ class GpuDem:
         h x w) on the device: only the window is uploaded (and put into place by a kernel); the
         canonical copy in use is refreshed on the device, the pyramid's blocks over the window
         patched on the host and only those uploaded. The host array the GpuDem was made of is
-        written too (``shading.Shader.update`` has done so already: the same array). ``zrange``
+        written too (``engine.shader.Shader.update`` has done so already: the same array). ``zrange``
         (lowest, highest, any void) of the edited DEM when the caller knows it, else computed."""
         from ..algorithms import frames
         heights = np.ascontiguousarray(heights, dtype=np.float32)

@@ -1,7 +1,7 @@
 """The products of a lighting run, one :class:`Product` each: what a cell's value means, its
 type and nodata, the tag that says so, the band's description, how overviews resample it, its
 statistics for the report and its share of shadow for the preview. Adding a product is one
-entry of ``PRODUCTS`` (and its kind in ``shading.render``)."""
+entry of ``PRODUCTS`` (and its kind in ``engine.shader.render``)."""
 
 from __future__ import annotations
 

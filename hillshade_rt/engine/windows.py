@@ -310,7 +310,7 @@ def window_for(bounds, shape, grid: Grid, azimuth: float, elevation: float, curv
 
 def halo_cells(grid: Grid, azimuth: float, reach: float, rows: tuple[int, int],
                margin: int = 1) -> tuple[int, int]:
-    """(rows, columns) a window adds to a region of these rows (as ``shading.halo_bounds``, before
+    """(rows, columns) a window adds to a region of these rows (as ``engine.shader.halo_bounds``, before
     clipping to the raster)."""
     east = math.sin(math.radians(azimuth)) * grid.col_sign
     north = math.cos(math.radians(azimuth)) * grid.row_sign
