@@ -24,7 +24,7 @@ DEFAULT_STEP = "30min"
 MAX_FRAMES = 2000
 
 
-@dataclass
+@dataclass(kw_only=True)
 class AnimateConfig:
     """An ``animate`` run: ``dem`` to ``output`` (.gif or .mp4), the times as a day (``date``:
     local midnight to midnight every ``step``, in ``--tz`` or else the zone of the DEM's

@@ -41,7 +41,7 @@ _LOCK = threading.Lock()   # one numba computation at a time per worker process
 HALO_MARGIN = 2         # cells beyond the reach (interpolation between two cell centres)
 
 
-@dataclass
+@dataclass(kw_only=True)
 class IllumConfig:
     """``files``: DEM and OUTPUT (or the DEM alone with ``output``); ``subsolar_file``: the
     series; ``body`` --body's text or None (the CRS's); ``sun_distance`` metres where the series

@@ -26,7 +26,7 @@ ONE_BAND_FORMATS = ("PNG", "JPEG", "WEBP", "BMP", "GIF", "AAIGrid", "XYZ", "GSAG
                     "GS7BG")
 
 
-@dataclass
+@dataclass(kw_only=True)
 class IrradianceConfig:
     """An ``irradiance`` run. The period: ``date`` (and ``end_date``), or ``start`` and
     ``end``; the open sky: ``clear_sky`` (None: ineichen) with ``linke_turbidity``, or the
