@@ -8,6 +8,10 @@ takes every n-th cell of the DEM and of each mask (at most ``size`` pixels on th
 Shadows computed on a decimated DEM would be cheaper for a big DEM but different: ridges lower,
 thin shadows lost or widened; the animation shows the masks the tool writes. The DEM is read
 whole (in memory); the frames are kept (one byte per pixel) until they are encoded.
+
+The run's steps, between the shared preamble and tail (``run.runner.RunContext``): the times,
+the DEM read, the suns at its place, the Shader prepared (``AnimateConfig.lighting``, passed
+whole), the picture's cells, the frames, the encoding, the report.
 """
 
 from __future__ import annotations

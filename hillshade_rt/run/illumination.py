@@ -21,6 +21,10 @@ body, zmin the window's lowest height); without curvature the lowest positive ta
 of the sun over the window's cells and the series bounds it: (zmax - zmin) / tan. Dask
 (``--scheduler``): the times cut into chunks (and the windows) as tasks, each returning its
 sums; the chunks are combined in time order (``algorithms.illumination.combine``).
+
+The run's steps, between the shared preamble and tail (``run.runner.RunContext``): the series
+read, the DEM opened, the suns on its body, the light (``IllumConfig.lighting`` made into the
+kernels' constants, :meth:`Physics.of`; each region's bands written as it comes), the report.
 """
 
 from __future__ import annotations

@@ -154,7 +154,7 @@ def irradiance(cfg: IrradianceConfig) -> dict:
     # (the --ghi series and the context are inputs)
     ctx = RunContext.start(ro, inputs=[cfg.dem, cfg.ghi] + cfg.read.inputs(),
                            outputs=[(cfg.output, "OUTPUT")], algorithm=cfg.algorithm,
-                           relief=True, note=False)
+                           note=False)     # the note once the command line is checked
     _check_format(cfg)
     asked = _asked(cfg)
     ctx.compile_note(cfg.algorithm, True)

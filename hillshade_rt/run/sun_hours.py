@@ -65,7 +65,7 @@ def sun_hours(cfg: SunHoursConfig) -> dict:
     ro = cfg.run
     ctx = RunContext.start(ro, inputs=[cfg.dem] + cfg.read.inputs(),
                            outputs=[(cfg.output, "OUTPUT")], algorithm=cfg.algorithm,
-                           relief=cfg.self_shadow, note=False)
+                           note=False)     # the note once the command line is checked
     check_output_format(cfg.output, output_driver(cfg.output, ro.fmt), "float32", 1, False,
                         ro.creation_options)
     days = _days(cfg)
