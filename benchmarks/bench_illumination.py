@@ -74,12 +74,13 @@ def main():
                          polar(tmp, zk, cell, "kepler_polar.tif")))
         # compile once (numba's cache) on a small DEM so that the timings are of the run
         small = polar(tmp, zk[:64, :64], cell, "warm.tif")
-        illumination(IllumConfig([small, os.path.join(tmp, "warm_out.tif")], subsolar_file=csv,
-                                 soft=args.soft, run=_quiet(backend=args.backend)))
+        illumination(IllumConfig(files=[small, os.path.join(tmp, "warm_out.tif")],
+                                 subsolar_file=csv, soft=args.soft,
+                                 run=_quiet(backend=args.backend)))
         for label, dem in dems:
             out = os.path.join(tmp, "out.tif")
             t0 = time.perf_counter()
-            rep = illumination(IllumConfig([dem, out], subsolar_file=csv, soft=args.soft,
+            rep = illumination(IllumConfig(files=[dem, out], subsolar_file=csv, soft=args.soft,
                                            run=_quiet(overwrite=True, backend=args.backend)))
             wall = time.perf_counter() - t0
             print(f"{label}: {wall:.1f} s total, {1000 * wall / args.n:.1f} ms a position "

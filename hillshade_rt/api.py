@@ -366,11 +366,14 @@ def irradiance(dem, output=None, *, date=None, end_date=None, start=None, end=No
     run = RunOptions(backend=backend, threads=more.get("threads"), report_path=report,
                      overwrite=overwrite, **_progress(progress), fmt=fmt, preview=preview,
                      say=_stderr, creation_options=creation_options)
-    cfg = IrradianceConfig(dem, output, text(date), text(end_date),
-                           text(start), text(end), step, clear_sky, linke_turbidity, albedo,
-                           None if ghi is None else os.fspath(ghi), mean, soft, perez,
-                           skyview_directions, place, algorithm, curvature, refraction_k,
-                           read, run, height_above_ground=height_above_ground)
+    cfg = IrradianceConfig(dem=dem, output=output, date=text(date),
+                           end_date=text(end_date), start=text(start), end=text(end),
+                           step=step, clear_sky=clear_sky, linke_turbidity=linke_turbidity,
+                           albedo=albedo, ghi=None if ghi is None else os.fspath(ghi),
+                           mean=mean, soft=soft, perez=perez,
+                           skyview_directions=skyview_directions, place=place,
+                           algorithm=algorithm, curvature=curvature, refraction_k=refraction_k,
+                           read=read, run=run, height_above_ground=height_above_ground)
     token = virtual_outputs.set(True)    # /vsimem/ outputs are fine from Python
     try:
         return irradiance_each(cfg, dem, output_pattern) if each else run_irradiance(cfg)
@@ -404,6 +407,8 @@ def animate(dem, output, *, date=None, start=None, end=None, step: str | None = 
     read = ReadOptions(**{k: more[k] for k in READ_KEYS if k in more})
     run = RunOptions(backend=backend, threads=more.get("threads"), report_path=report,
                      overwrite=overwrite, **_progress(progress), say=_stderr)
-    return run_animate(AnimateConfig(os.fspath(dem), os.fspath(output), text(date), text(start),
-                                     text(end), step, place, fps, size, label, algorithm,
-                                     curvature, refraction_k, read, run))
+    return run_animate(AnimateConfig(dem=os.fspath(dem), output=os.fspath(output),
+                                     date=text(date), start=text(start), end=text(end),
+                                     step=step, place=place, fps=fps, size=size, label=label,
+                                     algorithm=algorithm, curvature=curvature,
+                                     refraction_k=refraction_k, read=read, run=run))

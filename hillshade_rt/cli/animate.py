@@ -42,6 +42,8 @@ def animate(dem, output, date_, start, end, step, fps, size, label, tz, lat, lon
               progress=progress,
               **read_opts)
     place = {k: kw.pop(k) for k in PLACE_KEYS}
-    run_animate(AnimateConfig(dem, output, date_, start, end, step, place, fps, size, label,
-                              algorithm, curvature, refraction_k, to_read_options(kw),
-                              to_run_options(kw, say)))
+    run_animate(AnimateConfig(dem=dem, output=output, date=date_, start=start, end=end,
+                              step=step, place=place, fps=fps, size=size, label=label,
+                              algorithm=algorithm, curvature=curvature,
+                              refraction_k=refraction_k, read=to_read_options(kw),
+                              run=to_run_options(kw, say)))

@@ -49,7 +49,7 @@ def illumination(dem, output, subsolar_file, sun_distance, body, height_above_gr
               creation_options=creation_options,
               **read_opts)
     read = to_read_options(kw)
-    run_illumination(IllumConfig([dem, output], subsolar_file=subsolar_file, body=body,
+    run_illumination(IllumConfig(files=[dem, output], subsolar_file=subsolar_file, body=body,
                                  sun_distance=sun_distance,
                                  height_above_ground=height_above_ground, soft=soft,
                                  curvature=curvature, refraction_k=refraction_k,

@@ -84,9 +84,11 @@ def irradiance(files, date_, end_date, start, end, step, clear_sky, linke_turbid
               **read_opts)
     place = {k: kw.pop(k) for k in PLACE_KEYS}
     cfg = IrradianceConfig(
-        dem, output, date_, end_date, start, end, step, clear_sky, linke_turbidity, albedo, ghi,
-        mean, soft, perez, skyview_directions, place, algorithm, curvature, refraction_k,
-        to_read_options(kw), to_run_options(kw, say),
+        dem=dem, output=output, date=date_, end_date=end_date, start=start, end=end, step=step,
+        clear_sky=clear_sky, linke_turbidity=linke_turbidity, albedo=albedo, ghi=ghi,
+        mean=mean, soft=soft, perez=perez, skyview_directions=skyview_directions, place=place,
+        algorithm=algorithm, curvature=curvature, refraction_k=refraction_k,
+        read=to_read_options(kw), run=to_run_options(kw, say),
         height_above_ground=height_above_ground)
     if each:
         irradiance_each(cfg, dem, output_pattern)

@@ -61,9 +61,11 @@ def sun_hours(files, date_, end_date, step, tz, lat, lon, pressure, temperature,
               quiet=quiet, progress=progress, fmt=fmt, creation_options=creation_options,
               **read_opts)
     place = {k: kw.pop(k) for k in PLACE_KEYS}
-    cfg = SunHoursConfig(dem, output, date_, end_date, step, place, algorithm, curvature,
-                         refraction_k, soft, self_shadow, to_read_options(kw),
-                         to_run_options(kw, say), height_above_ground=height_above_ground)
+    cfg = SunHoursConfig(dem=dem, output=output, date=date_, end_date=end_date, step=step,
+                         place=place, algorithm=algorithm, curvature=curvature,
+                         refraction_k=refraction_k, soft=soft, self_shadow=self_shadow,
+                         read=to_read_options(kw), run=to_run_options(kw, say),
+                         height_above_ground=height_above_ground)
     if each:
         sun_hours_each(cfg, dem, output_pattern)
     else:

@@ -205,7 +205,7 @@ class ShadeConfig:
                         lift=self.height_above_ground)
 
 
-@dataclass
+@dataclass(kw_only=True)
 class SunHoursConfig:
     """A ``sun-hours`` run: the hours of direct sun per cell over a day or a range of days."""
 

@@ -21,6 +21,10 @@ body, zmin the window's lowest height); without curvature the lowest positive ta
 of the sun over the window's cells and the series bounds it: (zmax - zmin) / tan. Dask
 (``--scheduler``): the times cut into chunks (and the windows) as tasks, each returning its
 sums; the chunks are combined in time order (``algorithms.illumination.combine``).
+
+The run's steps, between the shared preamble and tail (``run.runner.RunContext``): the series
+read, the DEM opened, the suns on its body, the light (``IllumConfig.lighting`` made into the
+kernels' constants, :meth:`Physics.of`; each region's bands written as it comes), the report.
 """
 
 from __future__ import annotations
@@ -34,14 +38,15 @@ import numpy as np
 
 from .. import __version__
 from ..errors import HillshadeError, UsageProblem
-from .config import ReadOptions, RunOptions, set_threads
+from .config import ReadOptions, RunOptions
+from .runner import RunContext
 
 BYTES_PER_CELL = 96     # heights 4, frames 24, pyramid ~6, mask 1, soft 4, sums 5 x 8 + 1
 _LOCK = threading.Lock()   # one numba computation at a time per worker process
 HALO_MARGIN = 2         # cells beyond the reach (interpolation between two cell centres)
 
 
-@dataclass
+@dataclass(kw_only=True)
 class IllumConfig:
     """``files``: DEM and OUTPUT (or the DEM alone with ``output``); ``subsolar_file``: the
     series; ``body`` --body's text or None (the CRS's); ``sun_distance`` metres where the series
@@ -83,6 +88,17 @@ class IllumConfig:
             raise UsageProblem("chunks must be 1 or more")
         return inputs[0], output
 
+    def lighting(self, backend: str):
+        """How the terrain is lit (``engine.lighting.Lighting``), on ``backend`` (chosen):
+        curvature on unless turned off (``None``: on; never "auto"), refraction, the lift, soft
+        shadows. The algorithm is the per-cell sun's march (``algorithms.subsolar``), whatever
+        ``algorithm`` says; after :meth:`check`."""
+        from ..engine.lighting import Lighting
+        return Lighting(backend=backend,
+                        curvature=True if self.curvature is None else bool(self.curvature),
+                        refraction_k=self.refraction_k, soft=bool(self.soft),
+                        lift=self.height_above_ground)
+
 
 @dataclass
 class Physics:
@@ -96,6 +112,29 @@ class Physics:
     soft: bool
     r_min: float
     backend: str = "cpu"
+
+    @classmethod
+    def of(cls, body, lighting) -> Physics:
+        """The kernels' constants of ``body`` lit by ``lighting`` (``engine.lighting``): the
+        refraction k of its curvature (-1: none), its lift, soft, backend."""
+        from ..model.earth import refraction_for
+        k = refraction_for(body, lighting.refraction_k) if lighting.curvature else -1.0
+        return cls(float(body.a), 1.0 - (body.b * body.b) / (body.a * body.a), k,
+                   float(lighting.lift), bool(lighting.soft),
+                   float(body.b * body.b / body.a), lighting.backend)
+
+
+@dataclass
+class Counts:
+    """The positions of a stretch of the series lit (``positions``) and those dark on every
+    cell (``dark``: no march)."""
+
+    positions: int = 0
+    dark: int = 0
+
+    def add(self, other: Counts) -> None:
+        self.positions += other.positions
+        self.dark += other.dark
 
 
 def band_names(soft: bool) -> list[str]:
@@ -118,7 +157,7 @@ def _sums(shape, soft: bool) -> dict:
             "dark": np.ones(shape, np.uint8)}
 
 
-def light_series(z, frames, grid, phys: Physics, suns, hours, tick=None) -> tuple[dict, dict]:
+def light_series(z, frames, grid, phys: Physics, suns, hours, tick=None) -> tuple[dict, Counts]:
     """The sums (``algorithms.illumination``) of heights ``z`` (float32, NaN voids) with its
     ``frames`` (``bodysun.CellFrames``) and ``grid`` lit by the suns ``suns`` ((n, 3) metres,
     body-fixed) of ``hours`` each, and the counts (positions marched, dark ones). The pyramid,
@@ -130,7 +169,7 @@ def light_series(z, frames, grid, phys: Physics, suns, hours, tick=None) -> tupl
     from ..algorithms.pyramid import pyramid_args
     from ..engine.cell_suns import sun_radius_deg
     sums = _sums(z.shape, phys.soft)
-    counts = {"positions": 0, "dark": 0}
+    counts = Counts()
     if not np.isfinite(z).any():
         return sums, counts
     zmax = float(np.nanmax(z))
@@ -146,9 +185,9 @@ def light_series(z, frames, grid, phys: Physics, suns, hours, tick=None) -> tupl
     for s, dt in zip(suns, hours):
         sx, sy, sz = (float(v) for v in s)
         dt = float(dt)
-        counts["positions"] += 1
+        counts.positions += 1
         if ill.any_sun_up(z, *fr[:4], phys.a, phys.e2, sx, sy, sz, phys.lift) == 0:
-            counts["dark"] += 1
+            counts.dark += 1
             ill.accumulate_dark(z, dt, sums["start"], sums["end"], sums["longest"], sums["dark"])
         else:
             if phys.backend == "gpu":
@@ -276,7 +315,7 @@ def plan_windows(src, phys: Physics, suns, window_shape) -> tuple[list, float]:
     return out, zmax
 
 
-def region_task(src, region: Region, phys: Physics, suns, hours) -> tuple[dict, dict]:
+def region_task(src, region: Region, phys: Physics, suns, hours) -> tuple[dict, Counts]:
     """A window (or the whole DEM) lit by a stretch of the series: its core's sums and counts
     (the Dask task; also the local windows' step)."""
     with src.reader() as rd:
@@ -295,18 +334,31 @@ def _chunks(n: int, k: int) -> list[tuple[int, int]]:
     return [(edges[i], edges[i + 1]) for i in range(k) if edges[i + 1] > edges[i]]
 
 
+@dataclass
+class _Lit:
+    """What the light of the series gave: the body, the lighting and the kernels' constants of
+    it, the bands' names, the counts of positions, the sums and cells of each band (its mean),
+    the cells never lit, the number of regions."""
+
+    body: object
+    lighting: object        # engine.lighting.Lighting
+    phys: Physics
+    names: list
+    counts: Counts
+    means: dict             # band -> [sum, cells]
+    never_lit: int
+    windows: int
+
+    @property
+    def valid(self) -> int:
+        return self.means[self.names[0]][1]
+
+
 def illumination(cfg: IllumConfig) -> dict:
     """Write the illumination bands of the DEM over the series; returns the report."""
-    import numba
-
-    from ..engine.cell_suns import CellFrames, body_from_option, mean_sun_distance, sun_vector
-    from ..model.earth import dem_body, refraction_for
-    from ..model.ephemeris import read_subsolar
-    from ..io import BandWriter, input_label, write_json
-    from ..io.write import Claims
+    from ..engine.cell_suns import body_from_option
     from .config import parse_window_size
     from .horizon import memory_limit
-    from .report import Timer, progress
 
     ro = cfg.run
     dem, output = cfg.check()
@@ -314,123 +366,153 @@ def illumination(cfg: IllumConfig) -> dict:
     limit = memory_limit(cfg.max_memory)      # default: half of this machine's memory
     if cfg.body is not None:
         body_from_option(cfg.body)              # a bad --body: exit 2 before anything is read
-    set_threads(ro)
-    timer = Timer()
-    claims = Claims([dem, cfg.subsolar_file], ro.overwrite)
-    claims.claim(output, "OUTPUT")
-    for extra, what in ((ro.report_path, "--report"), (ro.preview, "--preview")):
-        if extra is not None:
-            claims.claim(extra, what)
+    ctx = RunContext.start(ro, inputs=[dem, cfg.subsolar_file], outputs=[(output, "OUTPUT")],
+                           note=False)
+    series, hours = _series(cfg)
+    with ctx.timer("read"):
+        src = cfg.read.open(dem, windows=window_shape is not None or cfg.scheduler is not None)
+    with src:
+        lit = _light(cfg, ctx, src, output, series, hours, window_shape, limit)
+    if ro.preview is not None:
+        with ctx.timer("write"):
+            _preview(src, output, ro)
+    rep = _report(cfg, ctx, src, output, series, hours, lit)
+    m, n_psr = rep["mean"], lit.never_lit
+    return ctx.finish(rep, [(
+        "summary", f"hillshade-rt: {output}: {src.shape[1]}x{src.shape[0]}, {len(series)} "
+                   f"subsolar positions over {rep['hours']:.1f} h on {lit.body.source}: mean "
+                   f"fraction lit {100 * (m['fraction_lit'] or 0):.2f}%, "
+                   f"{n_psr} cells never lit ({100 * n_psr / max(1, lit.valid):.2f}%); "
+                   f"compute {ctx.timer.seconds['compute']:.2f} s "
+                   f"({1000 * rep['seconds']['per_position']:.1f} ms a position)")])
+
+
+def _series(cfg: IllumConfig) -> tuple:
+    """The subsolar series (``ephemeris.read_subsolar``: at least 2 times) and the hours each
+    sample stands for."""
+    from ..model.ephemeris import read_subsolar
     series = read_subsolar(cfg.subsolar_file)
     if len(series) < 2:
         raise HillshadeError(f"{cfg.subsolar_file}: the series needs at least 2 times (each "
                              "sample stands for the interval to the next)")
-    hours = series.durations_h()
+    return series, series.durations_h()
+
+
+def _suns(cfg: IllumConfig, src, series) -> tuple:
+    """(body, suns): the DEM's body (``--body``, else its CRS's) and the sun of each position
+    ((n, 3) metres, body-fixed; at the series' distance, else ``--sun-distance``, else the
+    body's mean distance)."""
+    from ..engine.cell_suns import body_from_option, mean_sun_distance, sun_vector
+    from ..model.earth import dem_body
+    if src.transform is None or src.crs is None:
+        raise HillshadeError("illumination needs a DEM with a geotransform and a CRS (each "
+                             "cell's place on the body)")
+    body = body_from_option(cfg.body, dem_body(src))
+    default_d = mean_sun_distance(body) if cfg.sun_distance is None else cfg.sun_distance
+    if not default_d > body.a:
+        raise UsageProblem(f"--sun-distance must exceed the body's radius ({body.a:.0f} m, "
+                           f"{body.source}), got {default_d:g} m")
+    dist = (np.full(len(series), float(default_d)) if series.distance is None
+            else series.distance)
+    return body, np.array([sun_vector(body, la, lo, d)
+                           for la, lo, d in zip(series.lat, series.lon, dist)])
+
+
+def _window_shape(src, window_shape, limit):
+    """The windows' shape: ``--window-size``'s, else the one ``--max-memory`` needs (None: the
+    DEM in memory)."""
+    if window_shape is not None:
+        return window_shape
+    from .local import needs_windows
+    from ..engine.windows import window_budget
+    if needs_windows(src, limit, BYTES_PER_CELL):
+        from .horizon_windows import region_shape
+        return region_shape(src.shape, window_budget(limit, BYTES_PER_CELL)[0])
+    return None
+
+
+def _light(cfg: IllumConfig, ctx: RunContext, src, output, series, hours, window_shape,
+           limit) -> _Lit:
+    """The series lit on the DEM (in memory, in windows or on Dask) and each region's bands
+    written as it comes."""
+    from ..engine.cell_suns import CellFrames
+    from ..io import BandWriter
+    from .report import progress
+    ro = ctx.ro
+    body, suns = _suns(cfg, src, series)
+    lighting = cfg.lighting(ctx.backend)
+    phys = Physics.of(body, lighting)
+    window_shape = _window_shape(src, window_shape, limit)
     total_h = float(hours.sum())
-    with timer("read"):
-        src = cfg.read.open(dem, windows=window_shape is not None or cfg.scheduler is not None)
-    with src:
-        if src.transform is None or src.crs is None:
-            raise HillshadeError("illumination needs a DEM with a geotransform and a CRS (each "
-                                 "cell's place on the body)")
-        body = body_from_option(cfg.body, dem_body(src))
-        default_d = mean_sun_distance(body) if cfg.sun_distance is None else cfg.sun_distance
-        if not default_d > body.a:
-            raise UsageProblem(f"--sun-distance must exceed the body's radius ({body.a:.0f} m, "
-                               f"{body.source}), got {default_d:g} m")
-        dist = (np.full(len(series), float(default_d)) if series.distance is None
-                else series.distance)
-        suns = np.array([sun_vector(body, la, lo, d)
-                         for la, lo, d in zip(series.lat, series.lon, dist)])
-        curvature = True if cfg.curvature is None else bool(cfg.curvature)
-        k = refraction_for(body, cfg.refraction_k) if curvature else -1.0
-        e2 = 1.0 - (body.b * body.b) / (body.a * body.a)
-        from ..engine.gpu import resolve_backend
-        backend = resolve_backend(ro.backend or "auto")
-        phys = Physics(float(body.a), e2, k, float(cfg.height_above_ground), bool(cfg.soft),
-                       float(body.b * body.b / body.a), backend)
-        windowed = window_shape is not None
-        if not windowed:
-            from .local import needs_windows
-            from ..engine.windows import window_budget
-            windowed = needs_windows(src, limit, BYTES_PER_CELL)
-            if windowed:
-                from .horizon_windows import region_shape
-                window_shape = region_shape(src.shape, window_budget(limit, BYTES_PER_CELL)[0])
-        names = band_names(cfg.soft)
-        counts = {"positions": 0, "dark": 0}
-        tags = {"HILLSHADE_RT_VERSION": __version__,
-                "SUBSOLAR_FILE": os.path.basename(cfg.subsolar_file),
-                "TIMES": f"{len(series)} from {series.times()[0].isoformat()} to "
-                         f"{series.times()[-1].isoformat()}",
-                "HOURS": f"{total_h:.6g}", "BODY": body.source,
-                "HEIGHT_ABOVE_GROUND_M": f"{phys.lift:g}", "BANDS": ",".join(names)}
-        stats = {n: [0.0, 0] for n in names}
-        n_psr = 0
-        with timer("compute"), BandWriter(output, src, len(names), "float32", float("nan"),
+    names = band_names(cfg.soft)
+    counts = Counts()
+    tags = {"HILLSHADE_RT_VERSION": __version__,
+            "SUBSOLAR_FILE": os.path.basename(cfg.subsolar_file),
+            "TIMES": f"{len(series)} from {series.times()[0].isoformat()} to "
+                     f"{series.times()[-1].isoformat()}",
+            "HOURS": f"{total_h:.6g}", "BODY": body.source,
+            "HEIGHT_ABOVE_GROUND_M": f"{phys.lift:g}", "BANDS": ",".join(names)}
+    means = {n: [0.0, 0] for n in names}
+    n_psr = 0
+    with ctx.timer("compute"), BandWriter(output, src, len(names), "float32", float("nan"),
                                           tags, overwrite=ro.overwrite, fmt=ro.fmt,
                                           co=ro.creation_options) as w:
-            if windowed or cfg.scheduler is not None:
-                if windowed:
-                    regs, _ = plan_windows(src, phys, suns, window_shape)
-                else:
-                    rows, cols = src.shape
-                    regs = [Region((0, rows, 0, cols), (0, rows, 0, cols))]
-                results = _run_regions(src, regs, phys, suns, hours, cfg, ro.quiet)
+        if window_shape is not None or cfg.scheduler is not None:
+            if window_shape is not None:
+                regs, _ = plan_windows(src, phys, suns, window_shape)
             else:
-                d = src.read()
-                frames = CellFrames.of_dem(d)
-                rows, cols = d.shape
+                rows, cols = src.shape
                 regs = [Region((0, rows, 0, cols), (0, rows, 0, cols))]
-                bar = progress(range(len(series)), ro.quiet, "illumination", "position",
-                               mode=ro.progress)
-                with bar:
-                    sums, c = light_series(d.heights, frames, d.grid, phys, suns, hours,
-                                           tick=lambda: bar.update(1))
-                results = iter([(regs[0], sums, c, np.isfinite(d.heights))])
-            for reg, sums, c, valid in results:
-                for key in counts:
-                    counts[key] += c[key]
-                bands = bands_of(sums, valid, total_h, cfg.soft)
-                r0, r1, c0, c1 = reg.core
-                for i, (name, b) in enumerate(zip(names, bands)):
-                    w.write(i + 1, b, DESCRIPTIONS[name], window=(r0, r1, c0, c1))
-                    v = b[valid]
-                    stats[name][0] += float(v.sum(dtype=np.float64))
-                    stats[name][1] += int(v.size)
-                n_psr += int((sums["dark"][valid] == 1).sum())
-    valid_n = stats[names[0]][1]
-    if ro.preview is not None:
-        with timer("write"):
-            _preview(src, output, ro)
-    rep = {"input": input_label(src.path), "output": os.path.abspath(output),
-           "subsolar_file": os.path.abspath(cfg.subsolar_file), "shape": list(src.shape),
-           "times": len(series), "hours": total_h,
-           "first": series.times()[0].isoformat(), "last": series.times()[-1].isoformat(),
-           "body": {"source": body.source, "a_m": body.a, "b_m": body.b},
-           "curvature": {"applied": curvature, "refraction_k": k if curvature else None},
-           "height_above_ground_m": phys.lift, "soft": bool(cfg.soft), "bands": names,
-           "positions": {"marched": counts["positions"] - counts["dark"],
-                         "dark_everywhere": counts["dark"]},
-           "windows": len(regs), "valid_cells": valid_n,
-           "mean": {n: (stats[n][0] / stats[n][1] if stats[n][1] else None) for n in names},
-           "permanently_shadowed_cells": n_psr,
-           "scheduler": None if cfg.scheduler is None else str(cfg.scheduler),
-           "backend": phys.backend,
-           "seconds": dict(timer.seconds, total=timer.total(),
-                           per_position=timer.seconds.get("compute", 0.0) / len(series)),
-           "version": __version__}
-    if ro.report_path is not None:
-        write_json(ro.report_path, rep, ro.overwrite)
-    if not ro.quiet:
-        m = rep["mean"]
-        ro.say("summary", f"hillshade-rt: {output}: {src.shape[1]}x{src.shape[0]}, {len(series)} "
-                          f"subsolar positions over {total_h:.1f} h on {body.source}: mean "
-                          f"fraction lit {100 * (m['fraction_lit'] or 0):.2f}%, "
-                          f"{n_psr} cells never lit ({100 * n_psr / max(1, valid_n):.2f}%); "
-                          f"compute {timer.seconds['compute']:.2f} s "
-                          f"({1000 * rep['seconds']['per_position']:.1f} ms a position)")
-    return rep
+            results = _run_regions(src, regs, phys, suns, hours, cfg, ro.quiet)
+        else:
+            d = src.read()
+            frames = CellFrames.of_dem(d)
+            rows, cols = d.shape
+            regs = [Region((0, rows, 0, cols), (0, rows, 0, cols))]
+            bar = progress(range(len(series)), ro.quiet, "illumination", "position",
+                           mode=ro.progress)
+            with bar:
+                sums, c = light_series(d.heights, frames, d.grid, phys, suns, hours,
+                                       tick=lambda: bar.update(1))
+            results = iter([(regs[0], sums, c, np.isfinite(d.heights))])
+        for reg, sums, c, valid in results:
+            counts.add(c)
+            bands = bands_of(sums, valid, total_h, cfg.soft)
+            r0, r1, c0, c1 = reg.core
+            for i, (name, b) in enumerate(zip(names, bands)):
+                w.write(i + 1, b, DESCRIPTIONS[name], window=(r0, r1, c0, c1))
+                v = b[valid]
+                means[name][0] += float(v.sum(dtype=np.float64))
+                means[name][1] += int(v.size)
+            n_psr += int((sums["dark"][valid] == 1).sum())
+    return _Lit(body, lighting, phys, names, counts, means, n_psr, len(regs))
+
+
+def _report(cfg: IllumConfig, ctx: RunContext, src, output, series, hours, lit: _Lit) -> dict:
+    """The run's report (``--report``)."""
+    from ..io import input_label
+    phys, body, means = lit.phys, lit.body, lit.means
+    curvature = lit.lighting.curvature
+    timer = ctx.timer
+    return {"input": input_label(src.path), "output": os.path.abspath(output),
+            "subsolar_file": os.path.abspath(cfg.subsolar_file), "shape": list(src.shape),
+            "times": len(series), "hours": float(hours.sum()),
+            "first": series.times()[0].isoformat(), "last": series.times()[-1].isoformat(),
+            "body": {"source": body.source, "a_m": body.a, "b_m": body.b},
+            "curvature": {"applied": curvature,
+                          "refraction_k": phys.curv_k if curvature else None},
+            "height_above_ground_m": phys.lift, "soft": bool(cfg.soft), "bands": lit.names,
+            "positions": {"marched": lit.counts.positions - lit.counts.dark,
+                          "dark_everywhere": lit.counts.dark},
+            "windows": lit.windows, "valid_cells": lit.valid,
+            "mean": {n: (means[n][0] / means[n][1] if means[n][1] else None)
+                     for n in lit.names},
+            "permanently_shadowed_cells": lit.never_lit,
+            "scheduler": None if cfg.scheduler is None else str(cfg.scheduler),
+            "backend": phys.backend,
+            "seconds": dict(ctx.seconds(),
+                            per_position=timer.seconds.get("compute", 0.0) / len(series)),
+            "version": __version__}
 
 
 def _preview(src, output, ro) -> None:
@@ -487,12 +569,11 @@ def _run_regions(src, regs, phys, suns, hours, cfg, quiet):
                 done[f.key] = res
                 bar.update(1)
         for ri, reg in enumerate(regs):
-            acc, counts = None, {"positions": 0, "dark": 0}
+            acc, counts = None, Counts()
             for ci in range(len(chunks)):
                 sums, c = done[futs[(ri, ci)].key]
                 acc = sums if acc is None else combine(acc, sums)
-                for key in counts:
-                    counts[key] += c[key]
+                counts.add(c)
             with src.reader() as rd:
                 r0, r1, c0, c1 = reg.core
                 z = np.empty((r1 - r0, c1 - c0), np.float32)

@@ -6,19 +6,29 @@ The sun is sampled as ``sun-hours`` samples it (every step, each sample at the m
 interval, weighted by the interval's hours; per tile on large rasters; nights skipped), the same
 suns light the cast shadows (``shading.render``) and feed the clear-sky model. The DEM is held
 in memory; with ``--context`` the DEM is a tile of a larger raster (``run.context``): the
-cast shadows and the incidence come from the context's windows (``engine.windows.WindowLighting``, the regions
-cut to the tile), the sky view from the windowed horizon march (``run.horizon_windows``, the rays to the
-context's edge), so that every cell gets the bits the whole context's run gives it.
+cast shadows and the incidence come from the context's windows
+(``engine.windows.WindowLighting``, the regions cut to the tile), the sky view from the
+windowed horizon march (``run.horizon_windows``, the rays to the context's edge), so that every
+cell gets the bits the whole context's run gives it.
+
+The run's steps, between the shared preamble and tail (``run.runner.RunContext``): what the
+command line asks (the period, the place, the ``--ghi`` series), the DEM read, the samples (the
+suns of the period at the DEM's place and the open sky at each), the light (the sky view and
+the sums of every sun's beam, diffuse and reflected light), the output written, the report.
+The lighting settings travel as one ``engine.lighting.Lighting``
+(:meth:`IrradianceConfig.lighting`).
 """
 
 from __future__ import annotations
 
 import os
+import datetime as _dt
 from dataclasses import dataclass, field
 
 from .. import __version__
 from ..errors import HillshadeError, UsageProblem
-from .config import ReadOptions, RunOptions, set_threads
+from .config import ReadOptions, RunOptions
+from .runner import RunContext
 
 
 # formats that cannot hold the four float32 bands (pictures; ASCII and Surfer grids, one band)
@@ -26,7 +36,7 @@ ONE_BAND_FORMATS = ("PNG", "JPEG", "WEBP", "BMP", "GIF", "AAIGrid", "XYZ", "GSAG
                     "GS7BG")
 
 
-@dataclass
+@dataclass(kw_only=True)
 class IrradianceConfig:
     """An ``irradiance`` run. The period: ``date`` (and ``end_date``), or ``start`` and
     ``end``; the open sky: ``clear_sky`` (None: ineichen) with ``linke_turbidity``, or the
@@ -83,37 +93,142 @@ class IrradianceConfig:
         except HillshadeError as exc:
             raise UsageProblem(str(exc)) from None
 
+    def lighting(self, backend: str):
+        """How the terrain is lit (``engine.lighting.Lighting``), on ``backend`` (chosen);
+        after :meth:`check`. The cast shadows only: the incidence is the irradiance's own
+        (``engine.irradiance``), no self-shadowing."""
+        from ..engine.lighting import Lighting
+        return Lighting(algorithm=self.algorithm, backend=backend, curvature=self.curvature,
+                        refraction_k=self.refraction_k, soft=self.soft,
+                        lift=self.height_above_ground)
+
+
+@dataclass
+class _Asked:
+    """What the command line says of the period and the sky, checked before the DEM is read:
+    the step, the place (``SunRequest``), the days (``--date [--end-date]``) or the span
+    (``--start``/``--end``: (t0, t1, times, weights); None with ``--tz auto``, sampled again
+    in the DEM's zone), the ``--ghi`` series read (None: none, or read in the DEM's zone)."""
+
+    step: _dt.timedelta
+    req: object
+    first: _dt.date | None = None
+    last: _dt.date | None = None
+    span: tuple | None = None
+    series: tuple | None = None
+
+
+@dataclass
+class _Samples:
+    """The period sampled at the DEM's place: its text and hours, the times and their weights
+    (hours), the suns (``sun_info`` for the report), those with light (``work``), the open
+    sky at each."""
+
+    site: object
+    period: str
+    hours: float
+    times: object
+    weights: object
+    suns: list
+    sun_info: dict | None
+    work: list
+    sky: object             # engine.irradiance.Sky
+
+
+@dataclass
+class _Bands:
+    """The four bands (``engine.irradiance.BANDS``: float32, NaN voids), Dozier's sky view,
+    the curvature's report, and (``--context``) the report's ``processing``."""
+
+    bands: dict
+    vd: object
+    curvature: dict
+    processing: dict | None = None
+
 
 def irradiance(cfg: IrradianceConfig) -> dict:
-    import numba
-
-    from ..engine import irradiance as ir
-    from ..io import check_output_format, output_driver
-    from ..io.write import Claims
-    from ..engine.shader import choose_backend
-    from ..model.sun import SunRequest
-    from ..model.times import UTC, parse_date, parse_step
-    from .notes import compile_note
-    from .report import Timer
-
-    ro, output = cfg.run, cfg.output
+    """Write the four irradiance bands of ``cfg.dem`` to ``cfg.output``; returns the report."""
+    ro = cfg.run
     cfg.check()
-    lift = float(cfg.height_above_ground)
-    timer = Timer()
     cfg.read.check_context(cfg.dem, **{"--preview": ro.preview is not None})
     # (the --ghi series and the context are inputs)
-    claims = Claims([cfg.dem, cfg.ghi] + cfg.read.inputs(), ro.overwrite)
-    for path, what in ((output, "OUTPUT"), (ro.report_path, "--report"),
-                       (ro.preview, "--preview")):
-        if path is not None:
-            claims.claim(path, what)
+    ctx = RunContext.start(ro, inputs=[cfg.dem, cfg.ghi] + cfg.read.inputs(),
+                           outputs=[(cfg.output, "OUTPUT")], algorithm=cfg.algorithm,
+                           note=False)     # the note once the command line is checked
+    _check_format(cfg)
+    asked = _asked(cfg)
+    ctx.compile_note(cfg.algorithm, True)
+    lighting = cfg.lighting(ctx.backend)
+    area, d = _read(cfg, ctx)
+    if d is None:       # every cell nodata (a tile of the sea)
+        return _all_nodata(cfg, ctx)
+    try:
+        return _run(cfg, ctx, lighting, asked, d, area)
+    finally:
+        if area is not None:
+            area.close()
+
+
+def _run(cfg, ctx: RunContext, lighting, asked: _Asked, d, area) -> dict:
+    """The run once the DEM (``d``: in memory; with ``area``, the context opened for windows)
+    is open: the samples and the sky, the light (sky view, sums), the output, the report."""
+    import numpy as np
+
+    from ..model.earth import dem_body
+    from .report import progress
+    ro = ctx.ro
+    with ctx.timer("prepare"):
+        sampled = _samples(cfg, asked, d)
+        body = dem_body(d, asked.req.lat)
+        if area is None:
+            shader = _prepare(d, lighting, body, sampled)
+    algo_stats: dict = {}
+
+    def bar(it):
+        return progress(it, ro.quiet, "hillshade-rt irradiance", "sun", mode=ro.progress)
+    if area is None:
+        lit = _light(cfg, ctx, d, shader, lighting, body, sampled, algo_stats, bar)
+        geom = d
+    else:
+        lit = _light_in_context(cfg, ctx, area, lighting, body, sampled, algo_stats, bar)
+        geom = area.tile
+    if cfg.mean:
+        lit.bands = {k: (v / np.float32(sampled.hours)).astype(np.float32)
+                     for k, v in lit.bands.items()}
+    tags = _tags(cfg, lighting, asked.req, sampled, area)
+    _write(cfg, ctx, geom, d, lit, tags)
+    rep = _report(cfg, ctx, geom, sampled, lit, algo_stats, area)
+    sec, g, unit = rep["seconds"], rep["bands"]["global"], rep["units"]
+    return ctx.finish(rep, [(
+        "summary", f"hillshade-rt: {cfg.output}: {geom.shape[1]}x{geom.shape[0]}, "
+                   f"{sampled.period}, {len(sampled.work)} of {len(sampled.suns)} samples with "
+                   f"the sun up; global {g['min']:.1f} .. {g['max']:.1f} {unit} (mean "
+                   f"{g['mean']:.1f}); shadows {sec.get('shadows', 0.0):.2f} s, sky view "
+                   f"{sec['sky view']:.2f} s, total {sec['total']:.2f} s")])
+
+
+def _check_format(cfg: IrradianceConfig) -> None:
+    """The output's format holds four float32 bands (a picture or a one-grid format: no)."""
+    from ..engine import irradiance as ir
+    from ..io import check_output_format, output_driver
+    ro, output = cfg.run, cfg.output
     driver = output_driver(output, ro.fmt)
     if driver in ONE_BAND_FORMATS:
         raise HillshadeError(f"{output}: {driver} holds one band of integers or one grid; "
                              f"irradiance writes {len(ir.BANDS)} float32 bands "
                              f"({', '.join(ir.BANDS)}): write a GeoTIFF (.tif)")
     check_output_format(output, driver, "float32", len(ir.BANDS), True, ro.creation_options)
-    try:    # the command line alone decides these: a bad one is a usage error (exit 2)
+
+
+def _asked(cfg: IrradianceConfig) -> _Asked:
+    """The step, the place and the period of the command line (a bad one: a usage error, exit
+    status 2), and the ``--ghi`` series (a bad file fails the run, exit status 1, before the
+    DEM is read; with ``--tz auto`` once it is, in its zone)."""
+    from ..engine import irradiance as ir
+    from ..model.sun import SunRequest
+    from ..model.times import UTC, parse_date, parse_step
+    asked = None
+    try:
         step = parse_step(cfg.step)
         req = SunRequest.at_place([], **cfg.place)
         if cfg.date is not None:
@@ -121,224 +236,143 @@ def irradiance(cfg: IrradianceConfig) -> dict:
             last = parse_date(cfg.end_date, "--end-date") if cfg.end_date is not None else first
             if last < first:
                 raise HillshadeError("--end-date is before --date")
+            asked = _Asked(step, req, first, last)
         else:   # --tz auto: checked with UTC standing in, read again in the DEM's zone
-            t0, t1, times, weights = _period(cfg, req.tz or (UTC if req.auto_tz else None),
-                                             step)
+            span = _period(cfg, req.tz or (UTC if req.auto_tz else None), step)
+            asked = _Asked(step, req, span=None if req.auto_tz else span)
     except HillshadeError as exc:
         raise UsageProblem(str(exc)) from None
-    series = None
-    if cfg.ghi is not None and not req.auto_tz:   # a bad file fails the run (exit 1) before
-        series = ir.read_series(cfg.ghi, req.tz)  # the DEM is read (--tz auto: once it is)
-    set_threads(ro)
-    ran_on = choose_backend(ro.backend, cfg.algorithm, {})
-    if not ro.quiet:
-        note = compile_note(cfg.algorithm, ran_on, True)
-        if note:
-            ro.say("compile", note)
+    if cfg.ghi is not None and not req.auto_tz:
+        asked.series = ir.read_series(cfg.ghi, req.tz)
+    return asked
+
+
+def _read(cfg: IrradianceConfig, ctx: RunContext) -> tuple:
+    """(area, DEM): in memory (area None), or with ``--context`` the tile's area opened and
+    the DEM its context's source (the place, the suns, the body: the context's); (None, None)
+    when every cell of the DEM is nodata."""
     from ..errors import AllNodata
-    area = None
-    with timer("read"):
+    with ctx.timer("read"):
         if cfg.read.context is not None:     # a tile: the heights are the context's
             area = cfg.read.open_area(cfg.dem)
             try:
                 area.check_valid()
             except AllNodata:
                 area.close()
-                return _all_nodata(cfg, timer)
-            d = area.source          # the place, the suns, the body: the context's
-        else:
-            try:
-                d = cfg.read.read(cfg.dem)
-            except AllNodata:     # every band all nodata, a note (a tile of the sea)
-                return _all_nodata(cfg, timer)
-    try:
-        return _run(cfg, d, area, req, step, series, ran_on, lift, timer,
-                    first if cfg.date is not None else None,
-                    last if cfg.date is not None else None,
-                    None if cfg.date is not None or req.auto_tz else (t0, t1, times, weights))
-    finally:
-        if area is not None:
-            area.close()
+                return None, None
+            return area, area.source
+        try:
+            return None, cfg.read.read(cfg.dem)
+        except AllNodata:     # every band all nodata, a note (a tile of the sea)
+            return None, None
 
 
-def _run(cfg, d, area, req, step, series, ran_on, lift, timer, first, last, period_given):
-    """The run once the DEM (``d``: in memory; with ``area``, the context opened for windows)
-    is open: the suns, the sky, the sky view, the sums, the output and the report."""
+def _samples(cfg: IrradianceConfig, asked: _Asked, d) -> _Samples:
+    """The period sampled at the place of ``d`` (each sample at the middle of its interval,
+    weighted by its hours), the suns, those with light, the open sky at each."""
     import numpy as np
 
     from ..engine import irradiance as ir
-    from ..model.earth import dem_body
-    from ..io import BandWriter, input_label, write_json, write_png
-    from ..pictures.preview import relief_rgb, scaled
-    from ..engine.shader import Shader
     from ..model.times import day_samples, iso
-    from .report import progress
-
-    ro, output = cfg.run, cfg.output
-    if period_given is not None:
-        t0, t1, times, weights = period_given
-    with timer("prepare"):
-        site = req.site(d, "irradiance computes the Earth's sun only")
-        if req.auto_tz:          # the DEM's zone is known now
-            if cfg.ghi is not None:
-                series = ir.read_series(cfg.ghi, req.tz)
-            if cfg.date is None:
-                t0, t1, times, weights = _period(cfg, req.tz, step)
-        if cfg.date is not None:
-            try:
-                times, weights = day_samples(first, last, cfg.step, req.tz, site.lon)
-            except HillshadeError as exc:   # too many samples for the dates and the step
-                raise UsageProblem(str(exc)) from None
-            day = (f"midnight to midnight, {req.tz.key}" if req.tz is not None
-                   else f"local mean solar time at longitude {site.lon:.4f}")
-            period = (f"{first.isoformat()}" + (f" to {last.isoformat()}" if last > first
-                                                  else "") + f" ({day})")
-        else:
-            period = f"{iso(t0)} to {iso(t1)}"
-        hours = float(np.sum(weights))
-        req.times = times
-        suns, sun_info = req.suns(d, site)
-        zen = np.array([s.zenith for s in suns], np.float64)
-        if series is None:
-            sky = ir.clear_sky(times, zen, site.lat, site.lon, site.height,
-                               cfg.clear_sky or "ineichen", cfg.linke_turbidity)
-        else:
-            unix, *cols = series
-            ghi, dni, dhi = ir.series_at(times, unix, *cols, path=cfg.ghi)
-            sky = ir.measured_sky(times, zen, ghi, dni, dhi,
-                                  f"measured: {os.path.basename(cfg.ghi)} (interpolated in "
-                                  "time)")
-        if cfg.perez:
-            ir.with_perez(sky, times, zen)
-        curvature = "auto" if cfg.curvature is None else cfg.curvature
-        body = dem_body(d, req.lat)
-        work = [s for s in suns if not ir.is_dark(s, cfg.soft)]
-        if area is None:
-            shader = Shader(d.heights, d.grid, cfg.algorithm, {}, ran_on, curvature,
-                            cfg.refraction_k, body, d.height_range(), survey=d.survey(),
-                            lift=lift)
-            if work:
-                shader.warm_up(work[0].azimuth, max(work[0].elevation, 1.0), soft=cfg.soft,
-                               incidence=True, field=any(s.fieldwise for s in work))
-    algo_stats: dict = {}
-    bar = lambda it: progress(it, ro.quiet, "hillshade-rt irradiance", "sun",
-                                mode=ro.progress)  # noqa: E731
-    if area is None:
-        with timer("sky view"):
-            vd = ir.dozier_view(d.heights, d.grid, cfg.skyview_directions, ran_on, curvature,
-                                cfg.refraction_k, body, lift)
-        with timer("compute"):
-            bands = ir.accumulate(shader, suns, weights, sky, vd, cfg.albedo, soft=cfg.soft,
-                                  perez=cfg.perez, stats=algo_stats, timer=timer,
-                                  progress=bar)
-        curv = shader.report()
-        geom = d
+    req, series, span = asked.req, asked.series, asked.span
+    site = req.site(d, "irradiance computes the Earth's sun only")
+    if req.auto_tz:          # the DEM's zone is known now
+        if cfg.ghi is not None:
+            series = ir.read_series(cfg.ghi, req.tz)
+        if cfg.date is None:
+            span = _period(cfg, req.tz, asked.step)
+    if cfg.date is not None:
+        first, last = asked.first, asked.last
+        try:
+            times, weights = day_samples(first, last, cfg.step, req.tz, site.lon)
+        except HillshadeError as exc:   # too many samples for the dates and the step
+            raise UsageProblem(str(exc)) from None
+        day = (f"midnight to midnight, {req.tz.key}" if req.tz is not None
+               else f"local mean solar time at longitude {site.lon:.4f}")
+        period = (f"{first.isoformat()}" + (f" to {last.isoformat()}" if last > first
+                                              else "") + f" ({day})")
     else:
-        bands, vd, curv, processing = _in_context(cfg, area, suns, weights, sky, work, ran_on,
-                                                  curvature, body, lift, timer, algo_stats,
-                                                  bar)
-        geom = area.tile
-    if cfg.mean:
-        bands = {k: (v / np.float32(hours)).astype(np.float32) for k, v in bands.items()}
-    units = ("W/m2, mean over the period" if cfg.mean
-             else "Wh/m2, energy over the period")
-    sky_model = "perez" if cfg.perez else "isotropic"
-    tags = {"HILLSHADE_RT_VERSION": __version__, "UNITS": units, "PERIOD": period,
-            "PERIOD_HOURS": f"{hours:g}", "STEP": cfg.step, "SAMPLES": len(suns),
-            "SKY": sky.source, "SKY_MODEL": sky_model, "ALBEDO": f"{cfg.albedo:g}",
-            "SKYVIEW_DIRECTIONS": cfg.skyview_directions, "SOFT": cfg.soft,
-            "ALGORITHM": cfg.algorithm, "HEIGHT_ABOVE_GROUND_M": lift,
-            "DEFINITIONS": ir.definitions(sky_model, cfg.skyview_directions, cfg.soft),
-            "SUN": "NREL SPA (pvlib.spa) at the DEM's centre, per tile where it varies; "
-                   + ("apparent (refracted) elevation" if req.atmosphere.refraction
-                      else "true elevation (--no-refraction)"),
-            "EDGE": "no terrain beyond the raster: border cells see open sky outward"
-                    if area is None else
-                    f"the tile's cells in the context {input_label(area.source.path)} "
-                    f"(rows {area.bounds[0]}..{area.bounds[1]}, columns "
-                    f"{area.bounds[2]}..{area.bounds[3]}): its terrain casts the shadows and "
-                    "bounds the sky view; no terrain beyond the context"}
-    if cfg.ghi is None:
-        tags["CLEAR_SKY"] = cfg.clear_sky or "ineichen"
-        tags["TURBIDITY"] = sky.turbidity or "none (Haurwitz takes none)"
-    if sky.split:
-        tags["SPLIT"] = sky.split
-    unit = "W/m2" if cfg.mean else "Wh/m2"
-    with timer("write"):
-        with BandWriter(output, geom, len(ir.BANDS), "float32", -9999.0, tags,
-                        overview_resampling="average", overwrite=ro.overwrite,
-                        fmt=ro.fmt, co=ro.creation_options) as w:
-            for i, k in enumerate(ir.BANDS, 1):
-                v = bands[k]
-                w.write(i, np.where(np.isnan(v), np.float32(-9999.0), v), k, {"UNITS": unit})
-        if ro.preview is not None:     # the global band over the relief, 2nd..98th percentile
-            write_png(ro.preview, relief_rgb(d.heights, d.grid, ramp=scaled(bands["global"])),
-                      ro.overwrite)
-
-    def summary(v):
-        ok = v[~np.isnan(v)]
-        return ({"min": float(ok.min()), "mean": float(ok.mean()), "max": float(ok.max())}
-                if ok.size else {"min": None, "mean": None, "max": None})
-    sec = dict(timer.seconds, total=timer.total())
-    with_shadows = algo_stats.pop("samples_with_shadows", 0)
-    algo_stats.pop("samples", None)
-    rep = {"input": input_label(geom.path), "output": os.path.abspath(output),
-           "shape": list(geom.shape), "algorithm": cfg.algorithm, "backend": ran_on,
-           "period": period, "period_hours": hours, "step": cfg.step, "units": unit,
-           "samples": len(suns), "samples_with_sun": len(work),
-           "samples_with_shadows": with_shadows,
-           "sky": sky.source, "sky_model": sky_model, "turbidity": sky.turbidity,
-           "split": sky.split, "albedo": cfg.albedo,
-           "skyview_directions": cfg.skyview_directions, "soft": cfg.soft,
-           "height_above_ground_m": lift,
-           "sky_view": summary(vd),
-           "open_sky": {"dni_wh_m2": float(np.sum(np.asarray(weights) * sky.dni)),
-                        "dhi_wh_m2": float(np.sum(np.asarray(weights) * sky.dhi)),
-                        "ghi_wh_m2": float(np.sum(np.asarray(weights) * sky.ghi))},
-           "bands": {k: summary(bands[k]) for k in ir.BANDS},
-           "curvature": curv, "algorithm_stats": algo_stats,
-           "seconds": sec, "version": __version__}
-    rep.update(sun_info or {})
-    if area is not None:
-        rep["context"] = area.report()
-        rep["processing"] = processing
-    if ro.report_path is not None:
-        write_json(ro.report_path, rep, ro.overwrite)
-    if not ro.quiet:
-        g = rep["bands"]["global"]
-        ro.say("summary", f"hillshade-rt: {output}: {geom.shape[1]}x{geom.shape[0]}, {period}, "
-                          f"{len(work)} of {len(suns)} samples with the sun up; global "
-                          f"{g['min']:.1f} .. {g['max']:.1f} {unit} (mean {g['mean']:.1f}); "
-                          f"shadows {sec.get('shadows', 0.0):.2f} s, sky view "
-                          f"{sec['sky view']:.2f} s, total {sec['total']:.2f} s")
-    return rep
+        t0, t1, times, weights = span
+        period = f"{iso(t0)} to {iso(t1)}"
+    req.times = times
+    suns, sun_info = req.suns(d, site)
+    return _Samples(site, period, float(np.sum(weights)), times, weights, suns, sun_info,
+                    [s for s in suns if not ir.is_dark(s, cfg.soft)],
+                    _sky(cfg, times, suns, site, series))
 
 
-def _in_context(cfg, area, suns, weights, sky, work, ran_on, curvature, body, lift, timer,
-                algo_stats, bar):
+def _sky(cfg: IrradianceConfig, times, suns, site, series):
+    """The open sky at each sample: the clear-sky model's, or the ``--ghi`` series
+    interpolated in time; with ``--perez`` its Perez coefficients."""
+    import numpy as np
+
+    from ..engine import irradiance as ir
+    zen = np.array([s.zenith for s in suns], np.float64)
+    if series is None:
+        sky = ir.clear_sky(times, zen, site.lat, site.lon, site.height,
+                           cfg.clear_sky or "ineichen", cfg.linke_turbidity)
+    else:
+        unix, *cols = series
+        ghi, dni, dhi = ir.series_at(times, unix, *cols, path=cfg.ghi)
+        sky = ir.measured_sky(times, zen, ghi, dni, dhi,
+                              f"measured: {os.path.basename(cfg.ghi)} (interpolated in "
+                              "time)")
+    if cfg.perez:
+        ir.with_perez(sky, times, zen)
+    return sky
+
+
+def _prepare(d, lighting, body, sampled: _Samples):
+    """The Shader of the DEM in memory, warmed up for the first sun with light."""
+    shader = lighting.shader(d.heights, d.grid, body=body, zrange=d.height_range(),
+                             survey=d.survey())
+    work = sampled.work
+    if work:
+        shader.warm_up(work[0].azimuth, max(work[0].elevation, 1.0), soft=lighting.soft,
+                       incidence=True, field=any(s.fieldwise for s in work))
+    return shader
+
+
+def _light(cfg, ctx: RunContext, d, shader, lighting, body, sampled: _Samples, algo_stats,
+           bar) -> _Bands:
+    """The four bands of the DEM in memory: Dozier's sky view, then each sun's cast shadows
+    and incidence summed with the sky (``engine.irradiance.accumulate``)."""
+    from ..engine import irradiance as ir
+    with ctx.timer("sky view"):
+        vd = ir.dozier_view(d.heights, d.grid, cfg.skyview_directions, lighting.backend,
+                            lighting.curvature, lighting.refraction_k, body, lighting.lift)
+    with ctx.timer("compute"):
+        bands = ir.accumulate(shader, sampled.suns, sampled.weights, sampled.sky, vd,
+                              cfg.albedo, soft=lighting.soft, perez=cfg.perez, stats=algo_stats,
+                              timer=ctx.timer, progress=bar)
+    return _Bands(bands, vd, shader.report())
+
+
+def _light_in_context(cfg, ctx: RunContext, area, lighting, body, sampled: _Samples,
+                      algo_stats, bar) -> _Bands:
     """The four bands of the tile of ``area`` (``--context``): each sun's cast shadows and
-    incidence from the context's windows (``engine.windows.WindowLighting``, product "sun", the regions cut to
-    the tile), Dozier's sky view from the windowed horizon march (``run.horizon_windows``: the rays to
-    the context's edge), the slopes from the tile and a cell around it; then the same sums,
-    cell by cell, as a run of the whole context in memory (``irradiance.sums``). Returns
-    (bands, Vd, the curvature's report, the report's ``processing``)."""
+    incidence from the context's windows (``engine.windows.WindowLighting``, product "sun",
+    the regions cut to the tile), Dozier's sky view from the windowed horizon march
+    (``run.horizon_windows``: the rays to the context's edge), the slopes from the tile and a
+    cell around it; then the same sums, cell by cell, as a run of the whole context in memory
+    (``irradiance.sums``)."""
     import math
 
     import numpy as np
 
-    from ..engine import irradiance as ir
     from ..algorithms.relief import incidence
+    from ..engine import irradiance as ir
+    from ..engine.windows import (
+        WindowCache, WindowLighting, bytes_per_cell, default_max_memory, window_budget,
+        window_grid
+    )
     from ..model.earth import curvature_report
     from ..model.geometry import equal_azimuths
     from .horizon import horizon_job, memory_limit, prepare_windows
-    from .local import bounded_gdal_cache
-    from ..engine.lighting import Lighting
-    from ..engine.windows import (
-        WindowLighting, WindowCache, bytes_per_cell, default_max_memory, window_budget, window_grid
-    )
     from .horizon_windows import Figures, Product, region_outputs
+    from .local import bounded_gdal_cache
 
-    src = area.source
+    src, timer, work = area.source, ctx.timer, sampled.work
     rows, cols = src.shape
     r0, r1, c0, c1 = area.bounds
     fig = Figures()
@@ -346,17 +380,16 @@ def _in_context(cfg, area, suns, weights, sky, work, ran_on, curvature, body, li
         with timer("prepare"):
             bstats = area.block_stats()     # (the context's, kept between runs)
             dx, dy = src.grid.centre_spacing()
-            lighting = Lighting(algorithm=cfg.algorithm, backend=ran_on, curvature=curvature,
-                                refraction_k=cfg.refraction_k, soft=cfg.soft, lift=lift)
             job = WindowLighting(src, lighting, body, (bstats.zmin, bstats.zmax),
                                  math.hypot(cols * dx, rows * dy), "sun")
             budget = window_budget(default_max_memory(),
-                                   bytes_per_cell(cfg.algorithm, "sun", cfg.soft))[0]
+                                   bytes_per_cell(lighting.algorithm, "sun", lighting.soft))[0]
             if work:
                 job.warm_up(work[0])
             azimuths = equal_azimuths(360.0 / int(cfg.skyview_directions))
-            hjob, _ = horizon_job(src, azimuths, ran_on, curvature, cfg.refraction_k, "scan",
-                                  bstats, False, 1, math.inf, lift, body=body)
+            hjob, _ = horizon_job(src, azimuths, lighting.backend, lighting.curvature,
+                                  lighting.refraction_k, "scan", bstats, False, 1, math.inf,
+                                  lighting.lift, body=body)
         regs, _ = prepare_windows(src, hjob, memory_limit(None), None, timer, area)
         with src.reader() as rd:
             # the tile and a cell around it: its voids, and its slopes (Horn's normals) for
@@ -398,42 +431,142 @@ def _in_context(cfg, area, suns, weights, sky, work, ran_on, curvature, body, li
                         read["cells"] += p.cells
                 return out
             with timer("compute"):
-                bands = ir.sums(direct, void, slopes, suns, weights, sky, vd, cfg.albedo,
-                                soft=cfg.soft, perez=cfg.perez, stats=algo_stats, timer=timer,
-                                progress=bar)
+                bands = ir.sums(direct, void, slopes, sampled.suns, sampled.weights,
+                                sampled.sky, vd, cfg.albedo, soft=lighting.soft,
+                                perez=cfg.perez, stats=algo_stats, timer=timer, progress=bar)
     processing = {"mode": "windows", "cells": area.shape[0] * area.shape[1],
                   "shadow_windows": read["windows"], "shadow_window_cells": read["cells"],
                   "sky_view": fig.as_dict()}
-    return bands, vd, curvature_report(job.curvature, used, job.body, job.k), processing
+    return _Bands(bands, vd, curvature_report(job.curvature, used, job.body, job.k),
+                  processing)
 
 
-def _all_nodata(cfg, timer) -> dict:
+def _sky_model(cfg: IrradianceConfig) -> str:
+    return "perez" if cfg.perez else "isotropic"
+
+
+def _unit(cfg: IrradianceConfig) -> str:
+    return "W/m2" if cfg.mean else "Wh/m2"
+
+
+def _tags(cfg: IrradianceConfig, lighting, req, sampled: _Samples, area) -> dict:
+    """The output's metadata."""
+    from ..engine import irradiance as ir
+    from ..io import input_label
+    sky, sky_model = sampled.sky, _sky_model(cfg)
+    units = ("W/m2, mean over the period" if cfg.mean
+             else "Wh/m2, energy over the period")
+    tags = {"HILLSHADE_RT_VERSION": __version__, "UNITS": units, "PERIOD": sampled.period,
+            "PERIOD_HOURS": f"{sampled.hours:g}", "STEP": cfg.step,
+            "SAMPLES": len(sampled.suns), "SKY": sky.source, "SKY_MODEL": sky_model,
+            "ALBEDO": f"{cfg.albedo:g}", "SKYVIEW_DIRECTIONS": cfg.skyview_directions,
+            "SOFT": cfg.soft, "ALGORITHM": cfg.algorithm,
+            "HEIGHT_ABOVE_GROUND_M": lighting.lift,
+            "DEFINITIONS": ir.definitions(sky_model, cfg.skyview_directions, cfg.soft),
+            "SUN": "NREL SPA (pvlib.spa) at the DEM's centre, per tile where it varies; "
+                   + ("apparent (refracted) elevation" if req.atmosphere.refraction
+                      else "true elevation (--no-refraction)"),
+            "EDGE": "no terrain beyond the raster: border cells see open sky outward"
+                    if area is None else
+                    f"the tile's cells in the context {input_label(area.source.path)} "
+                    f"(rows {area.bounds[0]}..{area.bounds[1]}, columns "
+                    f"{area.bounds[2]}..{area.bounds[3]}): its terrain casts the shadows and "
+                    "bounds the sky view; no terrain beyond the context"}
+    if cfg.ghi is None:
+        tags["CLEAR_SKY"] = cfg.clear_sky or "ineichen"
+        tags["TURBIDITY"] = sky.turbidity or "none (Haurwitz takes none)"
+    if sky.split:
+        tags["SPLIT"] = sky.split
+    return tags
+
+
+def _write(cfg: IrradianceConfig, ctx: RunContext, geom, d, lit: _Bands, tags: dict) -> None:
+    """The four bands (-9999 nodata) on the grid of ``geom``, and the --preview (the global
+    band over the relief of ``d``, 2nd..98th percentile)."""
+    import numpy as np
+
+    from ..engine import irradiance as ir
+    from ..io import BandWriter, write_png
+    from ..pictures.preview import relief_rgb, scaled
+    ro, unit = ctx.ro, _unit(cfg)
+    with ctx.timer("write"):
+        with BandWriter(cfg.output, geom, len(ir.BANDS), "float32", -9999.0, tags,
+                        overview_resampling="average", overwrite=ro.overwrite,
+                        fmt=ro.fmt, co=ro.creation_options) as w:
+            for i, k in enumerate(ir.BANDS, 1):
+                v = lit.bands[k]
+                w.write(i, np.where(np.isnan(v), np.float32(-9999.0), v), k, {"UNITS": unit})
+        if ro.preview is not None:
+            write_png(ro.preview, relief_rgb(d.heights, d.grid,
+                                             ramp=scaled(lit.bands["global"])),
+                      ro.overwrite)
+
+
+def _summary(v) -> dict:
+    """min, mean, max of the valid cells of ``v`` (None where there are none)."""
+    import numpy as np
+    ok = v[~np.isnan(v)]
+    return ({"min": float(ok.min()), "mean": float(ok.mean()), "max": float(ok.max())}
+            if ok.size else {"min": None, "mean": None, "max": None})
+
+
+def _report(cfg: IrradianceConfig, ctx: RunContext, geom, sampled: _Samples, lit: _Bands,
+            algo_stats: dict, area) -> dict:
+    """The run's report (``--report``)."""
+    import numpy as np
+
+    from ..engine import irradiance as ir
+    from ..io import input_label
+    sky, weights = sampled.sky, np.asarray(sampled.weights)
+    with_shadows = algo_stats.pop("samples_with_shadows", 0)
+    algo_stats.pop("samples", None)
+    rep = {"input": input_label(geom.path), "output": os.path.abspath(cfg.output),
+           "shape": list(geom.shape), "algorithm": cfg.algorithm, "backend": ctx.backend,
+           "period": sampled.period, "period_hours": sampled.hours, "step": cfg.step,
+           "units": _unit(cfg), "samples": len(sampled.suns),
+           "samples_with_sun": len(sampled.work), "samples_with_shadows": with_shadows,
+           "sky": sky.source, "sky_model": _sky_model(cfg), "turbidity": sky.turbidity,
+           "split": sky.split, "albedo": cfg.albedo,
+           "skyview_directions": cfg.skyview_directions, "soft": cfg.soft,
+           "height_above_ground_m": float(cfg.height_above_ground),
+           "sky_view": _summary(lit.vd),
+           "open_sky": {"dni_wh_m2": float(np.sum(weights * sky.dni)),
+                        "dhi_wh_m2": float(np.sum(weights * sky.dhi)),
+                        "ghi_wh_m2": float(np.sum(weights * sky.ghi))},
+           "bands": {k: _summary(lit.bands[k]) for k in ir.BANDS},
+           "curvature": lit.curvature, "algorithm_stats": algo_stats,
+           "seconds": ctx.seconds(), "version": __version__}
+    rep.update(sampled.sun_info or {})
+    if area is not None:
+        rep["context"] = area.report()
+        rep["processing"] = lit.processing
+    return rep
+
+
+def _all_nodata(cfg: IrradianceConfig, ctx: RunContext) -> dict:
     """A DEM whose every cell is nodata: the four bands all -9999, a note; the report."""
     import numpy as np
 
     from ..engine import irradiance as ir
-    from ..io import BandWriter, input_label, write_json
+    from ..io import BandWriter, input_label
     from .context import nodata_note
     ro = cfg.run
     src = cfg.read.open(cfg.dem)
     src.close()
     tags = {"HILLSHADE_RT_VERSION": __version__, "NODATA": "-9999 (every cell of the DEM is "
             "nodata)"}
-    with timer("write"), BandWriter(cfg.output, src, len(ir.BANDS), "float32", -9999.0, tags,
-                                    overview_resampling="average", overwrite=ro.overwrite,
-                                    fmt=ro.fmt, co=ro.creation_options) as w:
+    with ctx.timer("write"), BandWriter(cfg.output, src, len(ir.BANDS), "float32", -9999.0,
+                                        tags, overview_resampling="average",
+                                        overwrite=ro.overwrite, fmt=ro.fmt,
+                                        co=ro.creation_options) as w:
         arr = np.full(src.shape, -9999.0, np.float32)
         for i, k in enumerate(ir.BANDS, 1):
             w.write(i, arr, k)
     rep = {"input": input_label(src.path), "output": os.path.abspath(cfg.output),
            "shape": list(src.shape), "all_nodata": True,
            "bands": {k: {"min": None, "mean": None, "max": None} for k in ir.BANDS},
-           "seconds": dict(timer.seconds, total=timer.total()), "version": __version__}
-    if ro.report_path is not None:
-        write_json(ro.report_path, rep, ro.overwrite)
-    if not ro.quiet:
-        ro.say("note", nodata_note(src.path))
-    return rep
+           "seconds": ctx.seconds(), "version": __version__}
+    return ctx.finish(rep, [("note", nodata_note(src.path))])
 
 
 def _period(cfg, tz, step):

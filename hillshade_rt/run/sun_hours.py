@@ -1,199 +1,224 @@
 """The ``sun-hours`` run: hours of direct sun per cell of a DEM over a day (or a range of days),
 like WhiteboxTools' TimeInDaylight or GRASS r.sun's insolation time: the sun every step, each lit
 sample counting for the part of its interval with the sun's centre up at the DEM's place
-(``solar.daylight_samples``: never more than the day length there). Returns the report."""
+(``solar.daylight_samples``: never more than the day length there). Returns the report.
+
+The run's steps, between the shared preamble and tail (``run.runner.RunContext``): the days
+(the command line's dates, step and place), the DEM read (whole, or the tile in its
+``--context``), the samples (the suns of the days at the DEM's place, those with some light and
+their weights), the light (each sample's lit cells added, weighted), the output written, the
+report.
+"""
 
 from __future__ import annotations
 
+import datetime as _dt
 import os
+from dataclasses import dataclass
 
 from .. import __version__
 from ..errors import HillshadeError, UsageProblem
-from .config import SunHoursConfig, set_threads
+from .config import SunHoursConfig
+from .runner import RunContext
+
+
+@dataclass
+class _Days:
+    """What the command line says of the sun: the first and last day, the step, the place."""
+
+    first: _dt.date
+    last: _dt.date
+    step: str
+    req: object             # model.sun.SunRequest (at the place; its times once sampled)
+
+    @property
+    def count(self) -> int:
+        return (self.last - self.first).days + 1
+
+
+@dataclass
+class _Samples:
+    """The suns of the days at the DEM's place: every sample (``suns``, ``sun_info`` for the
+    report) and those with some light with their weights in hours (``work``)."""
+
+    site: object            # model.site.Site
+    suns: list
+    sun_info: dict | None
+    work: list              # [(sun, hours)]
+
+
+@dataclass
+class _Hours:
+    """The hours of direct sun per cell (float32, NaN nodata) and how they were lit."""
+
+    hours: object           # numpy array
+    curvature: dict | None  # the curvature's report (None: every cell nodata)
 
 
 def sun_hours(cfg: SunHoursConfig) -> dict:
-    import numba
-    import numpy as np
-
-    from ..engine.shader import Shader, render
-
-    from ..model.earth import dem_body
-    from ..io import (check_output_format, input_label, output_driver, write_json, write_png,
-                      write_raster)
-    from ..pictures.preview import relief_rgb
-    from ..engine.shader import choose_backend
-    from ..model.solar import SUN_RADIUS_DEG, daylight_samples
-    from ..model.sun import SunRequest
-    from ..model.times import parse_date, parse_step
-    from ..io.write import Claims
+    """Write the hours of direct sun of ``cfg.dem`` to ``cfg.output``; returns the report."""
     from ..errors import AllNodata
+    from ..io import check_output_format, output_driver
     from .context import nodata_note
-    from .notes import compile_note
-    from .report import Timer, progress
 
     cfg.check()
-    ro, output, soft, self_shadow = cfg.run, cfg.output, cfg.soft, cfg.self_shadow
-    algorithm, step = cfg.algorithm, cfg.step
-    lift = float(cfg.height_above_ground)
-    timer = Timer()
-    claims = Claims([cfg.dem] + cfg.read.inputs(), ro.overwrite)
-    for path, what in ((output, "OUTPUT"), (ro.report_path, "--report"),
-                       (ro.preview, "--preview")):
-        if path is not None:
-            claims.claim(path, what)
-    check_output_format(output, output_driver(output, ro.fmt), "float32", 1, False,
+    ro = cfg.run
+    ctx = RunContext.start(ro, inputs=[cfg.dem] + cfg.read.inputs(),
+                           outputs=[(cfg.output, "OUTPUT")], algorithm=cfg.algorithm,
+                           note=False)     # the note once the command line is checked
+    check_output_format(cfg.output, output_driver(cfg.output, ro.fmt), "float32", 1, False,
                         ro.creation_options)
-    try:    # the command line alone decides these: a bad one is a usage error (exit 2)
-        first = parse_date(cfg.date, "--date")
-        last = parse_date(cfg.end_date, "--end-date") if cfg.end_date is not None else first
-        parse_step(step)
-        req = SunRequest.at_place([], **cfg.place)
-    except HillshadeError as exc:
-        raise UsageProblem(str(exc)) from None
-    if last < first:
-        raise UsageProblem("--end-date is before --date")
-    set_threads(ro)
-    ran_on = choose_backend(ro.backend, algorithm, {})
-    if not ro.quiet:
-        note = compile_note(algorithm, ran_on, self_shadow)
-        if note:
-            ro.say("compile", note)
+    days = _days(cfg)
+    ctx.compile_note(cfg.algorithm, cfg.self_shadow)
     cfg.read.check_context(cfg.dem, **{"--preview": ro.preview is not None})
-
-    def samples(d):
-        """(site, suns, sun_info, the suns with some light and their weights) over ``d``."""
-        site = req.site(d, "sun-hours computes the Earth's sun only (light a DEM of another "
-                           "body with shadow or hillshade, which take the sun's direction)")
-        try:
-            req.times, weights = daylight_samples(first, last, step, req.tz, site,
-                                                  req.atmosphere)
-        except HillshadeError as exc:   # too many samples for the dates and the step
-            raise UsageProblem(str(exc)) from None
-        suns, sun_info = req.suns(d, site)
-
-        def dark(s):
-            top = max([r.elevation for r in s.tiles] if s.tiles else [s.elevation])
-            return top + (SUN_RADIUS_DEG if soft else 0.0) <= 0.0
-        return site, suns, sun_info, [(s, w) for s, w in zip(suns, weights)
-                                      if w > 0 and not dark(s)]
-
+    lighting = cfg.lighting(ctx.backend)
     algo_stats: dict = {}
-    empty = None
+    area, lit = None, None
     if cfg.read.context is not None:
-        with timer("read"):
+        with ctx.timer("read"):
             area = cfg.read.open_area(cfg.dem)
         with area:
             d = area.tile          # the output's grid; the heights are the context's
             try:
                 area.check_valid()
+                valid = True
             except AllNodata:
-                empty = d.path
-            site, suns, sun_info, work = samples(area.source)
-            if empty is None:
-                hours, zrange, curv = _in_context(cfg, area, work, ran_on, req, timer,
-                                                  algo_stats)
+                valid = False
+            samples = _samples(days, area.source, lighting.soft)
+            if valid:
+                lit = _light_in_context(area, lighting, days.req, samples, ctx, algo_stats)
     else:
-        with timer("read"):
-            try:
-                d = cfg.read.read(cfg.dem)
-            except AllNodata:
-                d = cfg.read.open(cfg.dem)
-                d.close()
-                empty = d.path
-        with timer("prepare"):
-            site, suns, sun_info, work = samples(d)
-            if empty is None:
-                zmin, zmax = zrange = d.height_range()
-                shader = Shader(d.heights, d.grid, algorithm, {}, ran_on,
-                                "auto" if cfg.curvature is None else cfg.curvature,
-                                cfg.refraction_k, dem_body(d, req.lat), (zmin, zmax),
-                                survey=d.survey(), lift=lift)
-                if work:
-                    shader.warm_up(work[0][0].azimuth, max(work[0][0].elevation, 1.0),
-                                   soft=soft, incidence=self_shadow,
-                                   field=any(s.fieldwise for s, _ in work))
-                hours = np.where(np.isnan(d.heights), np.float32(np.nan), np.float32(0.0))
-        if empty is None:
-            with timer("compute"):
-                for s, w in progress(work, ro.quiet, "hillshade-rt sun-hours", unit="sun",
-                                         mode=ro.progress):
-                    hours += np.float32(w) * render(shader, s, "sun", soft=soft,
-                                                    self_shadow=self_shadow, stats=algo_stats)
-            curv = shader.report()
-    if empty is not None:
-        hours, curv = np.full(d.shape, np.nan, np.float32), None
-    days = (last - first).days + 1
-    tags = {"HILLSHADE_RT_VERSION": __version__, "UNITS": "hours of direct sun",
-            "DATE_FIRST": first.isoformat(), "DATE_LAST": last.isoformat(), "DAYS": days,
-            "STEP": step, "ALGORITHM": algorithm, "SOFT": soft, "SELF_SHADOW": self_shadow,
-            "HEIGHT_ABOVE_GROUND_M": lift,
-            "DAY": f"midnight to midnight, {req.tz.key}" if req.tz is not None
-            else f"local mean solar time at longitude {site.lon:.4f}"}
-    with timer("write"):
-        write_raster(output, np.where(np.isnan(hours), np.float32(-9999.0), hours), d,
-                     nodata=-9999.0, description="hours of direct sun", tags=tags,
-                     overwrite=ro.overwrite, fmt=ro.fmt, co=ro.creation_options)
-        if ro.preview is not None and empty is None:
-            top = float(np.nanmax(hours)) if np.isfinite(hours).any() else 0.0
-            write_png(ro.preview, relief_rgb(d.heights, d.grid,
-                                             warm=hours / top if top > 0 else np.zeros_like(hours)),
-                      ro.overwrite)
-    valid = hours[~np.isnan(hours)]
-    rep = {"input": input_label(d.path), "output": os.path.abspath(output),
-           "shape": list(d.shape), "algorithm": algorithm, "backend": ran_on,
-           "dates": [first.isoformat(), last.isoformat()], "days": days, "step": step,
-           "samples": len(suns), "samples_with_sun": len(work), "day_definition": tags["DAY"],
-           "soft": soft, "self_shadow": self_shadow, "height_above_ground_m": lift,
-           "hours": {"min": float(valid.min()) if valid.size else None,
-                     "mean": float(valid.mean()) if valid.size else None,
-                     "max": float(valid.max()) if valid.size else None},
-           "curvature": curv, "algorithm_stats": algo_stats,
-           "seconds": dict(timer.seconds, total=timer.total()), "version": __version__}
-    rep.update(sun_info or {})
-    if cfg.read.context is not None:
-        rep["context"] = area.report()
-    if ro.report_path is not None:
-        write_json(ro.report_path, rep, ro.overwrite)
-    if empty is not None and not ro.quiet:
-        ro.say("note", nodata_note(empty))
-    elif not ro.quiet:
-        h = rep["hours"]
-        ro.say("summary", f"hillshade-rt: {output}: {d.shape[1]}x{d.shape[0]}, {days} day(s) from "
-                          f"{first.isoformat()}, {len(work)} of {len(suns)} samples with the sun "
-                          f"up; sun hours {h['min']:.2f} .. {h['max']:.2f} (mean "
-                          f"{h['mean']:.2f}); compute {timer.seconds['compute']:.2f} s")
-    return rep
+        with ctx.timer("read"):
+            d, valid = _read(cfg)
+        with ctx.timer("prepare"):
+            samples = _samples(days, d, lighting.soft)
+            if valid:
+                shader, hours = _prepare(d, lighting, days.req, samples)
+        if valid:
+            lit = _light(shader, hours, lighting, samples, ctx, algo_stats)
+    tags = _tags(cfg, days, samples)
+    hours = _write(cfg, ctx, d, lit, tags)
+    rep = _report(cfg, ctx, d, days, samples, tags, hours, lit, algo_stats, area)
+    if lit is None:
+        return ctx.finish(rep, [("note", nodata_note(d.path))])
+    h = rep["hours"]
+    return ctx.finish(rep, [(
+        "summary", f"hillshade-rt: {cfg.output}: {d.shape[1]}x{d.shape[0]}, {days.count} "
+                   f"day(s) from {days.first.isoformat()}, {len(samples.work)} of "
+                   f"{len(samples.suns)} samples with the sun up; sun hours {h['min']:.2f} .. "
+                   f"{h['max']:.2f} (mean {h['mean']:.2f}); compute "
+                   f"{ctx.timer.seconds['compute']:.2f} s")])
 
 
-def _in_context(cfg, area, work, ran_on, req, timer, algo_stats):
+def _days(cfg: SunHoursConfig) -> _Days:
+    """The dates, the step and the place of the command line (a bad one: a usage error, exit
+    status 2, before the DEM is read)."""
+    from ..model.sun import SunRequest
+    from ..model.times import parse_date, parse_step
+    try:
+        first = parse_date(cfg.date, "--date")
+        last = parse_date(cfg.end_date, "--end-date") if cfg.end_date is not None else first
+        parse_step(cfg.step)
+        req = SunRequest.at_place([], **cfg.place)
+    except HillshadeError as exc:
+        raise UsageProblem(str(exc)) from None
+    if last < first:
+        raise UsageProblem("--end-date is before --date")
+    return _Days(first, last, cfg.step, req)
+
+
+def _read(cfg: SunHoursConfig) -> tuple:
+    """(the DEM in memory, True); one whose every cell is nodata: (the DEM opened and closed,
+    its size and place only, False)."""
+    from ..errors import AllNodata
+    try:
+        return cfg.read.read(cfg.dem), True
+    except AllNodata:
+        d = cfg.read.open(cfg.dem)
+        d.close()
+        return d, False
+
+
+def _samples(days: _Days, d, soft: bool) -> _Samples:
+    """The suns of the days at the place of ``d`` (``solar.daylight_samples``), and those with
+    some light (the top of the sun's disc, ``soft``, or its centre up somewhere) with their
+    weights."""
+    from ..model.solar import SUN_RADIUS_DEG, daylight_samples
+    req = days.req
+    site = req.site(d, "sun-hours computes the Earth's sun only (light a DEM of another "
+                       "body with shadow or hillshade, which take the sun's direction)")
+    try:
+        req.times, weights = daylight_samples(days.first, days.last, days.step, req.tz, site,
+                                              req.atmosphere)
+    except HillshadeError as exc:   # too many samples for the dates and the step
+        raise UsageProblem(str(exc)) from None
+    suns, sun_info = req.suns(d, site)
+
+    def dark(s):
+        top = max([r.elevation for r in s.tiles] if s.tiles else [s.elevation])
+        return top + (SUN_RADIUS_DEG if soft else 0.0) <= 0.0
+    return _Samples(site, suns, sun_info,
+                    [(s, w) for s, w in zip(suns, weights) if w > 0 and not dark(s)])
+
+
+def _prepare(d, lighting, req, samples: _Samples):
+    """The Shader of the DEM in memory (warmed up for the first lit sample) and the hours at
+    zero (NaN on nodata)."""
+    import numpy as np
+
+    from ..model.earth import dem_body
+    shader = lighting.shader(d.heights, d.grid, body=dem_body(d, req.lat),
+                             zrange=d.height_range(), survey=d.survey())
+    work = samples.work
+    if work:
+        shader.warm_up(work[0][0].azimuth, max(work[0][0].elevation, 1.0), soft=lighting.soft,
+                       incidence=lighting.self_shadow, field=any(s.fieldwise for s, _ in work))
+    return shader, np.where(np.isnan(d.heights), np.float32(np.nan), np.float32(0.0))
+
+
+def _light(shader, hours, lighting, samples: _Samples, ctx: RunContext, algo_stats) -> _Hours:
+    """Each lit sample's lit cells (product "sun") added to ``hours``, weighted by its hours."""
+    import numpy as np
+
+    from ..engine.shader import render
+    from .report import progress
+    ro = ctx.ro
+    with ctx.timer("compute"):
+        for s, w in progress(samples.work, ro.quiet, "hillshade-rt sun-hours", unit="sun",
+                             mode=ro.progress):
+            hours += np.float32(w) * render(shader, s, "sun", soft=lighting.soft,
+                                            self_shadow=lighting.self_shadow, stats=algo_stats)
+    return _Hours(hours, shader.report())
+
+
+def _light_in_context(area, lighting, req, samples: _Samples, ctx: RunContext,
+                      algo_stats) -> _Hours:
     """Sun hours of the tile of ``area`` (``--context``): each sun's windows of the context
-    (``engine.windows.WindowLighting``, product "sun"), cut to the tile, added in the order of the suns as a
-    run in memory adds them (the same float32 sums). (hours, height range, curvature)."""
+    (``engine.windows.WindowLighting``, product "sun"), cut to the tile, added in the order of
+    the suns as a run in memory adds them (the same float32 sums)."""
     import math
 
     import numpy as np
 
+    from ..engine.windows import (
+        WindowCache, WindowLighting, bytes_per_cell, default_max_memory, window_budget
+    )
     from ..model.earth import curvature_report, dem_body
     from .local import bounded_gdal_cache
-    from ..engine.windows import (
-        WindowLighting, WindowCache, bytes_per_cell, default_max_memory, window_budget
-    )
     from .report import progress
-    src = area.source
-    lift = float(cfg.height_above_ground)
+    src, ro, work = area.source, ctx.ro, samples.work
     r0, r1, c0, c1 = area.bounds
     with bounded_gdal_cache():
-        with timer("prepare"):
+        with ctx.timer("prepare"):
             bstats = area.block_stats()     # (the context's, kept between runs)
             rows, cols = src.shape
             dx, dy = src.grid.centre_spacing()
-            job = WindowLighting(src, cfg.lighting(ran_on), dem_body(src, req.lat),
+            job = WindowLighting(src, lighting, dem_body(src, req.lat),
                                  (bstats.zmin, bstats.zmax), math.hypot(cols * dx, rows * dy),
                                  "sun")
             budget = window_budget(default_max_memory(),
-                                   bytes_per_cell(cfg.algorithm, "sun", cfg.soft,
-                                                  cfg.self_shadow))[0]
+                                   bytes_per_cell(lighting.algorithm, "sun", lighting.soft,
+                                                  lighting.self_shadow))[0]
             if work:
                 job.warm_up(work[0][0])
         with src.reader() as rd:
@@ -202,14 +227,71 @@ def _in_context(cfg, area, work, ran_on, req, timer, algo_stats):
             hours = np.where(np.isnan(z), np.float32(np.nan), np.float32(0.0))
             del z
             cache, used = WindowCache(rd), set()
-            with timer("compute"):
-                for s, w in progress(work, cfg.run.quiet, "hillshade-rt sun-hours",
-                                         unit="sun", mode=cfg.run.progress):
+            with ctx.timer("compute"):
+                for s, w in progress(work, ro.quiet, "hillshade-rt sun-hours", unit="sun",
+                                     mode=ro.progress):
                     pieces = job.pieces(s, bstats, budget, area=area.bounds)
                     carry = job.carrier([pieces])
                     for p in pieces:
                         arr = job.light(cache.get(p.window), p, algo_stats, used, carry)
                         a0, a1, b0, b1 = area.local(p.region)
                         hours[a0:a1, b0:b1] += np.float32(w) * arr
-    return hours, (bstats.zmin, bstats.zmax), curvature_report(job.curvature, used, job.body,
-                                                               job.k)
+    return _Hours(hours, curvature_report(job.curvature, used, job.body, job.k))
+
+
+def _tags(cfg: SunHoursConfig, days: _Days, samples: _Samples) -> dict:
+    """The output's metadata."""
+    req = days.req
+    return {"HILLSHADE_RT_VERSION": __version__, "UNITS": "hours of direct sun",
+            "DATE_FIRST": days.first.isoformat(), "DATE_LAST": days.last.isoformat(),
+            "DAYS": days.count, "STEP": days.step, "ALGORITHM": cfg.algorithm,
+            "SOFT": cfg.soft, "SELF_SHADOW": cfg.self_shadow,
+            "HEIGHT_ABOVE_GROUND_M": float(cfg.height_above_ground),
+            "DAY": f"midnight to midnight, {req.tz.key}" if req.tz is not None
+            else f"local mean solar time at longitude {samples.site.lon:.4f}"}
+
+
+def _write(cfg: SunHoursConfig, ctx: RunContext, d, lit: _Hours | None, tags: dict):
+    """The hours (-9999 nodata; all of it for a DEM of nodata) and the --preview; returns the
+    hours written (NaN nodata)."""
+    import numpy as np
+
+    from ..io import write_png, write_raster
+    from ..pictures.preview import relief_rgb
+    ro = ctx.ro
+    hours = np.full(d.shape, np.nan, np.float32) if lit is None else lit.hours
+    with ctx.timer("write"):
+        write_raster(cfg.output, np.where(np.isnan(hours), np.float32(-9999.0), hours), d,
+                     nodata=-9999.0, description="hours of direct sun", tags=tags,
+                     overwrite=ro.overwrite, fmt=ro.fmt, co=ro.creation_options)
+        if ro.preview is not None and lit is not None:
+            top = float(np.nanmax(hours)) if np.isfinite(hours).any() else 0.0
+            write_png(ro.preview, relief_rgb(d.heights, d.grid,
+                                             warm=hours / top if top > 0 else np.zeros_like(hours)),
+                      ro.overwrite)
+    return hours
+
+
+def _report(cfg: SunHoursConfig, ctx: RunContext, d, days: _Days, samples: _Samples,
+            tags: dict, hours, lit: _Hours | None, algo_stats: dict, area) -> dict:
+    """The run's report (``--report``: docs/usage.md's keys)."""
+    import numpy as np
+
+    from ..io import input_label
+    valid = hours[~np.isnan(hours)]
+    rep = {"input": input_label(d.path), "output": os.path.abspath(cfg.output),
+           "shape": list(d.shape), "algorithm": cfg.algorithm, "backend": ctx.backend,
+           "dates": [days.first.isoformat(), days.last.isoformat()], "days": days.count,
+           "step": days.step, "samples": len(samples.suns),
+           "samples_with_sun": len(samples.work), "day_definition": tags["DAY"],
+           "soft": cfg.soft, "self_shadow": cfg.self_shadow,
+           "height_above_ground_m": float(cfg.height_above_ground),
+           "hours": {"min": float(valid.min()) if valid.size else None,
+                     "mean": float(valid.mean()) if valid.size else None,
+                     "max": float(valid.max()) if valid.size else None},
+           "curvature": None if lit is None else lit.curvature,
+           "algorithm_stats": algo_stats, "seconds": ctx.seconds(), "version": __version__}
+    rep.update(samples.sun_info or {})
+    if area is not None:
+        rep["context"] = area.report()
+    return rep

@@ -79,8 +79,9 @@ def test_voids_are_white_and_the_run_checks_first(tmp_path):
     dem = write_geotiff(tmp_path / "z.tif", z, Affine(30.0, 0, 400000.0, 0, -30.0, 5200000.0),
                         CRS.from_epsg(32632), nodata=-9999.0)
     out = str(tmp_path / "a.gif")
-    rep = animate(AnimateConfig(dem, out, start="2026-09-01T07:30", end="2026-09-01T17:30",
-                                step="163min", place={"tz": "Europe/Rome"}, size=90,
+    rep = animate(AnimateConfig(dem=dem, output=out, start="2026-09-01T07:30",
+                                end="2026-09-01T17:30", step="163min",
+                                place={"tz": "Europe/Rome"}, size=90,
                                 label=False))
     assert rep["frames"] == 4 and rep["night_frames"] == 0 and rep["every_nth_cell"] == 1
     with Image.open(out) as im:
@@ -88,7 +89,7 @@ def test_voids_are_white_and_the_run_checks_first(tmp_path):
         rgb = np.asarray(im.convert("RGB"))
     assert (rgb[20:30, 40:55] == 255).all() and (rgb[:20] != 255).any()
     with pytest.raises(UsageProblem, match="one way"):
-        animate(AnimateConfig(dem, str(tmp_path / "b.gif"), date="2026-09-01",
+        animate(AnimateConfig(dem=dem, output=str(tmp_path / "b.gif"), date="2026-09-01",
                               start="2026-09-01T07:30", end="2026-09-01T08:30"))
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.gif", "z.tif"]
 
@@ -114,13 +115,14 @@ def test_without_tz_the_day_and_labels_are_in_the_dem_zone(tmp_path):
     z = fractal_terrain(40, 40, seed=4, relief=300.0).astype(np.float32)
     dem = write_geotiff(tmp_path / "z.tif", z, Affine(30.0, 0, 465000.0, 0, -30.0, 5248000.0),
                         CRS.from_epsg(32632))
-    rep = animate(AnimateConfig(dem, str(tmp_path / "a.gif"), date="2026-07-15", step="6h",
-                                size=40))
+    rep = animate(AnimateConfig(dem=dem, output=str(tmp_path / "a.gif"), date="2026-07-15",
+                                step="6h", size=40))
     assert rep["label_time"] == "Europe/Zurich (the DEM's zone)"
     assert [t["time"] for t in rep["times"]] == [f"2026-07-15T{h:02d}:00:00+02:00"
                                                  for h in (0, 6, 12, 18)]
-    rep = animate(AnimateConfig(dem, str(tmp_path / "b.gif"), start="2026-01-15T10:00",
-                                end="2026-01-15T12:00", step="1h", size=40))
+    rep = animate(AnimateConfig(dem=dem, output=str(tmp_path / "b.gif"),
+                                start="2026-01-15T10:00", end="2026-01-15T12:00", step="1h",
+                                size=40))
     assert rep["times"][0]["time"] == "2026-01-15T10:00:00+01:00" and rep["frames"] == 3
     assert label_text(dt.datetime(2026, 7, 15, 10, tzinfo=ZoneInfo("Europe/Zurich")), False,
                       None) == "2026-07-15 10:00 CEST"

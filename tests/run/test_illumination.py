@@ -25,7 +25,7 @@ MOON = body_from_option("moon")
 
 def _run(tmp_path, dem, csv, name="out.tif", **kw):
     out = str(tmp_path / name)
-    rep = illumination(IllumConfig([dem, out], subsolar_file=csv, **kw))
+    rep = illumination(IllumConfig(files=[dem, out], subsolar_file=csv, **kw))
     return out, rep
 
 
