@@ -53,7 +53,7 @@ def config(dem, out, **kw):
 
 def test_the_config_takes_keywords_only(dem):
     with pytest.raises(TypeError):
-        ShadeConfig([dem], "shadow")       # noqa: the positional call of old
+        ShadeConfig([dem], "shadow")
     cfg = ShadeConfig(files=[dem], kind="hillshade")
     assert cfg.kind == "hillshade" and cfg.ambient == 0.2
 
@@ -97,7 +97,7 @@ def test_memory_and_windows_give_the_same_result(tmp_path, dem, seen):
 def test_an_all_nodata_result_draws_black(tmp_path):
     path = write_geotiff(tmp_path / "void.tif", np.full((20, 30), np.nan, np.float32), TR)
     rep = shade(config(path, tmp_path / "o.tif", preview=str(tmp_path / "o.png")))
-    assert rep["processing"]["mode"] == "all nodata"
+    assert rep["processing"]["mode"] == "all nodata" and (tmp_path / "o.png").exists()
     res = ShadeResult(dem=type("G", (), {"shape": (20, 30)})(), suns=[], sun_info=None,
                       records=[], stats=None, algo_stats={}, zrange=(None, None),
                       curvature=None, gpu=None, processing={})
