@@ -235,7 +235,8 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
                      say=_stderr, creation_options=creation_options,
                      worker_timeout=worker_timeout)
     hill = product == "hillshade"
-    cfg = ShadeConfig(files, product, sun, default_sun=(315.0, 45.0) if hill else None,
+    cfg = ShadeConfig(files=files, kind=product, sun=sun,
+                      default_sun=(315.0, 45.0) if hill else None,
                       algorithm=algorithm, options=options, curvature=curvature,
                       refraction_k=refraction_k, soft=soft,
                       self_shadow=hill or self_shadow or product == "classes",

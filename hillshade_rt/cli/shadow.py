@@ -25,8 +25,8 @@ def _config(files, kind, algorithm, options, kw, **more):
     sun = {k: kw.pop(k) for k in SUN_KEYS}
     read = to_read_options(kw)
     run = to_run_options(kw, say)
-    return ShadeConfig(list(files), kind, sun, algorithm=algorithm, options=options,
-                       algorithm_explicit=given("algorithm"), read=read, run=run,
+    return ShadeConfig(files=list(files), kind=kind, sun=sun, algorithm=algorithm,
+                       options=options, algorithm_explicit=given("algorithm"), read=read, run=run,
                        output=kw.pop("output"), output_pattern=kw.pop("output_pattern"),
                        max_memory=kw.pop("max_memory"), window_size=kw.pop("window_size"),
                        cog=kw.pop("cog"), scheduler=kw.pop("scheduler"),
@@ -114,8 +114,10 @@ def _point_light(files, position, lonlat, lift, soft, self_shadow, classes, algo
                     ("cog", "--cog"), ("stac_item", "--stac-item"), ("each", "--each")):
         refused[flag] = bool(kw.pop(k))
     window_size, max_memory = kw.pop("window_size"), kw.pop("max_memory")
-    light_shadow(LightConfig(list(files), kw.pop("output"), position, lonlat, lift, window_size,
-                             max_memory, to_read_options(kw), to_run_options(kw, say), refused))
+    light_shadow(LightConfig(files=list(files), output=kw.pop("output"), position=position,
+                             lonlat=lonlat, height_above_ground=lift, window_size=window_size,
+                             max_memory=max_memory, read=to_read_options(kw),
+                             run=to_run_options(kw, say), refused=refused))
 
 
 def _lightmap_refused(kw, soft, curvature, refraction_k) -> dict:
@@ -158,9 +160,11 @@ def _subsolar(files, subsolar, subsolar_file, distance, body, light_position, li
                     ("scheduler", "--scheduler"), ("output_pattern", "--output-pattern"),
                     ("cog", "--cog"), ("stac_item", "--stac-item"), ("each", "--each")):
         refused[flag] = bool(kw.pop(k))
-    subsolar_shadow(SubsolarConfig(list(files), kw.pop("output"), subsolar, distance, body,
-                                   lift, soft, curvature, refraction_k, to_read_options(kw),
-                                   to_run_options(kw, say), refused,
+    subsolar_shadow(SubsolarConfig(files=list(files), output=kw.pop("output"),
+                                   subsolar=subsolar, sun_distance=distance, body=body,
+                                   height_above_ground=lift, soft=soft, curvature=curvature,
+                                   refraction_k=refraction_k, read=to_read_options(kw),
+                                   run=to_run_options(kw, say), refused=refused,
                                    subsolar_file=subsolar_file))
 
 
@@ -198,8 +202,9 @@ def hillshade(files, ambient, scale, algorithm, curvature, refraction_k, soft,
     if light_position is not None or light_lonlat is not None:
         from ..run.lightmap import LightmapConfig, lightmap
         refused = _lightmap_refused(kw, soft, curvature, refraction_k)
-        lightmap(LightmapConfig(list(files), kw.pop("output"), light_position, light_lonlat,
-                                height_above_ground, read=to_read_options(kw),
+        lightmap(LightmapConfig(files=list(files), output=kw.pop("output"),
+                                position=light_position, lonlat=light_lonlat,
+                                height_above_ground=height_above_ground, read=to_read_options(kw),
                                 run=to_run_options(kw, say), refused=refused, ambient=ambient,
                                 scale=scale,
                                 falloff=falloff or "none", bits=int(bits or 8)))

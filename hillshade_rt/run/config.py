@@ -147,7 +147,7 @@ class RunOptions:
         self.worker_timeout = t
 
 
-@dataclass
+@dataclass(kw_only=True)
 class ShadeConfig:
     """A ``shadow`` / ``hillshade`` run: ``files`` (DEMs, and OUTPUT last when neither
     ``output`` nor ``output_pattern`` is given), the product ``kind`` ("shadow", "classes",

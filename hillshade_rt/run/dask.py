@@ -1,6 +1,7 @@
 """Windows and times as Dask tasks (``--scheduler``; needs ``pip install 'hillshade-rt[dask]'``).
 
-Each task gets the small :class:`~hillshade_rt.engine.windows.WindowLighting` and one
+Each task gets the small :class:`~hillshade_rt.engine.windows.WindowLighting` (the DEM's source,
+the run's ``engine.lighting.Lighting`` whole, the body and the whole raster's range) and one
 :class:`~hillshade_rt.engine.windows.PlannedWindow`; it opens the DEM itself (the path, or a mosaic's VRT
 document, must be readable by the workers), reads the piece's window with its halo, lights it and
 writes its region to a GeoTIFF of its own in a folder beside the output. Nothing large passes
@@ -378,14 +379,15 @@ def shade_piece(job, piece, path: str, nodata, stride: int | None = None) -> dic
     with _LOCK:
         arr = job.light(z, piece, stats, used)
     del z
-    prod = product(job.kind, job.soft)
+    lighting = job.lighting       # the run's settings, whole (``engine.lighting.Lighting``)
+    prod = product(job.kind, lighting.soft)
     st = prod.stats(arr)
     shade = None
     if stride:
-        sub, at = every_nth(prod.shade(arr, job.ambient), piece.region[0],
+        sub, at = every_nth(prod.shade(arr, lighting.ambient), piece.region[0],
                             piece.region[2], stride)
         shade = (sub.copy(), at)
-    if job.soft:
+    if lighting.soft:
         arr = np.where(np.isnan(arr), np.float32(nodata), arr).astype(np.float32)
     g0, g1, h0, h1 = piece.region
     src = job.source

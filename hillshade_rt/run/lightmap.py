@@ -30,7 +30,7 @@ FALLOFFS = ("none", "inverse-square")
 BITS = (8, 16)
 
 
-@dataclass
+@dataclass(kw_only=True)
 class LightmapConfig(LightConfig):
     """``LightConfig`` (the DEM, OUTPUT, the light, what is refused) and the hillshade's own:
     ``ambient`` 0..1, ``scale`` (gdaldem's -s), ``falloff`` (``FALLOFFS``), ``bits`` (8: uint8
@@ -127,25 +127,21 @@ def point_light_relief(d, x: float, y: float, z: float, *, ambient: float = 0.2,
 
 def lightmap(cfg: LightmapConfig) -> dict:
     """Write the point light's shaded relief of the DEM; returns the report. Bad input raises
-    before anything is written."""
+    before anything is written. The preamble and the tail every run shares:
+    ``run.runner.RunContext`` (the paths claimed, the threads; the CPU, the only backend of the
+    lightmap kernels; the report and the summary)."""
     import numpy as np
 
-    from ..io import check_output_format, input_label, output_driver, write_json, write_png, \
-        write_raster
-    from ..io.write import Claims
+    from ..io import check_output_format, input_label, output_driver, write_png, write_raster
     from ..pictures.preview import relief_rgb
-    from .config import apply_scale, set_threads
-    from .report import Timer
+    from .config import apply_scale
+    from .runner import RunContext
 
     ro = cfg.run
     dem, output, position, lonlat = cfg.check()
-    set_threads(ro)
-    timer = Timer()
-    claims = Claims([dem], ro.overwrite)
-    claims.claim(output, "OUTPUT")
-    for extra, what in ((ro.report_path, "--report"), (ro.preview, "--preview")):
-        if extra is not None:
-            claims.claim(extra, what)
+    ctx = RunContext.start(ro, inputs=[dem], outputs=[(output, "OUTPUT")], backend=False,
+                           note=False)
+    timer = ctx.timer
     dtype = "uint8" if cfg.bits == 8 else "uint16"
     check_output_format(output, output_driver(output, ro.fmt), dtype, 1, True, ro.creation_options)
     with timer("read"):
@@ -187,13 +183,10 @@ def lightmap(cfg: LightmapConfig) -> dict:
            "height_above_ground_m": float(cfg.height_above_ground),
            "shadow_fraction": share,
            "direct_mean": float(np.nanmean(direct)) if valid.any() else None,
-           "backend": "cpu", "algorithm": "point (plain march) + Lambert",
-           "seconds": dict(timer.seconds, total=timer.total()), "version": __version__}
-    if ro.report_path is not None:
-        write_json(ro.report_path, rep, ro.overwrite)
-    if not ro.quiet:
-        ro.say("summary", f"hillshade-rt: {output}: {d.shape[1]}x{d.shape[0]}, {cfg.bits}-bit "
-                          f"relief lit by a point light at row {row:.1f} col {col:.1f} z "
-                          f"{zl:g} m (falloff {cfg.falloff}): {100 * share:.2f}% of valid "
-                          f"cells in cast shadow; compute {timer.seconds['compute']:.2f} s")
-    return rep
+           "backend": ctx.backend, "algorithm": "point (plain march) + Lambert",
+           "seconds": ctx.seconds(), "version": __version__}
+    return ctx.finish(rep, [("summary", f"hillshade-rt: {output}: {d.shape[1]}x{d.shape[0]}, "
+                                        f"{cfg.bits}-bit relief lit by a point light at row "
+                                        f"{row:.1f} col {col:.1f} z {zl:g} m (falloff "
+                                        f"{cfg.falloff}): {100 * share:.2f}% of valid cells in "
+                                        f"cast shadow; compute {timer.seconds['compute']:.2f} s")])

@@ -1,15 +1,77 @@
 """A lighting run on this machine: the whole DEM in memory, or in windows read and written
 through GDAL (each with its halo toward the sun), or on Dask (``run.dask``) when a scheduler is
-given. Both take the run's inputs, the DEM opened once, the sun request and ``Outputs``, and
-return what ``run.shade`` puts in the report.
+given. Both take the run's inputs, the DEM opened once, the sun request, ``Outputs`` and the
+lighting (``engine.lighting.Lighting``, whole), and return a :class:`ShadeResult`: what
+``run.shade`` puts in the report and draws in the preview.
 """
 
 from __future__ import annotations
 
 import contextlib
+from dataclasses import dataclass
 
 from ..errors import HillshadeError
 from .config import apply_scale
+
+
+@dataclass(kw_only=True)
+class ShadeResult:
+    """What a lighting run did, for its report and its preview.
+
+    Attributes
+    ----------
+    dem : Dem or DemSource
+        What the outputs are georeferenced like (the DEM read, the source opened, or a
+        ``--context`` run's tile).
+    suns : list of SunOver
+        The suns, one output (band or file) each.
+    sun_info : dict or None
+        The report's keys about the suns' place and times (``SunRequest.suns``).
+    records : list of dict
+        Each sun's record (``Outputs.record``): its statistics, seconds, marching.
+    stats : dict or None
+        The product's statistics of the last sun.
+    algo_stats : dict
+        The algorithm's figures (its note, ...).
+    zrange : tuple
+        (lowest, highest) height of the DEM, m ((None, None): all nodata).
+    curvature : dict or None
+        Earth curvature as applied (``Shader.report``, ``model.earth.curvature_report``).
+    gpu : dict or None
+        The GPU's figures of a run in memory on the GPU.
+    processing : dict
+        How it ran (``mode``: in memory, tiled, dask, all nodata; cells, windows, bytes).
+    preview_heights : numpy.ndarray or None
+        The heights the preview draws (every n-th cell in windows; None: nothing lit).
+    preview_grid : Grid or None
+        Their grid.
+    preview_shade : numpy.ndarray or None
+        The product's shade (0 lit .. 1 shadow) over the suns, mean, on the preview's cells.
+    """
+
+    dem: object
+    suns: list
+    sun_info: dict | None
+    records: list
+    stats: dict | None
+    algo_stats: dict
+    zrange: tuple
+    curvature: dict | None
+    gpu: dict | None
+    processing: dict
+    preview_heights: object = None
+    preview_grid: object = None
+    preview_shade: object = None
+
+    def relief(self, azimuth: float, elevation: float):
+        """The preview: the relief lit from (``azimuth``, ``elevation``), degrees, tinted by the
+        shade (``pictures.preview.relief_rgb``); black for a run that lit nothing."""
+        import numpy as np
+        if self.preview_heights is None:
+            return np.zeros(tuple(self.dem.shape) + (3,), np.uint8)
+        from ..pictures.preview import relief_rgb
+        return relief_rgb(self.preview_heights, self.preview_grid, azimuth, elevation,
+                          shade=self.preview_shade)
 
 
 def bounded_gdal_cache():
@@ -35,21 +97,21 @@ def needs_windows(src, limit, per_cell) -> bool:
     return rows * cols > budget
 
 
-def shade_in_memory(inputs, source, scale, req, out, timer, algorithm, options, ran_on,
-              curvature, refraction_k, soft, self_shadow, ambient, quiet, *, lift=0.0,
-              progress_mode="bar", **_):
-    """``source``: the DEM already opened (``ReadOptions.open``; read here, not opened again).
-    ``lift``: --height-above-ground (``shading.Shader``)."""
+def shade_in_memory(inputs, source, scale, req, out, timer, lighting, quiet, *,
+                    progress_mode="bar", **_) -> ShadeResult:
+    """``source``: the DEM already opened (``ReadOptions.open``; read here, not opened again),
+    lit as ``lighting`` says (``engine.lighting.Lighting``: one ``Shader`` of it, its lift
+    --height-above-ground)."""
     import numpy as np
 
-    from ..engine.shader import Shader, render
+    from ..engine.shader import render
 
     from ..model.earth import dem_body
-    from ..pictures.preview import relief_rgb
     from .outputs import sun_tags
     from .report import progress
 
     kind = out.kind
+    soft, self_shadow, ambient = lighting.soft, lighting.self_shadow, lighting.ambient
     with timer("read"):
         d = source.read()
         if scale is not None:
@@ -58,9 +120,8 @@ def shade_in_memory(inputs, source, scale, req, out, timer, algorithm, options, 
         suns, sun_info = req.suns(d)
         out.plan(suns, inputs)
         zmin, zmax = d.height_range()
-        shader = Shader(d.heights, d.grid, algorithm, options, ran_on,
-                        "auto" if curvature is None else curvature, refraction_k,
-                        dem_body(d, req.lat), (zmin, zmax), survey=d.survey(), lift=lift)
+        shader = lighting.shader(d.heights, d.grid, body=dem_body(d, req.lat),
+                                 zrange=(zmin, zmax), survey=d.survey())
         day = [s for s in suns if not s.night]
         if day:
             shader.warm_up(day[0].azimuth, day[0].elevation, soft=soft,
@@ -92,22 +153,22 @@ def shade_in_memory(inputs, source, scale, req, out, timer, algorithm, options, 
         if writer is not None:
             with timer("write"):     # the close compresses the last blocks
                 writer.finish()
-    return {"dem": d, "suns": suns, "sun_info": sun_info, "records": records, "stats": st,
-            "algo_stats": algo_stats, "zrange": (zmin, zmax), "curvature": shader.report(),
-            "gpu": shader.gpu_report(),
-            "relief": lambda az, el: relief_rgb(d.heights, d.grid, az, el, shade=share),
-            "processing": {"mode": "in memory", "cells": int(d.heights.size)}}
+    return ShadeResult(dem=d, suns=suns, sun_info=sun_info, records=records, stats=st,
+                       algo_stats=algo_stats, zrange=(zmin, zmax), curvature=shader.report(),
+                       gpu=shader.gpu_report(),
+                       processing={"mode": "in memory", "cells": int(d.heights.size)},
+                       preview_heights=d.heights, preview_grid=d.grid, preview_shade=share)
 
 
-def shade_in_windows(inputs, source, scale, req, out, timer, algorithm, options, ran_on,
-          curvature, refraction_k, soft, self_shadow, ambient, quiet, *, limit,
-          window_shape, scheduler, per_cell, lift=0.0, area=None, progress_mode="bar",
-          worker_timeout=None):
-    """``source``: the DEM already opened for windows (``ReadOptions.open``). ``worker_timeout``:
-    --worker-timeout of a Dask run (``run.dask.DaskSession``). ``lift``:
-    --height-above-ground (``windows.WindowLighting``: the halos and the march). ``area``: a tile of
-    ``source`` (``run.context.Area``, ``--context``): only its cells are lit and written, on
-    the tile's grid, their windows read from ``source``."""
+def shade_in_windows(inputs, source, scale, req, out, timer, lighting, quiet, *, limit,
+                     window_shape, scheduler, per_cell, area=None, progress_mode="bar",
+                     worker_timeout=None) -> ShadeResult:
+    """``source``: the DEM already opened for windows (``ReadOptions.open``), lit as
+    ``lighting`` says (``engine.lighting.Lighting``, held by the run's
+    ``windows.WindowLighting``; its lift shortens the halos). ``worker_timeout``:
+    --worker-timeout of a Dask run (``run.dask.DaskSession``). ``area``: a tile of ``source``
+    (``run.context.Area``, ``--context``): only its cells are lit and written, on the tile's
+    grid, their windows read from ``source``."""
     import math
 
     import numpy as np
@@ -115,16 +176,16 @@ def shade_in_windows(inputs, source, scale, req, out, timer, algorithm, options,
     from ..model.earth import dem_body
     from ..model.geometry import Grid
     from ..model.earth import curvature_report
-    from ..pictures.preview import every_nth, relief_rgb
+    from ..pictures.preview import every_nth
     from ..engine.products import merge_stats
     from .outputs import sun_tags
-    from ..engine.lighting import Lighting
     from ..engine.windows import (
         MIN_WINDOW_CELLS, WindowLighting, MemoryTooSmall, WindowedRunStats, WindowCache, block_stats, format_size,
         marched_per_cell, memory_needed, window_budget
     )
 
     kind = out.kind
+    soft, ambient = lighting.soft, lighting.ambient
     with timer("read"):
         src = source
         if scale is not None:
@@ -144,9 +205,6 @@ def shade_in_windows(inputs, source, scale, req, out, timer, algorithm, options,
         suns, sun_info = req.suns(src)
         out.plan(suns, inputs, src.tiles if area is None else None)
         dx, dy = src.grid.centre_spacing()
-        lighting = Lighting(algorithm=algorithm, options=options, backend=ran_on,
-                            curvature=curvature, refraction_k=refraction_k, soft=soft,
-                            self_shadow=self_shadow, ambient=ambient, lift=lift)
         job = WindowLighting(src, lighting, dem_body(src, req.lat), zrange,
                              math.hypot(cols * dx, rows * dy), kind)
         # a limit too small: measured now, after the preparation (the process has grown), the
@@ -240,18 +298,17 @@ def shade_in_windows(inputs, source, scale, req, out, timer, algorithm, options,
         from ..io import input_label
         processing["mosaic"] = [{"path": input_label(t["path"]), "window": list(t["window"])}
                                 for t in src.tiles]
-
-    def relief(az, el):
-        pv = bstats.preview
+    pv, g = bstats.preview, None      # the preview's heights: every n-th cell, their grid
+    if pv is not None:
         g = Grid(pv.shape[0], pv.shape[1], src.grid.dx[::n] * n, src.grid.dy[::n] * n,
                  src.grid.col_sign, src.grid.row_sign, src.grid.method)
-        return relief_rgb(pv, g, az, el, shade=share)
-    return {"dem": geom, "suns": suns, "sun_info": sun_info, "records": records, "stats": st,
-            "algo_stats": algo_stats, "zrange": zrange, "curvature": curv, "gpu": None,
-            "relief": relief, "processing": processing}
+    return ShadeResult(dem=geom, suns=suns, sun_info=sun_info, records=records, stats=st,
+                       algo_stats=algo_stats, zrange=zrange, curvature=curv, gpu=None,
+                       processing=processing, preview_heights=pv, preview_grid=g,
+                       preview_shade=share)
 
 
-def all_nodata(inputs, source, req, out, timer, area=None, **_):
+def all_nodata(inputs, source, req, out, timer, area=None, **_) -> ShadeResult:
     """The run of a DEM (or a ``--context`` tile) whose every cell is nodata: every output
     written all nodata (its bands and tags as a run that lights them), nothing lit. The suns
     are those of ``source`` (the context's, with ``area``)."""
@@ -277,10 +334,9 @@ def all_nodata(inputs, source, req, out, timer, area=None, **_):
             records.append(out.record(sun, i, st, 0.0))
         if writer is not None:
             writer.finish()
-    return {"dem": geom, "suns": suns, "sun_info": sun_info, "records": records, "stats": st,
-            "algo_stats": {}, "zrange": (None, None), "curvature": None, "gpu": None,
-            "relief": lambda az, el: np.zeros(geom.shape + (3,), np.uint8),
-            "processing": {"mode": "all nodata", "cells": int(arr.size)}}
+    return ShadeResult(dem=geom, suns=suns, sun_info=sun_info, records=records, stats=st,
+                       algo_stats={}, zrange=(None, None), curvature=None, gpu=None,
+                       processing={"mode": "all nodata", "cells": int(arr.size)})
 
 
 def mean_stats(records, last):

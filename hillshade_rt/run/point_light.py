@@ -15,10 +15,10 @@ from dataclasses import dataclass, field
 
 from .. import __version__
 from ..errors import HillshadeError, UsageProblem
-from .config import ReadOptions, RunOptions, set_threads
+from .config import ReadOptions, RunOptions
 
 
-@dataclass
+@dataclass(kw_only=True)
 class LightConfig:
     """``files``: DEM and OUTPUT (or the DEM alone with ``output``); ``position`` (x, y, z: the
     DEM's CRS, metres above the datum) or ``lonlat`` (lon, lat, z: WGS84 degrees), as numbers
@@ -72,22 +72,21 @@ def parse_triple(text, what: str) -> tuple[float, float, float]:
 
 def light_shadow(cfg: LightConfig) -> dict:
     """Write the point light's cast-shadow mask of the DEM; returns the report. In memory, or
-    in windows (``--window-size``, or a DEM larger than ``--max-memory`` allows; ``_windows``)."""
+    in windows (``--window-size``, or a DEM larger than ``--max-memory`` allows; ``_windows``).
+    The preamble and the tail every run shares: ``run.runner.RunContext`` (the paths claimed,
+    the threads, the backend by the one rule; the report and the summary)."""
     import numpy as np
 
     from ..engine.arrays import point_light_mask
-    from ..io import check_output_format, input_label, output_driver, write_json, write_png, \
-        write_raster
-    from ..io.write import Claims
+    from ..io import check_output_format, input_label, output_driver, write_png, write_raster
     from ..pictures.preview import relief_rgb
     from .config import parse_window_size
     from .local import needs_windows
     from ..engine.windows import bytes_per_cell, default_max_memory, parse_size
-    from .report import Timer
+    from .runner import RunContext
 
     ro = cfg.run
     dem, output, position, lonlat = cfg.check()
-    set_threads(ro)
     wshape = parse_window_size(cfg.window_size)
     try:
         limit = (parse_size(cfg.max_memory) if cfg.max_memory is not None
@@ -95,12 +94,8 @@ def light_shadow(cfg: LightConfig) -> dict:
     except HillshadeError as exc:
         raise UsageProblem(f"--max-memory: {exc}") from None
     per_cell = bytes_per_cell("brute")
-    timer = Timer()
-    claims = Claims([dem], ro.overwrite)
-    claims.claim(output, "OUTPUT")
-    for extra, what in ((ro.report_path, "--report"), (ro.preview, "--preview")):
-        if extra is not None:
-            claims.claim(extra, what)
+    ctx = RunContext.start(ro, inputs=[dem], outputs=[(output, "OUTPUT")], note=False)
+    timer = ctx.timer
     check_output_format(output, output_driver(output, ro.fmt), "uint8", 1, False,
                         ro.creation_options)
     with timer("read"):
@@ -129,15 +124,15 @@ def light_shadow(cfg: LightConfig) -> dict:
                 "HEIGHT_ABOVE_GROUND_M": f"{float(cfg.height_above_ground):g}"}
         st: dict = {}
         if windowed:
-            shadowed, valid, processing = _windows(src, row, col, zl, cfg.height_above_ground,
-                                                   wshape, limit, per_cell, output, tags, ro,
-                                                   timer, st)
+            shadowed, valid, processing = _windows(ctx, src, row, col, zl,
+                                                   cfg.height_above_ground, wshape, limit,
+                                                   per_cell, output, tags)
         else:
             with timer("read"):
                 d = src.read()
             with timer("compute"):
                 mask = point_light_mask(d, x, y, zl, height_above_ground=cfg.height_above_ground,
-                                        backend=ro.backend, stats=st)
+                                        backend=ctx.backend, stats=st)
             with timer("write"):
                 write_raster(output, mask, d, nodata=255, description="cast shadow (point light)",
                              tags=tags, overwrite=ro.overwrite, fmt=ro.fmt,
@@ -153,33 +148,30 @@ def light_shadow(cfg: LightConfig) -> dict:
     rep = {"input": input_label(path), "output": os.path.abspath(output),
            "shape": list(shape), "light": {"x": x, "y": y, "z": zl, "row": row, "col": col},
            "height_above_ground_m": float(cfg.height_above_ground),
-           "shadow_fraction": share, "backend": st.get("backend", "cpu"),
+           "shadow_fraction": share, "backend": ctx.backend,
            "algorithm": "point (pyramid march)", "processing": processing,
-           "seconds": dict(timer.seconds, total=timer.total()), "version": __version__}
+           "seconds": ctx.seconds(), "version": __version__}
     if "gpu" in st:
         rep["gpu"] = st["gpu"]
-    if ro.report_path is not None:
-        write_json(ro.report_path, rep, ro.overwrite)
-    if not ro.quiet:
-        ro.say("summary", f"hillshade-rt: {output}: {shape[1]}x{shape[0]}, point light "
-                          f"at row {row:.1f} col {col:.1f} z {zl:g} m: "
-                          f"{100 * share:.2f}% of valid cells in shadow; compute "
-                          f"{timer.seconds.get('compute', 0.0):.2f} s")
-    return rep
+    return ctx.finish(rep, [("summary", f"hillshade-rt: {output}: {shape[1]}x{shape[0]}, point "
+                                        f"light at row {row:.1f} col {col:.1f} z {zl:g} m: "
+                                        f"{100 * share:.2f}% of valid cells in shadow; compute "
+                                        f"{timer.seconds.get('compute', 0.0):.2f} s")])
 
 
-def _windows(src, row, col, zl, lift, wshape, limit, per_cell, output, tags, ro, timer, st):
+def _windows(ctx, src, row, col, zl, lift, wshape, limit, per_cell, output, tags):
     """The mask in windows of ``src`` (an open ``io.DemSource``), each read with its halo: the box
     of the window and the light's cell (``algorithms.point_light.halo``), lit with the raster's ray
     arithmetic (the same cells as in memory, bit for bit) and its region written by
     ``io.raster.BandWriter``. Windows of ``wshape``, else squares a quarter of what
-    ``--max-memory`` allows (the halo reaches to the light: it may be larger). Returns
-    (shadowed cells, valid cells, the report's processing)."""
+    ``--max-memory`` allows (the halo reaches to the light: it may be larger); on the run's
+    backend (``ctx.backend``), timed by its timer. Returns (shadowed cells, valid cells, the
+    report's processing)."""
     import numpy as np
 
     from ..algorithms import point_light
     from ..algorithms.horizon import bilinear
-    from ..engine.gpu import GpuDem, resolve_backend
+    from ..engine.gpu import GpuDem
     from ..io.raster import BandWriter
     from ..engine.windows import window_budget
 
@@ -190,8 +182,7 @@ def _windows(src, row, col, zl, lift, wshape, limit, per_cell, output, tags, ro,
     if wshape is None:
         side = max(64, int(math.sqrt(window_budget(limit, per_cell)[0] / 4)))
         wshape = (side, side)
-    ran_on = resolve_backend(ro.backend)
-    st["backend"] = ran_on
+    ro, timer, ran_on = ctx.ro, ctx.timer, ctx.backend
     shadowed = valid = windows = 0
     largest = 0
     with src.reader() as rd, BandWriter(output, src, 1, "uint8", 255, tags,

@@ -1,36 +1,103 @@
 """The ``shadow`` / ``hillshade`` run: one DEM (or a mosaic of several), one or more suns, one
 output per sun (bands of OUTPUT, or files of --output-pattern). In memory when the run fits
---max-memory, else in windows (``run.local.shade_in_windows``), on Dask workers with a scheduler. The command
-line and ``api.shade`` both call :func:`shade` with a :class:`~.config.ShadeConfig`; it returns the
-report (what ``--report`` writes).
+--max-memory, else in windows (``run.local.shade_in_windows``), on Dask workers with a
+scheduler. The command line and ``api.shade`` both call :func:`shade` with a
+:class:`~.config.ShadeConfig`; it returns the report (what ``--report`` writes).
+
+The run's steps, between the preamble and the tail every run shares (``run.runner.RunContext``:
+the claims, the threads, the backend; the report written and the lines said): the sun and the
+paths checked (:func:`_plan`), the run started (:func:`_start`), the lighting settings built once
+(``ShadeConfig.lighting``, passed whole), the DEM opened and in memory vs windows decided
+(:func:`_opened`), the outputs planned (:func:`_outputs`), the terrain lit (:func:`_light`), the
+preview (:func:`_preview`), the report (:func:`_report`), the STAC item (:func:`_stac_item`),
+then ``RunContext.finish`` with the lines (:func:`_lines`).
 """
 
 from __future__ import annotations
 
 import contextlib
 import os
+from dataclasses import dataclass
 
 from ..errors import HillshadeError, UsageProblem
-from .config import ShadeConfig, inputs_and_output, parse_window_size, set_threads
+from .config import ShadeConfig, inputs_and_output, parse_window_size
+
+
+@dataclass(kw_only=True)
+class ShadePlan:
+    """What a ``shade`` run has settled before it lights anything.
+
+    Attributes
+    ----------
+    req : model.sun.SunRequest
+        The sun(s) asked for (a STAC item's sun turned to grid north once the DEM is open).
+    scene : object or None
+        The STAC item the sun came from (``run.stac.sun_from_item``; --sun-from-stac).
+    inputs : list of str
+        The DEM(s): one, or the tiles of a mosaic.
+    output : str or None
+        OUTPUT (None with --output-pattern).
+    window_shape : tuple or None
+        --window-size as (rows, cols).
+    limit : int
+        --max-memory, bytes.
+    pattern : run.outputs.OutputPattern or None
+        --output-pattern.
+    per_cell : int
+        Bytes a lit cell needs (``engine.windows.bytes_per_cell``).
+    windowed : bool
+        Lit in windows (else in memory).
+    area : run.context.Area or None
+        The tile of a ``--context`` run.
+    """
+
+    req: object
+    scene: object
+    inputs: list
+    output: str | None
+    window_shape: tuple | None
+    limit: int
+    pattern: object = None
+    per_cell: int = 0
+    windowed: bool = False
+    area: object = None
+
+    @property
+    def shown(self) -> str:
+        """The outputs as the user named them (OUTPUT, or the pattern)."""
+        return self.output or self.pattern.pattern
+
 
 def shade(cfg: ShadeConfig) -> dict:
     """Run ``cfg``; returns the report. Bad input raises ``HillshadeError`` (``UsageProblem``
     for a bad combination of options) before anything is written."""
-    import numba
-
-    from ..io.write import Claims, reset
-    from ..engine.shader import choose_backend
-    from ..model.sun import SunRequest
-    from ..engine.windows import bytes_per_cell, default_max_memory, parse_size
-    from .local import needs_windows
-    from .outputs import OutputPattern
-    from .report import Timer
-    from .stac import check_item_output, sun_from_item
+    from ..engine.windows import bytes_per_cell
 
     cfg.check()
-    kind, soft, algorithm, options = cfg.kind, cfg.soft, cfg.algorithm, cfg.options
+    plan = _plan(cfg)
+    ctx = _start(cfg, plan)
+    lighting = cfg.lighting(ctx.backend)
+    plan.per_cell = bytes_per_cell(lighting.algorithm, cfg.kind, lighting.soft,
+                                   lighting.self_shadow)
+    with _opened(cfg, ctx, plan) as src:
+        out = _outputs(cfg, ctx, plan, lighting, src)
+        ctx.compile_note(lighting.algorithm, lighting.self_shadow or cfg.kind != "shadow")
+        run, empty = _light(cfg, ctx, plan, lighting, src, out)
+        _preview(ctx, run)
+        rep = _report(cfg, ctx, plan, lighting, run)
+        _stac_item(cfg, ctx, plan, run, rep)
+        return ctx.finish(rep, _lines(cfg, plan, rep, run, empty))
+
+
+def _plan(cfg: ShadeConfig) -> ShadePlan:
+    """The sun and the paths checked (a STAC item's sun read), the window size and the memory
+    limit parsed, ``--context``'s combinations refused: before any path is claimed."""
+    from ..io.write import reset
+    from ..engine.windows import default_max_memory, parse_size
+    from ..model.sun import SunRequest
+    from .stac import sun_from_item
+
     ro = cfg.run
-    timer = Timer()
     # --sun-from-stac: the item's sun (a bad item fails the run, exit status 1)
     sun, scene = sun_from_item(cfg.sun, ro.quiet, ro.say)
     try:     # a bad sun is the command line's fault (exit status 2)
@@ -40,7 +107,6 @@ def shade(cfg: ShadeConfig) -> dict:
     except HillshadeError as exc:
         raise UsageProblem(str(exc)) from None
     inputs, output = inputs_and_output(cfg.files, cfg.output, cfg.output_pattern)
-    pattern = cfg.output_pattern
     reset()
     wshape = parse_window_size(cfg.window_size)
     try:
@@ -48,145 +114,203 @@ def shade(cfg: ShadeConfig) -> dict:
                  else default_max_memory())
     except HillshadeError as exc:
         raise UsageProblem(f"--max-memory: {exc}") from None
-    item_in = [cfg.sun["sun_from_stac"]] if cfg.sun.get("sun_from_stac") else []
     cfg.read.check_context(inputs, **{"--scheduler": cfg.scheduler is not None,
                                       "--preview": ro.preview is not None})
-    claims = Claims(inputs + item_in + cfg.read.inputs(), ro.overwrite)   # every path written:
-    if output is not None:                            # no input, no two the same
-        claims.claim(output, "OUTPUT")
-    check_item_output(cfg.stac_item, output, pattern, claims)
-    for extra, what in ((ro.report_path, "--report"), (ro.preview, "--preview")):
-        if extra is not None:
-            claims.claim(extra, what)
-    if pattern is not None:
-        pattern = OutputPattern(pattern)
-    set_threads(ro)
-    ran_on = choose_backend(ro.backend, algorithm, options)
-    per_cell = bytes_per_cell(algorithm, kind, soft, cfg.self_shadow)
-    if cfg.read.context is not None:    # a tile of the context: its windows, in the context
-        with timer("read"):
-            area = cfg.read.open_area(inputs)
-        with area:
-            return _shade(cfg, area.source, True, inputs, output, req, pattern, wshape, limit,
-                          claims, ran_on, per_cell, timer, scene, area)
-    forced = cfg.scheduler is not None or wshape is not None or len(inputs) > 1
-    with timer("read"):     # opened (not read) once, for its size and then its values
-        src = cfg.read.open(inputs, windows=forced)
-    with src:
-        return _shade(cfg, src, forced or needs_windows(src, limit, per_cell), inputs, output,
-                      req, pattern, wshape, limit, claims, ran_on, per_cell, timer, scene)
+    return ShadePlan(req=req, scene=scene, inputs=inputs, output=output, window_shape=wshape,
+                     limit=limit)
 
 
-def _shade(cfg, src, windowed, inputs, output, req, pattern, wshape, limit, claims, ran_on,
-           per_cell, timer, scene=None, area=None):
-    """``shade`` once the DEM is open: in memory or in windows, then the report. ``area``: the
-    tile of ``src`` a ``--context`` run lights (``run.context.Area``)."""
-    import numba
+def _start(cfg: ShadeConfig, plan: ShadePlan):
+    """The run started (``RunContext.start``): every path it writes claimed (OUTPUT, the STAC
+    item, the report, the preview: no input, no two the same), the threads set, the backend
+    chosen; then the pattern parsed. The compile note waits until the outputs are checked."""
+    from ..io.write import Claims
+    from .outputs import OutputPattern
+    from .runner import RunContext
+    from .stac import check_item_output
 
-    from ..io import check_output_format, input_label, output_driver, write_json, write_png
-    from ..engine.products import product
-    from ..errors import AllNodata
-    from .context import nodata_note
-    from .local import (all_nodata, bounded_gdal_cache, mean_stats, shade_in_memory,
-                        shade_in_windows)
-    from .notes import compile_note, note_to_show
-    from .outputs import Outputs
-    from .report import build_report, shown_paths, summary_line
-
-    kind, soft, algorithm, options = cfg.kind, cfg.soft, cfg.algorithm, cfg.options
     ro = cfg.run
-    prod = product(kind, soft)
-    dtype, nodata = prod.dtype, prod.nodata
-    out = Outputs(prod, algorithm, output, pattern, claims, cfg.cog, ro.preview is not None,
-                  cfg.ambient, ro.fmt, ro.creation_options)
-    if cfg.height_above_ground:     # the observer's height, in every output's tags
-        out.base_tags["HEIGHT_ABOVE_GROUND_M"] = f"{float(cfg.height_above_ground):g}"
-    if scene is not None:           # the sun of a STAC item: which item, in every output's tags
+    item_in = [cfg.sun["sun_from_stac"]] if cfg.sun.get("sun_from_stac") else []
+    reads = plan.inputs + item_in + cfg.read.inputs()
+    outputs = [(plan.output, "OUTPUT")]
+    if cfg.stac_item is not None:
+        # the item's own checks come after OUTPUT's claim and before the report's, as they
+        # always have: run on a claim of OUTPUT alone (outside any batch), then claimed again
+        ahead = Claims(reads, ro.overwrite)
+        ahead.batch = None
+        if plan.output is not None:
+            ahead.claim(plan.output, "OUTPUT")
+        check_item_output(cfg.stac_item, plan.output, cfg.output_pattern, ahead)
+        outputs.append((cfg.stac_item, "--stac-item"))
+    ctx = RunContext.start(ro, inputs=reads, outputs=outputs, algorithm=cfg.algorithm,
+                           options=cfg.options, note=False)
+    if cfg.output_pattern is not None:
+        plan.pattern = OutputPattern(cfg.output_pattern)
+    return ctx
+
+
+@contextlib.contextmanager
+def _opened(cfg: ShadeConfig, ctx, plan: ShadePlan):
+    """The DEM opened (not read) once, for its size and then its values; whether it is lit in
+    memory or in windows decided (``plan.windowed``). A ``--context`` tile: the context opened
+    with it (``plan.area``), lit in windows, in the context. Yields what is lit."""
+    from .local import needs_windows
+
+    if cfg.read.context is not None:    # a tile of the context: its windows, in the context
+        with ctx.timer("read"):
+            area = cfg.read.open_area(plan.inputs)
+        with area:
+            plan.windowed, plan.area = True, area
+            yield area.source
+        return
+    forced = cfg.scheduler is not None or plan.window_shape is not None or len(plan.inputs) > 1
+    with ctx.timer("read"):
+        src = cfg.read.open(plan.inputs, windows=forced)
+    with src:
+        plan.windowed = forced or needs_windows(src, plan.limit, plan.per_cell)
+        yield src
+
+
+def _outputs(cfg: ShadeConfig, ctx, plan: ShadePlan, lighting, src):
+    """The outputs planned (``run.outputs.Outputs``: the product, the files, their tags) and
+    checked against their format before any work; a STAC item's sun turned to grid north."""
+    from ..io import check_output_format, output_driver
+    from ..engine.products import product
+    from .outputs import Outputs
+
+    ro = cfg.run
+    prod = product(cfg.kind, lighting.soft)
+    out = Outputs(prod, lighting.algorithm, plan.output, plan.pattern, ctx.claims, cfg.cog,
+                  ro.preview is not None, lighting.ambient, ro.fmt, ro.creation_options)
+    if lighting.lift:     # the observer's height, in every output's tags
+        out.base_tags["HEIGHT_ABOVE_GROUND_M"] = f"{lighting.lift:g}"
+    if plan.scene is not None:     # the sun of a STAC item: which item, in every output's tags
         from .stac import note_if_apart, scene_tags, to_grid_north
-        req = to_grid_north(req, scene, src)      # its azimuth from true north
-        out.base_tags.update(scene_tags(scene))
+        plan.req = to_grid_north(plan.req, plan.scene, src)      # its azimuth from true north
+        out.base_tags.update(scene_tags(plan.scene))
         if not ro.quiet:
-            note_if_apart(scene, src, ro.say)
+            note_if_apart(plan.scene, src, ro.say)
     # Dask's parts are put together by GDAL (no 16-bit encoding of soft shadows on the way)
     out.via_vrt = cfg.scheduler is not None
-    if output is not None:   # the format can hold the product (before any work)
-        check_output_format(output, output_driver(output, ro.fmt, cfg.cog), dtype,
-                            len(req.times) if req.from_time else 1,
+    if plan.output is not None:   # the format can hold the product (before any work)
+        check_output_format(plan.output, output_driver(plan.output, ro.fmt, cfg.cog), prod.dtype,
+                            len(plan.req.times) if plan.req.from_time else 1,
                             out.continuous and not out.via_vrt, ro.creation_options,
                             out.resampling)
-    if not ro.quiet:
-        note = compile_note(algorithm, ran_on, cfg.self_shadow or kind != "shadow")
-        if note:
-            ro.say("compile", note)
+    return out
+
+
+def _light(cfg: ShadeConfig, ctx, plan: ShadePlan, lighting, src, out):
+    """The terrain lit and the outputs written: in memory or in windows (``run.local``), or
+    all nodata when every cell is. Returns (``local.ShadeResult``, the path of the all-nodata
+    DEM or None)."""
+    from ..errors import AllNodata
+    from .local import all_nodata, bounded_gdal_cache, shade_in_memory, shade_in_windows
+
+    ro, area = cfg.run, plan.area
     empty = None
     try:
-        with (bounded_gdal_cache() if windowed else contextlib.nullcontext()):
+        with (bounded_gdal_cache() if plan.windowed else contextlib.nullcontext()):
             try:
                 if area is not None:
                     area.check_valid()
-                run = (shade_in_windows if windowed else shade_in_memory)(
-                    inputs, src, cfg.scale, req, out, timer, algorithm, options, ran_on,
-                    cfg.curvature, cfg.refraction_k, soft, cfg.self_shadow, cfg.ambient,
-                    ro.quiet, limit=limit, window_shape=wshape, scheduler=cfg.scheduler,
-                    per_cell=per_cell, lift=cfg.height_above_ground, progress_mode=ro.progress,
+                run = (shade_in_windows if plan.windowed else shade_in_memory)(
+                    plan.inputs, src, cfg.scale, plan.req, out, ctx.timer, lighting, ro.quiet,
+                    limit=plan.limit, window_shape=plan.window_shape, scheduler=cfg.scheduler,
+                    per_cell=plan.per_cell, progress_mode=ro.progress,
                     worker_timeout=ro.worker_timeout,
                     **({} if area is None else {"area": area}))
             except AllNodata:      # (raised before any output is opened): all nodata then
                 empty = (src if area is None else area.tile).path
-                run = all_nodata(inputs, src, req, out, timer, area)
+                run = all_nodata(plan.inputs, src, plan.req, out, ctx.timer, area)
     finally:
         out.cleanup()
-    d, suns, records = run["dem"], run["suns"], run["records"]
-    if ro.preview is not None:
-        with timer("write"):
-            day = [s for s in suns if not s.night]
-            s0 = day[0] if day else suns[0]
-            write_png(ro.preview, run["relief"](s0.azimuth, s0.elevation), ro.overwrite)
-    seconds = dict(timer.seconds, total=timer.total())
+    return run, empty
+
+
+def _preview(ctx, run) -> None:
+    """--preview: the relief lit by the first day sun (the first sun at night), the product's
+    shade over it."""
+    ro = ctx.ro
+    if ro.preview is None:
+        return
+    from ..io import write_png
+    with ctx.timer("write"):
+        day = [s for s in run.suns if not s.night]
+        s0 = day[0] if day else run.suns[0]
+        write_png(ro.preview, run.relief(s0.azimuth, s0.elevation), ro.overwrite)
+
+
+def _report(cfg: ShadeConfig, ctx, plan: ShadePlan, lighting, run) -> dict:
+    """The run's report (``run.report.build_report`` and the lighting run's own keys)."""
+    from ..io import input_label
+    from ..engine.products import product
+    from .local import mean_stats
+    from .report import build_report
+
+    ro = cfg.run
+    prod = product(cfg.kind, lighting.soft)
+    suns, records = run.suns, run.records
     first = suns[0]
-    rep = build_report(dem=d, output=output or pattern.pattern, azimuth=first.azimuth,
-                       elevation=first.elevation, algorithm=algorithm, backend=ran_on,
-                       backend_requested=ro.backend, threads=numba.get_num_threads(),
-                       seconds=seconds, stats=mean_stats(records, run["stats"]),
-                       height_range=run["zrange"], options=options,
-                       algorithm_stats=run["algo_stats"], gpu=run.get("gpu"))
+    rep = build_report(dem=run.dem, output=plan.shown, azimuth=first.azimuth,
+                       elevation=first.elevation, algorithm=lighting.algorithm,
+                       backend=ctx.backend, backend_requested=ro.backend, threads=ctx.threads,
+                       seconds=ctx.seconds(), stats=mean_stats(records, run.stats),
+                       height_range=run.zrange, options=cfg.options,
+                       algorithm_stats=run.algo_stats, gpu=run.gpu)
     rep["sun"] = records[0] if len(records) == 1 else None
-    rep["sun_source"] = "time" if req.from_time else "given"
-    rep["sun_from_stac"] = scene.as_dict() if scene is not None else None
-    if run["sun_info"] is not None:
-        rep.update(run["sun_info"])
-    if len(records) > 1 or req.from_time:
+    rep["sun_source"] = "time" if plan.req.from_time else "given"
+    rep["sun_from_stac"] = plan.scene.as_dict() if plan.scene is not None else None
+    if run.sun_info is not None:
+        rep.update(run.sun_info)
+    if len(records) > 1 or plan.req.from_time:
         rep["times"] = records
     rep["night_count"] = sum(1 for s in suns if s.night)
-    rep["product"] = {"kind": kind, "soft": soft, "self_shadow": cfg.self_shadow,
-                      "dtype": dtype, "nodata": nodata, "bands": len(suns) if output else 1,
+    rep["product"] = {"kind": cfg.kind, "soft": lighting.soft,
+                      "self_shadow": lighting.self_shadow, "dtype": prod.dtype,
+                      "nodata": prod.nodata, "bands": len(suns) if plan.output else 1,
                       "cog": cfg.cog}
-    if kind == "hillshade":
-        rep["product"].update(ambient=cfg.ambient, scale=cfg.scale)
-    rep["curvature"] = run["curvature"]
-    rep["height_above_ground_m"] = float(cfg.height_above_ground)
-    rep["inputs"] = [input_label(p) for p in inputs]
-    rep["processing"] = run["processing"]
+    if cfg.kind == "hillshade":
+        rep["product"].update(ambient=lighting.ambient, scale=cfg.scale)
+    rep["curvature"] = run.curvature
+    rep["height_above_ground_m"] = lighting.lift
+    rep["inputs"] = [input_label(p) for p in plan.inputs]
+    rep["processing"] = run.processing
     if ro.preview is not None:
         rep["preview"] = os.path.abspath(ro.preview)
-    if cfg.stac_item is not None:   # once the raster is whole (its checksum), before the report
-        from .stac import write_item
-        with timer("write"):
-            write_item(cfg.stac_item, output, suns, scene, kind=kind, algorithm=algorithm,
-                       command=cfg.command, overwrite=ro.overwrite)
-        rep["stac_item"] = os.path.abspath(cfg.stac_item)
-    if ro.report_path is not None:
-        write_json(ro.report_path, rep, ro.overwrite)
-    if empty is not None and not ro.quiet:     # (-q: the report and the EMPTY tag keep it)
-        ro.say("note", nodata_note(empty))
-    if not ro.quiet:
-        # the outputs named as the user gave them (as every command does), a pattern's files
-        ro.say("summary", summary_line(rep, output if output is not None
-                                       else shown_paths(pattern.planned) or pattern.pattern))
-        note = note_to_show(run["algo_stats"], algorithm, options, cfg.algorithm_explicit)
-        if note:
-            ro.say("note", note)
-        if rep["night_count"]:
-            ro.say("note", f"the sun is below the horizon at {rep['night_count']} of "
-                           f"{len(suns)} time(s): all shadow there")
     return rep
+
+
+def _stac_item(cfg: ShadeConfig, ctx, plan: ShadePlan, run, rep: dict) -> None:
+    """--stac-item: written once the raster is whole (its checksum), before the report."""
+    if cfg.stac_item is None:
+        return
+    from .stac import write_item
+    with ctx.timer("write"):
+        write_item(cfg.stac_item, plan.output, run.suns, plan.scene, kind=cfg.kind,
+                   algorithm=cfg.algorithm, command=cfg.command, overwrite=cfg.run.overwrite)
+    rep["stac_item"] = os.path.abspath(cfg.stac_item)
+
+
+def _lines(cfg: ShadeConfig, plan: ShadePlan, rep: dict, run, empty) -> list:
+    """What the run says after its report, in order: the all-nodata note (with ``-q`` the
+    report and the EMPTY tag keep it), the summary (the outputs named as the user gave them, as
+    every command does: a pattern's files), the algorithm's note, the suns below the horizon."""
+    from .context import nodata_note
+    from .notes import note_to_show
+    from .report import shown_paths, summary_line
+
+    if cfg.run.quiet:
+        return []
+    lines = []
+    if empty is not None:
+        lines.append(("note", nodata_note(empty)))
+    lines.append(("summary", summary_line(rep, plan.output if plan.output is not None
+                                          else shown_paths(plan.pattern.planned)
+                                          or plan.pattern.pattern)))
+    lines.append(("note", note_to_show(run.algo_stats, cfg.algorithm, cfg.options,
+                                       cfg.algorithm_explicit)))
+    if rep["night_count"]:
+        lines.append(("note", f"the sun is below the horizon at {rep['night_count']} of "
+                              f"{len(run.suns)} time(s): all shadow there"))
+    return lines

@@ -16,10 +16,10 @@ from dataclasses import dataclass, field
 
 from .. import __version__
 from ..errors import UsageProblem
-from .config import ReadOptions, RunOptions, set_threads
+from .config import ReadOptions, RunOptions
 
 
-@dataclass
+@dataclass(kw_only=True)
 class SubsolarConfig:
     """``files``: DEM and OUTPUT (or the DEM alone with ``output``); ``subsolar``: (lat, lon)
     or the command line's 'LAT,LON'; ``sun_distance`` metres or None; ``body``: --body's text
@@ -78,7 +78,10 @@ def parse_latlon(text) -> tuple[float, float]:
 
 
 def subsolar_shadow(cfg: SubsolarConfig) -> dict:
-    """Write the per-cell-sun cast-shadow mask of the DEM; returns the report."""
+    """Write the per-cell-sun cast-shadow mask of the DEM; returns the report. The preamble
+    and the tail every run shares: ``run.runner.RunContext`` (the paths claimed, the threads,
+    the backend by the one rule, ``auto`` the GPU on a real device; the report and the
+    summary)."""
     import numpy as np
 
     from ..engine.arrays import subsolar_mask
@@ -88,24 +91,16 @@ def subsolar_shadow(cfg: SubsolarConfig) -> dict:
     from ..model.earth import dem_body
     from ..errors import HillshadeError
     from ..io import check_output_format, output_driver, write_png, write_raster
-    from ..io.write import Claims
     from ..pictures.preview import relief_rgb
     from ..engine.products import product
-    from .report import Timer
+    from .runner import RunContext
 
     ro = cfg.run
     dem, output, point = cfg.check()
-    set_threads(ro)
-    from ..engine.gpu import resolve_backend
-    backend = resolve_backend(ro.backend)   # the one rule: auto takes a real GPU
+    ctx = RunContext.start(ro, inputs=[dem], outputs=[(output, "OUTPUT")], note=False)
+    timer = ctx.timer
     if cfg.body is not None:
         body_from_option(cfg.body)              # a bad --body: exit 2 before anything is read
-    timer = Timer()
-    claims = Claims([dem], ro.overwrite)
-    claims.claim(output, "OUTPUT")
-    for extra, what in ((ro.report_path, "--report"), (ro.preview, "--preview")):
-        if extra is not None:
-            claims.claim(extra, what)
     prod = product("shadow", bool(cfg.soft))
     check_output_format(output, output_driver(output, ro.fmt), prod.dtype, 1, prod.continuous,
                         ro.creation_options)
@@ -127,8 +122,7 @@ def subsolar_shadow(cfg: SubsolarConfig) -> dict:
                            f"{body.source}), got {distance:g} m")
     curvature = True if cfg.curvature is None else bool(cfg.curvature)
     if series is not None:
-        return _series(cfg, d, output, series, body, distance, curvature, prod, timer,
-                       backend)
+        return _series(cfg, ctx, d, output, series, body, distance, curvature, prod)
     lat, lon = point
     s = sun_vector(body, lat, lon, distance)
     with timer("compute"):
@@ -136,7 +130,7 @@ def subsolar_shadow(cfg: SubsolarConfig) -> dict:
         arr = subsolar_mask(d, lat, lon, body=body, height_above_ground=cfg.height_above_ground,
                             curvature=curvature, refraction_k=cfg.refraction_k, frames=frames,
                             sun_xyz=s, soft=bool(cfg.soft),
-                            backend=backend)
+                            backend=ctx.backend)
         az, el = cell_suns(frames, body, s, d.heights, float(cfg.height_above_ground))
     arr, valid, share = _band(arr, bool(cfg.soft), prod)
     shade = np.where(valid, 1.0 - arr, 0.0) if cfg.soft else np.where(arr == 1, 1.0, 0.0)
@@ -152,23 +146,23 @@ def subsolar_shadow(cfg: SubsolarConfig) -> dict:
                      co=ro.creation_options)
         if ro.preview is not None:
             write_png(ro.preview, relief_rgb(d.heights, d.grid, shade=shade), ro.overwrite)
-    rep = _report(cfg, d, output, body, curvature, timer, backend,
+    rep = _report(cfg, ctx, d, output, body, curvature,
                   subsolar={"lat": lat, "lon": lon},
                   sun_distance_m=distance,
                   sun={"elevation_deg": [float(el_v.min()), float(el_v.max())],
                        "azimuth_deg": [float(az_v.min()), float(az_v.max())],
                        "azimuth": "true, clockwise from north"},
                   sun_radius_deg=sun_radius_deg(distance), shadow_fraction=share)
-    if not ro.quiet:
-        ro.say("summary", f"hillshade-rt: {output}: {d.shape[1]}x{d.shape[0]}, subsolar point "
-                          f"{lat:g},{lon:g} on {body.source}: sun elevation "
-                          f"{el_v.min():.2f}..{el_v.max():.2f} deg; {100 * share:.2f}% of "
-                          f"valid cells in shadow{' (less than half the disk)' if cfg.soft else ''}; compute {timer.seconds['compute']:.2f} s")
-    return rep
+    half = " (less than half the disk)" if cfg.soft else ""
+    return ctx.finish(rep, [("summary", f"hillshade-rt: {output}: {d.shape[1]}x{d.shape[0]}, "
+                                        f"subsolar point {lat:g},{lon:g} on {body.source}: sun "
+                                        f"elevation {el_v.min():.2f}..{el_v.max():.2f} deg; "
+                                        f"{100 * share:.2f}% of valid cells in shadow{half}; "
+                                        f"compute {timer.seconds['compute']:.2f} s")])
 
 
-def _series(cfg: SubsolarConfig, d, output: str, series, body, default_distance: float,
-            curvature: bool, prod, timer, backend: str) -> dict:
+def _series(cfg: SubsolarConfig, ctx, d, output: str, series, body, default_distance: float,
+            curvature: bool, prod) -> dict:
     """``shadow --subsolar-file F``: one band per position of the series (description: its UTC
     time; tags: the subsolar point and the distance), the frames and the pyramid made once,
     the masks computed into one reused buffer; a progress bar. Returns the report."""
@@ -181,7 +175,7 @@ def _series(cfg: SubsolarConfig, d, output: str, series, body, default_distance:
     from ..model.times import iso
     from .report import progress
 
-    ro = cfg.run
+    ro, timer, backend = cfg.run, ctx.timer, ctx.backend
     dist = (np.full(len(series), default_distance) if series.distance is None
             else np.asarray(series.distance, np.float64))
     if not (dist > body.a).all():
@@ -220,17 +214,16 @@ def _series(cfg: SubsolarConfig, d, output: str, series, body, default_distance:
                 w.write(i + 1, band, description=iso(times[i]),
                         tags={"TIME": iso(times[i]), "SUBSOLAR": f"lat {lat:g} lon {lon:g}",
                               "SUN_DISTANCE_M": f"{dist[i]:.6g}"})
-    rep = _report(cfg, d, output, body, curvature, timer, backend,
+    rep = _report(cfg, ctx, d, output, body, curvature,
                   subsolar_file=os.path.abspath(series.path), times=[iso(t) for t in times],
                   subsolar=[{"lat": float(a), "lon": float(b)}
                             for a, b in zip(series.lat, series.lon)],
                   sun_distance_m=[float(x) for x in dist], shadow_fraction=shares)
-    if not ro.quiet:
-        ro.say("summary", f"hillshade-rt: {output}: {d.shape[1]}x{d.shape[0]}, {len(series)} "
-                          f"subsolar positions on {body.source} (one band each): "
-                          f"{100 * min(shares):.2f}..{100 * max(shares):.2f}% of valid cells "
-                          f"in shadow; compute {timer.seconds['compute']:.2f} s")
-    return rep
+    return ctx.finish(rep, [("summary", f"hillshade-rt: {output}: {d.shape[1]}x{d.shape[0]}, "
+                                        f"{len(series)} subsolar positions on {body.source} (one "
+                                        f"band each): {100 * min(shares):.2f}.."
+                                        f"{100 * max(shares):.2f}% of valid cells in shadow; "
+                                        f"compute {timer.seconds['compute']:.2f} s")])
 
 
 def _band(arr, soft: bool, prod):
@@ -245,13 +238,11 @@ def _band(arr, soft: bool, prod):
     return arr, valid, float((arr[valid] == 1).mean()) if valid.any() else 0.0
 
 
-def _report(cfg: SubsolarConfig, d, output: str, body, curvature: bool, timer, backend: str,
-            **sun) -> dict:
+def _report(cfg: SubsolarConfig, ctx, d, output: str, body, curvature: bool, **sun) -> dict:
     """The report of a ``--subsolar`` or ``--subsolar-file`` run (``sun``: the keys of the
-    sun(s)), written to --report."""
+    sun(s)); ``RunContext.finish`` writes it (--report)."""
     from ..model.earth import refraction_for
-    from ..io import input_label, write_json
-    ro = cfg.run
+    from ..io import input_label
     rep = {"input": input_label(d.path), "output": os.path.abspath(output),
            "shape": list(d.shape), **sun,
            "body": {"source": body.source, "a_m": body.a, "b_m": body.b},
@@ -259,9 +250,7 @@ def _report(cfg: SubsolarConfig, d, output: str, body, curvature: bool, timer, b
                          "refraction_k": refraction_for(body, cfg.refraction_k)
                          if curvature else None},
            "soft": bool(cfg.soft), "height_above_ground_m": float(cfg.height_above_ground),
-           "backend": backend,
+           "backend": ctx.backend,
            "algorithm": "subsolar (pyramid march, a sun per cell)",
-           "seconds": dict(timer.seconds, total=timer.total()), "version": __version__}
-    if ro.report_path is not None:
-        write_json(ro.report_path, rep, ro.overwrite)
+           "seconds": ctx.seconds(), "version": __version__}
     return rep
