@@ -51,18 +51,21 @@ class RunContext:
     def start(cls, ro: RunOptions, *, inputs=(), outputs=(), algorithm: str | None = None,
               options=None, backend: bool = True, relief: bool = False,
               note: bool = True) -> RunContext:
-        """Begin a run: claim ``outputs`` ((path, what) pairs; None paths skipped) and the
-        report and preview against ``inputs``; set the threads; choose the backend (``backend``
+        """Begin a run: claim ``outputs`` ((path, what) pairs; None paths skipped; or a
+        callable taking the claims, for an output with checks of its own, run in its turn) and
+        the report and preview against ``inputs``; set the threads; choose the backend (``backend``
         False: a run with no GPU kernels, always the CPU) for ``algorithm`` and ``options``;
         say the compile note of ``algorithm`` (``relief``: the relief kernels too) unless
         ``note`` is False or the run is quiet."""
         from ..io.write import Claims
         claims = Claims(list(inputs), ro.overwrite)
         ctx = cls(ro, claims)
-        for path, what in list(outputs) + [(ro.report_path, "--report"),
-                                           (ro.preview, "--preview")]:
-            if path is not None:
-                claims.claim(path, what)
+        for entry in list(outputs) + [(ro.report_path, "--report"),
+                                      (ro.preview, "--preview")]:
+            if callable(entry):
+                entry(claims)
+            elif entry[0] is not None:
+                claims.claim(*entry)
         ctx.threads = set_threads(ro)
         if backend:
             from ..engine.gpu import resolve_backend

@@ -124,7 +124,6 @@ def _start(cfg: ShadeConfig, plan: ShadePlan):
     """The run started (``RunContext.start``): every path it writes claimed (OUTPUT, the STAC
     item, the report, the preview: no input, no two the same), the threads set, the backend
     chosen; then the pattern parsed. The compile note waits until the outputs are checked."""
-    from ..io.write import Claims
     from .outputs import OutputPattern
     from .runner import RunContext
     from .stac import check_item_output
@@ -132,16 +131,9 @@ def _start(cfg: ShadeConfig, plan: ShadePlan):
     ro = cfg.run
     item_in = [cfg.sun["sun_from_stac"]] if cfg.sun.get("sun_from_stac") else []
     reads = plan.inputs + item_in + cfg.read.inputs()
-    outputs = [(plan.output, "OUTPUT")]
-    if cfg.stac_item is not None:
-        # the item's own checks come after OUTPUT's claim and before the report's, as they
-        # always have: run on a claim of OUTPUT alone (outside any batch), then claimed again
-        ahead = Claims(reads, ro.overwrite)
-        ahead.batch = None
-        if plan.output is not None:
-            ahead.claim(plan.output, "OUTPUT")
-        check_item_output(cfg.stac_item, plan.output, cfg.output_pattern, ahead)
-        outputs.append((cfg.stac_item, "--stac-item"))
+    outputs = [(plan.output, "OUTPUT"),     # the STAC item's checks, then its claim
+               lambda claims: check_item_output(cfg.stac_item, plan.output,
+                                                cfg.output_pattern, claims)]
     ctx = RunContext.start(ro, inputs=reads, outputs=outputs, algorithm=cfg.algorithm,
                            options=cfg.options, note=False)
     if cfg.output_pattern is not None:
