@@ -163,6 +163,7 @@ def _lighting(da, kind, azimuth, elevation, time, tz, lat, lon, crs, spacing, no
     from ..algorithms import lookup
     from ..engine.products import product
     from ..run.config import check_lift
+    from ..engine.lighting import Lighting
     from ..engine.shader import choose_backend
     lookup(algorithm)
     algorithm = check_lift(lift, algorithm, soft)
@@ -170,26 +171,27 @@ def _lighting(da, kind, azimuth, elevation, time, tz, lat, lon, crs, spacing, no
     req, series = _request(azimuth, elevation, time, tz, lat, lon, pressure, temperature,
                            refraction, sun_tolerance)
     inp = as_input(da, crs, spacing, nodata)
-    ran_on = choose_backend(backend, algorithm, options)
+    lighting = Lighting(algorithm=algorithm, options=options,
+                        backend=choose_backend(backend, algorithm, options),
+                        curvature=curvature, refraction_k=refraction_k, soft=soft,
+                        self_shadow=self_shadow, lift=lift)
     prod = product(kind, soft)
     nd = np.nan if soft else prod.nodata
     attrs = {"product": kind + (" (soft)" if soft else ""), "description": prod.what,
              "values": prod.values, "algorithm": algorithm, "hillshade_rt_version": __version__,
              "height_above_ground_m": lift or None}
     if inp.lazy:
-        job, stats, suns, info = lazy_job(inp, req, algorithm, options, ran_on, curvature,
-                                          refraction_k, kind, soft, self_shadow, lift)
+        job, stats, suns, info = lazy_job(inp, req, lighting, kind)
         arrays = [lazy_render(job, s, stats, inp.heights, prod.dtype) for s in suns]
         import dask.array as dka
         stack = dka.stack
     else:
         from ..model.earth import dem_body
-        from ..engine.shader import Shader, render
+        from ..engine.shader import render
         dem = as_dem(inp)
         suns, info = req.suns(dem)
-        shader = Shader(dem.heights, dem.grid, algorithm, options, ran_on, curvature,
-                        refraction_k, dem_body(dem, req.lat), dem.height_range(),
-                        survey=dem.survey(), lift=lift)
+        shader = lighting.shader(dem.heights, dem.grid, body=dem_body(dem, req.lat),
+                                 zrange=dem.height_range(), survey=dem.survey())
         arrays = [render(shader, s, kind, soft=soft, self_shadow=self_shadow) for s in suns]
         stack = np.stack
     if info is not None:
@@ -456,7 +458,8 @@ def sun_hours(da, date, *, end_date=None, step: str = "10min", tz: str | None = 
     from ..algorithms import lookup
     from ..model.earth import dem_body
     from ..run.config import check_lift
-    from ..engine.shader import Shader, choose_backend, render
+    from ..engine.lighting import Lighting
+    from ..engine.shader import choose_backend, render
     from ..model.solar import SUN_RADIUS_DEG, daylight_samples
     from ..model.sun import SunRequest
     from ..model.times import parse_date, parse_step
@@ -476,7 +479,9 @@ def sun_hours(da, date, *, end_date=None, step: str = "10min", tz: str | None = 
     req = SunRequest.at_place([], tz, lat, lon, pressure, temperature, not refraction,
                               DEFAULT_TOLERANCE if sun_tolerance is None else sun_tolerance)
     inp = as_input(da, crs, spacing, nodata)
-    ran_on = choose_backend(backend, algorithm, {})
+    lighting = Lighting(algorithm=algorithm, backend=choose_backend(backend, algorithm, {}),
+                        curvature=curvature, refraction_k=refraction_k, soft=soft,
+                        self_shadow=self_shadow, lift=lift)
     other = ("sun_hours computes the Earth's sun only (light a DEM of another body with "
              "shadow, which takes the sun's direction)")
 
@@ -487,8 +492,7 @@ def sun_hours(da, date, *, end_date=None, step: str = "10min", tz: str | None = 
         src = LazySource(inp.heights, inp.grid, inp.transform, inp.crs, inp.path)
         site = req.site(src, other)
         req.times, weights = daylight_samples(first, last, step, req.tz, site, req.atmosphere)
-        job, stats, suns, _ = lazy_job(inp, req, algorithm, {}, ran_on, curvature,
-                                       refraction_k, "sun", soft, self_shadow, lift)
+        job, stats, suns, _ = lazy_job(inp, req, lighting, "sun")
         hours = inp.heights * np.float32(0.0)      # NaN on voids, 0 elsewhere
         for s, w in zip(suns, weights):
             if w > 0 and not dark(s):
@@ -499,9 +503,8 @@ def sun_hours(da, date, *, end_date=None, step: str = "10min", tz: str | None = 
         site = req.site(dem, other)
         req.times, weights = daylight_samples(first, last, step, req.tz, site, req.atmosphere)
         suns, _ = req.suns(dem, site)
-        shader = Shader(dem.heights, dem.grid, algorithm, {}, ran_on, curvature, refraction_k,
-                        dem_body(dem, req.lat), dem.height_range(), survey=dem.survey(),
-                        lift=lift)
+        shader = lighting.shader(dem.heights, dem.grid, body=dem_body(dem, req.lat),
+                                 zrange=dem.height_range(), survey=dem.survey())
         hours = np.where(np.isnan(dem.heights), np.float32(np.nan), np.float32(0.0))
         for s, w in zip(suns, weights):
             if w > 0 and not dark(s):

@@ -137,11 +137,10 @@ def lazy_render(job, sun, stats, z, dtype):
     return mosaic(tiles).rechunk(z.chunks)
 
 
-def lazy_job(inp: Input, req, algorithm, options, ran_on, curvature, refraction_k, kind,
-             soft, self_shadow, lift):
-    """(job, block statistics, suns, sun info) of a Dask-backed input."""
+def lazy_job(inp: Input, req, lighting, kind):
+    """(job, block statistics, suns, sun info) of a Dask-backed input lit so (``lighting``,
+    an ``engine.lighting.Lighting``) into product ``kind``."""
     from ..model.earth import dem_body
-    from ..engine.lighting import Lighting
     from ..engine.windows import WindowLighting
     src = LazySource(inp.heights, inp.grid, inp.transform, inp.crs, inp.path)
     stats = block_stats(inp.heights)
@@ -150,9 +149,6 @@ def lazy_job(inp: Input, req, algorithm, options, ran_on, curvature, refraction_
     suns, info = req.suns(src)
     rows, cols = inp.shape
     dx, dy = inp.grid.centre_spacing()
-    lighting = Lighting(algorithm=algorithm, options=options, backend=ran_on,
-                        curvature=curvature, refraction_k=refraction_k, soft=soft,
-                        self_shadow=self_shadow, lift=lift)
     job = WindowLighting(Frame(inp.shape, inp.grid), lighting, dem_body(src, req.lat),
                          (stats.zmin, stats.zmax), math.hypot(cols * dx, rows * dy), kind)
     return job, stats, suns, info
