@@ -204,34 +204,6 @@ def test_pyramid_is_reused_and_shape_checked():
                                   _plain(other, rays2))
 
 
-def test_auto_picks_bounds_on_mountains_and_brute_on_short_rays():
-    rays = sun_rays(Grid.uniform(500, 500, 30.0), 203.7, 3.0)
-    rays = sun_rays(Grid.uniform(2000, 2000, 30.0), 203.7, 3.0)
-    name, why = auto.choose((2000, 2000), 1.0, (0.0, 2000.0), rays)
-    assert name == "bounds" and "reach" in why
-    # gentle terrain under a high sun: rays clear the relief in a few steps
-    rays = sun_rays(Grid.uniform(500, 500, 1000.0), 203.7, 40.0)
-    assert auto.choose((500, 500), 1.0, (0.0, 300.0), rays)[0] == "brute"
-    # mostly sea (voids): brute skips voids for free
-    assert auto.choose((2000, 2000), 0.02, (0.0, 100.0), rays)[0] == "brute"
-    assert auto.choose((2000, 2000), 1.0, (0.0, 2000.0), rays, "gpu")[0] == "brute"
-    # a geographic tile too narrow for the wavefront to use a second thread: bounds on one
-    # thread is estimated at half its rate, a tile of 150 positions per thread at its full rate
-    import numba
-    if numba.get_num_threads() >= 2:
-        lat = np.linspace(32.0, 32.1, 100)
-        grid = Grid(100, 300, 92.6 * np.cos(np.radians(lat)), np.full(100, 92.6), 1, -1, "")
-        rays = sun_rays(grid, 290.0, 3.0)
-        assert "(per-row rays, 1 of" in auto.choose((100, 300), 1.0, (0.0, 2000.0), rays)[1]
-        lat = np.linspace(32.0, 33.0, 300)
-        grid = Grid(300, 300, 92.6 * np.cos(np.radians(lat)), np.full(300, 92.6), 1, -1, "")
-        rays = sun_rays(grid, 290.0, 3.0)     # two strips of 150 positions
-        assert auto.choose((300, 300), 1.0, (0.0, 2000.0), rays)[0] == "bounds"
-    st_ = {}
-    auto.shadow_mask(_terrain("spectral", 64, 64, 5, 500.0), rays, stats=st_)
-    assert st_["auto"]["chose"] in ({"bounds": 1}, {"brute": 1}) and st_["auto"]["why"]
-
-
 def test_read_only_heights():
     z = _terrain("spectral", 50, 60, 9, 400.0)
     z.setflags(write=False)
