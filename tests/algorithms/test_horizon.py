@@ -3,17 +3,23 @@ wall's atan(h / d); hull: equal to the scan on the axes and diagonals), their di
 mask of eq. 6, floors and caps, the horizon at points, and the checks of the options.
 (``max_distance`` and the marches through windows: test_horizon_reach.py.)"""
 
+import functools
 import math
 
 import numpy as np
 import pytest
 
+import hillshade_rt
 from hillshade_rt.algorithms import horizon
 from hillshade_rt.errors import HillshadeError
 from hillshade_rt.model.geometry import Grid, curvature_per_m2, sun_rays
 from hillshade_rt.testing import fractal_terrain, reference_horizon, reference_mask
 
 DX, DY = 3.0, 2.0
+
+# the array API on the flat model (its default curvature is the command line's "auto")
+api_horizon = functools.partial(hillshade_rt.horizon_angles, curvature=False)
+api_mask = functools.partial(hillshade_rt.shadow_mask, curvature=False)
 
 
 def _terrain():
@@ -160,3 +166,32 @@ def test_checks_and_notes():
     got = horizon.horizon_angles(z, curved, "hull", stats=stats)
     assert "Earth curvature on: hull replaced by scan" in stats["note"]
     np.testing.assert_array_equal(got, horizon.horizon_angles(z, curved))
+
+
+def test_horizon_angle_of_a_wall_and_of_a_summit():
+    # wall of 50 m, 10 cells (100 m) west of a cell on flat ground: horizon toward 270 = atan(0.5)
+    z = np.zeros((20, 40), np.float32)
+    z[:, 5] = 50.0
+    beta = api_horizon(z, 270.0, 10.0)
+    assert beta[10, 15] == pytest.approx(math.degrees(math.atan(50.0 / 100.0)), abs=1e-5)
+    assert beta[10, 0] == -90.0                  # nothing ahead inside the raster
+    # a cone: its summit looks down in every direction (negative horizon)
+    r, c = np.mgrid[0:41, 0:41]
+    cone = (400.0 - 10.0 * np.hypot(r - 20, c - 20)).astype(np.float32)
+    for az in (0.0, 163.0, 203.7):
+        b = api_horizon(cone, az, 30.0)
+        assert b[20, 20] < 0.0
+        assert b[20, 20] == pytest.approx(-math.degrees(math.atan(10.0 / 30.0)), abs=0.5)
+
+
+def test_horizon_angles_match_mask_and_sample_spacing():
+    z = fractal_terrain(80, 80, seed=12, relief=700.0)
+    g = Grid.uniform(80, 80, 30.0)
+    beta = api_horizon(z, 163.0, g)
+    for el in (2.0, 8.0, 20.0):
+        assert np.array_equal(beta > el, api_mask(z, 163.0, el, g, algorithm="brute") == 1)
+    sp2 = api_horizon(z, 163.0, g, sample_spacing=2)
+    assert (sp2 <= beta + 1e-4).all()          # fewer samples: never a higher horizon
+    assert (sp2 < beta - 1e-3).any()
+    for el in (2.0, 8.0):                      # and mostly the same mask
+        assert np.mean((sp2 > el) != (beta > el)) < 0.05
