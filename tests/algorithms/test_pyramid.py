@@ -239,53 +239,6 @@ def test_code_counts_equal_bincount():
     np.testing.assert_array_equal(code_counts(v), np.bincount(v.ravel(), minlength=256))
 
 
-def _lattice(az0, el0, daz, del_, n=9):
-    from hillshade_rt.algorithms.per_cell_sun import lattice_vectors
-    i, j = np.meshgrid(np.linspace(-1, 1, n), np.linspace(-1, 1, n), indexing="ij")
-    return lattice_vectors(az0 + daz * j + 0.3 * daz * i * j, el0 + del_ * i)
-
-
-@pytest.mark.parametrize("az0,el0", [(163.0, 3.0), (203.7, 8.0), (290.0, 1.0), (44.0, 0.3)])
-@pytest.mark.parametrize("curved", [False, True])
-def test_per_cell_sun_is_each_cells_own_ray(az0, el0, curved):
-    """Item 6: every cell marched with its own interpolated sun equals, cell by cell, the plain
-    march of that cell with the ray ``cell_ray`` gives it (a night cell is shadowed); the
-    direction varies by several degrees here, far more than a time-based sun does."""
-    from hillshade_rt.algorithms import per_cell_sun
-    from hillshade_rt.algorithms.raymath import ray_is_blocked
-    z = _terrain("spectral", 23, 31, 4, 400.0)
-    z[4:6, 7:9] = np.nan
-    lat = np.linspace(45, 46, 23)
-    grid = Grid(23, 31, 30.0 * np.cos(np.radians(lat)) / np.cos(np.radians(45)),
-                np.full(23, 30.0), 1, -1, "per row")
-    vec = _lattice(az0, el0, 4.0, 2.5)
-    c = curvature_per_m2(2e4, 0.13) if curved else 0.0
-    zmax = float(np.nanmax(z))
-    got = per_cell_sun.shadow_mask(z, grid, vec, c)
-    plain = per_cell_sun.shadow_mask(z, grid, vec, c, pyramid=False)
-    for r in range(23):
-        for col in range(31):
-            if np.isnan(z[r, col]):
-                assert got[r, col] == 255
-                continue
-            night, dc, sd, so, ri, cv = per_cell_sun.cell_ray.py_func(
-                r, col, vec, grid.dx, grid.dy, 1.0, -1.0, c, 0, 0, 23, 31)
-            want = 1 if night else int(ray_is_blocked(z, r, col, dc, sd, so, ri, cv, zmax, 0.0))
-            assert got[r, col] == want == plain[r, col], (r, col)
-
-
-def test_per_cell_sun_with_one_direction_is_the_fixed_sun():
-    from hillshade_rt.algorithms import per_cell_sun
-    z = _terrain("spectral", 40, 50, 6, 500.0)
-    grid = Grid.uniform(40, 50, 30.0)
-    for az, el in [(163.0, 4.0), (203.7, 12.0), (290.0, 2.0)]:
-        vec = _lattice(az, el, 0.0, 0.0)
-        got = per_cell_sun.shadow_mask(z, grid, vec)
-        ref = _plain(z, sun_rays(grid, az, el))
-        # the same direction, computed through unit vectors: at most a rounding tie apart
-        assert np.count_nonzero(got != ref) <= 2
-
-
 def test_time_based_sun_uses_the_per_cell_field():
     """A time-based sun over a large DEM: the engine marches every cell with its own sun in one
     pass (no tiles), and the mask agrees with the per-tile one but where the two approximations
