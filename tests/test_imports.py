@@ -14,6 +14,8 @@ from __future__ import annotations
 import ast
 import pathlib
 
+import pytest
+
 import hillshade_rt
 
 ROOT = pathlib.Path(hillshade_rt.__file__).parent
@@ -201,6 +203,7 @@ def test_registry_imports_no_algorithm():
     assert edges[ALGORITHMS] <= {"hillshade_rt.errors"}
 
 
+@pytest.mark.slow
 def test_no_cycles_in_package():
     """No import cycle anywhere in the package, deferred imports included. (The cycles there
     were, 31 of them, all went through gpu.py and the algorithm modules that imported its

@@ -35,7 +35,8 @@ def masks(z, dx, dy, az, el, name, opts):
             shadow_mask(z, az, el, g, algorithm=name, **opts))
 
 
-@pytest.mark.parametrize("name,opts", EXACT)
+@pytest.mark.parametrize("name,opts", [pytest.param(*e, marks=pytest.mark.slow) if i in (0, 3)
+                                       else e for i, e in enumerate(EXACT)])
 def test_exact_equals_brute_on_fractal_with_voids(name, opts):
     z = fractal_terrain(61, 47, seed=5, relief=250.0)
     z[20:24, 10:30] = np.nan
@@ -46,6 +47,7 @@ def test_exact_equals_brute_on_fractal_with_voids(name, opts):
             assert np.array_equal(a, b), (name, opts, az, el, int((a != b).sum()))
 
 
+@pytest.mark.slow
 @settings(max_examples=40)
 @given(seed=st.integers(0, 10_000), rows=st.integers(2, 32), cols=st.integers(2, 32),
        dx=st.floats(0.5, 100.0), dy=st.floats(0.5, 100.0),
@@ -68,6 +70,7 @@ def test_property_smap_and_horizon_equal_brute(seed, rows, cols, dx, dy, az, el,
     assert np.mean(sw != b) < 0.15
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("az", [17.0, 77.7, 163.0, 203.7, 291.3])
 def test_sweep_line_passes_equal_per_cell_kernel(az):
     """The vectorised line passes (one ray direction) and the per-cell kernel (per-row rays)
@@ -131,7 +134,9 @@ def test_sweep_wavefront_strips_equal_one_strip(az):
         assert np.array_equal(out, outs[0])
 
 
-@pytest.mark.parametrize("az", [0.0, 45.0, 90.0, 135.0, 180.0, 225.0, 270.0, 315.0])
+@pytest.mark.parametrize("az", [0.0, 45.0, pytest.param(90.0, marks=pytest.mark.slow), 135.0,
+                                pytest.param(180.0, marks=pytest.mark.slow), 225.0, 270.0,
+                                315.0])
 def test_sweep_and_hull_exact_on_axes_and_diagonals(az):
     z = fractal_terrain(70, 60, seed=2, relief=400.0)
     z[30:33, 30:40] = np.nan
@@ -215,7 +220,8 @@ def _point_reference(z, dx, dy, az, el, pts):
     return np.array(out)
 
 
-@pytest.mark.parametrize("az", [163.0, 203.7, 45.0, 290.0, 90.0])
+@pytest.mark.parametrize("az", [163.0, 203.7, 45.0, 290.0,
+                                pytest.param(90.0, marks=pytest.mark.slow)])
 def test_is_shadowed_points(az):
     z = fractal_terrain(50, 40, seed=9, relief=300.0)
     # cell centres on the terrain: same as the mask
@@ -232,6 +238,7 @@ def test_is_shadowed_points(az):
     assert np.array_equal(got, exp)
 
 
+@pytest.mark.slow
 def test_geographic_grid_falls_back_with_a_note():
     d = read_dem(data_path("jacksboro_fault_srtm3_mpl_403x344.tif"))
     rays = sun_rays(d.grid, 203.7, 10.0)

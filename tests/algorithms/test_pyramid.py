@@ -76,6 +76,7 @@ def _plain(z, rays):
     return brute.shadow_mask(z, rays, pyramid=False)
 
 
+@pytest.mark.slow
 @SETTINGS
 @given(cases())
 def test_pyramid_bounds_auto_equal_the_plain_march(case):
@@ -97,6 +98,7 @@ def test_pyramid_bounds_auto_equal_the_plain_march(case):
                                           f"smap, pyramid {pyr}")
 
 
+@pytest.mark.slow
 @SETTINGS
 @given(cases(), st.integers(2, 4))
 def test_bounds_in_narrow_strips_equal_the_plain_march(case, nstrips):
@@ -204,6 +206,7 @@ def test_pyramid_is_reused_and_shape_checked():
                                   _plain(other, rays2))
 
 
+@pytest.mark.slow
 def test_read_only_heights():
     z = _terrain("spectral", 50, 60, 9, 400.0)
     z.setflags(write=False)
@@ -213,6 +216,7 @@ def test_read_only_heights():
     np.testing.assert_array_equal(brute.shadow_mask(z, rays), ref)
 
 
+@pytest.mark.slow
 def test_degenerate_shapes_and_suns():
     for shape in [(1, 1), (1, 9), (9, 1), (2, 2)]:
         z = _terrain("noise", *shape, 4, 10.0)
@@ -229,6 +233,7 @@ def test_degenerate_shapes_and_suns():
     assert math.isfinite(float(rays.rise[0]))
 
 
+@pytest.mark.slow
 def test_code_counts_equal_bincount():
     from hillshade_rt.algorithms.counts import code_counts
     rng = np.random.default_rng(8)
@@ -293,6 +298,7 @@ def test_bounds_with_a_per_cell_sun_equal_the_field_march(az0, el0, daz, curved)
         assert 0 <= st_["undecided_fraction"] <= 1
 
 
+@pytest.mark.slow
 @SETTINGS
 @given(cases())
 def test_horizon_scan_over_the_pyramid_is_the_plain_scan(case):

@@ -156,6 +156,7 @@ def test_co_output_pattern_and_multiband(tmp_path, runner):
                                       read_band(tmp_path / "m.tif", i + 1))
 
 
+@pytest.mark.slow
 def test_co_dask_parts_through_vrt(tmp_path, runner):
     """--scheduler: the parts keep the defaults, the file put together from them gets --co
     (GeoTIFF, and COG with its own options); no part left."""
