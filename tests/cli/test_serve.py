@@ -369,31 +369,6 @@ def test_an_unsafe_folder_or_socket_is_not_used(served, dem, tmp_path):
     assert r.returncode == 0 and jobs(env, before + 1) == before + 1
 
 
-def test_the_checks_of_folder_and_socket(tmp_path):
-    uid = os.getuid()
-    d = tmp_path / "d"
-    d.mkdir(mode=0o700)
-    os.chmod(d, 0o700)
-    assert client.folder_problem(str(d)) is None
-    assert "owned by uid" in client.folder_problem(str(d), uid=uid + 1)
-    os.chmod(d, 0o750)
-    assert "mode 750" in client.folder_problem(str(d))
-    os.chmod(d, 0o700)
-    (tmp_path / "l").symlink_to(d)
-    assert "symbolic link" in client.folder_problem(str(tmp_path / "l"))
-    assert "not a folder" in client.folder_problem(__file__)
-    s = socket.socket(socket.AF_UNIX)
-    path = str(d / "s")
-    s.bind(path)
-    s.close()
-    os.chmod(path, 0o600)
-    assert client.socket_problem(path) is None
-    assert "owned by uid" in client.socket_problem(path, uid=uid + 1)
-    os.chmod(path, 0o660)
-    assert "mode 660" in client.socket_problem(path)
-    assert "not a socket" in client.socket_problem(__file__)
-
-
 @pytest.mark.slow
 def test_a_stale_socket_or_a_missing_folder_means_in_process(rundir, dem, tmp_path):
     env = make_env(rundir)
