@@ -279,6 +279,13 @@ def test_time_based_sun_uses_the_per_cell_field():
     assert "sun_field" not in st and sum(st["auto"]["chose"].values()) == len(sun.tiles)
 
 
+def _lattice(az0, el0, daz, del_, n=9):
+    """A 9 x 9 lattice of suns varying by ``daz`` in azimuth and ``del_`` in elevation."""
+    from hillshade_rt.algorithms.per_cell_sun import lattice_vectors
+    i, j = np.meshgrid(np.linspace(-1, 1, n), np.linspace(-1, 1, n), indexing="ij")
+    return lattice_vectors(az0 + daz * j + 0.3 * daz * i * j, el0 + del_ * i)
+
+
 @pytest.mark.parametrize("az0,el0,daz", [(163.0, 3.0, 4.0), (203.7, 8.0, 0.4), (290.0, 1.0, 2.0),
                                          (44.0, 0.3, 1.0), (89.0, 5.0, 3.0)])
 @pytest.mark.parametrize("curved", [False, True])
