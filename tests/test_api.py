@@ -23,6 +23,7 @@ def tiles(tmp_path):
                                 [(0, 120), (120, 240)])
 
 
+@pytest.mark.slow
 def test_shade_in_memory_windows_and_dask_client(tmp_path, tiles):
     """One DEM in memory, the same as tiles in windows, and on a Dask client the caller owns:
     identical masks; the report comes back as a dict (and as the file asked for)."""
@@ -90,6 +91,7 @@ def test_shade_errors_are_one_line_hillshade_errors(tmp_path, tiles):
                                             "tile_11.tif", "whole.tif"]
 
 
+@pytest.mark.slow
 def test_cli_api_and_array_function_agree_at_default_settings(tmp_path):
     """Issue 19: the command line, ``shade`` and ``shadow_mask`` give the same mask at their
     default settings on a UTM DEM (Big Tujunga, 36 km across: Earth curvature is on by

@@ -14,6 +14,8 @@ from __future__ import annotations
 import ast
 import pathlib
 
+import pytest
+
 import hillshade_rt
 
 ROOT = pathlib.Path(hillshade_rt.__file__).parent

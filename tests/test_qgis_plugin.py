@@ -366,6 +366,7 @@ def test_parse_progress_lines():
         assert cmd.parse_progress(other) is None, other
 
 
+@pytest.mark.slow
 def test_run_program_progress_lines(tmp_path):
     """The real program over many suns: its progress lines, read by the plugin's parser,
     increase to 100 %."""
@@ -511,6 +512,7 @@ def direct(dem, *args) -> subprocess.CompletedProcess:
                           timeout=600)
 
 
+@pytest.mark.slow
 @pytest.mark.qgis
 def test_qgis_shadow_equals_program(qgis, tmp_path):
     out, ref = tmp_path / "qgis.tif", tmp_path / "ref.tif"
@@ -531,6 +533,7 @@ def test_qgis_shadow_equals_program(qgis, tmp_path):
     np.testing.assert_array_equal(got, want)
 
 
+@pytest.mark.slow
 @pytest.mark.qgis
 def test_qgis_time_zone_equals_program(qgis, tmp_path):
     out, ref = tmp_path / "qgis.tif", tmp_path / "ref.tif"
@@ -545,6 +548,7 @@ def test_qgis_time_zone_equals_program(qgis, tmp_path):
     np.testing.assert_array_equal(read_band(out), want)
 
 
+@pytest.mark.slow
 @pytest.mark.qgis
 def test_qgis_bad_parameter_gives_program_error(qgis, tmp_path):
     out = tmp_path / "never.tif"
@@ -614,6 +618,7 @@ print("AFTER_CANCEL", round(time.monotonic() - Feedback.started, 1))
 """
 
 
+@pytest.mark.slow
 @pytest.mark.qgis
 def test_qgis_cancel_terminates_program(qgis, tmp_path):
     """Cancelling in QGIS (the feedback's isCanceled) stops the program at once: the
@@ -638,6 +643,7 @@ for layer in sorted(QgsProject.instance().mapLayers().values(), key=lambda l: l.
 """
 
 
+@pytest.mark.slow
 @pytest.mark.qgis
 def test_qgis_shadow_mask_loads_styled(qgis, tmp_path):
     """A shadow mask that QGIS loads on completion gets the plugin's style: shadow (1)
@@ -693,6 +699,7 @@ def points_files(folder):
     return geojson, csv
 
 
+@pytest.mark.slow
 @pytest.mark.qgis
 def test_qgis_horizon_directions_and_distance(qgis, tmp_path):
     out, dist = tmp_path / "hz.tif", tmp_path / "dist.tif"
@@ -713,6 +720,7 @@ def test_qgis_horizon_directions_and_distance(qgis, tmp_path):
     assert_same_raster(one, tmp_path / "ref1.tif")
 
 
+@pytest.mark.slow
 @pytest.mark.qgis
 def test_qgis_profile_and_query_tables(qgis, tmp_path):
     """Points of a layer -> the tables of ``profile`` and ``query``, row for row the
@@ -740,6 +748,7 @@ def test_qgis_profile_and_query_tables(qgis, tmp_path):
     assert len(got["features"][0]["properties"]["lit"]) == 7
 
 
+@pytest.mark.slow
 @pytest.mark.qgis
 def test_qgis_irradiance_equals_program(qgis, tmp_path):
     out = tmp_path / "irr.tif"
@@ -752,6 +761,7 @@ def test_qgis_irradiance_equals_program(qgis, tmp_path):
     assert_same_raster(out, tmp_path / "ref.tif")
 
 
+@pytest.mark.slow
 @pytest.mark.qgis
 def test_qgis_animate_equals_program(qgis, tmp_path):
     out = tmp_path / "day.gif"
@@ -764,6 +774,7 @@ def test_qgis_animate_equals_program(qgis, tmp_path):
     assert out.read_bytes()[:6] == b"GIF89a"
 
 
+@pytest.mark.slow
 @pytest.mark.qgis
 def test_qgis_illumination_equals_program(qgis, tmp_path):
     """A subsolar series on the Earth over the DEM's afternoon."""
@@ -789,6 +800,7 @@ print("PROGRESS", " ".join(format(p, "g") for p in seen))
 """
 
 
+@pytest.mark.slow
 @pytest.mark.qgis
 def test_qgis_progress_reaches_feedback(qgis, tmp_path):
     """The program's {"progress": F} lines become the feedback's percentages."""

@@ -30,6 +30,7 @@ def warmed(tmp_path_factory):
     return env, _python(["-m", "hillshade_rt.warm"], env)
 
 
+@pytest.mark.slow
 def test_warm_fills_an_empty_cache_with_every_kernel(warmed):
     env, p = warmed
     assert p.returncode == 0, p.stderr
@@ -51,6 +52,7 @@ def test_warm_fills_an_empty_cache_with_every_kernel(warmed):
     assert again.returncode == 0 and again.stderr == ""
 
 
+@pytest.mark.slow
 def test_after_the_warm_up_no_scenario_compiles(warmed):
     """Every command line of the warm-up again, in one process, with numba's compile events
     counted: every kernel comes from the cache."""

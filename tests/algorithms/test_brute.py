@@ -127,6 +127,7 @@ def test_long_low_sun_shadow_does_not_drift():
     assert m[0, 5:5 + expected].all() and not m[0, 5 + expected:].any()
 
 
+@pytest.mark.slow
 def test_raising_the_sun_never_adds_shadow():
     z = fractal_terrain(90, 70, seed=3, relief=300.0)
     for az in (0.0, 163.0, 203.7, 45.0):
@@ -165,6 +166,7 @@ special_az = st.sampled_from([0.0, 45.0, 90.0, 135.0, 180.0, 225.0, 270.0, 315.0
 any_az = st.floats(0.0, 360.0, exclude_max=True, allow_nan=False)
 
 
+@pytest.mark.slow
 @given(rows=st.integers(2, 22), cols=st.integers(2, 22), seed=st.integers(0, 2**31),
        relief=st.floats(1.0, 400.0), dx=st.floats(0.5, 50.0), dy=st.floats(0.5, 50.0),
        azimuth=st.one_of(special_az, any_az), elevation=st.floats(0.5, 89.0))

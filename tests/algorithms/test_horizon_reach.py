@@ -57,6 +57,7 @@ def test_max_distance_is_the_reference_within_that_distance(name, grid, dx, dy, 
     np.testing.assert_array_equal(dist, wdist)
 
 
+@pytest.mark.slow
 def test_max_distance_beyond_the_raster_changes_no_bit():
     """Curved rays, every-third samples, the plain march and soft shadows' floor and cap: with M
     larger than the raster, the same bits as without M."""
@@ -97,6 +98,7 @@ def _windows(rows, cols, size, overlap):
             for a in range(0, rows, size) for b in range(0, cols, size)]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name, grid, dx, dy", GRIDS)
 @pytest.mark.parametrize("max_distance", [None, 250.0])
 def test_marches_through_any_windows_give_the_same_bits(name, grid, dx, dy, max_distance):

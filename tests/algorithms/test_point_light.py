@@ -154,6 +154,7 @@ def _lights(z):
     return out
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("lift", [0.0, 3.0])
 def test_the_pyramid_march_is_the_plain_march(lift):
     """The march over the pyramid gives the plain march's mask cell for cell (rough and smooth

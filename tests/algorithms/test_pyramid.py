@@ -76,6 +76,7 @@ def _plain(z, rays):
     return brute.shadow_mask(z, rays, pyramid=False)
 
 
+@pytest.mark.slow
 @SETTINGS
 @given(cases())
 def test_pyramid_bounds_auto_equal_the_plain_march(case):
@@ -97,6 +98,7 @@ def test_pyramid_bounds_auto_equal_the_plain_march(case):
                                           f"smap, pyramid {pyr}")
 
 
+@pytest.mark.slow
 @SETTINGS
 @given(cases(), st.integers(2, 4))
 def test_bounds_in_narrow_strips_equal_the_plain_march(case, nstrips):
@@ -204,34 +206,7 @@ def test_pyramid_is_reused_and_shape_checked():
                                   _plain(other, rays2))
 
 
-def test_auto_picks_bounds_on_mountains_and_brute_on_short_rays():
-    rays = sun_rays(Grid.uniform(500, 500, 30.0), 203.7, 3.0)
-    rays = sun_rays(Grid.uniform(2000, 2000, 30.0), 203.7, 3.0)
-    name, why = auto.choose((2000, 2000), 1.0, (0.0, 2000.0), rays)
-    assert name == "bounds" and "reach" in why
-    # gentle terrain under a high sun: rays clear the relief in a few steps
-    rays = sun_rays(Grid.uniform(500, 500, 1000.0), 203.7, 40.0)
-    assert auto.choose((500, 500), 1.0, (0.0, 300.0), rays)[0] == "brute"
-    # mostly sea (voids): brute skips voids for free
-    assert auto.choose((2000, 2000), 0.02, (0.0, 100.0), rays)[0] == "brute"
-    assert auto.choose((2000, 2000), 1.0, (0.0, 2000.0), rays, "gpu")[0] == "brute"
-    # a geographic tile too narrow for the wavefront to use a second thread: bounds on one
-    # thread is estimated at half its rate, a tile of 150 positions per thread at its full rate
-    import numba
-    if numba.get_num_threads() >= 2:
-        lat = np.linspace(32.0, 32.1, 100)
-        grid = Grid(100, 300, 92.6 * np.cos(np.radians(lat)), np.full(100, 92.6), 1, -1, "")
-        rays = sun_rays(grid, 290.0, 3.0)
-        assert "(per-row rays, 1 of" in auto.choose((100, 300), 1.0, (0.0, 2000.0), rays)[1]
-        lat = np.linspace(32.0, 33.0, 300)
-        grid = Grid(300, 300, 92.6 * np.cos(np.radians(lat)), np.full(300, 92.6), 1, -1, "")
-        rays = sun_rays(grid, 290.0, 3.0)     # two strips of 150 positions
-        assert auto.choose((300, 300), 1.0, (0.0, 2000.0), rays)[0] == "bounds"
-    st_ = {}
-    auto.shadow_mask(_terrain("spectral", 64, 64, 5, 500.0), rays, stats=st_)
-    assert st_["auto"]["chose"] in ({"bounds": 1}, {"brute": 1}) and st_["auto"]["why"]
-
-
+@pytest.mark.slow
 def test_read_only_heights():
     z = _terrain("spectral", 50, 60, 9, 400.0)
     z.setflags(write=False)
@@ -241,6 +216,7 @@ def test_read_only_heights():
     np.testing.assert_array_equal(brute.shadow_mask(z, rays), ref)
 
 
+@pytest.mark.slow
 def test_degenerate_shapes_and_suns():
     for shape in [(1, 1), (1, 9), (9, 1), (2, 2)]:
         z = _terrain("noise", *shape, 4, 10.0)
@@ -257,6 +233,7 @@ def test_degenerate_shapes_and_suns():
     assert math.isfinite(float(rays.rise[0]))
 
 
+@pytest.mark.slow
 def test_code_counts_equal_bincount():
     from hillshade_rt.algorithms.counts import code_counts
     rng = np.random.default_rng(8)
@@ -265,53 +242,6 @@ def test_code_counts_equal_bincount():
         np.testing.assert_array_equal(code_counts(a), np.bincount(a.ravel(), minlength=256))
     v = np.arange(256, dtype=np.uint8)[None, :].repeat(80, 0)[:, ::2]   # a strided view
     np.testing.assert_array_equal(code_counts(v), np.bincount(v.ravel(), minlength=256))
-
-
-def _lattice(az0, el0, daz, del_, n=9):
-    from hillshade_rt.algorithms.per_cell_sun import lattice_vectors
-    i, j = np.meshgrid(np.linspace(-1, 1, n), np.linspace(-1, 1, n), indexing="ij")
-    return lattice_vectors(az0 + daz * j + 0.3 * daz * i * j, el0 + del_ * i)
-
-
-@pytest.mark.parametrize("az0,el0", [(163.0, 3.0), (203.7, 8.0), (290.0, 1.0), (44.0, 0.3)])
-@pytest.mark.parametrize("curved", [False, True])
-def test_per_cell_sun_is_each_cells_own_ray(az0, el0, curved):
-    """Item 6: every cell marched with its own interpolated sun equals, cell by cell, the plain
-    march of that cell with the ray ``cell_ray`` gives it (a night cell is shadowed); the
-    direction varies by several degrees here, far more than a time-based sun does."""
-    from hillshade_rt.algorithms import per_cell_sun
-    from hillshade_rt.algorithms.raymath import ray_is_blocked
-    z = _terrain("spectral", 23, 31, 4, 400.0)
-    z[4:6, 7:9] = np.nan
-    lat = np.linspace(45, 46, 23)
-    grid = Grid(23, 31, 30.0 * np.cos(np.radians(lat)) / np.cos(np.radians(45)),
-                np.full(23, 30.0), 1, -1, "per row")
-    vec = _lattice(az0, el0, 4.0, 2.5)
-    c = curvature_per_m2(2e4, 0.13) if curved else 0.0
-    zmax = float(np.nanmax(z))
-    got = per_cell_sun.shadow_mask(z, grid, vec, c)
-    plain = per_cell_sun.shadow_mask(z, grid, vec, c, pyramid=False)
-    for r in range(23):
-        for col in range(31):
-            if np.isnan(z[r, col]):
-                assert got[r, col] == 255
-                continue
-            night, dc, sd, so, ri, cv = per_cell_sun.cell_ray.py_func(
-                r, col, vec, grid.dx, grid.dy, 1.0, -1.0, c, 0, 0, 23, 31)
-            want = 1 if night else int(ray_is_blocked(z, r, col, dc, sd, so, ri, cv, zmax, 0.0))
-            assert got[r, col] == want == plain[r, col], (r, col)
-
-
-def test_per_cell_sun_with_one_direction_is_the_fixed_sun():
-    from hillshade_rt.algorithms import per_cell_sun
-    z = _terrain("spectral", 40, 50, 6, 500.0)
-    grid = Grid.uniform(40, 50, 30.0)
-    for az, el in [(163.0, 4.0), (203.7, 12.0), (290.0, 2.0)]:
-        vec = _lattice(az, el, 0.0, 0.0)
-        got = per_cell_sun.shadow_mask(z, grid, vec)
-        ref = _plain(z, sun_rays(grid, az, el))
-        # the same direction, computed through unit vectors: at most a rounding tie apart
-        assert np.count_nonzero(got != ref) <= 2
 
 
 def test_time_based_sun_uses_the_per_cell_field():
@@ -349,6 +279,13 @@ def test_time_based_sun_uses_the_per_cell_field():
     assert "sun_field" not in st and sum(st["auto"]["chose"].values()) == len(sun.tiles)
 
 
+def _lattice(az0, el0, daz, del_, n=9):
+    """A 9 x 9 lattice of suns varying by ``daz`` in azimuth and ``del_`` in elevation."""
+    from hillshade_rt.algorithms.per_cell_sun import lattice_vectors
+    i, j = np.meshgrid(np.linspace(-1, 1, n), np.linspace(-1, 1, n), indexing="ij")
+    return lattice_vectors(az0 + daz * j + 0.3 * daz * i * j, el0 + del_ * i)
+
+
 @pytest.mark.parametrize("az0,el0,daz", [(163.0, 3.0, 4.0), (203.7, 8.0, 0.4), (290.0, 1.0, 2.0),
                                          (44.0, 0.3, 1.0), (89.0, 5.0, 3.0)])
 @pytest.mark.parametrize("curved", [False, True])
@@ -368,6 +305,7 @@ def test_bounds_with_a_per_cell_sun_equal_the_field_march(az0, el0, daz, curved)
         assert 0 <= st_["undecided_fraction"] <= 1
 
 
+@pytest.mark.slow
 @SETTINGS
 @given(cases())
 def test_horizon_scan_over_the_pyramid_is_the_plain_scan(case):

@@ -32,7 +32,8 @@ def test_stored_shadow_fraction(name, shadow, valid):
     assert abs(np.count_nonzero(m == 1) - shadow) <= max(3, shadow // 20000)
 
 
-@pytest.mark.parametrize("az, el", [(203.7, 10.0), (163.0, 4.0), (45.0, 20.0), (290.0, 7.5)])
+@pytest.mark.parametrize("az, el", [pytest.param(203.7, 10.0, marks=pytest.mark.slow),
+                                    (163.0, 4.0), (45.0, 20.0), (290.0, 7.5)])
 def test_real_terrain_with_voids_matches_reference(az, el):
     d = read_dem(data_path("everest_srtm3_voids_crop200.tif"))
     z = d.heights[60:110, 40:90]  # 50x50 cells, 1 in 5 void; a view, not a copy

@@ -51,6 +51,7 @@ def _readonly_variants(z, tmp_path):
     return {"setflags": ro, "memmap r": mm, "np.load mmap r": loaded}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("algorithm", ALGOS)
 def test_read_only_heights_give_the_writable_mask(tmp_path, algorithm):
     z = _heights()
@@ -69,6 +70,7 @@ def test_read_only_heights_give_the_writable_mask(tmp_path, algorithm):
                 np.testing.assert_array_equal(np.asarray(a), before)   # NaN == NaN here
 
 
+@pytest.mark.slow
 def test_read_only_heights_on_the_gpu_simulator(tmp_path):
     from hillshade_rt.engine import gpu
     ok, what = gpu.status()
@@ -218,6 +220,7 @@ def test_sweep_within_its_bound_on_a_global_lunar_grid(kind):
         assert worst < 1.0, (az, el, worst)
 
 
+@pytest.mark.slow
 def test_sweep_within_its_bound_at_high_earth_latitudes():
     """The same on WGS84 longitude/latitude from 60 to 85 N (issue: 0.71 %, up to 22.6 deg)."""
     z, grid, lat = earth_high_latitudes()
@@ -252,6 +255,7 @@ def test_uniform_rays_take_the_line_passes_unchanged():
     np.testing.assert_array_equal(out, brute.shadow_mask(z, rays))
 
 
+@pytest.mark.slow
 def test_gpu_sweep_sends_the_same_cells_to_the_exact_march():
     """The GPU twin shares the per-cell body and the per-row floor: on a grid whose dx changes
     fast (rows of both dominant axes, chains that drift) it gives the CPU's mask."""

@@ -6,6 +6,7 @@ import subprocess
 import sys
 
 import numba
+import pytest
 
 from hillshade_rt.algorithms import _jitcache
 from hillshade_rt.cli import cli
@@ -29,6 +30,7 @@ def _compile(pkg, cache, pad):
     subprocess.run([sys.executable, "-c", code], env=env, check=True, timeout=300)
 
 
+@pytest.mark.slow
 def test_survey_and_prune_find_what_numba_left_stale(tmp_path, monkeypatch, runner):
     cache = tmp_path / "nc"
     pkg = tmp_path / "kpkg"

@@ -76,6 +76,7 @@ def _tags(path):
                 ds.descriptions)
 
 
+@pytest.mark.slow
 def test_rio_shadow_writes_what_hillshade_rt_shadow_writes(tmp_path):
     sun = ["--azimuth", "203.7", "--elevation", "8"]
     a, b = tmp_path / "rio.tif", tmp_path / "ours.tif"

@@ -164,6 +164,7 @@ def same_run(a, b):
 # ------------------------------------------------------------------------------------------
 # through the server: the same as in-process
 
+@pytest.mark.slow
 def test_a_shadow_run_through_the_server_is_the_in_process_run(served, dem, tmp_path):
     env = served.env
     here = in_process(["shadow", dem, tmp_path / "here.tif", *SUN], env)
@@ -178,6 +179,7 @@ def test_a_shadow_run_through_the_server_is_the_in_process_run(served, dem, tmp_
     assert sorted(os.listdir(tmp_path)) == ["here.tif", "there.tif"]
 
 
+@pytest.mark.slow
 def test_failing_and_malformed_command_lines(served, dem, tmp_path):
     env = served.env
     before = jobs(env)
@@ -335,6 +337,7 @@ def fallback_run(env, dem, tmp_path, name):
     return took
 
 
+@pytest.mark.slow
 def test_an_unsafe_folder_or_socket_is_not_used(served, dem, tmp_path):
     env = served.env
     where = client.paths(env)
@@ -366,31 +369,7 @@ def test_an_unsafe_folder_or_socket_is_not_used(served, dem, tmp_path):
     assert r.returncode == 0 and jobs(env, before + 1) == before + 1
 
 
-def test_the_checks_of_folder_and_socket(tmp_path):
-    uid = os.getuid()
-    d = tmp_path / "d"
-    d.mkdir(mode=0o700)
-    os.chmod(d, 0o700)
-    assert client.folder_problem(str(d)) is None
-    assert "owned by uid" in client.folder_problem(str(d), uid=uid + 1)
-    os.chmod(d, 0o750)
-    assert "mode 750" in client.folder_problem(str(d))
-    os.chmod(d, 0o700)
-    (tmp_path / "l").symlink_to(d)
-    assert "symbolic link" in client.folder_problem(str(tmp_path / "l"))
-    assert "not a folder" in client.folder_problem(__file__)
-    s = socket.socket(socket.AF_UNIX)
-    path = str(d / "s")
-    s.bind(path)
-    s.close()
-    os.chmod(path, 0o600)
-    assert client.socket_problem(path) is None
-    assert "owned by uid" in client.socket_problem(path, uid=uid + 1)
-    os.chmod(path, 0o660)
-    assert "mode 660" in client.socket_problem(path)
-    assert "not a socket" in client.socket_problem(__file__)
-
-
+@pytest.mark.slow
 def test_a_stale_socket_or_a_missing_folder_means_in_process(rundir, dem, tmp_path):
     env = make_env(rundir)
     fallback_run(env, dem, tmp_path, "nofolder")        # no folder at all
@@ -404,7 +383,9 @@ def test_a_stale_socket_or_a_missing_folder_means_in_process(rundir, dem, tmp_pa
     fallback_run(env, dem, tmp_path, "stale")
 
 
-@pytest.mark.parametrize("behaviour", ["refuses", "closes", "wedged", "garbage"])
+@pytest.mark.parametrize("behaviour", ["refuses", "closes",
+                                       pytest.param("wedged", marks=pytest.mark.slow),
+                                       pytest.param("garbage", marks=pytest.mark.slow)])
 def test_a_server_of_another_kind_means_in_process(rundir, dem, tmp_path, behaviour):
     """A server at the socket that answers 'refused' (another version), closes the
     connection, never answers, or answers nonsense: the command runs in-process, silently,
@@ -453,6 +434,7 @@ def test_a_server_of_another_kind_means_in_process(rundir, dem, tmp_path, behavi
 # ------------------------------------------------------------------------------------------
 # the server's life: idle timeout, HILLSHADE_RT_SERVER
 
+@pytest.mark.slow
 def test_the_idle_timeout_stops_the_server(rundir):
     srv = Server(rundir, "--idle-timeout", "2", "--workers", "1")
     try:
@@ -477,6 +459,7 @@ def test_off_never_uses_the_server(served, dem, tmp_path):
     assert r.returncode == 0 and jobs(served.env) == before
 
 
+@pytest.mark.slow
 def test_auto_starts_a_server_in_the_background(rundir, dem, tmp_path):
     env = make_env(rundir, HILLSHADE_RT_SERVER="auto", HILLSHADE_RT_SERVER_IDLE="120")
     pids = set()

@@ -81,20 +81,6 @@ def test_version_initialises_no_cuda_and_loads_no_numba_nor_gdal():
     assert not mods & LAZY
 
 
-def test_version_gpu_and_thread_lines(monkeypatch):
-    from hillshade_rt.cli import version as v
-    monkeypatch.delenv("NUMBA_ENABLE_CUDASIM", raising=False)
-    monkeypatch.setattr(v, "gpus_seen", lambda: [])
-    monkeypatch.setattr(v, "_installed", lambda d: None if d == "numba-cuda" else "1.0")
-    assert "backend gpu: not installed (pip install 'hillshade-rt[gpu]'" in v.version_text()
-    monkeypatch.setattr(v, "_installed", lambda d: "9.9")
-    assert "numba-cuda 9.9; no NVIDIA driver loaded, no GPU" in v.version_text()
-    monkeypatch.setattr(v, "gpus_seen", lambda: ["NVIDIA H200"])
-    assert "1 GPU(s) listed by the driver: NVIDIA H200" in v.version_text()
-    monkeypatch.setenv("NUMBA_NUM_THREADS", "3")
-    assert "backend cpu: numba, 3 threads (NUMBA_NUM_THREADS)" in v.version_text()
-
-
 @pytest.mark.parametrize("shell, words", [
     ("bash", ["_hillshade_rt_completion()", "complete -o nosort -F _hillshade_rt_completion"
               " hillshade-rt"]),

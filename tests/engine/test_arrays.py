@@ -12,6 +12,7 @@ from hillshade_rt.testing import data_path, read_band
 SRTM = data_path("jacksboro_fault_srtm3_mpl_403x344.tif")
 
 
+@pytest.mark.slow
 def test_sky_view_is_the_commands(tmp_path, runner):
     out = tmp_path / "s.tif"
     for definition in ("zaksek", "dozier"):

@@ -42,7 +42,9 @@ def test_backend_is_there():
     assert ok, what
 
 
-@pytest.mark.parametrize("algorithm", sorted(GPU_ALGORITHMS))
+@pytest.mark.parametrize("algorithm", [pytest.param(a, marks=pytest.mark.slow)
+                                       if a in ("smap", "sweep") else a
+                                       for a in sorted(GPU_ALGORITHMS)])
 @pytest.mark.parametrize("elevation", [4.0, 25.0])
 def test_gpu_mask_equals_cpu(dem, algorithm, elevation):
     z, g = dem
@@ -76,6 +78,7 @@ def test_sweep_gpu_is_the_sweep_not_brute():
     assert seen > 0   # these suns are chosen where sweep K=2 differs from brute
 
 
+@pytest.mark.slow
 def test_geographic_rays_per_row():
     """Per-row spacing (a geographic CRS): brute, horizon, sweep (and smap via brute) on GPU."""
     z = _terrain(15, 19, seed=8)
@@ -92,6 +95,7 @@ def test_geographic_rays_per_row():
                                           err_msg=f"{algorithm} az {az}")
 
 
+@pytest.mark.slow
 def test_box_on_gpu_casts_the_analytic_shadow():
     """A 10 m box on flat ground, sun at 163 deg / 30 deg, 1 m cells: the shadow reaches
     h / tan(e) = 17.3 m beyond the box along the sun's direction (north-north-west of it)."""
@@ -127,6 +131,7 @@ def test_horizon_angles_equal_cpu(dem):
         horizon.horizon_angles_gpu(g, rays, "hull")
 
 
+@pytest.mark.slow
 def test_horizon_windows_equal_cpu(dem):
     """The scan in windows (run.horizon_windows): a region's rays carried through windows on the device
     give the CPU's state and angles, which are the march in memory's."""
@@ -152,6 +157,7 @@ def test_horizon_windows_equal_cpu(dem):
         np.testing.assert_array_equal(out["cpu"][0], want)
 
 
+@pytest.mark.slow
 def test_dem_stays_on_the_device():
     z = fractal_terrain(48, 40, 2, 20.0, 3)
     g = gpu.GpuDem(z)
@@ -316,6 +322,7 @@ def test_missing_numba_cuda_is_named(monkeypatch):
     assert not ok and "numba-cuda is not installed" in what and "hillshade-rt[gpu]" in what
 
 
+@pytest.mark.slow
 def test_kernels_compile_for_a_real_gpu():
     """The simulator does not type-check: compile every kernel, through the real drivers and with
     the launches' own argument types, to PTX for an H100 (numba-cuda + NVVM, no GPU needed).
@@ -336,6 +343,7 @@ def test_kernels_compile_for_a_real_gpu():
         assert kernels[name]["fma"] == 0, name
 
 
+@pytest.mark.slow
 def test_gpu_curvature_soft_and_tiles_equal_cpu():
     """Earth curvature (brute and the horizon scan march the curved ray on the device), soft
     shadows (horizon angles on the device) and a per-tile sun, through the Shader, GPU vs CPU."""
@@ -363,6 +371,7 @@ def test_gpu_curvature_soft_and_tiles_equal_cpu():
                                atol=1e-6)
 
 
+@pytest.mark.slow
 def test_pyramid_march_on_the_gpu_equals_the_plain_march():
     """Issue 18: the GPU kernel marches over the max-height pyramid (built and uploaded once per
     DEM) and gives the plain march's mask: rough terrain with voids, per-row spacing (rows of a
@@ -388,6 +397,7 @@ def test_pyramid_march_on_the_gpu_equals_the_plain_march():
     assert g._pyramid is not None and g.pyramid_args() is g.pyramid_args()   # uploaded once
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("pyramid", [True, False])
 def test_point_light_gpu_equals_cpu(pyramid):
     """The point light's CUDA kernel (one per-cell body with the CPU's): the same mask on a small

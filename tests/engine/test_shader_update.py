@@ -236,6 +236,7 @@ def test_a_sun_at_night_or_per_tile_renders_in_full():
 
 # -- the GPU (numba's CUDA simulator unless NUMBA_ENABLE_CUDASIM=0) ---------------------------
 
+@pytest.mark.slow
 def test_gpudem_update_uploads_only_the_window_and_matches_a_new_upload():
     from hillshade_rt.engine import gpu
     from hillshade_rt.algorithms import frames
@@ -263,7 +264,7 @@ def test_gpudem_update_uploads_only_the_window_and_matches_a_new_upload():
         g.update(12, 0, new)
 
 
-@pytest.mark.parametrize("name", ["auto", "smap"])
+@pytest.mark.parametrize("name", ["auto", pytest.param("smap", marks=pytest.mark.slow)])
 def test_a_gpu_shader_updates_and_rerenders_like_a_new_cpu_shader(name):
     z = fractal_terrain(14, 18, 6, relief=90.0)
     grid = Grid.uniform(14, 18, 10.0)

@@ -276,7 +276,8 @@ def test_mosaic_of_tiles_is_one_surface(tmp_path, runner):
 
 
 @pytest.mark.parametrize("extra", [[], ["--cog", "--window-size", "96x128"],
-                                   ["--scheduler", "local:2", "--window-size", "128"]])
+                                   pytest.param(["--scheduler", "local:2", "--window-size", "128"],
+                                                marks=pytest.mark.slow)])
 def test_mosaic_one_output_per_tile(tmp_path, runner, extra):
     """--output-pattern with {tile}: the mosaic shaded as one surface, written as one file per
     input tile and time on the tile's own grid (the same cells as the whole DEM's run there);
@@ -413,6 +414,7 @@ def test_interrupt_leaves_no_output(tmp_path, runner, monkeypatch):
     assert os.listdir(tmp_path) == []
 
 
+@pytest.mark.slow
 def test_dask_local_cluster_equals_one_process(tmp_path, runner):
     """Windows x times as tasks on three worker processes: the same bands as one process; the
     parts folder is gone afterwards."""

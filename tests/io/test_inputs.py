@@ -165,23 +165,6 @@ def test_local_paths_keep_their_own_checks(tmp_path, runner):
         read_dem(str(tmp_path / "folder.tif"))
 
 
-def test_gdal_path_of_rasterio_urls(tmp_path, monkeypatch):
-    from hillshade_rt.io import gdal_path
-    monkeypatch.chdir(tmp_path)
-    assert gdal_path("zip://a.zip!d.tif") == f"/vsizip/{tmp_path}/a.zip/d.tif"
-    assert gdal_path("zip:///x/a.zip!/s/d.tif") == "/vsizip//x/a.zip/s/d.tif"
-    assert gdal_path("tar://t.tar!d.tif") == f"/vsitar/{tmp_path}/t.tar/d.tif"
-    assert gdal_path("gzip://d.tif.gz") == f"/vsigzip/{tmp_path}/d.tif.gz"
-    assert gdal_path("zip+https://h/a.zip!d.tif") == "/vsizip//vsicurl/https://h/a.zip/d.tif"
-    assert gdal_path("https://h/d.tif") == "/vsicurl/https://h/d.tif"
-    assert gdal_path("s3://b/k/d.tif") == "/vsis3/b/k/d.tif"
-    for same in ("/vsizip/a.zip/d.tif", "d.tif", "NETCDF:f.nc:z", "/abs/d.tif"):
-        assert gdal_path(same) == same
-    from hillshade_rt.io import input_label
-    assert input_label("zip://a.zip!d.tif") == "zip://a.zip!d.tif"
-    assert input_label("d.tif") == f"{tmp_path}/d.tif" and input_label("-") == "<stdin>"
-
-
 # ---------------------------------------------------------------------------------------------
 # standard input
 

@@ -15,8 +15,6 @@ from affine import Affine
 from rasterio.crs import CRS
 
 from hillshade_rt.cli import cli
-from hillshade_rt.errors import UsageProblem
-from hillshade_rt.io.raster import merged_options, parse_creation_options
 from hillshade_rt.testing import (LUNAR_SOUTH_POLAR_STEREO, data_path, fractal_terrain,
                                   read_band, repo_root, toy_lunar_subsolar, write_geotiff,
                                   write_subsolar_csv)
@@ -56,35 +54,6 @@ def cog_valid(path, what):
     print(f"cog_validate {what}: valid={ok} errors={errors} warnings={warnings}")
     assert ok and errors == [], (what, errors, warnings)
     return warnings
-
-
-# ---------------------------------------------------------------------------------------------
-# parsing
-
-def test_parse_creation_options():
-    assert parse_creation_options(()) == {}
-    assert parse_creation_options(["compress=zstd", "PREDICTOR=2", "COMPRESS=LZW"]) == \
-        {"COMPRESS": "LZW", "PREDICTOR": "2"}        # names upper-cased, the last one wins
-    assert parse_creation_options(["NAME=a=b"]) == {"NAME": "a=b"}
-    assert parse_creation_options({"tiled": True, "blockxsize": 512}) == \
-        {"TILED": "YES", "BLOCKXSIZE": "512"}
-    for bad in (["FOO"], ["=ZSTD"], ["COMPRESS="], ["2X=1"], ["A B=1"]):
-        with pytest.raises(UsageProblem, match="expected NAME=VALUE"):
-            parse_creation_options(bad)
-
-
-def test_merged_options_override_defaults():
-    d = dict(compress="deflate", zlevel=1, tiled=True, blockxsize=256, blockysize=256,
-             predictor=3)
-    assert merged_options(d) == dict(COMPRESS="deflate", ZLEVEL="1", TILED="YES",
-                                     BLOCKXSIZE="256", BLOCKYSIZE="256", PREDICTOR="3")
-    # another codec: the deflate level goes, the predictor stays where the codec takes one
-    assert merged_options(d, {"COMPRESS": "ZSTD"}) == dict(
-        COMPRESS="ZSTD", TILED="YES", BLOCKXSIZE="256", BLOCKYSIZE="256", PREDICTOR="3")
-    assert "PREDICTOR" not in merged_options(d, {"COMPRESS": "NONE"})
-    assert merged_options(d, {"COMPRESS": "NONE", "PREDICTOR": "2"})["PREDICTOR"] == "2"
-    assert "BLOCKXSIZE" not in merged_options(d, {"TILED": "NO"})
-    assert merged_options(d, {"BLOCKXSIZE": "512"})["BLOCKXSIZE"] == "512"
 
 
 # ---------------------------------------------------------------------------------------------
@@ -187,6 +156,7 @@ def test_co_output_pattern_and_multiband(tmp_path, runner):
                                       read_band(tmp_path / "m.tif", i + 1))
 
 
+@pytest.mark.slow
 def test_co_dask_parts_through_vrt(tmp_path, runner):
     """--scheduler: the parts keep the defaults, the file put together from them gets --co
     (GeoTIFF, and COG with its own options); no part left."""

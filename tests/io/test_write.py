@@ -248,6 +248,7 @@ def _wait_for(folder, pred, timeout=120):
     raise AssertionError(f"timed out waiting in {folder}: {os.listdir(folder)}")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("sig,code", [(signal.SIGTERM, 143), (signal.SIGINT, 130),
                                       (signal.SIGHUP, 129)])
 def test_signal_removes_unfinished_and_says_what_is_complete(tmp_path, sig, code):

@@ -156,8 +156,10 @@ def test_sun_hours_tiles(mosaic):
 @pytest.mark.parametrize("cmd,extra", [
     ("horizon", ["--azimuth", "203.7", "--max-distance", "3000"]),
     ("horizon", ["--directions", "8", "--max-distance", "1500", "--distance", "{dist}"]),
-    ("skyview", ["--directions", "16", "--max-distance", "2000"]),
-    ("skyview", ["--directions", "8", "--definition", "dozier"]),     # the whole context
+    pytest.param("skyview", ["--directions", "16", "--max-distance", "2000"],
+                 marks=pytest.mark.slow),
+    pytest.param("skyview", ["--directions", "8", "--definition", "dozier"],  # the whole context
+                 marks=pytest.mark.slow),
 ])
 def test_horizon_and_skyview_tiles(mosaic, cmd, extra):
     vrt, tiles, meta, d = mosaic
@@ -180,6 +182,7 @@ def test_horizon_and_skyview_tiles(mosaic, cmd, extra):
     assert differ > 0
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("extra", [
     ["--date", "2026-12-21", "--step", "2h", "--skyview-directions", "8"],
     ["--start", "2026-06-21T05:00-07:00", "--end", "2026-06-21T19:00-07:00", "--step", "3h",

@@ -169,6 +169,7 @@ def _one_line(err: str) -> str:
     return lines[0]
 
 
+@pytest.mark.slow
 def test_every_worker_lost_fails_within_the_bound(tmp_path):
     """The only worker and its nanny SIGKILLed mid-run: the run stops --worker-timeout after,
     one line naming the scheduler and how far it got; no output, no parts."""
@@ -188,6 +189,7 @@ def test_every_worker_lost_fails_within_the_bound(tmp_path):
         assert os.listdir(out) == []        # no output, no parts, no temporary file
 
 
+@pytest.mark.slow
 def test_workers_killed_and_restarted_by_their_nannies_the_run_goes_on(tmp_path, runner):
     """local:2, both worker processes SIGKILLed mid-run: their nannies (in the run's process)
     start new ones, which take the windows over, rewriting the parts the dead ones had
@@ -213,6 +215,7 @@ def test_workers_killed_and_restarted_by_their_nannies_the_run_goes_on(tmp_path,
     assert (read_band(ref) == read_band(out / "shadow.tif")).all()
 
 
+@pytest.mark.slow
 def test_no_worker_at_the_start(tmp_path):
     """A scheduler without any worker: the run fails after --worker-timeout, one line."""
     with cluster(tmp_path, workers=0) as c, shadow_run(tmp_path, c.address,
@@ -225,6 +228,7 @@ def test_no_worker_at_the_start(tmp_path):
         assert os.listdir(out) == []
 
 
+@pytest.mark.slow
 def test_no_worker_in_the_horizon_skyview_and_illumination_runs(tmp_path, runner):
     """Their windows (and times) as tasks go through the same watch: a scheduler without a
     worker fails each after --worker-timeout, one line, nothing written."""
@@ -253,6 +257,7 @@ def test_no_worker_in_the_horizon_skyview_and_illumination_runs(tmp_path, runner
             assert os.listdir(out) == [], args[0]
 
 
+@pytest.mark.slow
 def test_a_run_on_an_outside_cluster_says_nothing_else(tmp_path):
     """All well on a scheduler and worker of their own: exit 0, nothing on stderr (the client
     closed quietly), the output and no parts."""
@@ -262,6 +267,7 @@ def test_a_run_on_an_outside_cluster_says_nothing_else(tmp_path):
         assert os.listdir(out) == ["shadow.tif"]
 
 
+@pytest.mark.slow
 def test_scheduler_lost(tmp_path):
     """The scheduler SIGKILLed mid-run: exit 1 at once, one line naming it (not an internal
     error); no output, no parts."""
@@ -276,6 +282,7 @@ def test_scheduler_lost(tmp_path):
         assert os.listdir(out) == []
 
 
+@pytest.mark.slow
 def test_a_scheduler_that_stops_answering_is_lost_within_the_bound(tmp_path):
     """The scheduler stopped (SIGSTOP: its connections stay open, nothing answers): the run
     ends within a few --worker-timeout, one line naming it; no output, no parts."""
@@ -410,6 +417,7 @@ def test_a_result_waits_in_bounded_steps_and_a_tasks_timeout_is_its_error(monkey
         s._result(Future("finished", [closed]), 3, 10, "windows", 0.1)
 
 
+@pytest.mark.slow
 def test_a_task_whose_workers_keep_dying_is_named_when_dask_gives_up(tmp_path):
     """A real KilledWorker (the task kills its worker; allowed-failures 0): one line naming
     it, the parts' folder removed, the caller's client left open."""

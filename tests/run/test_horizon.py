@@ -17,6 +17,7 @@ SRTM = data_path("jacksboro_fault_srtm3_mpl_403x344.tif")      # geographic (EPS
 FLAT = ["--no-earth-curvature"]
 
 
+@pytest.mark.slow
 def test_directions_are_the_single_azimuth_runs_band_by_band(tmp_path, runner):
     """Band i is exactly the run toward i * 360 / N; descriptions and tags say which."""
     out = tmp_path / "h.tif"
@@ -35,6 +36,7 @@ def test_directions_are_the_single_azimuth_runs_band_by_band(tmp_path, runner):
         np.testing.assert_array_equal(read_band(out, band), read_band(one))
 
 
+@pytest.mark.slow
 def test_each_direction_decides_the_shadows_of_a_sun_there(tmp_path, runner):
     """The horizon toward the sun's azimuth decides every shadow: a cell is shadowed iff its
     angle exceeds the sun's elevation, cell for cell against brute (non-special azimuths)."""
@@ -159,6 +161,7 @@ def _bands(path):
         return ds.read(), ds.descriptions, ds.tags()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("dem", ["fractal", "everest"])
 @pytest.mark.parametrize("args", [["--azimuth", "203.7"], ["--directions", "8"],
                                   ["--directions", "8", "--max-distance", "2500"]])
@@ -207,6 +210,7 @@ def test_max_distance_on_the_command_line(tmp_path, runner):
         "none")
 
 
+@pytest.mark.slow
 def test_max_memory_switches_to_windows(tmp_path):
     """A --max-memory the DEM does not fit runs in windows, within that memory, with the bits
     of the run in memory."""
@@ -247,6 +251,7 @@ def test_bad_reach_options_are_one_line_and_write_nothing(tmp_path, runner, args
     assert not out.exists() and list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.slow
 def test_windows_on_dask_give_the_same_files(tmp_path, runner):
     """--scheduler local:2: the regions as Dask tasks, their parts put together through a VRT:
     the bands, descriptions and tags of the run in memory (angles and distances), no parts

@@ -124,6 +124,7 @@ def _toy(tmp_path, n=40, step_h=18.0, name="toy.csv"):
     return write_subsolar_csv(tmp_path / name, toy_lunar_subsolar(n, step_h, phase_deg=270.0))
 
 
+@pytest.mark.slow
 def test_polar_pit_floor_permanently_shadowed(tmp_path):
     dem, floor, rim = _polar_pit(tmp_path)
     csv = _toy(tmp_path)
@@ -139,6 +140,7 @@ def test_polar_pit_floor_permanently_shadowed(tmp_path):
     assert rep["permanently_shadowed_cells"] == int((psr == 1).sum())
 
 
+@pytest.mark.slow
 def test_height_above_ground_lights_more(tmp_path):
     dem, floor, rim = _polar_pit(tmp_path)
     csv = _toy(tmp_path)
@@ -151,6 +153,7 @@ def test_height_above_ground_lights_more(tmp_path):
     assert read_band(up, 3).sum() < read_band(base, 3).sum()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("curvature", [True, False])
 def test_windows_equal_memory(tmp_path, curvature):
     dem, _, _ = _polar_pit(tmp_path, n=200, rough=300.0)
@@ -163,6 +166,7 @@ def test_windows_equal_memory(tmp_path, curvature):
         np.testing.assert_array_equal(read_band(win, i + 1), read_band(mem, i + 1))
 
 
+@pytest.mark.slow
 def test_dask_equals_local(tmp_path):
     """The times cut into chunks across Dask tasks (3 chunks, windows too), combined in time
     order: bit for bit the local run."""
@@ -256,6 +260,7 @@ def test_cli_report_and_bands(tmp_path, runner):
     assert h.exit_code == 0 and "--subsolar-file" in h.output
 
 
+@pytest.mark.slow
 def test_gpu_backend_equals_cpu(tmp_path):
     """--backend gpu (here numba's CUDA simulator; a real device with NUMBA_ENABLE_CUDASIM=0):
     the CUDA twins' masks folded into the same sums, equal to the CPU run band for band."""

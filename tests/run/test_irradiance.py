@@ -58,6 +58,7 @@ def _day(date=dt.date(2026, 6, 21), step="15min"):
 # ---------------------------------------------------------------------------------------------
 # open planes: pvlib's plane-of-array irradiance
 
+@pytest.mark.slow
 @pytest.mark.parametrize("slope, aspect", [(0.0, 0.0), (25.0, 163.0), (40.0, 290.0)])
 def test_open_plane_equals_pvlib_isotropic(slope, aspect):
     """Flat, 25 deg facing 163 and 40 deg facing 290: every band at every time of a day equals
@@ -130,6 +131,7 @@ def _flat_cells(z):
     return (win == 0.0).all(axis=(2, 3))
 
 
+@pytest.mark.slow
 def test_beam_under_cast_shadows_is_the_masks_sum():
     """On a block at 46 N at the winter solstice (suns at non-special azimuths all day), the
     beam energy of every flat cell equals the sum over the day of DNI sin(E) (1 - mask) with
@@ -177,6 +179,7 @@ def test_beam_under_cast_shadows_is_the_masks_sum():
                                + per["reflected"][0], rtol=1e-6)
 
 
+@pytest.mark.slow
 def test_soft_beam_is_the_visible_fraction_of_the_disk():
     """With soft, the beam on a flat cell is DNI sin(E) times the visible fraction of the solar
     disk above the cell's horizon toward the sun (arrays.horizon_angles, solar.disk_fraction):
@@ -198,6 +201,7 @@ def test_soft_beam_is_the_visible_fraction_of_the_disk():
     assert penumbra.sum() >= 3
 
 
+@pytest.mark.slow
 def test_gpu_backend_gives_the_cpu_bands():
     """backend="gpu" (the cast shadows and Vd's horizon scans as CUDA kernels; numba's CUDA
     simulator here, the device with NUMBA_ENABLE_CUDASIM=0): the CPU's bands, a void
@@ -250,6 +254,7 @@ def _tags(path):
         return ds.tags(), ds.descriptions, ds.count, ds.nodata
 
 
+@pytest.mark.slow
 def test_mean_is_energy_over_the_period_hours(tmp_path, runner):
     """--mean divides the energy by the period's hours (23 on the day the clocks spring
     forward in America/Los_Angeles); bands, descriptions, units and tags say what they are."""
@@ -292,6 +297,7 @@ def test_night_gives_no_beam(tmp_path, runner):
     assert doc["period_hours"] == 3.0
 
 
+@pytest.mark.slow
 def test_tz_auto_is_the_dem_zone(tmp_path, runner):
     """--tz auto (the DEM is in UTM 11N at 34.3 N: America/Los_Angeles): local --start/--end
     read there after the DEM, and --date's days run there; the same as naming the zone."""
@@ -452,6 +458,7 @@ def test_a_dem_off_the_earth_or_without_a_place_fails_with_one_line(tmp_path, ru
                   "--lat", "46.5", "--lon", "7.5", "--step", "2h", "-q"])
 
 
+@pytest.mark.slow
 def test_geographic_dem_flat_gets_the_open_sky(tmp_path, runner):
     """An EPSG:4326 DEM (3 arc-second cells at 46.5 N; per-row spacing): on its flat part the
     global band is the clear sky's GHI over the day (Ineichen's DHI is GHI - DNI cos Z), the
@@ -497,6 +504,7 @@ def test_the_sun_varies_across_a_wide_dem(tmp_path):
     np.testing.assert_allclose(ratio / ratio[20, 20], 1.0, rtol=5e-3)
 
 
+@pytest.mark.slow
 def test_the_bundled_example_runs(tmp_path, runner):
     """examples/bigtujunga (1197 x 643 SRTM, UTM 11N): four bands, voids none, the diffuse
     band between a valley's share of the sky and the open sky's DHI, the global band below
@@ -516,6 +524,7 @@ def test_the_bundled_example_runs(tmp_path, runner):
     assert set(doc["seconds"]) >= {"sky view", "shadows", "irradiance", "write"}
 
 
+@pytest.mark.slow
 def test_api_run_is_the_command_line(tmp_path, runner):
     """api.irradiance takes the command line's options as keywords (dates as date objects too)
     and writes the same bands; bad values raise HillshadeError with the same words."""

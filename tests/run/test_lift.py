@@ -31,6 +31,7 @@ def _run(runner, args):
     return r
 
 
+@pytest.mark.slow
 def test_a_wall_lights_an_observer_exactly_above_its_shadow_line(tmp_path, runner):
     """A wall h = 30 m perpendicular to the sun at 203.7 deg, 20 deg up: an observer on the
     ground d metres from the wall (along the ray, to the wall's first full sample) is lit
@@ -61,7 +62,7 @@ def test_a_wall_lights_an_observer_exactly_above_its_shadow_line(tmp_path, runne
     assert all(g[cell] == (1 if hstar > 0 else 0) for cell, hstar in need.items())
 
 
-@pytest.mark.parametrize("az", [163.0, 203.7, 290.0])
+@pytest.mark.parametrize("az", [pytest.param(163.0, marks=pytest.mark.slow), 203.7, 290.0])
 def test_lift_equals_the_plain_python_reference(az):
     """Fractal terrain with voids, rectangular cells and spacing that varies per row (as in a
     geographic CRS): brute over the pyramid and the plain march equal the reference with the
@@ -100,6 +101,7 @@ def test_lift_is_monotone_and_an_observer_above_every_summit_is_lit():
     assert (brute.shadow_mask(z, rays, lift=float(z.max() - z.min())) == 0).all()
 
 
+@pytest.mark.slow
 def test_per_cell_sun_and_gpu_twins_take_the_lift():
     """The per-cell sun's march (a sun that varies across the raster) and the CUDA kernels
     (run here in numba's simulator) with a lift: the same mask as brute on the CPU."""
@@ -155,6 +157,7 @@ def test_hillshade_lights_what_the_lifted_shadow_lights(tmp_path, runner):
     assert changed.sum() > 100 and (hb[changed] > ha[changed]).all()
 
 
+@pytest.mark.slow
 def test_windows_equal_memory_with_a_lift_and_the_halo_is_shorter(tmp_path, runner):
     """--window-size 64 with H = 6 m gives the in-memory mask cell for cell; the halos it
     reads are shorter than at H = 0 (the rays start higher: reach (zmax - (low + H)) / tan E)."""
@@ -172,6 +175,7 @@ def test_windows_equal_memory_with_a_lift_and_the_halo_is_shorter(tmp_path, runn
     assert (outs["6"][0] != outs["0"][0]).sum() > 100
 
 
+@pytest.mark.slow
 def test_windows_with_each_cells_own_sun_and_a_lift(tmp_path, runner):
     """A 60 km DEM at a low sun from a time (every cell its own sun): windows of 64 x 64 with
     H = 15 m give the in-memory mask cell for cell, and a mask that differs from the ground's."""
@@ -193,6 +197,7 @@ def test_windows_with_each_cells_own_sun_and_a_lift(tmp_path, runner):
     assert not ((mg == 0) & (ma == 1)).any() and ((mg == 1) & (ma == 0)).sum() > 50
 
 
+@pytest.mark.slow
 def test_sun_hours_from_higher_up_are_never_fewer(tmp_path, runner):
     """A higher ray start at the same angle lies above the lower ray everywhere, so sun hours
     at H > 0 are >= those at H = 0 cell for cell (strictly more somewhere); with H > 0 the

@@ -43,6 +43,7 @@ def _fractal_dem(tmp_path, rows=150, cols=170, seed=5, relief=90.0):
                          UTM), z
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("az", [163.0, 203.7])
 def test_the_horizon_toward_a_wall_from_above_the_ground(tmp_path, runner, az):
     """Flat ground, a wall h = 30 m perpendicular to the azimuth: toward it, from H above a
@@ -66,6 +67,7 @@ def test_the_horizon_toward_a_wall_from_above_the_ground(tmp_path, runner, az):
         assert float(_tags(out)["HEIGHT_ABOVE_GROUND_M"]) == H
 
 
+@pytest.mark.slow
 def test_the_lifted_horizon_equals_the_plain_python_reference():
     """Fractal terrain with voids, rectangular cells whose spacing varies per row, at 203.7 and
     290 deg: the scan (over the pyramid and plain) and the hull's exact lines give the
@@ -101,6 +103,7 @@ def test_the_hull_takes_the_lift_where_it_is_exact():
                                    hz.horizon_angles(z, rays, lift=6.0), atol=1e-4)
 
 
+@pytest.mark.slow
 def test_gpu_twins_and_windows_take_the_lift():
     """The CUDA kernels (numba's simulator here) and the windowed march (``Marches``: a region
     marched through two windows) give the in-memory scan's bits with a lift."""
@@ -127,6 +130,7 @@ def test_gpu_twins_and_windows_take_the_lift():
             np.testing.assert_array_equal(m.angles(), want[4:12, 5:15])
 
 
+@pytest.mark.slow
 def test_horizon_and_skyview_in_windows_equal_memory_with_a_lift(tmp_path, runner):
     """--window-size 64 with H = 3 m: horizon (8 directions) and skyview (zaksek and
     negative openness) give the in-memory rasters cell for cell; the sky view factor at H is
@@ -164,6 +168,7 @@ def _bands(path):
         return ds.read()
 
 
+@pytest.mark.slow
 def test_skyview_tags_and_dozier_take_the_height(tmp_path, runner):
     """The tags give the height; Dozier's Vd from above is not Vd from the ground;
     H = 0 is today's run bit for bit."""
@@ -181,6 +186,7 @@ def test_skyview_tags_and_dozier_take_the_height(tmp_path, runner):
     assert float(_tags(zero)["HEIGHT_ABOVE_GROUND_M"]) == 0.0
 
 
+@pytest.mark.slow
 def test_soft_shadows_from_above_the_ground(tmp_path, runner):
     """``shadow --soft --height-above-ground H``: the visible fraction at H >= at 0 cell for
     cell (strictly more somewhere), and where it is 0 or 1 the hard mask at H agrees (shadow /
@@ -206,6 +212,7 @@ def test_soft_shadows_from_above_the_ground(tmp_path, runner):
     np.testing.assert_array_equal(read_band(win), f)
 
 
+@pytest.mark.slow
 def test_irradiance_beam_from_above_the_ground_is_never_less(tmp_path, runner):
     """irradiance --height-above-ground H: the beam band at H >= at 0 cell for cell (its cast
     shadows from H, the incidence the cell's surface), strictly more somewhere; the report and

@@ -30,7 +30,7 @@ def _json(runner, args):
     return json.loads(r.stdout)
 
 
-@pytest.mark.parametrize("dem_kind", ["utm", "geographic"])
+@pytest.mark.parametrize("dem_kind", ["utm", pytest.param("geographic", marks=pytest.mark.slow)])
 def test_profile_at_cell_centres_is_the_horizon_raster(tmp_path, runner, utm_dem, dem_kind):
     """At a cell centre with the observer on the ground, the profile is the horizon raster's
     value there, every 10 degrees (projected and geographic DEMs, curvature by default)."""

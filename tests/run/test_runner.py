@@ -1,6 +1,6 @@
-"""run.runner: the preamble and tail every run shares."""
-
-from __future__ import annotations
+"""run/runner.py: the skeleton every run shares: the claims before any work (outputs against
+inputs and each other, the report and preview too), threads, the backend, the compile note
+(not when quiet), the lines and the report at the end."""
 
 import json
 
@@ -8,30 +8,78 @@ import numba
 import pytest
 
 from hillshade_rt.errors import HillshadeError, UsageProblem
+from hillshade_rt.run import notes
 from hillshade_rt.run.config import RunOptions
 from hillshade_rt.run.runner import RunContext
 
 
-def _options(tmp_path, **kw):
+def _ro(tmp_path, said, **kw):
+    return RunOptions(say=lambda kind, msg: said.append((kind, msg)), **kw)
+
+
+def test_outputs_report_and_preview_are_claimed(tmp_path):
+    dem = tmp_path / "d.tif"
+    dem.write_bytes(b"")
     said = []
-    ro = RunOptions(say=lambda kind, msg: said.append((kind, msg)), **kw)
-    return ro, said
+    ro = _ro(tmp_path, said, report_path=str(tmp_path / "r.json"), backend="cpu")
+    ctx = RunContext.start(ro, inputs=[str(dem)], outputs=[(str(tmp_path / "o.tif"), "OUTPUT"),
+                                                           (None, "--distance")])
+    assert [w for _, w in ctx.claims.paths] == ["OUTPUT", "--report"]
+    with pytest.raises(UsageProblem, match="o.tif: --distance and OUTPUT name the same file"):
+        ctx.claim(str(tmp_path / "o.tif"), "--distance")
+    with pytest.raises(UsageProblem, match="d.tif: OUTPUT is also an input"):
+        RunContext.start(RunOptions(backend="cpu", overwrite=True), inputs=[str(dem)],
+                         outputs=[(str(dem), "OUTPUT")])
+    with pytest.raises(HillshadeError, match="d.tif: already exists"):
+        RunContext.start(RunOptions(backend="cpu"), outputs=[(str(dem), "OUTPUT")])
+    with pytest.raises(UsageProblem, match="x: --preview and --report name the same file"):
+        RunContext.start(RunOptions(backend="cpu", report_path=str(tmp_path / "x"),
+                                    preview=str(tmp_path / "x")))
 
 
-def test_start_claims_every_path_against_the_inputs(tmp_path):
-    dem = tmp_path / "dem.tif"
-    dem.write_bytes(b"x")
-    ro, _ = _options(tmp_path, report_path=str(dem), overwrite=True)
-    with pytest.raises(UsageProblem, match="--report is also an input"):
-        RunContext.start(ro, inputs=[str(dem)], outputs=[(str(tmp_path / "o.tif"), "OUTPUT")])
-    ro, _ = _options(tmp_path, preview=str(tmp_path / "o.tif"))
-    with pytest.raises(UsageProblem, match="name the same file"):
-        RunContext.start(ro, inputs=[str(dem)], outputs=[(str(tmp_path / "o.tif"), "OUTPUT")])
+def test_threads_and_backend(tmp_path):
+    before = numba.get_num_threads()
+    try:
+        ctx = RunContext.start(RunOptions(threads=1, backend="cpu"), algorithm=None)
+        assert ctx.threads == 1 == numba.get_num_threads() and ctx.backend == "cpu"
+        assert RunContext.start(RunOptions(backend="gpu"), backend=False).backend == "cpu"
+    finally:
+        numba.set_num_threads(before)
+
+
+def test_the_compile_note_unless_quiet(monkeypatch, tmp_path):
+    monkeypatch.setattr(notes, "compile_note",
+                        lambda algorithm, backend, relief=False: f"compiling {algorithm} {relief}")
+    said = []
+    RunContext.start(_ro(tmp_path, said, backend="cpu"), algorithm="brute", relief=True)
+    assert said == [("compile", "compiling brute True")]
+    said.clear()
+    RunContext.start(_ro(tmp_path, said, backend="cpu", quiet=True), algorithm="brute")
+    RunContext.start(_ro(tmp_path, said, backend="cpu"), algorithm="brute", note=False)
+    RunContext.start(_ro(tmp_path, said, backend="cpu"))
+    assert said == []
+
+
+def test_finish_writes_the_report_then_says_the_lines(tmp_path):
+    said = []
+    rep = tmp_path / "r.json"
+    ctx = RunContext.start(_ro(tmp_path, said, backend="cpu", report_path=str(rep)))
+    with ctx.timer("compute"):
+        pass
+    secs = ctx.seconds()
+    assert set(secs) == {"compute", "total"} and secs["total"] >= secs["compute"] >= 0
+    out = ctx.finish({"a": 1}, [("note", "first"), ("note", None), ("summary", "last")])
+    assert out == {"a": 1} and json.loads(rep.read_text()) == {"a": 1}
+    assert said == [("note", "first"), ("summary", "last")]
+    quiet = []
+    RunContext.start(_ro(tmp_path, quiet, backend="cpu", quiet=True)).finish(
+        {}, [("summary", "x")])
+    assert quiet == []
 
 
 def test_an_output_with_checks_runs_in_its_turn(tmp_path):
     seen = []
-    ro, _ = _options(tmp_path, report_path=str(tmp_path / "r.json"))
+    ro = RunOptions(report_path=str(tmp_path / "r.json"))
 
     def check(claims):
         seen.append([what for _, what in claims.paths])
@@ -40,41 +88,3 @@ def test_an_output_with_checks_runs_in_its_turn(tmp_path):
                                         (None, "unused")])
     assert seen == [["OUTPUT"]]
     assert [w for _, w in ctx.claims.paths] == ["OUTPUT", "--stac-item", "--report"]
-
-
-def test_threads_and_backend(tmp_path):
-    before = numba.get_num_threads()
-    try:
-        ro, _ = _options(tmp_path, threads=1, backend="cpu")
-        ctx = RunContext.start(ro, algorithm="bounds")
-        assert ctx.threads == 1 == numba.get_num_threads()
-        assert ctx.backend == "cpu"
-        ro, _ = _options(tmp_path, backend="auto")
-        assert RunContext.start(ro, backend=False).backend == "cpu"
-        ro, _ = _options(tmp_path, backend="sideways")
-        with pytest.raises(HillshadeError, match="backend must be"):
-            RunContext.start(ro, algorithm="bounds")
-    finally:
-        numba.set_num_threads(before)
-
-
-def test_finish_writes_the_report_then_says_the_lines_in_order(tmp_path):
-    report = tmp_path / "r.json"
-    ro, said = _options(tmp_path, report_path=str(report))
-    ctx = RunContext.start(ro, backend=False)
-    with ctx.timer("compute"):
-        pass
-    rep = {"answer": 42, "seconds": ctx.seconds()}
-    assert set(rep["seconds"]) == {"compute", "total"}
-    out = ctx.finish(rep, [("note", "first"), ("summary", None), ("summary", "last")])
-    assert out is rep
-    assert json.loads(report.read_text())["answer"] == 42
-    assert said == [("note", "first"), ("summary", "last")]
-
-
-def test_quiet_says_nothing_but_writes_the_report(tmp_path):
-    report = tmp_path / "r.json"
-    ro, said = _options(tmp_path, report_path=str(report), quiet=True)
-    ctx = RunContext.start(ro, algorithm="brute")
-    ctx.finish({"a": 1}, [("summary", "x")])
-    assert said == [] and report.exists()

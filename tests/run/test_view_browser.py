@@ -101,6 +101,7 @@ def cells_of(lo, hi, n_px):
     return np.floor(lo + (np.arange(n_px) + 0.5) * ((hi - lo) / n_px)).astype(np.int64)
 
 
+@pytest.mark.slow
 def test_time_slider_updates_the_shadows(browser, server, tmp_path):
     from selenium.webdriver.common.action_chains import ActionChains
     from selenium.webdriver.common.by import By
@@ -167,6 +168,7 @@ def test_time_slider_updates_the_shadows(browser, server, tmp_path):
         os.replace(tmp, DOCS_SCREENSHOT)
 
 
+@pytest.mark.slow
 def test_compass_drag_and_toggles(browser, server):
     """Dragging the sun on the compass sets azimuth and elevation by hand (the picture follows);
     soft shadows and sun hours each bring a new picture; the download link names the sun."""
@@ -196,6 +198,7 @@ def test_compass_drag_and_toggles(browser, server):
         wait_for(drv, f"return viewer.renders > {n + 1}")
 
 
+@pytest.mark.slow
 def test_terrain_brush_changes_the_picture(browser, server):
     """The brush: toggled on, a click raises the terrain there (a 400 m block, 300 m across),
     the picture is drawn again with its shadow; undo brings the first picture back."""

@@ -57,6 +57,7 @@ TIMES = ["2026-06-21T03:00:00+00:00", "2026-06-21T09:30:00+00:00",
          "2026-06-21T18:00:00+00:00"]      # Everest: morning, afternoon, night
 
 
+@pytest.mark.slow
 def test_time_series_is_a_time_dimension_equal_to_the_command_line(tmp_path):
     args = [a for t in TIMES for a in ("--time", t)]
     ref = cli("shadow", EVEREST, tmp_path / "cli.tif", *args)
@@ -85,6 +86,7 @@ def test_time_series_is_a_time_dimension_equal_to_the_command_line(tmp_path):
     assert one.attrs["sun_azimuth"] == pytest.approx(float(out.sun_azimuth[1]))
 
 
+@pytest.mark.slow
 def test_horizon_skyview_and_sun_hours_equal_the_command_line(tmp_path):
     da = rioxarray.open_rasterio(EVEREST)
     void = da.values[0] == -32768
@@ -142,6 +144,7 @@ def test_the_command_line_and_the_api_do_not_import_xarray():
                           check=True).stdout.strip() == "True"
 
 
+@pytest.mark.slow
 def test_the_docs_example_runs(tmp_path, monkeypatch):
     """docs/usage.md, "In xarray": its example, run from the repository's root as it says
     (the GeoTIFF it writes goes to a temporary folder here)."""

@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 import rioxarray           # the `xarray` extra, in `test`
 
 import hillshade_rt.xarray  # noqa: F401 -- registers da.hrt
@@ -27,6 +28,7 @@ def same_place(out, ref):
     assert out.rio.transform() == ref.rio.transform()
 
 
+@pytest.mark.slow
 def test_dask_input_is_lazy_and_equals_in_memory_with_chunks_smaller_than_the_halo(monkeypatch):
     import dask
 

@@ -1,0 +1,190 @@
+"""engine/irradiance.py: the bands' sums against pvlib's plane-of-array model on an open plane
+(isotropic and Perez 1990), Haurwitz's formula, the period's samples, measured series (CSV,
+interpolation, refusals) and the options' checks."""
+
+import datetime as dt
+import math
+import types
+import zoneinfo
+
+import numpy as np
+import pytest
+
+from hillshade_rt.engine import irradiance as irr
+from hillshade_rt.errors import HillshadeError
+
+UTC = dt.timezone.utc
+
+
+def test_check_options():
+    irr.check_options(0.2, 3.0, 32)
+    for args, why in [((1.5,), "--albedo must be between 0 and 1"),
+                      ((float("nan"),), "--albedo"),
+                      ((0.2, 0.5), "--linke-turbidity must be between 1 and 10"),
+                      ((0.2, None, 3), "--skyview-directions must be between 4 and 360")]:
+        with pytest.raises(HillshadeError, match=why):
+            irr.check_options(*args)
+
+
+def test_period_samples_midpoints_and_weights():
+    tz = zoneinfo.ZoneInfo("Europe/Zurich")
+    start = dt.datetime(2026, 3, 29, 0, 0, tzinfo=tz)       # the clocks go forward at 02:00
+    end = dt.datetime(2026, 3, 29, 5, 0, tzinfo=tz)        # four hours of elapsed time
+    times, w = irr.period_samples(start, end, dt.timedelta(hours=1.5))
+    assert w == [1.5, 1.5, 1.0]
+    assert [t.astimezone(UTC).strftime("%H:%M") for t in times] == ["23:45", "01:15", "02:30"]
+    assert all(t.tzinfo is tz for t in times)
+    with pytest.raises(HillshadeError, match="is not after --start"):
+        irr.period_samples(end, start, dt.timedelta(hours=1))
+    with pytest.raises(HillshadeError, match="--step must be positive"):
+        irr.period_samples(start, end, dt.timedelta(0))
+    with pytest.raises(HillshadeError, match="more than 3 samples"):
+        irr.period_samples(start, end, dt.timedelta(minutes=30), limit=3)
+
+
+def test_haurwitz_is_its_formula_and_split_by_erbs():
+    """Haurwitz's model as pvlib writes it (Reno, Hansen & Stein 2012, SAND2012-2389):
+    GHI = 1098 cos Z exp(-0.059 / cos Z); zero with the sun down."""
+    times = [dt.datetime(2026, 6, 21, h, tzinfo=UTC) for h in (9, 12, 23)]
+    zen = np.array([60.0, 30.0, 100.0])
+    sky = irr.clear_sky(times, zen, 46.0, 8.0, 500.0, model="haurwitz")
+    cz = np.cos(np.radians(zen[:2]))
+    np.testing.assert_allclose(sky.ghi[:2], 1098.0 * cz * np.exp(-0.059 / cz), rtol=1e-9)
+    assert sky.ghi[2] == 0 and sky.dni[2] == 0 and sky.split == irr.ERBS
+    # the split closes: GHI = DNI cos Z + DHI
+    np.testing.assert_allclose(sky.dni[:2] * cz + sky.dhi[:2], sky.ghi[:2], rtol=1e-6)
+    with pytest.raises(HillshadeError, match="--clear-sky must be one of ineichen, haurwitz"):
+        irr.clear_sky(times, zen, 46.0, 8.0, 500.0, model="solis")
+
+
+def test_measured_sky():
+    times = [dt.datetime(2026, 6, 21, 12, tzinfo=UTC)] * 2
+    sky = irr.measured_sky(times, [30.0, 40.0], [-3.0, 700.0], [-1.0, 600.0], [5.0, 150.0])
+    np.testing.assert_array_equal(sky.ghi, [0.0, 700.0])
+    np.testing.assert_array_equal(sky.dni, [0.0, 600.0])
+    assert sky.split is None
+    with pytest.raises(HillshadeError, match="give both dni and dhi"):
+        irr.measured_sky(times, [30.0, 40.0], [1.0, 2.0], dni=[1.0, 2.0])
+    with pytest.raises(HillshadeError, match="one value per time"):
+        irr.measured_sky(times, [30.0, 40.0], [1.0, 2.0], [1.0], [1.0])
+    assert irr.measured_sky(times, [30.0, 40.0], [500.0, 600.0]).split == irr.ERBS
+
+
+def test_read_series_and_interpolate(tmp_path):
+    p = tmp_path / "s.csv"
+    p.write_text("# a station\nTime,GHI,dni,dhi\n2026-06-21T10:00+02:00,100,50,60\n\n"
+                 "2026-06-21T09:00Z,300,250,70\n")
+    unix, ghi, dni, dhi = irr.read_series(str(p))
+    assert list(unix) == [dt.datetime(2026, 6, 21, 8, tzinfo=UTC).timestamp(),
+                          dt.datetime(2026, 6, 21, 9, tzinfo=UTC).timestamp()]
+    np.testing.assert_array_equal(ghi, [100.0, 300.0])
+    t = [dt.datetime(2026, 6, 21, 8, 15, tzinfo=UTC)]
+    g, none = irr.series_at(t, unix, ghi, None)
+    assert g[0] == pytest.approx(150.0) and none is None
+    with pytest.raises(HillshadeError, match="runs from .* but the period's samples run"):
+        irr.series_at([dt.datetime(2026, 6, 21, 9, 1, tzinfo=UTC)], unix, ghi)
+    q = tmp_path / "g.csv"
+    q.write_text("time,ghi\n2026-06-21 10:00,1\n2026-06-21 11:00,2\n")
+    unix, ghi, dni, dhi = irr.read_series(str(q), zoneinfo.ZoneInfo("Europe/Zurich"))
+    assert dni is None and dhi is None
+    assert unix[0] == dt.datetime(2026, 6, 21, 8, tzinfo=UTC).timestamp()
+
+
+@pytest.mark.parametrize("text, why", [
+    ("", "empty"),
+    ("time,dni\n", "no ghi column"),
+    ("time,ghi,dni\n", "give both dni and dhi columns"),
+    ("time,ghi\n2026-06-21T10:00Z\n", "line 2: 1 fields, the header has 2"),
+    ("time,ghi\n2026-06-21T10:00Z,x\n2026-06-21T11:00Z,1\n", "line 2: ghi 'x' is not a number"),
+    ("time,ghi\n2026-06-21T10:00Z,1\n", "needs at least two rows"),
+    ("time,ghi\n2026-06-21T10:00Z,1\n2026-06-21T10:00Z,2\n", "row 2 is not after row 1"),
+    ("time,ghi\nnoon,1\n2026-06-21T10:00Z,2\n", "s.csv line 2: "),
+])
+def test_read_series_refusals(tmp_path, text, why):
+    p = tmp_path / "s.csv"
+    p.write_text(text)
+    with pytest.raises(HillshadeError, match=why):
+        irr.read_series(str(p))
+
+
+def _plane_case():
+    """An open plane (slope 25 deg facing 203.7 deg) under suns of one day: what pvlib needs
+    and what ``sums`` needs (the plane's cos i as the direct term, Vd = (1 + cos S) / 2)."""
+    from pvlib.irradiance import aoi
+    tilt, aspect = 25.0, 203.7
+    times = [dt.datetime(2026, 5, 2, h, 30, tzinfo=UTC) for h in (6, 9, 11, 14, 17, 21)]
+    zen = np.array([80.0, 50.0, 35.0, 42.0, 70.0, 95.0])
+    saz = np.array([80.0, 130.0, 163.0, 220.0, 275.0, 300.0])
+    ghi = np.array([60.0, 550.0, 800.0, 700.0, 200.0, 0.0])
+    dhi = np.array([40.0, 120.0, 100.0, 150.0, 90.0, 0.0])
+    dni = np.array([120.0, 660.0, 860.0, 740.0, 320.0, 0.0])
+    cos_i = np.cos(np.radians(aoi(tilt, aspect, zen, saz)))
+    suns = [types.SimpleNamespace(tiles=[], elevation=90.0 - z) for z in zen]
+    cos_s = math.cos(math.radians(tilt))
+    vd = np.full((1, 2), (1.0 + cos_s) / 2.0, np.float32)
+    slopes = (np.full((1, 2), cos_s), np.full((1, 2), math.sin(math.radians(tilt))))
+    sky = irr.measured_sky(times, zen, ghi, dni, dhi)
+
+    def direct(s, timed):
+        k = [x.elevation for x in suns].index(s.elevation)
+        return np.full((1, 2), max(cos_i[k], 0.0), np.float32)
+    return locals()
+
+
+def test_isotropic_bands_on_an_open_plane_are_pvlibs():
+    from pvlib.irradiance import get_total_irradiance
+    c = _plane_case()
+    bands = irr.sums(c["direct"], np.zeros((1, 2), bool), lambda: c["slopes"], c["suns"],
+                     np.ones(6), c["sky"], c["vd"], 0.2, per_time=True)
+    poa = get_total_irradiance(c["tilt"], c["aspect"], c["zen"], c["saz"], c["dni"],
+                               c["ghi"], c["dhi"], albedo=0.2, model="isotropic")
+    np.testing.assert_allclose(bands["beam"][:, 0, 0], poa["poa_direct"], rtol=1e-5, atol=1e-3)
+    np.testing.assert_allclose(bands["diffuse"][:, 0, 0], poa["poa_sky_diffuse"], rtol=1e-5)
+    np.testing.assert_allclose(bands["reflected"][:, 0, 0], poa["poa_ground_diffuse"],
+                               rtol=1e-5)
+    np.testing.assert_allclose(bands["global"][:, 0, 0], poa["poa_global"], rtol=1e-5,
+                               atol=1e-3)
+
+
+def test_perez_diffuse_on_an_open_plane_is_pvlibs():
+    import pandas as pd
+    from pvlib.atmosphere import get_relative_airmass
+    from pvlib.irradiance import get_extra_radiation, perez
+    c = _plane_case()
+    sky = irr.with_perez(c["sky"], c["times"], c["zen"])
+    stats = {}
+    bands = irr.sums(c["direct"], np.zeros((1, 2), bool), lambda: c["slopes"], c["suns"],
+                     np.ones(6), sky, c["vd"], 0.2, perez=True, per_time=True, stats=stats)
+    idx = pd.DatetimeIndex(c["times"])
+    want = perez(c["tilt"], c["aspect"], c["dhi"], c["dni"], get_extra_radiation(idx),
+                 c["zen"], c["saz"], get_relative_airmass(c["zen"]))
+    np.testing.assert_allclose(bands["diffuse"][:, 0, 0], np.nan_to_num(np.asarray(want)),
+                               rtol=1e-5, atol=1e-3)
+    assert stats == {"samples": 6, "samples_with_shadows": 5}
+
+
+def test_summed_bands_are_the_weighted_per_time_bands():
+    c = _plane_case()
+    w = np.array([0.5, 1.0, 1.0, 2.0, 1.5, 1.0])
+    void = np.array([[False, True]])
+    args = (c["direct"], void, lambda: c["slopes"], c["suns"], w, c["sky"], c["vd"], 0.3)
+    per = irr.sums(*args, per_time=True)
+    tot = irr.sums(*args)
+    for k in irr.BANDS:
+        assert tot[k].dtype == np.float32
+        assert tot[k][0, 0] == pytest.approx(float(np.sum(w * per[k][:, 0, 0])), rel=1e-5)
+    assert np.isnan(tot["beam"][0, 1]) and np.isnan(tot["global"][0, 1])
+    with pytest.raises(HillshadeError, match="one weight and one sky value per sun"):
+        irr.sums(c["direct"], void, None, c["suns"], w[:3], c["sky"], c["vd"], 0.3)
+    with pytest.raises(HillshadeError, match="no Perez coefficients"):
+        irr.sums(*args, perez=True)
+
+
+def test_is_dark_and_definitions():
+    assert irr.is_dark(types.SimpleNamespace(tiles=[], elevation=-0.1), False)
+    assert not irr.is_dark(types.SimpleNamespace(tiles=[], elevation=-0.1), True)   # the disk
+    tiles = [types.SimpleNamespace(elevation=e) for e in (-3.0, 0.5)]
+    assert not irr.is_dark(types.SimpleNamespace(tiles=tiles, elevation=-3.0), False)
+    text = irr.definitions("perez", 16, True)
+    assert "Perez 1990" in text and "16 directions" in text and "visible fraction" in text
+    assert "DHI * Vd (isotropic" in irr.definitions("isotropic", 32, False)
