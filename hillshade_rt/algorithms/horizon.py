@@ -388,8 +388,8 @@ def horizon_angles(z: np.ndarray, rays: SunRays, method: str = "scan", sample_sp
 
     The scan marches over the maximum-height pyramid (``pyramid``: True, a ``MaxPyramid`` to
     reuse, or False for the plain scan: same angles). ``floor_deg`` / ``cap_deg`` (soft
-    shadows): β below the floor comes back as the floor, β above the cap as some angle above it
-    (the march stops there). ``lift``: the observer stands that many metres above each cell
+    shadows): β at or below the floor comes back as -90 (nothing above the floor: the whole
+    disc in view), β above the cap as 90 (the march stops there: none of it). ``lift``: the observer stands that many metres above each cell
     (``--height-above-ground``; >= 0, 0 the ground: the same bits as without)."""
     hull = _check(method, sample_spacing, rays)
     lift = _lift(lift)
