@@ -32,10 +32,10 @@ def main():
 
     def run(dem, ws, md):
         if args.command == "skyview":
-            return skyview(SkyviewConfig(dem, out, args.directions, window_size=ws,
-                                         max_distance=md, run=ro))
-        return horizon(HorizonConfig(dem, out, directions=args.directions, window_size=ws,
-                                     max_distance=md, run=ro))
+            return skyview(SkyviewConfig(dem=dem, output=out, directions=args.directions,
+                                         window_size=ws, max_distance=md, run=ro))
+        return horizon(HorizonConfig(dem=dem, output=out, directions=args.directions,
+                                     window_size=ws, max_distance=md, run=ro))
     print(f"{args.command} --directions {args.directions}; compute seconds, median of "
           f"{args.repeat} after a warm-up")
     print("| DEM | --max-distance | mode | seconds | vs in memory | cells read / cells | "

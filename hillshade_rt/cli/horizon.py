@@ -65,9 +65,10 @@ def horizon(files, azimuth, directions, distance, method, sample_spacing, max_di
     kw = dict(preview=preview, backend=backend, threads=threads, overwrite=overwrite,
               quiet=quiet, progress=progress, fmt=fmt, creation_options=creation_options,
               **read_opts)
-    cfg = HorizonConfig(dem, output, azimuth, method, sample_spacing, curvature,
-                        refraction_k, to_read_options(kw), to_run_options(kw, say),
-                        directions=directions, distance=distance,
+    cfg = HorizonConfig(dem=dem, output=output, azimuth=azimuth, method=method,
+                        sample_spacing=sample_spacing, curvature=curvature,
+                        refraction_k=refraction_k, read=to_read_options(kw),
+                        run=to_run_options(kw, say), directions=directions, distance=distance,
                         max_distance=max_distance, max_memory=max_memory,
                         window_size=window_size, scheduler=scheduler,
                         height_above_ground=height_above_ground)

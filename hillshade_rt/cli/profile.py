@@ -38,7 +38,8 @@ def profile(dem, at, at_xy, points, height_above_ground, step, fmt, output, curv
     it) every --step degrees of azimuth, for PV siting (pvlib, PVGIS), GRASS, GIS (GeoJSON)."""
     from ..run.profile import ProfileConfig, parse_pair, profile as run_profile
     kw = dict(preview=preview, overwrite=overwrite, quiet=quiet, **read_opts)
-    run_profile(ProfileConfig(dem, [parse_pair(a, "--at") for a in at],
-                              [parse_pair(a, "--at-xy") for a in at_xy], points,
-                              height_above_ground, step, fmt, output, curvature, refraction_k,
-                              to_read_options(kw), to_run_options(kw, say)))
+    run_profile(ProfileConfig(dem=dem, at=[parse_pair(a, "--at") for a in at],
+                              at_xy=[parse_pair(a, "--at-xy") for a in at_xy], points=points,
+                              height_above_ground=height_above_ground, step=step, fmt=fmt,
+                              output=output, curvature=curvature, refraction_k=refraction_k,
+                              read=to_read_options(kw), run=to_run_options(kw, say)))

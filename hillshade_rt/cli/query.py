@@ -45,8 +45,10 @@ def query(dem, at, at_xy, points, height_above_ground, irradiance, fmt, output, 
     from ..run.query import QueryConfig, query as run_query
     sun = {k: kw.pop(k) for k in SUN_KEYS}
     kw.update(overwrite=overwrite, quiet=quiet)
-    run_query(QueryConfig(dem, [parse_pair(a, "--at") for a in at],
-                          [parse_pair(a, "--at-xy") for a in at_xy], points, sun,
-                          height_above_ground, irradiance, fmt, output, curvature, refraction_k,
-                          to_read_options(kw), to_run_options(kw, say),
-                          light_position=light_position, light_lonlat=light_lonlat))
+    run_query(QueryConfig(dem=dem, at=[parse_pair(a, "--at") for a in at],
+                          at_xy=[parse_pair(a, "--at-xy") for a in at_xy], points=points,
+                          sun=sun, height_above_ground=height_above_ground,
+                          irradiance=irradiance, fmt=fmt, output=output, curvature=curvature,
+                          refraction_k=refraction_k, read=to_read_options(kw),
+                          run=to_run_options(kw, say), light_position=light_position,
+                          light_lonlat=light_lonlat))

@@ -66,9 +66,10 @@ def skyview(files, directions, definition, terrain_configuration, openness, max_
               quiet=quiet, progress=progress, fmt=fmt,
               creation_options=creation_options,
               **read_opts)
-    cfg = SkyviewConfig(dem, output, directions, definition, terrain_configuration,
-                        curvature, refraction_k, to_read_options(kw),
-                        to_run_options(kw, say), openness=openness,
+    cfg = SkyviewConfig(dem=dem, output=output, directions=directions, definition=definition,
+                        terrain_configuration=terrain_configuration, curvature=curvature,
+                        refraction_k=refraction_k, read=to_read_options(kw),
+                        run=to_run_options(kw, say), openness=openness,
                         max_distance=max_distance, max_memory=max_memory,
                         window_size=window_size, scheduler=scheduler,
                         height_above_ground=height_above_ground)

@@ -19,5 +19,6 @@ def view(dem, port, no_browser, tz, algorithm, backend, **read_opts):
     """Look at DEM's shadows in a browser: a local server on 127.0.0.1 (Ctrl-C stops it)
     with the sun dragged on a compass or set by date and time, pan and zoom."""
     from ..run.view import ViewConfig, view as run_view
-    run_view(ViewConfig(dem, to_read_options(dict(read_opts)), port, not no_browser, algorithm,
-                        backend, tz, say))
+    run_view(ViewConfig(dem=dem, read=to_read_options(dict(read_opts)), port=port,
+                        open_browser=not no_browser, algorithm=algorithm, backend=backend,
+                        tz=tz, say=say))

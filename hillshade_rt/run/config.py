@@ -261,7 +261,7 @@ def check_lift(height: float, algorithm: str, soft: bool) -> str:
     return for_lift(algorithm)
 
 
-@dataclass
+@dataclass(kw_only=True)
 class HorizonConfig:
     """A ``horizon`` run: the horizon angle toward one azimuth of every cell."""
 

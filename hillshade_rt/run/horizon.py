@@ -8,10 +8,12 @@ from __future__ import annotations
 import contextlib
 import math
 import os
+from dataclasses import dataclass, field
 
 from .. import __version__
 from ..errors import AllNodata, HillshadeError, UsageProblem
-from .config import HorizonConfig, parse_window_size, set_threads
+from .config import HorizonConfig, parse_window_size
+from .runner import RunContext
 
 # bytes per cell of a run in memory: heights, the pyramid, one direction's angles and distances
 # and their copies on the way to the file
@@ -54,32 +56,48 @@ def distance_tag(max_distance: float) -> str:
             else "none (to the raster's edge)")
 
 
+@dataclass(frozen=True)
+class Plan:
+    """A ``horizon`` run's options, checked: the azimuths of the bands, --max-distance in
+    metres (inf: none), --window-size as (rows, cols) or None, --max-memory in bytes."""
+
+    azimuths: list
+    max_distance: float
+    wshape: tuple | None
+    limit: int
+
+
+@dataclass
+class Made:
+    """What the making of a ``horizon`` run left for its report: the raster whose shape and
+    path it reports (the DEM, or the ``--context`` tile), whether the Earth's curvature was
+    on, the algorithm's figures, how it was processed (the report's ``processing``), the notes
+    said before the summary."""
+
+    geom: object
+    curved: bool
+    stats: dict
+    processing: dict
+    notes: list = field(default_factory=list)
+
+
 def horizon(cfg: HorizonConfig) -> dict:
-    import numba
+    """Write the horizon angles of ``cfg`` (and the distances to the horizon points); returns
+    the report."""
+    plan = _check(cfg)
+    ctx = _start(cfg, plan)
+    made = _make(cfg, plan, ctx)
+    return ctx.finish(_report(cfg, plan, ctx, made), _lines(cfg, plan, ctx, made))
 
-    from ..io import check_output_format, output_driver
-    from ..io.write import Claims
-    from ..engine.shader import choose_backend
-    from .local import needs_windows
-    from .notes import compile_note
-    from .report import Timer
 
-    ro, output, method, sample_spacing = cfg.run, cfg.output, cfg.method, cfg.sample_spacing
-    timer = Timer()
+def _check(cfg: HorizonConfig) -> Plan:
+    """The options checked, before anything is claimed or read (usage errors)."""
+    method = cfg.method
     azimuths = cfg.azimuths()
     cfg.read.check_context(cfg.dem, **{"--scheduler": cfg.scheduler is not None,
-                                       "--preview": ro.preview is not None,
+                                       "--preview": cfg.run.preview is not None,
                                        "--method hull": method == "hull"})
-    claims = Claims([cfg.dem] + cfg.read.inputs(), ro.overwrite)
-    claims.claim(output, "OUTPUT")
-    if ro.preview is not None:
-        claims.claim(ro.preview, "--preview")
-    if cfg.distance is not None:
-        claims.claim(cfg.distance, "--distance")
-    for path in [output] + ([cfg.distance] if cfg.distance is not None else []):
-        check_output_format(path, output_driver(path, ro.fmt), "float32", len(azimuths), False,
-                            ro.creation_options)
-    if method == "hull" and sample_spacing != 1:
+    if method == "hull" and cfg.sample_spacing != 1:
         raise UsageProblem("--sample-spacing applies to --method scan only")
     if method == "hull" and cfg.distance is not None:
         raise UsageProblem("--distance comes from --method scan only (the hull keeps no "
@@ -89,38 +107,53 @@ def horizon(cfg: HorizonConfig) -> dict:
     if method == "hull" and math.isfinite(max_distance):
         raise UsageProblem("--max-distance applies to --method scan only (the hull keeps the "
                            "whole line ahead)")
-    wshape = parse_window_size(cfg.window_size)
-    limit = memory_limit(cfg.max_memory)
-    set_threads(ro)
-    ran_on = choose_backend(ro.backend, "horizon", {"method": method})
-    if not ro.quiet:
-        note = compile_note("horizon", ran_on)
-        if note:
-            ro.say("compile", note)
+    return Plan(azimuths, max_distance, parse_window_size(cfg.window_size),
+                memory_limit(cfg.max_memory))
+
+
+def _start(cfg: HorizonConfig, plan: Plan) -> RunContext:
+    """The run begun (``RunContext.start``: OUTPUT, --preview, --distance claimed; threads;
+    backend; the compile note) and the outputs' format checked."""
+    from ..io import check_output_format, output_driver
+    ro = cfg.run
+    ctx = RunContext.start(ro, inputs=[cfg.dem] + cfg.read.inputs(),
+                           outputs=[(cfg.output, "OUTPUT")], algorithm="horizon",
+                           options={"method": cfg.method})
+    if cfg.distance is not None:
+        ctx.claim(cfg.distance, "--distance")
+    for path in [cfg.output] + ([cfg.distance] if cfg.distance is not None else []):
+        check_output_format(path, output_driver(path, ro.fmt), "float32", len(plan.azimuths),
+                            False, ro.creation_options)
+    return ctx
+
+
+def _make(cfg: HorizonConfig, plan: Plan, ctx: RunContext) -> Made:
+    """The DEM opened and its horizons written: in memory, or in windows (a DEM larger than
+    --max-memory, --window-size, --scheduler, a --context tile); all -9999 for a DEM with no
+    valid cell."""
+    from .local import needs_windows
     if cfg.read.context is not None:    # a tile of the context: its windows, in the context
-        with timer("read"):
+        with ctx.timer("read"):
             area = cfg.read.open_area(cfg.dem)
         with area:
             try:
                 area.check_valid()
             except AllNodata:
-                return _all_nodata(cfg, area.tile, azimuths, ran_on, max_distance, timer)
-            return _in_windows(cfg, area.source, azimuths, ran_on, max_distance, timer,
-                               wshape=wshape, limit=limit, area=area)
-    forced = wshape is not None or cfg.scheduler is not None
-    with timer("read"):    # opened (not read) once, for its size and then its values
+                return _all_nodata(cfg, plan, ctx, area.tile)
+            return _in_windows(cfg, plan, ctx, area.source, area=area)
+    forced = plan.wshape is not None or cfg.scheduler is not None
+    with ctx.timer("read"):    # opened (not read) once, for its size and then its values
         src = cfg.read.open(cfg.dem, windows=forced)
     with src:
-        windowed = forced or needs_windows(src, limit, BYTES_PER_CELL)
-        if windowed and method == "hull":
+        windowed = forced or needs_windows(src, plan.limit, BYTES_PER_CELL)
+        if windowed and cfg.method == "hull":
             raise UsageProblem("--method hull runs in memory only (its hulls are as long as a "
                                "line): use --method scan for a DEM in windows")
         run = _in_windows if windowed else _in_memory
         try:
-            return run(cfg, src, azimuths, ran_on, max_distance, timer, wshape=wshape,
-                       limit=limit)
+            return run(cfg, plan, ctx, src)
         except AllNodata:       # (raised before any output is opened)
-            return _all_nodata(cfg, src, azimuths, ran_on, max_distance, timer)
+            return _all_nodata(cfg, plan, ctx, src)
 
 
 def _tags(cfg, azimuths, curved, k, radius, max_distance):
@@ -171,37 +204,43 @@ def _band_text(cfg, a):
             f"distance to the horizon point toward azimuth {a:g}", {"AZIMUTH": f"{a:g}"})
 
 
-def _report(cfg, src, azimuths, ran_on, curved, stats, timer, processing):
-    ro = cfg.run
-    many = cfg.directions is not None
-    rows, cols = src.shape
+def _report(cfg: HorizonConfig, plan: Plan, ctx: RunContext, made: Made) -> dict:
+    """The run's report (``--report``)."""
     from ..io import input_label
-    rep = {"input": input_label(src.path), "output": os.path.abspath(cfg.output),
-           "shape": [rows, cols],
-           "distance": None if cfg.distance is None else os.path.abspath(cfg.distance),
-           "azimuth": azimuths[0] if not many else None, "azimuths": azimuths,
-           "method": cfg.method, "sample_spacing": cfg.sample_spacing,
-           "height_above_ground_m": float(cfg.height_above_ground),
-           "max_distance": check_max_distance(cfg.max_distance)
-           if cfg.max_distance is not None else None,
-           "backend": ran_on, "curvature": curved, "algorithm_stats": stats,
-           "seconds": dict(timer.seconds, total=timer.total()), "processing": processing,
-           "version": __version__}
-    if not ro.quiet:
-        toward = (f"toward az {azimuths[0]:g}" if not many else
-                  f"toward {len(azimuths)} directions ({360.0 / len(azimuths):g} deg apart)")
-        where = "" if processing["mode"] in ("in memory", "all nodata") else (
-            f", {processing['regions']} windows" + (" on Dask" if processing["mode"] == "dask"
-                                                    else ""))
-        ro.say("summary", f"hillshade-rt: {cfg.output}: {cols}x{rows}, horizon {toward} "
-                          f"({cfg.method}, {ran_on}{where}), compute "
-                          f"{timer.seconds.get('compute', 0.0):.3f} s")
-        if stats.get("note"):
-            ro.say("note", stats["note"])
-    return rep
+    many = cfg.directions is not None
+    rows, cols = made.geom.shape
+    azimuths = plan.azimuths
+    return {"input": input_label(made.geom.path), "output": os.path.abspath(cfg.output),
+            "shape": [rows, cols],
+            "distance": None if cfg.distance is None else os.path.abspath(cfg.distance),
+            "azimuth": azimuths[0] if not many else None, "azimuths": azimuths,
+            "method": cfg.method, "sample_spacing": cfg.sample_spacing,
+            "height_above_ground_m": float(cfg.height_above_ground),
+            "max_distance": plan.max_distance if cfg.max_distance is not None else None,
+            "backend": ctx.backend, "curvature": made.curved, "algorithm_stats": made.stats,
+            "seconds": ctx.seconds(), "processing": made.processing, "version": __version__}
 
 
-def _in_memory(cfg, src, azimuths, ran_on, max_distance, timer, **_):
+def _lines(cfg: HorizonConfig, plan: Plan, ctx: RunContext, made: Made) -> list:
+    """The lines for people at the end: the making's notes, the summary, the algorithm's
+    note."""
+    azimuths, processing = plan.azimuths, made.processing
+    rows, cols = made.geom.shape
+    toward = (f"toward az {azimuths[0]:g}" if cfg.directions is None else
+              f"toward {len(azimuths)} directions ({360.0 / len(azimuths):g} deg apart)")
+    where = "" if processing["mode"] in ("in memory", "all nodata") else (
+        f", {processing['regions']} windows" + (" on Dask" if processing["mode"] == "dask"
+                                                else ""))
+    summary = (f"hillshade-rt: {cfg.output}: {cols}x{rows}, horizon {toward} "
+               f"({cfg.method}, {ctx.backend}{where}), compute "
+               f"{ctx.timer.seconds.get('compute', 0.0):.3f} s")
+    return ([("note", n) for n in made.notes] + [("summary", summary)]
+            + [("note", made.stats.get("note"))])
+
+
+def _in_memory(cfg: HorizonConfig, plan: Plan, ctx: RunContext, src) -> Made:
+    """The horizons of the DEM read whole, one direction at a time, each band written as it
+    is made."""
     import numpy as np
 
     from ..algorithms import horizon as hz
@@ -212,9 +251,10 @@ def _in_memory(cfg, src, azimuths, ran_on, max_distance, timer, **_):
     from ..engine.shader import horizon_shader, warm_up
 
     ro, method, sample_spacing = cfg.run, cfg.method, cfg.sample_spacing
+    azimuths, max_distance = plan.azimuths, plan.max_distance
+    timer, ran_on = ctx.timer, ctx.backend
     lift = float(cfg.height_above_ground)
     az = azimuths[0]
-    many = cfg.directions is not None
     with timer("read"):
         d = src.read()
     stats: dict = {}
@@ -282,8 +322,7 @@ def _in_memory(cfg, src, azimuths, ran_on, max_distance, timer, **_):
         with timer("write"):
             write_png(ro.preview, relief_rgb(d.heights, d.grid, az, 45.0, shade=shade),
                       ro.overwrite)
-    return _report(cfg, d, azimuths, ran_on, curved, stats, timer,
-                   {"mode": "in memory", "cells": int(d.heights.size)})
+    return Made(d, curved, stats, {"mode": "in memory", "cells": int(d.heights.size)})
 
 
 def horizon_job(src, azimuths, ran_on, curvature, refraction_k, method, bstats, invert=False,
@@ -332,8 +371,10 @@ def prepare_windows(src, job, limit, wshape, timer, area=None):
     return regs, mem
 
 
-def _in_windows(cfg, src, azimuths, ran_on, max_distance, timer, *, wshape, limit, area=None):
-    """``area``: the tile of ``src`` to make (``--context``; its windows read from ``src``)."""
+def _in_windows(cfg: HorizonConfig, plan: Plan, ctx: RunContext, src, area=None) -> Made:
+    """The horizons in windows (``run.horizon_windows``), written window by window or made as
+    Dask tasks (--scheduler). ``area``: the tile of ``src`` to make (``--context``; its
+    windows read from ``src``)."""
     import numpy as np
 
     from ..model.geometry import Grid
@@ -344,6 +385,9 @@ def _in_windows(cfg, src, azimuths, ran_on, max_distance, timer, *, wshape, limi
     from .horizon_windows import Figures, Product, region_outputs
 
     ro = cfg.run
+    azimuths, max_distance = plan.azimuths, plan.max_distance
+    timer, ran_on = ctx.timer, ctx.backend
+    wshape, limit = plan.wshape, plan.limit
     az = azimuths[0]
     product = Product("horizon", distance=cfg.distance is not None)
     with bounded_gdal_cache():
@@ -412,18 +456,19 @@ def _in_windows(cfg, src, azimuths, ran_on, max_distance, timer, *, wshape, limi
                   **fig.as_dict(), **extra}
     if area is not None:
         processing["context"] = area.report()
-    return _report(cfg, geom, azimuths, ran_on, curved, {}, timer, processing)
+    return Made(geom, curved, {}, processing)
 
 
-def _all_nodata(cfg, geom, azimuths, ran_on, max_distance, timer):
+def _all_nodata(cfg: HorizonConfig, plan: Plan, ctx: RunContext, geom) -> Made:
     """A DEM (or ``--context`` tile) whose every cell is nodata: every band -9999, a note."""
     import numpy as np
 
     from .context import nodata_note
-    tags, dist_tags = _tags(cfg, azimuths, False, 0.0, 0.0, max_distance)
+    azimuths = plan.azimuths
+    tags, dist_tags = _tags(cfg, azimuths, False, 0.0, 0.0, plan.max_distance)
     w, wd = _writers(cfg, geom, azimuths, tags, dist_tags)
     arr = np.full(geom.shape, -9999.0, np.float32)
-    with timer("write"), w, (contextlib.nullcontext() if wd is None else wd):
+    with ctx.timer("write"), w, (contextlib.nullcontext() if wd is None else wd):
         for i, a in enumerate(azimuths):
             text, dtext, btags = _band_text(cfg, a)
             w.write(i + 1, arr, description=text, tags=btags)
@@ -432,10 +477,8 @@ def _all_nodata(cfg, geom, azimuths, ran_on, max_distance, timer):
         w.finish()
         if wd is not None:
             wd.finish()
-    if not cfg.run.quiet:
-        cfg.run.say("note", nodata_note(geom.path))
-    return _report(cfg, geom, azimuths, ran_on, False, {}, timer,
-                   {"mode": "all nodata", "cells": int(arr.size)})
+    return Made(geom, False, {}, {"mode": "all nodata", "cells": int(arr.size)},
+                [nodata_note(geom.path)])
 
 
 def _vrt_outputs(cfg, src, azimuths, tags, dist_tags) -> dict:

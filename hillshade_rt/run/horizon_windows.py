@@ -389,6 +389,20 @@ def region_outputs(job: HorizonJob, rd, region, product: Product, put) -> Figure
 _TASK_LOCK = None
 
 
+@dataclass
+class RegionPart:
+    """What a Dask task (``region_task``) hands back of its region (picklable): the marches'
+    figures, each output's part (output name -> the GeoTIFF of the region), the result's
+    statistics (min, sum, count of its valid cells), the preview's share ((every-n-th cells,
+    (row, col) where they go) or None) and the region (r0, r1, c0, c1)."""
+
+    figures: Figures
+    paths: dict
+    stats: list
+    shade: tuple | None
+    region: tuple
+
+
 def _task_lock():
     """One numba computation at a time per worker process (numba parallelises inside)."""
     global _TASK_LOCK
@@ -399,7 +413,7 @@ def _task_lock():
 
 
 def region_task(job: HorizonJob, region, product: Product, folder: str,
-                stride: int | None = None) -> dict:
+                stride: int | None = None) -> RegionPart:
     """The Dask task: march ``region``, write each output's part (a GeoTIFF of the region's
     shape, a band per direction, -9999 nodata) in ``folder``; returns the figures, the parts'
     paths, the result's statistics (min, sum, count of valid cells) and, with ``stride``, the
@@ -453,8 +467,7 @@ def region_task(job: HorizonJob, region, product: Product, folder: str,
                              [band + 1])
         with rasterio.Env(GDAL_CACHEMAX=GDAL_CACHE_MB), src.reader() as rd, _task_lock():
             fig = region_outputs(job, rd, region, product, put)
-    return {"figures": fig, "paths": paths, "stats": stats,
-            "shade": shade[0] if shade else None, "region": tuple(region)}
+    return RegionPart(fig, paths, stats, shade[0] if shade else None, tuple(region))
 
 
 def run_on_dask(scheduler, job: HorizonJob, regs, product: Product, outputs: dict,
@@ -485,20 +498,19 @@ def run_on_dask(scheduler, job: HorizonJob, regs, product: Product, outputs: dic
                              progress_mode)
         with bar:
             for _, res in session.completed(futures):
-                fig.add(res["figures"])
+                fig.add(res.figures)
                 results.append(res)
-                if share is not None and res["shade"] is not None:
-                    sub, (a, b) = res["shade"]
+                if share is not None and res.shade is not None:
+                    sub, (a, b) = res.shade
                     share[a:a + sub.shape[0], b:b + sub.shape[1]] = sub
                 bar.update(1)
         n = len(job.azimuths)
         for name, out in outputs.items():
-            bands = [[VrtSource(res["paths"][name], i + 1, (res["region"][0], res["region"][2]),
-                                (res["region"][1] - res["region"][0],
-                                 res["region"][3] - res["region"][2]))
+            bands = [[VrtSource(res.paths[name], i + 1, (res.region[0], res.region[2]),
+                                (res.region[1] - res.region[0], res.region[3] - res.region[2]))
                       for res in results] for i in range(product.outputs(n)[name])]
             out.write(bands)
-        return fig, [r["stats"] for r in results], session.info(workers)
+        return fig, [r.stats for r in results], session.info(workers)
 
 
 @dataclass

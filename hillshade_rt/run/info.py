@@ -3,25 +3,35 @@ as a dict; with a preview PNG of its shaded relief."""
 
 from __future__ import annotations
 
-from .config import ReadOptions
+from .config import ReadOptions, RunOptions
+from .runner import RunContext
 
 
 def describe(dem: str, read: ReadOptions, preview: str | None = None,
              overwrite: bool = False) -> tuple[dict, object]:
     """(the description, the DEM read)."""
-    if preview is not None:
-        from ..io.write import Claims
-        Claims([dem], overwrite).claim(preview, "--preview")
+    RunContext.start(RunOptions(preview=preview, overwrite=overwrite), inputs=[dem],
+                     backend=False)     # --preview claimed (no numba threads: none set)
     d = read.read(dem)
     if preview is not None:
-        from ..io import write_png
-        from ..pictures.preview import relief_rgb
-        write_png(preview, relief_rgb(d.heights, d.grid), overwrite)
+        _write_preview(d, preview, overwrite)
+    return _document(d), d
+
+
+def _write_preview(d, preview: str, overwrite: bool) -> None:
+    """--preview: the DEM's shaded relief, lit from the north-west."""
+    from ..io import write_png
+    from ..pictures.preview import relief_rgb
+    write_png(preview, relief_rgb(d.heights, d.grid), overwrite)
+
+
+def _document(d) -> dict:
+    """What was understood of the DEM ``d``, as the JSON of ``info --json``."""
     rows, cols = d.shape
     dx, dy = d.grid.centre_spacing()
     zmin, zmax = d.height_range()
     valid = d.valid_count()
-    doc = {
+    return {
         "path": d.path,
         "reader": d.kind,
         "driver": d.driver,
@@ -42,4 +52,3 @@ def describe(dem: str, read: ReadOptions, preview: str | None = None,
         "nodata_fraction": 1.0 - valid / (rows * cols),
         "height_range_m": [zmin, zmax],
     }
-    return doc, d

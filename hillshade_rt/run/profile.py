@@ -41,6 +41,7 @@ from .. import __version__
 from ..errors import UsageProblem
 from .config import ReadOptions, RunOptions
 from .points import gather, locate, on_ground, parse_pair, write_text
+from .runner import RunContext
 
 __all__ = ["ProfileConfig", "parse_pair", "profile", "render"]
 
@@ -52,7 +53,7 @@ CONVENTION = ("azimuth in degrees clockwise from north (grid north of the DEM), 
               "distance in metres along the ground to the horizon point")
 
 
-@dataclass
+@dataclass(kw_only=True)
 class ProfileConfig:
     dem: str
     at: list = field(default_factory=list)        # (lon, lat) pairs
@@ -68,56 +69,81 @@ class ProfileConfig:
     run: RunOptions = field(default_factory=RunOptions)
 
 
+@dataclass
+class Profiles:
+    """The horizons of the points (``engine.arrays.observer_profiles``): the azimuths (degrees
+    clockwise from north, north first), per point the horizon elevation (degrees) and the
+    ground distance to the horizon point (metres, inf: no terrain ahead) toward each, and
+    whether the Earth's curvature was on."""
+
+    azimuths: list
+    angles: np.ndarray
+    distances: np.ndarray
+    curved: bool
+
+
 def profile(cfg: ProfileConfig) -> dict:
     """Compute and write the profiles; returns the document (what ``json`` writes)."""
-    from ..model.earth import dem_body
-    from ..engine.arrays import observer_profiles
-    from ..io.write import Claims
+    _check(cfg)
+    points = gather(cfg.at, cfg.at_xy, cfg.points)
+    if cfg.fmt in ONE_POINT and len(points) != 1:
+        raise UsageProblem(f"--format {cfg.fmt} holds one point's profile; {len(points)} given "
+                           "(use csv, json or geojson for several)")
+    ctx = RunContext.start(cfg.run, inputs=[cfg.dem] + ([cfg.points] if cfg.points else []),
+                           outputs=[(cfg.output, "-o/--output")], backend=False)
+    d = cfg.read.read(cfg.dem)
+    points, to_ll = locate(points, d)
+    on_ground(points, d, cfg.height_above_ground)
+    prof = _profiles(cfg, d, points)
+    doc = _document(cfg, d, points, prof, to_ll)
+    write_text(cfg.output, render(doc, cfg.fmt), cfg.run.overwrite)
+    if cfg.run.preview is not None:     # the first point's horizon as its observer sees it
+        from ..io import write_png
+        from ..pictures.preview import panorama_rgb
+        write_png(cfg.run.preview, panorama_rgb(prof.azimuths, prof.angles[0]),
+                  cfg.run.overwrite)
+    return ctx.finish(doc, [("summary", None if cfg.output is None else
+                             f"hillshade-rt: {cfg.output}: {len(points)} point(s) x "
+                             f"{len(prof.azimuths)} azimuths ({cfg.fmt})")])
 
+
+def _check(cfg: ProfileConfig) -> None:
+    """The format, the step and the height checked (usage errors)."""
     if cfg.fmt not in FORMATS:
         raise UsageProblem(f"--format must be one of {', '.join(FORMATS)}, got {cfg.fmt!r}")
     if not (math.isfinite(cfg.step) and 0.0 < cfg.step <= 90.0):
         raise UsageProblem(f"--step must be a number of degrees in (0, 90], got {cfg.step}")
     if not math.isfinite(cfg.height_above_ground):
         raise UsageProblem("--height-above-ground must be a finite number of metres")
-    points = gather(cfg.at, cfg.at_xy, cfg.points)
-    if cfg.fmt in ONE_POINT and len(points) != 1:
-        raise UsageProblem(f"--format {cfg.fmt} holds one point's profile; {len(points)} given "
-                           "(use csv, json or geojson for several)")
-    claims = Claims([cfg.dem] + ([cfg.points] if cfg.points else []), cfg.run.overwrite)
-    if cfg.output is not None:
-        claims.claim(cfg.output, "-o/--output")
-    if cfg.run.preview is not None:
-        claims.claim(cfg.run.preview, "--preview")
-    d = cfg.read.read(cfg.dem)
-    points, to_ll = locate(points, d)
-    on_ground(points, d, cfg.height_above_ground)
+
+
+def _profiles(cfg: ProfileConfig, d, points) -> Profiles:
+    """The points' horizons every ``cfg.step`` degrees (the model's rays from each observer)."""
+    from ..engine.arrays import observer_profiles
+    from ..model.earth import dem_body
     azimuths, ang, dist, curved = observer_profiles(
         d.heights, d.grid, np.array([p["row"] for p in points]),
         np.array([p["col"] for p in points]), np.array([p["observer"] for p in points]),
         cfg.step, curvature=cfg.curvature, refraction_k=cfg.refraction_k, body=dem_body(d))
+    return Profiles(azimuths, ang, dist, curved)
+
+
+def _document(cfg: ProfileConfig, d, points, prof: Profiles, to_ll) -> dict:
+    """The document (what ``json`` writes; the other formats render it)."""
     doc = {"dem": os.path.abspath(d.path) if os.path.exists(d.path) else d.path,
            "crs": d.crs_string(), "convention": CONVENTION, "azimuth_step": cfg.step,
            "height_above_ground_m": cfg.height_above_ground,
-           "earth_curvature": curved, "version": __version__, "points": []}
+           "earth_curvature": prof.curved, "version": __version__, "points": []}
     for i, p in enumerate(points):
-        line = (_horizon_line(d, p, azimuths, ang[i], dist[i], to_ll)
+        line = (_horizon_line(d, p, prof.azimuths, prof.angles[i], prof.distances[i], to_ll)
                 if cfg.fmt == "geojson" else [])
         doc["points"].append({"id": p["id"], "x": p["x"], "y": p["y"], "lon": p["lon"],
                               "lat": p["lat"], "ground_m": p["ground"],
-                              "observer_m": p["observer"], "azimuth": azimuths,
-                              "horizon_deg": [round(float(v), 6) for v in ang[i]],
+                              "observer_m": p["observer"], "azimuth": prof.azimuths,
+                              "horizon_deg": [round(float(v), 6) for v in prof.angles[i]],
                               "distance_m": [None if not math.isfinite(v) else round(float(v), 3)
-                                             for v in dist[i]],
+                                             for v in prof.distances[i]],
                               "line": line})
-    write_text(cfg.output, render(doc, cfg.fmt), cfg.run.overwrite)
-    if cfg.run.preview is not None:     # the first point's horizon as its observer sees it
-        from ..io import write_png
-        from ..pictures.preview import panorama_rgb
-        write_png(cfg.run.preview, panorama_rgb(azimuths, ang[0]), cfg.run.overwrite)
-    if not cfg.run.quiet and cfg.output is not None:
-        cfg.run.say("summary", f"hillshade-rt: {cfg.output}: {len(points)} point(s) x "
-                               f"{len(azimuths)} azimuths ({cfg.fmt})")
     return doc
 
 

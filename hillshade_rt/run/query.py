@@ -42,6 +42,7 @@ from .. import __version__
 from ..errors import HillshadeError, UsageProblem
 from .config import ReadOptions, RunOptions
 from .points import gather, locate, on_ground, write_text
+from .runner import RunContext
 
 FORMATS = ("csv", "json", "geojson")
 CONVENTION = ("sun_azimuth_deg: degrees clockwise from the DEM's grid north (sun_true_azimuth_deg: "
@@ -77,7 +78,7 @@ LIGHT_COLUMNS = ("point", "x", "y", "lon", "lat", "light_azimuth_deg", "light_el
                  "light_distance_m", "incidence_cos", "lit", "ground_m", "observer_m")
 
 
-@dataclass
+@dataclass(kw_only=True)
 class QueryConfig:
     dem: str
     at: list = field(default_factory=list)        # (lon, lat) pairs
@@ -126,25 +127,78 @@ def sun_at(sun, shape, row: float, col: float) -> tuple[float, float]:
     return sun.azimuth, sun.elevation
 
 
+@dataclass
+class SunsAt:
+    """The suns of a query at its points: the suns (``sun.SunOver``), what the report says of
+    them (site, refraction; None for suns given), the site (None for suns given), and each
+    point's (grid azimuth, elevation) of each sun (points x suns, degrees: what the shadow
+    mask gives the point's cell)."""
+
+    suns: list
+    info: dict | None
+    site: object
+    azimuth: np.ndarray
+    elevation: np.ndarray
+
+
 def query(cfg: QueryConfig) -> dict:
     """Answer ``cfg`` and write it; returns the document (what ``json`` writes). Bad input
     raises ``HillshadeError`` (``UsageProblem`` for a bad command line) before anything is
     written."""
-    from ..engine.arrays import sun_at_points
-    from ..model.earth import dem_body
-    from ..io.write import Claims
-    from ..model.sun import SunRequest
-    from ..model.times import iso
-    from .config import check_lift
-
     if cfg.light_position is not None or cfg.light_lonlat is not None:
         return light_query(cfg)
+    from .config import check_lift
     fmt = output_format(cfg.fmt, cfg.output)
     check_lift(cfg.height_above_ground, "brute", False)
     lift = float(cfg.height_above_ground)
+    req, scene = _sun_request(cfg)
+    points = gather(cfg.at, cfg.at_xy, cfg.points)
+    ctx = _start(cfg, [cfg.sun["sun_from_stac"]] if cfg.sun.get("sun_from_stac") else [])
+    d = cfg.read.read(cfg.dem)
+    if scene is not None:
+        from .stac import to_grid_north
+        req = to_grid_north(req, scene, d)      # an item's azimuth is from true north
+    points = _place(points, d, lift, fmt)
+    at = _suns_at(req, d, points)
+    res = _march(cfg, req, d, points, at, lift)
+    irr = (irradiance(points, at.site, [s.time for s in at.suns], res) if cfg.irradiance
+           else None)
+    out_rows = _rows(points, at, res, _true_azimuth(at, points, res), irr)
+    doc = {"dem": os.path.abspath(d.path) if os.path.exists(d.path) else d.path,
+           "crs": d.crs_string(), "convention": CONVENTION,
+           "height_above_ground_m": lift, "earth_curvature": bool(res["curved"].any()),
+           "sun_source": "time" if req.from_time else "given",
+           "sun_from_stac": scene.as_dict() if scene is not None else None,
+           "irradiance": IRRADIANCE if irr is not None else None,
+           "points": len(points), "suns": len(at.suns), "version": __version__,
+           "rows": out_rows}
+    if at.info is not None:
+        doc["site"] = at.info["site"]
+        doc["refraction"] = at.info["refraction"]
+    write_text(cfg.output, render(doc, fmt), cfg.run.overwrite)
+    n, m = len(points), len(at.suns)
+    lit = sum(r["lit"] for r in out_rows)
+    return ctx.finish(doc, [("summary", None if cfg.output is None else
+                             f"hillshade-rt: {cfg.output}: {n} point(s) x {m} sun(s), "
+                             f"{lit} of {n * m} lit ({fmt})")])
+
+
+def _start(cfg: QueryConfig, more_inputs=()) -> RunContext:
+    """The run begun (``RunContext.start``): -o/--output claimed against the DEM, the points'
+    file and ``more_inputs``; the threads set (the marches are numba's); no GPU kernels."""
+    return RunContext.start(cfg.run, inputs=[cfg.dem] + ([cfg.points] if cfg.points else [])
+                            + list(more_inputs), outputs=[(cfg.output, "-o/--output")],
+                            backend=False)
+
+
+def _sun_request(cfg: QueryConfig):
+    """(the ``sun.SunRequest`` of the sun options, the STAC scene of --sun-from-stac or None);
+    a bad sun is the command line's fault (exit status 2), so is --irradiance without suns
+    from times."""
+    from ..model.sun import SunRequest
     from .stac import sun_from_item
     sun, scene = sun_from_item(cfg.sun, cfg.run.quiet, cfg.run.say)   # --sun-from-stac
-    try:     # a bad sun is the command line's fault (exit status 2)
+    try:
         req = SunRequest.from_options(**sun)
     except UsageProblem:
         raise
@@ -153,23 +207,24 @@ def query(cfg: QueryConfig) -> dict:
     if cfg.irradiance and not req.from_time:
         raise UsageProblem("--irradiance needs suns from times (--time or --start/--end/--step): "
                            "the clear-sky irradiance depends on the date and the place")
-    points = gather(cfg.at, cfg.at_xy, cfg.points)
-    if cfg.output is not None:
-        Claims([cfg.dem] + ([cfg.points] if cfg.points else [])
-               + ([cfg.sun["sun_from_stac"]] if cfg.sun.get("sun_from_stac") else []),
-               cfg.run.overwrite).claim(
-            cfg.output, "-o/--output")
-    d = cfg.read.read(cfg.dem)
-    if scene is not None:
-        from .stac import to_grid_north
-        req = to_grid_north(req, scene, d)      # an item's azimuth is from true north
+    return req, scene
+
+
+def _place(points, d, lift: float, fmt: str) -> list:
+    """The points placed on the DEM ``d`` (row, column, ground, observer ``lift`` above it);
+    GeoJSON needs their longitude and latitude."""
     points, _ = locate(points, d)
     on_ground(points, d, lift)
     if fmt == "geojson" and any(p["lon"] is None for p in points):
         raise HillshadeError(f"{d.path}: the DEM has no CRS, so the points have no longitude "
                              "and latitude for GeoJSON: use --format csv or json")
+    return points
+
+
+def _suns_at(req, d, points) -> SunsAt:
+    """The suns of ``req`` over ``d`` and their direction at each point (``sun_at``)."""
     site = req.site(d) if req.from_time else None
-    suns, sun_info = req.suns(d, site)
+    suns, info = req.suns(d, site)
     n, m = len(points), len(suns)
     rows = np.array([p["row"] for p in points])
     cols = np.array([p["col"] for p in points])
@@ -178,18 +233,39 @@ def query(cfg: QueryConfig) -> dict:
     for j, s in enumerate(suns):
         for i in range(n):
             az[i, j], el[i, j] = sun_at(s, d.shape, rows[i], cols[i])
-    res = sun_at_points(d.heights, rows, cols, az, el, d.grid, lift,
-                        curvature="auto" if cfg.curvature is None else cfg.curvature,
-                        refraction_k=cfg.refraction_k, body=dem_body(d, req.lat))
-    true_az = None
-    if site is not None:     # from the grid's north back to true north, at each point
-        conv = (site.convergence(rows, cols) if site.convergence is not None
-                else np.full(n, site.north_offset))
-        true_az = np.mod(res["azimuth"] - np.asarray(conv, np.float64)[:, None], 360.0)
-    irr = irradiance(points, site, [s.time for s in suns], res) if cfg.irradiance else None
+    return SunsAt(suns, info, site, az, el)
+
+
+def _march(cfg: QueryConfig, req, d, points, at: SunsAt, lift: float) -> dict:
+    """Each point's horizon toward each sun (``engine.arrays.sun_at_points``)."""
+    from ..engine.arrays import sun_at_points
+    from ..model.earth import dem_body
+    rows = np.array([p["row"] for p in points])
+    cols = np.array([p["col"] for p in points])
+    return sun_at_points(d.heights, rows, cols, at.azimuth, at.elevation, d.grid, lift,
+                         curvature="auto" if cfg.curvature is None else cfg.curvature,
+                         refraction_k=cfg.refraction_k, body=dem_body(d, req.lat))
+
+
+def _true_azimuth(at: SunsAt, points, res):
+    """The suns' azimuths from true north at each point (from the grid's north, by the
+    site's convergence there), or None for suns given."""
+    site = at.site
+    if site is None:
+        return None
+    rows = np.array([p["row"] for p in points])
+    cols = np.array([p["col"] for p in points])
+    conv = (site.convergence(rows, cols) if site.convergence is not None
+            else np.full(len(points), site.north_offset))
+    return np.mod(res["azimuth"] - np.asarray(conv, np.float64)[:, None], 360.0)
+
+
+def _rows(points, at: SunsAt, res, true_az, irr) -> list:
+    """One row per point and sun (``COLUMNS``, ``IRRADIANCE_COLUMNS`` with ``irr``)."""
+    from ..model.times import iso
     out_rows = []
     for i, p in enumerate(points):
-        for j, s in enumerate(suns):
+        for j, s in enumerate(at.suns):
             row = {"point": p["id"], "x": p["x"], "y": p["y"], "lon": p["lon"], "lat": p["lat"],
                    "time": iso(s.time) if s.time is not None else None,
                    "sun_azimuth_deg": float(res["azimuth"][i, j]),
@@ -205,22 +281,7 @@ def query(cfg: QueryConfig) -> dict:
                 row["dni_w_m2"] = float(irr[0][i, j])
                 row["beam_horizontal_w_m2"] = float(irr[1][i, j])
             out_rows.append(row)
-    doc = {"dem": os.path.abspath(d.path) if os.path.exists(d.path) else d.path,
-           "crs": d.crs_string(), "convention": CONVENTION,
-           "height_above_ground_m": lift, "earth_curvature": bool(res["curved"].any()),
-           "sun_source": "time" if req.from_time else "given",
-           "sun_from_stac": scene.as_dict() if scene is not None else None,
-           "irradiance": IRRADIANCE if irr is not None else None,
-           "points": n, "suns": m, "version": __version__, "rows": out_rows}
-    if sun_info is not None:
-        doc["site"] = sun_info["site"]
-        doc["refraction"] = sun_info["refraction"]
-    write_text(cfg.output, render(doc, fmt), cfg.run.overwrite)
-    if not cfg.run.quiet and cfg.output is not None:
-        lit = sum(r["lit"] for r in out_rows)
-        cfg.run.say("summary", f"hillshade-rt: {cfg.output}: {n} point(s) x {m} sun(s), "
-                               f"{lit} of {n * m} lit ({fmt})")
-    return doc
+    return out_rows
 
 
 def light_query(cfg: QueryConfig) -> dict:
@@ -231,7 +292,6 @@ def light_query(cfg: QueryConfig) -> dict:
     terrain is an error. Nothing is written on failure."""
     from ..algorithms.lightmap import light_at_points
     from ..engine.arrays import ground_height
-    from ..io.write import Claims
     from .config import PLACE_KEYS, SUN_KEYS, check_lift
     from .point_light import parse_triple
     from .lightmap import light_cell, light_xy
@@ -252,15 +312,9 @@ def light_query(cfg: QueryConfig) -> dict:
     check_lift(cfg.height_above_ground, "brute", False)
     lift = float(cfg.height_above_ground)
     points = gather(cfg.at, cfg.at_xy, cfg.points)
-    if cfg.output is not None:
-        Claims([cfg.dem] + ([cfg.points] if cfg.points else []), cfg.run.overwrite).claim(
-            cfg.output, "-o/--output")
+    ctx = _start(cfg)
     d = cfg.read.read(cfg.dem)
-    points, _ = locate(points, d)
-    on_ground(points, d, lift)
-    if fmt == "geojson" and any(p["lon"] is None for p in points):
-        raise HillshadeError(f"{d.path}: the DEM has no CRS, so the points have no longitude "
-                             "and latitude for GeoJSON: use --format csv or json")
+    points = _place(points, d, lift, fmt)
     x, y, zl = light_xy(d, pos, ll)
     row_l, col_l = light_cell(d, x, y)
     ground = ground_height(d.heights, row_l, col_l)
@@ -285,11 +339,10 @@ def light_query(cfg: QueryConfig) -> dict:
            "irradiance": None, "points": n, "suns": 1, "version": __version__,
            "rows": out_rows}
     write_text(cfg.output, render(doc, fmt), cfg.run.overwrite)
-    if not cfg.run.quiet and cfg.output is not None:
-        lit = sum(r["lit"] for r in out_rows)
-        cfg.run.say("summary", f"hillshade-rt: {cfg.output}: {n} point(s), point light at x "
-                               f"{x:.6g} y {y:.6g} z {zl:g} m, {lit} of {n} lit ({fmt})")
-    return doc
+    lit = sum(r["lit"] for r in out_rows)
+    return ctx.finish(doc, [("summary", None if cfg.output is None else
+                             f"hillshade-rt: {cfg.output}: {n} point(s), point light at x "
+                             f"{x:.6g} y {y:.6g} z {zl:g} m, {lit} of {n} lit ({fmt})")])
 
 
 def _finite(v) -> float | None:

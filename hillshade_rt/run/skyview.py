@@ -50,7 +50,8 @@ import numpy as np
 
 from .. import __version__
 from ..errors import UsageProblem
-from .config import ReadOptions, RunOptions, parse_window_size, set_threads
+from .config import ReadOptions, RunOptions, parse_window_size
+from .runner import RunContext
 
 from ..algorithms.skyview import DEFINITIONS, OPENNESS  # (the definitions, once)
 
@@ -59,7 +60,7 @@ from ..algorithms.skyview import DEFINITIONS, OPENNESS  # (the definitions, once
 BYTES_PER_CELL = 48
 
 
-@dataclass
+@dataclass(kw_only=True)
 class SkyviewConfig:
     dem: str
     output: str
@@ -108,66 +109,95 @@ def describe(cfg: SkyviewConfig, definition: str) -> str:
     return f"sky view factor ({cfg.definition})"
 
 
+@dataclass(frozen=True)
+class Plan:
+    """A ``skyview`` run's options, checked: the definition's name
+    (``algorithms.skyview.definition_of``), --max-distance in metres (inf: none),
+    --window-size as (rows, cols) or None, --max-memory in bytes."""
+
+    definition: str
+    max_distance: float
+    wshape: tuple | None
+    limit: int
+
+
+@dataclass
+class Made:
+    """What the making of a ``skyview`` run left: the raster whose shape and path it reports
+    (the DEM, or the ``--context`` tile), the result's statistics, how it was processed (the
+    report's ``processing``), whether the Earth's curvature was on, the relief of the
+    --preview (heights, Grid; None: none to draw), the notes said before the summary."""
+
+    geom: object
+    stats: _Stats
+    processing: dict
+    curved: bool
+    relief: tuple | None = None
+    notes: list = field(default_factory=list)
+
+
 def skyview(cfg: SkyviewConfig) -> dict:
-    import numba
+    """Write the sky view factor (or openness) of ``cfg``; returns the report."""
+    plan = _plan(cfg)
+    ctx = _start(cfg, plan)
+    made = _make(cfg, plan, ctx)
+    if cfg.run.preview is not None and made.relief is not None:
+        with ctx.timer("write"):
+            _preview(cfg, *made.relief)
+    return ctx.finish(_report(cfg, plan, ctx, made), _lines(cfg, plan, ctx, made))
 
-    from ..io import check_output_format, output_driver
-    from ..io.write import Claims
-    from ..engine.shader import choose_backend
+
+def _plan(cfg: SkyviewConfig) -> Plan:
+    """The options checked, before anything is claimed or read (usage errors)."""
     from .horizon import check_height, check_max_distance, memory_limit
-    from .local import needs_windows
-    from .report import Timer
-
-    ro = cfg.run
     definition = _check(cfg)
     max_distance = check_max_distance(cfg.max_distance)
     cfg.height_above_ground = check_height(cfg.height_above_ground)
-    wshape = parse_window_size(cfg.window_size)
-    limit = memory_limit(cfg.max_memory)
-    timer = Timer()
+    plan = Plan(definition, max_distance, parse_window_size(cfg.window_size),
+                memory_limit(cfg.max_memory))
     cfg.read.check_context(cfg.dem, **{"--scheduler": cfg.scheduler is not None,
-                                       "--preview": ro.preview is not None})
-    claims = Claims([cfg.dem] + cfg.read.inputs(), ro.overwrite)
-    claims.claim(cfg.output, "OUTPUT")
-    if ro.preview is not None:
-        claims.claim(ro.preview, "--preview")
+                                       "--preview": cfg.run.preview is not None})
+    return plan
+
+
+def _start(cfg: SkyviewConfig, plan: Plan) -> RunContext:
+    """The run begun (``RunContext.start``: OUTPUT and --preview claimed; threads; the
+    horizon scan's backend) and the output's format checked."""
+    from ..io import check_output_format, output_driver
+    ro = cfg.run
+    ctx = RunContext.start(ro, inputs=[cfg.dem] + cfg.read.inputs(),
+                           outputs=[(cfg.output, "OUTPUT")], algorithm="horizon",
+                           options={"method": "scan"}, note=False)
     check_output_format(cfg.output, output_driver(cfg.output, ro.fmt), "float32", 1, True,
                         ro.creation_options)
-    set_threads(ro)
-    ran_on = choose_backend(ro.backend, "horizon", {"method": "scan"})
+    return ctx
+
+
+def _make(cfg: SkyviewConfig, plan: Plan, ctx: RunContext) -> Made:
+    """The DEM opened and its result written: in memory, or in windows (a DEM larger than
+    --max-memory, --window-size, --scheduler, a --context tile); all -9999 for a DEM with no
+    valid cell."""
     from ..errors import AllNodata
+    from .local import needs_windows
     if cfg.read.context is not None:    # a tile of the context: its windows, in the context
-        with timer("read"):
+        with ctx.timer("read"):
             area = cfg.read.open_area(cfg.dem)
         with area:
-            src = area.tile
             try:
                 area.check_valid()
-                result, processing, curved, relief = _in_windows(
-                    cfg, definition, area.source, ran_on, max_distance, timer, wshape=wshape,
-                    limit=limit, area=area)
+                return _in_windows(cfg, plan, ctx, area.source, area=area)
             except AllNodata:
-                result, processing, curved, relief = _all_nodata(cfg, definition, src,
-                                                                 max_distance, timer)
-    else:
-        forced = wshape is not None or cfg.scheduler is not None
-        with timer("read"):
-            src = cfg.read.open(cfg.dem, windows=forced)
-        with src:
-            windowed = forced or needs_windows(src, limit, BYTES_PER_CELL)
-            run = _in_windows if windowed else _in_memory
-            try:
-                result, processing, curved, relief = run(cfg, definition, src, ran_on,
-                                                         max_distance, timer, wshape=wshape,
-                                                         limit=limit)
-            except AllNodata:    # (raised before the output is opened)
-                result, processing, curved, relief = _all_nodata(cfg, definition, src,
-                                                                 max_distance, timer)
-    if ro.preview is not None and relief is not None:
-        with timer("write"):
-            _preview(cfg, *relief)
-    return _report(cfg, definition, src, ran_on, curved, result, processing, timer,
-                   max_distance)
+                return _all_nodata(cfg, plan, ctx, area.tile)
+    forced = plan.wshape is not None or cfg.scheduler is not None
+    with ctx.timer("read"):
+        src = cfg.read.open(cfg.dem, windows=forced)
+    with src:
+        windowed = forced or needs_windows(src, plan.limit, BYTES_PER_CELL)
+        run = _in_windows if windowed else _in_memory
+        try:
+            return run(cfg, plan, ctx, src)
+        except AllNodata:    # (raised before the output is opened)
+            return _all_nodata(cfg, plan, ctx, src)
 
 
 def _tags(cfg, definition, n, curved, max_distance):
@@ -212,22 +242,24 @@ class _Stats:
                 "mean": self.total / self.count if self.count else None}
 
 
-def _in_memory(cfg, definition, src, ran_on, max_distance, timer, **_):
+def _in_memory(cfg: SkyviewConfig, plan: Plan, ctx: RunContext, src) -> Made:
+    """The result of the DEM read whole, the directions accumulated as they are made."""
     from ..algorithms import horizon as hz
     from ..algorithms.skyview import Sum, floor_deg, inverted
     from ..model.earth import dem_body
     from ..model.geometry import equal_azimuths
     from ..engine.shader import horizon_shader
 
+    definition, max_distance, timer = plan.definition, plan.max_distance, ctx.timer
     with timer("read"):
         d = src.read()
-    shader = horizon_shader(d.heights, d.grid, ran_on, cfg.curvature, cfg.refraction_k,
+    shader = horizon_shader(d.heights, d.grid, ctx.backend, cfg.curvature, cfg.refraction_k,
                             dem_body(d))
     z = d.heights
     if inverted(definition):     # negative openness: the horizons of -z (a copy: -z whole)
         z = np.negative(d.heights)
     gpu_dem = None
-    if ran_on == "gpu":
+    if ctx.backend == "gpu":
         from ..engine.gpu import GpuDem
         gpu_dem = GpuDem(z)
     n = int(cfg.directions)
@@ -259,27 +291,27 @@ def _in_memory(cfg, definition, src, ran_on, max_distance, timer, **_):
         with _writer(cfg, d, definition, n, bool(shader.curvature), max_distance) as w:
             w.write(1, np.where(np.isnan(out), np.float32(-9999.0), out),
                     description=describe(cfg, definition))
-    return (st, {"mode": "in memory", "cells": int(d.heights.size)}, bool(shader.curvature),
-            (d.heights, d.grid))
+    return Made(d, st, {"mode": "in memory", "cells": int(d.heights.size)},
+                bool(shader.curvature), (d.heights, d.grid))
 
 
-def _all_nodata(cfg, definition, geom, max_distance, timer):
+def _all_nodata(cfg: SkyviewConfig, plan: Plan, ctx: RunContext, geom) -> Made:
     """A DEM (or ``--context`` tile) whose every cell is nodata: the output all -9999, a
     note."""
     from .context import nodata_note
-    with timer("write"), _writer(cfg, geom, definition, int(cfg.directions), False,
-                                 max_distance) as w:
+    with ctx.timer("write"), _writer(cfg, geom, plan.definition, int(cfg.directions), False,
+                                     plan.max_distance) as w:
         w.write(1, np.full(geom.shape, -9999.0, np.float32),
-                description=describe(cfg, definition))
+                description=describe(cfg, plan.definition))
         w.finish()
-    if not cfg.run.quiet:
-        cfg.run.say("note", nodata_note(geom.path))
-    return _Stats(), {"mode": "all nodata", "cells": geom.shape[0] * geom.shape[1]}, False, None
+    return Made(geom, _Stats(), {"mode": "all nodata", "cells": geom.shape[0] * geom.shape[1]},
+                False, None, [nodata_note(geom.path)])
 
 
-def _in_windows(cfg, definition, src, ran_on, max_distance, timer, *, wshape, limit,
-                area=None):
-    """``area``: the tile of ``src`` to make (``--context``; its windows read from ``src``)."""
+def _in_windows(cfg: SkyviewConfig, plan: Plan, ctx: RunContext, src, area=None) -> Made:
+    """The result in windows (``run.horizon_windows``), written window by window or made as
+    Dask tasks (--scheduler). ``area``: the tile of ``src`` to make (``--context``; its
+    windows read from ``src``)."""
     from ..algorithms.skyview import inverted
     from ..model.geometry import equal_azimuths
     from .horizon import horizon_job, prepare_windows
@@ -288,6 +320,7 @@ def _in_windows(cfg, definition, src, ran_on, max_distance, timer, *, wshape, li
     from .horizon_windows import Figures, Product, VrtOutput, region_outputs, run_on_dask
 
     ro = cfg.run
+    definition, max_distance, timer = plan.definition, plan.max_distance, ctx.timer
     n = int(cfg.directions)
     azimuths = equal_azimuths(360.0 / n)
     product = Product("skyview", definition=definition, complement=cfg.terrain_configuration)
@@ -296,10 +329,10 @@ def _in_windows(cfg, definition, src, ran_on, max_distance, timer, *, wshape, li
         with timer("prepare"):
             bstats = (block_stats(src, preview_side=2048 if ro.preview else None)
                       if area is None else area.block_stats())
-        job, shader = horizon_job(src, azimuths, ran_on, cfg.curvature, cfg.refraction_k,
+        job, shader = horizon_job(src, azimuths, ctx.backend, cfg.curvature, cfg.refraction_k,
                                   "scan", bstats, inverted(definition), 1, max_distance,
                                   cfg.height_above_ground)
-        regs, mem = prepare_windows(src, job, limit, wshape, timer, area)
+        regs, mem = prepare_windows(src, job, plan.limit, plan.wshape, timer, area)
         curved = bool(shader.curvature)
         geom = src if area is None else area.tile
         if cfg.scheduler is not None:
@@ -335,7 +368,7 @@ def _in_windows(cfg, definition, src, ran_on, max_distance, timer, *, wshape, li
                     w.finish()
     processing = {"mode": "windows" if cfg.scheduler is None else "dask",
                   "cells": geom.shape[0] * geom.shape[1], "memory": mem,
-                  "window_shape_requested": list(wshape) if wshape else None,
+                  "window_shape_requested": list(plan.wshape) if plan.wshape else None,
                   **fig.as_dict(), **extra}
     if area is not None:
         processing["context"] = area.report()
@@ -346,7 +379,7 @@ def _in_windows(cfg, definition, src, ran_on, max_distance, timer, *, wshape, li
         relief = (pv, Grid(pv.shape[0], pv.shape[1], src.grid.dx[::n] * n,
                            src.grid.dy[::n] * n, src.grid.col_sign, src.grid.row_sign,
                            src.grid.method))
-    return st, processing, curved, relief
+    return Made(geom, st, processing, curved, relief)
 
 
 def _preview(cfg, z, grid) -> None:
@@ -358,33 +391,37 @@ def _preview(cfg, z, grid) -> None:
     write_png(cfg.run.preview, relief_rgb(z, grid, ramp=scaled(values)), cfg.run.overwrite)
 
 
-def _report(cfg, definition, src, ran_on, curved, st, processing, timer, max_distance):
+def _report(cfg: SkyviewConfig, plan: Plan, ctx: RunContext, made: Made) -> dict:
+    """The run's report (``--report``)."""
     from ..io import input_label
-    ro = cfg.run
-    rows, cols = src.shape
-    n = int(cfg.directions)
+    ro, definition, max_distance = cfg.run, plan.definition, plan.max_distance
+    rows, cols = made.geom.shape
     opn = definition.startswith("openness")
-    values = st.as_dict()
-    rep = {"input": input_label(src.path), "output": os.path.abspath(cfg.output),
+    rep = {"input": input_label(made.geom.path), "output": os.path.abspath(cfg.output),
            "shape": [rows, cols], "definition": definition if opn else cfg.definition,
-           "openness": cfg.openness, "directions": n,
+           "openness": cfg.openness, "directions": int(cfg.directions),
            "max_distance": max_distance if math.isfinite(max_distance) else None,
            "height_above_ground_m": float(cfg.height_above_ground),
-           "backend": ran_on, "curvature": curved,
-           ("openness_deg" if opn else "svf"): values,
-           "processing": processing,
-           "seconds": dict(timer.seconds, total=timer.total()), "version": __version__}
-    if not ro.quiet:
-        mean = values["mean"]
-        shown = f"{mean:.3f}" if mean is not None else "nan"
-        where = "" if processing["mode"] in ("in memory", "all nodata") else (
-            f", {processing['regions']} windows" + (" on Dask" if processing["mode"] == "dask"
-                                                    else ""))
-        ro.say("summary", f"hillshade-rt: {cfg.output}: {cols}x{rows}, "
-                          f"{describe(cfg, definition)}, {n} directions{where}, mean "
-                          f"{shown}{' deg' if opn else ''}; compute "
-                          f"{timer.seconds.get('compute', 0.0):.2f} s")
+           "backend": ctx.backend, "curvature": made.curved,
+           ("openness_deg" if opn else "svf"): made.stats.as_dict(),
+           "processing": made.processing,
+           "seconds": ctx.seconds(), "version": __version__}
     if ro.preview is not None:
         rep["preview"] = os.path.abspath(ro.preview)
     return rep
 
+
+def _lines(cfg: SkyviewConfig, plan: Plan, ctx: RunContext, made: Made) -> list:
+    """The lines for people at the end: the making's notes, the summary."""
+    definition, processing = plan.definition, made.processing
+    rows, cols = made.geom.shape
+    opn = definition.startswith("openness")
+    mean = made.stats.as_dict()["mean"]
+    shown = f"{mean:.3f}" if mean is not None else "nan"
+    where = "" if processing["mode"] in ("in memory", "all nodata") else (
+        f", {processing['regions']} windows" + (" on Dask" if processing["mode"] == "dask"
+                                                else ""))
+    summary = (f"hillshade-rt: {cfg.output}: {cols}x{rows}, {describe(cfg, definition)}, "
+               f"{int(cfg.directions)} directions{where}, mean {shown}{' deg' if opn else ''}; "
+               f"compute {ctx.timer.seconds.get('compute', 0.0):.2f} s")
+    return [("note", n) for n in made.notes] + [("summary", summary)]

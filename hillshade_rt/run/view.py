@@ -9,12 +9,13 @@ import threading
 from dataclasses import dataclass, field
 
 from ..errors import HillshadeError, UsageProblem
-from .config import ReadOptions, say_nothing
+from .config import ReadOptions, RunOptions, say_nothing
+from .runner import RunContext
 from .view_server import make_server
 from .viewer import Viewer
 
 
-@dataclass
+@dataclass(kw_only=True)
 class ViewConfig:
     """``hillshade-rt view DEM``: where to listen and what to shade with."""
 
@@ -40,22 +41,33 @@ class ViewConfig:
 def view(cfg: ViewConfig) -> None:
     """Read the DEM, prepare it, serve the viewer until interrupted (Ctrl-C: the server is
     closed and the interruption goes on up: the command line exits 130)."""
-    from ..engine.shader import choose_backend
     cfg.check()
-    backend = choose_backend(cfg.backend, cfg.algorithm, {})
+    ctx = RunContext.start(RunOptions(backend=cfg.backend, say=cfg.say), inputs=[cfg.dem],
+                           algorithm=cfg.algorithm, note=False)
     dem = cfg.read.read(cfg.dem)
-    viewer = Viewer(dem, cfg.algorithm, backend, cfg.tz)
+    viewer = Viewer(dem, cfg.algorithm, ctx.backend, cfg.tz)
     server = make_server(viewer, cfg.port)
     try:
-        cfg.say("compile", "preparing the kernels (numba) ...")
-        viewer.warm_up()
-        rows, cols = dem.shape
-        print(f"hillshade-rt: viewing {dem.path} ({cols} x {rows}) at {server.url} "
-              "(Ctrl-C stops)", flush=True)
-        if cfg.open_browser:
-            import webbrowser
-            threading.Thread(target=webbrowser.open, args=(server.url,), daemon=True).start()
+        _prepare(ctx, viewer)
+        _announce(cfg, dem, server.url)
         server.serve_forever(poll_interval=0.2)
     finally:
         server.server_close()
         viewer.close()
+
+
+def _prepare(ctx: RunContext, viewer: Viewer) -> None:
+    """The viewer's kernels compiled (or loaded) before the first request, said first."""
+    ctx.say("compile", "preparing the kernels (numba) ...")
+    viewer.warm_up()
+
+
+def _announce(cfg: ViewConfig, dem, url: str) -> None:
+    """The viewer's address on standard output, and the browser opened on it (unless
+    --no-browser)."""
+    rows, cols = dem.shape
+    print(f"hillshade-rt: viewing {dem.path} ({cols} x {rows}) at {url} (Ctrl-C stops)",
+          flush=True)
+    if cfg.open_browser:
+        import webbrowser
+        threading.Thread(target=webbrowser.open, args=(url,), daemon=True).start()

@@ -17,6 +17,7 @@ import math
 import os
 import tempfile
 from concurrent.futures import ThreadPoolExecutor
+from dataclasses import asdict, dataclass
 
 import numpy as np
 
@@ -63,6 +64,20 @@ def pixel_cells(lo: float, hi: float, n_px: int, n_cells: int, level: int):
 
 # --------------------------------------------------------------------------------------------
 # the viewer: a DEM prepared once, shaded per request
+
+@dataclass(frozen=True)
+class ViewSun:
+    """The sun of a query (``Viewer.sun``): grid azimuth and elevation in degrees, the time
+    (ISO 8601 in the viewer's zone; None for a sun given by ``az`` and ``el``)."""
+
+    azimuth: float
+    elevation: float
+    time: str | None = None
+
+    def as_dict(self) -> dict:
+        """As the API's JSON says it (``/api/point``'s ``sun``)."""
+        return asdict(self)
+
 
 class Viewer:
     """A DEM in memory (``io.Dem``) ready to be shaded window by window (thread-safe). The
@@ -172,23 +187,23 @@ class Viewer:
         self.shader(1, self.algorithm).warm_up(203.7, 20.0, soft=False, incidence=True)
 
     # -- the sun -------------------------------------------------------------------------------
-    def sun(self, q: dict) -> dict:
+    def sun(self, q: dict) -> ViewSun:
         """The sun a query asks for: ``az`` and ``el`` (degrees), or ``time`` (ISO 8601; without
-        an offset a local time in the viewer's zone) -> {azimuth, elevation, time}. A given ``el``
+        an offset a local time in the viewer's zone) -> its ``ViewSun``. A given ``el``
         is the command line's ``--elevation``: > 0 and <= 90 (a time may put the sun below the
         horizon: night)."""
         from ..model.geometry import normalize_azimuth
         if "time" in q:
             t = self.parse_time(q["time"])
             s = self.suns([t])[0]
-            return {"azimuth": s.azimuth, "elevation": s.elevation, "time": t.isoformat()}
+            return ViewSun(s.azimuth, s.elevation, t.isoformat())
         from ..model.geometry import check_elevation
         az, el = number(q, "az", 203.7), number(q, "el", 30.0)
         try:            # as the command line's --elevation: > 0 and <= 90
             el = check_elevation(el, "el")
         except HillshadeError as exc:
             raise BadRequest(str(exc)) from None
-        return {"azimuth": normalize_azimuth(az), "elevation": el, "time": None}
+        return ViewSun(normalize_azimuth(az), el)
 
     def parse_time(self, text: str) -> _dt.datetime:
         from ..model.times import parse_time
@@ -273,9 +288,9 @@ class Viewer:
         ci, cin = pixel_cells(x0, x1, w, cols, n)
         ri, rin = pixel_cells(y0, y1, h, rows, n)
         out = np.zeros((h, w, 4), np.uint8)
-        meta = {"X-Level": str(n), "X-Sun-Azimuth": repr(sun["azimuth"]),
-                "X-Sun-Elevation": repr(sun["elevation"]), "X-Algorithm": algorithm,
-                "X-Time": sun["time"] or ""}
+        meta = {"X-Level": str(n), "X-Sun-Azimuth": repr(sun.azimuth),
+                "X-Sun-Elevation": repr(sun.elevation), "X-Algorithm": algorithm,
+                "X-Time": sun.time or ""}
         if not cin.any() or not rin.any():
             return out, meta                 # the window lies outside the DEM: transparent
         from ..algorithms.picture import rgba
@@ -283,7 +298,7 @@ class Viewer:
         r0, r1 = int(ri[rin].min()), int(ri[rin].max()) + 1
         c0, c1 = int(ci[cin].min()), int(ci[cin].max()) + 1
         rs, cs = slice(r0, r1), slice(c0, c1)
-        az, el = sun["azimuth"], sun["elevation"]
+        az, el = sun.azimuth, sun.elevation
         sh = self.shader(n, algorithm)
         stats: dict = {}
         ge, gn, g0 = self.gradients(n, rs, cs)
@@ -375,7 +390,7 @@ class Viewer:
             raise NotFound(f"({x}, {y}) lies outside the DEM ({cols} x {rows} cells)")
         sun = self.sun(q)
         height = float(self.z[r, c])
-        out = {"x": x, "y": y, "row": r, "col": c, "sun": sun,
+        out = {"x": x, "y": y, "row": r, "col": c, "sun": sun.as_dict(),
                "height": height if math.isfinite(height) else None,
                "height_bilinear": None, "lit": None, "horizon": None}
         if not math.isfinite(height):
@@ -384,12 +399,11 @@ class Viewer:
                            min(max(x - 0.5, 0.0), cols - 1.0))
         out["height_bilinear"] = hb if math.isfinite(hb) else None
         sh = self.shader(1, self.algorithm_of(q))
-        m = sh.cast(Region(slice(r, r + 1), slice(c, c + 1), sun["azimuth"],
-                           sun["elevation"]))
+        m = sh.cast(Region(slice(r, r + 1), slice(c, c + 1), sun.azimuth, sun.elevation))
         out["lit"] = bool(m[0, 0] == 0)
         az, ang, _ = horizon_profile(self.dem, [float(r)], [float(c)], step=2.0)
         ang = np.asarray(ang[0], np.float64)
-        toward = float(np.interp(sun["azimuth"], np.append(az, 360.0),
+        toward = float(np.interp(sun.azimuth, np.append(az, 360.0),
                                  np.append(ang, ang[0])))
         out["horizon"] = {"azimuths": [float(a) for a in az],
                           "angles": [float(a) for a in ang], "toward_sun": toward}
@@ -545,20 +559,20 @@ class Viewer:
         from ..model.sun import SunOver
         algorithm, soft, sun = self.algorithm_of(q), flag(q, "soft"), self.sun(q)
         data = render(self.shader(1, algorithm),
-                      SunOver(None, sun["azimuth"], sun["elevation"]), "shadow", soft=soft)
+                      SunOver(None, sun.azimuth, sun.elevation), "shadow", soft=soft)
         p = product("shadow", soft)
         if soft:
             data = np.where(np.isnan(data), np.float32(p.nodata), data).astype(np.float32)
         edits = len(self._undo_stack)
         name = "shadow_{}{}_az{:.1f}_el{:.1f}.tif".format(
             os.path.splitext(os.path.basename(self.dem.path))[0] or "dem",
-            "_edited" if edits else "", sun["azimuth"], sun["elevation"])
+            "_edited" if edits else "", sun.azimuth, sun.elevation)
         with tempfile.TemporaryDirectory(prefix="hillshade-rt-view-") as tmp:
             path = os.path.join(tmp, name)
-            tags = {"VALUES": p.values, "AZIMUTH": f"{sun['azimuth']:.4f}",
-                    "ELEVATION": f"{sun['elevation']:.4f}"}
-            if sun["time"]:
-                tags["TIME"] = sun["time"]
+            tags = {"VALUES": p.values, "AZIMUTH": f"{sun.azimuth:.4f}",
+                    "ELEVATION": f"{sun.elevation:.4f}"}
+            if sun.time:
+                tags["TIME"] = sun.time
             if edits:     # the mask is of the terrain as edited in the viewer, not the file's
                 tags["TERRAIN"] = (f"edited: {edits} brush edit(s) in hillshade-rt view "
                                    "(in memory; the DEM's file is unchanged)")

@@ -222,7 +222,8 @@ def test_max_memory_switches_to_windows(tmp_path):
     for name in ("mem", "win"):
         # room for the process, GDAL's cache and about 3 MB of windows: the DEM needs 3.8
         limit = tiling.process_rss() + ((tiling.GDAL_CACHE_MB + 32 + 3) << 20)
-        reps[name] = horizon(HorizonConfig(path, str(tmp_path / f"{name}.tif"), directions=8,
+        reps[name] = horizon(HorizonConfig(dem=path, output=str(tmp_path / f"{name}.tif"),
+                                           directions=8,
                                            max_memory=None if name == "mem" else str(limit),
                                            run=RunOptions(quiet=True)))
     doc = reps["win"]["processing"]

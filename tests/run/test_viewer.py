@@ -137,6 +137,7 @@ def test_point(server, dem):
     status, _, body = http_get(server, f"/api/point?x={c + 0.5}&y={r + 0.5}&az={az}&el={el}")
     p = json.loads(body)
     assert status == 200 and (p["row"], p["col"]) == (r, c)
+    assert p["sun"] == {"azimuth": az, "elevation": el, "time": None}    # as the JSON says it
     assert p["height"] == pytest.approx(float(dem.heights[r, c]))
     assert p["lit"] is False
     # in shadow: the horizon toward the sun stands above it (interpolated between 2-degree steps)
@@ -251,7 +252,7 @@ def test_zone_of_a_dem_in_zurich_with_daylight_saving():
         assert info["zone"] == "Europe/Zurich" and info["zone_source"] == "the DEM's centre"
         for day, off in (("2026-07-15", "+02:00"), ("2026-01-15", "+01:00")):
             sun = viewer.sun({"time": f"{day}T12:00"})
-            assert sun["time"] == f"{day}T12:00:00{off}"
+            assert sun.time == f"{day}T12:00:00{off}"
             path = viewer.sunpath({"date": day})
             assert path["zone_label"].startswith(f"Europe/Zurich (UTC{off}")
             assert path["points"][72]["time"] == f"{day}T12:00:00{off}"
