@@ -30,7 +30,9 @@ import numpy as np
 import rasterio
 from affine import Affine
 
-from hillshade_rt.run.illumination import IllumConfig, illumination
+from hillshade_rt.run.config import IllumConfig
+
+from hillshade_rt.run.illumination import illumination
 from hillshade_rt.testing import (LUNAR_SOUTH_POLAR_STEREO, repo_root, spectral,
                                   toy_lunar_subsolar, write_geotiff, write_subsolar_csv)
 

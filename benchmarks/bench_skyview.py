@@ -24,7 +24,8 @@ def main():
     args = ap.parse_args()
     from hillshade_rt.run import HorizonConfig, horizon
     from hillshade_rt.run.config import RunOptions
-    from hillshade_rt.run.skyview import SkyviewConfig, skyview
+    from hillshade_rt.run.config import SkyviewConfig
+    from hillshade_rt.run.skyview import skyview
     from hillshade_rt.testing import real_dems
 
     out = os.path.join(tempfile.mkdtemp(prefix="hillshade-bench-skyview-"), "o.tif")

@@ -278,7 +278,8 @@ def _other_light(files, output, product, kw, read, run) -> dict:
         if hill:
             raise UsageProblem("--subsolar, --subsolar-file, --sun-distance and --body go with "
                                "the shadow product")
-        from .run.subsolar import SubsolarConfig, subsolar_shadow
+        from .run.config import SubsolarConfig
+        from .run.subsolar import subsolar_shadow
         refused.update({"--light-position/--light-lonlat": light,
                         "--self-shadow": kw["self_shadow"], "--classes": classes,
                         "--window-size": kw["window_size"] is not None,
@@ -296,7 +297,8 @@ def _other_light(files, output, product, kw, read, run) -> dict:
         raise UsageProblem("--falloff and --bits go with a point light (--light-position or "
                            "--light-lonlat)")
     if hill:
-        from .run.lightmap import LightmapConfig, lightmap
+        from .run.config import LightmapConfig
+        from .run.lightmap import lightmap
         refused.update({"--soft": kw["soft"], "--earth-curvature": kw["curvature"] is True,
                         "--refraction-coefficient": kw["refraction_k"] is not None,
                         "--backend gpu": run.backend == "gpu",
@@ -309,7 +311,8 @@ def _other_light(files, output, product, kw, read, run) -> dict:
             falloff=kw["falloff"] or "none", bits=int(kw["bits"] or 8)))
     if kw["falloff"] is not None or kw["bits"] is not None:
         raise UsageProblem("--falloff and --bits go with the hillshade product")
-    from .run.point_light import LightConfig, light_shadow
+    from .run.config import LightConfig
+    from .run.point_light import light_shadow
     refused.update({"--soft": kw["soft"], "--self-shadow": kw["self_shadow"],
                     "--classes": classes, "--earth-curvature": kw["curvature"] is True})
     return light_shadow(LightConfig(
@@ -346,7 +349,8 @@ def irradiance(dem, output=None, *, date=None, end_date=None, start=None, end=No
     heights in memory:
     :func:`hillshade_rt.engine.arrays.irradiance`."""
     from .run import ReadOptions, RunOptions
-    from .run.irradiance import IrradianceConfig, irradiance as run_irradiance
+    from .run.config import IrradianceConfig
+    from .run.irradiance import irradiance as run_irradiance
     from .run.batch import irradiance_each, split_files
     from .model.sun import DEFAULT_TOLERANCE
     from .io.write import virtual_outputs
@@ -394,7 +398,8 @@ def animate(dem, output, *, date=None, start=None, end=None, step: str | None = 
     extension decides). Further keywords are the command line's options of the same name
     (``tz``, ``lat``, ``lon``, ``band``, ``nodata``, ``threads``, ...). Returns the report."""
     from .run import ReadOptions, RunOptions
-    from .run.animate import AnimateConfig, animate as run_animate
+    from .run.config import AnimateConfig
+    from .run.animate import animate as run_animate
     from .model.sun import DEFAULT_TOLERANCE
     unknown = set(more) - set(FORWARDED)
     if unknown:

@@ -35,7 +35,8 @@ def animate(dem, output, date_, start, end, step, fps, size, label, tz, lat, lon
     install 'hillshade-rt[video]'). Each frame is the shaded relief, lit by that time's sun, with
     the cast shadows tinted blue (the shadow command's mask for that time, at every n-th cell),
     dark at night, and the date and local time in the top-left corner (--no-label: none)."""
-    from ..run.animate import AnimateConfig, animate as run_animate
+    from ..run.config import AnimateConfig
+    from ..run.animate import animate as run_animate
     kw = dict(tz=tz, lat=lat, lon=lon, pressure=pressure, temperature=temperature,
               no_refraction=no_refraction, sun_tolerance=sun_tolerance, backend=backend,
               threads=threads, report_path=report_path, overwrite=overwrite, quiet=quiet,

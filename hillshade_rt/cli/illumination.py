@@ -43,7 +43,8 @@ def illumination(dem, output, subsolar_file, sun_distance, body, height_above_gr
     (each time weighted by its interval), [2 with --soft: the mean visible fraction of the solar
     disk], then the longest continuous shadow (hours) and permanently shadowed (1 never lit in
     the series, 0 otherwise)."""
-    from ..run.illumination import IllumConfig, illumination as run_illumination
+    from ..run.config import IllumConfig
+    from ..run.illumination import illumination as run_illumination
     kw = dict(preview=preview, backend=backend, threads=threads, report_path=report_path,
               overwrite=overwrite, quiet=quiet, progress=progress, fmt=fmt,
               creation_options=creation_options,

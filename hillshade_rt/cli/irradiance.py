@@ -74,7 +74,8 @@ def irradiance(files, date_, end_date, start, end, step, clear_sky, linke_turbid
     period to OUTPUT: 4 float32 bands, Wh/m2 (W/m2 with --mean), -9999 nodata. Beam: DNI on
     the tilted surface, in cast shadow 0; diffuse: DHI times the sky view factor; reflected:
     GHI times albedo times the terrain's view factor."""
-    from ..run.irradiance import IrradianceConfig, irradiance as run_irradiance
+    from ..run.config import IrradianceConfig
+    from ..run.irradiance import irradiance as run_irradiance
     from ..run.batch import split_files, irradiance_each
     dem, output = split_files(files, each, output_pattern, "irradiance")
     kw = dict(tz=tz, lat=lat, lon=lon, pressure=pressure, temperature=temperature,

@@ -36,7 +36,8 @@ def profile(dem, at, at_xy, points, height_above_ground, step, fmt, output, curv
             refraction_k, preview, overwrite, quiet, **read_opts):
     """Write the horizon profile of points on DEM: the horizon elevation (and the distance to
     it) every --step degrees of azimuth, for PV siting (pvlib, PVGIS), GRASS, GIS (GeoJSON)."""
-    from ..run.profile import ProfileConfig, parse_pair, profile as run_profile
+    from ..run.config import ProfileConfig
+    from ..run.profile import parse_pair, profile as run_profile
     kw = dict(preview=preview, overwrite=overwrite, quiet=quiet, **read_opts)
     run_profile(ProfileConfig(dem=dem, at=[parse_pair(a, "--at") for a in at],
                               at_xy=[parse_pair(a, "--at-xy") for a in at_xy], points=points,

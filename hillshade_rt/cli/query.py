@@ -42,7 +42,8 @@ def query(dem, at, at_xy, points, height_above_ground, irradiance, fmt, output, 
     point light (--light-position/--light-lonlat) instead: whether it reaches each point, its
     azimuth, elevation and distance, and its incidence on the surface there."""
     from ..run.points import parse_pair
-    from ..run.query import QueryConfig, query as run_query
+    from ..run.config import QueryConfig
+    from ..run.query import query as run_query
     sun = {k: kw.pop(k) for k in SUN_KEYS}
     kw.update(overwrite=overwrite, quiet=quiet)
     run_query(QueryConfig(dem=dem, at=[parse_pair(a, "--at") for a in at],

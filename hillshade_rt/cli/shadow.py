@@ -102,7 +102,8 @@ def _point_light(files, position, lonlat, lift, soft, self_shadow, classes, algo
     ``run.point_light`` (which refuses what a point light does not take yet)."""
     from ..algorithms import options_from_cli
     from ..run.config import PLACE_KEYS
-    from ..run.point_light import LightConfig, light_shadow
+    from ..run.config import LightConfig
+    from ..run.point_light import light_shadow
     options_from_cli(kw)                       # the algorithms' own flags: none applies here
     sun = {k: kw.pop(k) for k in SUN_KEYS}
     refused = {"--azimuth/--elevation/--time/--start": any(
@@ -147,7 +148,8 @@ def _subsolar(files, subsolar, subsolar_file, distance, body, light_position, li
     (which refuses what it does not take yet)."""
     from ..algorithms import options_from_cli
     from ..run.config import PLACE_KEYS
-    from ..run.subsolar import SubsolarConfig, subsolar_shadow
+    from ..run.config import SubsolarConfig
+    from ..run.subsolar import subsolar_shadow
     options_from_cli(kw)
     sun = {k: kw.pop(k) for k in SUN_KEYS}
     refused = {"--azimuth/--elevation/--time/--start": any(
@@ -200,7 +202,8 @@ def hillshade(files, ambient, scale, algorithm, curvature, refraction_k, soft,
     --bits 16 and -f PNG make lightmaps."""
     from ..errors import UsageProblem
     if light_position is not None or light_lonlat is not None:
-        from ..run.lightmap import LightmapConfig, lightmap
+        from ..run.config import LightmapConfig
+        from ..run.lightmap import lightmap
         refused = _lightmap_refused(kw, soft, curvature, refraction_k)
         lightmap(LightmapConfig(files=list(files), output=kw.pop("output"),
                                 position=light_position, lonlat=light_lonlat,

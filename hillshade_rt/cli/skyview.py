@@ -59,7 +59,8 @@ def skyview(files, directions, definition, terrain_configuration, openness, max_
     from its exact horizon in --directions azimuths, or its openness (--openness, degrees).
     A DEM larger than --max-memory (or any, with --window-size) is computed in windows, with
     the same result."""
-    from ..run.skyview import SkyviewConfig, skyview as run_skyview
+    from ..run.config import SkyviewConfig
+    from ..run.skyview import skyview as run_skyview
     from ..run.batch import split_files, skyview_each
     dem, output = split_files(files, each, output_pattern, "skyview")
     kw = dict(preview=preview, backend=backend, threads=threads, overwrite=overwrite,

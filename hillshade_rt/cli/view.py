@@ -18,7 +18,8 @@ from .options import algorithm_option, backend_option, dem_options, to_read_opti
 def view(dem, port, no_browser, tz, algorithm, backend, **read_opts):
     """Look at DEM's shadows in a browser: a local server on 127.0.0.1 (Ctrl-C stops it)
     with the sun dragged on a compass or set by date and time, pan and zoom."""
-    from ..run.view import ViewConfig, view as run_view
+    from ..run.config import ViewConfig
+    from ..run.view import view as run_view
     run_view(ViewConfig(dem=dem, read=to_read_options(dict(read_opts)), port=port,
                         open_browser=not no_browser, algorithm=algorithm, backend=backend,
                         tz=tz, say=say))

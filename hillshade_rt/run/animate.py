@@ -18,57 +18,15 @@ from __future__ import annotations
 
 import datetime as _dt
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 from .. import __version__
 from ..errors import HillshadeError, UsageProblem
-from .config import ReadOptions, RunOptions
+from .config import AnimateConfig
 from .runner import RunContext
 
 DEFAULT_STEP = "30min"
 MAX_FRAMES = 2000
-
-
-@dataclass(kw_only=True)
-class AnimateConfig:
-    """An ``animate`` run: ``dem`` to ``output`` (.gif or .mp4), the times as a day (``date``:
-    local midnight to midnight every ``step``, in ``--tz`` or else the zone of the DEM's
-    centre) or a series (``start``, ``end``, ``step``), the place of the sun (``place``:
-    ``run.config.PLACE_KEYS``), frames per second, the picture's long side, the label."""
-
-    dem: str
-    output: str
-    date: str | None = None
-    start: str | None = None
-    end: str | None = None
-    step: str | None = None           # None: DEFAULT_STEP
-    place: dict = field(default_factory=dict)
-    fps: float = 12.0
-    size: int = 1024
-    label: bool = True
-    algorithm: str = "auto"
-    curvature: object = None
-    refraction_k: float | None = None
-    read: ReadOptions = field(default_factory=ReadOptions)
-    run: RunOptions = field(default_factory=RunOptions)
-
-    def check(self) -> str:
-        """The options' combinations (UsageProblem) and the output's format (".gif"/".mp4")."""
-        from ..pictures.animation import check_output
-        series = self.start is not None or self.end is not None
-        if (self.date is not None) == series:
-            raise UsageProblem("give the times one way: --date, or --start and --end "
-                               "(with --step)")
-        if series and (self.start is None or self.end is None):
-            raise UsageProblem("--start and --end go together")
-        return check_output(self.output, self.fps, self.size)
-
-    def lighting(self, backend: str):
-        """How the terrain is lit (``engine.lighting.Lighting``): the ``shadow`` command's
-        hard cast shadows, on ``backend`` (chosen)."""
-        from ..engine.lighting import Lighting
-        return Lighting(algorithm=self.algorithm, backend=backend, curvature=self.curvature,
-                        refraction_k=self.refraction_k)
 
 
 def times_of(cfg: AnimateConfig):

@@ -1,6 +1,11 @@
 """What a run is asked to do, as plain data: the DEM's read options, the sun, the algorithm and
-its options, the product and where it goes. The command line and ``api.shade`` build these; the
-checks of the options' combinations live here (one place for both), raising
+its options, the product and where it goes. Every command's config is here, keyword-only
+(``ShadeConfig``, ``SunHoursConfig``, ``HorizonConfig``, ``IrradianceConfig``, ``IllumConfig``,
+``LightConfig``, ``LightmapConfig``, ``SubsolarConfig``, ``SkyviewConfig``, ``QueryConfig``,
+``ProfileConfig``, ``ViewConfig``, ``AnimateConfig``); the command line, ``api``, xarray and
+QGIS (through the command line) build them, and a lighting run turns its config into one
+``engine.lighting.Lighting`` (``ShadeConfig.lighting``). The checks of the options'
+combinations live here (one place for every front door), raising
 :class:`~hillshade_rt.errors.UsageProblem` (exit status 2 on the command line) for a bad
 combination and :class:`~hillshade_rt.errors.HillshadeError` for a bad value.
 
@@ -10,6 +15,7 @@ as keywords, so a Python caller reads them as its own arguments.
 
 from __future__ import annotations
 
+import math
 import os
 import re
 from dataclasses import dataclass, field
@@ -36,7 +42,7 @@ PRODUCTS = ("shadow", "classes", "hillshade")
 DEFAULT_WORKER_TIMEOUT = 60.0
 
 
-@dataclass
+@dataclass(kw_only=True)
 class ReadOptions:
     """How to read a DEM (the command line's ``dem_options``): band, nodata, z-factor, the
     spacing of an ungeoreferenced grid and the layout of a raw one (texts as given; parsed
@@ -111,7 +117,7 @@ def say_nothing(kind: str, message: str) -> None:
     """The default ``say`` of a run: silent."""
 
 
-@dataclass
+@dataclass(kw_only=True)
 class RunOptions:
     """How a run goes, whatever it makes: backend, threads, report, overwrite, messages.
     ``say(kind, message)`` receives the run's messages for people: kind "compile" (numba is
@@ -348,3 +354,382 @@ def apply_scale(d, scale):
     rows, cols = d.shape
     d.grid = Grid.uniform(rows, cols, abs(d.transform.a) * scale, abs(d.transform.e) * scale,
                           cs, rs, f"--scale {scale:g} x transform units")
+
+
+@dataclass(kw_only=True)
+class IrradianceConfig:
+    """An ``irradiance`` run. The period: ``date`` (and ``end_date``), or ``start`` and
+    ``end``; the open sky: ``clear_sky`` (None: ineichen) with ``linke_turbidity``, or the
+    measured series of the CSV file ``ghi``."""
+
+    dem: str
+    output: str
+    date: str | None = None
+    end_date: str | None = None
+    start: str | None = None
+    end: str | None = None
+    step: str = "15min"
+    clear_sky: str | None = None          # None: "ineichen" (and not with ``ghi``)
+    linke_turbidity: float | None = None  # None: pvlib's climatological lookup
+    albedo: float = 0.2
+    ghi: str | None = None                # a CSV: time, ghi[, dni, dhi]
+    mean: bool = False                    # mean W/m² over the period instead of Wh/m²
+    soft: bool = False
+    perez: bool = False
+    skyview_directions: int = 32
+    place: dict = field(default_factory=dict)    # PLACE_KEYS: tz, lat, lon, pressure, ...
+    algorithm: str = "auto"
+    curvature: object = None
+    refraction_k: float | None = None
+    read: ReadOptions = field(default_factory=ReadOptions)
+    run: RunOptions = field(default_factory=RunOptions)
+    height_above_ground: float = 0.0      # metres: the receiving surface stands this high
+
+    def check(self):
+        """The options' combinations and values (UsageProblem: exit status 2)."""
+        from ..engine.irradiance import CLEAR_SKY_MODELS, check_options
+        by_date = self.date is not None or self.end_date is not None
+        by_time = self.start is not None or self.end is not None
+        if by_date == by_time:
+            raise UsageProblem("give the period one way: --date [--end-date], or --start and "
+                               "--end")
+        if by_date and self.date is None:
+            raise UsageProblem("--end-date goes with --date")
+        if by_time and (self.start is None or self.end is None):
+            raise UsageProblem("--start and --end go together")
+        if self.clear_sky is not None and self.clear_sky not in CLEAR_SKY_MODELS:
+            raise UsageProblem(f"--clear-sky must be one of {', '.join(CLEAR_SKY_MODELS)}, got "
+                               f"{self.clear_sky!r}")
+        if self.ghi is not None and (self.clear_sky is not None
+                                     or self.linke_turbidity is not None):
+            raise UsageProblem("--ghi gives the sky measured: --clear-sky and "
+                               "--linke-turbidity do not go with it")
+        if self.linke_turbidity is not None and self.clear_sky == "haurwitz":
+            raise UsageProblem("--linke-turbidity is Ineichen's: Haurwitz takes none")
+        self.algorithm = check_lift(self.height_above_ground, self.algorithm, self.soft)
+        try:
+            check_options(self.albedo, self.linke_turbidity, self.skyview_directions)
+        except HillshadeError as exc:
+            raise UsageProblem(str(exc)) from None
+
+    def lighting(self, backend: str):
+        """How the terrain is lit (``engine.lighting.Lighting``), on ``backend`` (chosen);
+        after :meth:`check`. The cast shadows only: the incidence is the irradiance's own
+        (``engine.irradiance``), no self-shadowing."""
+        from ..engine.lighting import Lighting
+        return Lighting(algorithm=self.algorithm, backend=backend, curvature=self.curvature,
+                        refraction_k=self.refraction_k, soft=self.soft,
+                        lift=self.height_above_ground)
+
+
+@dataclass(kw_only=True)
+class IllumConfig:
+    """``files``: DEM and OUTPUT (or the DEM alone with ``output``); ``subsolar_file``: the
+    series; ``body`` --body's text or None (the CRS's); ``sun_distance`` metres where the series
+    gives none (None: the body's mean distance); ``curvature`` True/False or None (on);
+    ``window_size`` (--window-size text or (rows, cols)), ``max_memory`` (text), ``scheduler``
+    (Dask), ``chunks`` (time chunks per window on Dask; None: the workers)."""
+
+    files: list
+    output: str | None = None
+    subsolar_file: str | None = None
+    body: str | None = None
+    sun_distance: float | None = None
+    height_above_ground: float = 0.0
+    soft: bool = False
+    curvature: bool | None = None
+    refraction_k: float | None = None
+    window_size: object = None
+    max_memory: object = None
+    scheduler: object = None
+    chunks: int | None = None
+    read: ReadOptions = field(default_factory=ReadOptions)
+    run: RunOptions = field(default_factory=RunOptions)
+
+    def check(self) -> tuple:
+        """(dem, output) checked."""
+        if self.subsolar_file is None:
+            raise UsageProblem("illumination needs --subsolar-file F (a subsolar series)")
+        inputs, output = inputs_and_output(self.files, self.output, None)
+        if len(inputs) != 1:
+            raise UsageProblem("illumination lights one DEM: give DEM OUTPUT")
+        d = self.sun_distance
+        if d is not None and not (math.isfinite(d) and d > 0):
+            raise UsageProblem(f"--sun-distance must be positive metres, got {d:g}")
+        h = float(self.height_above_ground)
+        if not (math.isfinite(h) and h >= 0):
+            raise UsageProblem(f"--height-above-ground must be >= 0 metres, got {h:g}")
+        if self.chunks is not None and int(self.chunks) < 1:
+            raise UsageProblem("chunks must be 1 or more")
+        return inputs[0], output
+
+    def lighting(self, backend: str):
+        """How the terrain is lit (``engine.lighting.Lighting``), on ``backend`` (chosen):
+        curvature on unless turned off (``None``: on; never "auto"), refraction, the lift, soft
+        shadows. The algorithm is the per-cell sun's march (``algorithms.subsolar``), whatever
+        ``algorithm`` says; after :meth:`check`."""
+        from ..engine.lighting import Lighting
+        return Lighting(backend=backend,
+                        curvature=True if self.curvature is None else bool(self.curvature),
+                        refraction_k=self.refraction_k, soft=bool(self.soft),
+                        lift=self.height_above_ground)
+
+
+@dataclass(kw_only=True)
+class LightConfig:
+    """``files``: DEM and OUTPUT (or the DEM alone with ``output``); ``position`` (x, y, z: the
+    DEM's CRS, metres above the datum) or ``lonlat`` (lon, lat, z: WGS84 degrees), as numbers
+    or the command line's 'A,B,C' texts; ``refused``: the options given with the light that it
+    does not take yet (name -> given), a usage error naming them."""
+
+    files: list
+    output: str | None = None
+    position: object = None
+    lonlat: object = None
+    height_above_ground: float = 0.0
+    window_size: object = None
+    max_memory: object = None
+    read: ReadOptions = field(default_factory=ReadOptions)
+    run: RunOptions = field(default_factory=RunOptions)
+    refused: dict = field(default_factory=dict)
+
+    def check(self) -> tuple:
+        """(dem, output, position, lonlat) checked: one light, one DEM, nothing refused."""
+        taken = [name for name, on in self.refused.items() if on]
+        if taken:
+            raise UsageProblem(f"a point light does not take {', '.join(taken)} (yet: hard "
+                               "shadows, in memory or in windows, CPU or GPU)")
+        if (self.position is None) == (self.lonlat is None):
+            raise UsageProblem("give --light-position X,Y,Z or --light-lonlat LON,LAT,Z, one "
+                               "of them")
+        inputs, output = inputs_and_output(self.files, self.output, None)
+        if len(inputs) != 1:
+            raise UsageProblem("a point light lights one DEM: give DEM OUTPUT")
+        pos = None if self.position is None else parse_triple(self.position,
+                                                               "--light-position")
+        ll = None if self.lonlat is None else parse_triple(self.lonlat, "--light-lonlat")
+        return inputs[0], output, pos, ll
+
+
+def parse_triple(text, what: str) -> tuple[float, float, float]:
+    """'A,B,C' as three finite floats (a usage error otherwise)."""
+    if isinstance(text, (tuple, list)):
+        parts = list(text)
+    else:
+        parts = str(text).split(",")
+    try:
+        vals = tuple(float(p) for p in parts)
+    except ValueError:
+        vals = ()
+    if len(vals) != 3 or not all(math.isfinite(v) for v in vals):
+        raise UsageProblem(f"{what} takes three numbers A,B,C, got {text!r}")
+    return vals
+
+
+FALLOFFS = ("none", "inverse-square")
+
+
+BITS = (8, 16)
+
+
+@dataclass(kw_only=True)
+class LightmapConfig(LightConfig):
+    """``LightConfig`` (the DEM, OUTPUT, the light, what is refused) and the hillshade's own:
+    ``ambient`` 0..1, ``scale`` (gdaldem's -s), ``falloff`` (``FALLOFFS``), ``bits`` (8: uint8
+    1..255, 16: uint16 1..65535)."""
+
+    ambient: float = 0.2
+    scale: float | None = None
+    falloff: str = "none"
+    bits: int = 8
+
+    def check(self) -> tuple:
+        if self.falloff not in FALLOFFS:
+            raise UsageProblem(f"--falloff must be one of {', '.join(FALLOFFS)}, got "
+                               f"{self.falloff!r}")
+        if self.bits not in BITS:
+            raise UsageProblem(f"--bits must be 8 or 16, got {self.bits!r}")
+        if not (math.isfinite(self.ambient) and 0.0 <= self.ambient <= 1.0):
+            raise UsageProblem(f"--ambient must be within 0..1, got {self.ambient}")
+        if self.scale is not None:
+            if not (math.isfinite(self.scale) and self.scale > 0):
+                raise UsageProblem(f"--scale must be a positive number, got {self.scale}")
+            if self.read.pixel_size is not None:
+                raise UsageProblem("--scale and --pixel-size do not go together")
+        return super().check()
+
+
+@dataclass(kw_only=True)
+class SubsolarConfig:
+    """``files``: DEM and OUTPUT (or the DEM alone with ``output``); ``subsolar``: (lat, lon)
+    or the command line's 'LAT,LON'; ``sun_distance`` metres or None; ``body``: --body's text
+    or None (the CRS's); ``curvature`` True/False or None (on); ``refused``: the options given
+    that this run does not take (name -> given)."""
+
+    files: list
+    output: str | None = None
+    subsolar: object = None
+    sun_distance: float | None = None
+    body: str | None = None
+    height_above_ground: float = 0.0
+    soft: bool = False
+    curvature: bool | None = None
+    refraction_k: float | None = None
+    read: ReadOptions = field(default_factory=ReadOptions)
+    run: RunOptions = field(default_factory=RunOptions)
+    refused: dict = field(default_factory=dict)
+    subsolar_file: str | None = None
+
+    def check(self) -> tuple:
+        """(dem, output, (lat, lon) or None for a series) checked: one DEM, one of --subsolar
+        and --subsolar-file, nothing refused."""
+        if self.subsolar is None and self.subsolar_file is None:
+            raise UsageProblem("--sun-distance and --body go with --subsolar LAT,LON or "
+                               "--subsolar-file F")
+        if self.subsolar is not None and self.subsolar_file is not None:
+            raise UsageProblem("give --subsolar LAT,LON or --subsolar-file F, not both")
+        taken = [name for name, on in self.refused.items() if on]
+        if taken:
+            raise UsageProblem(f"--subsolar does not take {', '.join(taken)} (yet: in memory, "
+                               "the shadow or --soft)")
+        inputs, output = inputs_and_output(self.files, self.output, None)
+        if len(inputs) != 1:
+            raise UsageProblem("--subsolar lights one DEM: give DEM OUTPUT")
+        d = self.sun_distance
+        if d is not None and not (math.isfinite(d) and d > 0):
+            raise UsageProblem(f"--sun-distance must be positive metres, got {d:g}")
+        return inputs[0], output, (None if self.subsolar is None
+                                   else parse_latlon(self.subsolar))
+
+
+def parse_latlon(text) -> tuple[float, float]:
+    """'LAT,LON' as two finite floats, the latitude in [-90, 90] (a usage error otherwise)."""
+    parts = list(text) if isinstance(text, (tuple, list)) else str(text).split(",")
+    try:
+        vals = tuple(float(p) for p in parts)
+    except ValueError:
+        vals = ()
+    if len(vals) != 2 or not all(math.isfinite(v) for v in vals):
+        raise UsageProblem(f"--subsolar takes two numbers LAT,LON, got {text!r}")
+    if not -90.0 <= vals[0] <= 90.0:
+        raise UsageProblem(f"--subsolar latitude must be in [-90, 90] degrees, got {vals[0]:g}")
+    return vals
+
+
+@dataclass(kw_only=True)
+class SkyviewConfig:
+    dem: str
+    output: str
+    directions: int = 32
+    definition: str = "zaksek"
+    terrain_configuration: bool = False   # 1 - Vd (Dozier's): the terrain a tilted cell sees
+    curvature: object = None
+    refraction_k: float | None = None
+    read: ReadOptions = field(default_factory=ReadOptions)
+    run: RunOptions = field(default_factory=RunOptions)
+    openness: str | None = None           # "positive" / "negative": Yokoyama's, in degrees
+    max_distance: float | None = None     # metres (Yokoyama's L, RVT's radius)
+    max_memory: object = None
+    window_size: object = None
+    scheduler: object = None              # the windows as Dask tasks
+    height_above_ground: float = 0.0      # metres: the observer of every cell stands this high
+
+
+@dataclass(kw_only=True)
+class QueryConfig:
+    dem: str
+    at: list = field(default_factory=list)        # (lon, lat) pairs
+    at_xy: list = field(default_factory=list)     # (x, y) pairs in the DEM's CRS
+    points: str | None = None                     # a CSV or GeoJSON file of points
+    sun: dict = field(default_factory=dict)       # run.config.SUN_KEYS
+    height_above_ground: float = 0.0
+    irradiance: bool = False
+    fmt: str | None = None                        # None: from the output's extension, else csv
+    output: str | None = None                     # None: standard output
+    curvature: object = None                      # None: "auto", as shadow
+    refraction_k: float | None = None
+    read: ReadOptions = field(default_factory=ReadOptions)
+    run: RunOptions = field(default_factory=RunOptions)
+    light_position: object = None                 # a point light: X,Y,Z in the DEM's CRS
+    light_lonlat: object = None                   # or LON,LAT,Z (WGS84 degrees)
+
+
+@dataclass(kw_only=True)
+class ProfileConfig:
+    dem: str
+    at: list = field(default_factory=list)        # (lon, lat) pairs
+    at_xy: list = field(default_factory=list)     # (x, y) pairs in the DEM's CRS
+    points: str | None = None                     # a CSV or GeoJSON file of points
+    height_above_ground: float = 0.0
+    step: float = 1.0
+    fmt: str = "csv"
+    output: str | None = None                     # None: standard output
+    curvature: object = None
+    refraction_k: float | None = None
+    read: ReadOptions = field(default_factory=ReadOptions)
+    run: RunOptions = field(default_factory=RunOptions)
+
+
+@dataclass(kw_only=True)
+class ViewConfig:
+    """``hillshade-rt view DEM``: where to listen and what to shade with."""
+
+    dem: str
+    read: ReadOptions = field(default_factory=ReadOptions)
+    port: int = 0
+    open_browser: bool = True
+    algorithm: str = "auto"
+    backend: str = "auto"
+    tz: str | None = None
+    say: object = say_nothing
+
+    def check(self) -> None:
+        from ..model.times import zone
+        if not (0 <= int(self.port) <= 65535):
+            raise UsageProblem(f"--port must be 0..65535, got {self.port}")
+        try:
+            zone(self.tz)
+        except HillshadeError as exc:
+            raise UsageProblem(str(exc)) from None
+
+
+@dataclass(kw_only=True)
+class AnimateConfig:
+    """An ``animate`` run: ``dem`` to ``output`` (.gif or .mp4), the times as a day (``date``:
+    local midnight to midnight every ``step``, in ``--tz`` or else the zone of the DEM's
+    centre) or a series (``start``, ``end``, ``step``), the place of the sun (``place``:
+    ``run.config.PLACE_KEYS``), frames per second, the picture's long side, the label."""
+
+    dem: str
+    output: str
+    date: str | None = None
+    start: str | None = None
+    end: str | None = None
+    step: str | None = None           # None: DEFAULT_STEP
+    place: dict = field(default_factory=dict)
+    fps: float = 12.0
+    size: int = 1024
+    label: bool = True
+    algorithm: str = "auto"
+    curvature: object = None
+    refraction_k: float | None = None
+    read: ReadOptions = field(default_factory=ReadOptions)
+    run: RunOptions = field(default_factory=RunOptions)
+
+    def check(self) -> str:
+        """The options' combinations (UsageProblem) and the output's format (".gif"/".mp4")."""
+        from ..pictures.animation import check_output
+        series = self.start is not None or self.end is not None
+        if (self.date is not None) == series:
+            raise UsageProblem("give the times one way: --date, or --start and --end "
+                               "(with --step)")
+        if series and (self.start is None or self.end is None):
+            raise UsageProblem("--start and --end go together")
+        return check_output(self.output, self.fps, self.size)
+
+    def lighting(self, backend: str):
+        """How the terrain is lit (``engine.lighting.Lighting``): the ``shadow`` command's
+        hard cast shadows, on ``backend`` (chosen)."""
+        from ..engine.lighting import Lighting
+        return Lighting(algorithm=self.algorithm, backend=backend, curvature=self.curvature,
+                        refraction_k=self.refraction_k)

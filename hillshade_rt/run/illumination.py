@@ -32,72 +32,18 @@ from __future__ import annotations
 import math
 import os
 import threading
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
 from .. import __version__
 from ..errors import HillshadeError, UsageProblem
-from .config import ReadOptions, RunOptions
+from .config import IllumConfig
 from .runner import RunContext
 
 BYTES_PER_CELL = 96     # heights 4, frames 24, pyramid ~6, mask 1, soft 4, sums 5 x 8 + 1
 _LOCK = threading.Lock()   # one numba computation at a time per worker process
 HALO_MARGIN = 2         # cells beyond the reach (interpolation between two cell centres)
-
-
-@dataclass(kw_only=True)
-class IllumConfig:
-    """``files``: DEM and OUTPUT (or the DEM alone with ``output``); ``subsolar_file``: the
-    series; ``body`` --body's text or None (the CRS's); ``sun_distance`` metres where the series
-    gives none (None: the body's mean distance); ``curvature`` True/False or None (on);
-    ``window_size`` (--window-size text or (rows, cols)), ``max_memory`` (text), ``scheduler``
-    (Dask), ``chunks`` (time chunks per window on Dask; None: the workers)."""
-
-    files: list
-    output: str | None = None
-    subsolar_file: str | None = None
-    body: str | None = None
-    sun_distance: float | None = None
-    height_above_ground: float = 0.0
-    soft: bool = False
-    curvature: bool | None = None
-    refraction_k: float | None = None
-    window_size: object = None
-    max_memory: object = None
-    scheduler: object = None
-    chunks: int | None = None
-    read: ReadOptions = field(default_factory=ReadOptions)
-    run: RunOptions = field(default_factory=RunOptions)
-
-    def check(self) -> tuple:
-        """(dem, output) checked."""
-        from .config import inputs_and_output
-        if self.subsolar_file is None:
-            raise UsageProblem("illumination needs --subsolar-file F (a subsolar series)")
-        inputs, output = inputs_and_output(self.files, self.output, None)
-        if len(inputs) != 1:
-            raise UsageProblem("illumination lights one DEM: give DEM OUTPUT")
-        d = self.sun_distance
-        if d is not None and not (math.isfinite(d) and d > 0):
-            raise UsageProblem(f"--sun-distance must be positive metres, got {d:g}")
-        h = float(self.height_above_ground)
-        if not (math.isfinite(h) and h >= 0):
-            raise UsageProblem(f"--height-above-ground must be >= 0 metres, got {h:g}")
-        if self.chunks is not None and int(self.chunks) < 1:
-            raise UsageProblem("chunks must be 1 or more")
-        return inputs[0], output
-
-    def lighting(self, backend: str):
-        """How the terrain is lit (``engine.lighting.Lighting``), on ``backend`` (chosen):
-        curvature on unless turned off (``None``: on; never "auto"), refraction, the lift, soft
-        shadows. The algorithm is the per-cell sun's march (``algorithms.subsolar``), whatever
-        ``algorithm`` says; after :meth:`check`."""
-        from ..engine.lighting import Lighting
-        return Lighting(backend=backend,
-                        curvature=True if self.curvature is None else bool(self.curvature),
-                        refraction_k=self.refraction_k, soft=bool(self.soft),
-                        lift=self.height_above_ground)
 
 
 @dataclass

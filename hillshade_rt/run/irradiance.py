@@ -23,84 +23,17 @@ from __future__ import annotations
 
 import os
 import datetime as _dt
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 from .. import __version__
 from ..errors import HillshadeError, UsageProblem
-from .config import ReadOptions, RunOptions
+from .config import IrradianceConfig
 from .runner import RunContext
 
 
 # formats that cannot hold the four float32 bands (pictures; ASCII and Surfer grids, one band)
 ONE_BAND_FORMATS = ("PNG", "JPEG", "WEBP", "BMP", "GIF", "AAIGrid", "XYZ", "GSAG", "GSBG",
                     "GS7BG")
-
-
-@dataclass(kw_only=True)
-class IrradianceConfig:
-    """An ``irradiance`` run. The period: ``date`` (and ``end_date``), or ``start`` and
-    ``end``; the open sky: ``clear_sky`` (None: ineichen) with ``linke_turbidity``, or the
-    measured series of the CSV file ``ghi``."""
-
-    dem: str
-    output: str
-    date: str | None = None
-    end_date: str | None = None
-    start: str | None = None
-    end: str | None = None
-    step: str = "15min"
-    clear_sky: str | None = None          # None: "ineichen" (and not with ``ghi``)
-    linke_turbidity: float | None = None  # None: pvlib's climatological lookup
-    albedo: float = 0.2
-    ghi: str | None = None                # a CSV: time, ghi[, dni, dhi]
-    mean: bool = False                    # mean W/m² over the period instead of Wh/m²
-    soft: bool = False
-    perez: bool = False
-    skyview_directions: int = 32
-    place: dict = field(default_factory=dict)    # PLACE_KEYS: tz, lat, lon, pressure, ...
-    algorithm: str = "auto"
-    curvature: object = None
-    refraction_k: float | None = None
-    read: ReadOptions = field(default_factory=ReadOptions)
-    run: RunOptions = field(default_factory=RunOptions)
-    height_above_ground: float = 0.0      # metres: the receiving surface stands this high
-
-    def check(self):
-        """The options' combinations and values (UsageProblem: exit status 2)."""
-        from ..engine.irradiance import CLEAR_SKY_MODELS, check_options
-        by_date = self.date is not None or self.end_date is not None
-        by_time = self.start is not None or self.end is not None
-        if by_date == by_time:
-            raise UsageProblem("give the period one way: --date [--end-date], or --start and "
-                               "--end")
-        if by_date and self.date is None:
-            raise UsageProblem("--end-date goes with --date")
-        if by_time and (self.start is None or self.end is None):
-            raise UsageProblem("--start and --end go together")
-        if self.clear_sky is not None and self.clear_sky not in CLEAR_SKY_MODELS:
-            raise UsageProblem(f"--clear-sky must be one of {', '.join(CLEAR_SKY_MODELS)}, got "
-                               f"{self.clear_sky!r}")
-        if self.ghi is not None and (self.clear_sky is not None
-                                     or self.linke_turbidity is not None):
-            raise UsageProblem("--ghi gives the sky measured: --clear-sky and "
-                               "--linke-turbidity do not go with it")
-        if self.linke_turbidity is not None and self.clear_sky == "haurwitz":
-            raise UsageProblem("--linke-turbidity is Ineichen's: Haurwitz takes none")
-        from .config import check_lift     # auto -> the algorithm that marches the lift
-        self.algorithm = check_lift(self.height_above_ground, self.algorithm, self.soft)
-        try:
-            check_options(self.albedo, self.linke_turbidity, self.skyview_directions)
-        except HillshadeError as exc:
-            raise UsageProblem(str(exc)) from None
-
-    def lighting(self, backend: str):
-        """How the terrain is lit (``engine.lighting.Lighting``), on ``backend`` (chosen);
-        after :meth:`check`. The cast shadows only: the incidence is the irradiance's own
-        (``engine.irradiance``), no self-shadowing."""
-        from ..engine.lighting import Lighting
-        return Lighting(algorithm=self.algorithm, backend=backend, curvature=self.curvature,
-                        refraction_k=self.refraction_k, soft=self.soft,
-                        lift=self.height_above_ground)
 
 
 @dataclass

@@ -20,41 +20,10 @@ from __future__ import annotations
 
 import math
 import os
-from dataclasses import dataclass
 
 from .. import __version__
 from ..errors import HillshadeError, UsageProblem
-from .point_light import LightConfig
-
-FALLOFFS = ("none", "inverse-square")
-BITS = (8, 16)
-
-
-@dataclass(kw_only=True)
-class LightmapConfig(LightConfig):
-    """``LightConfig`` (the DEM, OUTPUT, the light, what is refused) and the hillshade's own:
-    ``ambient`` 0..1, ``scale`` (gdaldem's -s), ``falloff`` (``FALLOFFS``), ``bits`` (8: uint8
-    1..255, 16: uint16 1..65535)."""
-
-    ambient: float = 0.2
-    scale: float | None = None
-    falloff: str = "none"
-    bits: int = 8
-
-    def check(self) -> tuple:
-        if self.falloff not in FALLOFFS:
-            raise UsageProblem(f"--falloff must be one of {', '.join(FALLOFFS)}, got "
-                               f"{self.falloff!r}")
-        if self.bits not in BITS:
-            raise UsageProblem(f"--bits must be 8 or 16, got {self.bits!r}")
-        if not (math.isfinite(self.ambient) and 0.0 <= self.ambient <= 1.0):
-            raise UsageProblem(f"--ambient must be within 0..1, got {self.ambient}")
-        if self.scale is not None:
-            if not (math.isfinite(self.scale) and self.scale > 0):
-                raise UsageProblem(f"--scale must be a positive number, got {self.scale}")
-            if self.read.pixel_size is not None:
-                raise UsageProblem("--scale and --pixel-size do not go together")
-        return super().check()
+from .config import FALLOFFS, LightmapConfig
 
 
 def light_xy(d, position, lonlat) -> tuple[float, float, float]:

@@ -11,63 +11,10 @@ from __future__ import annotations
 
 import math
 import os
-from dataclasses import dataclass, field
 
 from .. import __version__
 from ..errors import HillshadeError, UsageProblem
-from .config import ReadOptions, RunOptions
-
-
-@dataclass(kw_only=True)
-class LightConfig:
-    """``files``: DEM and OUTPUT (or the DEM alone with ``output``); ``position`` (x, y, z: the
-    DEM's CRS, metres above the datum) or ``lonlat`` (lon, lat, z: WGS84 degrees), as numbers
-    or the command line's 'A,B,C' texts; ``refused``: the options given with the light that it
-    does not take yet (name -> given), a usage error naming them."""
-
-    files: list
-    output: str | None = None
-    position: object = None
-    lonlat: object = None
-    height_above_ground: float = 0.0
-    window_size: object = None
-    max_memory: object = None
-    read: ReadOptions = field(default_factory=ReadOptions)
-    run: RunOptions = field(default_factory=RunOptions)
-    refused: dict = field(default_factory=dict)
-
-    def check(self) -> tuple:
-        """(dem, output, position, lonlat) checked: one light, one DEM, nothing refused."""
-        from .config import inputs_and_output
-        taken = [name for name, on in self.refused.items() if on]
-        if taken:
-            raise UsageProblem(f"a point light does not take {', '.join(taken)} (yet: hard "
-                               "shadows, in memory or in windows, CPU or GPU)")
-        if (self.position is None) == (self.lonlat is None):
-            raise UsageProblem("give --light-position X,Y,Z or --light-lonlat LON,LAT,Z, one "
-                               "of them")
-        inputs, output = inputs_and_output(self.files, self.output, None)
-        if len(inputs) != 1:
-            raise UsageProblem("a point light lights one DEM: give DEM OUTPUT")
-        pos = None if self.position is None else parse_triple(self.position,
-                                                               "--light-position")
-        ll = None if self.lonlat is None else parse_triple(self.lonlat, "--light-lonlat")
-        return inputs[0], output, pos, ll
-
-
-def parse_triple(text, what: str) -> tuple[float, float, float]:
-    """'A,B,C' as three finite floats (a usage error otherwise)."""
-    if isinstance(text, (tuple, list)):
-        parts = list(text)
-    else:
-        parts = str(text).split(",")
-    try:
-        vals = tuple(float(p) for p in parts)
-    except ValueError:
-        vals = ()
-    if len(vals) != 3 or not all(math.isfinite(v) for v in vals):
-        raise UsageProblem(f"{what} takes three numbers A,B,C, got {text!r}")
-    return vals
+from .config import LightConfig
 
 
 def light_shadow(cfg: LightConfig) -> dict:

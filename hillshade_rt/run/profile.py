@@ -33,13 +33,13 @@ import io as _io
 import json
 import math
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
 from .. import __version__
 from ..errors import UsageProblem
-from .config import ReadOptions, RunOptions
+from .config import ProfileConfig
 from .points import gather, locate, on_ground, parse_pair, write_text
 from .runner import RunContext
 
@@ -51,22 +51,6 @@ CONVENTION = ("azimuth in degrees clockwise from north (grid north of the DEM), 
               "horizon elevation in degrees above the observer's horizontal (negative: the "
               "observer looks down); -90 and no distance: no terrain ahead inside the DEM; "
               "distance in metres along the ground to the horizon point")
-
-
-@dataclass(kw_only=True)
-class ProfileConfig:
-    dem: str
-    at: list = field(default_factory=list)        # (lon, lat) pairs
-    at_xy: list = field(default_factory=list)     # (x, y) pairs in the DEM's CRS
-    points: str | None = None                     # a CSV or GeoJSON file of points
-    height_above_ground: float = 0.0
-    step: float = 1.0
-    fmt: str = "csv"
-    output: str | None = None                     # None: standard output
-    curvature: object = None
-    refraction_k: float | None = None
-    read: ReadOptions = field(default_factory=ReadOptions)
-    run: RunOptions = field(default_factory=RunOptions)
 
 
 @dataclass

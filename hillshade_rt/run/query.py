@@ -34,13 +34,13 @@ import io as _io
 import json
 import math
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
 from .. import __version__
 from ..errors import HillshadeError, UsageProblem
-from .config import ReadOptions, RunOptions
+from .config import QueryConfig
 from .points import gather, locate, on_ground, write_text
 from .runner import RunContext
 
@@ -76,25 +76,6 @@ LIGHT_CONVENTION = ("a point light (--light-position/--light-lonlat) instead of 
                     "the cell centres) + height above ground")
 LIGHT_COLUMNS = ("point", "x", "y", "lon", "lat", "light_azimuth_deg", "light_elevation_deg",
                  "light_distance_m", "incidence_cos", "lit", "ground_m", "observer_m")
-
-
-@dataclass(kw_only=True)
-class QueryConfig:
-    dem: str
-    at: list = field(default_factory=list)        # (lon, lat) pairs
-    at_xy: list = field(default_factory=list)     # (x, y) pairs in the DEM's CRS
-    points: str | None = None                     # a CSV or GeoJSON file of points
-    sun: dict = field(default_factory=dict)       # run.config.SUN_KEYS
-    height_above_ground: float = 0.0
-    irradiance: bool = False
-    fmt: str | None = None                        # None: from the output's extension, else csv
-    output: str | None = None                     # None: standard output
-    curvature: object = None                      # None: "auto", as shadow
-    refraction_k: float | None = None
-    read: ReadOptions = field(default_factory=ReadOptions)
-    run: RunOptions = field(default_factory=RunOptions)
-    light_position: object = None                 # a point light: X,Y,Z in the DEM's CRS
-    light_lonlat: object = None                   # or LON,LAT,Z (WGS84 degrees)
 
 
 def output_format(fmt: str | None, output: str | None) -> str:
@@ -293,7 +274,7 @@ def light_query(cfg: QueryConfig) -> dict:
     from ..algorithms.lightmap import light_at_points
     from ..engine.arrays import ground_height
     from .config import PLACE_KEYS, SUN_KEYS, check_lift
-    from .point_light import parse_triple
+    from .config import parse_triple
     from .lightmap import light_cell, light_xy
 
     fmt = output_format(cfg.fmt, cfg.output)

@@ -50,7 +50,8 @@ import numpy as np
 
 from .. import __version__
 from ..errors import UsageProblem
-from .config import ReadOptions, RunOptions, parse_window_size
+from .config import parse_window_size
+from .config import SkyviewConfig
 from .runner import RunContext
 
 from ..algorithms.skyview import DEFINITIONS, OPENNESS  # (the definitions, once)
@@ -58,25 +59,6 @@ from ..algorithms.skyview import DEFINITIONS, OPENNESS  # (the definitions, once
 # bytes per cell of a run in memory: heights and pyramid (twice for negative openness: -z),
 # one direction's angles, the sums (Dozier: cos S and sin S cos(φ - A) too), the result
 BYTES_PER_CELL = 48
-
-
-@dataclass(kw_only=True)
-class SkyviewConfig:
-    dem: str
-    output: str
-    directions: int = 32
-    definition: str = "zaksek"
-    terrain_configuration: bool = False   # 1 - Vd (Dozier's): the terrain a tilted cell sees
-    curvature: object = None
-    refraction_k: float | None = None
-    read: ReadOptions = field(default_factory=ReadOptions)
-    run: RunOptions = field(default_factory=RunOptions)
-    openness: str | None = None           # "positive" / "negative": Yokoyama's, in degrees
-    max_distance: float | None = None     # metres (Yokoyama's L, RVT's radius)
-    max_memory: object = None
-    window_size: object = None
-    scheduler: object = None              # the windows as Dask tasks
-    height_above_ground: float = 0.0      # metres: the observer of every cell stands this high
 
 
 def _check(cfg: SkyviewConfig) -> str:

@@ -10,71 +10,11 @@ usage error that says so."""
 
 from __future__ import annotations
 
-import math
 import os
-from dataclasses import dataclass, field
 
 from .. import __version__
 from ..errors import UsageProblem
-from .config import ReadOptions, RunOptions
-
-
-@dataclass(kw_only=True)
-class SubsolarConfig:
-    """``files``: DEM and OUTPUT (or the DEM alone with ``output``); ``subsolar``: (lat, lon)
-    or the command line's 'LAT,LON'; ``sun_distance`` metres or None; ``body``: --body's text
-    or None (the CRS's); ``curvature`` True/False or None (on); ``refused``: the options given
-    that this run does not take (name -> given)."""
-
-    files: list
-    output: str | None = None
-    subsolar: object = None
-    sun_distance: float | None = None
-    body: str | None = None
-    height_above_ground: float = 0.0
-    soft: bool = False
-    curvature: bool | None = None
-    refraction_k: float | None = None
-    read: ReadOptions = field(default_factory=ReadOptions)
-    run: RunOptions = field(default_factory=RunOptions)
-    refused: dict = field(default_factory=dict)
-    subsolar_file: str | None = None
-
-    def check(self) -> tuple:
-        """(dem, output, (lat, lon) or None for a series) checked: one DEM, one of --subsolar
-        and --subsolar-file, nothing refused."""
-        from .config import inputs_and_output
-        if self.subsolar is None and self.subsolar_file is None:
-            raise UsageProblem("--sun-distance and --body go with --subsolar LAT,LON or "
-                               "--subsolar-file F")
-        if self.subsolar is not None and self.subsolar_file is not None:
-            raise UsageProblem("give --subsolar LAT,LON or --subsolar-file F, not both")
-        taken = [name for name, on in self.refused.items() if on]
-        if taken:
-            raise UsageProblem(f"--subsolar does not take {', '.join(taken)} (yet: in memory, "
-                               "the shadow or --soft)")
-        inputs, output = inputs_and_output(self.files, self.output, None)
-        if len(inputs) != 1:
-            raise UsageProblem("--subsolar lights one DEM: give DEM OUTPUT")
-        d = self.sun_distance
-        if d is not None and not (math.isfinite(d) and d > 0):
-            raise UsageProblem(f"--sun-distance must be positive metres, got {d:g}")
-        return inputs[0], output, (None if self.subsolar is None
-                                   else parse_latlon(self.subsolar))
-
-
-def parse_latlon(text) -> tuple[float, float]:
-    """'LAT,LON' as two finite floats, the latitude in [-90, 90] (a usage error otherwise)."""
-    parts = list(text) if isinstance(text, (tuple, list)) else str(text).split(",")
-    try:
-        vals = tuple(float(p) for p in parts)
-    except ValueError:
-        vals = ()
-    if len(vals) != 2 or not all(math.isfinite(v) for v in vals):
-        raise UsageProblem(f"--subsolar takes two numbers LAT,LON, got {text!r}")
-    if not -90.0 <= vals[0] <= 90.0:
-        raise UsageProblem(f"--subsolar latitude must be in [-90, 90] degrees, got {vals[0]:g}")
-    return vals
+from .config import SubsolarConfig
 
 
 def subsolar_shadow(cfg: SubsolarConfig) -> dict:

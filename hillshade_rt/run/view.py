@@ -6,36 +6,12 @@ API, docs/viewer.md) until interrupted.
 from __future__ import annotations
 
 import threading
-from dataclasses import dataclass, field
 
-from ..errors import HillshadeError, UsageProblem
-from .config import ReadOptions, RunOptions, say_nothing
+from .config import RunOptions
+from .config import ViewConfig
 from .runner import RunContext
 from .view_server import make_server
 from .viewer import Viewer
-
-
-@dataclass(kw_only=True)
-class ViewConfig:
-    """``hillshade-rt view DEM``: where to listen and what to shade with."""
-
-    dem: str
-    read: ReadOptions = field(default_factory=ReadOptions)
-    port: int = 0
-    open_browser: bool = True
-    algorithm: str = "auto"
-    backend: str = "auto"
-    tz: str | None = None
-    say: object = say_nothing
-
-    def check(self) -> None:
-        from ..model.times import zone
-        if not (0 <= int(self.port) <= 65535):
-            raise UsageProblem(f"--port must be 0..65535, got {self.port}")
-        try:
-            zone(self.tz)
-        except HillshadeError as exc:
-            raise UsageProblem(str(exc)) from None
 
 
 def view(cfg: ViewConfig) -> None:

@@ -14,7 +14,8 @@ from hillshade_rt.pictures.animation import (
     LEVELS, PALETTE, draw_label, frame_indices, label_text, shadowed_pixels, step_of, write_gif
 )
 from hillshade_rt.errors import UsageProblem
-from hillshade_rt.run.animate import AnimateConfig, animate, day_times
+from hillshade_rt.run.config import AnimateConfig
+from hillshade_rt.run.animate import animate, day_times
 from hillshade_rt.testing import fractal_terrain, write_geotiff
 
 

@@ -15,7 +15,8 @@ from affine import Affine
 from hillshade_rt.engine.cell_suns import body_from_option, sun_vector
 from hillshade_rt.cli import cli
 from hillshade_rt.model.ephemeris import read_subsolar
-from hillshade_rt.run.illumination import IllumConfig, illumination
+from hillshade_rt.run.config import IllumConfig
+from hillshade_rt.run.illumination import illumination
 from hillshade_rt.testing import (LUNAR_SOUTH_POLAR_STEREO, MOON_GEOGRAPHIC, read_band,
                                   spectral, toy_lunar_subsolar, write_geotiff,
                                   write_subsolar_csv)

@@ -86,8 +86,10 @@ def test_point_runs_set_the_threads_of_their_run_options(name, dem, monkeypatch,
     import numba
 
     from hillshade_rt.run.config import RunOptions
-    from hillshade_rt.run.profile import ProfileConfig, profile
-    from hillshade_rt.run.query import QueryConfig, query
+    from hillshade_rt.run.config import ProfileConfig
+    from hillshade_rt.run.profile import profile
+    from hillshade_rt.run.config import QueryConfig
+    from hillshade_rt.run.query import query
 
     if numba.config.NUMBA_NUM_THREADS > 1:
         numba.set_num_threads(2)       # not 1 before the run: the run makes it 1
