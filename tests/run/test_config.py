@@ -24,29 +24,29 @@ def test_run_options_parse_creation_options_and_the_worker_timeout():
 
 
 def test_shade_check_and_its_lighting():
-    c = config.ShadeConfig(["a.tif", "b.tif"], kind="hillshade", algorithm="smap",
+    c = config.ShadeConfig(files=["a.tif", "b.tif"], kind="hillshade", algorithm="smap",
                            options={"nextv": "quad"}, curvature=False, soft=True, ambient=0.3)
     c.check()
     lt = c.lighting("cpu")
     assert (lt.algorithm, dict(lt.options), lt.backend, lt.curvature, lt.soft, lt.ambient) == (
         "smap", {"nextv": "quad"}, "cpu", False, True, 0.3)
     with pytest.raises(HillshadeError, match="product must be one of shadow, classes, hillshade"):
-        config.ShadeConfig(["a"], kind="relief").check()
+        config.ShadeConfig(files=["a"], kind="relief").check()
     with pytest.raises(UsageProblem, match="--classes and --soft do not go together"):
-        config.ShadeConfig(["a"], kind="classes", soft=True).check()
+        config.ShadeConfig(files=["a"], kind="classes", soft=True).check()
     with pytest.raises(UsageProblem, match="--scale must be a positive number"):
-        config.ShadeConfig(["a"], scale=0.0).check()
+        config.ShadeConfig(files=["a"], scale=0.0).check()
     ro = config.ReadOptions(pixel_size=(1.0, 1.0))
     with pytest.raises(UsageProblem, match="--scale and --pixel-size do not go together"):
-        config.ShadeConfig(["a"], scale=2.0, read=ro).check()
+        config.ShadeConfig(files=["a"], scale=2.0, read=ro).check()
 
 
 def test_a_height_above_the_ground_takes_the_algorithm_that_marches_it():
-    c = config.ShadeConfig(["a"], height_above_ground=3.0)
+    c = config.ShadeConfig(files=["a"], height_above_ground=3.0)
     c.check()
     assert c.algorithm == "brute" and c.lighting("cpu").lift == 3.0
     with pytest.raises(UsageProblem, match="--algorithm smap cannot start the rays"):
-        config.ShadeConfig(["a"], algorithm="smap", height_above_ground=3.0).check()
+        config.ShadeConfig(files=["a"], algorithm="smap", height_above_ground=3.0).check()
     assert config.check_lift(0.0, "smap", False) == "smap"
     for bad, why in [("x", "must be a number of metres"), (-1.0, ">= 0"),
                      (float("nan"), ">= 0")]:
@@ -55,28 +55,28 @@ def test_a_height_above_the_ground_takes_the_algorithm_that_marches_it():
 
 
 def test_sun_hours_self_shadow_follows_the_height():
-    on_ground = config.SunHoursConfig("d", "o", "2026-06-21", self_shadow=None)
+    on_ground = config.SunHoursConfig(dem="d", output="o", date="2026-06-21", self_shadow=None)
     on_ground.check()
-    above = config.SunHoursConfig("d", "o", "2026-06-21", self_shadow=None,
+    above = config.SunHoursConfig(dem="d", output="o", date="2026-06-21", self_shadow=None,
                                   height_above_ground=2.0)
     above.check()
     assert on_ground.self_shadow is True and above.self_shadow is False
     assert above.algorithm == "brute" and above.lighting("gpu").backend == "gpu"
-    given = config.SunHoursConfig("d", "o", "2026-06-21", self_shadow=True,
+    given = config.SunHoursConfig(dem="d", output="o", date="2026-06-21", self_shadow=True,
                                   height_above_ground=2.0)
     given.check()
     assert given.self_shadow is True and given.lighting("cpu").self_shadow
 
 
 def test_horizon_azimuths():
-    assert config.HorizonConfig("d", "o", azimuth=-156.3).azimuths() == [pytest.approx(203.7)]
-    assert config.HorizonConfig("d", "o", directions=8).azimuths() == [
+    assert config.HorizonConfig(dem="d", output="o", azimuth=-156.3).azimuths() == [pytest.approx(203.7)]
+    assert config.HorizonConfig(dem="d", output="o", directions=8).azimuths() == [
         0.0, 45.0, 90.0, 135.0, 180.0, 225.0, 270.0, 315.0]
     for kw in ({}, {"azimuth": 10.0, "directions": 8}):
         with pytest.raises(UsageProblem, match="give --azimuth A .* or --directions N"):
-            config.HorizonConfig("d", "o", **kw).azimuths()
+            config.HorizonConfig(dem="d", output="o", **kw).azimuths()
     with pytest.raises(UsageProblem, match="--directions must be between 8 and 360"):
-        config.HorizonConfig("d", "o", directions=4).azimuths()
+        config.HorizonConfig(dem="d", output="o", directions=4).azimuths()
 
 
 def test_inputs_and_output(tmp_path):
@@ -127,3 +127,16 @@ def test_set_threads():
         assert config.set_threads(config.RunOptions()) == numba.config.NUMBA_NUM_THREADS
     finally:
         numba.set_num_threads(before)
+
+
+def test_every_config_is_keyword_only_and_here():
+    """The configs of every command live in run/config.py and take keywords only (a
+    positional call cannot bind a value to the wrong field)."""
+    import dataclasses
+    names = [n for n in dir(config) if n.endswith("Config") or n in ("ReadOptions",
+                                                                     "RunOptions")]
+    assert len(names) >= 15
+    for name in names:
+        cls = getattr(config, name)
+        assert cls.__module__ == config.__name__, name
+        assert all(f.kw_only for f in dataclasses.fields(cls)), name
