@@ -228,9 +228,8 @@ def _lines(cfg: HorizonConfig, plan: Plan, ctx: RunContext, made: Made) -> list:
     rows, cols = made.geom.shape
     toward = (f"toward az {azimuths[0]:g}" if cfg.directions is None else
               f"toward {len(azimuths)} directions ({360.0 / len(azimuths):g} deg apart)")
-    where = "" if processing["mode"] in ("in memory", "all nodata") else (
-        f", {processing['regions']} windows" + (" on Dask" if processing["mode"] == "dask"
-                                                else ""))
+    from .horizon_windows import windows_phrase
+    where = windows_phrase(processing)
     summary = (f"hillshade-rt: {cfg.output}: {cols}x{rows}, horizon {toward} "
                f"({cfg.method}, {ctx.backend}{where}), compute "
                f"{ctx.timer.seconds.get('compute', 0.0):.3f} s")

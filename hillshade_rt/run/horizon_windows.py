@@ -323,6 +323,15 @@ class HorizonJob:
             fig.largest_window = max(fig.largest_window, _cells(win))
 
 
+def windows_phrase(processing: dict) -> str:
+    """How a horizon or sky-view run went, for its summary line: nothing in memory, else
+    ", N windows" (and " on Dask")."""
+    if processing["mode"] in ("in memory", "all nodata"):
+        return ""
+    return f", {processing['regions']} windows" + (" on Dask" if processing["mode"] == "dask"
+                                                   else "")
+
+
 def plan_regions(shape, limit: int | None, window_shape) -> tuple[list, dict]:
     """(the regions, the memory figures) of a windowed horizon run: ``window_shape``
     (--window-size) or regions as large as ``limit`` bytes (--max-memory) allow."""

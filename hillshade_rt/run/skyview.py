@@ -400,9 +400,8 @@ def _lines(cfg: SkyviewConfig, plan: Plan, ctx: RunContext, made: Made) -> list:
     opn = definition.startswith("openness")
     mean = made.stats.as_dict()["mean"]
     shown = f"{mean:.3f}" if mean is not None else "nan"
-    where = "" if processing["mode"] in ("in memory", "all nodata") else (
-        f", {processing['regions']} windows" + (" on Dask" if processing["mode"] == "dask"
-                                                else ""))
+    from .horizon_windows import windows_phrase
+    where = windows_phrase(processing)
     summary = (f"hillshade-rt: {cfg.output}: {cols}x{rows}, {describe(cfg, definition)}, "
                f"{int(cfg.directions)} directions{where}, mean {shown}{' deg' if opn else ''}; "
                f"compute {ctx.timer.seconds.get('compute', 0.0):.2f} s")
