@@ -45,12 +45,15 @@ def status(env) -> dict | None:
 
 
 def jobs(env, expect: int | None = None) -> int:
-    """Jobs the server has served; with ``expect``, once it has counted that many (a worker
-    reports a job to its master just after the job's status goes to the caller) or after 10 s."""
+    """Jobs the server has served. A worker reports a job to its master just after the job's
+    status goes to the caller, so the count is read once it has settled: with ``expect``, once
+    it has counted that many; without, once no worker is busy (each at most 10 s)."""
     deadline = time.monotonic() + 10
     while True:
-        n = status(env)["jobs"]
-        if expect is None or n >= expect or time.monotonic() > deadline:
+        st = status(env)
+        n = st["jobs"]
+        settled = n >= expect if expect is not None else st["workers"]["busy"] == 0
+        if settled or time.monotonic() > deadline:
             return n
         time.sleep(0.02)
 
