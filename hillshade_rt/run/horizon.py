@@ -217,8 +217,9 @@ def _report(cfg: HorizonConfig, plan: Plan, ctx: RunContext, made: Made) -> dict
             "method": cfg.method, "sample_spacing": cfg.sample_spacing,
             "height_above_ground_m": float(cfg.height_above_ground),
             "max_distance": plan.max_distance if cfg.max_distance is not None else None,
-            "backend": ctx.backend, "curvature": made.curved, "algorithm_stats": made.stats,
-            "seconds": ctx.seconds(), "processing": made.processing, "version": __version__}
+            "backend": ctx.backend, "threads": ctx.threads, "curvature": made.curved,
+            "algorithm_stats": made.stats, "seconds": ctx.phase_seconds(),
+            "processing": made.processing, "version": __version__}
 
 
 def _lines(cfg: HorizonConfig, plan: Plan, ctx: RunContext, made: Made) -> list:

@@ -416,7 +416,7 @@ def region_task(job: HorizonJob, region, product: Product, folder: str,
                 stride: int | None = None) -> RegionPart:
     """The Dask task: march ``region``, write each output's part (a GeoTIFF of the region's
     shape, a band per direction, -9999 nodata) in ``folder``; returns the figures, the parts'
-    paths, the result's statistics (min, sum, count of valid cells) and, with ``stride``, the
+    paths, the result's statistics (min, sum, count, max of valid cells) and, with ``stride``, the
     every-``stride``-th cells of the first direction's preview shade."""
     import warnings
 
@@ -440,7 +440,7 @@ def region_task(job: HorizonJob, region, product: Product, folder: str,
         prof["crs"] = src.crs
     if src.transform is not None:
         prof["transform"] = src.transform @ Affine.translation(c0, r0)
-    stats = [math.inf, 0.0, 0]
+    stats = [math.inf, 0.0, 0, -math.inf]
     shade = []
     with contextlib.ExitStack() as stack:
         stack.enter_context(warnings.catch_warnings())
@@ -459,6 +459,7 @@ def region_task(job: HorizonJob, region, product: Product, folder: str,
                     stats[0] = min(stats[0], float(v.min()))
                     stats[1] += float(v.sum(dtype=np.float64))
                     stats[2] += int(v.size)
+                    stats[3] = max(stats[3], float(v.max()))
             if stride and name == "angles" and band == 0:
                 sub, at = every_nth(np.clip(np.nan_to_num(arr, nan=0.0) / 30.0, 0.0, 1.0), r0,
                                     c0, stride)

@@ -207,21 +207,23 @@ def _writer(cfg, dem, definition, n, curved, max_distance):
 
 
 class _Stats:
-    """Minimum and mean of the valid results, window by window."""
+    """Minimum, mean and maximum of the valid results, window by window."""
 
     def __init__(self):
-        self.lo, self.total, self.count = math.inf, 0.0, 0
+        self.lo, self.total, self.count, self.hi = math.inf, 0.0, 0, -math.inf
 
     def add(self, a: np.ndarray) -> None:
         v = a[~np.isnan(a)]
         if v.size:
             self.lo = min(self.lo, float(v.min()))
+            self.hi = max(self.hi, float(v.max()))
             self.total += float(v.sum(dtype=np.float64))
             self.count += int(v.size)
 
     def as_dict(self) -> dict:
         return {"min": self.lo if self.count else None,
-                "mean": self.total / self.count if self.count else None}
+                "mean": self.total / self.count if self.count else None,
+                "max": self.hi if self.count else None}
 
 
 def _in_memory(cfg: SkyviewConfig, plan: Plan, ctx: RunContext, src) -> Made:
@@ -328,8 +330,9 @@ def _in_windows(cfg: SkyviewConfig, plan: Plan, ctx: RunContext, src, area=None)
                                                 {"result": out}, ro.quiet,
                                                 progress_mode=ro.progress,
                                                 worker_timeout=ro.worker_timeout)
-            for lo, total, count in parts:
+            for lo, total, count, hi in parts:
                 st.lo, st.total, st.count = min(st.lo, lo), st.total + total, st.count + count
+                st.hi = max(st.hi, hi)
         else:
             from .report import progress_total
             bar = progress_total(len(regs), ro.quiet, "hillshade-rt", "window", ro.progress)
@@ -384,10 +387,10 @@ def _report(cfg: SkyviewConfig, plan: Plan, ctx: RunContext, made: Made) -> dict
            "openness": cfg.openness, "directions": int(cfg.directions),
            "max_distance": max_distance if math.isfinite(max_distance) else None,
            "height_above_ground_m": float(cfg.height_above_ground),
-           "backend": ctx.backend, "curvature": made.curved,
+           "backend": ctx.backend, "threads": ctx.threads, "curvature": made.curved,
            ("openness_deg" if opn else "svf"): made.stats.as_dict(),
            "processing": made.processing,
-           "seconds": ctx.seconds(), "version": __version__}
+           "seconds": ctx.phase_seconds(), "version": __version__}
     if ro.preview is not None:
         rep["preview"] = os.path.abspath(ro.preview)
     return rep
