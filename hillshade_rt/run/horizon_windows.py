@@ -186,6 +186,33 @@ class Figures:
         return dict(self.__dict__)
 
 
+class ValueStats:
+    """Minimum, mean and maximum of the valid (not NaN) values of a product, window by window
+    (the reports' figures of skyview and horizon)."""
+
+    def __init__(self):
+        self.lo, self.total, self.count, self.hi = math.inf, 0.0, 0, -math.inf
+
+    def add(self, a: np.ndarray) -> None:
+        v = a[~np.isnan(a)]
+        if v.size:
+            self.lo = min(self.lo, float(v.min()))
+            self.hi = max(self.hi, float(v.max()))
+            self.total += float(v.sum(dtype=np.float64))
+            self.count += int(v.size)
+
+    def merge(self, part) -> None:
+        """Add a Dask task's (min, sum, count, max)."""
+        lo, total, count, hi = part
+        self.lo, self.total, self.count = min(self.lo, lo), self.total + total, self.count + count
+        self.hi = max(self.hi, hi)
+
+    def as_dict(self) -> dict:
+        return {"min": self.lo if self.count else None,
+                "mean": self.total / self.count if self.count else None,
+                "max": self.hi if self.count else None}
+
+
 @dataclass
 class HorizonJob:
     """What the windows of a horizon or skyview run share (picklable: a Dask task gets it).
@@ -453,7 +480,7 @@ def region_task(job: HorizonJob, region, product: Product, folder: str,
             dsts[name] = stack.enter_context(rasterio.open(tmp, "w", count=count, **prof))
 
         def put(name, band, arr):
-            if name == "result":
+            if name in ("result", "angles"):     # the figures of the product itself
                 v = arr[~np.isnan(arr)]
                 if v.size:
                     stats[0] = min(stats[0], float(v.min()))

@@ -292,9 +292,18 @@ def test_report_of_horizon_and_its_clash(tmp_path, runner):
                             str(rep), "--threads", "1"])
     assert r.exit_code == 0, r.output
     doc = _check_report(rep, ["input", "output", "shape", "azimuths", "method", "backend",
-                              "threads", "version"])
+                              "threads", "angle_deg", "version"])
     assert doc["output"] == str(out.resolve()) and doc["azimuths"] == [203.7]
     assert doc["shape"] == [344, 403] and doc["threads"] == 1
+    st = doc["angle_deg"]
+    assert -90.0 <= st["min"] <= st["mean"] <= st["max"] <= 90.0
+    rep2 = tmp_path / "w.json"         # in windows: the same figures
+    r = runner.invoke(cli, ["horizon", SRTM, str(tmp_path / "w.tif"), "--azimuth", "203.7",
+                            "--window-size", "100", "--report", str(rep2)])
+    assert r.exit_code == 0, r.output
+    w = _check_report(rep2, ["angle_deg"])["angle_deg"]
+    assert w["min"] == st["min"] and w["max"] == st["max"]
+    assert abs(w["mean"] - st["mean"]) < 1e-9
     for clash in (SRTM, str(out)):
         r = runner.invoke(cli, ["horizon", SRTM, str(out), "--azimuth", "163", "--report",
                                 clash, "--overwrite"])
