@@ -9,7 +9,7 @@ from .options import (InternalOption, SectionedCommand, context_option, each_pat
                       backend_option, dem_options, finite, format_option,
                       height_above_ground_option, horizon_physics_options, max_distance_option,
                       max_memory_option, overwrite_option, preview_option, quiet_option,
-                      progress_option,
+                      progress_option, report_option,
                       scheduler_option, threads_option, to_read_options, to_run_options,
                       window_size_option)
 
@@ -37,6 +37,7 @@ from .options import (InternalOption, SectionedCommand, context_option, each_pat
 @preview_option("Also write a quick-look PNG (relief, high horizons tinted).")
 @backend_option
 @threads_option
+@report_option
 @max_memory_option
 @window_size_option
 @scheduler_option
@@ -49,7 +50,8 @@ from .options import (InternalOption, SectionedCommand, context_option, each_pat
 @context_option
 @errors_to_click
 def horizon(files, azimuth, directions, distance, method, sample_spacing, max_distance,
-            curvature, refraction_k, height_above_ground, preview, backend, threads, max_memory,
+            curvature, refraction_k, height_above_ground, preview, backend, threads, report_path,
+            max_memory,
             window_size, scheduler, overwrite, quiet, progress, fmt,
             creation_options, each, output_pattern, **read_opts):
     """Write the horizon angle toward --azimuth (or toward each of --directions N azimuths, one
@@ -62,7 +64,8 @@ def horizon(files, azimuth, directions, distance, method, sample_spacing, max_di
     from ..run import HorizonConfig, horizon as run_horizon
     from ..run.batch import split_files, horizon_each
     dem, output = split_files(files, each, output_pattern, "horizon")
-    kw = dict(preview=preview, backend=backend, threads=threads, overwrite=overwrite,
+    kw = dict(preview=preview, backend=backend, threads=threads, report_path=report_path,
+              overwrite=overwrite,
               quiet=quiet, progress=progress, fmt=fmt, creation_options=creation_options,
               **read_opts)
     cfg = HorizonConfig(dem=dem, output=output, azimuth=azimuth, method=method,

@@ -7,7 +7,8 @@ import click
 from .errors import errors_to_click, say
 from ..run.config import SUN_KEYS
 from .options import (SectionedCommand, curvature_options, dem_options, height_above_ground_option,
-                      light_options, overwrite_option, point_options, quiet_option, sun_options,
+                      light_options, overwrite_option, point_options, quiet_option,
+                      report_option, sun_options,
                       to_read_options, to_run_options)
 
 
@@ -29,12 +30,13 @@ from .options import (SectionedCommand, curvature_options, dem_options, height_a
               help="Write here (default: standard output).")
 @curvature_options
 @light_options
-@overwrite_option("Replace the output if it exists.")
+@report_option
+@overwrite_option("Replace the output (and the report) if it exists.")
 @quiet_option()
 @dem_options
 @errors_to_click
 def query(dem, at, at_xy, points, height_above_ground, irradiance, fmt, output, curvature,
-          refraction_k, light_position, light_lonlat, overwrite, quiet, **kw):
+          refraction_k, light_position, light_lonlat, report_path, overwrite, quiet, **kw):
     """Whether the sun reaches points on DEM: for each point and each sun, lit or shadowed, the
     sun's azimuth and elevation, the horizon toward the sun, the margin between them (lit iff
     the sun is up and the margin >= 0) and the observer's height. The sun: --azimuth/--elevation,
@@ -45,7 +47,7 @@ def query(dem, at, at_xy, points, height_above_ground, irradiance, fmt, output, 
     from ..run.config import QueryConfig
     from ..run.query import query as run_query
     sun = {k: kw.pop(k) for k in SUN_KEYS}
-    kw.update(overwrite=overwrite, quiet=quiet)
+    kw.update(report_path=report_path, overwrite=overwrite, quiet=quiet)
     run_query(QueryConfig(dem=dem, at=[parse_pair(a, "--at") for a in at],
                           at_xy=[parse_pair(a, "--at-xy") for a in at_xy], points=points,
                           sun=sun, height_above_ground=height_above_ground,

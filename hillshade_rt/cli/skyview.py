@@ -9,7 +9,7 @@ from .options import (SectionedCommand, context_option, each_pattern_options,
                       backend_option, dem_options, format_option,
                       height_above_ground_option, horizon_physics_options,
                       max_distance_option, max_memory_option, overwrite_option,
-                      preview_option, quiet_option, progress_option, scheduler_option,
+                      preview_option, quiet_option, progress_option, report_option, scheduler_option,
                       threads_option, to_read_options, to_run_options,
                       window_size_option)
 
@@ -40,6 +40,7 @@ from .options import (SectionedCommand, context_option, each_pattern_options,
                 "high yellow).")
 @backend_option
 @threads_option
+@report_option
 @max_memory_option
 @window_size_option
 @scheduler_option
@@ -52,7 +53,8 @@ from .options import (SectionedCommand, context_option, each_pattern_options,
 @context_option
 @errors_to_click
 def skyview(files, directions, definition, terrain_configuration, openness, max_distance,
-            curvature, refraction_k, height_above_ground, preview, backend, threads, max_memory,
+            curvature, refraction_k, height_above_ground, preview, backend, threads, report_path,
+            max_memory,
             window_size, scheduler, overwrite, quiet, progress, fmt,
             creation_options, each, output_pattern, **read_opts):
     """Write the sky view factor of every cell of DEM to OUTPUT (float32 0..1, -9999 nodata)
@@ -63,7 +65,8 @@ def skyview(files, directions, definition, terrain_configuration, openness, max_
     from ..run.skyview import skyview as run_skyview
     from ..run.batch import split_files, skyview_each
     dem, output = split_files(files, each, output_pattern, "skyview")
-    kw = dict(preview=preview, backend=backend, threads=threads, overwrite=overwrite,
+    kw = dict(preview=preview, backend=backend, threads=threads, report_path=report_path,
+              overwrite=overwrite,
               quiet=quiet, progress=progress, fmt=fmt,
               creation_options=creation_options,
               **read_opts)

@@ -79,6 +79,7 @@ class Made:
     stats: dict
     processing: dict
     notes: list = field(default_factory=list)
+    angles: object = None      # horizon_windows.ValueStats of the angles written (None: none)
 
 
 def horizon(cfg: HorizonConfig) -> dict:
@@ -217,8 +218,12 @@ def _report(cfg: HorizonConfig, plan: Plan, ctx: RunContext, made: Made) -> dict
             "method": cfg.method, "sample_spacing": cfg.sample_spacing,
             "height_above_ground_m": float(cfg.height_above_ground),
             "max_distance": plan.max_distance if cfg.max_distance is not None else None,
-            "backend": ctx.backend, "curvature": made.curved, "algorithm_stats": made.stats,
-            "seconds": ctx.seconds(), "processing": made.processing, "version": __version__}
+            "backend": ctx.backend, "threads": ctx.threads, "curvature": made.curved,
+            "algorithm_stats": made.stats, "seconds": ctx.phase_seconds(),
+            "processing": made.processing,
+            "angle_deg": (made.angles.as_dict() if made.angles is not None else
+                          {"min": None, "mean": None, "max": None}),
+            "version": __version__}
 
 
 def _lines(cfg: HorizonConfig, plan: Plan, ctx: RunContext, made: Made) -> list:
@@ -299,12 +304,15 @@ def _in_memory(cfg: HorizonConfig, plan: Plan, ctx: RunContext, src) -> Made:
     curved = shader.curvature_for(az, 45.0) > 0     # the same for every direction
     tags, dist_tags = _tags(cfg, azimuths, curved, shader.k, shader.body.radius(az),
                             max_distance)
+    from .horizon_windows import ValueStats
     shade = None
+    vals = ValueStats()
     # one band per direction, written as it is made (N bands never all in memory)
     w, wd = _writers(cfg, d, azimuths, tags, dist_tags)
     with w, (contextlib.nullcontext() if wd is None else wd):
         for i, a in enumerate(azimuths):
             beta, dist = angles(a)
+            vals.add(beta)
             if ro.preview and i == 0:
                 shade = np.clip(np.nan_to_num(beta, nan=0.0) / 30.0, 0.0, 1.0)
             beta[np.isnan(beta)] = -9999.0
@@ -321,7 +329,8 @@ def _in_memory(cfg: HorizonConfig, plan: Plan, ctx: RunContext, src) -> Made:
         with timer("write"):
             write_png(ro.preview, relief_rgb(d.heights, d.grid, az, 45.0, shade=shade),
                       ro.overwrite)
-    return Made(d, curved, stats, {"mode": "in memory", "cells": int(d.heights.size)})
+    return Made(d, curved, stats, {"mode": "in memory", "cells": int(d.heights.size)},
+                angles=vals)
 
 
 def horizon_job(src, azimuths, ran_on, curvature, refraction_k, method, bstats, invert=False,
@@ -381,7 +390,7 @@ def _in_windows(cfg: HorizonConfig, plan: Plan, ctx: RunContext, src, area=None)
     from ..pictures.preview import every_nth, relief_rgb
     from .local import bounded_gdal_cache
     from ..engine.windows import block_stats
-    from .horizon_windows import Figures, Product, region_outputs
+    from .horizon_windows import Figures, Product, ValueStats, region_outputs
 
     ro = cfg.run
     azimuths, max_distance = plan.azimuths, plan.max_distance
@@ -404,14 +413,17 @@ def _in_windows(cfg: HorizonConfig, plan: Plan, ctx: RunContext, src, area=None)
         n = bstats.stride
         share = np.zeros(bstats.preview.shape, np.float32) if ro.preview else None
         extra = {}
+        vals = ValueStats()
         if cfg.scheduler is not None:
             from .horizon_windows import run_on_dask
             with timer("compute"):
-                fig, _, extra = run_on_dask(cfg.scheduler, job, regs, product,
+                fig, parts, extra = run_on_dask(cfg.scheduler, job, regs, product,
                                             _vrt_outputs(cfg, src, azimuths, tags, dist_tags),
                                             ro.quiet, share, n if ro.preview else None,
                                             progress_mode=ro.progress,
                                             worker_timeout=ro.worker_timeout)
+            for part in parts:
+                vals.merge(part)
         else:
             fig = Figures()
             w, wd = _writers(cfg, geom, azimuths, tags, dist_tags)
@@ -428,6 +440,8 @@ def _in_windows(cfg: HorizonConfig, plan: Plan, ctx: RunContext, src, area=None)
                             sub, (p, q) = every_nth(np.clip(np.nan_to_num(arr, nan=0.0) / 30.0,
                                                             0.0, 1.0), reg[0], reg[2], n)
                             share[p:p + sub.shape[0], q:q + sub.shape[1]] = sub
+                        if name == "angles":
+                            vals.add(arr)
                         arr[np.isnan(arr)] = -9999.0
                         with timer("write"):
                             if name == "angles":
@@ -436,7 +450,7 @@ def _in_windows(cfg: HorizonConfig, plan: Plan, ctx: RunContext, src, area=None)
                             else:
                                 wd.write(i + 1, arr, description=dtext, tags=btags,
                                          window=out_reg)
-                    with timer("compute"):
+                    with timer("compute", exclude="write"):    # put's writes apart
                         fig.add(region_outputs(job, rd, reg, product, put))
                     bar.update(1)
                 with timer("write"):
@@ -455,7 +469,7 @@ def _in_windows(cfg: HorizonConfig, plan: Plan, ctx: RunContext, src, area=None)
                   **fig.as_dict(), **extra}
     if area is not None:
         processing["context"] = area.report()
-    return Made(geom, curved, {}, processing)
+    return Made(geom, curved, {}, processing, angles=vals)
 
 
 def _all_nodata(cfg: HorizonConfig, plan: Plan, ctx: RunContext, geom) -> Made:

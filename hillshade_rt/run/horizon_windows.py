@@ -186,6 +186,33 @@ class Figures:
         return dict(self.__dict__)
 
 
+class ValueStats:
+    """Minimum, mean and maximum of the valid (not NaN) values of a product, window by window
+    (the reports' figures of skyview and horizon)."""
+
+    def __init__(self):
+        self.lo, self.total, self.count, self.hi = math.inf, 0.0, 0, -math.inf
+
+    def add(self, a: np.ndarray) -> None:
+        v = a[~np.isnan(a)]
+        if v.size:
+            self.lo = min(self.lo, float(v.min()))
+            self.hi = max(self.hi, float(v.max()))
+            self.total += float(v.sum(dtype=np.float64))
+            self.count += int(v.size)
+
+    def merge(self, part) -> None:
+        """Add a Dask task's (min, sum, count, max)."""
+        lo, total, count, hi = part
+        self.lo, self.total, self.count = min(self.lo, lo), self.total + total, self.count + count
+        self.hi = max(self.hi, hi)
+
+    def as_dict(self) -> dict:
+        return {"min": self.lo if self.count else None,
+                "mean": self.total / self.count if self.count else None,
+                "max": self.hi if self.count else None}
+
+
 @dataclass
 class HorizonJob:
     """What the windows of a horizon or skyview run share (picklable: a Dask task gets it).
@@ -425,7 +452,7 @@ def region_task(job: HorizonJob, region, product: Product, folder: str,
                 stride: int | None = None) -> RegionPart:
     """The Dask task: march ``region``, write each output's part (a GeoTIFF of the region's
     shape, a band per direction, -9999 nodata) in ``folder``; returns the figures, the parts'
-    paths, the result's statistics (min, sum, count of valid cells) and, with ``stride``, the
+    paths, the result's statistics (min, sum, count, max of valid cells) and, with ``stride``, the
     every-``stride``-th cells of the first direction's preview shade."""
     import warnings
 
@@ -449,7 +476,7 @@ def region_task(job: HorizonJob, region, product: Product, folder: str,
         prof["crs"] = src.crs
     if src.transform is not None:
         prof["transform"] = src.transform @ Affine.translation(c0, r0)
-    stats = [math.inf, 0.0, 0]
+    stats = [math.inf, 0.0, 0, -math.inf]
     shade = []
     with contextlib.ExitStack() as stack:
         stack.enter_context(warnings.catch_warnings())
@@ -462,12 +489,13 @@ def region_task(job: HorizonJob, region, product: Product, folder: str,
             dsts[name] = stack.enter_context(rasterio.open(tmp, "w", count=count, **prof))
 
         def put(name, band, arr):
-            if name == "result":
+            if name in ("result", "angles"):     # the figures of the product itself
                 v = arr[~np.isnan(arr)]
                 if v.size:
                     stats[0] = min(stats[0], float(v.min()))
                     stats[1] += float(v.sum(dtype=np.float64))
                     stats[2] += int(v.size)
+                    stats[3] = max(stats[3], float(v.max()))
             if stride and name == "angles" and band == 0:
                 sub, at = every_nth(np.clip(np.nan_to_num(arr, nan=0.0) / 30.0, 0.0, 1.0), r0,
                                     c0, stride)

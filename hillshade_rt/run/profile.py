@@ -75,20 +75,41 @@ def profile(cfg: ProfileConfig) -> dict:
                            "(use csv, json or geojson for several)")
     ctx = RunContext.start(cfg.run, inputs=[cfg.dem] + ([cfg.points] if cfg.points else []),
                            outputs=[(cfg.output, "-o/--output")], backend=False)
-    d = cfg.read.read(cfg.dem)
-    points, to_ll = locate(points, d)
-    on_ground(points, d, cfg.height_above_ground)
-    prof = _profiles(cfg, d, points)
-    doc = _document(cfg, d, points, prof, to_ll)
-    write_text(cfg.output, render(doc, cfg.fmt), cfg.run.overwrite)
-    if cfg.run.preview is not None:     # the first point's horizon as its observer sees it
-        from ..io import write_png
-        from ..pictures.preview import panorama_rgb
-        write_png(cfg.run.preview, panorama_rgb(prof.azimuths, prof.angles[0]),
-                  cfg.run.overwrite)
-    return ctx.finish(doc, [("summary", None if cfg.output is None else
-                             f"hillshade-rt: {cfg.output}: {len(points)} point(s) x "
-                             f"{len(prof.azimuths)} azimuths ({cfg.fmt})")])
+    with ctx.timer("read"):
+        d = cfg.read.read(cfg.dem)
+    with ctx.timer("prepare"):
+        points, to_ll = locate(points, d)
+        on_ground(points, d, cfg.height_above_ground)
+    with ctx.timer("compute"):
+        prof = _profiles(cfg, d, points)
+        doc = _document(cfg, d, points, prof, to_ll)
+    with ctx.timer("write"):
+        write_text(cfg.output, render(doc, cfg.fmt), cfg.run.overwrite)
+        if cfg.run.preview is not None:     # the first point's horizon as its observer sees it
+            from ..io import write_png
+            from ..pictures.preview import panorama_rgb
+            write_png(cfg.run.preview, panorama_rgb(prof.azimuths, prof.angles[0]),
+                      cfg.run.overwrite)
+    ctx.finish(_report(cfg, d, ctx, doc, prof),
+               [("summary", None if cfg.output is None else
+                 f"hillshade-rt: {cfg.output}: {len(points)} point(s) x "
+                 f"{len(prof.azimuths)} azimuths ({cfg.fmt})")])
+    return doc
+
+
+def _report(cfg: ProfileConfig, d, ctx: RunContext, doc: dict, prof: Profiles) -> dict:
+    """The run's report (``--report``): the document (its keys as they were) and the run's:
+    input, output (absolute; None: standard output), shape, format, threads, the counts, the
+    horizon elevations' min/mean/max over every point and azimuth, the phases' seconds."""
+    from ..io import input_label
+    ang = np.asarray(prof.angles, np.float64)
+    return {**doc, "input": input_label(d.path),
+            "output": None if cfg.output is None else os.path.abspath(cfg.output),
+            "shape": list(d.shape), "format": cfg.fmt, "threads": ctx.threads,
+            "point_count": int(ang.shape[0]), "azimuth_count": len(prof.azimuths),
+            "horizon_deg_stats": {"min": float(ang.min()), "mean": float(ang.mean()),
+                                  "max": float(ang.max())} if ang.size else None,
+            "seconds": ctx.phase_seconds()}
 
 
 def _check(cfg: ProfileConfig) -> None:

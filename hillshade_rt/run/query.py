@@ -135,16 +135,19 @@ def query(cfg: QueryConfig) -> dict:
     req, scene = _sun_request(cfg)
     points = gather(cfg.at, cfg.at_xy, cfg.points)
     ctx = _start(cfg, [cfg.sun["sun_from_stac"]] if cfg.sun.get("sun_from_stac") else [])
-    d = cfg.read.read(cfg.dem)
-    if scene is not None:
-        from .stac import to_grid_north
-        req = to_grid_north(req, scene, d)      # an item's azimuth is from true north
-    points = _place(points, d, lift, fmt)
-    at = _suns_at(req, d, points)
-    res = _march(cfg, req, d, points, at, lift)
-    irr = (irradiance(points, at.site, [s.time for s in at.suns], res) if cfg.irradiance
-           else None)
-    out_rows = _rows(points, at, res, _true_azimuth(at, points, res), irr)
+    with ctx.timer("read"):
+        d = cfg.read.read(cfg.dem)
+    with ctx.timer("prepare"):
+        if scene is not None:
+            from .stac import to_grid_north
+            req = to_grid_north(req, scene, d)      # an item's azimuth is from true north
+        points = _place(points, d, lift, fmt)
+        at = _suns_at(req, d, points)
+    with ctx.timer("compute"):
+        res = _march(cfg, req, d, points, at, lift)
+        irr = (irradiance(points, at.site, [s.time for s in at.suns], res) if cfg.irradiance
+               else None)
+        out_rows = _rows(points, at, res, _true_azimuth(at, points, res), irr)
     doc = {"dem": os.path.abspath(d.path) if os.path.exists(d.path) else d.path,
            "crs": d.crs_string(), "convention": CONVENTION,
            "height_above_ground_m": lift, "earth_curvature": bool(res["curved"].any()),
@@ -156,12 +159,28 @@ def query(cfg: QueryConfig) -> dict:
     if at.info is not None:
         doc["site"] = at.info["site"]
         doc["refraction"] = at.info["refraction"]
-    write_text(cfg.output, render(doc, fmt), cfg.run.overwrite)
+    with ctx.timer("write"):
+        write_text(cfg.output, render(doc, fmt), cfg.run.overwrite)
     n, m = len(points), len(at.suns)
     lit = sum(r["lit"] for r in out_rows)
-    return ctx.finish(doc, [("summary", None if cfg.output is None else
-                             f"hillshade-rt: {cfg.output}: {n} point(s) x {m} sun(s), "
-                             f"{lit} of {n * m} lit ({fmt})")])
+    ctx.finish(_report(cfg, d, ctx, doc, fmt, lit, [s.time for s in at.suns]),
+               [("summary", None if cfg.output is None else
+                 f"hillshade-rt: {cfg.output}: {n} point(s) x {m} sun(s), "
+                 f"{lit} of {n * m} lit ({fmt})")])
+    return doc
+
+
+def _report(cfg: QueryConfig, d, ctx: RunContext, doc: dict, fmt: str, lit: int,
+            times=()) -> dict:
+    """The run's report (``--report``): the document (its keys as they were) and the run's:
+    input, output (absolute; None: standard output), shape, format, threads, the lit rows,
+    the suns' times (ISO 8601; none for given suns or a point light), the phases' seconds."""
+    from ..io import input_label
+    return {**doc, "input": input_label(d.path),
+            "output": None if cfg.output is None else os.path.abspath(cfg.output),
+            "shape": list(d.shape), "format": fmt, "threads": ctx.threads, "lit_rows": int(lit),
+            "sun_times": [t.isoformat() for t in times if t is not None],
+            "seconds": ctx.phase_seconds()}
 
 
 def _start(cfg: QueryConfig, more_inputs=()) -> RunContext:
@@ -294,7 +313,8 @@ def light_query(cfg: QueryConfig) -> dict:
     lift = float(cfg.height_above_ground)
     points = gather(cfg.at, cfg.at_xy, cfg.points)
     ctx = _start(cfg)
-    d = cfg.read.read(cfg.dem)
+    with ctx.timer("read"):
+        d = cfg.read.read(cfg.dem)
     points = _place(points, d, lift, fmt)
     x, y, zl = light_xy(d, pos, ll)
     row_l, col_l = light_cell(d, x, y)
@@ -302,9 +322,10 @@ def light_query(cfg: QueryConfig) -> dict:
     if math.isfinite(ground) and zl <= ground:
         raise HillshadeError(f"the light is inside the terrain ({zl:g} m at a ground of "
                              f"{ground:g} m)")
-    res = light_at_points(d.heights, d.grid, [p["row"] for p in points],
-                          [p["col"] for p in points], [p["observer"] for p in points], row_l,
-                          col_l, zl)
+    with ctx.timer("compute"):
+        res = light_at_points(d.heights, d.grid, [p["row"] for p in points],
+                              [p["col"] for p in points], [p["observer"] for p in points],
+                              row_l, col_l, zl)
     out_rows = [{"point": p["id"], "x": p["x"], "y": p["y"], "lon": p["lon"], "lat": p["lat"],
                  "light_azimuth_deg": float(res["azimuth"][i]),
                  "light_elevation_deg": float(res["elevation"][i]),
@@ -319,11 +340,13 @@ def light_query(cfg: QueryConfig) -> dict:
            "height_above_ground_m": lift, "earth_curvature": False, "sun_source": None,
            "irradiance": None, "points": n, "suns": 1, "version": __version__,
            "rows": out_rows}
-    write_text(cfg.output, render(doc, fmt), cfg.run.overwrite)
+    with ctx.timer("write"):
+        write_text(cfg.output, render(doc, fmt), cfg.run.overwrite)
     lit = sum(r["lit"] for r in out_rows)
-    return ctx.finish(doc, [("summary", None if cfg.output is None else
+    ctx.finish(_report(cfg, d, ctx, doc, fmt, lit), [("summary", None if cfg.output is None else
                              f"hillshade-rt: {cfg.output}: {n} point(s), point light at x "
                              f"{x:.6g} y {y:.6g} z {zl:g} m, {lit} of {n} lit ({fmt})")])
+    return doc
 
 
 def _finite(v) -> float | None:

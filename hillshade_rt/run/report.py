@@ -18,12 +18,18 @@ class Timer:
         self._t0 = time.perf_counter()
 
     @contextmanager
-    def __call__(self, stage: str):
+    def __call__(self, stage: str, exclude: str | None = None):
+        """Time the block as ``stage``; ``exclude``: a stage timed inside the block (e.g. the
+        writes of a window's compute), whose seconds there are not counted twice."""
         t = time.perf_counter()
+        inner = self.seconds.get(exclude, 0.0) if exclude else 0.0
         try:
             yield
         finally:
-            self.seconds[stage] = self.seconds.get(stage, 0.0) + time.perf_counter() - t
+            took = time.perf_counter() - t
+            if exclude:
+                took -= self.seconds.get(exclude, 0.0) - inner
+            self.seconds[stage] = self.seconds.get(stage, 0.0) + max(0.0, took)
 
     def total(self) -> float:
         return time.perf_counter() - self._t0

@@ -22,6 +22,8 @@ from dataclasses import dataclass, field
 from .config import RunOptions, set_threads
 from .report import Timer
 
+PHASES = ("read", "prepare", "compute", "write")     # the reports' seconds, in order
+
 
 @dataclass(eq=False)
 class RunContext:
@@ -98,6 +100,11 @@ class RunContext:
     def seconds(self) -> dict:
         """The stages' seconds and the total so far (the reports' ``seconds``)."""
         return dict(self.timer.seconds, total=self.timer.total())
+
+    def phase_seconds(self) -> dict:
+        """:meth:`seconds` with every phase (read, prepare, compute, write; 0.0 when the run
+        had none) and the total, as the reports of the lighting commands give them."""
+        return {**{k: 0.0 for k in PHASES}, **self.seconds()}
 
     def finish(self, report: dict, lines=()) -> dict:
         """End the run: write ``report`` (``--report``, JSON, atomically), then say ``lines``

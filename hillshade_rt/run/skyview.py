@@ -52,6 +52,7 @@ from .. import __version__
 from ..errors import UsageProblem
 from .config import parse_window_size
 from .config import SkyviewConfig
+from .horizon_windows import ValueStats as _Stats
 from .runner import RunContext
 
 from ..algorithms.skyview import DEFINITIONS, OPENNESS  # (the definitions, once)
@@ -206,24 +207,6 @@ def _writer(cfg, dem, definition, n, curved, max_distance):
                       co=ro.creation_options)
 
 
-class _Stats:
-    """Minimum and mean of the valid results, window by window."""
-
-    def __init__(self):
-        self.lo, self.total, self.count = math.inf, 0.0, 0
-
-    def add(self, a: np.ndarray) -> None:
-        v = a[~np.isnan(a)]
-        if v.size:
-            self.lo = min(self.lo, float(v.min()))
-            self.total += float(v.sum(dtype=np.float64))
-            self.count += int(v.size)
-
-    def as_dict(self) -> dict:
-        return {"min": self.lo if self.count else None,
-                "mean": self.total / self.count if self.count else None}
-
-
 def _in_memory(cfg: SkyviewConfig, plan: Plan, ctx: RunContext, src) -> Made:
     """The result of the DEM read whole, the directions accumulated as they are made."""
     from ..algorithms import horizon as hz
@@ -328,8 +311,8 @@ def _in_windows(cfg: SkyviewConfig, plan: Plan, ctx: RunContext, src, area=None)
                                                 {"result": out}, ro.quiet,
                                                 progress_mode=ro.progress,
                                                 worker_timeout=ro.worker_timeout)
-            for lo, total, count in parts:
-                st.lo, st.total, st.count = min(st.lo, lo), st.total + total, st.count + count
+            for part in parts:
+                st.merge(part)
         else:
             from .report import progress_total
             bar = progress_total(len(regs), ro.quiet, "hillshade-rt", "window", ro.progress)
@@ -343,7 +326,7 @@ def _in_windows(cfg: SkyviewConfig, plan: Plan, ctx: RunContext, src, area=None)
                         with timer("write"):
                             w.write(1, np.where(np.isnan(out), np.float32(-9999.0), out),
                                     description=describe(cfg, definition), window=reg)
-                    with timer("compute"):
+                    with timer("compute", exclude="write"):    # put's writes apart
                         fig.add(region_outputs(job, rd, reg, product, put))
                     bar.update(1)
                 with timer("write"):
@@ -384,10 +367,10 @@ def _report(cfg: SkyviewConfig, plan: Plan, ctx: RunContext, made: Made) -> dict
            "openness": cfg.openness, "directions": int(cfg.directions),
            "max_distance": max_distance if math.isfinite(max_distance) else None,
            "height_above_ground_m": float(cfg.height_above_ground),
-           "backend": ctx.backend, "curvature": made.curved,
+           "backend": ctx.backend, "threads": ctx.threads, "curvature": made.curved,
            ("openness_deg" if opn else "svf"): made.stats.as_dict(),
            "processing": made.processing,
-           "seconds": ctx.seconds(), "version": __version__}
+           "seconds": ctx.phase_seconds(), "version": __version__}
     if ro.preview is not None:
         rep["preview"] = os.path.abspath(ro.preview)
     return rep

@@ -271,3 +271,41 @@ def test_windows_on_dask_give_the_same_files(tmp_path, runner):
         assert ad == bd and at == bt
     assert sorted(p.name for p in tmp_path.iterdir()) == ["dask.tif", "dask_d.tif", "mem.tif",
                                                           "mem_d.tif"]
+
+
+def _check_report(path, keys):
+    """The report at ``path`` parses, has ``keys`` and its phases' seconds add up."""
+    import json
+    rep = json.loads(path.read_text())
+    assert set(keys) <= set(rep), set(keys) - set(rep)
+    sec = rep["seconds"]
+    phases = [sec[k] for k in ("read", "prepare", "compute", "write")]
+    assert all(s >= 0.0 for s in phases) and sec["total"] >= sum(phases) - 1e-3
+    return rep
+
+
+def test_report_of_horizon_and_its_clash(tmp_path, runner):
+    """--report: the run's JSON (absolute output, the azimuths, threads, the phases' seconds);
+    a report path that is the DEM or OUTPUT is a usage error (exit 2, one line)."""
+    out, rep = tmp_path / "h.tif", tmp_path / "h.json"
+    r = runner.invoke(cli, ["horizon", SRTM, str(out), "--azimuth", "203.7", "--report",
+                            str(rep), "--threads", "1"])
+    assert r.exit_code == 0, r.output
+    doc = _check_report(rep, ["input", "output", "shape", "azimuths", "method", "backend",
+                              "threads", "angle_deg", "version"])
+    assert doc["output"] == str(out.resolve()) and doc["azimuths"] == [203.7]
+    assert doc["shape"] == [344, 403] and doc["threads"] == 1
+    st = doc["angle_deg"]
+    assert -90.0 <= st["min"] <= st["mean"] <= st["max"] <= 90.0
+    rep2 = tmp_path / "w.json"         # in windows: the same figures
+    r = runner.invoke(cli, ["horizon", SRTM, str(tmp_path / "w.tif"), "--azimuth", "203.7",
+                            "--window-size", "100", "--report", str(rep2)])
+    assert r.exit_code == 0, r.output
+    w = _check_report(rep2, ["angle_deg"])["angle_deg"]
+    assert w["min"] == st["min"] and w["max"] == st["max"]
+    assert abs(w["mean"] - st["mean"]) < 1e-9
+    for clash in (SRTM, str(out)):
+        r = runner.invoke(cli, ["horizon", SRTM, str(out), "--azimuth", "163", "--report",
+                                clash, "--overwrite"])
+        assert r.exit_code == 2 and len(r.stderr.strip().splitlines()) == 1, r.output
+        assert "--report" in r.stderr

@@ -175,3 +175,33 @@ def test_box_profile_is_atan_of_height_over_distance_across_its_width(runner, tm
     assert inside.sum() >= 55                               # about ±28 degrees
     outside = np.abs(phi) > np.radians(35)                 # the box out of the rays' way
     np.testing.assert_allclose(got[outside], 0.0, atol=1e-9)
+
+
+def _check_report(path, keys):
+    """The report at ``path`` parses, has ``keys`` and its phases' seconds add up."""
+    rep = json.loads(path.read_text())
+    assert set(keys) <= set(rep), set(keys) - set(rep)
+    sec = rep["seconds"]
+    phases = [sec[k] for k in ("read", "prepare", "compute", "write")]
+    assert all(s >= 0.0 for s in phases) and sec["total"] >= sum(phases) - 1e-3
+    return rep
+
+
+def test_report_of_profile_and_its_clash(tmp_path, runner, utm_dem):
+    """--report: the document's keys and the run's (absolute output, counts, the horizon's
+    min/mean/max, the phases' seconds); the report as -o is a usage error (exit 2)."""
+    dem, _ = utm_dem
+    out, rep = tmp_path / "p.csv", tmp_path / "p.json"
+    r = runner.invoke(cli, ["profile", dem, "--at-xy", "501515,3998185", "--at-xy",
+                            "502015,3998485", "--step", "7.5", "-o", str(out), "--report",
+                            str(rep)])
+    assert r.exit_code == 0, r.output
+    doc = _check_report(rep, ["input", "output", "shape", "threads", "point_count",
+                              "azimuth_count", "horizon_deg_stats", "version", "points"])
+    assert doc["output"] == str(out.resolve()) and doc["shape"] == [120, 140]
+    assert doc["point_count"] == 2 and doc["azimuth_count"] == 48
+    st = doc["horizon_deg_stats"]
+    assert -90.0 <= st["min"] <= st["mean"] <= st["max"] <= 90.0
+    r = runner.invoke(cli, ["profile", dem, "--at-xy", "501515,3998185", "-o", str(out),
+                            "--report", str(out), "--overwrite"])
+    assert r.exit_code == 2 and len(r.stderr.strip().splitlines()) == 1, r.output

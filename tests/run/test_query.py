@@ -440,3 +440,33 @@ def test_a_point_light_query_takes_no_earth_curvature(tmp_path, runner):
     r = runner.invoke(cli, base + ["-o", str(b), "--no-earth-curvature"])
     assert r.exit_code == 0, r.output
     assert a.read_text() == b.read_text()
+
+
+def _check_report(path, keys):
+    """The report at ``path`` parses, has ``keys`` and its phases' seconds add up."""
+    rep = json.loads(path.read_text())
+    assert set(keys) <= set(rep), set(keys) - set(rep)
+    sec = rep["seconds"]
+    phases = [sec[k] for k in ("read", "prepare", "compute", "write")]
+    assert all(s >= 0.0 for s in phases) and sec["total"] >= sum(phases) - 1e-3
+    return rep
+
+
+def test_report_of_query_and_its_clash(tmp_path, runner):
+    """--report: the document's keys (points, suns) and the run's (absolute output, the suns'
+    times, lit rows, the phases' seconds); the DEM as the report is a usage error (exit 2)."""
+    d, cells = _cells(LIDAR, 5, seed=4)
+    pts = _points_csv(tmp_path, d, cells)
+    out, rep = tmp_path / "q.csv", tmp_path / "q.json"
+    sun = ["--time", "2026-03-20T16:40-05:00", "--time", "2026-03-20T08:10-05:00"]
+    r = runner.invoke(cli, ["query", LIDAR, "--points", pts, "-o", str(out), "--report",
+                            str(rep)] + sun)
+    assert r.exit_code == 0, r.output
+    doc = _check_report(rep, ["input", "output", "shape", "threads", "points", "suns",
+                              "sun_times", "lit_rows", "version"])
+    assert doc["output"] == str(out.resolve()) and doc["points"] == len(cells)
+    assert doc["suns"] == 2 and len(doc["sun_times"]) == 2
+    assert 0 <= doc["lit_rows"] <= 2 * len(cells)
+    r = runner.invoke(cli, ["query", LIDAR, "--points", pts, "-o", str(out), "--report",
+                            LIDAR, "--overwrite"] + sun)
+    assert r.exit_code == 2 and len(r.stderr.strip().splitlines()) == 1, r.output

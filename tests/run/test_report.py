@@ -63,3 +63,18 @@ def test_cli_progress_json_multi_sun(tmp_path, args):
     assert res.exit_code == 0 and fractions(res.stderr)[-1] == 1.0
     assert runner.invoke(cli, [args[0], DEM, str(tmp_path / "q.tif"), *args[1:],
                                "--progress", "xml"]).exit_code == 2
+
+
+def test_timer_excludes_a_stage_timed_inside():
+    """``timer(stage, exclude=inner)``: the inner stage's seconds inside the block are not
+    counted in the outer one too (a window's writes inside its compute)."""
+    import time as _time
+
+    from hillshade_rt.run.report import Timer
+    t = Timer()
+    with t("compute", exclude="write"):
+        with t("write"):
+            _time.sleep(0.05)
+    assert t.seconds["write"] >= 0.05
+    assert 0.0 <= t.seconds["compute"] < 0.04
+    assert t.total() >= t.seconds["write"] + t.seconds["compute"]

@@ -1,6 +1,7 @@
 """``hillshade-rt skyview`` (issue 20, item 3): the sky view factor from the exact horizon, two
 definitions, checked on planes where both are known in closed form."""
 
+import json
 import math
 import re
 
@@ -284,3 +285,29 @@ def test_preview_colours_the_relief_by_the_result_in_memory_and_in_windows(tmp_p
     np.testing.assert_array_equal(pics["mem"], pics["win"])
     lum = pics["mem"].astype(int).sum(axis=0)
     assert lum[45, 55] < lum[10, 10]        # the pit's centre sees less sky than the plain
+
+
+def _check_report(path, keys):
+    """The report at ``path`` parses, has ``keys`` and its phases' seconds add up."""
+    rep = json.loads(path.read_text())
+    assert set(keys) <= set(rep), set(keys) - set(rep)
+    sec = rep["seconds"]
+    phases = [sec[k] for k in ("read", "prepare", "compute", "write")]
+    assert all(s >= 0.0 for s in phases) and sec["total"] >= sum(phases) - 1e-3
+    return rep
+
+
+def test_report_of_skyview_and_its_clash(tmp_path, runner):
+    """--report: absolute output, directions, threads, the factor's min/mean, the phases'
+    seconds; the DEM as the report is a usage error (exit 2, one line)."""
+    dem = _plane(tmp_path, 20.0)
+    out, rep = tmp_path / "svf.tif", tmp_path / "svf.json"
+    r = runner.invoke(cli, ["skyview", dem, str(out), "--directions", "8", "--report",
+                            str(rep)] + FLAT)
+    assert r.exit_code == 0, r.output
+    doc = _check_report(rep, ["input", "output", "shape", "definition", "directions",
+                              "backend", "threads", "svf", "version"])
+    assert doc["output"] == str(out.resolve()) and doc["directions"] == 8
+    assert 0.0 < doc["svf"]["min"] <= doc["svf"]["mean"] <= doc["svf"]["max"] <= 1.0
+    r = runner.invoke(cli, ["skyview", dem, str(out), "--report", dem, "--overwrite"])
+    assert r.exit_code == 2 and len(r.stderr.strip().splitlines()) == 1, r.output
