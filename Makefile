@@ -7,7 +7,7 @@ OUTDIR ?= out
 EXAMPLE_DEM := examples/bigtujunga_srtm30m_utm11n_1197x643.tif
 EXAMPLE_OUT := $(OUTDIR)/bigtujunga_shadow.tif
 
-.PHONY: run test test-fast install install-test bench bench-sun bench-tiling bench-big bench-gpu bench-peers bench-horizon docs-pictures docs-animation docs-viewer bench-writes bench-real bench-real-quick bench-fast bench-point bench-view bench-update bench-illumination gpu-check clean clean-cache bench-startup bench-batch help qgis-plugin docs-qgis
+.PHONY: run test test-fast install install-test bench bench-sun bench-tiling bench-big bench-gpu bench-peers bench-horizon docs-pictures docs-animation docs-viewer bench-writes bench-real bench-real-quick bench-fast bench-point bench-view bench-update bench-illumination gpu-check clean clean-cache bench-startup bench-batch bench-products help qgis-plugin docs-qgis
 
 help:
 	@echo "make run    - set up .venv, shade the bundled example DEM, print where the mask went"
@@ -22,6 +22,7 @@ help:
 	@echo "make gpu-check - on a machine with a GPU: the GPU tests on the device, then make bench-gpu"
 	@echo "make bench-peers - install other shadow tools into .venv and time them against ours"
 	@echo "make bench-horizon - horizon/skyview in 32 directions vs one mask; SVF vs rvt-py, whitebox"
+	@echo "make bench-products - SVF vs rvt-py/whitebox, horizon x32 vs one mask, irradiance (vs r.sun): targets met?"
 	@echo "make bench-real - real DEMs and spectral fractals (1024-4096), 18 suns, with the peers"
 	@echo "make bench-real-quick - the same with 1024 and 6 suns (a few minutes on 2 cores)"
 	@echo "make bench-fast - the default's curvature cost, cost against size, geographic vs projected"
@@ -144,6 +145,16 @@ docs-animation: $(VENV)/.installed
 # factor of rvt-py and whitebox-workflows against ours (issue 20)
 bench-horizon: $(VENV)/.installed-peers
 	$(BIN)/python benchmarks/bench_horizon.py
+
+# The products against their targets in one run, peers in the same run (figures for
+# docs/benchmarks.md, printed as markdown): the sky view factor vs rvt-py and whitebox-workflows
+# (both installed by .installed-peers: whitebox-workflows by the peers extra, rvt_py above),
+# horizon --directions 32 vs one shadow mask, irradiance over a day (and a year with --year) and
+# vs GRASS's r.sun where `grass` is on PATH (a system package, Debian's grass-core: not
+# installed here; without it the benchmark says r.sun was skipped). Long: run it on an idle
+# machine. BENCH_PRODUCTS_ARGS passes options, e.g. "--quick", "--parts C --year", "--runs 5".
+bench-products: $(VENV)/.installed-peers
+	$(BIN)/python benchmarks/bench_products.py $(BENCH_PRODUCTS_ARGS)
 
 # Benchmarks that look like Earth (issue 18): real DEMs (benchmarks/data/SOURCES.md), spectral
 # fractals (beta 2.4, 3.2), the smooth facet fractal labelled as such; peers in the same run.

@@ -25,7 +25,6 @@ import os
 import platform
 import sys
 import time
-import warnings
 
 import numba
 import numpy as np
@@ -35,7 +34,7 @@ from hillshade_rt.algorithms import horizon as hz
 from hillshade_rt.algorithms.pyramid import MaxPyramid
 from hillshade_rt.engine.arrays import shadow_mask, sky_view
 from hillshade_rt.model.geometry import Grid, equal_azimuths, sun_rays
-from hillshade_rt.testing import real_dems, spectral
+from hillshade_rt.testing import peer_svf_rvt, peer_svf_whitebox, real_dems, spectral
 
 CELL = 30.0
 
@@ -84,46 +83,7 @@ def exact_svf(z, grid, n, radius_m):
     return sky_view(z, grid, n, curvature=False, **kw)
 
 
-def peer_rvt(z, cell, n, r):
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            import rvt.vis
-    except ImportError as e:
-        return "rvt-py sky_view_factor", f"not installed ({e})"
-
-    def run():
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            return rvt.vis.sky_view_factor(z.astype(np.float32), cell, svf_n_dir=n,
-                                           svf_r_max=r)["svf"]
-    return "rvt-py sky_view_factor", run
-
-
-def peer_whitebox(z, cell, n, r):
-    try:
-        import rasterio
-        import whitebox_workflows as wbw
-    except ImportError as e:
-        return "whitebox-workflows sky_view_factor", f"not installed ({e})"
-    import tempfile
-    path = os.path.join(tempfile.mkdtemp(), "dem.tif")
-    prof = dict(driver="GTiff", width=z.shape[1], height=z.shape[0], count=1, dtype="float32",
-                nodata=-9999.0, crs="EPSG:32611",
-                transform=rasterio.transform.from_origin(0, z.shape[0] * cell, cell, cell))
-    with rasterio.open(path, "w", **prof) as ds:
-        ds.write(np.where(np.isnan(z), -9999.0, z).astype(np.float32), 1)
-    wbe = wbw.WbEnvironment()
-    wbe.verbose = False
-    dem = wbe.read_raster(path)
-
-    def run():
-        return wbe.sky_view_factor(dem, az_fraction=360.0 / n, max_dist=r * cell,
-                                   observer_hgt_offset=0.0).to_numpy().astype(np.float32)
-    return "whitebox-workflows sky_view_factor", run
-
-
-PEERS = {"rvt": peer_rvt, "whitebox": peer_whitebox}
+PEERS = {"rvt": peer_svf_rvt, "whitebox": peer_svf_whitebox}
 
 
 def part2(label, z, grid, n, r, peers, lines, notes):

@@ -22,7 +22,8 @@ edits, no test importing another test file or ``conftest`` (pytest fixtures stay
 * **Files**: :func:`write_geotiff`, :func:`read_band`, :func:`split_geotiff` (one DEM cut into
   tiles).
 * **Timing and peers** (benchmarks): :func:`median_seconds`; :func:`peer_doshade`,
-  :func:`peer_whitebox`, :func:`peer_topocalc`, other tools' shadow masks where installed.
+  :func:`peer_whitebox`, :func:`peer_topocalc`, other tools' shadow masks where installed;
+  :func:`peer_svf_rvt`, :func:`peer_svf_whitebox`, their sky view factors.
 
 Only numpy is imported here; rasterio and the peers are imported by the functions that use them.
 """
@@ -41,7 +42,8 @@ import numpy as np
 
 __all__ = [
     "BENCH_REAL_DEMS", "SMALL_REAL_DEMS", "box_terrain", "data_path", "fractal_terrain",
-    "median_seconds", "peer_doshade", "peer_topocalc", "peer_whitebox", "read_band", "real_dems",
+    "median_seconds", "peer_doshade", "peer_svf_rvt", "peer_svf_whitebox", "peer_topocalc",
+    "peer_whitebox", "read_band", "real_dems",
     "reference_mask", "repo_root", "ridges", "roughness", "serving", "smooth_facets",
     "spectral", "spectral_f64", "split_geotiff", "tiled", "write_geotiff", "write_ridges_dem",
 ]
@@ -474,16 +476,12 @@ def peer_doshade(z, cell, az, el):
     return "insolation doshade", lambda: 1 - insolf.doshade(zz, cell, sv)
 
 
-def peer_whitebox(z, cell, az, el):
-    """``whitebox-workflows``' ``horizon_angle`` (shadow = horizon angle > sun elevation); the
-    DEM goes through a temporary GeoTIFF, only the tool call is in the callable."""
-    try:
-        import rasterio
-        import whitebox_workflows as wbw
-    except ImportError as e:
-        return "whitebox-workflows horizon_angle", f"not installed ({e})"
-    tmp = tempfile.mkdtemp()
-    path = os.path.join(tmp, "dem.tif")
+def _whitebox_raster(z, cell):
+    """``(WbEnvironment, raster)``: ``z`` through a temporary GeoTIFF (square cells of ``cell``
+    metres, UTM 11N, -9999 nodata) into whitebox-workflows, quiet. ImportError without it."""
+    import rasterio
+    import whitebox_workflows as wbw
+    path = os.path.join(tempfile.mkdtemp(), "dem.tif")
     prof = dict(driver="GTiff", width=z.shape[1], height=z.shape[0], count=1, dtype="float32",
                 nodata=-9999.0, crs="EPSG:32611",
                 transform=rasterio.transform.from_origin(0, z.shape[0] * cell, cell, cell))
@@ -491,7 +489,16 @@ def peer_whitebox(z, cell, az, el):
         ds.write(np.where(np.isnan(z), -9999.0, z).astype(np.float32), 1)
     wbe = wbw.WbEnvironment()
     wbe.verbose = False
-    dem = wbe.read_raster(path)
+    return wbe, wbe.read_raster(path)
+
+
+def peer_whitebox(z, cell, az, el):
+    """``whitebox-workflows``' ``horizon_angle`` (shadow = horizon angle > sun elevation); the
+    DEM goes through a temporary GeoTIFF, only the tool call is in the callable."""
+    try:
+        wbe, dem = _whitebox_raster(z, cell)
+    except ImportError as e:
+        return "whitebox-workflows horizon_angle", f"not installed ({e})"
     maxd = float(math.hypot(*z.shape) * cell)
 
     def run():
@@ -515,6 +522,45 @@ def peer_topocalc(z, cell, az, el):
         hcos = tc_horizon(tc_az, zz, cell)
         return (hcos > math.sin(math.radians(el))).astype(np.uint8)
     return "topocalc horizon", run
+
+
+# The sky view factor's peers: (name, callable giving the SVF, float32 0..1, NaN on voids), or
+# (name, reason it was skipped). Square cells of ``cell`` metres, ``n`` equal azimuths, a radius
+# of ``r`` cells.
+
+def peer_svf_rvt(z, cell, n, r):
+    """``rvt-py``'s ``rvt.vis.sky_view_factor`` (Zakšek et al.'s own code: nearest-cell shifts,
+    mirrored padding of ``r`` cells at the edges); ``r`` cells (it has no unbounded mode: pass
+    the raster's diagonal for one)."""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            import rvt.vis
+    except ImportError as e:
+        return "rvt-py sky_view_factor", f"not installed ({e})"
+
+    def run():
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return rvt.vis.sky_view_factor(z.astype(np.float32), cell, svf_n_dir=n,
+                                           svf_r_max=int(r))["svf"]
+    return "rvt-py sky_view_factor", run
+
+
+def peer_svf_whitebox(z, cell, n, r):
+    """``whitebox-workflows``' ``sky_view_factor`` (azimuth step 360/``n``, the observer on the
+    ground); ``r`` cells, or None: no radius (its own unbounded mode). The DEM goes through a
+    temporary GeoTIFF, only the tool call is in the callable."""
+    try:
+        wbe, dem = _whitebox_raster(z, cell)
+    except ImportError as e:
+        return "whitebox-workflows sky_view_factor", f"not installed ({e})"
+    maxd = None if r is None else float(r) * cell
+
+    def run():
+        return wbe.sky_view_factor(dem, az_fraction=360.0 / n, max_dist=maxd,
+                                   observer_hgt_offset=0.0).to_numpy().astype(np.float32)
+    return "whitebox-workflows sky_view_factor", run
 
 
 # --------------------------------------------------------------------------------------------
