@@ -18,7 +18,9 @@ sample only (the paper's ``sp``): faster, approximate (figures in docs/algorithm
 ``max_distance`` M (metres) ends each ray at its last sample within M of ground distance
 (k <= floor(M / step_m), the row's metres per step). One march (``_march``) serves the raster in
 memory and windows of it (``Marches``: a region's rays carried from window to window, state and
-all, for rasters larger than memory: ``run.horizon_windows``), with the same bits.
+all, for rasters larger than memory: ``run.horizon_windows``), with the same bits. In memory the
+angles are taken row by row (``rowscan``): all cells of a row share their rays' geometry, so
+their k-th samples are one vectorised loop; the same bits as the march, several times faster.
 
 ``hull`` (fast, O(N log N)): Dozier & Frew's idea [2]_ as in topocalc: along one straight line in
 the sun direction the horizon of every point follows from the upper convex hull of the samples
@@ -52,6 +54,7 @@ from ._jitcache import njit
 from .frames import frame_of, uniform_rays
 from .pyramid import climb, pyramid_args, samples_left
 from .raymath import line_position, madd, ray_origin, terrain_on_line
+from .rowscan import CHUNK, DENSE_COLS, DENSE_ROWS, row_dense
 
 METHODS = ("scan", "hull")
 
@@ -216,6 +219,58 @@ def _scan_kernel(z, pyr, off, widths, nlev, dom_col, step_dom, step_other, rise,
                         want_dist, dist, max_dist, lift)
 
 
+@njit(parallel=True, cache=True)
+def _rows_kernel(z, pyr, off, widths, nlev, dom_col, step_dom, step_other, step_m, curv, zmax,
+                 beta, floor_tan, cap_tan, want_dist, dist, max_dist, lift):
+    """The angles of ``_scan_kernel`` (sp = 1), row by row (``rowscan``): every row's rays
+    sampled densely over the whole row while enough of them march, the rest by ``_march``
+    from where the dense samples left them. The same bits."""
+    rows, cols = z.shape
+    for r in prange(rows):
+        sm = step_m[r]
+        dc = dom_col[r] != 0
+        sd = np.int64(step_dom[r])
+        so = step_other[r]
+        cv = curv[r]
+        kmax = last_step(max_dist, sm)
+        cap = cap_tan * sm
+        best = np.empty(cols)
+        kb = np.zeros(cols, np.int64)
+        done = np.zeros(cols, np.uint8)
+        h0 = np.empty(cols)
+        for c in range(cols):
+            h0[c] = float(z[r, c]) + lift
+            best[c] = floor_tan * sm
+            if math.isnan(h0[c]):
+                done[c] = 1
+        ratio = DENSE_COLS if dc else DENSE_ROWS
+        k1 = 0
+        left = cols
+        while True:
+            ka = k1 + 1
+            k1 = min(kmax, k1 + CHUNK)
+            left = row_dense(z, r, dc, sd, so, cv, zmax, cap, ka, k1, h0, best, kb, done)
+            if left == 0 or k1 >= kmax or left * ratio < cols:
+                break
+        if left > 0 and k1 < kmax:
+            for c in range(cols):
+                if done[c] == 0:
+                    line0, other0, n_dom, n_oth = ray_origin(z, r, c, dc)
+                    best[c], kb[c], _ = _march(z, pyr, off, widths, nlev, np.int64(0),
+                                               np.int64(0), line0, other0, n_dom, n_oth, h0[c],
+                                               dc, sd, so, np.int64(1), zmax, 0.0, cv, False,
+                                               best[c], kb[c], k1 + 1, kmax, cap)
+        for c in range(cols):
+            if math.isnan(z[r, c]):
+                beta[r, c] = np.nan
+                if want_dist:
+                    dist[r, c] = np.nan
+                continue
+            if want_dist:
+                dist[r, c] = kb[c] * sm if kb[c] > 0 else np.nan
+            beta[r, c] = _angle(best[c], sm, floor_tan, cap_tan)
+
+
 @kernel
 def _scan_gpu(z, pyr, off, widths, nlev, dom_col, step_dom, step_other, rise, step_m, curv, sp,
               zmax, want_mask, mask, beta, floor_tan, cap_tan, want_dist, dist, max_dist, lift):
@@ -378,7 +433,8 @@ def horizon_angles(z: np.ndarray, rays: SunRays, method: str = "scan", sample_sp
                    zmax: float | None = None, stats: dict | None = None, pyramid=True,
                    floor_deg: float | None = None, cap_deg: float | None = None,
                    distance: np.ndarray | None = None,
-                   max_distance: float | None = None, lift: float = 0.0) -> np.ndarray:
+                   max_distance: float | None = None, lift: float = 0.0,
+                   row_wise: bool = True) -> np.ndarray:
     """β in degrees (float32, NaN on voids, -90 where no terrain lies ahead in the raster).
     ``distance``: a DEM-shaped float32 array that receives the ground distance in metres to
     each cell's horizon point (the sample of the maximum; NaN on voids and with nothing ahead;
@@ -390,7 +446,10 @@ def horizon_angles(z: np.ndarray, rays: SunRays, method: str = "scan", sample_sp
     reuse, or False for the plain scan: same angles). ``floor_deg`` / ``cap_deg`` (soft
     shadows): β at or below the floor comes back as -90 (nothing above the floor: the whole
     disc in view), β above the cap as 90 (the march stops there: none of it). ``lift``: the observer stands that many metres above each cell
-    (``--height-above-ground``; >= 0, 0 the ground: the same bits as without)."""
+    (``--height-above-ground``; >= 0, 0 the ground: the same bits as without).
+
+    The scan (sp = 1) runs row by row (``rowscan``; ``row_wise`` False: cell by cell, the
+    reference it equals bit for bit)."""
     hull = _check(method, sample_spacing, rays)
     lift = _lift(lift)
     max_dist = _max_distance(max_distance, method)
@@ -410,11 +469,16 @@ def horizon_angles(z: np.ndarray, rays: SunRays, method: str = "scan", sample_sp
                          if rays.curved else
                          PER_ROW_SPACING + ": hull replaced by scan (exact, slower)")
     beta = np.empty(z.shape, np.float32)
+    dist = np.empty((1, 1), np.float32) if distance is None else distance
+    if sample_spacing == 1 and row_wise:
+        _rows_kernel(z, *pyramid_args(z, pyramid), rays.dom_col, rays.step_dom, rays.step_other,
+                     rays.step_m, rays.curv, float(zmax), beta, _tan_deg(floor_deg, -np.inf),
+                     _tan_deg(cap_deg, np.inf), distance is not None, dist, max_dist, lift)
+        return beta
     _scan_kernel(z, *pyramid_args(z, pyramid), rays.dom_col, rays.step_dom, rays.step_other,
                  rays.rise, rays.step_m, rays.curv, np.int64(sample_spacing), float(zmax), False,
                  np.empty((1, 1), np.uint8), beta, _tan_deg(floor_deg, -np.inf),
-                 _tan_deg(cap_deg, np.inf), distance is not None,
-                 np.empty((1, 1), np.float32) if distance is None else distance, max_dist, lift)
+                 _tan_deg(cap_deg, np.inf), distance is not None, dist, max_dist, lift)
     return beta
 
 
