@@ -4,10 +4,12 @@ sample counting for the part of its interval with the sun's centre up at the DEM
 (``solar.daylight_samples``: never more than the day length there). Returns the report.
 
 The run's steps, between the shared preamble and tail (``run.runner.RunContext``): the days
-(the command line's dates, step and place), the DEM read (whole, or the tile in its
-``--context``), the samples (the suns of the days at the DEM's place, those with some light and
+(the command line's dates, step and place), the DEM opened, and read whole when the run fits
+--max-memory, the samples (the suns of the days at the DEM's place, those with some light and
 their weights), the light (each sample's lit cells added, weighted), the output written, the
-report.
+report. A DEM larger than --max-memory, --window-size, --scheduler and a ``--context`` tile go
+through ``run.sun_hours_windows`` instead (the same sums, region by region, written as they are
+made): the same bits.
 """
 
 from __future__ import annotations
@@ -111,7 +113,8 @@ def sun_hours(cfg: SunHoursConfig) -> dict:
             windowed = forced or needs_windows(src, limit, memory_per_cell(lighting))
             d = src
             if windowed:
-                samples = _samples(days, src, lighting.soft)
+                with ctx.timer("prepare"):
+                    samples = _samples(days, src, lighting.soft)
                 tags = _tags(cfg, days, samples)
                 try:
                     with bounded_gdal_cache():

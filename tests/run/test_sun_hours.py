@@ -120,10 +120,10 @@ def test_end_date_before_date_is_a_usage_error(tmp_path):
 # ---------------------------------------------------------------------------------------------
 # in windows and on Dask (run.sun_hours_windows): the bits of the run in memory
 
-def _hours(tmp_path, dem, out, report=None, **kw):
+def _hours(tmp_path, dem, out, report=None, step="40min", **kw):
     """The hours (the band read back, -9999 nodata) and the report of ``dem`` on the solstice
-    at Zurich's clock, every 40 minutes."""
-    cfg = SunHoursConfig(dem=dem, output=str(tmp_path / out), date="2026-12-21", step="40min",
+    at Zurich's clock, every ``step``."""
+    cfg = SunHoursConfig(dem=dem, output=str(tmp_path / out), date="2026-12-21", step=step,
                          place={"tz": TZ}, run=RunOptions(overwrite=True, quiet=True,
                                                           report_path=report), **kw)
     rep = sun_hours(cfg)
@@ -221,8 +221,8 @@ def test_soft_lifted_and_smap_hours_in_windows(tmp_path, extra):
     """The disk's visible fraction, an observer 30 m up, SMap without self-shadow: in windows
     of 64 x 64 the bits of the run in memory."""
     dem = _dem(tmp_path, _voids())
-    whole, _ = _hours(tmp_path, dem, "whole.tif", **extra)
-    got, _ = _hours(tmp_path, dem, "win.tif", window_size=64, **extra)
+    whole, _ = _hours(tmp_path, dem, "whole.tif", step="90min", **extra)
+    got, _ = _hours(tmp_path, dem, "win.tif", window_size=64, step="90min", **extra)
     np.testing.assert_array_equal(got, whole)
 
 
@@ -244,6 +244,26 @@ def test_max_memory_decides_and_the_day_is_read_about_once(tmp_path, monkeypatch
     p = wrep["processing"]
     assert p["mode"] == "tiled" and p["regions"] > 1
     assert p["windows_read"] == p["regions"] and 1.0 <= p["dem_reads"] < 3.0
+
+
+def test_the_command_line_in_windows_with_a_preview(tmp_path):
+    """--window-size, --report, --preview on the command line: the report says how it ran,
+    the summary names the windows, the preview is the DEM's size (every cell: a small DEM)."""
+    from click.testing import CliRunner
+
+    from hillshade_rt.cli import cli
+    dem = _dem(tmp_path, _voids())
+    whole, _ = _hours(tmp_path, dem, "whole.tif", step="2h")
+    r = CliRunner().invoke(cli, ["sun-hours", dem, str(tmp_path / "w.tif"), "--date",
+                                 "2026-12-21", "--step", "2h", "--tz", TZ, "--window-size",
+                                 "64x80", "--report", str(tmp_path / "w.json"), "--preview",
+                                 str(tmp_path / "w.png")])
+    assert r.exit_code == 0, r.output
+    assert ", 2 windows" in r.stderr.strip().splitlines()[-1]
+    np.testing.assert_array_equal(read_band(tmp_path / "w.tif"), whole)
+    doc = json.loads((tmp_path / "w.json").read_text())
+    assert doc["processing"]["mode"] == "tiled" and doc["processing"]["regions"] == 2
+    assert read_band(tmp_path / "w.png").shape == (SIDE, SIDE)
 
 
 def test_a_memory_limit_too_small_for_one_window_is_one_line(tmp_path):
