@@ -103,8 +103,9 @@ def sun_hours(cfg: SunHoursConfig) -> dict:
             samples = _samples(days, area.source, lighting.soft)
             tags = _tags(cfg, days, samples)
             if valid:
-                lit = _in_windows(cfg, ctx, area.source, lighting, days.req, samples, tags,
-                                  limit, wshape, area)
+                with bounded_gdal_cache():
+                    lit = _in_windows(cfg, ctx, area.source, lighting, days.req, samples,
+                                      tags, limit, wshape, area)
     else:
         forced = wshape is not None or cfg.scheduler is not None
         with ctx.timer("read"):     # opened (not read) once, for its size and then its values
