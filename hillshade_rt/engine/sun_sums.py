@@ -163,7 +163,8 @@ def region_shape(job, suns, stats, budget_cells: int, bounds) -> tuple[int, int]
     sun's window."""
     b = bounds
     br, bc = b[1] - b[0], b[3] - b[2]
-    sides = [sun_sides(job, s, stats, b) for s in suns]
+    # no sun with light: each region is read once for its voids (a window without a halo)
+    sides = [sun_sides(job, s, stats, b) for s in suns] or [(0, 0, 0, 0)]
     best, need = None, None
     for tr in _sizes(br):
         for tc in _sizes(bc):

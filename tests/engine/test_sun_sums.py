@@ -109,6 +109,22 @@ def test_the_shape_reads_the_fewest_cells_within_the_budget(dem):
     assert all(g.cells <= 9000 for rs in regs for g in rs.groups if len(g.pieces) > 1)
 
 
-def test_a_region_without_suns_is_its_voids():
-    g = SunGroup((0, 2, 0, 3), ())
-    assert g.cells == 6
+def test_without_suns_the_sum_is_zero_and_the_voids(dem):
+    """No sun with light (a polar night): every region read once, its sum 0 where there are
+    heights and NaN on the voids."""
+    z, path = dem
+    lighting = Lighting(algorithm="brute", curvature=False)
+    with open_dem(path, windows=True) as src:
+        st = block_stats(src)
+        job = WindowLighting(src, lighting, dem_body(src), (st.zmin, st.zmax), 1500.0, "sun")
+        regs = plan_regions(job, [], st, 10 ** 6, (50, 64))
+        assert [rs.groups for rs in regs] == [(SunGroup(rs.region, ()),) for rs in regs]
+        assert region_shape(job, [], st, 5000, (0, 90, 0, 110)) == (64, 64)
+        assert region_shape(job, [], st, 10 ** 6, (0, 90, 0, 110)) == (90, 110)
+        got = np.full(z.shape, -1.0, np.float32)
+        with src.reader() as rd:
+            for rs in regs:
+                r0, r1, c0, c1 = rs.region
+                got[r0:r1, c0:c1] = region_sum(WindowCache(rd).get, rs, None)
+    np.testing.assert_array_equal(got, np.where(np.isnan(z), np.float32(np.nan),
+                                                np.float32(0.0)))
