@@ -132,7 +132,6 @@ def hours_in_windows(cfg, ctx, src, lighting, req, work, tags, *, limit, window_
     pv_hours = np.full(pv.shape, np.nan, np.float32) if pv is not None else None
     values, algo_stats, used = ValueStats(), {}, set()
     if scheduler is not None:
-        from .dask import DaskSession  # noqa: F401  (the Dask extra, checked on the way)
         with timer("compute"):
             _on_dask(cfg, scheduler, job, regs, weights, tags, values, algo_stats, used,
                      tally, pv_hours, n)
