@@ -223,7 +223,7 @@ LAYERS = [
     # engine/: three layers of its own (the array API, the window job and the irradiance
     # physics over the shader, over the GPU runtime, products and per-cell suns)
     ("hillshade_rt.engine.arrays", "hillshade_rt.engine.windows",
-     "hillshade_rt.engine.irradiance"),
+     "hillshade_rt.engine.sun_sums", "hillshade_rt.engine.irradiance"),
     ("hillshade_rt.engine.shader", "hillshade_rt.engine.lighting"),
     ("hillshade_rt.engine", "hillshade_rt.io", "hillshade_rt.pictures"),
     ("hillshade_rt.algorithms",),

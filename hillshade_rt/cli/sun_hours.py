@@ -8,10 +8,10 @@ from .errors import errors_to_click, say
 from ..run.config import PLACE_KEYS
 from .options import (SectionedCommand, context_option, algorithm_option, backend_option, dem_options,
                       each_pattern_options, format_option,
-                      height_above_ground_option, overwrite_option, physics_options, place_options,
-                      preview_option, quiet_option, progress_option, report_option,
-                      threads_option, to_read_options,
-                      to_run_options)
+                      height_above_ground_option, max_memory_option, overwrite_option,
+                      physics_options, place_options, preview_option, quiet_option,
+                      progress_option, report_option, scheduler_option, threads_option,
+                      to_read_options, to_run_options, window_size_option)
 
 
 @click.command("sun-hours", cls=SectionedCommand)
@@ -35,6 +35,9 @@ from .options import (SectionedCommand, context_option, algorithm_option, backen
 @backend_option
 @threads_option
 @report_option
+@max_memory_option
+@window_size_option
+@scheduler_option
 @overwrite_option("Replace outputs if they exist.")
 @quiet_option("No progress bar or summary on stderr.")
 @progress_option
@@ -46,12 +49,14 @@ from .options import (SectionedCommand, context_option, algorithm_option, backen
 def sun_hours(files, date_, end_date, step, tz, lat, lon, pressure, temperature,
               no_refraction, sun_tolerance, algorithm, curvature, refraction_k, soft,
               height_above_ground, self_shadow, preview, backend, threads, report_path,
-              overwrite, quiet, progress, fmt,
+              max_memory, window_size, scheduler, overwrite, quiet, progress, fmt,
               creation_options, each, output_pattern, **read_opts):
     """Write the hours of direct sun per cell of DEM over a day (or a range of days) to OUTPUT
     (float32 hours, -9999 nodata), like WhiteboxTools' TimeInDaylight or GRASS r.sun's insolation
-    time: the sun every --step, each lit sample counting for its interval. Several DEMs:
-    --each --output-pattern 'out/{stem}_hours.tif', each with its own place's sun."""
+    time: the sun every --step, each lit sample counting for its interval. A DEM larger than
+    --max-memory (or any, with --window-size or --scheduler) is computed in windows, with the
+    same result. Several DEMs: --each --output-pattern 'out/{stem}_hours.tif', each with its
+    own place's sun."""
     from ..run import SunHoursConfig, sun_hours as run_sun_hours
     from ..run.batch import split_files, sun_hours_each
     dem, output = split_files(files, each, output_pattern, "sun-hours")
@@ -65,7 +70,8 @@ def sun_hours(files, date_, end_date, step, tz, lat, lon, pressure, temperature,
                          place=place, algorithm=algorithm, curvature=curvature,
                          refraction_k=refraction_k, soft=soft, self_shadow=self_shadow,
                          read=to_read_options(kw), run=to_run_options(kw, say),
-                         height_above_ground=height_above_ground)
+                         height_above_ground=height_above_ground, max_memory=max_memory,
+                         window_size=window_size, scheduler=scheduler)
     if each:
         sun_hours_each(cfg, dem, output_pattern)
     else:

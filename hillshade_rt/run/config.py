@@ -229,6 +229,9 @@ class SunHoursConfig:
     read: ReadOptions = field(default_factory=ReadOptions)
     run: RunOptions = field(default_factory=RunOptions)
     height_above_ground: float = 0.0  # metres: each cell's ray starts this far above it
+    max_memory: object = None         # windows (run.sun_hours_windows) when the DEM needs more
+    window_size: object = None        # windows of this many output cells, whatever the size
+    scheduler: object = None          # the windows as Dask tasks
 
     def check(self) -> None:
         """The height above the ground (``check_lift``: ``algorithm`` becomes the one that

@@ -4,21 +4,23 @@ sample counting for the part of its interval with the sun's centre up at the DEM
 (``solar.daylight_samples``: never more than the day length there). Returns the report.
 
 The run's steps, between the shared preamble and tail (``run.runner.RunContext``): the days
-(the command line's dates, step and place), the DEM read (whole, or the tile in its
-``--context``), the samples (the suns of the days at the DEM's place, those with some light and
+(the command line's dates, step and place), the DEM opened, and read whole when the run fits
+--max-memory, the samples (the suns of the days at the DEM's place, those with some light and
 their weights), the light (each sample's lit cells added, weighted), the output written, the
-report.
+report. A DEM larger than --max-memory, --window-size, --scheduler and a ``--context`` tile go
+through ``run.sun_hours_windows`` instead (the same sums, region by region, written as they are
+made): the same bits.
 """
 
 from __future__ import annotations
 
 import datetime as _dt
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from .. import __version__
 from ..errors import HillshadeError, UsageProblem
-from .config import SunHoursConfig
+from .config import SunHoursConfig, parse_window_size
 from .runner import RunContext
 
 
@@ -49,20 +51,32 @@ class _Samples:
 
 @dataclass
 class _Hours:
-    """The hours of direct sun per cell (float32, NaN nodata) and how they were lit."""
+    """The hours of direct sun per cell (float32, NaN nodata) and how they were lit (in
+    memory, or in windows: then written already, their figures only)."""
 
-    hours: object           # numpy array
+    hours: object           # numpy array (None: written window by window)
     curvature: dict | None  # the curvature's report (None: every cell nodata)
+    processing: dict = field(default_factory=lambda: {"mode": "in memory"})
+    values: dict | None = None   # min, mean, max of the hours written in windows
+    algo_stats: dict | None = None   # the windows' algorithm figures
+    preview: tuple | None = None     # in windows: (heights, grid, hours) of every n-th cell
 
 
 def sun_hours(cfg: SunHoursConfig) -> dict:
-    """Write the hours of direct sun of ``cfg.dem`` to ``cfg.output``; returns the report."""
+    """Write the hours of direct sun of ``cfg.dem`` to ``cfg.output``; returns the report. In
+    memory when the run fits --max-memory, else in windows (``run.sun_hours_windows``; with
+    --window-size, --scheduler or --context too): the same bits either way."""
     from ..errors import AllNodata
     from ..io import check_output_format, output_driver
     from .context import nodata_note
+    from .horizon import memory_limit
+    from .local import bounded_gdal_cache, needs_windows
+    from .sun_hours_windows import memory_per_cell, windows_phrase
 
     cfg.check()
     ro = cfg.run
+    wshape = parse_window_size(cfg.window_size)
+    limit = memory_limit(cfg.max_memory)
     ctx = RunContext.start(ro, inputs=[cfg.dem] + cfg.read.inputs(),
                            outputs=[(cfg.output, "OUTPUT")], algorithm=cfg.algorithm,
                            note=False)     # the note once the command line is checked
@@ -70,10 +84,12 @@ def sun_hours(cfg: SunHoursConfig) -> dict:
                         ro.creation_options)
     days = _days(cfg)
     ctx.compile_note(cfg.algorithm, cfg.self_shadow)
-    cfg.read.check_context(cfg.dem, **{"--preview": ro.preview is not None})
+    cfg.read.check_context(cfg.dem, **{"--scheduler": cfg.scheduler is not None,
+                                       "--preview": ro.preview is not None})
     lighting = cfg.lighting(ctx.backend)
     algo_stats: dict = {}
     area, lit = None, None
+    tags = None
     if cfg.read.context is not None:
         with ctx.timer("read"):
             area = cfg.read.open_area(cfg.dem)
@@ -85,20 +101,44 @@ def sun_hours(cfg: SunHoursConfig) -> dict:
             except AllNodata:
                 valid = False
             samples = _samples(days, area.source, lighting.soft)
+            tags = _tags(cfg, days, samples)
             if valid:
-                lit = _light_in_context(area, lighting, days.req, samples, ctx, algo_stats)
+                with bounded_gdal_cache():
+                    lit = _in_windows(cfg, ctx, area.source, lighting, days.req, samples,
+                                      tags, limit, wshape, area)
     else:
-        with ctx.timer("read"):
-            d, valid = _read(cfg)
-        with ctx.timer("prepare"):
-            samples = _samples(days, d, lighting.soft)
-            if valid:
-                shader, hours = _prepare(d, lighting, days.req, samples)
-        if valid:
-            lit = _light(shader, hours, lighting, samples, ctx, algo_stats)
-    tags = _tags(cfg, days, samples)
-    hours = _write(cfg, ctx, d, lit, tags)
-    rep = _report(cfg, ctx, d, days, samples, tags, hours, lit, algo_stats, area)
+        forced = wshape is not None or cfg.scheduler is not None
+        with ctx.timer("read"):     # opened (not read) once, for its size and then its values
+            src = cfg.read.open(cfg.dem, windows=forced)
+        with src:
+            windowed = forced or needs_windows(src, limit, memory_per_cell(lighting))
+            d = src
+            if windowed:
+                with ctx.timer("prepare"):
+                    samples = _samples(days, src, lighting.soft)
+                tags = _tags(cfg, days, samples)
+                try:
+                    with bounded_gdal_cache():
+                        lit = _in_windows(cfg, ctx, src, lighting, days.req, samples, tags,
+                                          limit, wshape)
+                except AllNodata:   # (raised before the output is opened)
+                    lit = None
+            else:
+                with ctx.timer("read"):
+                    try:
+                        d, valid = src.read(), True
+                    except AllNodata:
+                        valid = False
+                with ctx.timer("prepare"):
+                    samples = _samples(days, d, lighting.soft)
+                    if valid:
+                        shader, hours = _prepare(d, lighting, days.req, samples)
+                if valid:
+                    lit = _light(shader, hours, lighting, samples, ctx, algo_stats)
+    if tags is None:
+        tags = _tags(cfg, days, samples)
+    figures = _write(cfg, ctx, d, lit, tags)
+    rep = _report(cfg, ctx, d, days, samples, tags, figures, lit, algo_stats, area)
     if lit is None:
         return ctx.finish(rep, [("note", nodata_note(d.path))])
     h = rep["hours"]
@@ -107,7 +147,7 @@ def sun_hours(cfg: SunHoursConfig) -> dict:
                    f"day(s) from {days.first.isoformat()}, {len(samples.work)} of "
                    f"{len(samples.suns)} samples with the sun up; sun hours {h['min']:.2f} .. "
                    f"{h['max']:.2f} (mean {h['mean']:.2f}); compute "
-                   f"{ctx.timer.seconds['compute']:.2f} s")])
+                   f"{ctx.timer.seconds['compute']:.2f} s{windows_phrase(rep['processing'])}")])
 
 
 def _days(cfg: SunHoursConfig) -> _Days:
@@ -125,18 +165,6 @@ def _days(cfg: SunHoursConfig) -> _Days:
     if last < first:
         raise UsageProblem("--end-date is before --date")
     return _Days(first, last, cfg.step, req)
-
-
-def _read(cfg: SunHoursConfig) -> tuple:
-    """(the DEM in memory, True); one whose every cell is nodata: (the DEM opened and closed,
-    its size and place only, False)."""
-    from ..errors import AllNodata
-    try:
-        return cfg.read.read(cfg.dem), True
-    except AllNodata:
-        d = cfg.read.open(cfg.dem)
-        d.close()
-        return d, False
 
 
 def _samples(days: _Days, d, soft: bool) -> _Samples:
@@ -191,52 +219,15 @@ def _light(shader, hours, lighting, samples: _Samples, ctx: RunContext, algo_sta
     return _Hours(hours, shader.report())
 
 
-def _light_in_context(area, lighting, req, samples: _Samples, ctx: RunContext,
-                      algo_stats) -> _Hours:
-    """Sun hours of the tile of ``area`` (``--context``): each sun's windows of the context
-    (``engine.windows.WindowLighting``, product "sun"), cut to the tile, added in the order of
-    the suns as a run in memory adds them (the same float32 sums)."""
-    import math
-
-    import numpy as np
-
-    from ..engine.windows import (
-        WindowCache, WindowLighting, bytes_per_cell, default_max_memory, window_budget
-    )
-    from ..model.earth import curvature_report, dem_body
-    from .local import bounded_gdal_cache
-    from .report import progress
-    src, ro, work = area.source, ctx.ro, samples.work
-    r0, r1, c0, c1 = area.bounds
-    with bounded_gdal_cache():
-        with ctx.timer("prepare"):
-            bstats = area.block_stats()     # (the context's, kept between runs)
-            rows, cols = src.shape
-            dx, dy = src.grid.centre_spacing()
-            job = WindowLighting(src, lighting, dem_body(src, req.lat),
-                                 (bstats.zmin, bstats.zmax), math.hypot(cols * dx, rows * dy),
-                                 "sun")
-            budget = window_budget(default_max_memory(),
-                                   bytes_per_cell(lighting.algorithm, "sun", lighting.soft,
-                                                  lighting.self_shadow))[0]
-            if work:
-                job.warm_up(work[0][0])
-        with src.reader() as rd:
-            z = np.empty((r1 - r0, c1 - c0), np.float32)
-            rd.read(area.bounds, z)
-            hours = np.where(np.isnan(z), np.float32(np.nan), np.float32(0.0))
-            del z
-            cache, used = WindowCache(rd), set()
-            with ctx.timer("compute"):
-                for s, w in progress(work, ro.quiet, "hillshade-rt sun-hours", unit="sun",
-                                     mode=ro.progress):
-                    pieces = job.pieces(s, bstats, budget, area=area.bounds)
-                    carry = job.carrier([pieces])
-                    for p in pieces:
-                        arr = job.light(cache.get(p.window), p, algo_stats, used, carry)
-                        a0, a1, b0, b1 = area.local(p.region)
-                        hours[a0:a1, b0:b1] += np.float32(w) * arr
-    return _Hours(hours, curvature_report(job.curvature, used, job.body, job.k))
+def _in_windows(cfg: SunHoursConfig, ctx: RunContext, src, lighting, req, samples: _Samples,
+                tags: dict, limit: int, wshape, area=None) -> _Hours:
+    """The hours in windows (``run.sun_hours_windows``: the same float32 sums as in memory),
+    written to OUTPUT as they are made. ``area``: a ``--context`` tile of ``src``."""
+    from .sun_hours_windows import hours_in_windows
+    win = hours_in_windows(cfg, ctx, src, lighting, req, samples.work, tags, limit=limit,
+                           window_shape=wshape, scheduler=cfg.scheduler, area=area)
+    return _Hours(None, win.curvature, processing=win.processing, values=win.values.as_dict(),
+                  algo_stats=win.algo_stats, preview=win.preview)
 
 
 def _tags(cfg: SunHoursConfig, days: _Days, samples: _Samples) -> dict:
@@ -251,14 +242,24 @@ def _tags(cfg: SunHoursConfig, days: _Days, samples: _Samples) -> dict:
             else f"local mean solar time at longitude {samples.site.lon:.4f}"}
 
 
-def _write(cfg: SunHoursConfig, ctx: RunContext, d, lit: _Hours | None, tags: dict):
-    """The hours (-9999 nodata; all of it for a DEM of nodata) and the --preview; returns the
-    hours written (NaN nodata)."""
+def _write(cfg: SunHoursConfig, ctx: RunContext, d, lit: _Hours | None, tags: dict) -> dict:
+    """The hours (-9999 nodata; all of it for a DEM of nodata) and the --preview (in windows:
+    the hours are written already, the preview from every n-th cell); returns the min, mean and
+    max of the hours written."""
     import numpy as np
 
     from ..io import write_png, write_raster
     from ..pictures.preview import relief_rgb
     ro = ctx.ro
+    if lit is not None and lit.hours is None:       # written in windows
+        v = lit.values
+        if ro.preview is not None and lit.preview is not None:
+            pv, grid, pvh = lit.preview
+            top = v["max"] if v["max"] is not None else 0.0
+            with ctx.timer("write"):
+                write_png(ro.preview, relief_rgb(pv, grid, warm=pvh / top if top > 0
+                                                 else np.zeros_like(pvh)), ro.overwrite)
+        return v
     hours = np.full(d.shape, np.nan, np.float32) if lit is None else lit.hours
     with ctx.timer("write"):
         write_raster(cfg.output, np.where(np.isnan(hours), np.float32(-9999.0), hours), d,
@@ -269,16 +270,22 @@ def _write(cfg: SunHoursConfig, ctx: RunContext, d, lit: _Hours | None, tags: di
             write_png(ro.preview, relief_rgb(d.heights, d.grid,
                                              warm=hours / top if top > 0 else np.zeros_like(hours)),
                       ro.overwrite)
-    return hours
+    from .horizon_windows import ValueStats
+    values = ValueStats()           # (the mean summed in float64, as in windows)
+    values.add(hours)
+    return values.as_dict()
 
 
 def _report(cfg: SunHoursConfig, ctx: RunContext, d, days: _Days, samples: _Samples,
-            tags: dict, hours, lit: _Hours | None, algo_stats: dict, area) -> dict:
+            tags: dict, figures: dict, lit: _Hours | None, algo_stats: dict, area) -> dict:
     """The run's report (``--report``: docs/usage.md's keys)."""
-    import numpy as np
-
     from ..io import input_label
-    valid = hours[~np.isnan(hours)]
+    if lit is not None and lit.algo_stats is not None:
+        algo_stats = lit.algo_stats
+    processing = (lit.processing if lit is not None else
+                  {"mode": "all nodata", "cells": int(d.shape[0] * d.shape[1])})
+    if processing.get("mode") == "in memory":
+        processing = {"mode": "in memory", "cells": int(d.shape[0] * d.shape[1])}
     rep = {"input": input_label(d.path), "output": os.path.abspath(cfg.output),
            "shape": list(d.shape), "algorithm": cfg.algorithm, "backend": ctx.backend,
            "dates": [days.first.isoformat(), days.last.isoformat()], "days": days.count,
@@ -286,11 +293,10 @@ def _report(cfg: SunHoursConfig, ctx: RunContext, d, days: _Days, samples: _Samp
            "samples_with_sun": len(samples.work), "day_definition": tags["DAY"],
            "soft": cfg.soft, "self_shadow": cfg.self_shadow,
            "height_above_ground_m": float(cfg.height_above_ground),
-           "hours": {"min": float(valid.min()) if valid.size else None,
-                     "mean": float(valid.mean()) if valid.size else None,
-                     "max": float(valid.max()) if valid.size else None},
+           "hours": figures,
            "curvature": None if lit is None else lit.curvature,
-           "algorithm_stats": algo_stats, "seconds": ctx.seconds(), "version": __version__}
+           "algorithm_stats": algo_stats, "processing": processing,
+           "seconds": ctx.seconds(), "version": __version__}
     rep.update(samples.sun_info or {})
     if area is not None:
         rep["context"] = area.report()

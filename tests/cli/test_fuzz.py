@@ -1171,6 +1171,7 @@ _COMMANDS = {
         (["--step"], _v(["3h", "90min", "PT20M"], ["0s", "abc", "-5min", "1 fortnight"]), 6),
         (["--soft"], None, 6), (["--no-self-shadow"], None, 6),
         (["--height-above-ground"], _v(["0", "2"], ["-1"]), 8),
+        (["--window-size"], _v(["64", "64x80"], ["0", "8"]), 8),
     ]),
     "horizon": (["DEM", "OUT"], [["--azimuth", "163"], ["--directions", "8"]],
                 _READ_TABLE + _OUT_TABLE[:1] + _OUT_TABLE[2:4] + _PHYS_TABLE + [

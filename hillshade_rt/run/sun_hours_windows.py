@@ -1,0 +1,286 @@
+"""Sun hours of rasters larger than memory: the sums of ``engine.sun_sums`` region by region,
+each region written into OUTPUT as it is made, or each region a Dask task (``--scheduler``) that
+writes its part, put together through a VRT at the end (as ``run.dask`` does for shadows). Every
+cell gets the bits a run in memory gives it (the same float32 additions, in the same order).
+
+Used by ``run.sun_hours`` for a DEM larger than ``--max-memory``, with ``--window-size`` or
+``--scheduler``, and for a ``--context`` tile (its regions cut to the tile, their windows read
+from the context)."""
+
+from __future__ import annotations
+
+import math
+import os
+import threading
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import HillshadeError
+
+DESCRIPTION = "hours of direct sun"
+_TASK_LOCK = threading.Lock()     # one numba computation at a time per Dask worker process
+
+
+def memory_per_cell(lighting) -> int:
+    """Bytes per cell of a run in memory: what lighting the DEM whole needs
+    (``engine.windows.bytes_per_cell``, product "sun"), the hours and one sun's weighted term."""
+    from ..engine.windows import bytes_per_cell
+    return bytes_per_cell(lighting.algorithm, "sun", lighting.soft, lighting.self_shadow) + 8
+
+
+@dataclass
+class WindowedHours:
+    """What a windowed sun-hours run made: the hours' figures (``horizon_windows.ValueStats``),
+    the curvature as applied, the algorithm's figures, how it ran (the report's
+    ``processing``) and, for ``--preview``, (heights, grid, hours) on every n-th cell."""
+
+    values: object
+    curvature: dict | None
+    algo_stats: dict
+    processing: dict
+    preview: tuple | None = None
+
+
+@dataclass
+class _Tally:
+    """Figures of the windows: regions, pieces lit, windows read, cells and bytes read."""
+
+    regions: int = 0
+    windows: int = 0
+    reads: int = 0
+    cells_read: int = 0
+    largest: tuple = (0, 0)
+    bytes_read: int = 0
+    bytes_carried: int = 0
+    extra: dict = field(default_factory=dict)
+
+    def plan(self, regs) -> None:
+        self.regions = len(regs)
+        for rs in regs:
+            for g in rs.groups:
+                r0, r1, c0, c1 = g.window
+                self.reads += 1
+                self.cells_read += (r1 - r0) * (c1 - c0)
+                if (r1 - r0) * (c1 - c0) > self.largest[0] * self.largest[1]:
+                    self.largest = (r1 - r0, c1 - c0)
+            self.windows += rs.pieces
+
+
+def hours_in_windows(cfg, ctx, src, lighting, req, work, tags, *, limit, window_shape,
+                     scheduler=None, area=None) -> WindowedHours:
+    """Write the sun hours of ``src`` (``io.DemSource`` opened for windows; with ``area``, a
+    ``run.context.Area``: its tile only) to ``cfg.output``: ``work`` the lit samples
+    ``[(sun, hours)]`` in order, ``tags`` the output's. ``limit``: --max-memory in bytes;
+    ``window_shape``: --window-size; ``scheduler``: --scheduler. Raises ``AllNodata`` (before
+    anything is written) for a DEM of voids only, ``HillshadeError`` for a memory limit too
+    small for one window (naming the smallest that would do)."""
+    from ..engine.sun_sums import (BYTES_PER_GROUP_CELL, plan_regions, region_sum,
+                                   weighted_light)
+    from ..engine.windows import (MIN_WINDOW_CELLS, MemoryTooSmall, WindowCache,
+                                  WindowLighting, block_stats, bytes_per_cell, format_size,
+                                  memory_needed, window_budget)
+    from ..io import BandWriter
+    from ..model.earth import curvature_report, dem_body
+    from ..pictures.preview import every_nth
+    from .horizon_windows import ValueStats
+    from .report import progress_total
+
+    ro, timer = cfg.run, ctx.timer
+    rows, cols = src.shape
+    suns, weights = [s for s, _ in work], [w for _, w in work]
+    per_cell = bytes_per_cell(lighting.algorithm, "sun", lighting.soft,
+                              lighting.self_shadow) + BYTES_PER_GROUP_CELL
+    tally = _Tally()
+    with timer("prepare"):   # one pass for the height ranges; the plan; compilation
+        if area is None:
+            bstats = block_stats(src, preview_side=2048 if ro.preview is not None else None)
+            stats_bytes = rows * cols * src.itemsize
+        else:
+            bstats = area.block_stats()
+            stats_bytes = area.statistics["bytes_read"]
+        dx, dy = src.grid.centre_spacing()
+        job = WindowLighting(src, lighting, dem_body(src, req.lat), (bstats.zmin, bstats.zmax),
+                             math.hypot(cols * dx, rows * dy), "sun")
+        try:
+            budget, mem = window_budget(limit, per_cell)
+            small = None
+        except HillshadeError as exc:
+            budget, mem, small = 0, None, exc
+        try:
+            regs = plan_regions(job, suns, bstats, budget, window_shape,
+                                None if area is None else area.bounds)
+        except MemoryTooSmall as exc:
+            small, cells = small or exc, exc.cells
+        else:
+            cells = max(g.cells for rs in regs for g in rs.groups)
+        if small is not None:
+            least = memory_needed(per_cell, max(cells, MIN_WINDOW_CELLS))
+            if window_shape is None and scheduler is None and area is None:
+                # or the whole DEM in memory, where that needs less
+                least = min(least, memory_needed(memory_per_cell(lighting), rows * cols))
+            said = str(small).split("; give")[0].replace(": raise --max-memory", "")
+            raise HillshadeError(f"{said}; give at least --max-memory "
+                                 f"{format_size(least, up=True)}")
+        tally.plan(regs)
+        if suns:
+            job.warm_up(suns[0])
+    geom = src if area is None else area.tile
+    n = bstats.stride
+    pv = bstats.preview if area is None else None
+    pv_hours = np.full(pv.shape, np.nan, np.float32) if pv is not None else None
+    values, algo_stats, used = ValueStats(), {}, set()
+    if scheduler is not None:
+        with timer("compute"):
+            _on_dask(cfg, scheduler, job, regs, weights, tags, values, algo_stats, used,
+                     tally, pv_hours, n)
+        mode = "dask"
+    else:
+        bar = progress_total(tally.windows, ro.quiet, "hillshade-rt sun-hours", "window",
+                             ro.progress)
+        w = BandWriter(cfg.output, geom, 1, "float32", -9999.0, tags, overwrite=ro.overwrite,
+                       fmt=ro.fmt, co=ro.creation_options)
+        with w, src.reader() as rd, bar:
+            cache = WindowCache(rd)
+            term = weighted_light(job, weights, algo_stats, used)
+            for rs in regs:
+                with timer("compute"):
+                    acc = region_sum(cache.get, rs, term, lambda p: bar.update(1))
+                    values.add(acc)
+                if pv_hours is not None:
+                    sub, (a, b) = every_nth(acc, rs.region[0], rs.region[2], n)
+                    pv_hours[a:a + sub.shape[0], b:b + sub.shape[1]] = sub
+                acc[np.isnan(acc)] = -9999.0
+                with timer("write"):
+                    w.write(1, acc, description=DESCRIPTION,
+                            window=rs.region if area is None else area.local(rs.region))
+                del acc
+            tally.bytes_read, tally.bytes_carried = rd.bytes_read, cache.carried_bytes
+            with timer("write"):     # the close compresses the last blocks
+                w.finish()
+        mode = "tiled"
+    cells = geom.shape[0] * geom.shape[1]
+    processing = {"mode": mode, "cells": cells, "memory": mem,
+                  "window_shape_requested": list(window_shape) if window_shape else None,
+                  "regions": tally.regions, "windows": tally.windows,
+                  "windows_read": tally.reads, "largest_window": list(tally.largest),
+                  "cells_read": tally.cells_read, "bytes_read": tally.bytes_read,
+                  "bytes_carried": tally.bytes_carried,
+                  "dem_reads": tally.bytes_read / max(1, cells * src.itemsize),
+                  "statistics_pass_bytes": stats_bytes, **tally.extra}
+    if area is not None:
+        processing["context"] = area.report()
+    preview = None
+    if pv is not None:
+        from ..model.geometry import Grid
+        g = Grid(pv.shape[0], pv.shape[1], src.grid.dx[::n] * n, src.grid.dy[::n] * n,
+                 src.grid.col_sign, src.grid.row_sign, src.grid.method)
+        preview = (pv, g, pv_hours)
+    return WindowedHours(values, curvature_report(job.curvature, used, job.body, job.k),
+                         algo_stats, processing, preview)
+
+
+def windows_phrase(processing: dict) -> str:
+    """How the run went, for its summary line: nothing in memory, else ", N windows" (the
+    regions; " on Dask")."""
+    if processing["mode"] in ("in memory", "all nodata"):
+        return ""
+    return f", {processing['regions']} windows" + (" on Dask" if processing["mode"] == "dask"
+                                                   else "")
+
+
+# ---------------------------------------------------------------------------------------------
+# regions as Dask tasks (--scheduler)
+
+def region_task(job, rs, weights, path: str, stride: int | None = None) -> dict:
+    """The Dask task: the sums of region ``rs`` (``engine.sun_sums.region_sum``, its windows
+    read here), written to ``path`` (a GeoTIFF of the region, -9999 nodata). Returns its
+    figures: (min, sum, count, max) of the hours, the algorithm's figures, the curvature used,
+    bytes read and carried, and the every-``stride``-th hours for a preview."""
+    import rasterio
+    from affine import Affine
+    from rasterio.errors import NotGeoreferencedWarning
+
+    from ..engine.sun_sums import region_sum, weighted_light
+    from ..engine.windows import GDAL_CACHE_MB, WindowCache
+    from ..io import DEFLATE_LEVEL, atomic_path, gdal_checked
+    from ..pictures.preview import every_nth
+    from .horizon_windows import ValueStats
+
+    stats: dict = {}
+    used: set = set()
+    with rasterio.Env(GDAL_CACHEMAX=GDAL_CACHE_MB), job.source.reader() as rd, _TASK_LOCK:
+        cache = WindowCache(rd)
+        acc = region_sum(cache.get, rs, weighted_light(job, weights, stats, used))
+        nread, carried = rd.bytes_read, cache.carried_bytes
+    vals = ValueStats()
+    vals.add(acc)
+    r0, r1, c0, c1 = rs.region
+    shade = None
+    if stride:
+        sub, at = every_nth(acc, r0, c0, stride)
+        shade = (sub.copy(), at)
+    acc[np.isnan(acc)] = -9999.0
+    src = job.source
+    prof = dict(driver="GTiff", width=c1 - c0, height=r1 - r0, count=1, dtype="float32",
+                nodata=-9999.0, compress="deflate", zlevel=DEFLATE_LEVEL, predictor=3,
+                tiled=True, blockxsize=256, blockysize=256)
+    if src.crs is not None:
+        prof["crs"] = src.crs
+    if src.transform is not None:
+        prof["transform"] = src.transform @ Affine.translation(c0, r0)
+    # overwrite: a task run again (its worker died) writes the same part again
+    with atomic_path(path, ".tif", overwrite=True) as tmp, warnings.catch_warnings():
+        warnings.simplefilter("ignore", NotGeoreferencedWarning)
+        with gdal_checked(path), rasterio.open(tmp, "w", **prof) as dst:
+            dst.write(acc, 1)
+    return {"values": (vals.lo, vals.total, vals.count, vals.hi), "algorithm_stats": stats,
+            "curvature_used": used, "bytes_read": nread, "bytes_carried": carried,
+            "shade": shade}
+
+
+def _on_dask(cfg, scheduler, job, regs, weights, tags, values, algo_stats, used, tally,
+             pv_hours, stride) -> None:
+    """Every region a task (:func:`region_task`); their parts put together through a VRT into
+    ``cfg.output`` (``horizon_windows.VrtOutput``, as the in-memory run's file: one float32
+    band, -9999 nodata, the same tags and description)."""
+    from ..io.vrt import VrtSource
+    from .dask import DaskSession
+    from .horizon_windows import VrtOutput
+    from .report import progress_total
+
+    ro = cfg.run
+    src = job.source
+    with DaskSession(scheduler, cfg.output, ro.worker_timeout) as session:
+        client, folder = session.client, session.folder
+        workers = session.workers()
+        paths = {}
+        for rs in regs:
+            path = os.path.join(folder, f"hours_r{rs.region[0]}_c{rs.region[2]}.tif")
+            f = client.submit(region_task, job, rs, weights, path,
+                              stride if pv_hours is not None else None, pure=False)
+            paths[f.key] = (rs, path)
+            session.futures.append(f)
+        parts = []
+        bar = progress_total(len(session.futures), ro.quiet, "hillshade-rt sun-hours (dask)",
+                             "window", ro.progress)
+        with bar:
+            for f, res in session.completed(session.futures):
+                rs, path = paths[f.key]
+                parts.append((rs.region, path))
+                values.merge(res["values"])
+                used |= res["curvature_used"]
+                for k, v in res["algorithm_stats"].items():
+                    algo_stats.setdefault(k, v)
+                tally.bytes_read += res["bytes_read"]
+                tally.bytes_carried += res["bytes_carried"]
+                if pv_hours is not None and res["shade"] is not None:
+                    sub, (a, b) = res["shade"]
+                    pv_hours[a:a + sub.shape[0], b:b + sub.shape[1]] = sub
+                bar.update(1)
+        out = VrtOutput(cfg.output, src.shape, src.transform, src.crs, [DESCRIPTION], tags,
+                        overwrite=ro.overwrite, fmt=ro.fmt, co=ro.creation_options)
+        out.write([[VrtSource(path, 1, (r[0], r[2]), (r[1] - r[0], r[3] - r[2]))
+                    for r, path in parts]])
+        tally.extra = session.info(workers)
