@@ -16,7 +16,8 @@ _EXPORTS = {"HillshadeError": "errors", "Grid": "model.geometry", "sun_rays": "m
             "is_shadowed": "engine.arrays", "sky_view": "engine.arrays",
             "horizon_profile": "engine.arrays", "sun_at_points": "engine.arrays",
             "Shader": "engine.shader", "render": "engine.shader",
-            "shade": "api", "irradiance": "api", "animate": "api"}
+            "shade": "api", "irradiance": "api", "animate": "api",
+            "sun_hours": "api"}
 
 __all__ = list(_EXPORTS) + ["__version__"]
 

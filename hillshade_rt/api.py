@@ -387,6 +387,64 @@ def irradiance(dem, output=None, *, date=None, end_date=None, start=None, end=No
 
 
 @_keyword_errors
+def sun_hours(dem, output=None, *, date=None, end_date=None, step: str = "10min",
+              algorithm: str = "auto", curvature: bool | None = None,
+              refraction_k: float | None = None, soft: bool = False,
+              self_shadow: bool | None = None, height_above_ground: float = 0.0,
+              backend: str = "auto", max_memory=None, window_size=None, client=None,
+              worker_timeout: float = DEFAULT_WORKER_TIMEOUT, fmt: str | None = None,
+              creation_options=None, overwrite: bool = False, report: str | None = None,
+              preview: str | None = None, progress: bool = False, context=None,
+              each: bool = False, output_pattern: str | None = None, **more) -> dict:
+    """``hillshade-rt sun-hours`` as a function: the hours of direct sun per cell of the DEM
+    at ``dem`` over the day ``date`` (a date or "YYYY-MM-DD"; to ``end_date``, included), the
+    sun every ``step``, written to ``output`` (float32 hours, -9999 nodata). In memory, or in
+    windows as ``--max-memory``/``--window-size``; ``client`` a ``distributed.Client`` (or a
+    scheduler address, or "local:N"): the windows run as Dask tasks on it, as :func:`shade`'s.
+    The same bits in every mode. Further keywords are the command line's options of the same
+    name (``tz``, ``lat``, ``lon``, ``band``, ``nodata``, ``threads``, ...); ``self_shadow``
+    None: on with the observer on the ground, off above it; ``each``, ``output_pattern``,
+    ``context``, ``fmt``, ``creation_options`` and ``progress`` as for :func:`irradiance`.
+    Returns the report."""
+    from .run import ReadOptions, RunOptions
+    from .run.config import SunHoursConfig
+    from .run.sun_hours import sun_hours as run_sun_hours
+    from .run.batch import split_files, sun_hours_each
+    from .model.sun import DEFAULT_TOLERANCE
+    from .io.write import virtual_outputs
+    unknown = set(more) - set(FORWARDED)
+    if unknown:
+        raise TypeError(f"sun_hours() got unexpected keyword argument(s) "
+                        f"{', '.join(sorted(unknown))}")
+    if date is None:
+        raise HillshadeError("sun_hours needs date (the day, or the first day with end_date)")
+
+    def text(v):
+        return None if v is None else str(v.isoformat() if hasattr(v, "isoformat") else v)
+    dems = [dem] if isinstance(dem, (str, os.PathLike)) else list(dem)
+    dem, output = split_files(dems + ([] if output is None else [output]), each,
+                              output_pattern, "sun-hours")
+    place = {k: more.get(k, d) for k, d in zip(PLACE_KEYS, (None,) * 5 + (False,
+                                                                          DEFAULT_TOLERANCE))}
+    read = ReadOptions(**{k: more[k] for k in READ_KEYS if k in more},
+                       context=None if context is None else os.fspath(context))
+    run = RunOptions(backend=backend, threads=more.get("threads"), report_path=report,
+                     overwrite=overwrite, **_progress(progress), fmt=fmt, preview=preview,
+                     say=_stderr, creation_options=creation_options,
+                     worker_timeout=worker_timeout)
+    cfg = SunHoursConfig(dem=dem, output=output, date=text(date), end_date=text(end_date),
+                         step=step, place=place, algorithm=algorithm, curvature=curvature,
+                         refraction_k=refraction_k, soft=soft, self_shadow=self_shadow,
+                         read=read, run=run, height_above_ground=height_above_ground,
+                         max_memory=max_memory, window_size=window_size, scheduler=client)
+    token = virtual_outputs.set(True)    # /vsimem/ outputs are fine from Python
+    try:
+        return sun_hours_each(cfg, dem, output_pattern) if each else run_sun_hours(cfg)
+    finally:
+        virtual_outputs.reset(token)
+
+
+@_keyword_errors
 def animate(dem, output, *, date=None, start=None, end=None, step: str | None = None,
             fps: float = 12.0, size: int = 1024, label: bool = True, algorithm: str = "auto",
             curvature: bool | None = None, refraction_k: float | None = None,

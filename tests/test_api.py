@@ -1,5 +1,6 @@
 """hillshade_rt.shade: whole runs from Python, the command line's code and report."""
 
+import datetime as _dt
 import json
 import os
 
@@ -183,7 +184,7 @@ ALGORITHM_FLAGS = {"no_pyramid", "nextv", "better_nextv", "horizon_method", "sam
                    "exact_steps"}
 # each API function and the commands it stands for
 FRONT_DOORS = {"shade": ("shadow", "hillshade"), "irradiance": ("irradiance",),
-               "animate": ("animate",)}
+               "animate": ("animate",), "sun_hours": ("sun-hours",)}
 
 
 def _keywords(function) -> set:
@@ -219,7 +220,7 @@ def test_api_takes_every_option_of_its_command():
                     missing.setdefault(name, []).append(f"{command} {param.opts[0]}")
     assert not missing, missing
     # RENAMED names only real parameters (a stale entry would hide nothing but mislead)
-    every = {p.name for c in ("shadow", "hillshade", "irradiance", "animate")
+    every = {p.name for c in ("shadow", "hillshade", "irradiance", "animate", "sun-hours")
              for p in cli.commands[c].params}
     assert set(RENAMED) <= every and ALGORITHM_FLAGS <= every
 
@@ -285,3 +286,29 @@ def test_progress_json_lines_and_quiet(tmp_path, capsys):
     assert capsys.readouterr().err == ""
     with pytest.raises(hr.HillshadeError, match="progress must be"):
         hr.shade(dem, tmp_path / "c.tif", times=times, progress="dots")
+
+
+def test_sun_hours_as_the_command_line_in_memory_and_in_windows(tmp_path):
+    """``sun_hours`` writes the command's file, in memory and in windows (the same bits), and
+    says what it needs."""
+    from click.testing import CliRunner
+
+    from hillshade_rt.cli import cli
+    z = fractal_terrain(90, 110, 7, relief=400.0)
+    dem = write_geotiff(tmp_path / "d.tif", z, Affine(30, 0, 476000, 0, -30, 4400000),
+                        CRS.from_epsg(32613))
+    r = CliRunner().invoke(cli, ["sun-hours", dem, str(tmp_path / "cli.tif"), "-q", "--date",
+                                 "2026-12-21", "--step", "1h"])
+    assert r.exit_code == 0, r.output
+    ref = read_band(tmp_path / "cli.tif")
+    rep = hr.sun_hours(dem, tmp_path / "api.tif", date="2026-12-21", step="1h")
+    np.testing.assert_array_equal(read_band(tmp_path / "api.tif"), ref)
+    hr.sun_hours(dem, tmp_path / "win.tif", date=_dt.date(2026, 12, 21), step="1h",
+                 window_size="64x64")
+    np.testing.assert_array_equal(read_band(tmp_path / "win.tif"), ref)
+    assert len(np.unique(ref)) > 3 and isinstance(rep, dict)
+    with pytest.raises(hr.HillshadeError, match="needs date"):
+        hr.sun_hours(dem, tmp_path / "x.tif")
+    with pytest.raises(TypeError, match="azimuth"):
+        hr.sun_hours(dem, tmp_path / "x.tif", date="2026-12-21", azimuth=3)
+    assert not (tmp_path / "x.tif").exists()
