@@ -764,14 +764,14 @@ def irradiance(heights, times, spacing: float | tuple[float, float] | Grid | Non
     if perez:
         ir.with_perez(sky, times, zen)
     ran_on = choose_backend(backend, algorithm, {})
+    shader = Shader(z, grid, algorithm, {}, ran_on, curvature, refraction_k, body)
     if sky_view is not None:
         vd = np.ascontiguousarray(sky_view, np.float32)
         if vd.shape != z.shape:
             raise HillshadeError(f"sky_view: shape {vd.shape}, the heights' is {z.shape}")
-    else:
+    else:       # (one pyramid for the sky view and the shadows: the Shader's)
         vd = ir.dozier_view(z, grid, sky_view_directions, ran_on, curvature, refraction_k,
-                            body)
-    shader = Shader(z, grid, algorithm, {}, ran_on, curvature, refraction_k, body)
+                            body, pyramid=shader.pyramid(z, True) if ran_on == "cpu" else None)
     out = ir.accumulate(shader, suns, np.ones(len(times)) if weights is None else weights, sky,
                         vd, albedo, soft=soft, perez=perez, per_time=weights is None)
     if mean:

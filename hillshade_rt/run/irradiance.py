@@ -286,9 +286,12 @@ def _light(cfg, ctx: RunContext, d, shader, lighting, body, sampled: _Samples, a
         if cfg.sky_view is not None:
             vd, vd_tags = _read_vd(cfg, d, hs, None, d.heights)
         else:
+            # one pyramid for the sky view and every sun's shadows (the Shader's, built once)
+            pyramid = shader.pyramid(shader.z, True) if lighting.backend == "cpu" else None
             vd, vd_tags = ir.dozier_view(d.heights, d.grid, cfg.skyview_directions,
                                          lighting.backend, lighting.curvature,
-                                         lighting.refraction_k, body, lighting.lift), None
+                                         lighting.refraction_k, body, lighting.lift,
+                                         pyramid=pyramid), None
     if cfg.sky_view_out is not None:
         _write_vd(cfg, ctx, d, vd, hs, None, d.heights)
     with ctx.timer("compute"):
