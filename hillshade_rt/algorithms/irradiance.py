@@ -71,18 +71,21 @@ def incidence_of(nrm: tuple, lx: float, ly: float, lz: float) -> np.ndarray:
 
 
 @njit(parallel=True, cache=True)
-def add_sample(lit, ge, gn, length, row_tile, col_tile, suns, from_normals, beam_on, dni, w,
-               beam, diffuse_on, circ_on, f1, circ, f2, dhi, vd, sin_s, share, diffuse):
+def add_sample(lit, cast, use_cast, ge, gn, length, row_tile, col_tile, suns, from_normals,
+               beam_on, dni, w, beam, diffuse_on, circ_on, f1, circ, f2, dhi, vd, sin_s, share,
+               diffuse):
     """Add one sample into the sums ``beam`` and ``diffuse`` (float64, in place).
 
-    ``lit`` (float32): with ``from_normals`` the cast-shadow light (1/0, or the disk's
-    fraction), each cell's cos i from the normals (``ge``, ``gn``, ``length``) and the sun of
-    its tile (``suns[row_tile[r], col_tile[c]]``: lx, ly, lz); else max(cos i, 0) · lit
-    itself. ``beam_on``: beam += w · (dni · max(cos i, 0) · lit), ``dni`` float32.
+    ``lit`` (float32): with ``from_normals`` the cast-shadow light (the disk's fraction, or
+    with ``use_cast`` 1 where the hard mask ``cast`` (uint8) is 0, else 0: ``render``'s "sun"
+    light, the voids NaN through cos i), each cell's cos i from the normals (``ge``, ``gn``,
+    ``length``) and the sun of its tile (``suns[row_tile[r], col_tile[c]]``: lx, ly, lz); else
+    max(cos i, 0) · lit itself. ``beam_on``: beam += w · (dni · max(cos i, 0) · lit), ``dni`` float32.
     ``diffuse_on`` (Perez): d = (1 - f1) · vd + f2 · sin_s · share, plus ``circ`` ·
     max(cos i, 0) · lit with ``circ_on`` (circ = f1 / b); diffuse += w · max(dhi · d, 0)."""
     n_r, n_c = beam.shape
     zero = np.float32(0.0)
+    one = np.float32(1.0)
     for r in prange(n_r):
         tr = row_tile[r]
         for c in range(n_c):
@@ -94,7 +97,10 @@ def add_sample(lit, ge, gn, length, row_tile, col_tile, suns, from_normals, beam
                                       / length[r, c])
                     if not (cosi >= zero or math.isnan(cosi)):
                         cosi = zero
-                    d = cosi * lit[r, c]
+                    if use_cast:
+                        d = cosi * (one if cast[r, c] == 0 else zero)
+                    else:
+                        d = cosi * lit[r, c]
                 else:
                     d = lit[r, c]
             if beam_on:

@@ -420,8 +420,8 @@ def accumulate(shader, suns, weights, sky: Sky, vd: np.ndarray, albedo: float, *
         nrm = normals(shader.z, shader.grid)      # once: every sun's incidence reads them
 
     def lit_of(s, timed):
-        with timed("shadows"):
-            return render(shader, s, "sun", soft=soft, stats=stats)
+        with timed("shadows"):     # hard: the uint8 mask itself (add_sample reads it)
+            return render(shader, s, "sun" if soft else "shadow", soft=soft, stats=stats)
 
     def slopes():
         from ..algorithms.irradiance import incidence_of
@@ -465,7 +465,7 @@ def sums(direct, void: np.ndarray, slopes, suns, weights, sky: Sky, vd: np.ndarr
     """``accumulate``'s bands over any cells: ``direct(sun, timed)`` gives max(cos i, 0) · lit
     of the cells (float32, NaN voids) for a sun with light to cast (``timed(stage)``: the
     timer's context), or with ``normals`` (``algorithms.irradiance.normals`` of the cells) lit
-    alone, cos i then worked out from the normals; ``void`` marks their voids, ``slopes()``
+    alone (float32, or the uint8 hard mask: 0 lit), cos i then worked out from the normals; ``void`` marks their voids, ``slopes()``
     gives their (cos S, sin S) (Perez only). The cells may be a whole DEM (``accumulate``) or a
     tile of a larger raster whose shadows and incidence come from its windows
     (``run.irradiance`` with --context): the arithmetic per cell is the same, cell by cell, in
@@ -504,6 +504,7 @@ def sums(direct, void: np.ndarray, slopes, suns, weights, sky: Sky, vd: np.ndarr
     none1 = np.zeros(1, np.int64)
     none3 = np.zeros((1, 1, 3), np.float64)
     no_lit = np.empty((1, 1), np.float32)
+    no_cast = np.empty((1, 1), np.uint8)
     rows0 = np.zeros(shape[0], np.int64)
     if not perez:
         sin_s = horizon_share = none2
@@ -514,7 +515,8 @@ def sums(direct, void: np.ndarray, slopes, suns, weights, sky: Sky, vd: np.ndarr
         lit = None
         if (dni > 0 or circ) and not is_dark(s, soft):
             lit = np.ascontiguousarray(direct(s, timed))
-            if lit.dtype != np.float32 or lit.shape != shape:
+            if lit.shape != shape or not (lit.dtype == np.float32 or (
+                    lit.dtype == np.uint8 and normals is not None)):
                 raise HillshadeError(f"the light of a sun is {lit.dtype} {lit.shape}, not "
                                      f"float32 {shape}")
             counted["samples_with_shadows"] += 1
@@ -528,7 +530,9 @@ def sums(direct, void: np.ndarray, slopes, suns, weights, sky: Sky, vd: np.ndarr
             else:
                 row_tile, col_tile, vec, ge, gn, length = rows0, none1, none3, none2, none2, none2
             f1 = float(sky.f1[k]) if diffuse_on else 0.0
-            add_sample(no_lit if lit is None else lit, ge, gn, length, row_tile, col_tile, vec,
+            mask = lit is not None and lit.dtype == np.uint8
+            add_sample(no_lit if lit is None or mask else lit, lit if mask else no_cast, mask,
+                       ge, gn, length, row_tile, col_tile, vec,
                        lit is not None and normals is not None, lit is not None,
                        np.float32(dni), float(w[k]), beam, diffuse_on,
                        bool(diffuse_on and lit is not None and sky.f1[k] > 0), f1,
