@@ -769,11 +769,15 @@ def irradiance(heights, times, spacing: float | tuple[float, float] | Grid | Non
         vd = np.ascontiguousarray(sky_view, np.float32)
         if vd.shape != z.shape:
             raise HillshadeError(f"sky_view: shape {vd.shape}, the heights' is {z.shape}")
-    else:       # (one pyramid for the sky view and the shadows: the Shader's)
+    from ..algorithms.irradiance import normals
+    nrm = normals(z, grid)          # Horn's normals once: the sky view's and the sums'
+    if sky_view is None:            # (one pyramid for the sky view and the shadows: the Shader's)
         vd = ir.dozier_view(z, grid, sky_view_directions, ran_on, curvature, refraction_k,
-                            body, pyramid=shader.pyramid(z, True) if ran_on == "cpu" else None)
+                            body, pyramid=shader.pyramid(z, True) if ran_on == "cpu" else None,
+                            normals=nrm)
     out = ir.accumulate(shader, suns, np.ones(len(times)) if weights is None else weights, sky,
-                        vd, albedo, soft=soft, perez=perez, per_time=weights is None)
+                        vd, albedo, soft=soft, perez=perez, per_time=weights is None,
+                        normals=nrm)
     if mean:
         hours = float(weights.sum())
         if hours <= 0:

@@ -333,14 +333,16 @@ def with_perez(sky: Sky, times, zenith) -> Sky:
 
 def dozier_view(z, grid, directions: int, backend: str = "cpu", curvature="auto",
                 refraction_k: float | None = None, body=None, lift: float = 0.0,
-                pyramid=None) -> np.ndarray:
+                pyramid=None, normals=None) -> np.ndarray:
     """Dozier's sky view factor Vd of every cell's tilted surface (float32, NaN voids) from its
     exact horizon in ``directions`` azimuths, as ``hillshade-rt skyview --definition dozier``
     (curvature "auto": on for a raster more than 1 km across); the horizons seen from ``lift``
     metres above each cell (--height-above-ground), the surface's slope and aspect the cell's.
     ``pyramid``: the maximum-height pyramid of ``z`` to march over (``algorithms.pyramid.
     MaxPyramid``, e.g. the lighting Shader's, so that the shadows reuse the one built here;
-    None or False: one of its own)."""
+    None or False: one of its own); ``normals``: Horn's normals of ``z``
+    (``algorithms.irradiance.normals``, shared with the sums) for the surface's slope and
+    aspect (None: from the heights, the same values)."""
     from ..algorithms import horizon as hz
     from ..algorithms.skyview import sky_view
     from ..model.geometry import equal_azimuths
@@ -360,7 +362,8 @@ def dozier_view(z, grid, directions: int, backend: str = "cpu", curvature="auto"
         def angles_of(a):
             return hz.horizon_angles(z, shader.rays(grid, a, 45.0), pyramid=pyramid,
                                      floor_deg=0.0, lift=lift)
-    return sky_view(z, grid, equal_azimuths(360.0 / int(directions)), angles_of, "dozier")
+    return sky_view(z, grid, equal_azimuths(360.0 / int(directions)), angles_of, "dozier",
+                    normals=normals)
 
 
 def slope_terms(z, grid) -> tuple[np.ndarray, np.ndarray]:
@@ -394,7 +397,7 @@ def is_dark(sun, soft: bool) -> bool:
 
 def accumulate(shader, suns, weights, sky: Sky, vd: np.ndarray, albedo: float, *,
                soft: bool = False, perez: bool = False, per_time: bool = False,
-               stats: dict | None = None, timer=None, progress=None) -> dict:
+               stats: dict | None = None, timer=None, progress=None, normals=None) -> dict:
     """The four bands (``BANDS``, float32, NaN voids) over ``shader``'s DEM: with ``per_time``
     each a (times, rows, cols) stack of W/m² at each sun, else the sums of W/m² times
     ``weights`` (hours): Wh/m². ``suns``: ``sun.SunOver`` per sample (the shadows' and the
@@ -403,7 +406,8 @@ def accumulate(shader, suns, weights, sky: Sky, vd: np.ndarray, albedo: float, *
     cast; ``timer`` (``run.report.Timer``-like) times them as "shadows" and the rest as
     "irradiance"; ``progress`` wraps the loop (a progress bar). The sums take Horn's normals once
     (``algorithms.irradiance.normals``) and add each sample in place; the stacks go as before,
-    sun by sun through numpy."""
+    sun by sun through numpy. ``normals``: those normals when the caller has them (the sky
+    view's)."""
     from .shader import render
     if per_time:
         def direct(s, timed):
@@ -414,10 +418,12 @@ def accumulate(shader, suns, weights, sky: Sky, vd: np.ndarray, albedo: float, *
         return sums(direct, np.isnan(shader.z), lambda: slope_terms(shader.z, shader.grid),
                     suns, weights, sky, vd, albedo, soft=soft, perez=perez, per_time=True,
                     stats=stats, timer=timer, progress=progress)
-    from ..algorithms.irradiance import normals
+    from ..algorithms.irradiance import normals as horn_normals
     from ..algorithms.relief import sun_vector
-    with (timer("irradiance") if timer is not None else _nothing()):
-        nrm = normals(shader.z, shader.grid)      # once: every sun's incidence reads them
+    nrm = normals
+    if nrm is None:
+        with (timer("irradiance") if timer is not None else _nothing()):
+            nrm = horn_normals(shader.z, shader.grid)   # once: every sun's incidence reads them
 
     def lit_of(s, timed):
         with timed("shadows"):     # hard: the uint8 mask itself (add_sample reads it)

@@ -277,8 +277,11 @@ def _light(cfg, ctx: RunContext, d, shader, lighting, body, sampled: _Samples, a
            bar) -> _Bands:
     """The four bands of the DEM in memory: Dozier's sky view, then each sun's cast shadows
     and incidence summed with the sky (``engine.irradiance.accumulate``)."""
+    from ..algorithms.irradiance import normals
     from ..engine import irradiance as ir
     from ..engine.shader import horizon_shader
+    with ctx.timer("prepare"):   # Horn's normals once: the sky view's and every sun's
+        nrm = normals(d.heights, d.grid)
     # the sky view's curvature and refraction, as dozier_view's (from the shape, no heights)
     hs = horizon_shader(d.heights, d.grid, lighting.backend, lighting.curvature,
                         lighting.refraction_k, body)
@@ -291,13 +294,13 @@ def _light(cfg, ctx: RunContext, d, shader, lighting, body, sampled: _Samples, a
             vd, vd_tags = ir.dozier_view(d.heights, d.grid, cfg.skyview_directions,
                                          lighting.backend, lighting.curvature,
                                          lighting.refraction_k, body, lighting.lift,
-                                         pyramid=pyramid), None
+                                         pyramid=pyramid, normals=nrm), None
     if cfg.sky_view_out is not None:
         _write_vd(cfg, ctx, d, vd, hs, None, d.heights)
     with ctx.timer("compute"):
         bands = ir.accumulate(shader, sampled.suns, sampled.weights, sampled.sky, vd,
                               cfg.albedo, soft=lighting.soft, perez=cfg.perez, stats=algo_stats,
-                              timer=ctx.timer, progress=bar)
+                              timer=ctx.timer, progress=bar, normals=nrm)
     return _Bands(bands, vd, shader.report(), vd_from="computed" if vd_tags is None else "read",
                   vd_tags=vd_tags)
 
