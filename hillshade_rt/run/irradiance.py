@@ -11,6 +11,11 @@ cast shadows and the incidence come from the context's windows
 windowed horizon march (``run.horizon_windows``, the rays to the context's edge), so that every
 cell gets the bits the whole context's run gives it.
 
+Dozier's Vd is computed (the pyramid and Horn's normals of the DEM computed once and shared with
+every sun's shadows and sums), or read with ``--sky-view`` from a file that ``skyview
+--definition dozier`` or ``--sky-view-out`` wrote, checked against the DEM and the run's
+settings (``run.sky_view_file``): the same output bytes either way.
+
 The run's steps, between the shared preamble and tail (``run.runner.RunContext``): what the
 command line asks (the period, the place, the ``--ghi`` series), the DEM read, the samples (the
 suns of the period at the DEM's place and the open sky at each), the light (the sky view and
