@@ -80,7 +80,8 @@ def add_sample(lit, cast, use_cast, ge, gn, length, row_tile, col_tile, suns, fr
     with ``use_cast`` 1 where the hard mask ``cast`` (uint8) is 0, else 0: ``render``'s "sun"
     light, the voids NaN through cos i), each cell's cos i from the normals (``ge``, ``gn``,
     ``length``) and the sun of its tile (``suns[row_tile[r], col_tile[c]]``: lx, ly, lz); else
-    max(cos i, 0) · lit itself. ``beam_on``: beam += w · (dni · max(cos i, 0) · lit), ``dni`` float32.
+    max(cos i, 0) · lit itself. ``beam_on``: beam += w · (dni · max(cos i, 0) · lit), ``dni``
+    float32.
     ``diffuse_on`` (Perez): d = (1 - f1) · vd + f2 · sin_s · share, plus ``circ`` ·
     max(cos i, 0) · lit with ``circ_on`` (circ = f1 / b); diffuse += w · max(dhi · d, 0)."""
     n_r, n_c = beam.shape

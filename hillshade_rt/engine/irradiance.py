@@ -471,13 +471,13 @@ def sums(direct, void: np.ndarray, slopes, suns, weights, sky: Sky, vd: np.ndarr
     """``accumulate``'s bands over any cells: ``direct(sun, timed)`` gives max(cos i, 0) · lit
     of the cells (float32, NaN voids) for a sun with light to cast (``timed(stage)``: the
     timer's context), or with ``normals`` (``algorithms.irradiance.normals`` of the cells) lit
-    alone (float32, or the uint8 hard mask: 0 lit), cos i then worked out from the normals; ``void`` marks their voids, ``slopes()``
-    gives their (cos S, sin S) (Perez only). The cells may be a whole DEM (``accumulate``) or a
-    tile of a larger raster whose shadows and incidence come from its windows
-    (``run.irradiance`` with --context): the arithmetic per cell is the same, cell by cell, in
-    the same order and types. The sums are added in place sample by sample
-    (``algorithms.irradiance.add_sample``), the values of the numpy expressions of the stacks
-    (``per_time``) bit for bit."""
+    alone (float32, or the uint8 hard mask: 0 lit), cos i then worked out from the normals;
+    ``void`` marks their voids, ``slopes()`` gives their (cos S, sin S) (Perez only). The cells
+    may be a whole DEM (``accumulate``) or a tile of a larger raster whose shadows and incidence
+    come from its windows (``run.irradiance`` with --context): the arithmetic per cell is the
+    same, cell by cell, in the same order and types. The sums are added in place sample by
+    sample (``algorithms.irradiance.add_sample``: the bits of numpy's w · (DNI · d) and
+    w · max(DHI · (...), 0) sums); the stacks (``per_time``) are numpy's."""
     import contextlib
     w = np.asarray(weights, np.float64)
     n = len(suns)

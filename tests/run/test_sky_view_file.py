@@ -181,3 +181,14 @@ def test_api_keywords(tmp_path):
     b = hillshade_rt.irradiance(dem, tmp_path / "b.tif", sky_view=tmp_path / "sv.tif", **kw)
     assert a["sky_view_from"] == "computed" and b["sky_view_from"] == "read"
     assert (tmp_path / "a.tif").read_bytes() == (tmp_path / "b.tif").read_bytes()
+
+
+def test_sky_view_with_each_is_a_usage_error(tmp_path, runner):
+    """--each runs many DEMs: one sky view file cannot serve them (exit 2, nothing written)."""
+    a, b = _dem(tmp_path, "a.tif"), _dem(tmp_path, "b.tif", seed=6)
+    for opt in ("--sky-view", "--sky-view-out"):
+        r = runner.invoke(cli, ["irradiance", str(a), str(b), "--each", "--output-pattern",
+                                str(tmp_path / "{stem}_irr.tif"), *DAY, opt,
+                                str(tmp_path / "sv.tif")])
+        _one_line(r, 2, "run each DEM on its own")
+    assert not list(tmp_path.glob("*_irr.tif")) and not (tmp_path / "sv.tif").exists()
