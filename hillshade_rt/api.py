@@ -332,7 +332,8 @@ def irradiance(dem, output=None, *, date=None, end_date=None, start=None, end=No
                overwrite: bool = False, report: str | None = None,
                preview: str | None = None, progress: bool = False, context=None,
                height_above_ground: float = 0.0, each: bool = False,
-               output_pattern: str | None = None, **more) -> dict:
+               output_pattern: str | None = None, sky_view=None, sky_view_out=None,
+               **more) -> dict:
     """``hillshade-rt irradiance`` as a function: the beam, diffuse, reflected and global
     irradiance on every cell of the DEM at ``dem`` over a period, written to ``output`` (4
     float32 bands, Wh/m², or W/m² with ``mean``). The period: ``date`` (a date or
@@ -342,7 +343,10 @@ def irradiance(dem, output=None, *, date=None, end_date=None, start=None, end=No
     the command line's options of the same name (``tz``, ``lat``, ``lon``, ``band``,
     ``nodata``, ``threads``, ...); ``fmt`` and ``creation_options`` as for :func:`shade`;
     ``context`` as ``--context`` (the DEM a tile of that raster); ``height_above_ground`` as
-    ``--height-above-ground`` (metres: the receiving surface stands this high). ``each``:
+    ``--height-above-ground`` (metres: the receiving surface stands this high); ``sky_view``
+    as ``--sky-view`` (the path of Dozier's sky view factor made by ``skyview --definition
+    dozier`` with the run's settings, read instead of computed), ``sky_view_out`` as
+    ``--sky-view-out`` (the path the computed one is written to). ``each``:
     ``dem`` a list of unrelated DEMs, each on its own into ``output_pattern``'s ``{stem}``, as
     ``--each`` (no ``output``; the report lists each input's status, as :func:`shade`'s).
     ``progress`` as for :func:`shade`. Returns the report. For
@@ -378,7 +382,9 @@ def irradiance(dem, output=None, *, date=None, end_date=None, start=None, end=No
                            mean=mean, soft=soft, perez=perez,
                            skyview_directions=skyview_directions, place=place,
                            algorithm=algorithm, curvature=curvature, refraction_k=refraction_k,
-                           read=read, run=run, height_above_ground=height_above_ground)
+                           read=read, run=run, height_above_ground=height_above_ground,
+                           sky_view=None if sky_view is None else os.fspath(sky_view),
+                           sky_view_out=None if sky_view_out is None else os.fspath(sky_view_out))
     token = virtual_outputs.set(True)    # /vsimem/ outputs are fine from Python
     try:
         return irradiance_each(cfg, dem, output_pattern) if each else run_irradiance(cfg)

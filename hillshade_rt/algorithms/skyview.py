@@ -138,20 +138,23 @@ class Sum:
     ``z`` and ``grid``: heights (and their grid) around the cells, ``rows``/``cols`` the cells'
     place in ``z`` (the whole of it in memory; a window's region, with a cell of margin, in
     windows): Dozier's definition takes the cells' slope and aspect from Horn's normals there.
-    :meth:`add` one direction's angles of the cells, then :meth:`result`."""
+    :meth:`add` one direction's angles of the cells, then :meth:`result`. ``normals``: Horn's
+    normals of the whole of ``z`` (``irradiance.normals``, computed once by the caller, which
+    reuses them), read instead of the heights for the incidences (the same values)."""
 
     def __init__(self, definition: str, z: np.ndarray, grid, rows: slice = slice(None),
-                 cols: slice = slice(None)):
+                 cols: slice = slice(None), normals=None):
         r0, r1, _ = rows.indices(z.shape[0])
         c0, c1, _ = cols.indices(z.shape[1])
         self.definition, self.z, self.grid, self.rows, self.cols = definition, z, grid, rows, cols
+        whole = (r0, r1, c0, c1) == (0, z.shape[0], 0, z.shape[1])
+        self.normals = normals if whole else None
         self.shape = (r1 - r0, c1 - c0)
         self.acc = np.zeros(self.shape, np.float64)
         self.count = np.zeros(self.shape, np.int32) if definition.startswith("openness") else None
         self.cos_s = None
         if definition == "dozier":
-            from .relief import incidence
-            self.cos_s = incidence(z, grid, 0.0, 90.0, rows, cols).astype(np.float64)
+            self.cos_s = self._incidence(0.0, 90.0).astype(np.float64)
         self.n = 0
 
     def add(self, azimuth: float, beta: np.ndarray) -> None:
@@ -161,14 +164,20 @@ class Sum:
         if d == "zaksek":
             zaksek(beta, self.acc)
         elif d == "dozier":
-            from .relief import incidence
             # sin S cos(φ - A): the normal's horizontal part along φ (incidence of a sun on
             # the horizon at azimuth φ)
-            dozier(beta, self.cos_s, incidence(self.z, self.grid, azimuth, 0.0, self.rows,
-                                               self.cols), self.acc)
+            dozier(beta, self.cos_s, self._incidence(azimuth, 0.0), self.acc)
         else:
             openness(beta, self.acc, self.count)
         self.n += 1
+
+    def _incidence(self, azimuth: float, elevation: float) -> np.ndarray:
+        """``relief.incidence`` of the cells, from the normals when the caller gave them."""
+        from .relief import incidence, sun_vector
+        if self.normals is not None:
+            from .irradiance import incidence_of
+            return incidence_of(self.normals, *sun_vector(azimuth, elevation))
+        return incidence(self.z, self.grid, azimuth, elevation, self.rows, self.cols)
 
     def result(self) -> np.ndarray:
         """float32: the sky view factor (0..1) or the openness (degrees); NaN on voids and,
@@ -183,11 +192,12 @@ class Sum:
         return out.astype(np.float32)
 
 
-def sky_view(z, grid, azimuths, angles_of, definition: str) -> np.ndarray:
+def sky_view(z, grid, azimuths, angles_of, definition: str, normals=None) -> np.ndarray:
     """The definition's result over the whole raster ``z`` (float32, NaN on voids) from
     ``angles_of(azimuth)`` (horizon elevation in degrees per cell, NaN on voids, -90 with
-    nothing ahead; of -z for negative openness) at each azimuth."""
-    s = Sum(definition, z, grid)
+    nothing ahead; of -z for negative openness) at each azimuth; ``normals`` as
+    :class:`Sum`'s."""
+    s = Sum(definition, z, grid, normals=normals)
     for a in azimuths:
         s.add(a, angles_of(a))
     return s.result()

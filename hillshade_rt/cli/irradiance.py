@@ -45,6 +45,13 @@ from .options import (SectionedCommand, context_option, each_pattern_options,
                    "instead of the isotropic one.")
 @click.option("--skyview-directions", type=click.IntRange(4, 360), default=32, show_default=True,
               metavar="N", help="Azimuths of the sky view factor (computed once).")
+@click.option("--sky-view", "sky_view", type=click.Path(dir_okay=False), default=None,
+              metavar="FILE", help="Read the sky view factor from FILE (hillshade-rt skyview "
+                                   "DEM FILE --definition dozier, same grid and settings) "
+                                   "instead of computing it.")
+@click.option("--sky-view-out", "sky_view_out", type=click.Path(dir_okay=False), default=None,
+              metavar="FILE", help="Also write the sky view factor computed to FILE, for "
+                                   "later runs' --sky-view.")
 @place_options("irradiance")
 @algorithm_option
 @physics_options
@@ -65,7 +72,7 @@ from .options import (SectionedCommand, context_option, each_pattern_options,
 @context_option
 @errors_to_click
 def irradiance(files, date_, end_date, start, end, step, clear_sky, linke_turbidity,
-               albedo, ghi, mean, perez, skyview_directions, tz, lat, lon, pressure, temperature,
+               albedo, ghi, mean, perez, skyview_directions, sky_view, sky_view_out, tz, lat, lon, pressure, temperature,
                no_refraction, sun_tolerance, algorithm, curvature, refraction_k, soft,
                height_above_ground, preview,
                backend, threads, report_path, overwrite, quiet, progress, fmt,
@@ -90,7 +97,7 @@ def irradiance(files, date_, end_date, start, end, step, clear_sky, linke_turbid
         mean=mean, soft=soft, perez=perez, skyview_directions=skyview_directions, place=place,
         algorithm=algorithm, curvature=curvature, refraction_k=refraction_k,
         read=to_read_options(kw), run=to_run_options(kw, say),
-        height_above_ground=height_above_ground)
+        height_above_ground=height_above_ground, sky_view=sky_view, sky_view_out=sky_view_out)
     if each:
         irradiance_each(cfg, dem, output_pattern)
     else:

@@ -622,7 +622,8 @@ def irradiance(heights, times, spacing: float | tuple[float, float] | Grid | Non
                sky_view_directions: int = 32, algorithm: str = "auto", backend: str = "auto",
                curvature="auto", refraction_k: float | None = None, body=None,
                refraction: bool = True, pressure: float | None = None,
-               temperature: float = 12.0, sun_tolerance: float | None = None) -> dict:
+               temperature: float = 12.0, sun_tolerance: float | None = None,
+               sky_view=None) -> dict:
     """Beam, diffuse, reflected and global irradiance on every cell, as ``hillshade-rt irradiance``.
 
     Formulas: ``hillshade_rt.engine.irradiance``, docs/irradiance.md.
@@ -687,6 +688,11 @@ def irradiance(heights, times, spacing: float | tuple[float, float] | Grid | Non
     sun_tolerance : float, optional
         Degrees: on a georeferenced DEM the sun is computed per tile where its direction varies
         by more than this across the raster (default 0.05).
+    sky_view : numpy.ndarray, optional
+        Dozier's sky view factor Vd of every cell (the heights' shape, NaN voids), e.g. the
+        band ``hillshade-rt skyview --definition dozier`` wrote (-9999 as NaN), used instead
+        of computing it (``sky_view_directions`` then unused); the caller sees to it that it
+        was made with the same settings.
 
     Returns
     -------
@@ -701,7 +707,7 @@ def irradiance(heights, times, spacing: float | tuple[float, float] | Grid | Non
         No spacing for an array; no times, naive times, weights not one number of hours >= 0 per
         time, ``mean`` without weights or with no hours; ``dni``/``dhi`` without ``ghi``, ``ghi``
         not one value per time; no ``lat``/``lon`` for an array, or out of range; bad options
-        (albedo, turbidity, directions, algorithm).
+        (albedo, turbidity, directions, algorithm); ``sky_view`` not of the heights' shape.
     AllNodata
         Every height is nodata.
     """
@@ -758,10 +764,20 @@ def irradiance(heights, times, spacing: float | tuple[float, float] | Grid | Non
     if perez:
         ir.with_perez(sky, times, zen)
     ran_on = choose_backend(backend, algorithm, {})
-    vd = ir.dozier_view(z, grid, sky_view_directions, ran_on, curvature, refraction_k, body)
     shader = Shader(z, grid, algorithm, {}, ran_on, curvature, refraction_k, body)
+    if sky_view is not None:
+        vd = np.ascontiguousarray(sky_view, np.float32)
+        if vd.shape != z.shape:
+            raise HillshadeError(f"sky_view: shape {vd.shape}, the heights' is {z.shape}")
+    from ..algorithms.irradiance import normals
+    nrm = normals(z, grid)          # Horn's normals once: the sky view's and the sums'
+    if sky_view is None:            # (one pyramid for the sky view and the shadows: the Shader's)
+        vd = ir.dozier_view(z, grid, sky_view_directions, ran_on, curvature, refraction_k,
+                            body, pyramid=shader.pyramid(z, True) if ran_on == "cpu" else None,
+                            normals=nrm)
     out = ir.accumulate(shader, suns, np.ones(len(times)) if weights is None else weights, sky,
-                        vd, albedo, soft=soft, perez=perez, per_time=weights is None)
+                        vd, albedo, soft=soft, perez=perez, per_time=weights is None,
+                        normals=nrm)
     if mean:
         hours = float(weights.sum())
         if hours <= 0:

@@ -332,11 +332,17 @@ def with_perez(sky: Sky, times, zenith) -> Sky:
 # the terrain: what does not change with the sun
 
 def dozier_view(z, grid, directions: int, backend: str = "cpu", curvature="auto",
-                refraction_k: float | None = None, body=None, lift: float = 0.0) -> np.ndarray:
+                refraction_k: float | None = None, body=None, lift: float = 0.0,
+                pyramid=None, normals=None) -> np.ndarray:
     """Dozier's sky view factor Vd of every cell's tilted surface (float32, NaN voids) from its
     exact horizon in ``directions`` azimuths, as ``hillshade-rt skyview --definition dozier``
     (curvature "auto": on for a raster more than 1 km across); the horizons seen from ``lift``
-    metres above each cell (--height-above-ground), the surface's slope and aspect the cell's."""
+    metres above each cell (--height-above-ground), the surface's slope and aspect the cell's.
+    ``pyramid``: the maximum-height pyramid of ``z`` to march over (``algorithms.pyramid.
+    MaxPyramid``, e.g. the lighting Shader's, so that the shadows reuse the one built here;
+    None or False: one of its own); ``normals``: Horn's normals of ``z``
+    (``algorithms.irradiance.normals``, shared with the sums) for the surface's slope and
+    aspect (None: from the heights, the same values)."""
     from ..algorithms import horizon as hz
     from ..algorithms.skyview import sky_view
     from ..model.geometry import equal_azimuths
@@ -350,12 +356,14 @@ def dozier_view(z, grid, directions: int, backend: str = "cpu", curvature="auto"
             return hz.horizon_angles_gpu(g, shader.rays(grid, a, 45.0), floor_deg=0.0,
                                          lift=lift)
     else:
-        pyramid = shader.pyramid(z, True)      # one for every direction
+        if not pyramid:
+            pyramid = shader.pyramid(z, True)      # one for every direction
 
         def angles_of(a):
             return hz.horizon_angles(z, shader.rays(grid, a, 45.0), pyramid=pyramid,
                                      floor_deg=0.0, lift=lift)
-    return sky_view(z, grid, equal_azimuths(360.0 / int(directions)), angles_of, "dozier")
+    return sky_view(z, grid, equal_azimuths(360.0 / int(directions)), angles_of, "dozier",
+                    normals=normals)
 
 
 def slope_terms(z, grid) -> tuple[np.ndarray, np.ndarray]:
@@ -389,35 +397,87 @@ def is_dark(sun, soft: bool) -> bool:
 
 def accumulate(shader, suns, weights, sky: Sky, vd: np.ndarray, albedo: float, *,
                soft: bool = False, perez: bool = False, per_time: bool = False,
-               stats: dict | None = None, timer=None, progress=None) -> dict:
+               stats: dict | None = None, timer=None, progress=None, normals=None) -> dict:
     """The four bands (``BANDS``, float32, NaN voids) over ``shader``'s DEM: with ``per_time``
     each a (times, rows, cols) stack of W/m² at each sun, else the sums of W/m² times
     ``weights`` (hours): Wh/m². ``suns``: ``sun.SunOver`` per sample (the shadows' and the
     incidence's suns), ``sky`` the open sky at each, ``vd`` Dozier's sky view factor. The cast
     shadows (``engine.shader.render``) are computed only for samples with the sun up and light to
     cast; ``timer`` (``run.report.Timer``-like) times them as "shadows" and the rest as
-    "irradiance"; ``progress`` wraps the loop (a progress bar)."""
+    "irradiance"; ``progress`` wraps the loop (a progress bar). The sums take Horn's normals once
+    (``algorithms.irradiance.normals``) and add each sample in place; the stacks go as before,
+    sun by sun through numpy. ``normals``: those normals when the caller has them (the sky
+    view's)."""
     from .shader import render
+    if per_time:
+        def direct(s, timed):
+            with timed("shadows"):
+                lit = render(shader, s, "sun", soft=soft, stats=stats)
+            with timed("irradiance"):
+                return np.maximum(cos_incidence(shader, s), np.float32(0.0)) * lit
+        return sums(direct, np.isnan(shader.z), lambda: slope_terms(shader.z, shader.grid),
+                    suns, weights, sky, vd, albedo, soft=soft, perez=perez, per_time=True,
+                    stats=stats, timer=timer, progress=progress)
+    from ..algorithms.irradiance import normals as horn_normals
+    from ..algorithms.relief import sun_vector
+    nrm = normals
+    if nrm is None:
+        with (timer("irradiance") if timer is not None else _nothing()):
+            nrm = horn_normals(shader.z, shader.grid)   # once: every sun's incidence reads them
 
-    def direct(s, timed):
-        with timed("shadows"):
-            lit = render(shader, s, "sun", soft=soft, stats=stats)
-        with timed("irradiance"):
-            return np.maximum(cos_incidence(shader, s), np.float32(0.0)) * lit
-    return sums(direct, np.isnan(shader.z), lambda: slope_terms(shader.z, shader.grid), suns,
-                weights, sky, vd, albedo, soft=soft, perez=perez, per_time=per_time,
-                stats=stats, timer=timer, progress=progress)
+    def lit_of(s, timed):
+        with timed("shadows"):     # hard: the uint8 mask itself (add_sample reads it)
+            return render(shader, s, "sun" if soft else "shadow", soft=soft, stats=stats)
+
+    def slopes():
+        from ..algorithms.irradiance import incidence_of
+        cos_s = incidence_of(nrm, *sun_vector(0.0, 90.0)).astype(np.float64)
+        return cos_s, np.sqrt(np.maximum(1.0 - cos_s * cos_s, 0.0))
+    return sums(lit_of, np.isnan(shader.z), slopes, suns, weights, sky, vd, albedo, soft=soft,
+                perez=perez, stats=stats, timer=timer, progress=progress, normals=nrm)
+
+
+def _nothing():
+    import contextlib
+    return contextlib.nullcontext()
+
+
+def tile_suns(sun, shape) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(row_tile, col_tile, vectors): the sun of every cell of a raster of ``shape`` as the
+    tile it lies in, ``vectors[row_tile[r], col_tile[c]]`` its (lx, ly, lz)
+    (``relief.sun_vector``: the incidence's); the tiles of ``sun.regions`` (one: the whole
+    raster) on the grid of their edges."""
+    from ..algorithms.relief import sun_vector
+    rows, cols = shape
+    regions = [(r.rows.indices(rows)[:2], r.cols.indices(cols)[:2], r) for r in
+               sun.regions(shape)]
+    rb = sorted({0, rows} | {x for (a, _, _) in regions for x in a})
+    cb = sorted({0, cols} | {x for (_, b, _) in regions for x in b})
+    ri = {x: i for i, x in enumerate(rb)}
+    ci = {x: i for i, x in enumerate(cb)}
+    vec = np.full((len(rb) - 1, len(cb) - 1, 3), np.nan)
+    for (r0, r1), (c0, c1), reg in regions:
+        vec[ri[r0]:ri[r1], ci[c0]:ci[c1]] = sun_vector(reg.azimuth, reg.elevation)
+    if np.isnan(vec).any():
+        raise HillshadeError("the sun's tiles do not cover the raster")
+    row_tile = (np.searchsorted(rb, np.arange(rows), side="right") - 1).astype(np.int64)
+    col_tile = (np.searchsorted(cb, np.arange(cols), side="right") - 1).astype(np.int64)
+    return row_tile, col_tile, vec
 
 
 def sums(direct, void: np.ndarray, slopes, suns, weights, sky: Sky, vd: np.ndarray,
          albedo: float, *, soft: bool = False, perez: bool = False, per_time: bool = False,
-         stats: dict | None = None, timer=None, progress=None) -> dict:
+         stats: dict | None = None, timer=None, progress=None, normals=None) -> dict:
     """``accumulate``'s bands over any cells: ``direct(sun, timed)`` gives max(cos i, 0) · lit
     of the cells (float32, NaN voids) for a sun with light to cast (``timed(stage)``: the
-    timer's context), ``void`` marks their voids, ``slopes()`` gives their (cos S, sin S)
-    (Perez only). The cells may be a whole DEM (``accumulate``) or a tile of a larger raster
-    whose shadows and incidence come from its windows (``run.irradiance`` with --context): the
-    arithmetic per cell is the same, cell by cell, in the same order and types."""
+    timer's context), or with ``normals`` (``algorithms.irradiance.normals`` of the cells) lit
+    alone (float32, or the uint8 hard mask: 0 lit), cos i then worked out from the normals;
+    ``void`` marks their voids, ``slopes()`` gives their (cos S, sin S) (Perez only). The cells
+    may be a whole DEM (``accumulate``) or a tile of a larger raster whose shadows and incidence
+    come from its windows (``run.irradiance`` with --context): the arithmetic per cell is the
+    same, cell by cell, in the same order and types. The sums are added in place sample by
+    sample (``algorithms.irradiance.add_sample``: the bits of numpy's w · (DNI · d) and
+    w · max(DHI · (...), 0) sums); the stacks (``per_time``) are numpy's."""
     import contextlib
     w = np.asarray(weights, np.float64)
     n = len(suns)
@@ -434,14 +494,78 @@ def sums(direct, void: np.ndarray, slopes, suns, weights, sky: Sky, vd: np.ndarr
         cos_s, sin_s = slopes()
         # the horizon band's share left by the terrain, relative to the open plane's
         horizon_share = np.minimum(vd64 / ((1.0 + cos_s) / 2.0), 1.0)
-    if per_time:
-        stacks = {k: np.empty((n,) + shape, np.float32) for k in BANDS}
-    else:
-        beam = np.zeros(shape, np.float64)
-        diffuse = np.zeros(shape, np.float64)
-    zero = np.where(void, np.float32(np.nan), np.float32(0.0))
     counted = {"samples": n, "samples_with_shadows": 0}
-    for k in (progress(range(n)) if progress is not None else range(n)):
+    loop = progress(range(n)) if progress is not None else range(n)
+    if per_time:
+        stacks = _stacks(direct, void, loop, suns, sky, vd, vd64, albedo, soft, perez,
+                         sin_s if perez else None, horizon_share if perez else None, counted,
+                         timed)
+        if stats is not None:
+            stats.update(counted)
+        return stacks
+    from ..algorithms.irradiance import add_sample
+    beam = np.zeros(shape, np.float64)
+    diffuse = np.zeros(shape, np.float64)
+    none2 = np.empty((1, 1), np.float64)         # (arrays a call does not read)
+    none1 = np.zeros(1, np.int64)
+    none3 = np.zeros((1, 1, 3), np.float64)
+    no_lit = np.empty((1, 1), np.float32)
+    no_cast = np.empty((1, 1), np.uint8)
+    rows0 = np.zeros(shape[0], np.int64)
+    if not perez:
+        sin_s = horizon_share = none2
+    for k in loop:
+        s = suns[k]
+        dni, dhi = float(sky.dni[k]), float(sky.dhi[k])
+        circ = perez and dhi > 0 and bool(sky.perez_on[k]) and sky.f1[k] > 0
+        lit = None
+        if (dni > 0 or circ) and not is_dark(s, soft):
+            lit = np.ascontiguousarray(direct(s, timed))
+            if lit.shape != shape or not (lit.dtype == np.float32 or (
+                    lit.dtype == np.uint8 and normals is not None)):
+                raise HillshadeError(f"the light of a sun is {lit.dtype} {lit.shape}, not "
+                                     f"float32 {shape}")
+            counted["samples_with_shadows"] += 1
+        diffuse_on = bool(perez and dhi > 0 and sky.perez_on[k])
+        if lit is None and not diffuse_on:
+            continue
+        with timed("irradiance"):
+            if lit is not None and normals is not None:
+                row_tile, col_tile, vec = tile_suns(s, shape)
+                ge, gn, length = normals
+            else:
+                row_tile, col_tile, vec, ge, gn, length = rows0, none1, none3, none2, none2, none2
+            f1 = float(sky.f1[k]) if diffuse_on else 0.0
+            mask = lit is not None and lit.dtype == np.uint8
+            add_sample(no_lit if lit is None or mask else lit, lit if mask else no_cast, mask,
+                       ge, gn, length, row_tile, col_tile, vec,
+                       lit is not None and normals is not None, lit is not None,
+                       np.float32(dni), float(w[k]), beam, diffuse_on,
+                       bool(diffuse_on and lit is not None and sky.f1[k] > 0), f1,
+                       float(sky.f1[k] / sky.b[k]) if diffuse_on else 0.0,
+                       float(sky.f2[k]) if diffuse_on else 0.0, dhi,
+                       vd64, sin_s, horizon_share, diffuse)
+    if stats is not None:
+        stats.update(counted)
+    with timed("irradiance"):
+        if not perez:
+            diffuse = float(np.sum(w * sky.dhi)) * vd64
+        reflected = float(np.sum(w * sky.ghi)) * albedo * (1.0 - vd64)
+        beam[void] = np.nan
+        diffuse[void] = np.nan
+        bands = {"beam": beam, "diffuse": diffuse, "reflected": reflected,
+                 "global": beam + diffuse + reflected}
+        return {k: v.astype(np.float32) for k, v in bands.items()}
+
+
+def _stacks(direct, void, loop, suns, sky, vd, vd64, albedo, soft, perez, sin_s,
+            horizon_share, counted, timed) -> dict:
+    """``sums``' (times, rows, cols) stacks of W/m² (``per_time``), sun by sun in numpy."""
+    n = len(suns)
+    shape = void.shape
+    stacks = {k: np.empty((n,) + shape, np.float32) for k in BANDS}
+    zero = np.where(void, np.float32(np.nan), np.float32(0.0))
+    for k in loop:
         s = suns[k]
         dni, dhi, ghi = float(sky.dni[k]), float(sky.dhi[k]), float(sky.ghi[k])
         circ = perez and dhi > 0 and bool(sky.perez_on[k]) and sky.f1[k] > 0
@@ -459,30 +583,12 @@ def sums(direct, void: np.ndarray, slopes, suns, weights, sky: Sky, vd: np.ndarr
                     d_t = np.maximum(dhi * d_t, 0.0)
                 else:
                     d_t = zero
-            if per_time:
-                stacks["beam"][k] = b_t
-                stacks["diffuse"][k] = d_t if perez else np.float32(dhi) * vd
-                stacks["reflected"][k] = np.float32(ghi * albedo) * (1.0 - vd)
-                stacks["global"][k] = (stacks["beam"][k] + stacks["diffuse"][k]
-                                       + stacks["reflected"][k])
-            else:
-                if d_k is not None:
-                    beam += w[k] * b_t
-                if perez and d_t is not zero:
-                    diffuse += w[k] * d_t
-    if stats is not None:
-        stats.update(counted)
-    if per_time:
-        return stacks
-    with timed("irradiance"):
-        if not perez:
-            diffuse = float(np.sum(w * sky.dhi)) * vd64
-        reflected = float(np.sum(w * sky.ghi)) * albedo * (1.0 - vd64)
-        beam[void] = np.nan
-        diffuse[void] = np.nan
-        bands = {"beam": beam, "diffuse": diffuse, "reflected": reflected,
-                 "global": beam + diffuse + reflected}
-        return {k: v.astype(np.float32) for k, v in bands.items()}
+            stacks["beam"][k] = b_t
+            stacks["diffuse"][k] = d_t if perez else np.float32(dhi) * vd
+            stacks["reflected"][k] = np.float32(ghi * albedo) * (1.0 - vd)
+            stacks["global"][k] = (stacks["beam"][k] + stacks["diffuse"][k]
+                                   + stacks["reflected"][k])
+    return stacks
 
 
 def definitions(sky_model: str, directions: int, soft: bool) -> str:

@@ -49,7 +49,21 @@ class SunOver:
     # the SPA's n x n lattice over the raster as unit vectors (east, north, up; grid azimuth and
     # apparent elevation): each cell's own sun, interpolated (algorithms.per_cell_sun)
     lattice: np.ndarray | None = None
-    field_deviation_deg: float | None = None   # interpolated vs SPA at the tile centres
+    # interpolated vs SPA at the tile centres (``field_deviation_deg``), worked out when first
+    # asked (a report's): the arguments of ``_field_deviation`` until then
+    _field_deviation: float | None = field(default=None, repr=False)
+    _field_inputs: tuple | None = field(default=None, repr=False, compare=False)
+
+    @property
+    def field_deviation_deg(self) -> float | None:
+        """Largest angle (deg) between the lattice's interpolated sun and the SPA's at the
+        tile centres (None: no lattice)."""
+        if self._field_deviation is None and self._field_inputs is not None:
+            lattice, rows, cols, r, c, taz, tel = self._field_inputs
+            self._field_deviation = _field_deviation(lattice, rows, cols, r, c,
+                                                     _vectors(taz, tel))
+            self._field_inputs = None
+        return self._field_deviation
 
     @property
     def fieldwise(self) -> bool:
@@ -161,7 +175,7 @@ def sun_over(site: Site, shape, times, atmosphere: Atmosphere = Atmosphere(),
     gaz = az + conv[None, :]
     vec = _vectors(gaz, el).reshape(len(times), n, n, 3)
     mid = n // 2
-    out = []
+    out, tiled = [], []
     for i, t in enumerate(times):
         centre = vec[i, mid, mid]
         dev = float(_angle(vec[i], centre).max())
@@ -181,17 +195,29 @@ def sun_over(site: Site, shape, times, atmosphere: Atmosphere = Atmosphere(),
                                    indexing="ij")
             tlo, tla = site.to_lonlat(tr_.ravel(), tc_.ravel())
             tconv = site.convergence(tr_.ravel(), tc_.ravel())
-            taz, tel, _ = solar_position(np.full(tlo.shape, ts[i]), tla, tlo, site.height,
-                                         atmosphere, delta_t)
-            taz = (taz + tconv) % 360.0
-            s.tiles = [Region(slice(int(re_[a]), int(re_[a + 1])), slice(int(ce[b]), int(ce[b + 1])),
-                              float(taz[a * nc + b]), float(tel[a * nc + b]))
-                       for a in range(nr) for b in range(nc)]
-            s.tile_deviation_deg = 0.5 * (per_c * cols / nc + per_r * rows / nr)
-            s.lattice = np.ascontiguousarray(vec[i])
-            s.field_deviation_deg = _field_deviation(s.lattice, rows, cols, tr_.ravel(),
-                                                     tc_.ravel(), _vectors(taz, tel))
+            tiled.append((i, s, per_c, per_r, nr, nc, re_, ce, tr_, tc_, tlo, tla, tconv))
         out.append(s)
+    if not tiled:
+        return out
+    # the SPA at every tile centre of every time, in one call (elementwise: each value the
+    # bits of a call per time)
+    taz_all, tel_all, _ = solar_position(
+        np.concatenate([np.full(x[10].shape, ts[x[0]]) for x in tiled]),
+        np.concatenate([x[11] for x in tiled]), np.concatenate([x[10] for x in tiled]),
+        site.height, atmosphere, delta_t)
+    at = 0
+    for i, s, per_c, per_r, nr, nc, re_, ce, tr_, tc_, tlo, tla, tconv in tiled:
+        taz, tel = taz_all[at:at + tlo.size], tel_all[at:at + tlo.size]
+        at += tlo.size
+        taz = (taz + tconv) % 360.0
+        rs = [slice(a, b) for a, b in zip(re_[:-1].tolist(), re_[1:].tolist())]
+        cs = [slice(a, b) for a, b in zip(ce[:-1].tolist(), ce[1:].tolist())]
+        az_l, el_l = taz.tolist(), tel.tolist()
+        s.tiles = [Region(rs[a], cs[b], az_l[a * nc + b], el_l[a * nc + b])
+                   for a in range(nr) for b in range(nc)]
+        s.tile_deviation_deg = 0.5 * (per_c * cols / nc + per_r * rows / nr)
+        s.lattice = np.ascontiguousarray(vec[i])
+        s._field_inputs = (s.lattice, rows, cols, tr_.ravel(), tc_.ravel(), taz, tel)
     return out
 
 

@@ -387,10 +387,15 @@ class IrradianceConfig:
     read: ReadOptions = field(default_factory=ReadOptions)
     run: RunOptions = field(default_factory=RunOptions)
     height_above_ground: float = 0.0      # metres: the receiving surface stands this high
+    sky_view: str | None = None           # Dozier's Vd read from this file (skyview's output)
+    sky_view_out: str | None = None       # the Vd computed written to this file too
 
     def check(self):
         """The options' combinations and values (UsageProblem: exit status 2)."""
         from ..engine.irradiance import CLEAR_SKY_MODELS, check_options
+        if self.sky_view is not None and self.sky_view_out is not None:
+            raise UsageProblem("--sky-view-out writes the sky view the run computes; with "
+                               "--sky-view it computes none: give one of them")
         by_date = self.date is not None or self.end_date is not None
         by_time = self.start is not None or self.end is not None
         if by_date == by_time:

@@ -11,6 +11,11 @@ cast shadows and the incidence come from the context's windows
 windowed horizon march (``run.horizon_windows``, the rays to the context's edge), so that every
 cell gets the bits the whole context's run gives it.
 
+Dozier's Vd is computed (the pyramid and Horn's normals of the DEM computed once and shared with
+every sun's shadows and sums), or read with ``--sky-view`` from a file that ``skyview
+--definition dozier`` or ``--sky-view-out`` wrote, checked against the DEM and the run's
+settings (``run.sky_view_file``): the same output bytes either way.
+
 The run's steps, between the shared preamble and tail (``run.runner.RunContext``): what the
 command line asks (the period, the place, the ``--ghi`` series), the DEM read, the samples (the
 suns of the period at the DEM's place and the open sky at each), the light (the sky view and
@@ -71,12 +76,15 @@ class _Samples:
 @dataclass
 class _Bands:
     """The four bands (``engine.irradiance.BANDS``: float32, NaN voids), Dozier's sky view,
-    the curvature's report, and (``--context``) the report's ``processing``."""
+    the curvature's report, and (``--context``) the report's ``processing``; where the sky view
+    came from (``vd_from``: "computed" or "read") and the tags of the file read (or None)."""
 
     bands: dict
     vd: object
     curvature: dict
     processing: dict | None = None
+    vd_from: str = "computed"
+    vd_tags: dict | None = None
 
 
 def irradiance(cfg: IrradianceConfig) -> dict:
@@ -85,8 +93,10 @@ def irradiance(cfg: IrradianceConfig) -> dict:
     cfg.check()
     cfg.read.check_context(cfg.dem, **{"--preview": ro.preview is not None})
     # (the --ghi series and the context are inputs)
-    ctx = RunContext.start(ro, inputs=[cfg.dem, cfg.ghi] + cfg.read.inputs(),
-                           outputs=[(cfg.output, "OUTPUT")], algorithm=cfg.algorithm,
+    ctx = RunContext.start(ro, inputs=[cfg.dem, cfg.ghi, cfg.sky_view] + cfg.read.inputs(),
+                           outputs=[(cfg.output, "OUTPUT"),
+                                    (cfg.sky_view_out, "--sky-view-out")],
+                           algorithm=cfg.algorithm,
                            note=False)     # the note once the command line is checked
     _check_format(cfg)
     asked = _asked(cfg)
@@ -132,12 +142,14 @@ def _run(cfg, ctx: RunContext, lighting, asked: _Asked, d, area) -> dict:
     _write(cfg, ctx, geom, d, lit, tags)
     rep = _report(cfg, ctx, geom, sampled, lit, algo_stats, area)
     sec, g, unit = rep["seconds"], rep["bands"]["global"], rep["units"]
+    sv = (" read from " + cfg.sky_view if lit.vd_from == "read" else "") + \
+        f" {sec['sky view']:.2f} s"
     return ctx.finish(rep, [(
         "summary", f"hillshade-rt: {cfg.output}: {geom.shape[1]}x{geom.shape[0]}, "
                    f"{sampled.period}, {len(sampled.work)} of {len(sampled.suns)} samples with "
                    f"the sun up; global {g['min']:.1f} .. {g['max']:.1f} {unit} (mean "
-                   f"{g['mean']:.1f}); shadows {sec.get('shadows', 0.0):.2f} s, sky view "
-                   f"{sec['sky view']:.2f} s, total {sec['total']:.2f} s")])
+                   f"{g['mean']:.1f}); shadows {sec.get('shadows', 0.0):.2f} s, sky view"
+                   f"{sv}, total {sec['total']:.2f} s")])
 
 
 def _check_format(cfg: IrradianceConfig) -> None:
@@ -270,15 +282,56 @@ def _light(cfg, ctx: RunContext, d, shader, lighting, body, sampled: _Samples, a
            bar) -> _Bands:
     """The four bands of the DEM in memory: Dozier's sky view, then each sun's cast shadows
     and incidence summed with the sky (``engine.irradiance.accumulate``)."""
+    from ..algorithms.irradiance import normals
     from ..engine import irradiance as ir
+    from ..engine.shader import horizon_shader
+    with ctx.timer("prepare"):   # Horn's normals once: the sky view's and every sun's
+        nrm = normals(d.heights, d.grid)
+    # the sky view's curvature and refraction, as dozier_view's (from the shape, no heights)
+    hs = horizon_shader(d.heights, d.grid, lighting.backend, lighting.curvature,
+                        lighting.refraction_k, body)
     with ctx.timer("sky view"):
-        vd = ir.dozier_view(d.heights, d.grid, cfg.skyview_directions, lighting.backend,
-                            lighting.curvature, lighting.refraction_k, body, lighting.lift)
+        if cfg.sky_view is not None:
+            vd, vd_tags = _read_vd(cfg, d, hs, None, d.heights)
+        else:
+            # one pyramid for the sky view and every sun's shadows (the Shader's, built once)
+            pyramid = shader.pyramid(shader.z, True) if lighting.backend == "cpu" else None
+            vd, vd_tags = ir.dozier_view(d.heights, d.grid, cfg.skyview_directions,
+                                         lighting.backend, lighting.curvature,
+                                         lighting.refraction_k, body, lighting.lift,
+                                         pyramid=pyramid, normals=nrm), None
+    if cfg.sky_view_out is not None:
+        _write_vd(cfg, ctx, d, vd, hs, None, d.heights)
     with ctx.timer("compute"):
         bands = ir.accumulate(shader, sampled.suns, sampled.weights, sampled.sky, vd,
                               cfg.albedo, soft=lighting.soft, perez=cfg.perez, stats=algo_stats,
-                              timer=ctx.timer, progress=bar)
-    return _Bands(bands, vd, shader.report())
+                              timer=ctx.timer, progress=bar, normals=nrm)
+    return _Bands(bands, vd, shader.report(), vd_from="computed" if vd_tags is None else "read",
+                  vd_tags=vd_tags)
+
+
+def _want(cfg, hs, area, heights) -> dict:
+    """The tags of the run's sky view (``sky_view_file.dozier_tags``): ``hs`` the horizon
+    Shader (its curvature, refraction coefficient and body), ``area`` the --context tile (or
+    None), ``heights`` the DEM's when it is read whole (for the digest; None in windows)."""
+    from .sky_view_file import dozier_tags
+    return dozier_tags(cfg.skyview_directions, curved=bool(hs.curvature), k=hs.k, body=hs.body,
+                       height_above_ground=float(cfg.height_above_ground), area=area,
+                       heights=heights)
+
+
+def _read_vd(cfg, geom, hs, area, heights):
+    """(Vd, the file's tags) of --sky-view, checked against the grid of ``geom`` and the
+    run's settings."""
+    from .sky_view_file import read_vd
+    return read_vd(cfg.sky_view, geom, _want(cfg, hs, area, heights))
+
+
+def _write_vd(cfg, ctx, geom, vd, hs, area, heights) -> None:
+    """--sky-view-out: the Vd computed, as skyview writes it (its tags too)."""
+    from .sky_view_file import write_vd
+    with ctx.timer("write"):
+        write_vd(cfg.sky_view_out, geom, vd, _want(cfg, hs, area, heights), ctx.ro)
 
 
 def _light_in_context(cfg, ctx: RunContext, area, lighting, body, sampled: _Samples,
@@ -320,10 +373,15 @@ def _light_in_context(cfg, ctx: RunContext, area, lighting, body, sampled: _Samp
             if work:
                 job.warm_up(work[0])
             azimuths = equal_azimuths(360.0 / int(cfg.skyview_directions))
-            hjob, _ = horizon_job(src, azimuths, lighting.backend, lighting.curvature,
-                                  lighting.refraction_k, "scan", bstats, False, 1, math.inf,
-                                  lighting.lift, body=body)
-        regs, _ = prepare_windows(src, hjob, memory_limit(None), None, timer, area)
+            hjob, hs = horizon_job(src, azimuths, lighting.backend, lighting.curvature,
+                                   lighting.refraction_k, "scan", bstats, False, 1, math.inf,
+                                   lighting.lift, body=body)
+        vd_tags = None
+        if cfg.sky_view is not None:
+            with timer("sky view"):
+                vd, vd_tags = _read_vd(cfg, area.tile, hs, area, None)
+        else:
+            regs, _ = prepare_windows(src, hjob, memory_limit(None), None, timer, area)
         with src.reader() as rd:
             # the tile and a cell around it: its voids, and its slopes (Horn's normals) for
             # Perez
@@ -337,15 +395,18 @@ def _light_in_context(cfg, ctx: RunContext, area, lighting, body, sampled: _Samp
                 cos_s = incidence(zm, window_grid(src.grid, m), 0.0, 90.0,
                                   *inner).astype(np.float64)
                 return cos_s, np.sqrt(np.maximum(1.0 - cos_s * cos_s, 0.0))
-            with timer("sky view"):       # Dozier's Vd of the tile's regions, as skyview's
-                vd = np.empty(area.shape, np.float32)
-                product = Product("skyview", definition="dozier")
-                for reg in regs:
-                    a0, a1, b0, b1 = area.local(reg)
+            if vd_tags is None:
+                with timer("sky view"):   # Dozier's Vd of the tile's regions, as skyview's
+                    vd = np.empty(area.shape, np.float32)
+                    product = Product("skyview", definition="dozier")
+                    for reg in regs:
+                        a0, a1, b0, b1 = area.local(reg)
 
-                    def put(name, band, out, a0=a0, a1=a1, b0=b0, b1=b1):
-                        vd[a0:a1, b0:b1] = out
-                    fig.add(region_outputs(hjob, rd, reg, product, put))
+                        def put(name, band, out, a0=a0, a1=a1, b0=b0, b1=b1):
+                            vd[a0:a1, b0:b1] = out
+                        fig.add(region_outputs(hjob, rd, reg, product, put))
+                if cfg.sky_view_out is not None:
+                    _write_vd(cfg, ctx, area.tile, vd, hs, area, None)
             cache, used = WindowCache(rd), set()
             read = {"windows": 0, "cells": 0}
 
@@ -371,7 +432,7 @@ def _light_in_context(cfg, ctx: RunContext, area, lighting, body, sampled: _Samp
                   "shadow_windows": read["windows"], "shadow_window_cells": read["cells"],
                   "sky_view": fig.as_dict()}
     return _Bands(bands, vd, curvature_report(job.curvature, used, job.body, job.k),
-                  processing)
+                  processing, "computed" if vd_tags is None else "read", vd_tags)
 
 
 def _sky_model(cfg: IrradianceConfig) -> str:
@@ -462,7 +523,10 @@ def _report(cfg: IrradianceConfig, ctx: RunContext, geom, sampled: _Samples, lit
            "split": sky.split, "albedo": cfg.albedo,
            "skyview_directions": cfg.skyview_directions, "soft": cfg.soft,
            "height_above_ground_m": float(cfg.height_above_ground),
-           "sky_view": _summary(lit.vd),
+           "sky_view": _summary(lit.vd), "sky_view_from": lit.vd_from,
+           "sky_view_file": (os.path.abspath(cfg.sky_view) if cfg.sky_view is not None else
+                             os.path.abspath(cfg.sky_view_out) if cfg.sky_view_out is not None
+                             else None),
            "open_sky": {"dni_wh_m2": float(np.sum(weights * sky.dni)),
                         "dhi_wh_m2": float(np.sum(weights * sky.dhi)),
                         "ghi_wh_m2": float(np.sum(weights * sky.ghi))},
@@ -470,6 +534,8 @@ def _report(cfg: IrradianceConfig, ctx: RunContext, geom, sampled: _Samples, lit
            "curvature": lit.curvature, "algorithm_stats": algo_stats,
            "seconds": ctx.seconds(), "version": __version__}
     rep.update(sampled.sun_info or {})
+    if lit.vd_tags is not None:      # the version that made the file read
+        rep["sky_view_made_by"] = lit.vd_tags.get("HILLSHADE_RT_VERSION")
     if area is not None:
         rep["context"] = area.report()
         rep["processing"] = lit.processing

@@ -183,7 +183,9 @@ def _make(cfg: SkyviewConfig, plan: Plan, ctx: RunContext) -> Made:
             return _all_nodata(cfg, plan, ctx, src)
 
 
-def _tags(cfg, definition, n, curved, max_distance):
+def _tags(cfg, definition, n, curved, max_distance, made=None):
+    """The output's tags; ``made``: how the horizons were made (``sky_view_file.provenance``:
+    the refraction coefficient, the body, the context, the heights' digest)."""
     from .horizon import distance_tag
     from ..algorithms.skyview import units
     opn = definition.startswith("openness")
@@ -195,14 +197,14 @@ def _tags(cfg, definition, n, curved, max_distance):
             "EDGE": ("no terrain beyond the raster: directions with no terrain ahead (within "
                      "MAX_DISTANCE) are left out of the mean; none at all: nodata" if opn else
                      "no terrain beyond the raster: border cells see open sky outward"),
-            "EARTH_CURVATURE": "on" if curved else "off"}
+            "EARTH_CURVATURE": "on" if curved else "off", **(made or {})}
 
 
-def _writer(cfg, dem, definition, n, curved, max_distance):
+def _writer(cfg, dem, definition, n, curved, max_distance, made=None):
     from ..io import BandWriter
     ro = cfg.run
     return BandWriter(cfg.output, dem, 1, "float32", -9999.0,
-                      _tags(cfg, definition, n, curved, max_distance),
+                      _tags(cfg, definition, n, curved, max_distance, made),
                       overview_resampling="average", overwrite=ro.overwrite, fmt=ro.fmt,
                       co=ro.creation_options)
 
@@ -214,6 +216,7 @@ def _in_memory(cfg: SkyviewConfig, plan: Plan, ctx: RunContext, src) -> Made:
     from ..model.earth import dem_body
     from ..model.geometry import equal_azimuths
     from ..engine.shader import horizon_shader
+    from .sky_view_file import provenance
 
     definition, max_distance, timer = plan.definition, plan.max_distance, ctx.timer
     with timer("read"):
@@ -253,7 +256,8 @@ def _in_memory(cfg: SkyviewConfig, plan: Plan, ctx: RunContext, src) -> Made:
     st = _Stats()
     st.add(out)
     with timer("write"):
-        with _writer(cfg, d, definition, n, bool(shader.curvature), max_distance) as w:
+        made = provenance(k=shader.k, body=shader.body, heights=d.heights)
+        with _writer(cfg, d, definition, n, bool(shader.curvature), max_distance, made) as w:
             w.write(1, np.where(np.isnan(out), np.float32(-9999.0), out),
                     description=describe(cfg, definition))
     return Made(d, st, {"mode": "in memory", "cells": int(d.heights.size)},
@@ -283,6 +287,7 @@ def _in_windows(cfg: SkyviewConfig, plan: Plan, ctx: RunContext, src, area=None)
     from .local import bounded_gdal_cache
     from ..engine.windows import block_stats
     from .horizon_windows import Figures, Product, VrtOutput, region_outputs, run_on_dask
+    from .sky_view_file import provenance
 
     ro = cfg.run
     definition, max_distance, timer = plan.definition, plan.max_distance, ctx.timer
@@ -299,11 +304,12 @@ def _in_windows(cfg: SkyviewConfig, plan: Plan, ctx: RunContext, src, area=None)
                                   cfg.height_above_ground)
         regs, mem = prepare_windows(src, job, plan.limit, plan.wshape, timer, area)
         curved = bool(shader.curvature)
+        made = provenance(k=shader.k, body=shader.body, area=area)
         geom = src if area is None else area.tile
         if cfg.scheduler is not None:
             out = VrtOutput(cfg.output, src.shape, src.transform, src.crs,
                             [describe(cfg, definition)],
-                            _tags(cfg, definition, n, curved, max_distance),
+                            _tags(cfg, definition, n, curved, max_distance, made),
                             resampling="average", overwrite=ro.overwrite, fmt=ro.fmt,
                       co=ro.creation_options)
             with timer("compute"):
@@ -316,7 +322,7 @@ def _in_windows(cfg: SkyviewConfig, plan: Plan, ctx: RunContext, src, area=None)
         else:
             from .report import progress_total
             bar = progress_total(len(regs), ro.quiet, "hillshade-rt", "window", ro.progress)
-            with _writer(cfg, geom, definition, n, curved, max_distance) as w, \
+            with _writer(cfg, geom, definition, n, curved, max_distance, made) as w, \
                     src.reader() as rd, bar:
                 for reg in regs:
                     out_reg = reg if area is None else area.local(reg)

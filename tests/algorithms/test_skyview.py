@@ -101,3 +101,20 @@ def test_a_window_sum_equals_the_whole_rasters_cells():
     for a in AZ[:5]:
         part.add(a, betas[a][2:6, 3:9])
     np.testing.assert_array_equal(part.result(), whole[2:6, 3:9])
+
+
+def test_dozier_sum_from_given_normals_is_the_same():
+    """Horn's normals given (computed once by irradiance) give Dozier's Vd bit for bit."""
+    from hillshade_rt.algorithms.irradiance import normals
+    from hillshade_rt.algorithms.skyview import sky_view
+    from hillshade_rt.testing import fractal_terrain
+    z = fractal_terrain(40, 50, 4, relief=500.0).astype(np.float32)
+    z[6, 7] = np.nan
+    grid = Grid(40, 50, np.linspace(29.0, 31.0, 40), np.full(40, 30.9), 1, -1, "test")
+    rng = np.random.default_rng(2)
+    betas = {a: rng.uniform(-5.0, 40.0, z.shape).astype(np.float32)
+             for a in (0.0, 90.0, 163.0, 203.7, 290.0)}
+    plain = sky_view(z, grid, list(betas), betas.get, "dozier")
+    given = sky_view(z, grid, list(betas), betas.get, "dozier", normals=normals(z, grid))
+    assert np.array_equal(plain.view(np.uint32), given.view(np.uint32))
+    assert np.isnan(given[6, 7]) and np.isfinite(given[7, 7])
