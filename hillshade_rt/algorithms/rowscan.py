@@ -42,32 +42,40 @@ DENSE_ROWS = 2
 CHUNK = 16
 
 
+@njit(cache=True, inline="always")
+def _take(j, a, bb, f, out, h0, best, kb, done, fk, kk, cv, zmax, cap, k):
+    """Cell j's sample k, between heights ``a`` and ``bb`` at fraction ``f`` (``out``: the
+    sample lies outside the raster), as the march takes it: stop once no later sample can
+    raise the maximum (``zmax``), else raise the maximum ``best`` (per step; ``kb`` its k)
+    where the sample is higher, and stop past ``cap``. Branch-free (selects), so the loops
+    that call it vectorise."""
+    b0 = best[j]
+    h = h0[j]
+    bk = b0 * fk
+    t = a if f == 0.0 else madd(a, f, bb - a)
+    lift = t - h
+    if cv != 0.0:
+        lift = madd(lift, -kk, cv)
+    nb = lift / fk
+    stop = zmax - h <= bk
+    d = done[j]
+    upd = (d == 0) & (not stop) & (not out) & (lift > bk)
+    best[j] = nb if upd else b0
+    kb[j] = k if upd else kb[j]
+    done[j] = d | stop | out | (upd & (nb > cap))
+
+
 @njit(cache=True)
 def _step_cols(s0, s1, f, h0, best, kb, done, fk, kk, cv, zmax, cap, k):
     """Sample k of a run of cells of a row whose rays cross columns: every cell's sample lies
     on the same row position (fraction ``f``), its two neighbours at the same index of ``s0``
-    and ``s1`` (the two rows' cells k columns ahead, contiguous): one vectorised loop. The
-    march's steps per cell, in its order: stop once no later sample can raise the maximum
-    (``zmax``), else take the sample and raise the maximum ``best`` (per step; ``kb`` its k)
-    where it is higher, and stop past ``cap``."""
+    and ``s1`` (the two rows' cells k columns ahead, contiguous): one vectorised loop of
+    ``_take``."""
     n = best.shape[0]
     for j in range(n):
-        b0 = best[j]
-        h = h0[j]
-        bk = b0 * fk
         a = float(s0[j])
         bb = float(s1[j])
-        t = a if f == 0.0 else madd(a, f, bb - a)
-        lift = t - h
-        if cv != 0.0:
-            lift = madd(lift, -kk, cv)
-        nb = lift / fk
-        stop = zmax - h <= bk
-        d = done[j]
-        upd = (d == 0) & (not stop) & (lift > bk)
-        best[j] = nb if upd else b0
-        kb[j] = k if upd else kb[j]
-        done[j] = d | stop | (upd & (nb > cap))
+        _take(j, a, bb, f, False, h0, best, kb, done, fk, kk, cv, zmax, cap, k)
 
 
 @njit(cache=True)
@@ -76,26 +84,13 @@ def _step_rows_fast(s0, s1, s2, j0q, ks, q, h0, best, kb, done, fk, kk, cv, zmax
     slices starting at j0 + q, j0 + q + 1, j0 + q + 2): floor(pos) is base or base + 1."""
     n = best.shape[0]
     for j in range(n):
-        b0 = best[j]
-        h = h0[j]
-        bk = b0 * fk
         base = float(j0q + j)          # j + q as a float, exact
         pos = float(j0q - q + j) + ks
         up = pos >= base + 1.0
         f = pos - (base + 1.0) if up else pos - base
         a = float(s1[j]) if up else float(s0[j])
         bb = float(s2[j]) if up else float(s1[j])
-        t = a if f == 0.0 else madd(a, f, bb - a)
-        lift = t - h
-        if cv != 0.0:
-            lift = madd(lift, -kk, cv)
-        nb = lift / fk
-        stop = zmax - h <= bk
-        d = done[j]
-        upd = (d == 0) & (not stop) & (lift > bk)
-        best[j] = nb if upd else b0
-        kb[j] = k if upd else kb[j]
-        done[j] = d | stop | (upd & (nb > cap))
+        _take(j, a, bb, f, False, h0, best, kb, done, fk, kk, cv, zmax, cap, k)
 
 
 @njit(cache=True)
@@ -106,9 +101,6 @@ def _step_rows(zl, ks, h0, best, kb, done, fk, kk, cv, zmax, cap, k, ja, jb):
     n = zl.shape[0]
     top = float(n - 1)
     for j in range(ja, jb):
-        b0 = best[j]
-        h = h0[j]
-        bk = b0 * fk
         pos = float(j) + ks
         out = (pos <= -EDGE_EPS) | (pos >= top + EDGE_EPS)
         pos = min(max(pos, 0.0), top)
@@ -117,17 +109,7 @@ def _step_rows(zl, ks, h0, best, kb, done, fk, kk, cv, zmax, cap, k, ja, jb):
         i1 = min(i0 + 1, n - 1)
         a = float(zl[i0])
         bb = float(zl[i1])
-        t = a if f == 0.0 else madd(a, f, bb - a)
-        lift = t - h
-        if cv != 0.0:
-            lift = madd(lift, -kk, cv)
-        nb = lift / fk
-        stop = zmax - h <= bk
-        d = done[j]
-        upd = (d == 0) & (not stop) & (not out) & (lift > bk)
-        best[j] = nb if upd else b0
-        kb[j] = k if upd else kb[j]
-        done[j] = d | stop | out | (upd & (nb > cap))
+        _take(j, a, bb, f, out, h0, best, kb, done, fk, kk, cv, zmax, cap, k)
 
 
 @njit(cache=True)
