@@ -101,6 +101,27 @@ def _progress(progress) -> dict:
     return dict(quiet=progress == "json", progress=progress)
 
 
+def _no_other_keywords(function: str, more: dict) -> None:
+    """TypeError, as Python's own, for a keyword in ``**more`` that is not one of FORWARDED."""
+    unknown = set(more) - set(FORWARDED)
+    if unknown:
+        raise TypeError(f"{function}() got unexpected keyword argument(s) "
+                        f"{', '.join(sorted(unknown))}")
+
+
+def _place(more: dict) -> dict:
+    """The place's options (``run.config.PLACE_KEYS``) from ``**more``, the command line's
+    defaults for those not given."""
+    from .model.sun import DEFAULT_TOLERANCE
+    return {k: more.get(k, d) for k, d in zip(PLACE_KEYS, (None,) * 5 + (False,
+                                                                         DEFAULT_TOLERANCE))}
+
+
+def _text(v):
+    """A date or datetime as ISO text (None stays None; text as it is)."""
+    return None if v is None else str(v.isoformat() if hasattr(v, "isoformat") else v)
+
+
 def _stderr(kind: str, message: str) -> None:
     """``say`` with ``progress=True``: the command line's lines on stderr."""
     import sys
@@ -179,13 +200,10 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
     from .run.batch import check_pattern, shade_each
     from .algorithms import algorithm_for, options_for
     from .run.config import PRODUCTS
-    from .model.sun import DEFAULT_TOLERANCE
     from .io.write import virtual_outputs
     if product not in PRODUCTS:
         raise HillshadeError(f"product must be one of {', '.join(PRODUCTS)}, got {product!r}")
-    unknown = set(more) - set(FORWARDED)
-    if unknown:
-        raise TypeError(f"shade() got unexpected keyword argument(s) {', '.join(sorted(unknown))}")
+    _no_other_keywords("shade", more)
     files = [os.fspath(dems)] if isinstance(dems, (str, os.PathLike)) else [os.fspath(p)
                                                                             for p in dems]
     if not files:
@@ -227,7 +245,7 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
                                                  else times)),
                start=_iso(start), end=_iso(end), step=step,
                sun_from_stac=None if sun_from_stac is None else os.fspath(sun_from_stac),
-               **{k: more.get(k, d) for k, d in zip(PLACE_KEYS, (None,) * 5 + (False, DEFAULT_TOLERANCE))})
+               **_place(more))
     read = ReadOptions(**{k: more[k] for k in READ_KEYS if k in more},
                        context=None if context is None else os.fspath(context))
     run = RunOptions(backend=backend, threads=more.get("threads"), report_path=report,
@@ -356,27 +374,19 @@ def irradiance(dem, output=None, *, date=None, end_date=None, start=None, end=No
     from .run.config import IrradianceConfig
     from .run.irradiance import irradiance as run_irradiance
     from .run.batch import irradiance_each, split_files
-    from .model.sun import DEFAULT_TOLERANCE
     from .io.write import virtual_outputs
-    unknown = set(more) - set(FORWARDED)
-    if unknown:
-        raise TypeError(f"irradiance() got unexpected keyword argument(s) "
-                        f"{', '.join(sorted(unknown))}")
-
-    def text(v):
-        return None if v is None else str(v.isoformat() if hasattr(v, "isoformat") else v)
+    _no_other_keywords("irradiance", more)
     dems = [dem] if isinstance(dem, (str, os.PathLike)) else list(dem)
     dem, output = split_files(dems + ([] if output is None else [output]), each,
                               output_pattern, "irradiance")
-    place = {k: more.get(k, d) for k, d in zip(PLACE_KEYS, (None,) * 5 + (False,
-                                                                          DEFAULT_TOLERANCE))}
+    place = _place(more)
     read = ReadOptions(**{k: more[k] for k in READ_KEYS if k in more},
                        context=None if context is None else os.fspath(context))
     run = RunOptions(backend=backend, threads=more.get("threads"), report_path=report,
                      overwrite=overwrite, **_progress(progress), fmt=fmt, preview=preview,
                      say=_stderr, creation_options=creation_options)
-    cfg = IrradianceConfig(dem=dem, output=output, date=text(date),
-                           end_date=text(end_date), start=text(start), end=text(end),
+    cfg = IrradianceConfig(dem=dem, output=output, date=_text(date),
+                           end_date=_text(end_date), start=_text(start), end=_text(end),
                            step=step, clear_sky=clear_sky, linke_turbidity=linke_turbidity,
                            albedo=albedo, ghi=None if ghi is None else os.fspath(ghi),
                            mean=mean, soft=soft, perez=perez,
@@ -416,29 +426,21 @@ def sun_hours(dem, output=None, *, date=None, end_date=None, step: str = "10min"
     from .run.config import SunHoursConfig
     from .run.sun_hours import sun_hours as run_sun_hours
     from .run.batch import split_files, sun_hours_each
-    from .model.sun import DEFAULT_TOLERANCE
     from .io.write import virtual_outputs
-    unknown = set(more) - set(FORWARDED)
-    if unknown:
-        raise TypeError(f"sun_hours() got unexpected keyword argument(s) "
-                        f"{', '.join(sorted(unknown))}")
+    _no_other_keywords("sun_hours", more)
     if date is None:
         raise HillshadeError("sun_hours needs date (the day, or the first day with end_date)")
-
-    def text(v):
-        return None if v is None else str(v.isoformat() if hasattr(v, "isoformat") else v)
     dems = [dem] if isinstance(dem, (str, os.PathLike)) else list(dem)
     dem, output = split_files(dems + ([] if output is None else [output]), each,
                               output_pattern, "sun-hours")
-    place = {k: more.get(k, d) for k, d in zip(PLACE_KEYS, (None,) * 5 + (False,
-                                                                          DEFAULT_TOLERANCE))}
+    place = _place(more)
     read = ReadOptions(**{k: more[k] for k in READ_KEYS if k in more},
                        context=None if context is None else os.fspath(context))
     run = RunOptions(backend=backend, threads=more.get("threads"), report_path=report,
                      overwrite=overwrite, **_progress(progress), fmt=fmt, preview=preview,
                      say=_stderr, creation_options=creation_options,
                      worker_timeout=worker_timeout)
-    cfg = SunHoursConfig(dem=dem, output=output, date=text(date), end_date=text(end_date),
+    cfg = SunHoursConfig(dem=dem, output=output, date=_text(date), end_date=_text(end_date),
                          step=step, place=place, algorithm=algorithm, curvature=curvature,
                          refraction_k=refraction_k, soft=soft, self_shadow=self_shadow,
                          read=read, run=run, height_above_ground=height_above_ground,
@@ -464,21 +466,13 @@ def animate(dem, output, *, date=None, start=None, end=None, step: str | None = 
     from .run import ReadOptions, RunOptions
     from .run.config import AnimateConfig
     from .run.animate import animate as run_animate
-    from .model.sun import DEFAULT_TOLERANCE
-    unknown = set(more) - set(FORWARDED)
-    if unknown:
-        raise TypeError(f"animate() got unexpected keyword argument(s) "
-                        f"{', '.join(sorted(unknown))}")
-
-    def text(v):
-        return None if v is None else str(v.isoformat() if hasattr(v, "isoformat") else v)
-    place = {k: more.get(k, d) for k, d in zip(PLACE_KEYS, (None,) * 5 + (False,
-                                                                          DEFAULT_TOLERANCE))}
+    _no_other_keywords("animate", more)
+    place = _place(more)
     read = ReadOptions(**{k: more[k] for k in READ_KEYS if k in more})
     run = RunOptions(backend=backend, threads=more.get("threads"), report_path=report,
                      overwrite=overwrite, **_progress(progress), say=_stderr)
     return run_animate(AnimateConfig(dem=os.fspath(dem), output=os.fspath(output),
-                                     date=text(date), start=text(start), end=text(end),
+                                     date=_text(date), start=_text(start), end=_text(end),
                                      step=step, place=place, fps=fps, size=size, label=label,
                                      algorithm=algorithm, curvature=curvature,
                                      refraction_k=refraction_k, read=read, run=run))
