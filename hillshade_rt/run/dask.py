@@ -354,19 +354,40 @@ def _remove(folder: str) -> None:
         time.sleep(0.2)
 
 
-def shade_piece(job, piece, path: str, nodata, stride: int | None = None) -> dict:
-    """The task: read ``piece``'s window, light it, write its region to ``path`` (GeoTIFF).
-    Returns the product's cell counts, the algorithm's figures, bytes read, seconds, and the
-    every-``stride``-th cells of its shade for a preview (with where they go there)."""
+def write_part(path: str, arr, source, r0: int, c0: int, nodata, **profile) -> None:
+    """A task's part of the output: ``arr`` (one band), whose first cell is the source's
+    (r0, c0), as a tiled, deflated GeoTIFF at ``path`` in the source's CRS, written atomically.
+    Overwrites: Dask runs a task again when its worker died before saying it was done, and the
+    part it wrote then is the same. ``profile``: more creation options (a predictor)."""
+    import warnings
+
     import rasterio
     from affine import Affine
     from rasterio.errors import NotGeoreferencedWarning
 
     from ..io import DEFLATE_LEVEL, atomic_path, gdal_checked
+    prof = dict(driver="GTiff", width=arr.shape[1], height=arr.shape[0], count=1,
+                dtype=arr.dtype.name, nodata=nodata, compress="deflate", zlevel=DEFLATE_LEVEL,
+                tiled=True, blockxsize=256, blockysize=256, **profile)
+    if source.crs is not None:
+        prof["crs"] = source.crs
+    if source.transform is not None:
+        prof["transform"] = source.transform @ Affine.translation(c0, r0)
+    with atomic_path(path, ".tif", overwrite=True) as tmp, warnings.catch_warnings():
+        warnings.simplefilter("ignore", NotGeoreferencedWarning)
+        with gdal_checked(path), rasterio.open(tmp, "w", **prof) as dst:
+            dst.write(arr, 1)
+
+
+def shade_piece(job, piece, path: str, nodata, stride: int | None = None) -> dict:
+    """The task: read ``piece``'s window, light it, write its region to ``path`` (GeoTIFF).
+    Returns the product's cell counts, the algorithm's figures, bytes read, seconds, and the
+    every-``stride``-th cells of its shade for a preview (with where they go there)."""
+    import rasterio
+
     from ..pictures.preview import every_nth
     from ..engine.products import product
     from ..engine.windows import GDAL_CACHE_MB
-    import warnings
 
     t0 = time.perf_counter()
     r0, r1, c0, c1 = piece.window
@@ -389,21 +410,7 @@ def shade_piece(job, piece, path: str, nodata, stride: int | None = None) -> dic
         shade = (sub.copy(), at)
     if lighting.soft:
         arr = np.where(np.isnan(arr), np.float32(nodata), arr).astype(np.float32)
-    g0, g1, h0, h1 = piece.region
-    src = job.source
-    prof = dict(driver="GTiff", width=h1 - h0, height=g1 - g0, count=1, dtype=arr.dtype.name,
-                nodata=nodata, compress="deflate", zlevel=DEFLATE_LEVEL, tiled=True,
-                blockxsize=256, blockysize=256)
-    if src.crs is not None:
-        prof["crs"] = src.crs
-    if src.transform is not None:
-        prof["transform"] = src.transform @ Affine.translation(h0, g0)
-    # overwrite: Dask runs a task again when its worker died before saying it was done; the
-    # part it wrote then is the same
-    with atomic_path(path, ".tif", overwrite=True) as tmp, warnings.catch_warnings():
-        warnings.simplefilter("ignore", NotGeoreferencedWarning)
-        with gdal_checked(path), rasterio.open(tmp, "w", **prof) as dst:
-            dst.write(arr, 1)
+    write_part(path, arr, job.source, piece.region[0], piece.region[2], nodata)
     return {"stats": st, "algorithm_stats": stats, "curvature_used": used, "bytes_read": nread,
             "seconds": time.perf_counter() - t0, "shade": shade}
 

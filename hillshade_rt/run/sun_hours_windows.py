@@ -12,7 +12,6 @@ from __future__ import annotations
 import math
 import os
 import threading
-import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -199,13 +198,11 @@ def region_task(job, rs, weights, path: str, stride: int | None = None) -> dict:
     figures: (min, sum, count, max) of the hours, the algorithm's figures, the curvature used,
     bytes read and carried, and the every-``stride``-th hours for a preview."""
     import rasterio
-    from affine import Affine
-    from rasterio.errors import NotGeoreferencedWarning
 
     from ..engine.sun_sums import region_sum, weighted_light
     from ..engine.windows import GDAL_CACHE_MB, WindowCache
-    from ..io import DEFLATE_LEVEL, atomic_path, gdal_checked
     from ..pictures.preview import every_nth
+    from .dask import write_part
     from .horizon_windows import ValueStats
 
     stats: dict = {}
@@ -222,19 +219,8 @@ def region_task(job, rs, weights, path: str, stride: int | None = None) -> dict:
         sub, at = every_nth(acc, r0, c0, stride)
         shade = (sub.copy(), at)
     acc[np.isnan(acc)] = -9999.0
-    src = job.source
-    prof = dict(driver="GTiff", width=c1 - c0, height=r1 - r0, count=1, dtype="float32",
-                nodata=-9999.0, compress="deflate", zlevel=DEFLATE_LEVEL, predictor=3,
-                tiled=True, blockxsize=256, blockysize=256)
-    if src.crs is not None:
-        prof["crs"] = src.crs
-    if src.transform is not None:
-        prof["transform"] = src.transform @ Affine.translation(c0, r0)
-    # overwrite: a task run again (its worker died) writes the same part again
-    with atomic_path(path, ".tif", overwrite=True) as tmp, warnings.catch_warnings():
-        warnings.simplefilter("ignore", NotGeoreferencedWarning)
-        with gdal_checked(path), rasterio.open(tmp, "w", **prof) as dst:
-            dst.write(acc, 1)
+    write_part(path, acc.astype(np.float32, copy=False), job.source, r0, c0, -9999.0,
+               predictor=3)
     return {"values": (vals.lo, vals.total, vals.count, vals.hi), "algorithm_stats": stats,
             "curvature_used": used, "bytes_read": nread, "bytes_carried": carried,
             "shade": shade}
