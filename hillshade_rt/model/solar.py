@@ -74,12 +74,16 @@ def solar_position(times, lat, lon, height_m=0.0, atmosphere: Atmosphere = Atmos
     if not isinstance(times, np.ndarray) or times.dtype == object:
         times = np.array([t.timestamp() if isinstance(t, _dt.datetime) else float(t)
                           for t in np.ravel(np.asarray(times, dtype=object))], dtype=np.float64)
-    unix, lat, lon, h = np.broadcast_arrays(np.asarray(times, np.float64),
-                                            np.asarray(lat, np.float64),
+    # the times as given (T, 1) against places (1, P): the SPA's part that depends on the time
+    # only runs once per time, the rest per (time, place) broadcast (_spa)
+    times = np.asarray(times, np.float64)
+    unix, lat, lon, h = np.broadcast_arrays(times, np.asarray(lat, np.float64),
                                             np.asarray(lon, np.float64),
                                             np.asarray(height_m, np.float64))
     shape = unix.shape
     unix, lat, lon, h = (np.ravel(a) for a in (unix, lat, lon, h))
+    if times.shape != shape:        # fewer times than positions: the time's own shape
+        unix = np.ravel(times)
     finite = unix[np.isfinite(unix)]
     if finite.size:
         span = np.floor(np.array([finite.min(), finite.max()])).astype("datetime64[s]")
@@ -108,8 +112,16 @@ def solar_position(times, lat, lon, height_m=0.0, atmosphere: Atmosphere = Atmos
         else:
             delta_t = spa.calculate_deltat(years, months)
     pressure = atmosphere.pressure_at(h)
-    zen_app, zen, el_app, el, az, _ = spa.solar_position_numpy(
-        unix, lat, lon, h, pressure, float(atmosphere.temperature_c), delta_t, ATMOS_REFRACT, 1)
+    if times.shape == shape:
+        zen_app, zen, el_app, el, az, _ = spa.solar_position_numpy(
+            unix, lat, lon, h, pressure, float(atmosphere.temperature_c), delta_t,
+            ATMOS_REFRACT, 1)
+    else:
+        tshape = times.shape
+        zen_app, zen, el_app, el, az = _spa(
+            unix, np.broadcast_to(delta_t, unix.shape).astype(np.float64), tshape, shape,
+            lat.reshape(shape), lon.reshape(shape), h.reshape(shape), np.reshape(
+                np.broadcast_to(pressure, h.shape), shape), float(atmosphere.temperature_c))
     if atmosphere.refraction:
         el_out, zen_out = el_app, zen_app
     else:
@@ -117,6 +129,64 @@ def solar_position(times, lat, lon, height_m=0.0, atmosphere: Atmosphere = Atmos
     return (np.asarray(az, np.float64).reshape(shape), np.asarray(el_out, np.float64).reshape(shape),
             np.asarray(zen_out, np.float64).reshape(shape))
 
+
+
+def _spa(unix, delta_t, tshape, shape, lat, lon, elev, pressure, temp):
+    """``pvlib.spa.solar_position_numpy``'s steps, split: those of the time alone (the
+    heliocentric series, nutation, sidereal time, the geocentric sun: most of the work) on the
+    ``unix`` times (flat, of ``tshape``), the rest on the (time, place) arrays of ``shape`` they
+    broadcast to. The same elementwise operations in the same order: the same bits as a call on
+    the broadcast arrays (tests/model/test_solar.py), for the cost of one call per time rather
+    than per (time, place). Returns (apparent zenith, zenith, apparent elevation, elevation,
+    azimuth), degrees, of ``shape``."""
+    from pvlib import spa
+    jd = spa.julian_day(unix)
+    jde = spa.julian_ephemeris_day(jd, delta_t)
+    jc = spa.julian_century(jd)
+    jce = spa.julian_ephemeris_century(jde)
+    jme = spa.julian_ephemeris_millennium(jce)
+    R = spa.heliocentric_radius_vector(jme)
+    L = spa.heliocentric_longitude(jme)
+    B = spa.heliocentric_latitude(jme)
+    Theta = spa.geocentric_longitude(L)
+    beta = spa.geocentric_latitude(B)
+    x0 = spa.mean_elongation(jce)
+    x1 = spa.mean_anomaly_sun(jce)
+    x2 = spa.mean_anomaly_moon(jce)
+    x3 = spa.moon_argument_latitude(jce)
+    x4 = spa.moon_ascending_longitude(jce)
+    l_o_nutation = np.empty((2, len(x0)))
+    spa.longitude_obliquity_nutation(jce, x0, x1, x2, x3, x4, l_o_nutation)
+    delta_psi = l_o_nutation[0]
+    delta_epsilon = l_o_nutation[1]
+    epsilon0 = spa.mean_ecliptic_obliquity(jme)
+    epsilon = spa.true_ecliptic_obliquity(epsilon0, delta_epsilon)
+    delta_tau = spa.aberration_correction(R)
+    lamd = spa.apparent_sun_longitude(Theta, delta_psi, delta_tau)
+    v0 = spa.mean_sidereal_time(jd, jc)
+    v = spa.apparent_sidereal_time(v0, delta_psi, epsilon)
+    alpha = spa.geocentric_sun_right_ascension(lamd, epsilon, beta)
+    delta = spa.geocentric_sun_declination(lamd, epsilon, beta)
+    xi = spa.equatorial_horizontal_parallax(R)
+
+    def each(a):
+        return np.broadcast_to(np.reshape(a, tshape), shape)
+    v, alpha, delta, xi = each(v), each(alpha), each(delta), each(xi)
+    H = spa.local_hour_angle(v, lon, alpha)
+    u = spa.uterm(lat)
+    x = spa.xterm(u, lat, elev)
+    y = spa.yterm(u, lat, elev)
+    delta_alpha = spa.parallax_sun_right_ascension(x, xi, H, delta)
+    delta_prime = spa.topocentric_sun_declination(delta, x, y, xi, delta_alpha, H)
+    H_prime = spa.topocentric_local_hour_angle(H, delta_alpha)
+    e0 = spa.topocentric_elevation_angle_without_atmosphere(lat, delta_prime, H_prime)
+    delta_e = spa.atmospheric_refraction_correction(pressure, temp, e0, ATMOS_REFRACT)
+    e = spa.topocentric_elevation_angle(e0, delta_e)
+    theta = spa.topocentric_zenith_angle(e)
+    theta0 = spa.topocentric_zenith_angle(e0)
+    gamma = spa.topocentric_astronomers_azimuth(H_prime, delta_prime, lat)
+    phi = spa.topocentric_azimuth_angle(gamma)
+    return (np.ravel(theta), np.ravel(theta0), np.ravel(e), np.ravel(e0), np.ravel(phi))
 
 
 def daylight_samples(first: _dt.date, last: _dt.date, step: str, tz, site, atmosphere=None,

@@ -37,6 +37,33 @@ def test_spa_worked_example():
     assert 0.005 < el[0] - el0[0] < 0.05
 
 
+@pytest.mark.parametrize("atmosphere", [Atmosphere(), Atmosphere(refraction=False),
+                                        Atmosphere(pressure_hpa=850.0, temperature_c=-3.0)])
+def test_times_against_places_are_the_bits_of_the_spa_on_every_pair(atmosphere):
+    """Times (T, 1) against places (1, P) run the SPA's time part once per time: each value
+    is the bits of pvlib's SPA on the broadcast (time, place) pairs, as the per-pair call
+    gives them."""
+    rng = np.random.default_rng(7)
+    t = 1.7e9 + np.sort(rng.uniform(0.0, 3.2e7, 211))     # a year of odd instants
+    lat = rng.uniform(-70.0, 70.0, 81)
+    lon = rng.uniform(-180.0, 180.0, 81)
+    h = rng.uniform(0.0, 4000.0, 81)
+    got = solar_position(t[:, None], lat[None, :], lon[None, :], h[None, :], atmosphere)
+    pairs = [np.broadcast_to(a, (t.size, lat.size)).ravel()
+             for a in (t[:, None], lat[None, :], lon[None, :], h[None, :])]
+    want = solar_position(*pairs, atmosphere=atmosphere)       # one SPA call per pair
+    for g, w in zip(got, want):
+        assert g.shape == (t.size, lat.size)
+        np.testing.assert_array_equal(g.ravel(), w)
+    # one time, many places; and a scalar place against many times: the same bits too
+    one = solar_position(t[5], lat, lon, h, atmosphere)
+    for g, w in zip(one, got):
+        np.testing.assert_array_equal(g, w[5])
+    many = solar_position(t, lat[3], lon[3], h[3], atmosphere)
+    for g, w in zip(many, got):
+        np.testing.assert_array_equal(g, w[:, 3])
+
+
 def test_atmosphere_pressure_given_or_standard_at_the_height():
     """--pressure wins at every height; without it the ICAO standard atmosphere: 1013.25 hPa at
     sea level, about 820 at 1830 m (the SPA report's site), arrays too."""
