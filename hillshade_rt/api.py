@@ -342,8 +342,9 @@ def _other_light(files, output, product, kw, read, run) -> dict:
 @_keyword_errors
 def irradiance(dem, output=None, *, date=None, end_date=None, start=None, end=None,
                step: str = "15min", clear_sky: str | None = None,
-               linke_turbidity: float | None = None, albedo: float = 0.2, ghi=None,
-               mean: bool = False, soft: bool = False, perez: bool = False,
+               linke_turbidity=None, albedo=0.2, ghi=None,
+               mean: bool = False, daily_mean: bool = False, monthly: bool = False,
+               soft: bool = False, perez: bool = False,
                skyview_directions: int = 32, algorithm: str = "auto",
                curvature: bool | None = None, refraction_k: float | None = None,
                backend: str = "auto", fmt: str | None = None, creation_options=None,
@@ -357,7 +358,10 @@ def irradiance(dem, output=None, *, date=None, end_date=None, start=None, end=No
     float32 bands, Wh/m², or W/m² with ``mean``). The period: ``date`` (a date or
     "YYYY-MM-DD") and ``end_date``, or ``start`` and ``end`` (datetimes or ISO strings). The
     sky: ``clear_sky`` ("ineichen", the default, with ``linke_turbidity``; "haurwitz") or
-    ``ghi``, the path of a measured series (CSV: time, ghi[, dni, dhi]). Further keywords are
+    ``ghi``, the path of a measured series (CSV: time, ghi[, dni, dhi]); ``linke_turbidity``
+    and ``albedo`` a number, 12 monthly numbers (a sequence or "a,b,..."), or for ``albedo``
+    a raster's path or a pattern with ``{month}``; ``daily_mean`` as ``--daily-mean`` (Wh/m²
+    a day), ``monthly`` as ``--monthly`` (a global band per month after the four). Further keywords are
     the command line's options of the same name (``tz``, ``lat``, ``lon``, ``band``,
     ``nodata``, ``threads``, ...); ``fmt`` and ``creation_options`` as for :func:`shade`;
     ``context`` as ``--context`` (the DEM a tile of that raster); ``height_above_ground`` as
@@ -389,8 +393,8 @@ def irradiance(dem, output=None, *, date=None, end_date=None, start=None, end=No
                            end_date=_text(end_date), start=_text(start), end=_text(end),
                            step=step, clear_sky=clear_sky, linke_turbidity=linke_turbidity,
                            albedo=albedo, ghi=None if ghi is None else os.fspath(ghi),
-                           mean=mean, soft=soft, perez=perez,
-                           skyview_directions=skyview_directions, place=place,
+                           mean=mean, daily_mean=daily_mean, monthly=monthly, soft=soft,
+                           perez=perez, skyview_directions=skyview_directions, place=place,
                            algorithm=algorithm, curvature=curvature, refraction_k=refraction_k,
                            read=read, run=run, height_above_ground=height_above_ground,
                            sky_view=None if sky_view is None else os.fspath(sky_view),

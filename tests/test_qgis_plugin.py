@@ -291,8 +291,8 @@ def test_irradiance_animate_illumination_argv():
                     "--overwrite"]
     p = parse(argv)
     assert (p["clear_sky"], p["linke_turbidity"], p["albedo"], p["ghi"], p["mean"],
-            p["perez"], p["skyview_directions"]) == ("haurwitz", 3.5, 0.3, "/m/ghi.csv", True,
-                                                     True, 16)
+            p["perez"], p["skyview_directions"]) == ("haurwitz", "3.5", "0.3", "/m/ghi.csv",
+                                                     True, True, 16)
     argv = cmd.irradiance_argv("hr", "dem.tif", "irr.tif", date="2026-06-21")
     assert argv == ["hr", "irradiance", "dem.tif", "irr.tif", "--date", "2026-06-21",
                     "--step", "15min", "--clear-sky", "ineichen", "--albedo", "0.2",

@@ -8,7 +8,7 @@ import click
 from .errors import errors_to_click, say
 from ..run.config import PLACE_KEYS
 from .options import (SectionedCommand, context_option, each_pattern_options,
-                      algorithm_option, backend_option, dem_options, finite, format_option,
+                      algorithm_option, backend_option, dem_options, format_option,
                       height_above_ground_option, overwrite_option, physics_options, place_options,
                       preview_option, quiet_option, progress_option, report_option,
                       threads_option, to_read_options,
@@ -31,15 +31,27 @@ from .options import (SectionedCommand, context_option, each_pattern_options,
 @click.option("--clear-sky", type=click.Choice(["ineichen", "haurwitz"]), default=None,
               help="pvlib's clear-sky model (default ineichen; haurwitz gives GHI only, split "
                    "into DNI and DHI by Erbs).")
-@click.option("--linke-turbidity", type=float, default=None, callback=finite, metavar="T",
-              help="Linke turbidity for ineichen (default: pvlib's climatological monthly "
-                   "value at the place).")
-@click.option("--albedo", type=float, default=0.2, show_default=True, callback=finite,
-              help="Ground reflectance (0..1) of the terrain the cell sees.")
+@click.option("--linke-turbidity", default=None, metavar="T|T1,...,T12",
+              help="Linke turbidity for ineichen: a number, or 12 monthly numbers (January "
+                   "first; each sample its month's); default: pvlib's climatological monthly "
+                   "value at the place.")
+@click.option("--albedo", default="0.2", show_default=True,
+              metavar="A|A1,...,A12|FILE|PATTERN",
+              help="Ground reflectance (0..1) of the terrain the cell sees: a number, 12 "
+                   "monthly numbers, a raster (bilinear to the DEM's grid; it must cover the "
+                   "DEM), or 12 monthly rasters named by a pattern with {month} (1..12) or "
+                   "{month:02d} (01..12).")
 @click.option("--ghi", "ghi", type=click.Path(dir_okay=False), default=None, metavar="FILE.csv",
               help="A measured sky instead: CSV with columns time, ghi (and dni, dhi; else "
                    "split by Erbs), W/m2, interpolated in time.")
 @click.option("--mean", is_flag=True, help="Mean W/m2 over the period instead of Wh/m2.")
+@click.option("--daily-mean", is_flag=True,
+              help="Wh/m2 per day (the energy divided by the period's days; each month's by "
+                   "its own) instead of Wh/m2.")
+@click.option("--monthly", is_flag=True,
+              help="Also the global energy of each month of the period: one band per month "
+                   "after the four (description YYYY-MM; months in --tz, else local mean solar "
+                   "time).")
 @click.option("--perez", is_flag=True,
               help="Perez (1990) anisotropic sky (circumsolar part shadowed with the beam) "
                    "instead of the isotropic one.")
@@ -72,7 +84,7 @@ from .options import (SectionedCommand, context_option, each_pattern_options,
 @context_option
 @errors_to_click
 def irradiance(files, date_, end_date, start, end, step, clear_sky, linke_turbidity,
-               albedo, ghi, mean, perez, skyview_directions, sky_view, sky_view_out, tz, lat, lon, pressure, temperature,
+               albedo, ghi, mean, daily_mean, monthly, perez, skyview_directions, sky_view, sky_view_out, tz, lat, lon, pressure, temperature,
                no_refraction, sun_tolerance, algorithm, curvature, refraction_k, soft,
                height_above_ground, preview,
                backend, threads, report_path, overwrite, quiet, progress, fmt,
@@ -94,7 +106,8 @@ def irradiance(files, date_, end_date, start, end, step, clear_sky, linke_turbid
     cfg = IrradianceConfig(
         dem=dem, output=output, date=date_, end_date=end_date, start=start, end=end, step=step,
         clear_sky=clear_sky, linke_turbidity=linke_turbidity, albedo=albedo, ghi=ghi,
-        mean=mean, soft=soft, perez=perez, skyview_directions=skyview_directions, place=place,
+        mean=mean, daily_mean=daily_mean, monthly=monthly, soft=soft, perez=perez,
+        skyview_directions=skyview_directions, place=place,
         algorithm=algorithm, curvature=curvature, refraction_k=refraction_k,
         read=to_read_options(kw), run=to_run_options(kw, say),
         height_above_ground=height_above_ground, sky_view=sky_view, sky_view_out=sky_view_out)

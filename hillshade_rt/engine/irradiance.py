@@ -165,10 +165,11 @@ ERBS = "DNI and DHI split from GHI by Erbs et al. (1982), pvlib.irradiance.erbs"
 
 
 def clear_sky(times, zenith, lat: float, lon: float, altitude: float, model: str = "ineichen",
-              linke_turbidity: float | None = None) -> Sky:
+              linke_turbidity=None) -> Sky:
     """pvlib's clear-sky irradiance at ``times`` (aware datetimes) for the sun's ``zenith``
     (degrees, the project's SPA: the same suns as the shadows) at (lat, lon, altitude m).
-    Ineichen-Perez with ``linke_turbidity`` (None: pvlib's climatological monthly lookup,
+    Ineichen-Perez with ``linke_turbidity`` (a number; an array: one per sample time, e.g.
+    each sample its month's value; None: pvlib's climatological monthly lookup,
     shipped with pvlib, interpolated to the day), or Haurwitz (GHI only: DNI and DHI by Erbs)."""
     import pandas as pd
     from pvlib.location import Location
@@ -195,6 +196,13 @@ def clear_sky(times, zenith, lat: float, lon: float, altitude: float, model: str
         what = (f"{float(np.mean(lt)):.2f} (pvlib's climatological monthly lookup at "
                 f"{lat:.4f}, {lon:.4f}, interpolated to the day; range "
                 f"{float(np.min(lt)):.2f}..{float(np.max(lt)):.2f})")
+    elif np.ndim(linke_turbidity):     # one value per sample (monthly values)
+        lt = np.asarray(linke_turbidity, np.float64)
+        if lt.shape != zenith.shape:
+            raise HillshadeError("one Linke turbidity per sample time")
+        vals = np.unique(lt)
+        what = (f"{float(np.mean(lt)):.2f} mean of the samples' monthly values (given: "
+                f"{', '.join(f'{v:g}' for v in vals)})")
     else:
         lt = float(linke_turbidity)
         what = f"{lt:g} (given)"
@@ -397,7 +405,8 @@ def is_dark(sun, soft: bool) -> bool:
 
 def accumulate(shader, suns, weights, sky: Sky, vd: np.ndarray, albedo: float, *,
                soft: bool = False, perez: bool = False, per_time: bool = False,
-               stats: dict | None = None, timer=None, progress=None, normals=None) -> dict:
+               stats: dict | None = None, timer=None, progress=None, normals=None,
+               groups: "Groups | None" = None) -> dict:
     """The four bands (``BANDS``, float32, NaN voids) over ``shader``'s DEM: with ``per_time``
     each a (times, rows, cols) stack of W/m² at each sun, else the sums of W/m² times
     ``weights`` (hours): Wh/m². ``suns``: ``sun.SunOver`` per sample (the shadows' and the
@@ -407,7 +416,7 @@ def accumulate(shader, suns, weights, sky: Sky, vd: np.ndarray, albedo: float, *
     "irradiance"; ``progress`` wraps the loop (a progress bar). The sums take Horn's normals once
     (``algorithms.irradiance.normals``) and add each sample in place; the stacks go as before,
     sun by sun through numpy. ``normals``: those normals when the caller has them (the sky
-    view's)."""
+    view's). ``groups``: as ``sums``' (not with ``per_time``)."""
     from .shader import render
     if per_time:
         def direct(s, timed):
@@ -434,7 +443,8 @@ def accumulate(shader, suns, weights, sky: Sky, vd: np.ndarray, albedo: float, *
         cos_s = incidence_of(nrm, *sun_vector(0.0, 90.0)).astype(np.float64)
         return cos_s, np.sqrt(np.maximum(1.0 - cos_s * cos_s, 0.0))
     return sums(lit_of, np.isnan(shader.z), slopes, suns, weights, sky, vd, albedo, soft=soft,
-                perez=perez, stats=stats, timer=timer, progress=progress, normals=nrm)
+                perez=perez, stats=stats, timer=timer, progress=progress, normals=nrm,
+                groups=groups)
 
 
 def _nothing():
@@ -465,9 +475,23 @@ def tile_suns(sun, shape) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return row_tile, col_tile, vec
 
 
+@dataclass
+class Groups:
+    """Samples grouped by period (the months of ``irradiance --monthly``, or of monthly sky
+    inputs): ``index`` each sample's group (0, 1, ..., never decreasing), ``albedo`` each
+    group's albedo (a number, or a float64 raster of the cells), ``bands`` whether ``sums``
+    returns each group's global band (``"groups"``: float32 Wh/m², NaN voids). ``albedo``
+    None: the run's single albedo for every group."""
+
+    index: np.ndarray
+    albedo: list | None = None
+    bands: bool = True
+
+
 def sums(direct, void: np.ndarray, slopes, suns, weights, sky: Sky, vd: np.ndarray,
-         albedo: float, *, soft: bool = False, perez: bool = False, per_time: bool = False,
-         stats: dict | None = None, timer=None, progress=None, normals=None) -> dict:
+         albedo, *, soft: bool = False, perez: bool = False, per_time: bool = False,
+         stats: dict | None = None, timer=None, progress=None, normals=None,
+         groups: Groups | None = None) -> dict:
     """``accumulate``'s bands over any cells: ``direct(sun, timed)`` gives max(cos i, 0) · lit
     of the cells (float32, NaN voids) for a sun with light to cast (``timed(stage)``: the
     timer's context), or with ``normals`` (``algorithms.irradiance.normals`` of the cells) lit
@@ -477,7 +501,12 @@ def sums(direct, void: np.ndarray, slopes, suns, weights, sky: Sky, vd: np.ndarr
     come from its windows (``run.irradiance`` with --context): the arithmetic per cell is the
     same, cell by cell, in the same order and types. The sums are added in place sample by
     sample (``algorithms.irradiance.add_sample``: the bits of numpy's w · (DNI · d) and
-    w · max(DHI · (...), 0) sums); the stacks (``per_time``) are numpy's."""
+    w · max(DHI · (...), 0) sums); the stacks (``per_time``) are numpy's. ``albedo``: a number
+    or a float64 raster of the cells (constant in time). ``groups`` (:class:`Groups`): each
+    group's global band too (its beam and Perez diffuse the difference of the float64 running
+    sums at its ends; its isotropic diffuse and reflected light from its own samples' sky), and
+    with ``groups.albedo`` the reflected light of each group with its own albedo, the total
+    their sum; the total bands are otherwise the bits of a run without groups."""
     import contextlib
     w = np.asarray(weights, np.float64)
     n = len(suns)
@@ -514,7 +543,18 @@ def sums(direct, void: np.ndarray, slopes, suns, weights, sky: Sky, vd: np.ndarr
     rows0 = np.zeros(shape[0], np.int64)
     if not perez:
         sin_s = horizon_share = none2
+    gi = None if groups is None else np.asarray(groups.index, np.int64)
+    if gi is not None and (len(gi) != n or (n and (gi[0] != 0 or np.any(np.diff(gi) < 0)))):
+        raise HillshadeError("one group per sun, numbered from 0 in the suns' order")
+    ends = []                    # (group, its beam sum, its diffuse sum)
+    prev = [beam.copy(), diffuse.copy() if perez else None] if gi is not None else None
+
+    def close(g):
+        ends.append((g, beam - prev[0], diffuse - prev[1] if perez else None))
+        prev[0], prev[1] = beam.copy(), diffuse.copy() if perez else None
     for k in loop:
+        if gi is not None and k > 0 and gi[k] != gi[k - 1]:
+            close(int(gi[k - 1]))
         s = suns[k]
         dni, dhi = float(sky.dni[k]), float(sky.dhi[k])
         circ = perez and dhi > 0 and bool(sky.perez_on[k]) and sky.f1[k] > 0
@@ -545,17 +585,46 @@ def sums(direct, void: np.ndarray, slopes, suns, weights, sky: Sky, vd: np.ndarr
                        float(sky.f1[k] / sky.b[k]) if diffuse_on else 0.0,
                        float(sky.f2[k]) if diffuse_on else 0.0, dhi,
                        vd64, sin_s, horizon_share, diffuse)
+    if gi is not None and n:
+        close(int(gi[-1]))
     if stats is not None:
         stats.update(counted)
     with timed("irradiance"):
+        per_group = None
+        if gi is not None:
+            per_group = _group_bands(ends, gi, w, sky, vd64, albedo, groups, perez, void)
         if not perez:
             diffuse = float(np.sum(w * sky.dhi)) * vd64
-        reflected = float(np.sum(w * sky.ghi)) * albedo * (1.0 - vd64)
+        if groups is not None and groups.albedo is not None:
+            reflected = per_group[1]
+        else:
+            reflected = float(np.sum(w * sky.ghi)) * albedo * (1.0 - vd64)
         beam[void] = np.nan
         diffuse[void] = np.nan
         bands = {"beam": beam, "diffuse": diffuse, "reflected": reflected,
                  "global": beam + diffuse + reflected}
-        return {k: v.astype(np.float32) for k, v in bands.items()}
+        out = {k: v.astype(np.float32) for k, v in bands.items()}
+        if groups is not None and groups.bands:
+            out["groups"] = per_group[0]
+        return out
+
+
+def _group_bands(ends, gi, w, sky, vd64, albedo, groups: Groups, perez, void):
+    """(each group's global band (float32, NaN voids), the reflected light summed over the
+    groups with their own albedo (float64; None without ``groups.albedo``))."""
+    out, refl_total = [], None
+    for g, b, d in ends:
+        sel = gi == g
+        ag = albedo if groups.albedo is None else groups.albedo[g]
+        refl = float(np.sum(w[sel] * sky.ghi[sel])) * ag * (1.0 - vd64)
+        if groups.albedo is not None:
+            refl_total = refl if refl_total is None else refl_total + refl
+        if groups.bands:
+            dif = d if perez else float(np.sum(w[sel] * sky.dhi[sel])) * vd64
+            glob = (b + dif + refl).astype(np.float32)
+            glob[void] = np.nan
+            out.append(glob)
+    return out, refl_total
 
 
 def _stacks(direct, void, loop, suns, sky, vd, vd64, albedo, soft, perez, sin_s,

@@ -373,10 +373,14 @@ class IrradianceConfig:
     end: str | None = None
     step: str = "15min"
     clear_sky: str | None = None          # None: "ineichen" (and not with ``ghi``)
-    linke_turbidity: float | None = None  # None: pvlib's climatological lookup
-    albedo: float = 0.2
+    # a number, 12 monthly numbers ("a,b,..." or a sequence), a raster or a pattern with
+    # {month} (run.sky_inputs); linke_turbidity None: pvlib's climatological lookup
+    linke_turbidity: float | str | None = None
+    albedo: float | str = 0.2
     ghi: str | None = None                # a CSV: time, ghi[, dni, dhi]
     mean: bool = False                    # mean W/m² over the period instead of Wh/m²
+    daily_mean: bool = False              # Wh/m² per day: the energy over the period's days
+    monthly: bool = False                 # and the global energy of each month, a band each
     soft: bool = False
     perez: bool = False
     skyview_directions: int = 32
@@ -389,10 +393,27 @@ class IrradianceConfig:
     height_above_ground: float = 0.0      # metres: the receiving surface stands this high
     sky_view: str | None = None           # Dozier's Vd read from this file (skyview's output)
     sky_view_out: str | None = None       # the Vd computed written to this file too
+    # (check() parses linke_turbidity and albedo into run.sky_inputs.SkyValue)
+    linke_input: object = field(default=None, init=False, repr=False, compare=False)
+    albedo_input: object = field(default=None, init=False, repr=False, compare=False)
+
+    def sky_inputs(self) -> list:
+        """The files of --albedo and --linke-turbidity (after :meth:`check`)."""
+        return [p for v in (self.albedo_input, self.linke_input) if v is not None
+                for p in v.inputs()]
 
     def check(self):
         """The options' combinations and values (UsageProblem: exit status 2)."""
         from ..engine.irradiance import CLEAR_SKY_MODELS, check_options
+        from .sky_inputs import SkyValue
+        self.albedo_input = SkyValue.parse("--albedo", self.albedo, 0.0, 1.0)
+        self.linke_input = SkyValue.parse("--linke-turbidity", self.linke_turbidity, 1.0, 10.0,
+                                          " (clean, dry air ~2, hazy ~5)")
+        if self.linke_input is not None and self.linke_input.rasters:
+            raise UsageProblem("--linke-turbidity takes a number or 12 monthly numbers; as a "
+                               "raster it is not supported yet")
+        if self.mean and self.daily_mean:
+            raise UsageProblem("--mean (W/m2) and --daily-mean (Wh/m2 per day): give one")
         if self.sky_view is not None and self.sky_view_out is not None:
             raise UsageProblem("--sky-view-out writes the sky view the run computes; with "
                                "--sky-view it computes none: give one of them")
@@ -409,14 +430,14 @@ class IrradianceConfig:
             raise UsageProblem(f"--clear-sky must be one of {', '.join(CLEAR_SKY_MODELS)}, got "
                                f"{self.clear_sky!r}")
         if self.ghi is not None and (self.clear_sky is not None
-                                     or self.linke_turbidity is not None):
+                                     or self.linke_input is not None):
             raise UsageProblem("--ghi gives the sky measured: --clear-sky and "
                                "--linke-turbidity do not go with it")
-        if self.linke_turbidity is not None and self.clear_sky == "haurwitz":
+        if self.linke_input is not None and self.clear_sky == "haurwitz":
             raise UsageProblem("--linke-turbidity is Ineichen's: Haurwitz takes none")
         self.algorithm = check_lift(self.height_above_ground, self.algorithm, self.soft)
         try:
-            check_options(self.albedo, self.linke_turbidity, self.skyview_directions)
+            check_options(0.0, None, self.skyview_directions)
         except HillshadeError as exc:
             raise UsageProblem(str(exc)) from None
 

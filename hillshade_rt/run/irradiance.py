@@ -71,6 +71,7 @@ class _Samples:
     sun_info: dict | None
     work: list
     sky: object             # engine.irradiance.Sky
+    tz: object = None       # the zone of the samples' local time (None: local mean solar)
 
 
 @dataclass
@@ -85,6 +86,7 @@ class _Bands:
     processing: dict | None = None
     vd_from: str = "computed"
     vd_tags: dict | None = None
+    months: list | None = None      # --monthly: ((year, month), hours, global band) each
 
 
 def irradiance(cfg: IrradianceConfig) -> dict:
@@ -93,7 +95,8 @@ def irradiance(cfg: IrradianceConfig) -> dict:
     cfg.check()
     cfg.read.check_context(cfg.dem, **{"--preview": ro.preview is not None})
     # (the --ghi series and the context are inputs)
-    ctx = RunContext.start(ro, inputs=[cfg.dem, cfg.ghi, cfg.sky_view] + cfg.read.inputs(),
+    ctx = RunContext.start(ro, inputs=[cfg.dem, cfg.ghi, cfg.sky_view] + cfg.read.inputs()
+                           + cfg.sky_inputs(),
                            outputs=[(cfg.output, "OUTPUT"),
                                     (cfg.sky_view_out, "--sky-view-out")],
                            algorithm=cfg.algorithm,
@@ -135,9 +138,13 @@ def _run(cfg, ctx: RunContext, lighting, asked: _Asked, d, area) -> dict:
     else:
         lit = _light_in_context(cfg, ctx, area, lighting, body, sampled, algo_stats, bar)
         geom = area.tile
-    if cfg.mean:
-        lit.bands = {k: (v / np.float32(sampled.hours)).astype(np.float32)
+    if cfg.mean or cfg.daily_mean:     # W/m² (÷ hours), or Wh/m² a day (÷ days)
+        per = 1.0 if cfg.mean else 24.0
+        lit.bands = {k: (v / np.float32(sampled.hours / per)).astype(np.float32)
                      for k, v in lit.bands.items()}
+        if lit.months is not None:
+            lit.months = [(key, hours, (v / np.float32(hours / per)).astype(np.float32))
+                          for key, hours, v in lit.months]
     tags = _tags(cfg, lighting, asked.req, sampled, area)
     _write(cfg, ctx, geom, d, lit, tags)
     rep = _report(cfg, ctx, geom, sampled, lit, algo_stats, area)
@@ -243,10 +250,10 @@ def _samples(cfg: IrradianceConfig, asked: _Asked, d) -> _Samples:
     suns, sun_info = req.suns(d, site)
     return _Samples(site, period, float(np.sum(weights)), times, weights, suns, sun_info,
                     [s for s in suns if not ir.is_dark(s, cfg.soft)],
-                    _sky(cfg, times, suns, site, series))
+                    _sky(cfg, times, suns, site, series, req.tz), req.tz)
 
 
-def _sky(cfg: IrradianceConfig, times, suns, site, series):
+def _sky(cfg: IrradianceConfig, times, suns, site, series, tz=None):
     """The open sky at each sample: the clear-sky model's, or the ``--ghi`` series
     interpolated in time; with ``--perez`` its Perez coefficients."""
     import numpy as np
@@ -254,8 +261,14 @@ def _sky(cfg: IrradianceConfig, times, suns, site, series):
     from ..engine import irradiance as ir
     zen = np.array([s.zenith for s in suns], np.float64)
     if series is None:
+        lt = cfg.linke_input
+        if lt is not None and lt.monthly is not None:     # each sample its month's value
+            from .sky_inputs import local_months
+            lt = np.array(lt.monthly, np.float64)[local_months(times, tz, site.lon) - 1]
+        elif lt is not None:
+            lt = lt.number
         sky = ir.clear_sky(times, zen, site.lat, site.lon, site.height,
-                           cfg.clear_sky or "ineichen", cfg.linke_turbidity)
+                           cfg.clear_sky or "ineichen", lt)
     else:
         unix, *cols = series
         ghi, dni, dhi = ir.series_at(times, unix, *cols, path=cfg.ghi)
@@ -302,12 +315,53 @@ def _light(cfg, ctx: RunContext, d, shader, lighting, body, sampled: _Samples, a
                                          pyramid=pyramid, normals=nrm), None
     if cfg.sky_view_out is not None:
         _write_vd(cfg, ctx, d, vd, hs, None, d.heights)
+    with ctx.timer("prepare"):
+        albedo, groups, keys = _albedo_groups(cfg, sampled, d, None)
     with ctx.timer("compute"):
         bands = ir.accumulate(shader, sampled.suns, sampled.weights, sampled.sky, vd,
-                              cfg.albedo, soft=lighting.soft, perez=cfg.perez, stats=algo_stats,
-                              timer=ctx.timer, progress=bar, normals=nrm)
+                              albedo, soft=lighting.soft, perez=cfg.perez, stats=algo_stats,
+                              timer=ctx.timer, progress=bar, normals=nrm, groups=groups)
     return _Bands(bands, vd, shader.report(), vd_from="computed" if vd_tags is None else "read",
-                  vd_tags=vd_tags)
+                  vd_tags=vd_tags, months=_months(cfg, sampled, bands, keys))
+
+
+def _albedo_groups(cfg, sampled: _Samples, geom, valid):
+    """(the albedo of the whole period: a number or a raster on the grid of ``geom``; the
+    samples' groups (``engine.irradiance.Groups``: their months) where --monthly or a monthly
+    albedo needs them, else None; the groups' (year, month))."""
+    import numpy as np
+
+    from ..engine import irradiance as ir
+    from .sky_inputs import month_keys
+    a = cfg.albedo_input
+    shape = geom.shape
+    if valid is None and a.rasters:
+        valid = ~np.isnan(geom.heights)
+
+    def on(month):
+        return a.on_grid(month, geom.transform, geom.crs, shape, valid)
+    if not (cfg.monthly or a.by_month):
+        return on(1), None, None
+    keys = month_keys(sampled.times, sampled.tz, sampled.site.lon)
+    order = list(dict.fromkeys(keys))
+    index = np.array([order.index(k) for k in keys], np.int64) if keys else np.zeros(0, np.int64)
+    per = [on(m) for _, m in order] if a.by_month else None
+    return (None if a.by_month else on(1)), ir.Groups(index, per, bool(cfg.monthly)), order
+
+
+def _months(cfg, sampled: _Samples, bands: dict, keys) -> list | None:
+    """--monthly: ((year, month), the month's hours, its global band) each."""
+    import numpy as np
+    if not cfg.monthly:
+        bands.pop("groups", None)
+        return None
+    from .sky_inputs import month_keys
+    got = month_keys(sampled.times, sampled.tz, sampled.site.lon)
+    w = np.asarray(sampled.weights, np.float64)
+    hours = {k: 0.0 for k in keys}
+    for k, h in zip(got, w.tolist()):
+        hours[k] += h
+    return [(k, hours[k], v) for k, v in zip(keys, bands.pop("groups"))]
 
 
 def _want(cfg, hs, area, heights) -> dict:
@@ -424,15 +478,19 @@ def _light_in_context(cfg, ctx: RunContext, area, lighting, body, sampled: _Samp
                         read["windows"] += 1
                         read["cells"] += p.cells
                 return out
+            with timer("prepare"):
+                albedo, groups, keys = _albedo_groups(cfg, sampled, area.tile, ~void)
             with timer("compute"):
                 bands = ir.sums(direct, void, slopes, sampled.suns, sampled.weights,
-                                sampled.sky, vd, cfg.albedo, soft=lighting.soft,
-                                perez=cfg.perez, stats=algo_stats, timer=timer, progress=bar)
+                                sampled.sky, vd, albedo, soft=lighting.soft,
+                                perez=cfg.perez, stats=algo_stats, timer=timer, progress=bar,
+                                groups=groups)
     processing = {"mode": "windows", "cells": area.shape[0] * area.shape[1],
                   "shadow_windows": read["windows"], "shadow_window_cells": read["cells"],
                   "sky_view": fig.as_dict()}
     return _Bands(bands, vd, curvature_report(job.curvature, used, job.body, job.k),
-                  processing, "computed" if vd_tags is None else "read", vd_tags)
+                  processing, "computed" if vd_tags is None else "read", vd_tags,
+                  _months(cfg, sampled, bands, keys))
 
 
 def _sky_model(cfg: IrradianceConfig) -> str:
@@ -440,7 +498,7 @@ def _sky_model(cfg: IrradianceConfig) -> str:
 
 
 def _unit(cfg: IrradianceConfig) -> str:
-    return "W/m2" if cfg.mean else "Wh/m2"
+    return "W/m2" if cfg.mean else "Wh/m2/day" if cfg.daily_mean else "Wh/m2"
 
 
 def _tags(cfg: IrradianceConfig, lighting, req, sampled: _Samples, area) -> dict:
@@ -449,11 +507,13 @@ def _tags(cfg: IrradianceConfig, lighting, req, sampled: _Samples, area) -> dict
     from ..io import input_label
     sky, sky_model = sampled.sky, _sky_model(cfg)
     units = ("W/m2, mean over the period" if cfg.mean
-             else "Wh/m2, energy over the period")
+             else "Wh/m2 per day, the energy over the period divided by its days"
+             if cfg.daily_mean else "Wh/m2, energy over the period")
     tags = {"HILLSHADE_RT_VERSION": __version__, "UNITS": units, "PERIOD": sampled.period,
             "PERIOD_HOURS": f"{sampled.hours:g}", "STEP": cfg.step,
             "SAMPLES": len(sampled.suns), "SKY": sky.source, "SKY_MODEL": sky_model,
-            "ALBEDO": f"{cfg.albedo:g}", "SKYVIEW_DIRECTIONS": cfg.skyview_directions,
+            "ALBEDO": cfg.albedo_input.describe(),
+            "SKYVIEW_DIRECTIONS": cfg.skyview_directions,
             "SOFT": cfg.soft, "ALGORITHM": cfg.algorithm,
             "HEIGHT_ABOVE_GROUND_M": lighting.lift,
             "DEFINITIONS": ir.definitions(sky_model, cfg.skyview_directions, cfg.soft),
@@ -471,6 +531,11 @@ def _tags(cfg: IrradianceConfig, lighting, req, sampled: _Samples, area) -> dict
         tags["TURBIDITY"] = sky.turbidity or "none (Haurwitz takes none)"
     if sky.split:
         tags["SPLIT"] = sky.split
+    if cfg.monthly:
+        tags["MONTHS"] = ("bands 5 on: the global energy of each month of the period (its "
+                          "description YYYY-MM; months in "
+                          + (f"{sampled.tz.key}" if sampled.tz is not None
+                             else "local mean solar time") + "), in the bands' units")
     return tags
 
 
@@ -484,12 +549,16 @@ def _write(cfg: IrradianceConfig, ctx: RunContext, geom, d, lit: _Bands, tags: d
     from ..pictures.preview import relief_rgb, scaled
     ro, unit = ctx.ro, _unit(cfg)
     with ctx.timer("write"):
-        with BandWriter(cfg.output, geom, len(ir.BANDS), "float32", -9999.0, tags,
-                        overview_resampling="average", overwrite=ro.overwrite,
+        months = lit.months or []
+        with BandWriter(cfg.output, geom, len(ir.BANDS) + len(months), "float32", -9999.0,
+                        tags, overview_resampling="average", overwrite=ro.overwrite,
                         fmt=ro.fmt, co=ro.creation_options) as w:
             for i, k in enumerate(ir.BANDS, 1):
                 v = lit.bands[k]
                 w.write(i, np.where(np.isnan(v), np.float32(-9999.0), v), k, {"UNITS": unit})
+            for i, ((year, month), hours, v) in enumerate(months, len(ir.BANDS) + 1):
+                w.write(i, np.where(np.isnan(v), np.float32(-9999.0), v), f"{year}-{month:02d}",
+                        {"UNITS": unit, "QUANTITY": "global", "HOURS": f"{hours:g}"})
         if ro.preview is not None:
             write_png(ro.preview, relief_rgb(d.heights, d.grid,
                                              ramp=scaled(lit.bands["global"])),
@@ -520,7 +589,9 @@ def _report(cfg: IrradianceConfig, ctx: RunContext, geom, sampled: _Samples, lit
            "units": _unit(cfg), "samples": len(sampled.suns),
            "samples_with_sun": len(sampled.work), "samples_with_shadows": with_shadows,
            "sky": sky.source, "sky_model": _sky_model(cfg), "turbidity": sky.turbidity,
-           "split": sky.split, "albedo": cfg.albedo,
+           "split": sky.split,
+           "albedo": (cfg.albedo_input.number if cfg.albedo_input.number is not None
+                      else cfg.albedo_input.describe()),
            "skyview_directions": cfg.skyview_directions, "soft": cfg.soft,
            "height_above_ground_m": float(cfg.height_above_ground),
            "sky_view": _summary(lit.vd), "sky_view_from": lit.vd_from,
@@ -534,6 +605,9 @@ def _report(cfg: IrradianceConfig, ctx: RunContext, geom, sampled: _Samples, lit
            "curvature": lit.curvature, "algorithm_stats": algo_stats,
            "seconds": ctx.seconds(), "version": __version__}
     rep.update(sampled.sun_info or {})
+    if lit.months is not None:
+        rep["months"] = [{"month": f"{y}-{m:02d}", "hours": h, "global": _summary(v)}
+                         for (y, m), h, v in lit.months]
     if lit.vd_tags is not None:      # the version that made the file read
         rep["sky_view_made_by"] = lit.vd_tags.get("HILLSHADE_RT_VERSION")
     if area is not None:

@@ -1,0 +1,201 @@
+"""The sky's inputs of ``irradiance`` as GRASS r.sun users give them: a number for the whole
+DEM, twelve monthly numbers, a raster, or twelve monthly rasters (a file name pattern with
+``{month}``).
+
+``--albedo 0.2``, ``--albedo 0.3,0.3,0.25,...`` (12 values, January first), ``--albedo
+albedo.tif``, ``--albedo 'albedo_{month:02d}.tif'`` (``{month}``: 1..12, Python's format, so
+``{month:02d}`` gives 01..12). A raster is resampled to the DEM's grid bilinearly
+(``rasterio.warp.reproject``, its own nodata and the cells outside it NaN); a raster that does
+not cover every valid cell of the DEM is refused (one line, exit 2), as is a value out of the
+option's range. A sample's month is its local month (the DEM's zone with ``--tz``, else local
+mean solar time at the DEM's longitude).
+
+``--linke-turbidity`` takes a number or twelve monthly numbers (each sample's clear sky with its
+month's value, as r.sun users loop over days with monthly Linke values). A constant raster is
+the number: the same bits.
+
+References
+----------
+.. [1] M. Šúri, J. Hofierka, "A new GIS-based solar radiation model and its application to
+       photovoltaic assessments," Transactions in GIS, vol. 8, no. 2, pp. 175-190, 2004.
+       :doi:`10.1111/j.1467-9671.2004.00174.x`
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import math
+import os
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import UsageProblem
+
+MONTHS = 12
+
+
+@dataclass(frozen=True)
+class SkyValue:
+    """One sky input: ``number`` (the whole DEM, the whole period), ``monthly`` (12 numbers),
+    ``path`` (one raster) or ``pattern`` (12 rasters, ``{month}`` formatted 1..12)."""
+
+    option: str
+    low: float
+    high: float
+    number: float | None = None
+    monthly: tuple | None = None
+    path: str | None = None
+    pattern: str | None = None
+
+    @classmethod
+    def parse(cls, option: str, value, low: float, high: float,
+              hint: str = "") -> "SkyValue | None":
+        """The option's value (a number, "a,b,...", a path or a pattern; None: not given)
+        checked: numbers within [low, high], 12 of them for months, the files there."""
+        if value is None:
+            return None
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            return cls(option, low, high, number=cls._check(option, float(value), low, high, hint))
+        if isinstance(value, (list, tuple)):
+            parts = [str(v) for v in value]
+        else:
+            text = os.fspath(value) if isinstance(value, os.PathLike) else str(value)
+            if "{" in text and "}" in text:
+                try:
+                    names = [text.format(month=m) for m in range(1, MONTHS + 1)]
+                except (KeyError, IndexError, ValueError) as exc:
+                    raise UsageProblem(f"{option} {text!r}: a pattern takes {{month}} (1..12) "
+                                       f"or {{month:02d}} (01..12) only ({exc})") from None
+                missing = [n for n in names if not _exists(n)]
+                if missing:
+                    raise UsageProblem(f"{option} {text!r}: no such file: {missing[0]} (the "
+                                       f"pattern names one raster per month)")
+                return cls(option, low, high, pattern=text)
+            parts = text.split(",")
+            if len(parts) == 1:
+                try:
+                    return cls(option, low, high,
+                               number=cls._check(option, float(text), low, high, hint))
+                except ValueError:
+                    if not _exists(text):
+                        raise UsageProblem(f"{option}: {text!r} is neither a number nor an "
+                                           "existing raster") from None
+                    return cls(option, low, high, path=text)
+        if len(parts) != MONTHS:
+            raise UsageProblem(f"{option} takes one number or {MONTHS} monthly numbers "
+                               f"(January first), got {len(parts)}")
+        try:
+            vals = tuple(cls._check(option, float(p), low, high, hint) for p in parts)
+        except ValueError:
+            raise UsageProblem(f"{option}: the monthly values must be numbers, got "
+                               f"{','.join(parts)!r}") from None
+        if len(set(vals)) == 1:           # twelve times one number: that number
+            return cls(option, low, high, number=vals[0])
+        return cls(option, low, high, monthly=vals)
+
+    @staticmethod
+    def _check(option, v, low, high, hint=""):
+        if not (math.isfinite(v) and low <= v <= high):
+            raise UsageProblem(f"{option} must be between {low:g} and {high:g}{hint}, got "
+                               f"{v:g}")
+        return v
+
+    @property
+    def rasters(self) -> bool:
+        return self.path is not None or self.pattern is not None
+
+    @property
+    def by_month(self) -> bool:
+        return self.monthly is not None or self.pattern is not None
+
+    def inputs(self) -> list:
+        """The files read (for the run's input/output checks)."""
+        if self.path is not None:
+            return [self.path]
+        if self.pattern is not None:
+            return [self.pattern.format(month=m) for m in range(1, MONTHS + 1)]
+        return []
+
+    def describe(self) -> str:
+        """The tag's text."""
+        if self.number is not None:
+            return f"{self.number:g}"
+        if self.monthly is not None:
+            return "monthly " + ",".join(f"{v:g}" for v in self.monthly)
+        if self.path is not None:
+            return f"raster {os.path.basename(self.path)} (bilinear to the DEM's grid)"
+        return f"monthly rasters {os.path.basename(self.pattern)} (bilinear to the DEM's grid)"
+
+    def value_of_month(self, month: int) -> float:
+        """The number of ``month`` (1..12): ``number`` or ``monthly[month - 1]``."""
+        return self.number if self.monthly is None else self.monthly[month - 1]
+
+    def on_grid(self, month: int, transform, crs, shape, valid: np.ndarray | None):
+        """The value of ``month`` on the grid (``transform``, ``crs``, ``shape``): a float, or a
+        float64 raster resampled bilinearly; cells of ``valid`` it does not cover: refused."""
+        if not self.rasters:
+            return self.value_of_month(month)
+        path = self.path if self.path is not None else self.pattern.format(month=month)
+        out = resample(path, transform, crs, shape)
+        lacking = np.isnan(out) if valid is None else (np.isnan(out) & valid)
+        if lacking.any():
+            raise UsageProblem(f"{self.option} {path}: the raster does not cover the DEM "
+                               f"({int(lacking.sum())} of its cells lie outside or on its "
+                               "nodata)")
+        seen = out[~np.isnan(out)]
+        if seen.size and (seen.min() < self.low or seen.max() > self.high):
+            raise UsageProblem(f"{self.option} {path}: values must be between {self.low:g} and "
+                               f"{self.high:g}, found {seen.min():g}..{seen.max():g}")
+        return out
+
+
+def _exists(path: str) -> bool:
+    return path.startswith("/vsi") or os.path.exists(path)
+
+
+def resample(path: str, transform, crs, shape) -> np.ndarray:
+    """Band 1 of the raster ``path`` on the grid (``transform``, ``crs``, ``shape``), bilinear
+    (``rasterio.warp.reproject``), float64, NaN where it has no value (outside, nodata)."""
+    import contextlib
+
+    import rasterio
+    from rasterio.warp import Resampling, reproject
+
+    from ..errors import HillshadeError
+    from ..io.gdal import open_raster, read_error
+    out = np.full(shape, np.nan, np.float64)
+    with contextlib.ExitStack() as stack:
+        try:
+            src = open_raster(path, stack)
+        except HillshadeError as exc:
+            raise UsageProblem(str(exc)) from None
+        if src.crs is None or src.transform.is_identity:
+            raise UsageProblem(f"{path}: the raster has no georeferencing (a CRS and a "
+                               "geotransform): it cannot be put on the DEM's grid")
+        try:
+            reproject(rasterio.band(src, 1), out, src_nodata=src.nodata,
+                      dst_transform=transform, dst_crs=crs if crs is not None else src.crs,
+                      dst_nodata=np.nan, resampling=Resampling.bilinear)
+        except Exception as exc:      # noqa: BLE001 -- GDAL's read errors, one line
+            raise read_error(path, exc) from None
+    return out
+
+
+def local_months(times, tz, lon: float) -> np.ndarray:
+    """Each sample time's month (1..12) where the DEM is: in ``tz`` (a zone), else in local mean
+    solar time at longitude ``lon`` (degrees east)."""
+    if tz is not None:
+        return np.array([t.astimezone(tz).month for t in times], np.int64)
+    shift = _dt.timedelta(hours=lon / 15.0)
+    return np.array([(t.astimezone(_dt.timezone.utc) + shift).month for t in times], np.int64)
+
+
+def month_keys(times, tz, lon: float) -> list:
+    """Each sample time's (year, month) where the DEM is (as :func:`local_months`)."""
+    if tz is not None:
+        loc = [t.astimezone(tz) for t in times]
+    else:
+        shift = _dt.timedelta(hours=lon / 15.0)
+        loc = [t.astimezone(_dt.timezone.utc) + shift for t in times]
+    return [(t.year, t.month) for t in loc]
