@@ -352,7 +352,8 @@ def irradiance(dem, output=None, *, date=None, end_date=None, start=None, end=No
                preview: str | None = None, progress: bool = False, context=None,
                height_above_ground: float = 0.0, each: bool = False,
                output_pattern: str | None = None, sky_view=None, sky_view_out=None,
-               **more) -> dict:
+               max_memory=None, window_size=None, client=None,
+               worker_timeout: float = DEFAULT_WORKER_TIMEOUT, **more) -> dict:
     """``hillshade-rt irradiance`` as a function: the beam, diffuse, reflected and global
     irradiance on every cell of the DEM at ``dem`` over a period, written to ``output`` (4
     float32 bands, Wh/m², or W/m² with ``mean``). The period: ``date`` (a date or
@@ -368,7 +369,10 @@ def irradiance(dem, output=None, *, date=None, end_date=None, start=None, end=No
     ``--height-above-ground`` (metres: the receiving surface stands this high); ``sky_view``
     as ``--sky-view`` (the path of Dozier's sky view factor made by ``skyview --definition
     dozier`` with the run's settings, read instead of computed), ``sky_view_out`` as
-    ``--sky-view-out`` (the path the computed one is written to). ``each``:
+    ``--sky-view-out`` (the path the computed one is written to). In memory, or in windows as
+    ``--max-memory``/``--window-size``; ``client`` a ``distributed.Client`` (or a scheduler
+    address, or "local:N"): the windows run as Dask tasks on it (``worker_timeout`` as
+    ``--worker-timeout``), as :func:`sun_hours`'s; the same bits in every mode. ``each``:
     ``dem`` a list of unrelated DEMs, each on its own into ``output_pattern``'s ``{stem}``, as
     ``--each`` (no ``output``; the report lists each input's status, as :func:`shade`'s).
     ``progress`` as for :func:`shade`. Returns the report. For
@@ -388,7 +392,8 @@ def irradiance(dem, output=None, *, date=None, end_date=None, start=None, end=No
                        context=None if context is None else os.fspath(context))
     run = RunOptions(backend=backend, threads=more.get("threads"), report_path=report,
                      overwrite=overwrite, **_progress(progress), fmt=fmt, preview=preview,
-                     say=_stderr, creation_options=creation_options)
+                     say=_stderr, creation_options=creation_options,
+                     worker_timeout=worker_timeout)
     cfg = IrradianceConfig(dem=dem, output=output, date=_text(date),
                            end_date=_text(end_date), start=_text(start), end=_text(end),
                            step=step, clear_sky=clear_sky, linke_turbidity=linke_turbidity,
@@ -398,7 +403,8 @@ def irradiance(dem, output=None, *, date=None, end_date=None, start=None, end=No
                            algorithm=algorithm, curvature=curvature, refraction_k=refraction_k,
                            read=read, run=run, height_above_ground=height_above_ground,
                            sky_view=None if sky_view is None else os.fspath(sky_view),
-                           sky_view_out=None if sky_view_out is None else os.fspath(sky_view_out))
+                           sky_view_out=None if sky_view_out is None else os.fspath(sky_view_out),
+                           max_memory=max_memory, window_size=window_size, scheduler=client)
     token = virtual_outputs.set(True)    # /vsimem/ outputs are fine from Python
     try:
         return irradiance_each(cfg, dem, output_pattern) if each else run_irradiance(cfg)

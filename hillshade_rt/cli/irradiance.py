@@ -9,10 +9,10 @@ from .errors import errors_to_click, say
 from ..run.config import PLACE_KEYS
 from .options import (SectionedCommand, context_option, each_pattern_options,
                       algorithm_option, backend_option, dem_options, format_option,
-                      height_above_ground_option, overwrite_option, physics_options, place_options,
-                      preview_option, quiet_option, progress_option, report_option,
-                      threads_option, to_read_options,
-                      to_run_options)
+                      height_above_ground_option, max_memory_option, overwrite_option,
+                      physics_options, place_options, preview_option, quiet_option,
+                      progress_option, report_option, scheduler_option, threads_option,
+                      to_read_options, to_run_options, window_size_option)
 
 
 @click.command(cls=SectionedCommand)
@@ -75,6 +75,9 @@ from .options import (SectionedCommand, context_option, each_pattern_options,
 @backend_option
 @threads_option
 @report_option
+@max_memory_option
+@window_size_option
+@scheduler_option
 @overwrite_option("Replace outputs if they exist.")
 @quiet_option("No progress bar or summary on stderr.")
 @progress_option
@@ -87,12 +90,14 @@ def irradiance(files, date_, end_date, start, end, step, clear_sky, linke_turbid
                albedo, ghi, mean, daily_mean, monthly, perez, skyview_directions, sky_view, sky_view_out, tz, lat, lon, pressure, temperature,
                no_refraction, sun_tolerance, algorithm, curvature, refraction_k, soft,
                height_above_ground, preview,
-               backend, threads, report_path, overwrite, quiet, progress, fmt,
+               backend, threads, report_path, max_memory, window_size, scheduler, overwrite,
+               quiet, progress, fmt,
                creation_options, each, output_pattern, **read_opts):
     """Write the beam, diffuse, reflected and global irradiance on every cell of DEM over a
     period to OUTPUT: 4 float32 bands, Wh/m2 (W/m2 with --mean), -9999 nodata. Beam: DNI on
     the tilted surface, in cast shadow 0; diffuse: DHI times the sky view factor; reflected:
-    GHI times albedo times the terrain's view factor."""
+    GHI times albedo times the terrain's view factor. A DEM larger than --max-memory (or any,
+    with --window-size or --scheduler) is computed in windows, with the same result."""
     from ..run.config import IrradianceConfig
     from ..run.irradiance import irradiance as run_irradiance
     from ..run.batch import split_files, irradiance_each
@@ -110,7 +115,8 @@ def irradiance(files, date_, end_date, start, end, step, clear_sky, linke_turbid
         skyview_directions=skyview_directions, place=place,
         algorithm=algorithm, curvature=curvature, refraction_k=refraction_k,
         read=to_read_options(kw), run=to_run_options(kw, say),
-        height_above_ground=height_above_ground, sky_view=sky_view, sky_view_out=sky_view_out)
+        height_above_ground=height_above_ground, sky_view=sky_view, sky_view_out=sky_view_out,
+        max_memory=max_memory, window_size=window_size, scheduler=scheduler)
     if each:
         irradiance_each(cfg, dem, output_pattern)
     else:

@@ -403,6 +403,15 @@ def is_dark(sun, soft: bool) -> bool:
 # --------------------------------------------------------------------------------------------
 # the sums
 
+def casts(sky: Sky, k: int, sun, soft: bool = False, perez: bool = False) -> bool:
+    """Whether sample ``k`` (``sun``, the ``sky`` at it) has direct light to cast: a beam, or
+    Perez's circumsolar part, and the sun (its disk, ``soft``) up somewhere. ``sums`` asks for
+    the direct term of these samples only, in their order."""
+    dhi = float(sky.dhi[k])
+    circ = perez and dhi > 0 and bool(sky.perez_on[k]) and sky.f1[k] > 0
+    return bool((float(sky.dni[k]) > 0 or circ) and not is_dark(sun, soft))
+
+
 def accumulate(shader, suns, weights, sky: Sky, vd: np.ndarray, albedo: float, *,
                soft: bool = False, perez: bool = False, per_time: bool = False,
                stats: dict | None = None, timer=None, progress=None, normals=None,
@@ -557,9 +566,8 @@ def sums(direct, void: np.ndarray, slopes, suns, weights, sky: Sky, vd: np.ndarr
             close(int(gi[k - 1]))
         s = suns[k]
         dni, dhi = float(sky.dni[k]), float(sky.dhi[k])
-        circ = perez and dhi > 0 and bool(sky.perez_on[k]) and sky.f1[k] > 0
         lit = None
-        if (dni > 0 or circ) and not is_dark(s, soft):
+        if casts(sky, k, s, soft, perez):
             lit = np.ascontiguousarray(direct(s, timed))
             if lit.shape != shape or not (lit.dtype == np.float32 or (
                     lit.dtype == np.uint8 and normals is not None)):
@@ -637,9 +645,8 @@ def _stacks(direct, void, loop, suns, sky, vd, vd64, albedo, soft, perez, sin_s,
     for k in loop:
         s = suns[k]
         dni, dhi, ghi = float(sky.dni[k]), float(sky.dhi[k]), float(sky.ghi[k])
-        circ = perez and dhi > 0 and bool(sky.perez_on[k]) and sky.f1[k] > 0
         d_k = None
-        if (dni > 0 or circ) and not is_dark(s, soft):
+        if casts(sky, k, s, soft, perez):
             d_k = direct(s, timed)
             counted["samples_with_shadows"] += 1
         with timed("irradiance"):

@@ -240,6 +240,29 @@ def weighted_light(job, weights, stats: dict | None = None, used: set | None = N
     return term
 
 
+def sun_pieces(get, rs: RegionSuns):
+    """Each sun of ``rs`` in order with its pieces' heights: ``(i, pieces)``, ``i`` the sun's
+    index, ``pieces`` an iterator of ``(piece, z)``, ``z`` the heights of the piece's window
+    (a C-contiguous copy, made as it is reached: use it before the next sun); each group's
+    window read once, when its first sun is reached (``get`` as :func:`region_sum`'s). For a
+    caller that takes the suns one at a time (irradiance's sums: ``run.irradiance_windows``)."""
+    def heights(zg, w0, v0, pieces):
+        for _, p in pieces:
+            a0, a1, b0, b1 = p.window
+            yield p, np.ascontiguousarray(zg[a0 - w0:a1 - w0, b0 - v0:b1 - v0])
+    for g in rs.groups:
+        w0, _, v0, _ = g.window
+        zg = get(g.window)
+        k = 0
+        while k < len(g.pieces):
+            j = k
+            while j < len(g.pieces) and g.pieces[j][0] == g.pieces[k][0]:
+                j += 1
+            yield g.pieces[k][0], heights(zg, w0, v0, g.pieces[k:j])
+            k = j
+        del zg
+
+
 def region_sum(get, rs: RegionSuns, term, on_piece=None) -> np.ndarray:
     """The sum over the suns of ``rs`` of ``term(i, piece, z)`` (float32, the piece's region's
     shape; ``z`` the heights of the piece's window, C-contiguous), over the region: float32,

@@ -393,6 +393,9 @@ class IrradianceConfig:
     height_above_ground: float = 0.0      # metres: the receiving surface stands this high
     sky_view: str | None = None           # Dozier's Vd read from this file (skyview's output)
     sky_view_out: str | None = None       # the Vd computed written to this file too
+    max_memory: object = None   # windows (run.irradiance_windows) when the DEM needs more
+    window_size: object = None  # windows of this many output cells, whatever the size
+    scheduler: object = None    # the windows as Dask tasks
     # (check() parses linke_turbidity and albedo into run.sky_inputs.SkyValue)
     linke_input: object = field(default=None, init=False, repr=False, compare=False)
     albedo_input: object = field(default=None, init=False, repr=False, compare=False)

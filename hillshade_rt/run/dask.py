@@ -355,10 +355,11 @@ def _remove(folder: str) -> None:
 
 
 def write_part(path: str, arr, source, r0: int, c0: int, nodata, **profile) -> None:
-    """A task's part of the output: ``arr`` (one band), whose first cell is the source's
-    (r0, c0), as a tiled, deflated GeoTIFF at ``path`` in the source's CRS, written atomically.
-    Overwrites: Dask runs a task again when its worker died before saying it was done, and the
-    part it wrote then is the same. ``profile``: more creation options (a predictor)."""
+    """A task's part of the output: ``arr`` (one band, or bands first: (bands, rows, cols)),
+    whose first cell is the source's (r0, c0), as a tiled, deflated GeoTIFF at ``path`` in the
+    source's CRS, written atomically. Overwrites: Dask runs a task again when its worker died
+    before saying it was done, and the part it wrote then is the same. ``profile``: more
+    creation options (a predictor)."""
     import warnings
 
     import rasterio
@@ -366,7 +367,8 @@ def write_part(path: str, arr, source, r0: int, c0: int, nodata, **profile) -> N
     from rasterio.errors import NotGeoreferencedWarning
 
     from ..io import DEFLATE_LEVEL, atomic_path, gdal_checked
-    prof = dict(driver="GTiff", width=arr.shape[1], height=arr.shape[0], count=1,
+    arr3 = arr if arr.ndim == 3 else arr[np.newaxis]
+    prof = dict(driver="GTiff", width=arr3.shape[2], height=arr3.shape[1], count=arr3.shape[0],
                 dtype=arr.dtype.name, nodata=nodata, compress="deflate", zlevel=DEFLATE_LEVEL,
                 tiled=True, blockxsize=256, blockysize=256, **profile)
     if source.crs is not None:
@@ -376,7 +378,7 @@ def write_part(path: str, arr, source, r0: int, c0: int, nodata, **profile) -> N
     with atomic_path(path, ".tif", overwrite=True) as tmp, warnings.catch_warnings():
         warnings.simplefilter("ignore", NotGeoreferencedWarning)
         with gdal_checked(path), rasterio.open(tmp, "w", **prof) as dst:
-            dst.write(arr, 1)
+            dst.write(arr3)
 
 
 def shade_piece(job, piece, path: str, nodata, stride: int | None = None) -> dict:

@@ -5,7 +5,10 @@ a period (Wh/m², or the mean W/m²), four float32 bands; the formulas are
 The sun is sampled as ``sun-hours`` samples it (every step, each sample at the middle of its
 interval, weighted by the interval's hours; per tile on large rasters; nights skipped), the same
 suns light the cast shadows (``shading.render``) and feed the clear-sky model. The DEM is held
-in memory; with ``--context`` the DEM is a tile of a larger raster (``run.context``): the
+in memory, or made region by region when it would need more than --max-memory, with
+--window-size or --scheduler (``run.irradiance_windows``: the same bits, written as the
+regions are made, or a Dask task per region); with ``--context`` the DEM is a tile of a larger
+raster (``run.context``): the
 cast shadows and the incidence come from the context's windows
 (``engine.windows.WindowLighting``, the regions cut to the tile), the sky view from the
 windowed horizon march (``run.horizon_windows``, the rays to the context's edge), so that every
@@ -77,8 +80,9 @@ class _Samples:
 @dataclass
 class _Bands:
     """The four bands (``engine.irradiance.BANDS``: float32, NaN voids), Dozier's sky view,
-    the curvature's report, and (``--context``) the report's ``processing``; where the sky view
-    came from (``vd_from``: "computed" or "read") and the tags of the file read (or None)."""
+    the curvature's report, and (``--context``, windows) the report's ``processing``; where the
+    sky view came from (``vd_from``: "computed" or "read") and the tags of the file read (or
+    None)."""
 
     bands: dict
     vd: object
@@ -87,13 +91,18 @@ class _Bands:
     vd_from: str = "computed"
     vd_tags: dict | None = None
     months: list | None = None      # --monthly: ((year, month), hours, global band) each
+    figures: dict | None = None     # in windows (bands and vd None, written already): the
+    #                                 bands' and "sky_view"'s min, mean, max
 
 
 def irradiance(cfg: IrradianceConfig) -> dict:
     """Write the four irradiance bands of ``cfg.dem`` to ``cfg.output``; returns the report."""
+    from .irradiance_windows import asked_windows
     ro = cfg.run
     cfg.check()
-    cfg.read.check_context(cfg.dem, **{"--preview": ro.preview is not None})
+    cfg.read.check_context(cfg.dem, **{"--preview": ro.preview is not None,
+                                       "--scheduler": cfg.scheduler is not None})
+    limit, wshape = asked_windows(cfg)
     # (the --ghi series and the context are inputs)
     ctx = RunContext.start(ro, inputs=[cfg.dem, cfg.ghi, cfg.sky_view] + cfg.read.inputs()
                            + cfg.sky_inputs(),
@@ -105,58 +114,72 @@ def irradiance(cfg: IrradianceConfig) -> dict:
     asked = _asked(cfg)
     ctx.compile_note(cfg.algorithm, True)
     lighting = cfg.lighting(ctx.backend)
-    area, d = _read(cfg, ctx)
+    area, d, windows = _read(cfg, ctx, lighting, limit, wshape)
     if d is None:       # every cell nodata (a tile of the sea)
         return _all_nodata(cfg, ctx)
     try:
-        return _run(cfg, ctx, lighting, asked, d, area)
+        return _run(cfg, ctx, lighting, asked, d, area, (limit, wshape) if windows else None)
     finally:
         if area is not None:
             area.close()
+        elif windows:
+            d.close()
 
 
-def _run(cfg, ctx: RunContext, lighting, asked: _Asked, d, area) -> dict:
-    """The run once the DEM (``d``: in memory; with ``area``, the context opened for windows)
-    is open: the samples and the sky, the light (sky view, sums), the output, the report."""
+def _run(cfg, ctx: RunContext, lighting, asked: _Asked, d, area, windows=None) -> dict:
+    """The run once the DEM (``d``: in memory; with ``area``, the context opened for windows;
+    with ``windows``, (--max-memory in bytes, --window-size), opened for windows) is open: the
+    samples and the sky, the light (sky view, sums), the output, the report."""
     import numpy as np
 
+    from ..errors import AllNodata
     from ..model.earth import dem_body
     from .report import progress
+    from .sun_hours_windows import windows_phrase
     ro = ctx.ro
     with ctx.timer("prepare"):
         sampled = _samples(cfg, asked, d)
         body = dem_body(d, asked.req.lat)
-        if area is None:
+        if area is None and windows is None:
             shader = _prepare(d, lighting, body, sampled)
     algo_stats: dict = {}
+    tags = _tags(cfg, lighting, asked.req, sampled, area)
 
     def bar(it):
         return progress(it, ro.quiet, "hillshade-rt irradiance", "sun", mode=ro.progress)
-    if area is None:
+    if windows is not None:       # region by region, written as they are made
+        try:
+            lit = _in_windows(cfg, ctx, d, lighting, body, sampled, tags, area, *windows)
+        except AllNodata:          # (before the output is opened)
+            return _all_nodata(cfg, ctx)
+        algo_stats = lit.figures.pop("algorithm_stats")
+        geom = d if area is None else area.tile
+    elif area is None:
         lit = _light(cfg, ctx, d, shader, lighting, body, sampled, algo_stats, bar)
         geom = d
     else:
         lit = _light_in_context(cfg, ctx, area, lighting, body, sampled, algo_stats, bar)
         geom = area.tile
-    if cfg.mean or cfg.daily_mean:     # W/m² (÷ hours), or Wh/m² a day (÷ days)
-        per = 1.0 if cfg.mean else 24.0
-        lit.bands = {k: (v / np.float32(sampled.hours / per)).astype(np.float32)
-                     for k, v in lit.bands.items()}
-        if lit.months is not None:
-            lit.months = [(key, hours, (v / np.float32(hours / per)).astype(np.float32))
-                          for key, hours, v in lit.months]
-    tags = _tags(cfg, lighting, asked.req, sampled, area)
-    _write(cfg, ctx, geom, d, lit, tags)
+    if lit.bands is not None:
+        if cfg.mean or cfg.daily_mean:     # W/m² (÷ hours), or Wh/m² a day (÷ days)
+            per = 1.0 if cfg.mean else 24.0
+            lit.bands = {k: (v / np.float32(sampled.hours / per)).astype(np.float32)
+                         for k, v in lit.bands.items()}
+            if lit.months is not None:
+                lit.months = [(key, hours, (v / np.float32(hours / per)).astype(np.float32))
+                              for key, hours, v in lit.months]
+        _write(cfg, ctx, geom, d, lit, tags)
     rep = _report(cfg, ctx, geom, sampled, lit, algo_stats, area)
     sec, g, unit = rep["seconds"], rep["bands"]["global"], rep["units"]
     sv = (" read from " + cfg.sky_view if lit.vd_from == "read" else "") + \
-        f" {sec['sky view']:.2f} s"
+        f" {sec.get('sky view', 0.0):.2f} s"
+    how = windows_phrase(lit.processing) if windows is not None else ""
     return ctx.finish(rep, [(
         "summary", f"hillshade-rt: {cfg.output}: {geom.shape[1]}x{geom.shape[0]}, "
                    f"{sampled.period}, {len(sampled.work)} of {len(sampled.suns)} samples with "
                    f"the sun up; global {g['min']:.1f} .. {g['max']:.1f} {unit} (mean "
                    f"{g['mean']:.1f}); shadows {sec.get('shadows', 0.0):.2f} s, sky view"
-                   f"{sv}, total {sec['total']:.2f} s")])
+                   f"{sv}, total {sec['total']:.2f} s{how}")])
 
 
 def _check_format(cfg: IrradianceConfig) -> None:
@@ -199,11 +222,16 @@ def _asked(cfg: IrradianceConfig) -> _Asked:
     return asked
 
 
-def _read(cfg: IrradianceConfig, ctx: RunContext) -> tuple:
-    """(area, DEM): in memory (area None), or with ``--context`` the tile's area opened and
-    the DEM its context's source (the place, the suns, the body: the context's); (None, None)
-    when every cell of the DEM is nodata."""
+def _read(cfg: IrradianceConfig, ctx: RunContext, lighting, limit: int, wshape) -> tuple:
+    """(area, DEM, windows): in memory (area None), or with ``--context`` the tile's area
+    opened and the DEM its context's source (the place, the suns, the body: the context's);
+    ``windows``: the DEM (or the tile) is made region by region (``run.irradiance_windows``:
+    larger than ``limit`` bytes, or --window-size, --scheduler; a tile with --window-size or
+    --max-memory), the DEM opened, not read; (None, None, False) when every cell of the DEM
+    is nodata."""
     from ..errors import AllNodata
+    from .irradiance_windows import memory_per_cell, windowed
+    from .local import needs_windows
     with ctx.timer("read"):
         if cfg.read.context is not None:     # a tile: the heights are the context's
             area = cfg.read.open_area(cfg.dem)
@@ -211,12 +239,17 @@ def _read(cfg: IrradianceConfig, ctx: RunContext) -> tuple:
                 area.check_valid()
             except AllNodata:
                 area.close()
-                return None, None
-            return area, area.source
+                return None, None, False
+            return area, area.source, wshape is not None or cfg.max_memory is not None
+        forced = windowed(cfg)
+        src = cfg.read.open(cfg.dem, windows=forced)
+        if forced or needs_windows(src, limit, memory_per_cell(lighting)):
+            return None, src, True
         try:
-            return None, cfg.read.read(cfg.dem)
+            with src:
+                return None, src.read(), False
         except AllNodata:     # every band all nodata, a note (a tile of the sea)
-            return None, None
+            return None, None, False
 
 
 def _samples(cfg: IrradianceConfig, asked: _Asked, d) -> _Samples:
@@ -395,41 +428,32 @@ def _light_in_context(cfg, ctx: RunContext, area, lighting, body, sampled: _Samp
     the regions cut to the tile), Dozier's sky view from the windowed horizon march
     (``run.horizon_windows``: the rays to the context's edge), the slopes from the tile and a
     cell around it; then the same sums, cell by cell, as a run of the whole context in memory
-    (``irradiance.sums``)."""
-    import math
-
+    (``irradiance.sums``). The pieces are ``run.irradiance_windows``' (a tile held whole;
+    --window-size or --max-memory make it region by region there)."""
     import numpy as np
 
-    from ..algorithms.relief import incidence
     from ..engine import irradiance as ir
     from ..engine.windows import (
-        WindowCache, WindowLighting, bytes_per_cell, default_max_memory, window_budget,
-        window_grid
+        WindowCache, bytes_per_cell, default_max_memory, window_budget
     )
     from ..model.earth import curvature_report
-    from ..model.geometry import equal_azimuths
-    from .horizon import horizon_job, memory_limit, prepare_windows
-    from .horizon_windows import Figures, Product, region_outputs
+    from .horizon import memory_limit, prepare_windows
+    from .horizon_windows import Figures
+    from .irradiance_windows import add_direct, lighting_job, region_vd, sky_view_job, surface
     from .local import bounded_gdal_cache
 
     src, timer, work = area.source, ctx.timer, sampled.work
-    rows, cols = src.shape
     r0, r1, c0, c1 = area.bounds
     fig = Figures()
     with bounded_gdal_cache():
         with timer("prepare"):
             bstats = area.block_stats()     # (the context's, kept between runs)
-            dx, dy = src.grid.centre_spacing()
-            job = WindowLighting(src, lighting, body, (bstats.zmin, bstats.zmax),
-                                 math.hypot(cols * dx, rows * dy), "sun")
+            job = lighting_job(src, lighting, body, bstats)
             budget = window_budget(default_max_memory(),
                                    bytes_per_cell(lighting.algorithm, "sun", lighting.soft))[0]
             if work:
                 job.warm_up(work[0])
-            azimuths = equal_azimuths(360.0 / int(cfg.skyview_directions))
-            hjob, hs = horizon_job(src, azimuths, lighting.backend, lighting.curvature,
-                                   lighting.refraction_k, "scan", bstats, False, 1, math.inf,
-                                   lighting.lift, body=body)
+            hjob, hs = sky_view_job(src, lighting, body, bstats, cfg.skyview_directions)
         vd_tags = None
         if cfg.sky_view is not None:
             with timer("sky view"):
@@ -437,28 +461,19 @@ def _light_in_context(cfg, ctx: RunContext, area, lighting, body, sampled: _Samp
         else:
             regs, _ = prepare_windows(src, hjob, memory_limit(None), None, timer, area)
         with src.reader() as rd:
-            # the tile and a cell around it: its voids, and its slopes (Horn's normals) for
-            # Perez
-            m = (max(0, r0 - 1), min(rows, r1 + 1), max(0, c0 - 1), min(cols, c1 + 1))
-            zm = np.empty((m[1] - m[0], m[3] - m[2]), np.float32)
-            rd.read(m, zm)
-            inner = (slice(r0 - m[0], r1 - m[0]), slice(c0 - m[2], c1 - m[2]))
-            void = np.isnan(zm[inner])
-
-            def slopes():
-                cos_s = incidence(zm, window_grid(src.grid, m), 0.0, 90.0,
-                                  *inner).astype(np.float64)
-                return cos_s, np.sqrt(np.maximum(1.0 - cos_s * cos_s, 0.0))
+            def heights(m):
+                z = np.empty((m[1] - m[0], m[3] - m[2]), np.float32)
+                rd.read(m, z)
+                return z
+            # the tile's voids, and its slopes (Horn's normals) for Perez
+            void, slopes = surface(heights, src.grid, src.shape, area.bounds)
             if vd_tags is None:
                 with timer("sky view"):   # Dozier's Vd of the tile's regions, as skyview's
                     vd = np.empty(area.shape, np.float32)
-                    product = Product("skyview", definition="dozier")
                     for reg in regs:
                         a0, a1, b0, b1 = area.local(reg)
-
-                        def put(name, band, out, a0=a0, a1=a1, b0=b0, b1=b1):
-                            vd[a0:a1, b0:b1] = out
-                        fig.add(region_outputs(hjob, rd, reg, product, put))
+                        vd[a0:a1, b0:b1], f = region_vd(hjob, rd, reg)
+                        fig.add(f)
                 if cfg.sky_view_out is not None:
                     _write_vd(cfg, ctx, area.tile, vd, hs, area, None)
             cache, used = WindowCache(rd), set()
@@ -471,10 +486,8 @@ def _light_in_context(cfg, ctx: RunContext, area, lighting, body, sampled: _Samp
                     pieces = job.pieces(s, bstats, budget, area=area.bounds)
                     carry = job.carrier([pieces])
                     for p in pieces:
-                        lit, cosi = job.light_incidence(cache.get(p.window), p, algo_stats,
-                                                        used, carry)
-                        a0, a1, b0, b1 = area.local(p.region)
-                        out[a0:a1, b0:b1] = np.maximum(cosi, np.float32(0.0)) * lit
+                        add_direct(job, out, (r0, c0), p, cache.get(p.window), algo_stats,
+                                   used, carry)
                         read["windows"] += 1
                         read["cells"] += p.cells
                 return out
@@ -547,18 +560,18 @@ def _write(cfg: IrradianceConfig, ctx: RunContext, geom, d, lit: _Bands, tags: d
     from ..engine import irradiance as ir
     from ..io import BandWriter, write_png
     from ..pictures.preview import relief_rgb, scaled
-    ro, unit = ctx.ro, _unit(cfg)
+    ro = ctx.ro
     with ctx.timer("write"):
         months = lit.months or []
         with BandWriter(cfg.output, geom, len(ir.BANDS) + len(months), "float32", -9999.0,
                         tags, overview_resampling="average", overwrite=ro.overwrite,
                         fmt=ro.fmt, co=ro.creation_options) as w:
-            for i, k in enumerate(ir.BANDS, 1):
+            for i, (k, meta) in enumerate(zip(ir.BANDS, _band_meta(cfg)), 1):
                 v = lit.bands[k]
-                w.write(i, np.where(np.isnan(v), np.float32(-9999.0), v), k, {"UNITS": unit})
+                w.write(i, np.where(np.isnan(v), np.float32(-9999.0), v), *meta)
             for i, ((year, month), hours, v) in enumerate(months, len(ir.BANDS) + 1):
                 w.write(i, np.where(np.isnan(v), np.float32(-9999.0), v), f"{year}-{month:02d}",
-                        {"UNITS": unit, "QUANTITY": "global", "HOURS": f"{hours:g}"})
+                        {"UNITS": _unit(cfg), "QUANTITY": "global", "HOURS": f"{hours:g}"})
         if ro.preview is not None:
             write_png(ro.preview, relief_rgb(d.heights, d.grid,
                                              ramp=scaled(lit.bands["global"])),
@@ -571,6 +584,25 @@ def _summary(v) -> dict:
     ok = v[~np.isnan(v)]
     return ({"min": float(ok.min()), "mean": float(ok.mean()), "max": float(ok.max())}
             if ok.size else {"min": None, "mean": None, "max": None})
+
+
+def _in_windows(cfg: IrradianceConfig, ctx: RunContext, src, lighting, body,
+                sampled: _Samples, tags: dict, area, limit: int, wshape) -> _Bands:
+    """The four bands made and written region by region (``run.irradiance_windows``: the
+    same bits as in memory), of ``area``'s tile only with ``--context``."""
+    from .irradiance_windows import bands_in_windows
+    win = bands_in_windows(cfg, ctx, src, lighting, body, sampled, tags, _band_meta(cfg),
+                           lambda hs: _want(cfg, hs, area, None), limit=limit,
+                           window_shape=wshape, scheduler=cfg.scheduler, area=area)
+    return _Bands(None, None, win.curvature, win.processing, win.vd_from, win.vd_tags,
+                  figures={"bands": win.values, "sky_view": win.vd_values,
+                           "algorithm_stats": win.algo_stats})
+
+
+def _band_meta(cfg: IrradianceConfig) -> list:
+    """Each band's (description, tags), in ``engine.irradiance.BANDS``' order."""
+    from ..engine import irradiance as ir
+    return [(k, {"UNITS": _unit(cfg)}) for k in ir.BANDS]
 
 
 def _report(cfg: IrradianceConfig, ctx: RunContext, geom, sampled: _Samples, lit: _Bands,
@@ -594,14 +626,16 @@ def _report(cfg: IrradianceConfig, ctx: RunContext, geom, sampled: _Samples, lit
                       else cfg.albedo_input.describe()),
            "skyview_directions": cfg.skyview_directions, "soft": cfg.soft,
            "height_above_ground_m": float(cfg.height_above_ground),
-           "sky_view": _summary(lit.vd), "sky_view_from": lit.vd_from,
+           "sky_view": (_summary(lit.vd) if lit.figures is None
+                        else lit.figures["sky_view"]), "sky_view_from": lit.vd_from,
            "sky_view_file": (os.path.abspath(cfg.sky_view) if cfg.sky_view is not None else
                              os.path.abspath(cfg.sky_view_out) if cfg.sky_view_out is not None
                              else None),
            "open_sky": {"dni_wh_m2": float(np.sum(weights * sky.dni)),
                         "dhi_wh_m2": float(np.sum(weights * sky.dhi)),
                         "ghi_wh_m2": float(np.sum(weights * sky.ghi))},
-           "bands": {k: _summary(lit.bands[k]) for k in ir.BANDS},
+           "bands": ({k: _summary(lit.bands[k]) for k in ir.BANDS} if lit.figures is None
+                     else lit.figures["bands"]),
            "curvature": lit.curvature, "algorithm_stats": algo_stats,
            "seconds": ctx.seconds(), "version": __version__}
     rep.update(sampled.sun_info or {})
@@ -612,7 +646,8 @@ def _report(cfg: IrradianceConfig, ctx: RunContext, geom, sampled: _Samples, lit
         rep["sky_view_made_by"] = lit.vd_tags.get("HILLSHADE_RT_VERSION")
     if area is not None:
         rep["context"] = area.report()
-        rep["processing"] = lit.processing
+    rep["processing"] = (lit.processing if lit.processing is not None else
+                         {"mode": "in memory", "cells": int(geom.shape[0] * geom.shape[1])})
     return rep
 
 

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import hashlib
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -134,39 +135,92 @@ def _same_settings(path: str, tags: dict, want: dict) -> None:
                              "differs: another DEM, --band, --nodata or --z-factor)")
 
 
+def _checked(path: str, geom, want: dict, stack):
+    """The sky view file ``path`` opened in ``stack`` (its dataset, its tags), checked: one
+    float32 band, the grid of ``geom``, the settings of ``want``."""
+    from ..io.gdal import open_raster
+    from ..io.paths import check_input_path
+    check_input_path(path)
+    ds = open_raster(path, stack)
+    if ds.count != 1 or ds.dtypes[0] != "float32":
+        raise HillshadeError(f"{path}: {ds.count} band(s) of {ds.dtypes[0]}: a sky view "
+                             "file is one float32 band (hillshade-rt skyview --definition "
+                             "dozier)")
+    _same_grid(path, ds, geom)
+    tags = dict(ds.tags())
+    _same_settings(path, tags, want)
+    return ds, tags
+
+
+def _read(path: str, ds, window=None) -> np.ndarray:
+    """Vd of ``ds`` (whole, or its ``window`` (r0, r1, c0, c1)): float32, NaN where nodata."""
+    from ..io.gdal import read_error
+    try:
+        if window is None:
+            vd = ds.read(1)
+        else:
+            from rasterio.windows import Window
+            r0, r1, c0, c1 = window
+            vd = ds.read(1, window=Window(c0, r0, c1 - c0, r1 - r0))
+    except Exception as exc:      # noqa: BLE001 -- GDAL's read errors, one line
+        raise read_error(path, exc) from None
+    if ds.nodata is not None:
+        vd[vd == np.float32(ds.nodata)] = np.nan
+    return np.ascontiguousarray(vd, np.float32)
+
+
 def read_vd(path: str, geom, want: dict) -> tuple[np.ndarray, dict]:
     """(Vd: float32, NaN where the file has nodata; the file's tags) of the sky view file
     ``path``, checked against the DEM's grid (``geom``: a Dem, DemSource or tile) and the run's
     tags ``want`` (:func:`dozier_tags`)."""
     import contextlib
-
-    from ..io.gdal import open_raster, read_error
-    from ..io.paths import check_input_path
-    check_input_path(path)
     with contextlib.ExitStack() as stack:
-        ds = open_raster(path, stack)
-        if ds.count != 1 or ds.dtypes[0] != "float32":
-            raise HillshadeError(f"{path}: {ds.count} band(s) of {ds.dtypes[0]}: a sky view "
-                                 "file is one float32 band (hillshade-rt skyview --definition "
-                                 "dozier)")
-        _same_grid(path, ds, geom)
-        tags = dict(ds.tags())
-        _same_settings(path, tags, want)
-        try:
-            vd = ds.read(1)
-        except Exception as exc:      # noqa: BLE001 -- GDAL's read errors, one line
-            raise read_error(path, exc) from None
-        nodata = ds.nodata
-    if nodata is not None:
-        vd[vd == np.float32(nodata)] = np.nan
-    return np.ascontiguousarray(vd, np.float32), tags
+        ds, tags = _checked(path, geom, want, stack)
+        return _read(path, ds), tags
+
+
+@dataclass(frozen=True)
+class VdFile:
+    """A sky view file checked once (:func:`open_vd`) and read window by window (picklable: a
+    Dask task reads its region)."""
+
+    path: str
+    tags: dict
+
+    def read(self, window) -> np.ndarray:
+        """Vd of ``window`` (r0, r1, c0, c1): float32, NaN where the file has nodata."""
+        import contextlib
+
+        from ..io.gdal import open_raster
+        with contextlib.ExitStack() as stack:
+            return _read(self.path, open_raster(self.path, stack), window)
+
+
+def open_vd(path: str, geom, want: dict) -> VdFile:
+    """The sky view file ``path`` checked as :func:`read_vd` checks it (its values not read)."""
+    import contextlib
+    with contextlib.ExitStack() as stack:
+        return VdFile(path, _checked(path, geom, want, stack)[1])
+
+
+def vd_writer(path: str, geom, tags: dict, ro):
+    """The ``io.BandWriter`` of a Vd file on the grid of ``geom`` as skyview writes it: one
+    float32 band, -9999 nodata, averaged overviews, ``tags``; atomic, in the format of its
+    extension with the default creation options (not OUTPUT's --format and --co). Write it
+    with :func:`write_vd_window`."""
+    from ..io import BandWriter
+    return BandWriter(path, geom, 1, "float32", -9999.0, tags, overview_resampling="average",
+                      overwrite=ro.overwrite)
+
+
+def write_vd_window(w, vd: np.ndarray, window=None) -> None:
+    """``vd`` (float32, NaN voids) into the writer ``w`` of :func:`vd_writer`, whole or its
+    ``window`` (r0, r1, c0, c1)."""
+    w.write(1, np.where(np.isnan(vd), np.float32(-9999.0), vd), description=DOZIER_PRODUCT,
+            window=window)
 
 
 def write_vd(path: str, geom, vd: np.ndarray, tags: dict, ro) -> None:
-    """``vd`` (float32, NaN voids) written to ``path`` as skyview writes it: one float32 band,
-    -9999 nodata, averaged overviews, ``tags``; atomically (``io.BandWriter``), in the format
-    of its extension with the default creation options (not OUTPUT's --format and --co)."""
-    from ..io import BandWriter
-    with BandWriter(path, geom, 1, "float32", -9999.0, tags, overview_resampling="average",
-                    overwrite=ro.overwrite) as w:
-        w.write(1, np.where(np.isnan(vd), np.float32(-9999.0), vd), description=DOZIER_PRODUCT)
+    """``vd`` (float32, NaN voids) written to ``path`` as skyview writes it (:func:`vd_writer`)."""
+    with vd_writer(path, geom, tags, ro) as w:
+        write_vd_window(w, vd)

@@ -43,7 +43,7 @@ class WindowedHours:
 
 
 @dataclass
-class _Tally:
+class Tally:
     """Figures of the windows: regions, pieces lit, windows read, cells and bytes read."""
 
     regions: int = 0
@@ -66,6 +66,19 @@ class _Tally:
                     self.largest = (r1 - r0, c1 - c0)
             self.windows += rs.pieces
 
+    def processing(self, mode: str, cells: int, itemsize: int, memory, window_shape,
+                   stats_bytes: int) -> dict:
+        """The report's ``processing`` of a run of ``cells`` output cells (``itemsize`` bytes a
+        height): ``mode`` ("tiled", "dask", ...), the memory figures, --window-size, the
+        statistics pass's bytes and these figures."""
+        return {"mode": mode, "cells": cells, "memory": memory,
+                "window_shape_requested": list(window_shape) if window_shape else None,
+                "regions": self.regions, "windows": self.windows, "windows_read": self.reads,
+                "largest_window": list(self.largest), "cells_read": self.cells_read,
+                "bytes_read": self.bytes_read, "bytes_carried": self.bytes_carried,
+                "dem_reads": self.bytes_read / max(1, cells * itemsize),
+                "statistics_pass_bytes": stats_bytes, **self.extra}
+
 
 def hours_in_windows(cfg, ctx, src, lighting, req, work, tags, *, limit, window_shape,
                      scheduler=None, area=None) -> WindowedHours:
@@ -75,11 +88,8 @@ def hours_in_windows(cfg, ctx, src, lighting, req, work, tags, *, limit, window_
     ``window_shape``: --window-size; ``scheduler``: --scheduler. Raises ``AllNodata`` (before
     anything is written) for a DEM of voids only, ``HillshadeError`` for a memory limit too
     small for one window (naming the smallest that would do)."""
-    from ..engine.sun_sums import (BYTES_PER_GROUP_CELL, plan_regions, region_sum,
-                                   weighted_light)
-    from ..engine.windows import (MIN_WINDOW_CELLS, MemoryTooSmall, WindowCache,
-                                  WindowLighting, block_stats, bytes_per_cell, format_size,
-                                  memory_needed, window_budget)
+    from ..engine.sun_sums import BYTES_PER_GROUP_CELL, region_sum, weighted_light
+    from ..engine.windows import WindowCache, WindowLighting, block_stats, bytes_per_cell
     from ..io import BandWriter
     from ..model.earth import curvature_report, dem_body
     from ..pictures.preview import every_nth
@@ -91,7 +101,7 @@ def hours_in_windows(cfg, ctx, src, lighting, req, work, tags, *, limit, window_
     suns, weights = [s for s, _ in work], [w for _, w in work]
     per_cell = bytes_per_cell(lighting.algorithm, "sun", lighting.soft,
                               lighting.self_shadow) + BYTES_PER_GROUP_CELL
-    tally = _Tally()
+    tally = Tally()
     with timer("prepare"):   # one pass for the height ranges; the plan; compilation
         if area is None:
             bstats = block_stats(src, preview_side=2048 if ro.preview is not None else None)
@@ -102,26 +112,9 @@ def hours_in_windows(cfg, ctx, src, lighting, req, work, tags, *, limit, window_
         dx, dy = src.grid.centre_spacing()
         job = WindowLighting(src, lighting, dem_body(src, req.lat), (bstats.zmin, bstats.zmax),
                              math.hypot(cols * dx, rows * dy), "sun")
-        try:
-            budget, mem = window_budget(limit, per_cell)
-            small = None
-        except HillshadeError as exc:
-            budget, mem, small = 0, None, exc
-        try:
-            regs = plan_regions(job, suns, bstats, budget, window_shape,
-                                None if area is None else area.bounds)
-        except MemoryTooSmall as exc:
-            small, cells = small or exc, exc.cells
-        else:
-            cells = max(g.cells for rs in regs for g in rs.groups)
-        if small is not None:
-            least = memory_needed(per_cell, max(cells, MIN_WINDOW_CELLS))
-            if window_shape is None and scheduler is None and area is None:
-                # or the whole DEM in memory, where that needs less
-                least = min(least, memory_needed(memory_per_cell(lighting), rows * cols))
-            said = str(small).split("; give")[0].replace(": raise --max-memory", "")
-            raise HillshadeError(f"{said}; give at least --max-memory "
-                                 f"{format_size(least, up=True)}")
+        whole = (memory_per_cell(lighting) if window_shape is None and scheduler is None
+                 and area is None else None)
+        regs, mem = plan_sums(job, suns, bstats, limit, per_cell, window_shape, area, whole)
         tally.plan(regs)
         if suns:
             job.warm_up(suns[0])
@@ -160,14 +153,7 @@ def hours_in_windows(cfg, ctx, src, lighting, req, work, tags, *, limit, window_
                 w.finish()
         mode = "tiled"
     cells = geom.shape[0] * geom.shape[1]
-    processing = {"mode": mode, "cells": cells, "memory": mem,
-                  "window_shape_requested": list(window_shape) if window_shape else None,
-                  "regions": tally.regions, "windows": tally.windows,
-                  "windows_read": tally.reads, "largest_window": list(tally.largest),
-                  "cells_read": tally.cells_read, "bytes_read": tally.bytes_read,
-                  "bytes_carried": tally.bytes_carried,
-                  "dem_reads": tally.bytes_read / max(1, cells * src.itemsize),
-                  "statistics_pass_bytes": stats_bytes, **tally.extra}
+    processing = tally.processing(mode, cells, src.itemsize, mem, window_shape, stats_bytes)
     if area is not None:
         processing["context"] = area.report()
     preview = None
@@ -178,6 +164,41 @@ def hours_in_windows(cfg, ctx, src, lighting, req, work, tags, *, limit, window_
         preview = (pv, g, pv_hours)
     return WindowedHours(values, curvature_report(job.curvature, used, job.body, job.k),
                          algo_stats, processing, preview)
+
+
+def plan_sums(job, suns, bstats, limit: int, per_cell: int, window_shape, area=None,
+              whole_per_cell: int | None = None) -> tuple[list, dict | None]:
+    """(the regions with their suns in groups, ``engine.sun_sums.plan_regions``; the memory
+    figures) of a run of sums over ``suns`` in windows of ``per_cell`` bytes a cell under
+    ``limit`` bytes (--max-memory), regions of ``window_shape`` (--window-size) or the cheapest
+    that fit, of ``area``'s tile only (``--context``). A limit too small for one window is one
+    ``HillshadeError`` naming the smallest --max-memory that would do (or, with
+    ``whole_per_cell``, the bytes a cell of a run in memory needs, the DEM whole in memory
+    where that needs less)."""
+    from ..engine.sun_sums import plan_regions
+    from ..engine.windows import (MIN_WINDOW_CELLS, MemoryTooSmall, format_size,
+                                  memory_needed, window_budget)
+    try:
+        budget, mem = window_budget(limit, per_cell)
+        small = None
+    except HillshadeError as exc:
+        budget, mem, small = 0, None, exc
+    try:
+        regs = plan_regions(job, suns, bstats, budget, window_shape,
+                            None if area is None else area.bounds)
+    except MemoryTooSmall as exc:
+        small, cells = small or exc, exc.cells
+    else:
+        cells = max(g.cells for rs in regs for g in rs.groups)
+    if small is not None:
+        least = memory_needed(per_cell, max(cells, MIN_WINDOW_CELLS))
+        if whole_per_cell is not None:      # or the whole DEM in memory, where that needs less
+            rows, cols = job.source.shape
+            least = min(least, memory_needed(whole_per_cell, rows * cols))
+        said = str(small).split("; give")[0].replace(": raise --max-memory", "")
+        raise HillshadeError(f"{said}; give at least --max-memory "
+                             f"{format_size(least, up=True)}")
+    return regs, mem
 
 
 def windows_phrase(processing: dict) -> str:

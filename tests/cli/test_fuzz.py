@@ -1208,6 +1208,7 @@ _COMMANDS = {
         (["--mean"], None, 6), (["--perez"], None, 6), (["--soft"], None, 8),
         (["--skyview-directions"], _v(["8"], ["3", "0"]), 8),
         (["--algorithm"], _v(["auto", "smap", "brute"]), 8),
+        (["--window-size"], _v(["64", "64x80"], ["0", "8"]), 8),
     ]),
     "query": (["DEM"], [["--at-xy", "@CENTRE", "--azimuth", "203.7", "--elevation", "12"],
                         ["--at-xy", "@CENTRE", "--time", "2026-06-21T18:00Z"],

@@ -1,0 +1,497 @@
+"""Irradiance of rasters larger than memory: the four bands of ``irradiance`` region by region,
+each region written into OUTPUT as it is made, or each region a Dask task (``--scheduler``) that
+writes its part, put together through a VRT at the end (as ``run.sun_hours_windows`` does for
+sun hours). Every cell gets the bits a run in memory gives it.
+
+A region's bands are the in-memory run's per-cell arithmetic on the region's cells
+(``engine.irradiance.sums``, float64 sums in the samples' order, then float32):
+
+* Dozier's sky view Vd of the region from the windowed horizon march
+  (``run.horizon_windows.region_outputs``: the rays to the raster's edge, exact), or read from
+  ``--sky-view FILE`` window by window (``run.sky_view_file.VdFile``);
+* the region's voids and slopes (Horn's normals) from its heights and a cell around it;
+* each sample's direct term max(cos i, 0) · lit from the windowed shadows
+  (``engine.windows.WindowLighting.light_incidence`` of the sun's pieces cut to the region), the
+  samples in groups whose windows fit memory together and are read once
+  (``engine.sun_sums.plan_regions``, ``sun_pieces``), as sun-hours' sums are.
+
+Only the samples with direct light to cast (``engine.irradiance.casts``) are planned and lit,
+those whose direct term the sums ask for. The regions' shape and the groups are sun-hours'
+(``run.sun_hours_windows.plan_sums``); a window cell's bytes count the region's share too
+(the sums' float64 arrays, or the horizon march before them), the region lying inside its
+windows. The same helpers make a ``--context`` tile's bands in memory (``run.irradiance``).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import os
+import threading
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..errors import HillshadeError
+
+# bytes per cell of a region's sums (``engine.irradiance.sums``): beam and diffuse (float64),
+# Vd in float64, Perez's cos S, sin S and horizon share (float64), the heights and voids with a
+# cell around, a sample's direct term, the four float32 bands and the float64 temporaries of
+# the last sums
+SUMS_BYTES_PER_CELL = 100
+NORMALS_BYTES_PER_CELL = 24       # Horn's normals of a run in memory (three float64)
+_TASK_LOCK = threading.Lock()     # one numba computation at a time per Dask worker process
+
+
+def memory_per_cell(lighting) -> int:
+    """Bytes per cell of a run in memory: lighting the DEM whole (``engine.windows.
+    bytes_per_cell``, product "sun"), Horn's normals and the sums."""
+    from ..engine.windows import bytes_per_cell
+    return (bytes_per_cell(lighting.algorithm, "sun", lighting.soft) + NORMALS_BYTES_PER_CELL
+            + SUMS_BYTES_PER_CELL)
+
+
+def window_bytes_per_cell(lighting) -> int:
+    """Bytes per cell of a group's window: lighting it, the group's heights
+    (``engine.sun_sums.BYTES_PER_GROUP_CELL``) and the region's share (the region lies inside
+    its windows): its sums, or the horizon march of its sky view before them, the larger."""
+    from ..engine.sun_sums import BYTES_PER_GROUP_CELL
+    from ..engine.windows import bytes_per_cell
+    from .horizon_windows import BYTES_PER_REGION_CELL
+    return (bytes_per_cell(lighting.algorithm, "sun", lighting.soft) + BYTES_PER_GROUP_CELL
+            + max(SUMS_BYTES_PER_CELL, BYTES_PER_REGION_CELL))
+
+
+# ---------------------------------------------------------------------------------------------
+# what a region's bands take, shared with a --context tile's
+
+def lighting_job(src, lighting, body, bstats):
+    """The ``engine.windows.WindowLighting`` of the beam's cast shadows and incidence (product
+    "sun") over ``src``, with the whole raster's height range and extent (``bstats``: the
+    statistics pass's), so that every window decides curvature as a run in memory does."""
+    from ..engine.windows import WindowLighting
+    rows, cols = src.shape
+    dx, dy = src.grid.centre_spacing()
+    return WindowLighting(src, lighting, body, (bstats.zmin, bstats.zmax),
+                          math.hypot(cols * dx, rows * dy), "sun")
+
+
+def sky_view_job(src, lighting, body, bstats, directions: int):
+    """(the ``run.horizon_windows.HorizonJob`` of Dozier's sky view in ``directions``
+    azimuths, seen from the lighting's lift, with no --max-distance; its horizon Shader: the
+    curvature, refraction coefficient and body the Vd file's tags name)."""
+    from ..model.geometry import equal_azimuths
+    from .horizon import horizon_job
+    return horizon_job(src, equal_azimuths(360.0 / int(directions)), lighting.backend,
+                       lighting.curvature, lighting.refraction_k, "scan", bstats, False, 1,
+                       math.inf, lighting.lift, body=body)
+
+
+def region_vd(hjob, rd, region) -> tuple[np.ndarray, object]:
+    """(Dozier's Vd of ``region`` (r0, r1, c0, c1): float32, NaN voids, as ``skyview
+    --definition dozier`` makes it; the march's ``horizon_windows.Figures``) by the windowed
+    horizon march of ``hjob``, read through ``rd``."""
+    from .horizon_windows import Product, region_outputs
+    out = []
+    fig = region_outputs(hjob, rd, region, Product("skyview", definition="dozier"),
+                         lambda name, band, arr: out.append(arr))
+    return out[0], fig
+
+
+def surface(read, grid, shape, region) -> tuple[np.ndarray, object]:
+    """(the voids of ``region`` (r0, r1, c0, c1) of a raster of ``shape`` on ``grid``, a
+    function giving its slopes' (cos S, sin S), float64, from Horn's normals): from its heights
+    and a cell around them, ``read(window)`` (float32 heights of a window)."""
+    from ..algorithms.relief import incidence
+    from ..engine.windows import window_grid
+    rows, cols = shape
+    r0, r1, c0, c1 = region
+    m = (max(0, r0 - 1), min(rows, r1 + 1), max(0, c0 - 1), min(cols, c1 + 1))
+    zm = read(m)
+    inner = (slice(r0 - m[0], r1 - m[0]), slice(c0 - m[2], c1 - m[2]))
+
+    def slopes():
+        cos_s = incidence(zm, window_grid(grid, m), 0.0, 90.0, *inner).astype(np.float64)
+        return cos_s, np.sqrt(np.maximum(1.0 - cos_s * cos_s, 0.0))
+    return np.isnan(zm[inner]), slopes
+
+
+def add_direct(job, out: np.ndarray, origin, piece, z, stats, used, carry=None) -> None:
+    """max(cos i, 0) · lit of ``piece``'s region (``job.light_incidence`` of its window's
+    heights ``z``) into ``out``, whose first cell is the raster's ``origin`` (row, col)."""
+    lit, cosi = job.light_incidence(z, piece, stats, used, carry)
+    a0, a1, b0, b1 = piece.region
+    out[a0 - origin[0]:a1 - origin[0], b0 - origin[1]:b1 - origin[1]] = \
+        np.maximum(cosi, np.float32(0.0)) * lit
+
+
+# ---------------------------------------------------------------------------------------------
+# a region's bands
+
+@dataclass
+class Jobs:
+    """What every region's bands take (picklable: a Dask task gets it): ``light`` the
+    ``WindowLighting`` of the beam, ``horizons`` the ``HorizonJob`` of Dozier's Vd (None: read
+    from ``vd_file``, a ``sky_view_file.VdFile`` whose first cell is the raster's
+    ``vd_origin``), the samples (``suns``, their ``weights`` in hours, the open ``sky`` at
+    each), ``albedo``, ``soft``, ``perez``, and ``hours``: with --mean the period's hours (the
+    bands divided by them), else None."""
+
+    light: object
+    horizons: object
+    vd_file: object
+    suns: list
+    weights: object
+    sky: object
+    albedo: float
+    soft: bool = False
+    perez: bool = False
+    hours: float | None = None
+    vd_origin: tuple = (0, 0)
+
+    def casting(self) -> list[int]:
+        """The samples whose direct term the sums ask for, in order."""
+        from ..engine.irradiance import casts
+        return [k for k, s in enumerate(self.suns)
+                if casts(self.sky, k, s, self.soft, self.perez)]
+
+
+@dataclass
+class RegionMade:
+    """A region's bands (``engine.irradiance.BANDS``: float32, NaN voids), its Vd, the horizon
+    march's figures and the bytes its window cache copied instead of reading."""
+
+    bands: dict
+    vd: np.ndarray
+    figures: object
+    bytes_carried: int = 0
+
+
+def region_bands(jobs: Jobs, rd, rs, stats: dict, used: set, timer=None,
+                 on_piece=None) -> RegionMade:
+    """The four bands of the region of ``rs`` (``engine.sun_sums.RegionSuns`` of the samples
+    of ``jobs.casting()``), read through ``rd``: its Vd, its voids and slopes, each sample's
+    direct term from its pieces (each group's window read once), the sums
+    (``engine.irradiance.sums``). ``stats``, ``used``: the algorithm's figures and the
+    curvature used, added to; ``timer(stage)``: "sky view", "compute" (and the sums' own
+    stages); ``on_piece(piece)`` after each piece lit."""
+    from ..engine import irradiance as ir
+    from ..engine.sun_sums import sun_pieces
+    from ..engine.windows import WindowCache
+    from .horizon_windows import Figures
+
+    def timed(stage):
+        return timer(stage) if timer is not None else contextlib.nullcontext()
+    region = rs.region
+    r0, r1, c0, c1 = region
+    with timed("sky view"):
+        if jobs.horizons is None:
+            o0, o1 = jobs.vd_origin
+            vd, fig = jobs.vd_file.read((r0 - o0, r1 - o0, c0 - o1, c1 - o1)), Figures()
+        else:
+            vd, fig = region_vd(jobs.horizons, rd, region)
+    cache = WindowCache(rd)
+    src = jobs.light.source
+    lit_suns = jobs.casting()
+    order = sun_pieces(cache.get, rs)
+    with timed("compute"):
+        void, slopes = surface(cache.get, src.grid, src.shape, region)
+
+        def direct(s, timed):
+            i, pieces = next(order, (None, None))
+            if i is None or jobs.suns[lit_suns[i]] is not s:
+                raise HillshadeError(f"region {region}: the planned suns are not the sums' "
+                                     "(a bug)")
+            out = np.empty((r1 - r0, c1 - c0), np.float32)
+            with timed("shadows"):
+                for p, z in pieces:
+                    add_direct(jobs.light, out, (r0, c0), p, z, stats, used)
+                    if on_piece is not None:
+                        on_piece(p)
+            return out
+        bands = ir.sums(direct, void, slopes, jobs.suns, jobs.weights, jobs.sky, vd,
+                        jobs.albedo, soft=jobs.soft, perez=jobs.perez, stats=stats,
+                        timer=timer)
+        if jobs.hours is not None:        # --mean (÷ hours), --daily-mean (÷ days)
+            bands = {k: (v / np.float32(jobs.hours)).astype(np.float32)
+                     for k, v in bands.items()}
+    return RegionMade(bands, vd, fig, cache.carried_bytes)
+
+
+# ---------------------------------------------------------------------------------------------
+# the run's bands in windows
+
+@dataclass
+class WindowedBands:
+    """What a windowed irradiance run made (its bands written already): each band's and the
+    Vd's (min, mean, max) (``horizon_windows.ValueStats.as_dict``), the curvature as applied,
+    the algorithm's figures, how it ran (the report's ``processing``), where the Vd came from
+    and the tags of a --sky-view file read."""
+
+    values: dict
+    vd_values: dict
+    curvature: dict | None
+    algo_stats: dict
+    processing: dict
+    vd_from: str = "computed"
+    vd_tags: dict | None = None
+
+
+def bands_in_windows(cfg, ctx, src, lighting, body, sampled, tags: dict, band_meta: list,
+                     want, *, limit: int, window_shape=None, scheduler=None,
+                     area=None) -> WindowedBands:
+    """Write the four bands of ``src`` (``io.DemSource`` opened for windows; with ``area``, a
+    ``run.context.Area``: its tile only) to ``cfg.output`` region by region (or as Dask tasks,
+    ``scheduler``), and with --sky-view-out the Vd too. ``sampled``: the run's samples
+    (``suns``, ``weights``, ``sky``, ``work``, ``hours``); ``tags`` the output's,
+    ``band_meta`` each band's (description, tags); ``want(hs)`` the Vd file's tags for the
+    horizon Shader ``hs`` (``sky_view_file.dozier_tags``). ``limit``: --max-memory in bytes,
+    ``window_shape``: --window-size. Raises ``AllNodata`` (before anything is written) for a
+    DEM of voids only, ``HillshadeError`` for a memory limit too small for one window."""
+    from ..errors import UsageProblem
+    from .local import bounded_gdal_cache
+    a = cfg.albedo_input
+    if cfg.monthly or (a is not None and (a.by_month or a.rasters)):
+        raise UsageProblem("--monthly, and --albedo by month or as a raster, run in memory "
+                           "only: not in windows (--max-memory, --window-size, --scheduler)")
+    with bounded_gdal_cache():
+        return _bands_in_windows(cfg, ctx, src, lighting, body, sampled, tags, band_meta, want,
+                                 limit, window_shape, scheduler, area)
+
+
+def _bands_in_windows(cfg, ctx, src, lighting, body, sampled, tags, band_meta, want, limit,
+                      window_shape, scheduler, area) -> WindowedBands:
+    from ..engine.windows import block_stats
+    from ..engine import irradiance as ir
+    from ..io import BandWriter
+    from ..model.earth import curvature_report
+    from .horizon_windows import Figures, ValueStats
+    from .report import progress_total
+    from .sky_view_file import open_vd, vd_writer, write_vd_window
+    from .sun_hours_windows import Tally, plan_sums
+
+    ro, timer = cfg.run, ctx.timer
+    rows, cols = src.shape
+    geom = src if area is None else area.tile
+    tally = Tally()
+    with timer("prepare"):   # one pass for the height ranges; the plan; compilation
+        if area is None:
+            bstats = block_stats(src, preview_side=2048 if ro.preview is not None else None)
+            stats_bytes = rows * cols * src.itemsize
+        else:
+            bstats = area.block_stats()
+            stats_bytes = area.statistics["bytes_read"]
+        job = lighting_job(src, lighting, body, bstats)
+        hjob, hs = sky_view_job(src, lighting, body, bstats, cfg.skyview_directions)
+        vd_file = None
+        if cfg.sky_view is not None:
+            vd_file = open_vd(cfg.sky_view, geom, want(hs))
+        jobs = Jobs(job, None if vd_file is not None else hjob, vd_file, sampled.suns,
+                    np.asarray(sampled.weights, np.float64), sampled.sky,
+                    cfg.albedo_input.number, lighting.soft, cfg.perez,
+                    (float(sampled.hours) / (1.0 if cfg.mean else 24.0)
+                     if cfg.mean or cfg.daily_mean else None),
+                    (0, 0) if area is None else (area.bounds[0], area.bounds[2]))
+        casting = [sampled.suns[k] for k in jobs.casting()]
+        whole = (memory_per_cell(lighting) if window_shape is None and scheduler is None
+                 and area is None else None)
+        regs, mem = plan_sums(job, casting, bstats, limit, window_bytes_per_cell(lighting),
+                              window_shape, area, whole)
+        tally.plan(regs)
+        if sampled.work:
+            job.warm_up(sampled.work[0])
+    values = {k: ValueStats() for k in ir.BANDS}
+    vd_values, fig, algo_stats, used = ValueStats(), Figures(), {}, set()
+    pv = bstats.preview if area is None else None
+    n = bstats.stride
+    pv_global = np.full(pv.shape, np.nan, np.float32) if pv is not None else None
+    vd_tags = want(hs) if cfg.sky_view_out is not None else None
+    if scheduler is not None:
+        with timer("compute"):
+            _on_dask(cfg, scheduler, jobs, regs, tags, band_meta, vd_tags, values, vd_values,
+                     fig, algo_stats, used, tally, pv_global, n)
+        mode = "dask"
+    else:
+        from ..pictures.preview import every_nth
+        bar = progress_total(tally.windows, ro.quiet, "hillshade-rt irradiance", "window",
+                             ro.progress)
+        w = BandWriter(cfg.output, geom, len(ir.BANDS), "float32", -9999.0, tags,
+                       overview_resampling="average", overwrite=ro.overwrite, fmt=ro.fmt,
+                       co=ro.creation_options)
+        vw = vd_writer(cfg.sky_view_out, geom, vd_tags, ro) if vd_tags is not None else None
+        with w, (vw if vw is not None else contextlib.nullcontext()), src.reader() as rd, bar:
+            for rs in regs:
+                made = region_bands(jobs, rd, rs, algo_stats, used, timer,
+                                    lambda p: bar.update(1))
+                fig.add(made.figures)
+                tally.bytes_carried += made.bytes_carried
+                at = rs.region if area is None else area.local(rs.region)
+                vd_values.add(made.vd)
+                if pv_global is not None:
+                    sub, (a, b) = every_nth(made.bands["global"], rs.region[0], rs.region[2],
+                                            n)
+                    pv_global[a:a + sub.shape[0], b:b + sub.shape[1]] = sub
+                with timer("write"):
+                    for i, k in enumerate(ir.BANDS):
+                        v = made.bands[k]
+                        values[k].add(v)
+                        v[np.isnan(v)] = -9999.0
+                        w.write(i + 1, v, *band_meta[i], window=at)
+                    if vw is not None:
+                        write_vd_window(vw, made.vd, at)
+                del made
+            tally.bytes_read = rd.bytes_read
+            with timer("write"):     # the close compresses the last blocks
+                if vw is not None:
+                    vw.finish()
+                w.finish()
+        mode = "windows"
+    if pv_global is not None:
+        _preview(ro, src, bstats, pv_global)
+    processing = tally.processing(mode, geom.shape[0] * geom.shape[1], src.itemsize, mem,
+                                  window_shape, stats_bytes)
+    processing["sky_view"] = fig.as_dict() if vd_file is None else None
+    if area is not None:
+        processing["context"] = area.report()
+    return WindowedBands({k: v.as_dict() for k, v in values.items()}, vd_values.as_dict(),
+                         curvature_report(job.curvature, used, job.body, job.k), algo_stats,
+                         processing, "computed" if vd_file is None else "read",
+                         None if vd_file is None else vd_file.tags)
+
+
+def _preview(ro, src, bstats, pv_global) -> None:
+    """--preview in windows: the global band over the relief of every n-th cell (the
+    statistics pass's), 2nd..98th percentile of those cells."""
+    from ..io import write_png
+    from ..model.geometry import Grid
+    from ..pictures.preview import relief_rgb, scaled
+    pv, n = bstats.preview, bstats.stride
+    g = Grid(pv.shape[0], pv.shape[1], src.grid.dx[::n] * n, src.grid.dy[::n] * n,
+             src.grid.col_sign, src.grid.row_sign, src.grid.method)
+    write_png(ro.preview, relief_rgb(pv, g, ramp=scaled(pv_global)), ro.overwrite)
+
+
+# ---------------------------------------------------------------------------------------------
+# regions as Dask tasks (--scheduler)
+
+def region_task(jobs: Jobs, rs, paths: dict, stride: int | None = None) -> dict:
+    """The Dask task: the bands of region ``rs`` (:func:`region_bands`, its windows read
+    here), written to ``paths["bands"]`` (a GeoTIFF of the region, four bands, -9999 nodata)
+    and its Vd to ``paths["vd"]`` when there is one. Returns its figures: (min, sum, count,
+    max) of each band and of Vd, the horizon march's, the algorithm's, the curvature used,
+    bytes read and carried, and the every-``stride``-th cells of the global band for a
+    preview."""
+    import rasterio
+
+    from ..engine import irradiance as ir
+    from ..engine.windows import GDAL_CACHE_MB
+    from ..pictures.preview import every_nth
+    from .dask import write_part
+    from .horizon_windows import ValueStats
+
+    stats: dict = {}
+    used: set = set()
+    with rasterio.Env(GDAL_CACHEMAX=GDAL_CACHE_MB), jobs.light.source.reader() as rd, \
+            _TASK_LOCK:
+        made = region_bands(jobs, rd, rs, stats, used)
+        nread = rd.bytes_read
+    r0, _, c0, _ = rs.region
+
+    def figures(v):
+        vs = ValueStats()
+        vs.add(v)
+        return vs.lo, vs.total, vs.count, vs.hi
+    values = {k: figures(v) for k, v in made.bands.items()}
+    shade = None
+    if stride:
+        sub, at = every_nth(made.bands["global"], r0, c0, stride)
+        shade = (sub.copy(), at)
+    src = jobs.light.source
+    write_part(paths["bands"], np.stack([np.where(np.isnan(made.bands[k]), np.float32(-9999.0),
+                                                  made.bands[k]) for k in ir.BANDS]),
+               src, r0, c0, -9999.0, predictor=3)
+    if "vd" in paths:
+        write_part(paths["vd"], np.where(np.isnan(made.vd), np.float32(-9999.0), made.vd),
+                   src, r0, c0, -9999.0, predictor=3)
+    return {"values": values, "vd": figures(made.vd), "figures": made.figures,
+            "algorithm_stats": stats, "curvature_used": used, "bytes_read": nread,
+            "bytes_carried": made.bytes_carried, "shade": shade}
+
+
+def _on_dask(cfg, scheduler, jobs: Jobs, regs, tags, band_meta, vd_tags, values, vd_values,
+             fig, algo_stats, used, tally, pv_global, stride) -> None:
+    """Every region a task (:func:`region_task`); their parts put together through VRTs into
+    ``cfg.output`` (as the in-memory run's file: four float32 bands, -9999 nodata, the same
+    tags and descriptions) and, with ``vd_tags``, into --sky-view-out."""
+    from ..engine import irradiance as ir
+    from ..io.vrt import VrtSource
+    from .dask import DaskSession
+    from .horizon_windows import VrtOutput
+    from .report import progress_total
+    from .sky_view_file import DOZIER_PRODUCT
+
+    ro = cfg.run
+    src = jobs.light.source
+    if jobs.horizons is not None:      # nothing large to the workers: no preview
+        h = jobs.horizons
+        jobs = replace(jobs, horizons=replace(h, stats=replace(h.stats, preview=None)))
+    with DaskSession(scheduler, cfg.output, ro.worker_timeout) as session:
+        client, folder = session.client, session.folder
+        workers = session.workers()
+        parts = {}
+        for rs in regs:
+            r0, _, c0, _ = rs.region
+            paths = {"bands": os.path.join(folder, f"irradiance_r{r0}_c{c0}.tif")}
+            if vd_tags is not None:
+                paths["vd"] = os.path.join(folder, f"vd_r{r0}_c{c0}.tif")
+            f = client.submit(region_task, jobs, rs, paths,
+                              stride if pv_global is not None else None, pure=False)
+            parts[f.key] = (rs.region, paths)
+            session.futures.append(f)
+        done = []
+        bar = progress_total(len(session.futures), ro.quiet, "hillshade-rt irradiance (dask)",
+                             "window", ro.progress)
+        with bar:
+            for f, res in session.completed(session.futures):
+                done.append(parts[f.key])
+                for k, v in res["values"].items():
+                    values[k].merge(v)
+                vd_values.merge(res["vd"])
+                fig.add(res["figures"])
+                used |= res["curvature_used"]
+                for k, v in res["algorithm_stats"].items():
+                    algo_stats.setdefault(k, v)
+                tally.bytes_read += res["bytes_read"]
+                tally.bytes_carried += res["bytes_carried"]
+                if pv_global is not None and res["shade"] is not None:
+                    sub, (a, b) = res["shade"]
+                    pv_global[a:a + sub.shape[0], b:b + sub.shape[1]] = sub
+                bar.update(1)
+
+        def sources(name, band):
+            return [VrtSource(p[name], band, (r[0], r[2]), (r[1] - r[0], r[3] - r[2]))
+                    for r, p in done]
+        if vd_tags is not None:
+            VrtOutput(cfg.sky_view_out, src.shape, src.transform, src.crs, [DOZIER_PRODUCT],
+                      vd_tags, resampling="average",
+                      overwrite=ro.overwrite).write([sources("vd", 1)])
+        out = VrtOutput(cfg.output, src.shape, src.transform, src.crs,
+                        [d for d, _ in band_meta], tags, band_tags=[t for _, t in band_meta],
+                        resampling="average", overwrite=ro.overwrite, fmt=ro.fmt,
+                        co=ro.creation_options)
+        out.write([sources("bands", i + 1) for i in range(len(ir.BANDS))])
+        tally.extra = session.info(workers)
+
+
+def asked_windows(cfg) -> tuple:
+    """(--max-memory in bytes, default half of this machine's memory; --window-size as (rows,
+    cols) or None): a malformed one is a usage error (exit status 2)."""
+    from .config import parse_window_size
+    from .horizon import memory_limit
+    return memory_limit(cfg.max_memory), parse_window_size(cfg.window_size)
+
+
+def windowed(cfg) -> bool:
+    """Whether --window-size or --scheduler ask for windows whatever the DEM's size."""
+    return cfg.window_size is not None or cfg.scheduler is not None
+
