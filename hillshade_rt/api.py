@@ -453,6 +453,62 @@ def sun_hours(dem, output=None, *, date=None, end_date=None, step: str = "10min"
 
 
 @_keyword_errors
+def horizon(dem, output=None, *, azimuth: float | None = None, directions: int | None = None,
+            start: float | None = None, end: float | None = None, step: float | None = None,
+            angle_unit: str = "degrees", distance=None, method: str = "scan",
+            sample_spacing: int = 1, max_distance: float | None = None,
+            curvature: bool | None = None, refraction_k: float | None = None,
+            height_above_ground: float = 0.0, backend: str = "auto", max_memory=None,
+            window_size=None, client=None, worker_timeout: float = DEFAULT_WORKER_TIMEOUT,
+            fmt: str | None = None, creation_options=None, overwrite: bool = False,
+            report: str | None = None, preview: str | None = None, progress: bool = False,
+            context=None, each: bool = False, output_pattern: str | None = None,
+            **more) -> dict:
+    """``hillshade-rt horizon`` as a function: the horizon angle of every cell of the DEM at
+    ``dem`` toward ``azimuth`` (one band), or toward each of ``directions`` equally spaced
+    azimuths, or toward ``start``, ``start + step``, ... before ``end`` (r.horizon's
+    start/end/step in degrees clockwise from north: floor((end - start) / step) bands; start
+    0 and end start + 360 by default), written to ``output`` (float32, ``angle_unit``
+    "degrees" or "radians", -9999 nodata; each band's description its azimuth).
+    ``distance``: the path of a second raster, the metres to each cell's horizon point. In
+    memory, or in windows as ``max_memory``/``window_size``; ``client`` as for
+    :func:`sun_hours`. Further keywords are the command line's options of the same name
+    (``band``, ``nodata``, ``threads``, ...); ``each``, ``output_pattern``, ``context``,
+    ``fmt``, ``creation_options`` and ``progress`` as for :func:`irradiance`. Returns the
+    report. For heights in memory: :func:`hillshade_rt.engine.arrays.horizon_angles`."""
+    from .run import HorizonConfig, ReadOptions, RunOptions
+    from .run.horizon import horizon as run_horizon
+    from .run.batch import horizon_each, split_files
+    from .io.write import virtual_outputs
+    unknown = set(more) - set(READ_KEYS + ("threads",))
+    if unknown:
+        raise TypeError(f"horizon() got unexpected keyword argument(s) "
+                        f"{', '.join(sorted(unknown))}")
+    dems = [dem] if isinstance(dem, (str, os.PathLike)) else list(dem)
+    dem, output = split_files(dems + ([] if output is None else [output]), each,
+                              output_pattern, "horizon")
+    read = ReadOptions(**{k: more[k] for k in READ_KEYS if k in more},
+                       context=None if context is None else os.fspath(context))
+    run = RunOptions(backend=backend, threads=more.get("threads"), report_path=report,
+                     overwrite=overwrite, **_progress(progress), fmt=fmt, preview=preview,
+                     say=_stderr, creation_options=creation_options,
+                     worker_timeout=worker_timeout)
+    cfg = HorizonConfig(dem=dem, output=output, azimuth=azimuth, method=method,
+                        sample_spacing=sample_spacing, curvature=curvature,
+                        refraction_k=refraction_k, read=read, run=run, directions=directions,
+                        distance=None if distance is None else os.fspath(distance),
+                        max_distance=max_distance, max_memory=max_memory,
+                        window_size=window_size, scheduler=client,
+                        height_above_ground=height_above_ground, start=start, end=end,
+                        step=step, angle_unit=angle_unit)
+    token = virtual_outputs.set(True)    # /vsimem/ outputs are fine from Python
+    try:
+        return horizon_each(cfg, dem, output_pattern) if each else run_horizon(cfg)
+    finally:
+        virtual_outputs.reset(token)
+
+
+@_keyword_errors
 def animate(dem, output, *, date=None, start=None, end=None, step: str | None = None,
             fps: float = 12.0, size: int = 1024, label: bool = True, algorithm: str = "auto",
             curvature: bool | None = None, refraction_k: float | None = None,
