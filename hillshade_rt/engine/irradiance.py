@@ -69,6 +69,13 @@ from ..errors import HillshadeError
 CLEAR_SKY_MODELS = ("ineichen", "haurwitz")
 SKY_MODELS = ("isotropic", "perez")
 BANDS = ("beam", "diffuse", "reflected", "global")
+# GRASS r.sun's names of the same quantities (its outputs beam_rad, diff_rad, refl_rad, glob_rad:
+# W/m² in its mode 1, an instant; Wh/m² per day in its mode 2) and of the instant's incidence
+# angle (incidout: the sun's elevation above the surface, degrees)
+RSUN_NAMES = {"beam": "beam_rad", "diffuse": "diff_rad", "reflected": "refl_rad",
+              "global": "glob_rad", "incidence": "incidout"}
+# the bands of one instant (``instant``): the four irradiances, then the incidence angle
+INSTANT_BANDS = BANDS + ("incidence",)
 
 # Perez, Ineichen, Seals, Michalsky & Stewart (1990), Solar Energy 44(5), table 6, "all sites
 # composite" (pvlib's default coefficients, 'allsitescomposite1990'): per sky-clearness bin

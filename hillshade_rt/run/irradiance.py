@@ -474,6 +474,25 @@ def _tags(cfg: IrradianceConfig, lighting, req, sampled: _Samples, area) -> dict
     return tags
 
 
+def one_day(cfg: IrradianceConfig) -> bool:
+    """Whether the bands are r.sun's mode 2 product: the sums over one day (``--date`` without
+    a later ``--end-date``), Wh/m² per day, not ``--mean``'s W/m²."""
+    from ..model.times import parse_date
+    return (cfg.date is not None and not cfg.mean
+            and (cfg.end_date is None or parse_date(cfg.end_date, "--end-date")
+                 == parse_date(cfg.date)))
+
+
+def band_texts(cfg: IrradianceConfig) -> list[tuple[str, dict]]:
+    """The four bands' descriptions and tags: r.sun's names (beam_rad, diff_rad, refl_rad,
+    glob_rad) where the band is r.sun's product (:func:`one_day`), ours (beam, diffuse,
+    reflected, global) otherwise; the tags NAME (ours, always), RSUN_NAME and UNITS."""
+    from ..engine import irradiance as ir
+    rsun = one_day(cfg)
+    return [(ir.RSUN_NAMES[k] if rsun else k,
+             {"UNITS": _unit(cfg), "NAME": k, "RSUN_NAME": ir.RSUN_NAMES[k]}) for k in ir.BANDS]
+
+
 def _write(cfg: IrradianceConfig, ctx: RunContext, geom, d, lit: _Bands, tags: dict) -> None:
     """The four bands (-9999 nodata) on the grid of ``geom``, and the --preview (the global
     band over the relief of ``d``, 2nd..98th percentile)."""
@@ -482,14 +501,14 @@ def _write(cfg: IrradianceConfig, ctx: RunContext, geom, d, lit: _Bands, tags: d
     from ..engine import irradiance as ir
     from ..io import BandWriter, write_png
     from ..pictures.preview import relief_rgb, scaled
-    ro, unit = ctx.ro, _unit(cfg)
+    ro = ctx.ro
     with ctx.timer("write"):
         with BandWriter(cfg.output, geom, len(ir.BANDS), "float32", -9999.0, tags,
                         overview_resampling="average", overwrite=ro.overwrite,
                         fmt=ro.fmt, co=ro.creation_options) as w:
-            for i, k in enumerate(ir.BANDS, 1):
+            for i, (k, (text, btags)) in enumerate(zip(ir.BANDS, band_texts(cfg)), 1):
                 v = lit.bands[k]
-                w.write(i, np.where(np.isnan(v), np.float32(-9999.0), v), k, {"UNITS": unit})
+                w.write(i, np.where(np.isnan(v), np.float32(-9999.0), v), text, btags)
         if ro.preview is not None:
             write_png(ro.preview, relief_rgb(d.heights, d.grid,
                                              ramp=scaled(lit.bands["global"])),
@@ -559,8 +578,8 @@ def _all_nodata(cfg: IrradianceConfig, ctx: RunContext) -> dict:
                                         overwrite=ro.overwrite, fmt=ro.fmt,
                                         co=ro.creation_options) as w:
         arr = np.full(src.shape, -9999.0, np.float32)
-        for i, k in enumerate(ir.BANDS, 1):
-            w.write(i, arr, k)
+        for i, (text, btags) in enumerate(band_texts(cfg), 1):
+            w.write(i, arr, text, btags)
     rep = {"input": input_label(src.path), "output": os.path.abspath(cfg.output),
            "shape": list(src.shape), "all_nodata": True,
            "bands": {k: {"min": None, "mean": None, "max": None} for k in ir.BANDS},
