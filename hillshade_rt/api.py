@@ -40,6 +40,7 @@ _KEYWORDS = {"--overwrite": "overwrite=True", "--earth-curvature": "curvature=Tr
              "--format": "fmt", "--soft": "soft=True", "--self-shadow": "self_shadow=True",
              "--no-self-shadow": "self_shadow=False", "--cog": "cog=True", "--each": "each=True",
              "--mean": "mean=True", "--perez": "perez=True", "--classes": "product='classes'",
+             "--instant": "instant=True",
              "--no-refraction": "no_refraction=True", "--output": "output",
              "--quiet": "progress=False", "--help": "help()"}
 _OPTION = re.compile(r"(?<![\w-])--[a-z][a-z0-9-]*")
@@ -115,6 +116,16 @@ def _place(more: dict) -> dict:
     from .model.sun import DEFAULT_TOLERANCE
     return {k: more.get(k, d) for k, d in zip(PLACE_KEYS, (None,) * 5 + (False,
                                                                          DEFAULT_TOLERANCE))}
+
+
+def _times(times) -> tuple:
+    """The ``times`` keyword (None, one time, or many; datetimes or ISO text) as the ISO texts
+    of ``--time``."""
+    if times is None:
+        return ()
+    if isinstance(times, (str, _dt.datetime)):
+        times = [times]
+    return tuple(_text(t) for t in times)
 
 
 def _text(v):
@@ -351,7 +362,7 @@ def irradiance(dem, output=None, *, date=None, end_date=None, start=None, end=No
                preview: str | None = None, progress: bool = False, context=None,
                height_above_ground: float = 0.0, each: bool = False,
                output_pattern: str | None = None, sky_view=None, sky_view_out=None,
-               **more) -> dict:
+               times=None, instant: bool = False, **more) -> dict:
     """``hillshade-rt irradiance`` as a function: the beam, diffuse, reflected and global
     irradiance on every cell of the DEM at ``dem`` over a period, written to ``output`` (4
     float32 bands, Wh/m², or W/m² with ``mean``). The period: ``date`` (a date or
@@ -367,12 +378,15 @@ def irradiance(dem, output=None, *, date=None, end_date=None, start=None, end=No
     ``--sky-view-out`` (the path the computed one is written to). ``each``:
     ``dem`` a list of unrelated DEMs, each on its own into ``output_pattern``'s ``{stem}``, as
     ``--each`` (no ``output``; the report lists each input's status, as :func:`shade`'s).
-    ``progress`` as for :func:`shade`. Returns the report. For
-    heights in memory:
+    ``progress`` as for :func:`shade`. ``times`` (a datetime or ISO string, or a list of
+    them) as ``--time``: instead of a period, the irradiance at each of those instants (W/m²)
+    and the sun's elevation above each cell's surface, five bands per time (r.sun's mode 1);
+    ``instant=True`` as ``--instant``: the same at the times ``start``..``end`` every
+    ``step``, or at ``date``'s sample times. Returns the report. For heights in memory:
     :func:`hillshade_rt.engine.arrays.irradiance`."""
     from .run import ReadOptions, RunOptions
     from .run.config import IrradianceConfig
-    from .run.irradiance import irradiance as run_irradiance
+    from .run.irradiance_instant import irradiance_or_instants as run_irradiance
     from .run.batch import irradiance_each, split_files
     from .io.write import virtual_outputs
     _no_other_keywords("irradiance", more)
@@ -394,7 +408,8 @@ def irradiance(dem, output=None, *, date=None, end_date=None, start=None, end=No
                            algorithm=algorithm, curvature=curvature, refraction_k=refraction_k,
                            read=read, run=run, height_above_ground=height_above_ground,
                            sky_view=None if sky_view is None else os.fspath(sky_view),
-                           sky_view_out=None if sky_view_out is None else os.fspath(sky_view_out))
+                           sky_view_out=None if sky_view_out is None else os.fspath(sky_view_out),
+                           times=_times(times), instant=bool(instant))
     token = virtual_outputs.set(True)    # /vsimem/ outputs are fine from Python
     try:
         return irradiance_each(cfg, dem, output_pattern) if each else run_irradiance(cfg)

@@ -454,6 +454,13 @@ class IrradianceConfig:
     height_above_ground: float = 0.0      # metres: the receiving surface stands this high
     sky_view: str | None = None           # Dozier's Vd read from this file (skyview's output)
     sky_view_out: str | None = None       # the Vd computed written to this file too
+    times: tuple = ()                     # --time: instants (W/m² at each, run.irradiance_instant)
+    instant: bool = False                 # --instant: the period's times as instants, not sums
+
+    def instants(self) -> bool:
+        """Whether the run writes instants (``--time`` or ``--instant``: r.sun's mode 1) rather
+        than the period's sums."""
+        return bool(self.times) or bool(self.instant)
 
     def check(self):
         """The options' combinations and values (UsageProblem: exit status 2)."""
@@ -463,9 +470,15 @@ class IrradianceConfig:
                                "--sky-view it computes none: give one of them")
         by_date = self.date is not None or self.end_date is not None
         by_time = self.start is not None or self.end is not None
-        if by_date == by_time:
+        if self.instants() and self.mean:
+            raise UsageProblem("--mean averages a period's sums: the instants of --time or "
+                               "--instant are W/m2 already")
+        if self.times and (by_date or by_time):
+            raise UsageProblem("--time gives the instants: --date, --end-date, --start and --end "
+                               "do not go with it")
+        if not self.times and by_date == by_time:
             raise UsageProblem("give the period one way: --date [--end-date], or --start and "
-                               "--end")
+                               "--end" + (" (or the instants: --time)" if not by_date else ""))
         if by_date and self.date is None:
             raise UsageProblem("--end-date goes with --date")
         if by_time and (self.start is None or self.end is None):

@@ -88,7 +88,11 @@ class _Bands:
 
 
 def irradiance(cfg: IrradianceConfig) -> dict:
-    """Write the four irradiance bands of ``cfg.dem`` to ``cfg.output``; returns the report."""
+    """Write the four irradiance bands of ``cfg.dem`` to ``cfg.output``; returns the report.
+    (``--time`` and ``--instant`` are ``run.irradiance_instant``'s: ``irradiance_or_instants``
+    runs either.)"""
+    if cfg.instants():
+        raise UsageProblem("--time and --instant are run.irradiance_instant's run")
     ro = cfg.run
     cfg.check()
     cfg.read.check_context(cfg.dem, **{"--preview": ro.preview is not None})
@@ -243,10 +247,10 @@ def _samples(cfg: IrradianceConfig, asked: _Asked, d) -> _Samples:
     suns, sun_info = req.suns(d, site)
     return _Samples(site, period, float(np.sum(weights)), times, weights, suns, sun_info,
                     [s for s in suns if not ir.is_dark(s, cfg.soft)],
-                    _sky(cfg, times, suns, site, series))
+                    open_sky(cfg, times, suns, site, series))
 
 
-def _sky(cfg: IrradianceConfig, times, suns, site, series):
+def open_sky(cfg: IrradianceConfig, times, suns, site, series):
     """The open sky at each sample: the clear-sky model's, or the ``--ghi`` series
     interpolated in time; with ``--perez`` its Perez coefficients."""
     import numpy as np
@@ -292,7 +296,7 @@ def _light(cfg, ctx: RunContext, d, shader, lighting, body, sampled: _Samples, a
                         lighting.refraction_k, body)
     with ctx.timer("sky view"):
         if cfg.sky_view is not None:
-            vd, vd_tags = _read_vd(cfg, d, hs, None, d.heights)
+            vd, vd_tags = read_sky_view(cfg, d, hs, None, d.heights)
         else:
             # one pyramid for the sky view and every sun's shadows (the Shader's, built once)
             pyramid = shader.pyramid(shader.z, True) if lighting.backend == "cpu" else None
@@ -301,7 +305,7 @@ def _light(cfg, ctx: RunContext, d, shader, lighting, body, sampled: _Samples, a
                                          lighting.refraction_k, body, lighting.lift,
                                          pyramid=pyramid, normals=nrm), None
     if cfg.sky_view_out is not None:
-        _write_vd(cfg, ctx, d, vd, hs, None, d.heights)
+        write_sky_view(cfg, ctx, d, vd, hs, None, d.heights)
     with ctx.timer("compute"):
         bands = ir.accumulate(shader, sampled.suns, sampled.weights, sampled.sky, vd,
                               cfg.albedo, soft=lighting.soft, perez=cfg.perez, stats=algo_stats,
@@ -320,14 +324,14 @@ def _want(cfg, hs, area, heights) -> dict:
                        heights=heights)
 
 
-def _read_vd(cfg, geom, hs, area, heights):
+def read_sky_view(cfg, geom, hs, area, heights):
     """(Vd, the file's tags) of --sky-view, checked against the grid of ``geom`` and the
     run's settings."""
     from .sky_view_file import read_vd
     return read_vd(cfg.sky_view, geom, _want(cfg, hs, area, heights))
 
 
-def _write_vd(cfg, ctx, geom, vd, hs, area, heights) -> None:
+def write_sky_view(cfg, ctx, geom, vd, hs, area, heights) -> None:
     """--sky-view-out: the Vd computed, as skyview writes it (its tags too)."""
     from .sky_view_file import write_vd
     with ctx.timer("write"):
@@ -379,7 +383,7 @@ def _light_in_context(cfg, ctx: RunContext, area, lighting, body, sampled: _Samp
         vd_tags = None
         if cfg.sky_view is not None:
             with timer("sky view"):
-                vd, vd_tags = _read_vd(cfg, area.tile, hs, area, None)
+                vd, vd_tags = read_sky_view(cfg, area.tile, hs, area, None)
         else:
             regs, _ = prepare_windows(src, hjob, memory_limit(None), None, timer, area)
         with src.reader() as rd:
@@ -406,7 +410,7 @@ def _light_in_context(cfg, ctx: RunContext, area, lighting, body, sampled: _Samp
                             vd[a0:a1, b0:b1] = out
                         fig.add(region_outputs(hjob, rd, reg, product, put))
                 if cfg.sky_view_out is not None:
-                    _write_vd(cfg, ctx, area.tile, vd, hs, area, None)
+                    write_sky_view(cfg, ctx, area.tile, vd, hs, area, None)
             cache, used = WindowCache(rd), set()
             read = {"windows": 0, "cells": 0}
 
