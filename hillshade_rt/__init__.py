@@ -17,7 +17,7 @@ _EXPORTS = {"HillshadeError": "errors", "Grid": "model.geometry", "sun_rays": "m
             "horizon_profile": "engine.arrays", "sun_at_points": "engine.arrays",
             "Shader": "engine.shader", "render": "engine.shader",
             "shade": "api", "irradiance": "api", "animate": "api",
-            "sun_hours": "api"}
+            "sun_hours": "api", "horizon": "api"}
 
 __all__ = list(_EXPORTS) + ["__version__"]
 

@@ -40,6 +40,7 @@ _KEYWORDS = {"--overwrite": "overwrite=True", "--earth-curvature": "curvature=Tr
              "--format": "fmt", "--soft": "soft=True", "--self-shadow": "self_shadow=True",
              "--no-self-shadow": "self_shadow=False", "--cog": "cog=True", "--each": "each=True",
              "--mean": "mean=True", "--perez": "perez=True", "--classes": "product='classes'",
+             "--instant": "instant=True",
              "--no-refraction": "no_refraction=True", "--output": "output",
              "--quiet": "progress=False", "--help": "help()"}
 _OPTION = re.compile(r"(?<![\w-])--[a-z][a-z0-9-]*")
@@ -115,6 +116,16 @@ def _place(more: dict) -> dict:
     from .model.sun import DEFAULT_TOLERANCE
     return {k: more.get(k, d) for k, d in zip(PLACE_KEYS, (None,) * 5 + (False,
                                                                          DEFAULT_TOLERANCE))}
+
+
+def _times(times) -> tuple:
+    """The ``times`` keyword (None, one time, or many; datetimes or ISO text) as the ISO texts
+    of ``--time``."""
+    if times is None:
+        return ()
+    if isinstance(times, (str, _dt.datetime)):
+        times = [times]
+    return tuple(_text(t) for t in times)
 
 
 def _text(v):
@@ -353,7 +364,8 @@ def irradiance(dem, output=None, *, date=None, end_date=None, start=None, end=No
                height_above_ground: float = 0.0, each: bool = False,
                output_pattern: str | None = None, sky_view=None, sky_view_out=None,
                max_memory=None, window_size=None, client=None,
-               worker_timeout: float = DEFAULT_WORKER_TIMEOUT, **more) -> dict:
+               worker_timeout: float = DEFAULT_WORKER_TIMEOUT, times=None,
+               instant: bool = False, **more) -> dict:
     """``hillshade-rt irradiance`` as a function: the beam, diffuse, reflected and global
     irradiance on every cell of the DEM at ``dem`` over a period, written to ``output`` (4
     float32 bands, Wh/m², or W/m² with ``mean``). The period: ``date`` (a date or
@@ -375,12 +387,15 @@ def irradiance(dem, output=None, *, date=None, end_date=None, start=None, end=No
     ``--worker-timeout``), as :func:`sun_hours`'s; the same bits in every mode. ``each``:
     ``dem`` a list of unrelated DEMs, each on its own into ``output_pattern``'s ``{stem}``, as
     ``--each`` (no ``output``; the report lists each input's status, as :func:`shade`'s).
-    ``progress`` as for :func:`shade`. Returns the report. For
-    heights in memory:
+    ``progress`` as for :func:`shade`. ``times`` (a datetime or ISO string, or a list of
+    them) as ``--time``: instead of a period, the irradiance at each of those instants (W/m²)
+    and the sun's elevation above each cell's surface, five bands per time (r.sun's mode 1);
+    ``instant=True`` as ``--instant``: the same at the times ``start``..``end`` every
+    ``step``, or at ``date``'s sample times. Returns the report. For heights in memory:
     :func:`hillshade_rt.engine.arrays.irradiance`."""
     from .run import ReadOptions, RunOptions
     from .run.config import IrradianceConfig
-    from .run.irradiance import irradiance as run_irradiance
+    from .run.irradiance_instant import irradiance_or_instants as run_irradiance
     from .run.batch import irradiance_each, split_files
     from .io.write import virtual_outputs
     _no_other_keywords("irradiance", more)
@@ -404,7 +419,8 @@ def irradiance(dem, output=None, *, date=None, end_date=None, start=None, end=No
                            read=read, run=run, height_above_ground=height_above_ground,
                            sky_view=None if sky_view is None else os.fspath(sky_view),
                            sky_view_out=None if sky_view_out is None else os.fspath(sky_view_out),
-                           max_memory=max_memory, window_size=window_size, scheduler=client)
+                           max_memory=max_memory, window_size=window_size, scheduler=client,
+                           times=_times(times), instant=bool(instant))
     token = virtual_outputs.set(True)    # /vsimem/ outputs are fine from Python
     try:
         return irradiance_each(cfg, dem, output_pattern) if each else run_irradiance(cfg)
@@ -458,6 +474,62 @@ def sun_hours(dem, output=None, *, date=None, end_date=None, step: str = "10min"
     token = virtual_outputs.set(True)    # /vsimem/ outputs are fine from Python
     try:
         return sun_hours_each(cfg, dem, output_pattern) if each else run_sun_hours(cfg)
+    finally:
+        virtual_outputs.reset(token)
+
+
+@_keyword_errors
+def horizon(dem, output=None, *, azimuth: float | None = None, directions: int | None = None,
+            start: float | None = None, end: float | None = None, step: float | None = None,
+            angle_unit: str = "degrees", distance=None, method: str = "scan",
+            sample_spacing: int = 1, max_distance: float | None = None,
+            curvature: bool | None = None, refraction_k: float | None = None,
+            height_above_ground: float = 0.0, backend: str = "auto", max_memory=None,
+            window_size=None, client=None, worker_timeout: float = DEFAULT_WORKER_TIMEOUT,
+            fmt: str | None = None, creation_options=None, overwrite: bool = False,
+            report: str | None = None, preview: str | None = None, progress: bool = False,
+            context=None, each: bool = False, output_pattern: str | None = None,
+            **more) -> dict:
+    """``hillshade-rt horizon`` as a function: the horizon angle of every cell of the DEM at
+    ``dem`` toward ``azimuth`` (one band), or toward each of ``directions`` equally spaced
+    azimuths, or toward ``start``, ``start + step``, ... before ``end`` (r.horizon's
+    start/end/step in degrees clockwise from north: floor((end - start) / step) bands; start
+    0 and end start + 360 by default), written to ``output`` (float32, ``angle_unit``
+    "degrees" or "radians", -9999 nodata; each band's description its azimuth).
+    ``distance``: the path of a second raster, the metres to each cell's horizon point. In
+    memory, or in windows as ``max_memory``/``window_size``; ``client`` as for
+    :func:`sun_hours`. Further keywords are the command line's options of the same name
+    (``band``, ``nodata``, ``threads``, ...); ``each``, ``output_pattern``, ``context``,
+    ``fmt``, ``creation_options`` and ``progress`` as for :func:`irradiance`. Returns the
+    report. For heights in memory: :func:`hillshade_rt.engine.arrays.horizon_angles`."""
+    from .run import HorizonConfig, ReadOptions, RunOptions
+    from .run.horizon import horizon as run_horizon
+    from .run.batch import horizon_each, split_files
+    from .io.write import virtual_outputs
+    unknown = set(more) - set(READ_KEYS + ("threads",))
+    if unknown:
+        raise TypeError(f"horizon() got unexpected keyword argument(s) "
+                        f"{', '.join(sorted(unknown))}")
+    dems = [dem] if isinstance(dem, (str, os.PathLike)) else list(dem)
+    dem, output = split_files(dems + ([] if output is None else [output]), each,
+                              output_pattern, "horizon")
+    read = ReadOptions(**{k: more[k] for k in READ_KEYS if k in more},
+                       context=None if context is None else os.fspath(context))
+    run = RunOptions(backend=backend, threads=more.get("threads"), report_path=report,
+                     overwrite=overwrite, **_progress(progress), fmt=fmt, preview=preview,
+                     say=_stderr, creation_options=creation_options,
+                     worker_timeout=worker_timeout)
+    cfg = HorizonConfig(dem=dem, output=output, azimuth=azimuth, method=method,
+                        sample_spacing=sample_spacing, curvature=curvature,
+                        refraction_k=refraction_k, read=read, run=run, directions=directions,
+                        distance=None if distance is None else os.fspath(distance),
+                        max_distance=max_distance, max_memory=max_memory,
+                        window_size=window_size, scheduler=client,
+                        height_above_ground=height_above_ground, start=start, end=end,
+                        step=step, angle_unit=angle_unit)
+    token = virtual_outputs.set(True)    # /vsimem/ outputs are fine from Python
+    try:
+        return horizon_each(cfg, dem, output_pattern) if each else run_horizon(cfg)
     finally:
         virtual_outputs.reset(token)
 

@@ -139,6 +139,8 @@ GROUPS: dict[str, list[list[str]]] = {
          "--skyview-directions", "8", "--soft"],
         ["irradiance", "{utm}", "{out}/r.tif", "--date", "2026-06-21", "--step", "3h",
          "--skyview-directions", "8", "--perez", "--window-size", "64"],
+        ["irradiance", "{utm}", "{out}/r.tif", "--time", "2026-06-21T19:00Z",
+         "--skyview-directions", "8"],
         ["profile", "{utm}", "--at-xy", "{utm_xy}", "-o", "{out}/s.csv"],
         ["profile", "{geo}", "--at", "{geo_lonlat}", "-o", "{out}/s.csv"],
     ],

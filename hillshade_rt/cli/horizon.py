@@ -22,6 +22,20 @@ from .options import (InternalOption, SectionedCommand, context_option, each_pat
 @click.option("--directions", type=click.IntRange(8, 360), default=None, metavar="N",
               help="N equally spaced azimuths clockwise from north, 0 first (8..360): one band "
                    "per direction, its description the azimuth.")
+@click.option("--start", type=float, default=None, callback=finite, metavar="DEG",
+              help="With --step: the first azimuth, degrees clockwise from north (default 0; "
+                   "r.horizon's start, which counts counter-clockwise from east: ours is 90 - "
+                   "its, mod 360).")
+@click.option("--end", type=float, default=None, callback=finite, metavar="DEG",
+              help="With --step: azimuths before this one (default --start + 360; at most one "
+                   "turn after --start).")
+@click.option("--step", type=float, default=None, callback=finite, metavar="DEG",
+              help="One band every DEG degrees clockwise from --start, before --end: "
+                   "floor((end - start) / step) bands, as r.horizon; each band's description "
+                   "its azimuth. Not with --azimuth or --directions.")
+@click.option("--angle-unit", type=click.Choice(["degrees", "radians"]), default="degrees",
+              show_default=True,
+              help="The unit of the angles written (r.horizon writes radians, degrees with -d).")
 @click.option("--distance", "distance", type=click.Path(dir_okay=False), default=None,
               metavar="DIST.tif",
               help="Also write the ground distance in metres to each cell's horizon point "
@@ -49,16 +63,18 @@ from .options import (InternalOption, SectionedCommand, context_option, each_pat
 @dem_options
 @context_option
 @errors_to_click
-def horizon(files, azimuth, directions, distance, method, sample_spacing, max_distance,
-            curvature, refraction_k, height_above_ground, preview, backend, threads, report_path,
+def horizon(files, azimuth, directions, start, end, step, angle_unit, distance, method,
+            sample_spacing, max_distance, curvature, refraction_k, height_above_ground, preview,
+            backend, threads, report_path,
             max_memory,
             window_size, scheduler, overwrite, quiet, progress, fmt,
             creation_options, each, output_pattern, **read_opts):
-    """Write the horizon angle toward --azimuth (or toward each of --directions N azimuths, one
-    band each) of every cell of DEM to OUTPUT.
+    """Write the horizon angle toward --azimuth (or toward each of --directions N azimuths, or
+    of --start/--end/--step's, one band each) of every cell of DEM to OUTPUT.
 
-    Float32 degrees above the horizontal (negative: the cell looks down on everything ahead;
-    -90: no terrain ahead inside the raster, or within --max-distance); nodata -9999. A cell is
+    Float32 degrees (or --angle-unit radians) above the horizontal (negative: the cell looks
+    down on everything ahead; -90: no terrain ahead inside the raster, or within
+    --max-distance); nodata -9999. A cell is
     lit by a sun at this azimuth iff its angle <= the sun's elevation. A DEM larger than
     --max-memory (or any, with --window-size) is computed in windows, with the same result."""
     from ..run import HorizonConfig, horizon as run_horizon
@@ -74,7 +90,8 @@ def horizon(files, azimuth, directions, distance, method, sample_spacing, max_di
                         run=to_run_options(kw, say), directions=directions, distance=distance,
                         max_distance=max_distance, max_memory=max_memory,
                         window_size=window_size, scheduler=scheduler,
-                        height_above_ground=height_above_ground)
+                        height_above_ground=height_above_ground, start=start, end=end,
+                        step=step, angle_unit=angle_unit)
     if each:
         horizon_each(cfg, dem, output_pattern)
     else:

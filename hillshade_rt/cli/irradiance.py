@@ -28,6 +28,12 @@ from .options import (SectionedCommand, context_option, each_pattern_options,
 @click.option("--end", default=None, metavar="ISO8601", help="End of the period (with --start).")
 @click.option("--step", default="15min", show_default=True, metavar="DURATION",
               help="Sampling interval; each sample (at its middle) stands for its interval.")
+@click.option("--time", "time", multiple=True, metavar="ISO8601",
+              help="Instead of a period: the irradiance (W/m2) and incidence angle at this "
+                   "instant, 5 bands (repeat for more; r.sun's mode 1).")
+@click.option("--instant", is_flag=True,
+              help="The instants of --start..--end every --step (or of --date's samples), 5 "
+                   "bands each, instead of the period's sums.")
 @click.option("--clear-sky", type=click.Choice(["ineichen", "haurwitz"]), default=None,
               help="pvlib's clear-sky model (default ineichen; haurwitz gives GHI only, split "
                    "into DNI and DHI by Erbs).")
@@ -86,8 +92,9 @@ from .options import (SectionedCommand, context_option, each_pattern_options,
 @dem_options
 @context_option
 @errors_to_click
-def irradiance(files, date_, end_date, start, end, step, clear_sky, linke_turbidity,
-               albedo, ghi, mean, daily_mean, monthly, perez, skyview_directions, sky_view, sky_view_out, tz, lat, lon, pressure, temperature,
+def irradiance(files, date_, end_date, start, end, step, time, instant, clear_sky,
+               linke_turbidity, albedo, ghi, mean, daily_mean, monthly, perez,
+               skyview_directions, sky_view, sky_view_out, tz, lat, lon, pressure, temperature,
                no_refraction, sun_tolerance, algorithm, curvature, refraction_k, soft,
                height_above_ground, preview,
                backend, threads, report_path, max_memory, window_size, scheduler, overwrite,
@@ -97,9 +104,11 @@ def irradiance(files, date_, end_date, start, end, step, clear_sky, linke_turbid
     period to OUTPUT: 4 float32 bands, Wh/m2 (W/m2 with --mean), -9999 nodata. Beam: DNI on
     the tilted surface, in cast shadow 0; diffuse: DHI times the sky view factor; reflected:
     GHI times albedo times the terrain's view factor. A DEM larger than --max-memory (or any,
-    with --window-size or --scheduler) is computed in windows, with the same result."""
+    with --window-size or --scheduler) is computed in windows, with the same result. With
+    --time or --instant: at each instant, the four in W/m2 and the sun's angle above each
+    cell's surface, 5 bands per time."""
     from ..run.config import IrradianceConfig
-    from ..run.irradiance import irradiance as run_irradiance
+    from ..run.irradiance_instant import irradiance_or_instants as run_irradiance
     from ..run.batch import split_files, irradiance_each
     dem, output = split_files(files, each, output_pattern, "irradiance")
     kw = dict(tz=tz, lat=lat, lon=lon, pressure=pressure, temperature=temperature,
@@ -116,7 +125,8 @@ def irradiance(files, date_, end_date, start, end, step, clear_sky, linke_turbid
         algorithm=algorithm, curvature=curvature, refraction_k=refraction_k,
         read=to_read_options(kw), run=to_run_options(kw, say),
         height_above_ground=height_above_ground, sky_view=sky_view, sky_view_out=sky_view_out,
-        max_memory=max_memory, window_size=window_size, scheduler=scheduler)
+        max_memory=max_memory, window_size=window_size, scheduler=scheduler,
+        times=tuple(time), instant=instant)
     if each:
         irradiance_each(cfg, dem, output_pattern)
     else:

@@ -69,6 +69,13 @@ from ..errors import HillshadeError
 CLEAR_SKY_MODELS = ("ineichen", "haurwitz")
 SKY_MODELS = ("isotropic", "perez")
 BANDS = ("beam", "diffuse", "reflected", "global")
+# GRASS r.sun's names of the same quantities (its outputs beam_rad, diff_rad, refl_rad, glob_rad:
+# W/m² in its mode 1, an instant; Wh/m² per day in its mode 2) and of the instant's incidence
+# angle (incidout: the sun's elevation above the surface, degrees)
+RSUN_NAMES = {"beam": "beam_rad", "diffuse": "diff_rad", "reflected": "refl_rad",
+              "global": "glob_rad", "incidence": "incidout"}
+# the bands of one instant (``instant``): the four irradiances, then the incidence angle
+INSTANT_BANDS = BANDS + ("incidence",)
 
 # Perez, Ineichen, Seals, Michalsky & Stewart (1990), Solar Energy 44(5), table 6, "all sites
 # composite" (pvlib's default coefficients, 'allsitescomposite1990'): per sky-clearness bin
@@ -678,3 +685,47 @@ def definitions(sky_model: str, directions: int, soft: bool) -> str:
     return (f"beam = DNI * max(cos i, 0) * lit (i: incidence on the cell's surface, Horn "
             f"normals; lit: {lit}); diffuse = {diffuse}; reflected = GHI * albedo * (1 - Vd); "
             "global = beam + diffuse + reflected")
+
+
+# --------------------------------------------------------------------------------------------
+# one instant (r.sun's mode 1)
+
+def sky_at(sky: Sky, k: int) -> Sky:
+    """The open sky of sample ``k`` alone: a one-sample :class:`Sky` (Perez's coefficients
+    too, where it has them)."""
+    from dataclasses import replace
+
+    def one(v):
+        return None if v is None else v[k:k + 1]
+    return replace(sky, dni=one(sky.dni), dhi=one(sky.dhi), ghi=one(sky.ghi), f1=one(sky.f1),
+                   f2=one(sky.f2), b=one(sky.b), perez_on=one(sky.perez_on))
+
+
+def surface_elevation(cos_i: np.ndarray) -> np.ndarray:
+    """The sun's elevation above each cell's surface plane, degrees (float32, NaN voids), from
+    cos i (i: the angle of incidence from the surface's normal): 90 - i = asin(cos i), in
+    float64 then rounded. 90: the sun along the normal; 0 or less: the sun behind the surface.
+    GRASS r.sun's incidout is this angle (NULL where it is not positive or in cast shadow)."""
+    c = np.clip(cos_i.astype(np.float64), -1.0, 1.0)
+    return np.degrees(np.arcsin(c)).astype(np.float32)
+
+
+def instant(shader, sun, sky: Sky, k: int, vd: np.ndarray, albedo: float, *,
+            soft: bool = False, perez: bool = False, stats: dict | None = None, timer=None,
+            normals=None) -> dict:
+    """The irradiance at one instant (r.sun's mode 1): sample ``k`` of ``sky`` under ``sun``
+    (a ``sun.SunOver``) as ``accumulate`` adds it, alone and with weight 1, so each band is
+    that sample's contribution in W/m² (the same formulas and arithmetic as the period's sums,
+    which add w_k times these in float64), float32, NaN voids; "incidence" (``INSTANT_BANDS``)
+    is :func:`surface_elevation` of the sun on every cell, tile by tile where the sun is per
+    tile (the incidence the beam uses). ``stats``: "samples_with_shadows" counts the instants
+    whose cast shadows were computed."""
+    one: dict = {}
+    bands = accumulate(shader, [sun], [1.0], sky_at(sky, k), vd, albedo, soft=soft, perez=perez,
+                       stats=one, timer=timer, normals=normals)
+    if stats is not None:
+        stats["samples_with_shadows"] = (stats.get("samples_with_shadows", 0)
+                                         + one.get("samples_with_shadows", 0))
+    with (timer("irradiance") if timer is not None else _nothing()):
+        bands["incidence"] = surface_elevation(cos_incidence(shader, sun))
+    return bands

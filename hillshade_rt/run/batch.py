@@ -492,7 +492,7 @@ def skyview_each(cfg, dems, pattern) -> dict:
 
 def irradiance_each(cfg, dems, pattern) -> dict:
     """``irradiance --each``: each DEM's four irradiance bands, its sun from its own place."""
-    from .irradiance import irradiance
+    from .irradiance_instant import irradiance_or_instants as irradiance
     if cfg.sky_view is not None or cfg.sky_view_out is not None:
         raise UsageProblem("--sky-view and --sky-view-out name one DEM's sky view: run each "
                            "DEM on its own to read or write one")

@@ -290,19 +290,84 @@ class HorizonConfig:
     window_size: object = None         # windows of this many output cells, whatever the size
     scheduler: object = None           # the windows as Dask tasks
     height_above_ground: float = 0.0   # metres: the observer of every cell stands this high
+    start: float | None = None         # r.horizon's start/end/step, clockwise from north:
+    end: float | None = None           # the azimuths start, start + step, ... before end
+    step: float | None = None
+    angle_unit: str = "degrees"        # the angles written: "degrees" or "radians" (-d)
+
+    def many(self) -> bool:
+        """One band per direction (--directions or --step), not --azimuth's single band."""
+        return self.azimuth is None
+
+    def series(self) -> tuple[float, float, float] | None:
+        """(start, end, step) of --start/--end/--step (start 0 and end start + 360 when not
+        given), or None without --step."""
+        if self.step is None:
+            return None
+        start = 0.0 if self.start is None else float(self.start)
+        return start, start + 360.0 if self.end is None else float(self.end), float(self.step)
 
     def azimuths(self) -> list[float]:
-        """The azimuths of the bands: ``azimuth``, or the ``directions`` ones; exactly one of
-        the two (a usage error otherwise)."""
+        """The azimuths of the bands: ``azimuth``, the ``directions`` ones, or those of
+        ``start``/``end``/``step``; exactly one of the three (a usage error otherwise)."""
         from ..model.geometry import equal_azimuths, normalize_azimuth
-        if (self.azimuth is None) == (self.directions is None):
-            raise UsageProblem("give --azimuth A (one direction) or --directions N, one of them")
+        if self.angle_unit not in ANGLE_UNITS:
+            raise UsageProblem(f"--angle-unit must be one of {', '.join(ANGLE_UNITS)}, got "
+                               f"{self.angle_unit!r}")
+        if self.step is None and (self.start is not None or self.end is not None):
+            raise UsageProblem("--start and --end go with --step (the angle between "
+                               "directions)")
+        given = [self.azimuth is not None, self.directions is not None, self.step is not None]
+        if sum(given) != 1:
+            raise UsageProblem("give --azimuth A (one direction), --directions N or --start/"
+                               "--end/--step, one of them")
         if self.directions is not None:
             n = int(self.directions)
             if not 8 <= n <= 360:
                 raise UsageProblem(f"--directions must be between 8 and 360, got {n}")
             return equal_azimuths(360.0 / n)
+        if self.step is not None:
+            return series_azimuths(*self.series())
         return [normalize_azimuth(self.azimuth)]
+
+
+# the units horizon angles are written in (r.horizon's -d flag: degrees; its default radians)
+ANGLE_UNITS = ("degrees", "radians")
+# the most directions --start/--end/--step may ask for (every 0.1 degree)
+MAX_DIRECTIONS = 3600
+
+
+def series_azimuths(start: float, end: float, step: float) -> list[float]:
+    """The azimuths of ``horizon --start --end --step`` (degrees clockwise from north, each in
+    [0, 360)): start, start + step, ... as r.horizon counts them, floor((end - start) / step)
+    of them, so the last one is before ``end``, and where the step does not divide the range
+    the remainder gives no direction (r.horizon's ``(int)((end - start) / step)``). Where it
+    divides, direction k is start + (end - start) * k / n: with start 0 and end 360 the
+    azimuths of ``--directions n``, bit for bit. Usage errors: ``start`` outside [0, 360),
+    ``end`` not in (start, start + 360], ``step`` not > 0, or more than ``MAX_DIRECTIONS``."""
+    from ..model.geometry import normalize_azimuth
+    for name, v in (("--start", start), ("--end", end), ("--step", step)):
+        if not math.isfinite(v):
+            raise UsageProblem(f"{name} must be a finite number of degrees, got {v}")
+    if not 0.0 <= start < 360.0:
+        raise UsageProblem(f"--start must be in [0, 360) degrees clockwise from north, got "
+                           f"{start:g}")
+    if not start < end <= start + 360.0:
+        raise UsageProblem(f"--end must be after --start and at most one turn on (--start "
+                           f"{start:g}: {start:g} < --end <= {start + 360.0:g}), got {end:g}")
+    if not step > 0.0:
+        raise UsageProblem(f"--step must be a positive number of degrees, got {step:g}")
+    span = end - start
+    n = int(math.floor(span / step + 1e-9))
+    if n < 1:
+        raise UsageProblem(f"--step {step:g} is larger than --end - --start ({span:g}): no "
+                           "direction")
+    if n > MAX_DIRECTIONS:
+        raise UsageProblem(f"--start/--end/--step give {n} directions, more than "
+                           f"{MAX_DIRECTIONS}: use a larger --step")
+    if abs(n * step - span) <= 1e-9 * max(1.0, span):
+        return [normalize_azimuth(start + span * k / n) for k in range(n)]
+    return [normalize_azimuth(start + k * step) for k in range(n)]
 
 
 def inputs_and_output(files, output, pattern):
@@ -404,6 +469,13 @@ class IrradianceConfig:
         """The files of --albedo and --linke-turbidity (after :meth:`check`)."""
         return [p for v in (self.albedo_input, self.linke_input) if v is not None
                 for p in v.inputs()]
+    times: tuple = ()                     # --time: instants (W/m² at each, run.irradiance_instant)
+    instant: bool = False                 # --instant: the period's times as instants, not sums
+
+    def instants(self) -> bool:
+        """Whether the run writes instants (``--time`` or ``--instant``: r.sun's mode 1) rather
+        than the period's sums."""
+        return bool(self.times) or bool(self.instant)
 
     def check(self):
         """The options' combinations and values (UsageProblem: exit status 2)."""
@@ -422,9 +494,18 @@ class IrradianceConfig:
                                "--sky-view it computes none: give one of them")
         by_date = self.date is not None or self.end_date is not None
         by_time = self.start is not None or self.end is not None
-        if by_date == by_time:
+        if self.instants() and (self.monthly or self.daily_mean):
+            raise UsageProblem("--monthly and --daily-mean are a period's sums: the instants of "
+                               "--time or --instant have none")
+        if self.instants() and self.mean:
+            raise UsageProblem("--mean averages a period's sums: the instants of --time or "
+                               "--instant are W/m2 already")
+        if self.times and (by_date or by_time):
+            raise UsageProblem("--time gives the instants: --date, --end-date, --start and --end "
+                               "do not go with it")
+        if not self.times and by_date == by_time:
             raise UsageProblem("give the period one way: --date [--end-date], or --start and "
-                               "--end")
+                               "--end" + (" (or the instants: --time)" if not by_date else ""))
         if by_date and self.date is None:
             raise UsageProblem("--end-date goes with --date")
         if by_time and (self.start is None or self.end is None):

@@ -157,11 +157,34 @@ def _make(cfg: HorizonConfig, plan: Plan, ctx: RunContext) -> Made:
             return _all_nodata(cfg, plan, ctx, src)
 
 
+def _no_terrain(cfg) -> str:
+    """The value written where no terrain lies ahead: -90 degrees, or -pi/2 in radians."""
+    import numpy as np
+    from .horizon_windows import in_unit
+    if cfg.angle_unit == "radians":
+        return f"{float(in_unit(np.float32(-90.0), 'radians')):.9g} (-pi/2)"
+    return "-90"
+
+
+def _convention(cfg, azimuths) -> str:
+    """How the bands' azimuths were chosen, for the AZIMUTH_CONVENTION tag."""
+    head = "degrees clockwise from north (grid north), "
+    series = cfg.series()
+    if series is None:
+        return head + "band i at i * 360 / N"
+    start, end, step = series
+    return (head + f"band i at {start:g} + i * {step:g} (mod 360) for i < floor(({end:g} - "
+            f"{start:g}) / {step:g}) = {len(azimuths)} (r.horizon's start/end/step; r.horizon "
+            "counts counter-clockwise from east: its angle is 90 - ours, mod 360)")
+
+
 def _tags(cfg, azimuths, curved, k, radius, max_distance):
     """(the output's tags, the distance raster's tags, band tags per direction or None)."""
-    many = cfg.directions is not None
+    many = cfg.many()
+    units = ("radians above the horizontal" if cfg.angle_unit == "radians"
+             else "degrees above the horizontal")
     base = {"HILLSHADE_RT_VERSION": __version__, "METHOD": cfg.method,
-            "SAMPLE_SPACING": cfg.sample_spacing, "UNITS": "degrees above the horizontal",
+            "SAMPLE_SPACING": cfg.sample_spacing, "UNITS": units,
             "MAX_DISTANCE": distance_tag(max_distance),
             "HEIGHT_ABOVE_GROUND_M": float(cfg.height_above_ground)}
     dist_tags = {"HILLSHADE_RT_VERSION": __version__, "UNITS": "metres (ground distance along "
@@ -173,9 +196,10 @@ def _tags(cfg, azimuths, curved, k, radius, max_distance):
                 "EARTH_CURVATURE": f"on, R {radius:.0f} m, k {k:g}" if curved else "off"}
         return tags, {**dist_tags, "AZIMUTH": az}
     series = {"DIRECTIONS": len(azimuths), "AZIMUTHS": ",".join(f"{a:g}" for a in azimuths),
-              "AZIMUTH_CONVENTION": "degrees clockwise from north (grid north), band i at "
-                                    "i * 360 / N"}
-    tags = {**base, "NODATA": "-9999 (a void)", "NO_TERRAIN_AHEAD": "-90", **series,
+              "AZIMUTH_CONVENTION": _convention(cfg, azimuths)}
+    if cfg.series() is not None:
+        series.update(zip(("START", "END", "STEP"), (f"{v:g}" for v in cfg.series())))
+    tags = {**base, "NODATA": "-9999 (a void)", "NO_TERRAIN_AHEAD": _no_terrain(cfg), **series,
             "EARTH_CURVATURE": f"on, k {k:g}" if curved else "off"}
     return tags, {**dist_tags, **series}
 
@@ -186,7 +210,7 @@ def _writers(cfg, dem, azimuths, tags, dist_tags):
     from ..io import BandWriter
     ro = cfg.run
     n = len(azimuths)
-    many = cfg.directions is not None
+    many = cfg.many()
     resampling = "average" if many else "nearest"
     w = BandWriter(cfg.output, dem, n, "float32", -9999.0, tags, overview_resampling=resampling,
                    overwrite=ro.overwrite, fmt=ro.fmt, co=ro.creation_options)
@@ -199,7 +223,7 @@ def _writers(cfg, dem, azimuths, tags, dist_tags):
 
 def _band_text(cfg, a):
     """(description of the angle band, of the distance band, band tags) toward ``a``."""
-    if cfg.directions is None:
+    if not cfg.many():
         return "horizon angle", "distance to the horizon point", None
     return (f"horizon angle toward azimuth {a:g}",
             f"distance to the horizon point toward azimuth {a:g}", {"AZIMUTH": f"{a:g}"})
@@ -208,7 +232,7 @@ def _band_text(cfg, a):
 def _report(cfg: HorizonConfig, plan: Plan, ctx: RunContext, made: Made) -> dict:
     """The run's report (``--report``)."""
     from ..io import input_label
-    many = cfg.directions is not None
+    many = cfg.many()
     rows, cols = made.geom.shape
     azimuths = plan.azimuths
     return {"input": input_label(made.geom.path), "output": os.path.abspath(cfg.output),
@@ -218,6 +242,9 @@ def _report(cfg: HorizonConfig, plan: Plan, ctx: RunContext, made: Made) -> dict
             "method": cfg.method, "sample_spacing": cfg.sample_spacing,
             "height_above_ground_m": float(cfg.height_above_ground),
             "max_distance": plan.max_distance if cfg.max_distance is not None else None,
+            "angle_unit": cfg.angle_unit,
+            "series": (None if cfg.series() is None else
+                       dict(zip(("start", "end", "step"), cfg.series()))),
             "backend": ctx.backend, "threads": ctx.threads, "curvature": made.curved,
             "algorithm_stats": made.stats, "seconds": ctx.phase_seconds(),
             "processing": made.processing,
@@ -231,8 +258,12 @@ def _lines(cfg: HorizonConfig, plan: Plan, ctx: RunContext, made: Made) -> list:
     note."""
     azimuths, processing = plan.azimuths, made.processing
     rows, cols = made.geom.shape
-    toward = (f"toward az {azimuths[0]:g}" if cfg.directions is None else
-              f"toward {len(azimuths)} directions ({360.0 / len(azimuths):g} deg apart)")
+    series = cfg.series()
+    toward = (f"toward az {azimuths[0]:g}" if not cfg.many() else
+              f"toward {len(azimuths)} directions ({360.0 / len(azimuths):g} deg apart)"
+              if series is None else
+              f"toward {len(azimuths)} directions (az {series[0]:g} to {series[1]:g} every "
+              f"{series[2]:g} deg)")
     from .horizon_windows import windows_phrase
     where = windows_phrase(processing)
     summary = (f"hillshade-rt: {cfg.output}: {cols}x{rows}, horizon {toward} "
@@ -304,7 +335,7 @@ def _in_memory(cfg: HorizonConfig, plan: Plan, ctx: RunContext, src) -> Made:
     curved = shader.curvature_for(az, 45.0) > 0     # the same for every direction
     tags, dist_tags = _tags(cfg, azimuths, curved, shader.k, shader.body.radius(az),
                             max_distance)
-    from .horizon_windows import ValueStats
+    from .horizon_windows import ValueStats, in_unit
     shade = None
     vals = ValueStats()
     # one band per direction, written as it is made (N bands never all in memory)
@@ -315,6 +346,7 @@ def _in_memory(cfg: HorizonConfig, plan: Plan, ctx: RunContext, src) -> Made:
             vals.add(beta)
             if ro.preview and i == 0:
                 shade = np.clip(np.nan_to_num(beta, nan=0.0) / 30.0, 0.0, 1.0)
+            beta = in_unit(beta, cfg.angle_unit)
             beta[np.isnan(beta)] = -9999.0
             text, dtext, btags = _band_text(cfg, a)
             with timer("write"):
@@ -390,14 +422,15 @@ def _in_windows(cfg: HorizonConfig, plan: Plan, ctx: RunContext, src, area=None)
     from ..pictures.preview import every_nth, relief_rgb
     from .local import bounded_gdal_cache
     from ..engine.windows import block_stats
-    from .horizon_windows import Figures, Product, ValueStats, region_outputs
+    from .horizon_windows import Figures, Product, ValueStats, in_unit, region_outputs
 
     ro = cfg.run
     azimuths, max_distance = plan.azimuths, plan.max_distance
     timer, ran_on = ctx.timer, ctx.backend
     wshape, limit = plan.wshape, plan.limit
     az = azimuths[0]
-    product = Product("horizon", distance=cfg.distance is not None)
+    product = Product("horizon", distance=cfg.distance is not None,
+                      radians=cfg.angle_unit == "radians")
     with bounded_gdal_cache():
         with timer("prepare"):    # one pass: the block height ranges (and the preview)
             bstats = (block_stats(src, preview_side=2048 if ro.preview else None)
@@ -442,6 +475,7 @@ def _in_windows(cfg: HorizonConfig, plan: Plan, ctx: RunContext, src, area=None)
                             share[p:p + sub.shape[0], q:q + sub.shape[1]] = sub
                         if name == "angles":
                             vals.add(arr)
+                            arr = in_unit(arr, cfg.angle_unit)
                         arr[np.isnan(arr)] = -9999.0
                         with timer("write"):
                             if name == "angles":
@@ -498,7 +532,7 @@ def _vrt_outputs(cfg, src, azimuths, tags, dist_tags) -> dict:
     """The outputs of a run on Dask (``reach.VrtOutput``), as ``_writers`` writes them."""
     from .horizon_windows import VrtOutput
     ro = cfg.run
-    many = cfg.directions is not None
+    many = cfg.many()
     texts = [_band_text(cfg, a) for a in azimuths]
     band_tags = [t[2] for t in texts] if many else None
     common = dict(shape=src.shape, transform=src.transform, crs=src.crs,

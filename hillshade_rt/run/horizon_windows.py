@@ -385,12 +385,22 @@ class Product:
     distance: bool = False
     definition: str = "zaksek"
     complement: bool = False
+    radians: bool = False          # the "angles" written in radians (their figures in degrees)
 
     def outputs(self, n: int) -> dict:
         """Output name -> bands."""
         if self.kind == "horizon":
             return {"angles": n, **({"distance": n} if self.distance else {})}
         return {"result": 1}
+
+
+def in_unit(beta, angle_unit: str):
+    """The angles ``beta`` (float32 degrees, NaN voids) in ``angle_unit``: themselves, or
+    times float32(pi / 180) for "radians" (r.horizon's unit without -d; a new array, NaN stays
+    NaN)."""
+    if angle_unit == "radians":
+        return beta * np.float32(math.pi / 180.0)
+    return beta
 
 
 def region_outputs(job: HorizonJob, rd, region, product: Product, put) -> Figures:
@@ -500,6 +510,8 @@ def region_task(job: HorizonJob, region, product: Product, folder: str,
                 sub, at = every_nth(np.clip(np.nan_to_num(arr, nan=0.0) / 30.0, 0.0, 1.0), r0,
                                     c0, stride)
                 shade.append((sub.copy(), at))
+            if name == "angles" and product.radians:
+                arr = in_unit(arr, "radians")
             dsts[name].write(np.where(np.isnan(arr), np.float32(-9999.0), arr)[np.newaxis],
                              [band + 1])
         with rasterio.Env(GDAL_CACHEMAX=GDAL_CACHE_MB), src.reader() as rd, _task_lock():

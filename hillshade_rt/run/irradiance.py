@@ -96,7 +96,11 @@ class _Bands:
 
 
 def irradiance(cfg: IrradianceConfig) -> dict:
-    """Write the four irradiance bands of ``cfg.dem`` to ``cfg.output``; returns the report."""
+    """Write the four irradiance bands of ``cfg.dem`` to ``cfg.output``; returns the report.
+    (``--time`` and ``--instant`` are ``run.irradiance_instant``'s: ``irradiance_or_instants``
+    runs either.)"""
+    if cfg.instants():
+        raise UsageProblem("--time and --instant are run.irradiance_instant's run")
     from .irradiance_windows import asked_windows
     ro = cfg.run
     cfg.check()
@@ -283,10 +287,10 @@ def _samples(cfg: IrradianceConfig, asked: _Asked, d) -> _Samples:
     suns, sun_info = req.suns(d, site)
     return _Samples(site, period, float(np.sum(weights)), times, weights, suns, sun_info,
                     [s for s in suns if not ir.is_dark(s, cfg.soft)],
-                    _sky(cfg, times, suns, site, series, req.tz), req.tz)
+                    open_sky(cfg, times, suns, site, series, req.tz), req.tz)
 
 
-def _sky(cfg: IrradianceConfig, times, suns, site, series, tz=None):
+def open_sky(cfg: IrradianceConfig, times, suns, site, series, tz=None):
     """The open sky at each sample: the clear-sky model's, or the ``--ghi`` series
     interpolated in time; with ``--perez`` its Perez coefficients."""
     import numpy as np
@@ -338,7 +342,7 @@ def _light(cfg, ctx: RunContext, d, shader, lighting, body, sampled: _Samples, a
                         lighting.refraction_k, body)
     with ctx.timer("sky view"):
         if cfg.sky_view is not None:
-            vd, vd_tags = _read_vd(cfg, d, hs, None, d.heights)
+            vd, vd_tags = read_sky_view(cfg, d, hs, None, d.heights)
         else:
             # one pyramid for the sky view and every sun's shadows (the Shader's, built once)
             pyramid = shader.pyramid(shader.z, True) if lighting.backend == "cpu" else None
@@ -347,7 +351,7 @@ def _light(cfg, ctx: RunContext, d, shader, lighting, body, sampled: _Samples, a
                                          lighting.refraction_k, body, lighting.lift,
                                          pyramid=pyramid, normals=nrm), None
     if cfg.sky_view_out is not None:
-        _write_vd(cfg, ctx, d, vd, hs, None, d.heights)
+        write_sky_view(cfg, ctx, d, vd, hs, None, d.heights)
     with ctx.timer("prepare"):
         albedo, groups, keys = _albedo_groups(cfg, sampled, d, None)
     with ctx.timer("compute"):
@@ -407,14 +411,14 @@ def _want(cfg, hs, area, heights) -> dict:
                        heights=heights)
 
 
-def _read_vd(cfg, geom, hs, area, heights):
+def read_sky_view(cfg, geom, hs, area, heights):
     """(Vd, the file's tags) of --sky-view, checked against the grid of ``geom`` and the
     run's settings."""
     from .sky_view_file import read_vd
     return read_vd(cfg.sky_view, geom, _want(cfg, hs, area, heights))
 
 
-def _write_vd(cfg, ctx, geom, vd, hs, area, heights) -> None:
+def write_sky_view(cfg, ctx, geom, vd, hs, area, heights) -> None:
     """--sky-view-out: the Vd computed, as skyview writes it (its tags too)."""
     from .sky_view_file import write_vd
     with ctx.timer("write"):
@@ -457,7 +461,7 @@ def _light_in_context(cfg, ctx: RunContext, area, lighting, body, sampled: _Samp
         vd_tags = None
         if cfg.sky_view is not None:
             with timer("sky view"):
-                vd, vd_tags = _read_vd(cfg, area.tile, hs, area, None)
+                vd, vd_tags = read_sky_view(cfg, area.tile, hs, area, None)
         else:
             regs, _ = prepare_windows(src, hjob, memory_limit(None), None, timer, area)
         with src.reader() as rd:
@@ -475,7 +479,7 @@ def _light_in_context(cfg, ctx: RunContext, area, lighting, body, sampled: _Samp
                         vd[a0:a1, b0:b1], f = region_vd(hjob, rd, reg)
                         fig.add(f)
                 if cfg.sky_view_out is not None:
-                    _write_vd(cfg, ctx, area.tile, vd, hs, area, None)
+                    write_sky_view(cfg, ctx, area.tile, vd, hs, area, None)
             cache, used = WindowCache(rd), set()
             read = {"windows": 0, "cells": 0}
 
@@ -552,6 +556,25 @@ def _tags(cfg: IrradianceConfig, lighting, req, sampled: _Samples, area) -> dict
     return tags
 
 
+def one_day(cfg: IrradianceConfig) -> bool:
+    """Whether the bands are r.sun's mode 2 product: the sums over one day (``--date`` without
+    a later ``--end-date``), Wh/m² per day, not ``--mean``'s W/m²."""
+    from ..model.times import parse_date
+    return (cfg.date is not None and not cfg.mean
+            and (cfg.end_date is None or parse_date(cfg.end_date, "--end-date")
+                 == parse_date(cfg.date)))
+
+
+def band_texts(cfg: IrradianceConfig) -> list[tuple[str, dict]]:
+    """The four bands' descriptions and tags: r.sun's names (beam_rad, diff_rad, refl_rad,
+    glob_rad) where the band is r.sun's product (:func:`one_day`), ours (beam, diffuse,
+    reflected, global) otherwise; the tags NAME (ours, always), RSUN_NAME and UNITS."""
+    from ..engine import irradiance as ir
+    rsun = one_day(cfg)
+    return [(ir.RSUN_NAMES[k] if rsun else k,
+             {"UNITS": _unit(cfg), "NAME": k, "RSUN_NAME": ir.RSUN_NAMES[k]}) for k in ir.BANDS]
+
+
 def _write(cfg: IrradianceConfig, ctx: RunContext, geom, d, lit: _Bands, tags: dict) -> None:
     """The four bands (-9999 nodata) on the grid of ``geom``, and the --preview (the global
     band over the relief of ``d``, 2nd..98th percentile)."""
@@ -566,12 +589,12 @@ def _write(cfg: IrradianceConfig, ctx: RunContext, geom, d, lit: _Bands, tags: d
         with BandWriter(cfg.output, geom, len(ir.BANDS) + len(months), "float32", -9999.0,
                         tags, overview_resampling="average", overwrite=ro.overwrite,
                         fmt=ro.fmt, co=ro.creation_options) as w:
-            for i, (k, meta) in enumerate(zip(ir.BANDS, _band_meta(cfg)), 1):
+            for i, (k, (text, btags)) in enumerate(zip(ir.BANDS, _band_meta(cfg)), 1):
                 v = lit.bands[k]
-                w.write(i, np.where(np.isnan(v), np.float32(-9999.0), v), *meta)
+                w.write(i, np.where(np.isnan(v), np.float32(-9999.0), v), text, btags)
             for i, ((year, month), hours, v) in enumerate(months, len(ir.BANDS) + 1):
                 w.write(i, np.where(np.isnan(v), np.float32(-9999.0), v), f"{year}-{month:02d}",
-                        {"UNITS": _unit(cfg), "QUANTITY": "global", "HOURS": f"{hours:g}"})
+                        {"UNITS": _unit(cfg), "NAME": "global", "HOURS": f"{hours:g}"})
         if ro.preview is not None:
             write_png(ro.preview, relief_rgb(d.heights, d.grid,
                                              ramp=scaled(lit.bands["global"])),
@@ -600,9 +623,9 @@ def _in_windows(cfg: IrradianceConfig, ctx: RunContext, src, lighting, body,
 
 
 def _band_meta(cfg: IrradianceConfig) -> list:
-    """Each band's (description, tags), in ``engine.irradiance.BANDS``' order."""
-    from ..engine import irradiance as ir
-    return [(k, {"UNITS": _unit(cfg)}) for k in ir.BANDS]
+    """Each band's (description, tags), in ``engine.irradiance.BANDS``' order
+    (:func:`band_texts`)."""
+    return band_texts(cfg)
 
 
 def _report(cfg: IrradianceConfig, ctx: RunContext, geom, sampled: _Samples, lit: _Bands,
@@ -668,8 +691,8 @@ def _all_nodata(cfg: IrradianceConfig, ctx: RunContext) -> dict:
                                         overwrite=ro.overwrite, fmt=ro.fmt,
                                         co=ro.creation_options) as w:
         arr = np.full(src.shape, -9999.0, np.float32)
-        for i, k in enumerate(ir.BANDS, 1):
-            w.write(i, arr, k)
+        for i, (text, btags) in enumerate(band_texts(cfg), 1):
+            w.write(i, arr, text, btags)
     rep = {"input": input_label(src.path), "output": os.path.abspath(cfg.output),
            "shape": list(src.shape), "all_nodata": True,
            "bands": {k: {"min": None, "mean": None, "max": None} for k in ir.BANDS},

@@ -233,7 +233,9 @@ def _in_windows(cfg: SunHoursConfig, ctx: RunContext, src, lighting, req, sample
 def _tags(cfg: SunHoursConfig, days: _Days, samples: _Samples) -> dict:
     """The output's metadata."""
     req = days.req
+    from .sun_hours_windows import DESCRIPTION, RSUN_NAME
     return {"HILLSHADE_RT_VERSION": __version__, "UNITS": "hours of direct sun",
+            "NAME": DESCRIPTION, "RSUN_NAME": RSUN_NAME,
             "DATE_FIRST": days.first.isoformat(), "DATE_LAST": days.last.isoformat(),
             "DAYS": days.count, "STEP": days.step, "ALGORITHM": cfg.algorithm,
             "SOFT": cfg.soft, "SELF_SHADOW": cfg.self_shadow,
@@ -250,6 +252,7 @@ def _write(cfg: SunHoursConfig, ctx: RunContext, d, lit: _Hours | None, tags: di
 
     from ..io import write_png, write_raster
     from ..pictures.preview import relief_rgb
+    from .sun_hours_windows import description
     ro = ctx.ro
     if lit is not None and lit.hours is None:       # written in windows
         v = lit.values
@@ -263,7 +266,7 @@ def _write(cfg: SunHoursConfig, ctx: RunContext, d, lit: _Hours | None, tags: di
     hours = np.full(d.shape, np.nan, np.float32) if lit is None else lit.hours
     with ctx.timer("write"):
         write_raster(cfg.output, np.where(np.isnan(hours), np.float32(-9999.0), hours), d,
-                     nodata=-9999.0, description="hours of direct sun", tags=tags,
+                     nodata=-9999.0, description=description(tags), tags=tags,
                      overwrite=ro.overwrite, fmt=ro.fmt, co=ro.creation_options)
         if ro.preview is not None and lit is not None:
             top = float(np.nanmax(hours)) if np.isfinite(hours).any() else 0.0

@@ -19,6 +19,14 @@ import numpy as np
 from ..errors import HillshadeError
 
 DESCRIPTION = "hours of direct sun"
+# r.sun's name of the same product: its insol_time, hours of direct sun over one day (mode 2)
+RSUN_NAME = "insol_time"
+
+
+def description(tags: dict) -> str:
+    """The band's description: r.sun's name (``RSUN_NAME``) for the hours of one day (the tags'
+    DAYS 1: r.sun's product), ``DESCRIPTION`` for the sum over several days."""
+    return RSUN_NAME if int(tags.get("DAYS", 0)) == 1 else DESCRIPTION
 _TASK_LOCK = threading.Lock()     # one numba computation at a time per Dask worker process
 
 
@@ -145,7 +153,7 @@ def hours_in_windows(cfg, ctx, src, lighting, req, work, tags, *, limit, window_
                     pv_hours[a:a + sub.shape[0], b:b + sub.shape[1]] = sub
                 acc[np.isnan(acc)] = -9999.0
                 with timer("write"):
-                    w.write(1, acc, description=DESCRIPTION,
+                    w.write(1, acc, description=description(tags),
                             window=rs.region if area is None else area.local(rs.region))
                 del acc
             tally.bytes_read, tally.bytes_carried = rd.bytes_read, cache.carried_bytes
@@ -286,7 +294,8 @@ def _on_dask(cfg, scheduler, job, regs, weights, tags, values, algo_stats, used,
                     sub, (a, b) = res["shade"]
                     pv_hours[a:a + sub.shape[0], b:b + sub.shape[1]] = sub
                 bar.update(1)
-        out = VrtOutput(cfg.output, src.shape, src.transform, src.crs, [DESCRIPTION], tags,
+        out = VrtOutput(cfg.output, src.shape, src.transform, src.crs, [description(tags)],
+                        tags,
                         overwrite=ro.overwrite, fmt=ro.fmt, co=ro.creation_options)
         out.write([[VrtSource(path, 1, (r[0], r[2]), (r[1] - r[0], r[3] - r[2]))
                     for r, path in parts]])

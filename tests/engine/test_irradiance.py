@@ -276,3 +276,61 @@ def test_tile_suns_is_each_cells_tile():
     assert (rt == 0).all() and (ct == 0).all() and tuple(vec[0, 0]) == sun_vector(203.7, 10.0)
     with pytest.raises(HillshadeError, match="do not cover"):
         irr.tile_suns(SunOver(None, 0.0, 20.0, tiles=tiles[:3]), (5, 7))
+
+
+def test_surface_elevation_is_90_minus_the_incidence_angle():
+    cos_i = np.array([[1.0, 0.5, 0.0, -0.5, np.nan, 1.0000001]], np.float32)
+    got = irr.surface_elevation(cos_i)
+    assert got.dtype == np.float32
+    np.testing.assert_allclose(got[0, :4], [90.0, 30.0, 0.0, -30.0], atol=1e-5)
+    assert np.isnan(got[0, 4]) and got[0, 5] == 90.0          # rounding past 1 is clipped
+
+
+@pytest.mark.parametrize("perez", [False, True])
+def test_an_instant_is_one_sample_of_the_sums(perez):
+    """``instant``: sample k alone with weight 1 (the numpy sums of that one sun, bit for bit,
+    as ``accumulate`` gives them), so the period's sums are the weighted instants (to float32
+    rounding); "incidence" is the sun's elevation above each cell's surface, per tile; on a
+    geographic DEM whose suns vary per tile, with voids."""
+    from hillshade_rt.engine.shader import Shader
+    from hillshade_rt.model.geometry import Grid
+    from hillshade_rt.model.site import Site
+    from hillshade_rt.model.sun import sun_over
+    from hillshade_rt.testing import fractal_terrain
+    z = fractal_terrain(48, 56, 13, relief=700.0).astype(np.float32)
+    z[7, 9] = np.nan
+    grid = Grid(48, 56, np.linspace(76.0, 78.0, 48), np.full(48, 92.6), 1, -1, "test")
+    tz = zoneinfo.ZoneInfo("America/Los_Angeles")
+    times, w = irr.period_samples(dt.datetime(2026, 3, 2, 5, tzinfo=tz),
+                                  dt.datetime(2026, 3, 2, 19, tzinfo=tz), dt.timedelta(hours=2))
+    site = Site(34.3, -118.2, 900.0, "test",
+                to_lonlat=lambda r, c: (-118.2 + 0.2 * (c / 56.0 - 0.5),
+                                        34.3 - 0.2 * (r / 48.0 - 0.5)),
+                convergence=lambda r, c: 0.0 * np.asarray(r))
+    suns = sun_over(site, z.shape, times, tolerance=0.001)
+    zen = np.array([s.zenith for s in suns])
+    sky = irr.clear_sky(times, zen, 34.3, -118.2, 900.0, "ineichen", 3.0)
+    if perez:
+        irr.with_perez(sky, times, zen)
+    vd = (0.6 + 0.4 * np.random.default_rng(2).random(z.shape)).astype(np.float32)
+    vd[np.isnan(z)] = np.nan
+    shader = Shader(z, grid, "auto", {}, "cpu", False)
+    total = {k: np.zeros(z.shape) for k in irr.BANDS}
+    stats = {}
+    for k, s in enumerate(suns):
+        one = irr.sky_at(sky, k)
+        assert one.dni.shape == (1,) and one.dni[0] == sky.dni[k]
+        assert (one.f1 is None) == (not perez)
+        got = irr.instant(shader, s, sky, k, vd, 0.25, perez=perez, stats=stats)
+        want = _old_sums(shader, [s], np.ones(1), one, vd, 0.25, False, perez)
+        for q in irr.BANDS:
+            assert np.array_equal(got[q].view(np.uint32), want[q].view(np.uint32)), (k, q)
+            total[q] += w[k] * got[q]
+        inc = irr.surface_elevation(irr.cos_incidence(shader, s))
+        assert np.array_equal(got["incidence"], inc, equal_nan=True)
+        assert np.isnan(got["incidence"][7, 9]) and np.isnan(got["beam"][7, 9])
+    assert set(got) == set(irr.INSTANT_BANDS) and stats["samples_with_shadows"] >= 5
+    period = irr.accumulate(shader, suns, w, sky, vd, 0.25, perez=perez)
+    for q in irr.BANDS:
+        np.testing.assert_allclose(total[q], period[q], rtol=1e-6, atol=1e-3)
+    assert irr.RSUN_NAMES["global"] == "glob_rad" and irr.RSUN_NAMES["incidence"] == "incidout"

@@ -72,11 +72,43 @@ def test_horizon_azimuths():
     assert config.HorizonConfig(dem="d", output="o", azimuth=-156.3).azimuths() == [pytest.approx(203.7)]
     assert config.HorizonConfig(dem="d", output="o", directions=8).azimuths() == [
         0.0, 45.0, 90.0, 135.0, 180.0, 225.0, 270.0, 315.0]
-    for kw in ({}, {"azimuth": 10.0, "directions": 8}):
-        with pytest.raises(UsageProblem, match="give --azimuth A .* or --directions N"):
+    for kw in ({}, {"azimuth": 10.0, "directions": 8}, {"directions": 8, "step": 10.0},
+               {"azimuth": 10.0, "step": 10.0}):
+        with pytest.raises(UsageProblem, match="give --azimuth A .*, --directions N or "
+                                               "--start/--end/--step, one of them"):
             config.HorizonConfig(dem="d", output="o", **kw).azimuths()
     with pytest.raises(UsageProblem, match="--directions must be between 8 and 360"):
         config.HorizonConfig(dem="d", output="o", directions=4).azimuths()
+
+
+def test_horizon_start_end_step_as_r_horizon_counts_them():
+    """r.horizon's start/end/step, clockwise from north: floor((end - start) / step)
+    directions; start 0, end 360 and a step that divides 360: --directions' azimuths, bit for
+    bit; a remainder gives no direction; a range may wrap past north."""
+    def az(**kw):
+        return config.HorizonConfig(dem="d", output="o", **kw).azimuths()
+    for n in (8, 11, 13, 360):
+        assert az(step=360.0 / n) == az(directions=n)
+        assert az(start=0.0, end=360.0, step=360.0 / n) == az(directions=n)
+    assert az(step=40.7, start=163.0) == [pytest.approx((163.0 + 40.7 * k) % 360.0)
+                                          for k in range(8)]          # 360 / 40.7 = 8.8
+    assert az(start=0.0, end=100.0, step=30.0) == [0.0, 30.0, 60.0]   # 90: the remainder
+    assert az(start=290.0, end=430.0, step=35.0) == [290.0, 325.0, 0.0, 35.0]
+    assert az(start=45.0, end=46.0, step=0.25) == [45.0, 45.25, 45.5, 45.75]
+    cases = [(dict(start=10.0), "--start and --end go with --step"),
+             (dict(step=0.0), "--step must be a positive"),
+             (dict(step=-5.0), "--step must be a positive"),
+             (dict(step=10.0, start=360.0), "--start must be in [0, 360)"),
+             (dict(step=10.0, start=-1.0), "--start must be in [0, 360)"),
+             (dict(step=10.0, start=20.0, end=20.0), "--end must be after --start"),
+             (dict(step=10.0, start=20.0, end=381.0), "--end must be after --start"),
+             (dict(step=50.0, start=20.0, end=60.0), "larger than --end - --start"),
+             (dict(step=0.01), "more than 3600"),
+             (dict(step=10.0, angle_unit="grads"), "--angle-unit must be one of")]
+    for kw, words in cases:
+        with pytest.raises(UsageProblem) as e:
+            az(**kw)
+        assert words in str(e.value), (kw, str(e.value))
 
 
 def test_inputs_and_output(tmp_path):

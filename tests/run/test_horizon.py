@@ -81,8 +81,12 @@ def test_tilted_plane_uphill_is_its_slope_and_downhill_minus_it(tmp_path, runner
 @pytest.mark.parametrize("args, code, words", [
     (["--directions", "4"], 2, "8<=x<=360"),
     (["--directions", "100000"], 2, "8<=x<=360"),
-    ([], 2, "give --azimuth A (one direction) or --directions N"),
+    ([], 2, "give --azimuth A (one direction), --directions N or --start/--end/--step"),
     (["--directions", "8", "--azimuth", "10"], 2, "one of them"),
+    (["--directions", "8", "--step", "10"], 2, "one of them"),
+    (["--start", "10", "--end", "50"], 2, "--start and --end go with --step"),
+    (["--step", "10", "--start", "400"], 2, "--start must be in [0, 360)"),
+    (["--step", "45", "--angle-unit", "grads"], 2, "'grads' is not one of"),
 ])
 def test_bad_directions_are_one_line_and_write_nothing(tmp_path, runner, args, code, words):
     out = tmp_path / "h.tif"
@@ -309,3 +313,106 @@ def test_report_of_horizon_and_its_clash(tmp_path, runner):
                                 clash, "--overwrite"])
         assert r.exit_code == 2 and len(r.stderr.strip().splitlines()) == 1, r.output
         assert "--report" in r.stderr
+
+
+def _small_dem(tmp_path):
+    """A rough 100 x 120 terrain with a void, 30 m cells in UTM (curvature on: 3.6 km
+    across)."""
+    from hillshade_rt.testing import fractal_terrain
+    z = fractal_terrain(100, 120, 11, relief=400.0, octaves=5) + 500.0
+    z[20:23, 30:34] = np.nan
+    return write_geotiff(tmp_path / "small.tif", z.astype(np.float32),
+                         Affine(30.0, 0, 500000, 0, -30.0, 4000000), CRS.from_epsg(32633))
+
+
+def test_start_end_step_are_directions_where_they_coincide(tmp_path, runner):
+    """--step 45 (start 0, end 360) is --directions 8, bit for bit, its tags aside; --start 0
+    --end 360 --step 30 is --directions 12."""
+    dem = _small_dem(tmp_path)
+    for series, n in ((["--step", "45"], 8), (["--start", "0", "--end", "360", "--step", "30"],
+                                               12)):
+        a, b = tmp_path / f"a{n}.tif", tmp_path / f"b{n}.tif"
+        r = runner.invoke(cli, ["horizon", dem, str(a), "-q"] + series)
+        assert r.exit_code == 0, r.output
+        r = runner.invoke(cli, ["horizon", dem, str(b), "-q", "--directions", str(n)])
+        assert r.exit_code == 0, r.output
+        (va, da, ta), (vb, db, tb) = _bands(a), _bands(b)
+        assert va.shape[0] == n and da == db
+        np.testing.assert_array_equal(va, vb)
+        assert ta["AZIMUTHS"] == tb["AZIMUTHS"] and ta["STEP"] == f"{360 / n:g}"
+
+
+def test_start_step_bands_are_the_single_azimuth_runs(tmp_path, runner):
+    """--start 163 --step 40.7: floor(360 / 40.7) = 8 bands at 163 + 40.7 k (mod 360), each
+    the --azimuth run toward it, bit for bit; the descriptions give the azimuths; the report
+    and the summary say the series."""
+    dem = _small_dem(tmp_path)
+    out, rep = tmp_path / "s.tif", tmp_path / "s.json"
+    r = runner.invoke(cli, ["horizon", dem, str(out), "--start", "163", "--step", "40.7",
+                            "--report", str(rep)])
+    assert r.exit_code == 0, r.output
+    assert "8 directions (az 163 to 523 every 40.7 deg)" in r.stderr
+    azimuths = [(163.0 + 40.7 * k) % 360.0 for k in range(8)]
+    vals, desc, tags = _bands(out)
+    assert vals.shape[0] == 8
+    assert tags["START"] == "163" and tags["END"] == "523" and tags["STEP"] == "40.7"
+    assert "r.horizon" in tags["AZIMUTH_CONVENTION"]
+    import json
+    report = json.loads(rep.read_text())
+    assert report["azimuths"] == pytest.approx(azimuths)
+    assert report["series"] == {"start": 163.0, "end": 523.0, "step": 40.7}
+    assert report["angle_unit"] == "degrees"
+    for k in (0, 3, 5):          # 163, 285.1, 1.5 (past north)
+        assert desc[k] == f"horizon angle toward azimuth {azimuths[k]:g}"
+        one = tmp_path / f"one{k}.tif"
+        r = runner.invoke(cli, ["horizon", dem, str(one), "-q", "--azimuth", repr(azimuths[k])])
+        assert r.exit_code == 0, r.output
+        np.testing.assert_array_equal(vals[k], read_band(one))
+    assert len(np.unique(vals[3])) > 10
+
+
+@pytest.mark.parametrize("extra", [[], ["--window-size", "64"],
+                                   pytest.param(["--window-size", "64", "--scheduler", "local:1"],
+                                                marks=pytest.mark.slow)])
+def test_radians_are_the_degrees_times_pi_over_180(tmp_path, runner, extra):
+    """--angle-unit radians: every angle the degrees' times float32(pi / 180), bit for bit
+    (in memory, in windows, on Dask); -9999 stays nodata, -90 (no terrain ahead) becomes -pi/2; the
+    tags say the unit."""
+    dem = _small_dem(tmp_path)
+    deg, rad = tmp_path / "deg.tif", tmp_path / "rad.tif"
+    args = ["--start", "10", "--end", "300", "--step", "72.5"] + extra
+    r = runner.invoke(cli, ["horizon", dem, str(deg), "-q"] + args)
+    assert r.exit_code == 0, r.output
+    r = runner.invoke(cli, ["horizon", dem, str(rad), "-q", "--angle-unit", "radians"] + args)
+    assert r.exit_code == 0, r.output
+    (d, dd, dt), (q, qd, qt) = _bands(deg), _bands(rad)
+    assert d.shape[0] == 4 and dd == qd
+    void = d == -9999.0
+    assert void.any() and (q[void] == -9999.0).all()
+    np.testing.assert_array_equal(q[~void], d[~void] * np.float32(math.pi / 180.0))
+    np.testing.assert_allclose(q[~void], np.radians(d[~void].astype(np.float64)), rtol=2e-7)
+    assert (d == -90.0).any() and np.allclose(q[d == -90.0], -math.pi / 2)
+    assert dt["UNITS"] == "degrees above the horizontal"
+    assert qt["UNITS"] == "radians above the horizontal"
+    assert qt["NO_TERRAIN_AHEAD"].startswith("-1.57079")
+
+
+def test_horizon_from_python_takes_the_same_keywords(tmp_path, runner):
+    """hillshade_rt.horizon: the command as a function, start/end/step and angle_unit as
+    keywords; its errors name the keywords."""
+    import hillshade_rt as hr
+    dem = _small_dem(tmp_path)
+    r = runner.invoke(cli, ["horizon", dem, str(tmp_path / "cli.tif"), "-q", "--start", "163",
+                            "--end", "400", "--step", "40.7", "--angle-unit", "radians"])
+    assert r.exit_code == 0, r.output
+    rep = hr.horizon(dem, tmp_path / "api.tif", start=163, end=400, step=40.7,
+                     angle_unit="radians")
+    assert rep["azimuths"] == pytest.approx([163.0 + 40.7 * k for k in range(5)])
+    np.testing.assert_array_equal(_bands(tmp_path / "api.tif")[0],
+                                  _bands(tmp_path / "cli.tif")[0])
+    with pytest.raises(hr.HillshadeError) as e:
+        hr.horizon(dem, tmp_path / "x.tif", directions=8, step=10)
+    assert "directions N or start/end/step" in str(e.value) and "--" not in str(e.value)
+    with pytest.raises(TypeError, match="elevation"):
+        hr.horizon(dem, tmp_path / "x.tif", step=10, elevation=3)
+    assert not (tmp_path / "x.tif").exists()

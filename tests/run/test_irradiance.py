@@ -265,8 +265,16 @@ def test_mean_is_energy_over_the_period_hours(tmp_path, runner):
     _run(runner, [dem, e, "--report", tmp_path / "e.json"] + common)
     _run(runner, [dem, m, "--mean"] + common)
     te, desc, count, nodata = _tags(e)
-    tm = _tags(m)[0]
-    assert count == 4 and desc == BANDS and nodata == -9999.0
+    tm, mdesc = _tags(m)[:2]
+    # one day's Wh/m2 is r.sun's mode 2 product: its names; the mean W/m2 is not: ours; the
+    # band tags NAME keep ours, RSUN_NAME r.sun's, either way
+    assert count == 4 and desc == ("beam_rad", "diff_rad", "refl_rad", "glob_rad")
+    assert mdesc == BANDS and nodata == -9999.0
+    with rasterio.open(e) as ds:
+        assert [ds.tags(b)["NAME"] for b in range(1, 5)] == list(BANDS)
+        assert ds.tags(4)["RSUN_NAME"] == "glob_rad" and ds.tags(4)["UNITS"] == "Wh/m2"
+    with rasterio.open(m) as ds:
+        assert ds.tags(2)["NAME"] == "diffuse" and ds.tags(2)["RSUN_NAME"] == "diff_rad"
     assert te["PERIOD_HOURS"] == tm["PERIOD_HOURS"] == "23"
     assert te["UNITS"].startswith("Wh/m2") and tm["UNITS"].startswith("W/m2")
     for key in ("PERIOD", "STEP", "CLEAR_SKY", "TURBIDITY", "ALBEDO", "DEFINITIONS"):

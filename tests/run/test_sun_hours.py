@@ -326,3 +326,23 @@ def test_dask_gives_the_bits_of_the_run_in_memory(tmp_path):
         assert {k: v for k, v in b.tags().items() if k != "AREA_OR_POINT"} == \
             {k: v for k, v in a.tags().items() if k != "AREA_OR_POINT"}
     assert sorted(os.listdir(tmp_path)) == ["dask.tif", "dem.tif", "whole.tif"]
+
+
+@pytest.mark.parametrize("window_size", [None, "64"])
+def test_one_day_is_named_as_r_sun_names_it(tmp_path, window_size):
+    """One day's hours are r.sun's insol_time: that is the band's description (in memory and
+    in windows); several days' sum is not r.sun's product: our description; the tags NAME and
+    RSUN_NAME say both either way."""
+    import rasterio
+    dem = _dem(tmp_path, _pillar())
+    for out, end_date, want in (("one.tif", None, "insol_time"),
+                                ("two.tif", "2026-12-22", "hours of direct sun")):
+        cfg = SunHoursConfig(dem=dem, output=str(tmp_path / out), date="2026-12-21",
+                             end_date=end_date, step="1h", place={"tz": TZ},
+                             window_size=window_size,
+                             run=RunOptions(overwrite=True, quiet=True))
+        sun_hours(cfg)
+        with rasterio.open(tmp_path / out) as ds:
+            assert ds.descriptions == (want,), out
+            assert ds.tags()["NAME"] == "hours of direct sun"
+            assert ds.tags()["RSUN_NAME"] == "insol_time"
