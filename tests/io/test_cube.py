@@ -260,3 +260,14 @@ def test_the_zarr_folders_of_dead_runs_are_swept(tmp_path):
     _write(tmp_path / "n.nc", _stack())
     assert not reused.exists() and mine.exists()        # dead (pid reused); alive
 
+
+
+def test_zarr_without_its_libraries_names_the_extra(tmp_path, monkeypatch):
+    import importlib.util
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec",
+                        lambda name, *a: None if name == "zarr" else real(name, *a))
+    with pytest.raises(HillshadeError, match=r"pip install 'hillshade-rt\[xarray\]'"):
+        _write(tmp_path / "s.zarr", _stack())
+    assert cube.check_cube_support(tmp_path / "s.nc") == "netcdf"
+    assert os.listdir(tmp_path) == []
