@@ -44,7 +44,8 @@ import warnings
 import numpy as np
 
 from ..errors import HillshadeError
-from .write import atomic_folder, atomic_path, check_output_path, disk_full, os_error
+from .write import (atomic_folder, atomic_path, check_output_path, disk_full, is_virtual,
+                    os_error)
 
 CUBE_SUFFIXES = {".nc": "netcdf", ".zarr": "zarr"}
 CHUNK = 1024          # a chunk's largest side, cells (one time step per chunk)
@@ -63,10 +64,14 @@ def cube_format(path) -> str | None:
 
 
 def check_cube_support(path) -> str:
-    """The cube's format (:func:`cube_format`) once its libraries are known to be there: a
-    one-line :class:`HillshadeError` naming what to install otherwise (before any work)."""
+    """The cube's format (:func:`cube_format`) once its libraries are known to be there and
+    the path is a local one: a one-line :class:`HillshadeError` naming what to install (or
+    that GDAL's virtual files are not for cubes) otherwise, before any work."""
     import importlib.util
     fmt = cube_format(path)
+    if fmt is not None and is_virtual(os.fspath(path)):
+        raise HillshadeError(f"{path}: a time cube is written to a local file or folder "
+                             "(netCDF4 and zarr, not GDAL's virtual files)")
     if fmt == "netcdf" and importlib.util.find_spec("netCDF4") is None:
         raise HillshadeError(f"{path}: a NetCDF time cube needs netCDF4: pip install netCDF4")
     if fmt == "zarr" and any(importlib.util.find_spec(m) is None

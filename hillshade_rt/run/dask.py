@@ -7,8 +7,8 @@ document, must be readable by the workers), reads the piece's window with its ha
 writes its region to a GeoTIFF of its own in a folder beside the output. Nothing large passes
 through the scheduler: a task returns counts, timings and a few preview cells. When every task is
 done the parts are put together through a VRT into the output (GeoTIFF or COG, GDAL streaming
-block by block, written to a temporary file and renamed; a time cube part by part), and the folder is removed, also when
-the run fails or is interrupted.
+block by block, written to a temporary file and renamed; a time cube part by part), and the
+folder is removed, also when the run fails or is interrupted.
 
 numba parallelises inside a task over the worker's cores; tasks of one worker process run one at
 a time (a lock), so give workers one thread each (``dask worker --nthreads 1``); ``local:N``

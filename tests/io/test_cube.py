@@ -166,6 +166,9 @@ def test_rotated_grid_and_bad_shapes_refused(tmp_path):
     with pytest.raises(ValueError, match="azimuth"):
         cube.write_cube(tmp_path / "r.nc", np.zeros((3, 3, 4), np.uint8), _grid(3, 4),
                         TIMES, name="v", time_variables={"azimuth": ([1.0], {})})
+    with pytest.raises(HillshadeError, match="local file"):
+        cube.write_cube("/vsimem/c.nc", np.zeros((1, 3, 4), np.uint8), _grid(3, 4), TIMES[:1],
+                        name="v")
     assert os.listdir(tmp_path) == []
 
 
@@ -271,3 +274,37 @@ def test_zarr_without_its_libraries_names_the_extra(tmp_path, monkeypatch):
         _write(tmp_path / "s.zarr", _stack())
     assert cube.check_cube_support(tmp_path / "s.nc") == "netcdf"
     assert os.listdir(tmp_path) == []
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", FORMATS)
+def test_a_signal_leaves_no_half_written_cube(tmp_path, name):
+    """SIGTERM while a long series is written into a cube: exit 143, one line, nothing left
+    (the temporary file or folder removed)."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    from hillshade_rt.testing import fractal_terrain, write_geotiff
+    dem = write_geotiff(tmp_path / "big.tif", fractal_terrain(900, 900, 7, relief=1500),
+                        Affine(10, 0, 400000, 0, -10, 3800000), CRS.from_epsg(32611))
+    out = tmp_path / "out"
+    out.mkdir()
+    p = subprocess.Popen([sys.executable, "-m", "hillshade_rt", "shadow", dem, str(out / name),
+                          "--algorithm", "brute", "--start", "2026-06-21T06:00-07:00", "--end",
+                          "2026-06-21T19:00-07:00", "--step", "10min", "-q", "--threads", "1"],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        t0 = time.time()
+        while not any(".part" in n for n in os.listdir(out)):      # writing has begun
+            assert time.time() - t0 < 120 and p.poll() is None, os.listdir(out)
+            time.sleep(0.02)
+        p.send_signal(signal.SIGTERM)
+        _, err = p.communicate(timeout=120)
+    finally:
+        if p.poll() is None:
+            p.kill()
+    assert p.returncode == 143, err
+    assert err.strip().count("\n") == 0 and "Traceback" not in err, err
+    assert os.listdir(out) == [], os.listdir(out)

@@ -443,6 +443,7 @@ def test_a_task_whose_workers_keep_dying_is_named_when_dask_gives_up(tmp_path):
     assert os.listdir(tmp_path) == []
 
 
+@pytest.mark.slow
 def test_a_series_on_dask_into_a_cube_equals_the_geotiff(tmp_path, runner):
     """A time series on Dask into OUTPUT.nc: the parts written into the cube window by window,
     the same values as the GeoTIFF the parts make, no part left."""

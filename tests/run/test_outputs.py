@@ -122,11 +122,11 @@ def _shade(runner, command, out, *extra):
 
 @pytest.mark.parametrize("command, name, extra", [
     ("shadow", "s.nc", []),
-    ("shadow", "s.nc", ["--window-size", "160x130"]),
+    pytest.param("shadow", "s.nc", ["--window-size", "160x130"], marks=pytest.mark.slow),
     ("shadow", "s.nc", ["--soft"]),
-    ("hillshade", "s.nc", []),
-    pytest.param("shadow", "s.zarr", ["--window-size", "160x130"], marks=pytest.mark.skipif(
-        not _zarr_here(), reason="zarr not installed")),
+    pytest.param("hillshade", "s.nc", [], marks=pytest.mark.slow),
+    pytest.param("shadow", "s.zarr", ["--window-size", "160x130"], marks=[
+        pytest.mark.slow, pytest.mark.skipif(not _zarr_here(), reason="zarr not installed")]),
 ])
 def test_a_series_into_a_cube_equals_the_geotiffs_bands(tmp_path, runner, command, name, extra):
     import numpy as np

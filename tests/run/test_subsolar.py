@@ -153,6 +153,7 @@ def test_bad_subsolar_files_write_nothing(tmp_path, runner, dem, content, extra,
     assert not out.exists()
 
 
+@pytest.mark.slow
 def test_subsolar_series_into_a_cube(tmp_path, runner, dem):
     """``--subsolar-file`` into OUTPUT.nc: one CF time cube, its bands the GeoTIFF's, the
     subsolar points and distances per time."""
