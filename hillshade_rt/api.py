@@ -161,6 +161,8 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
           bits: int | None = None, subsolar=None, subsolar_file=None,
           sun_distance: float | None = None, body: str | None = None, **more) -> dict:
     """Shade DEM file(s) into ``output`` (one band per sun) or ``output_pattern`` files.
+    A series of times into an ``output`` named ``*.nc`` or ``*.zarr`` is one CF-1.8 time cube
+    (``io.cube``: dimensions time, y, x; the sun's azimuth and elevation per time).
 
     ``dems``: a path or a list of paths (tiles on one grid, shaded as one surface; with
     ``{tile}`` in ``output_pattern`` one file per tile). ``product``: "shadow" (1 shadow / 0 lit;

@@ -315,3 +315,20 @@ def test_sun_hours_as_the_command_line_in_memory_and_in_windows(tmp_path):
     with pytest.raises(TypeError, match="azimuth"):
         hr.sun_hours(dem, tmp_path / "x.tif", date="2026-12-21", azimuth=3)
     assert not (tmp_path / "x.tif").exists()
+
+
+def test_shade_of_times_into_nc_is_a_time_cube(tmp_path):
+    xr = pytest.importorskip("xarray")
+    dem = write_geotiff(tmp_path / "d.tif", fractal_terrain(60, 70, 4, relief=300.0),
+                        Affine(10, 0, 400000, 0, -10, 3800000), UTM)
+    times = [_dt.datetime(2026, 6, 21, 15, 30, tzinfo=_dt.timezone.utc),
+             _dt.datetime(2026, 6, 21, 22, 10, tzinfo=_dt.timezone.utc)]
+    rep = hr.shade(dem, str(tmp_path / "t.tif"), times=times, progress=False)
+    hr.shade(dem, str(tmp_path / "t.nc"), times=times, progress=False)
+    with xr.open_dataset(tmp_path / "t.nc", mask_and_scale=False) as ds:
+        np.testing.assert_array_equal(ds["time"].values,
+                                      np.array(["2026-06-21T15:30", "2026-06-21T22:10"],
+                                               "datetime64[ns]"))
+        np.testing.assert_array_equal(ds["shadow"].values[1], read_band(tmp_path / "t.tif", 2))
+        assert ds["azimuth"].values.tolist() == [s["azimuth"] for s in rep["times"]]
+        assert "Python API" in ds.attrs["history"]

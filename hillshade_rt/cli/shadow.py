@@ -73,8 +73,8 @@ def shadow(files, algorithm, curvature, refraction_k, soft, self_shadow, classes
     shadows the next; OUTPUT is the last path, or give it with -o. Unrelated DEMs (any grid,
     CRS, size): --each with --output-pattern 'out/{stem}_shadow.tif', each on its own. The sun:
     --azimuth/--elevation, or --time (repeatable) or --start/--end/--step at the DEM's
-    place (one band per time), or --subsolar LAT,LON / --subsolar-file F on the DEM's body (every
-    cell its own sun). --soft writes the visible fraction of the sun's disk (float32,
+    place (one band per time; OUTPUT.nc or OUTPUT.zarr: one CF time cube), or --subsolar
+    LAT,LON / --subsolar-file F on the DEM's body (every cell its own sun). --soft writes the visible fraction of the sun's disk (float32,
     1 = fully lit, -9999 nodata); --classes writes 0 lit / 1 self-shadow / 2 cast / 255."""
     from ..algorithms import algorithm_for, options_for, options_from_cli
     if subsolar is not None or subsolar_file is not None or sun_distance is not None or \
@@ -167,7 +167,7 @@ def _subsolar(files, subsolar, subsolar_file, distance, body, light_position, li
                                    height_above_ground=lift, soft=soft, curvature=curvature,
                                    refraction_k=refraction_k, read=to_read_options(kw),
                                    run=to_run_options(kw, say), refused=refused,
-                                   subsolar_file=subsolar_file))
+                                   subsolar_file=subsolar_file, command=command_line()))
 
 
 @click.command(cls=SectionedCommand)

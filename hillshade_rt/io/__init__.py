@@ -13,6 +13,8 @@
 ``vrt``        VRT documents (mosaics in, parts put together out)
 ``crs``        a CRS for people
 ``raster``     ``BandWriter``, the one GeoTIFF profile, output formats, COGs, PNG pictures
+``cube``       time cubes: a (time, y, x) series as one CF-1.8 NetCDF4 file or Zarr store
+               (``CubeWriter``, ``write_cube``)
 ``write``      every file written whole or not at all: ``atomic_path``, ``Claims``,
                ``gdal_checked``, signals, ``write_json``
 =============  ===============================================================================
@@ -39,6 +41,8 @@ _EXPORTS = {
     "read_decimated": "raster",
     "copy_vrt": "raster", "to_cog": "raster", "output_driver": "raster",
     "check_output_format": "raster", "gtiff_profile": "raster", "DEFLATE_LEVEL": "raster",
+    "CubeWriter": "cube", "write_cube": "cube", "cube_format": "cube",
+    "check_cube_support": "cube",
     "atomic_path": "write", "temp_beside": "write", "Claims": "write",
     "check_output_path": "write", "gdal_checked": "write", "write_json": "write",
 }

@@ -6,7 +6,8 @@ Every file a run writes (rasters, the JSON report, PNG previews, scratch mosaics
 replace a file that appeared meanwhile unless the run may overwrite (``os.link``, else Linux's
 ``renameat2(RENAME_NOREPLACE)``, else a last look before the rename). A path that is a symbolic
 link is written through to its target (atomically, in the target's folder); devices, pipes and
-sockets are refused. On any failure or interruption the temporary file is removed.
+sockets are refused. On any failure or interruption the temporary file is removed. A folder
+(a Zarr store) goes the same way through :func:`atomic_folder`.
 
 :class:`Claims` checks, before any work, that no path a run writes is one of its inputs (the same
 file, through symbolic or hard links) or another of its outputs. :data:`completed` lists what this
@@ -27,6 +28,7 @@ import json
 import logging
 import os
 import re
+import shutil
 import signal
 import socket
 import sys
@@ -147,7 +149,17 @@ def check_output_path(path: str, overwrite: bool) -> str:
         raise HillshadeError(f"{path}: outputs go to local files (or /vsimem/ from Python); "
                              "write here, then copy")
     if os.path.isdir(path):
-        raise HillshadeError(f"{path}: is a folder")
+        if not path.rstrip("/\\").lower().endswith(".zarr"):
+            raise HillshadeError(f"{path}: is a folder")
+        # a Zarr store (io.cube) is a folder: replaced by --overwrite, if it is one
+        if not overwrite:
+            raise HillshadeError(f"{path}: already exists (use --overwrite to replace it)")
+        if not is_zarr_store(path):
+            raise HillshadeError(f"{path}: is a folder that holds no Zarr store; not replaced")
+        parent = os.path.dirname(os.path.abspath(path.rstrip("/\\")))
+        if not os.access(parent, os.W_OK):
+            raise HillshadeError(f"{path}: output folder {parent} is not writable")
+        return path
     real = target_of(path)
     folder = os.path.dirname(real)
     if not os.path.isdir(folder):
@@ -158,6 +170,13 @@ def check_output_path(path: str, overwrite: bool) -> str:
     if not os.access(folder, os.W_OK):
         raise HillshadeError(f"{path}: output folder {folder} is not writable")
     return path
+
+
+def is_zarr_store(path: str) -> bool:
+    """Whether the folder ``path`` holds a Zarr store (v2 or v3 metadata at its top): the only
+    kind of folder an output (a time cube, ``io.cube``) replaces."""
+    return any(os.path.isfile(os.path.join(path, n))
+               for n in ("zarr.json", ".zgroup", ".zarray", ".zmetadata"))
 
 
 def temp_beside(path: str, suffix: str) -> str:
@@ -275,7 +294,8 @@ def writer_dead(name: str) -> bool:
 
 
 def sweep_dead(folder: str) -> list[str]:
-    """Remove the temporaries of dead runs in ``folder`` (once per folder per run); returns
+    """Remove the temporaries of dead runs in ``folder`` (files, and the folders of Zarr
+    stores in the making, ``*.zarr``: ``io.cube``) once per folder per run; returns
     their paths. Never fails: an unreadable folder or a file gone meanwhile is passed over."""
     key = os.path.abspath(folder)
     if key in _swept:
@@ -293,6 +313,9 @@ def sweep_dead(folder: str) -> list[str]:
         with contextlib.suppress(OSError):
             if os.path.isfile(p) and not os.path.islink(p):
                 os.remove(p)
+                removed.append(p)
+            elif name.endswith(".zarr") and os.path.isdir(p) and not os.path.islink(p):
+                shutil.rmtree(p)    # a time cube's Zarr store in the making (io.cube)
                 removed.append(p)
     return removed
 
@@ -458,6 +481,91 @@ def atomic_path(path: str, suffix: str = "", overwrite: bool = False, sidecars: 
         raise
 
 
+# --------------------------------------------------------------------------------------------
+# a folder written whole or not at all (a time cube's Zarr store, io.cube)
+
+def _fsync_tree(folder: str) -> None:
+    for root, dirs, files in os.walk(folder):
+        for n in files:
+            fd = os.open(os.path.join(root, n), os.O_RDONLY)
+            try:
+                os.fsync(fd)
+            finally:
+                os.close(fd)
+        with contextlib.suppress(OSError):     # (not every system syncs folders)
+            fd = os.open(root, os.O_RDONLY)
+            try:
+                os.fsync(fd)
+            finally:
+                os.close(fd)
+
+
+def _publish_folder(tmp: str, final: str, overwrite: bool, shown: str) -> None:
+    """Rename the finished folder ``tmp`` onto ``final``: without ``overwrite`` only where
+    nothing is there (renameat2's RENAME_NOREPLACE, else a last look); with it an existing Zarr
+    store is renamed aside, the new one into place, then the old removed."""
+    if os.path.lexists(final):
+        if not overwrite:
+            raise _appeared(shown)
+        if os.path.isdir(final) and not os.path.islink(final):
+            if not is_zarr_store(final):
+                raise HillshadeError(f"{shown}: is a folder that holds no Zarr store; not "
+                                     "replaced")
+            old = tempfile.mkdtemp(dir=os.path.dirname(final),
+                                   prefix="." + os.path.basename(final) + ".",
+                                   suffix="~" + owner_tag() + ".scratch.zarr")
+            os.rename(final, os.path.join(old, "store"))
+            try:
+                os.rename(tmp, final)
+            except OSError:
+                os.rename(os.path.join(old, "store"), final)     # the old store back
+                raise
+            finally:
+                shutil.rmtree(old, ignore_errors=True)
+            return
+        os.remove(final)
+    try:
+        if _rename_noreplace(tmp, final):
+            return
+    except FileExistsError:
+        raise _appeared(shown) from None
+    if os.path.lexists(final):
+        raise _appeared(shown)
+    os.rename(tmp, final)
+
+
+@contextlib.contextmanager
+def atomic_folder(path: str, suffix: str, overwrite: bool):
+    """Yield a new hidden temporary folder beside ``path`` (``.NAME.<random>~<owner>.part
+    .zarr``); when the block succeeds its files are synced and it is published onto ``path``
+    (:func:`_publish_folder`); on any failure it is removed."""
+    final = os.path.abspath(os.fspath(path).rstrip("/\\"))
+    if os.path.islink(final):
+        final = target_of(final) if not os.path.isdir(final) else os.path.realpath(final)
+    folder = os.path.dirname(final)
+    sweep_dead(folder)
+    try:
+        tmp = tempfile.mkdtemp(dir=folder, prefix="." + os.path.basename(final)[:200] + ".",
+                               suffix="~" + owner_tag() + ".part" + suffix)
+    except OSError as exc:
+        raise os_error(path, exc) from None
+    try:
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o777 & ~umask)   # mkdtemp makes 0700; the usual permissions
+        yield tmp
+        try:
+            _fsync_tree(tmp)
+            with signals_deferred():
+                _publish_folder(tmp, final, overwrite, path)
+                completed.append(path)
+        except OSError as exc:
+            raise os_error(path, exc) from None
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+
+
 def write_json(path: str, obj: dict, overwrite: bool = False) -> None:
     """Write ``obj`` as JSON (temporary file, checked close, then rename)."""
     text = json.dumps(obj, indent=2) + "\n"
@@ -578,7 +686,7 @@ def stderr_dropped():
         _CAPTURE.release()
 
 
-def _disk_full(path: str) -> bool:
+def disk_full(path: str) -> bool:
     with contextlib.suppress(OSError):
         st = os.statvfs(os.path.dirname(os.path.abspath(path)) or ".")
         return st.f_bavail * st.f_frsize < 64 * 1024
@@ -624,7 +732,7 @@ def gdal_checked(path: str, what: str = "cannot write"):
         if isinstance(cap, _StderrCapture):
             cap.replay()
         return
-    full = ("no space left on device" in printed or _disk_full(path)
+    full = ("no space left on device" in printed or disk_full(path)
             or any("no space" in m.lower() for m in rec.messages))
     if full:
         reason = "no space left on device"

@@ -692,6 +692,7 @@ class SubsolarConfig:
     run: RunOptions = field(default_factory=RunOptions)
     refused: dict = field(default_factory=dict)
     subsolar_file: str | None = None
+    command: str | None = None          # the command line (a time cube's history)
 
     def check(self) -> tuple:
         """(dem, output, (lat, lon) or None for a series) checked: one DEM, one of --subsolar

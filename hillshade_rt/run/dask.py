@@ -7,8 +7,8 @@ document, must be readable by the workers), reads the piece's window with its ha
 writes its region to a GeoTIFF of its own in a folder beside the output. Nothing large passes
 through the scheduler: a task returns counts, timings and a few preview cells. When every task is
 done the parts are put together through a VRT into the output (GeoTIFF or COG, GDAL streaming
-block by block, written to a temporary file and renamed), and the folder is removed, also when
-the run fails or is interrupted.
+block by block, written to a temporary file and renamed; a time cube part by part), and the
+folder is removed, also when the run fails or is interrupted.
 
 numba parallelises inside a task over the worker's cores; tasks of one worker process run one at
 a time (a lock), so give workers one thread each (``dask worker --nthreads 1``); ``local:N``
@@ -466,7 +466,13 @@ def run_on_dask(scheduler, job, suns, plans, out, share, stride, quiet, algo_sta
             return [VrtSource(path, 1, (p.region[0], p.region[2]),
                               (p.region[1] - p.region[0], p.region[3] - p.region[2]))
                     for (j, p, path) in keys.values() if j == i]
-        if out.output is not None:
+        if out.output is not None and out.cube is not None:    # a time cube: window by window
+            import rasterio
+            with out.writer(src, len(suns)) as w:
+                for i, p, path in sorted(keys.values(), key=lambda k: (k[0], k[1].region)):
+                    with rasterio.open(path) as part:
+                        w.write(i + 1, part.read(1), window=p.region)
+        elif out.output is not None:
             doc = vrt_xml(src.shape, src.transform, src.crs,
                           [band_sources(i) for i in range(len(suns))], dtype, out.nodata,
                           [out.description(s) for s in suns], out.base_tags,

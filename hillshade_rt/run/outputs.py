@@ -1,5 +1,6 @@
 """Where a lighting run's products go: bands of one OUTPUT or the files of ``--output-pattern``
-(one per time, per input tile of a mosaic), their type, nodata, tags and band descriptions.
+(one per time, per input tile of a mosaic), their type, nodata, tags and band descriptions; a
+series into OUTPUT named ``*.nc`` or ``*.zarr``: one CF time cube (``io.cube``).
 """
 
 from __future__ import annotations
@@ -9,7 +10,7 @@ import os
 import string
 
 from .. import __version__
-from ..errors import HillshadeError
+from ..errors import HillshadeError, UsageProblem
 from ..model.sun import SunOver
 from ..model.times import iso
 
@@ -95,6 +96,58 @@ def sun_tags(sun: SunOver) -> dict:
     return tags
 
 
+def cube_attrs(product) -> dict:
+    """The CF attributes of a product's variable in a time cube: its long name, what its
+    values mean (flags, a dimensionless range)."""
+    import numpy as np
+    a = {"long_name": product.what, "comment": f"values: {product.values}"}
+    if product.kind in ("shadow", "classes") and not product.soft:
+        flags = ([0, 1], "lit shadow") if product.kind == "shadow" else \
+            ([0, 1, 2], "lit self_shadow cast_shadow")
+        a.update(flag_values=np.array(flags[0], np.uint8), flag_meanings=flags[1])
+    elif product.soft and product.kind == "shadow":
+        a.update(units="1", valid_range=np.array([0.0, 1.0], np.float32))
+    else:       # a shaded relief: 1..255
+        a.update(units="1", valid_range=np.array([1, 255], np.uint8))
+    return a
+
+
+def cube_name(product) -> str:
+    """The data variable of a product in a time cube."""
+    return "visible_fraction" if product.kind == "shadow" and product.soft else product.kind
+
+
+def sun_variables(suns) -> dict:
+    """The per-time variables of a lighting series' cube: the sun's azimuth (from grid north,
+    as the run used it) and elevation at the raster's centre, degrees; the true azimuth where
+    every time has one."""
+    out = {"azimuth": ([s.azimuth for s in suns],
+                       {"long_name": "sun azimuth at the raster's centre, clockwise from grid "
+                                     "north", "units": "degree"}),
+           "elevation": ([s.elevation for s in suns],
+                         {"standard_name": "solar_elevation_angle",
+                          "long_name": "sun elevation at the raster's centre (apparent)",
+                          "units": "degree"})}
+    if all(s.true_azimuth is not None for s in suns):
+        out["true_azimuth"] = ([s.true_azimuth for s in suns],
+                               {"standard_name": "solar_azimuth_angle",
+                                "long_name": "sun azimuth at the raster's centre, clockwise "
+                                             "from true north", "units": "degree"})
+    return out
+
+
+def cube_globals(title: str, tags: dict, command: str | None) -> dict:
+    """A cube's global attributes: ``title``, ``history`` (when and the command; the Python
+    API's call otherwise), ``source`` (this version), ``tags`` (the GeoTIFF's dataset tags)
+    lower-cased."""
+    import datetime as dt
+    now = dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+    out = {"title": title, "history": f"{now}: {command or 'hillshade_rt (Python API)'}",
+           "source": f"hillshade-rt {__version__}"}
+    out.update({k.lower(): str(v) for k, v in tags.items() if k != "HILLSHADE_RT_VERSION"})
+    return out
+
+
 def label(sun: SunOver) -> str:
     if sun.time is not None:
         return iso(sun.time)
@@ -123,12 +176,38 @@ class Outputs:
         self.paths = None
         self.tiles = self.tile_paths = None
         self._scratch: list[str] = []
+        self.cube = None        # "netcdf" or "zarr": OUTPUT is a time cube (use_cube)
+        self.command = None     # the command line, a cube's history
+        self.suns = None
+
+    def use_cube(self, from_time: bool, cog: bool = False, stac_item=None) -> bool:
+        """Whether OUTPUT is a time cube: named ``*.nc`` or ``*.zarr``, the suns from times,
+        no --format (which names GDAL's driver). The options a cube cannot take are refused
+        then (usage errors, before any work): --co (GDAL's creation options), --cog,
+        --stac-item; a missing library is named (``io.cube.check_cube_support``)."""
+        from ..io.cube import check_cube_support, cube_format
+        if (self.output is None or self.fmt is not None or not from_time
+                or cube_format(self.output) is None):
+            return False
+        if self.co:
+            raise UsageProblem(f"{self.output}: --co sets GDAL's creation options; a time cube "
+                               "(.nc, .zarr) is written compressed, a chunk per time, without "
+                               "them: drop --co, or write a GeoTIFF (.tif)")
+        if cog:
+            raise UsageProblem(f"{self.output}: --cog writes a GeoTIFF, not a time cube (.nc, "
+                               ".zarr)")
+        if stac_item is not None:
+            raise UsageProblem(f"--stac-item describes a GeoTIFF OUTPUT, not the time cube "
+                               f"{self.output}")
+        self.cube = check_cube_support(self.output)
+        return True
 
     def plan(self, suns, inputs, tiles=None):
         """The files of each sun. ``tiles``: a mosaic's input tiles (``DemSource.tiles``); with a
         pattern naming ``{tile}`` each sun's mosaic is written to a scratch file beside the
         outputs and cut into one file per tile (``finish``)."""
         from ..io import check_output_format, output_driver
+        self.suns = suns
         if self.pattern is None:
             return
         per_tile = bool(self.pattern.per_tile and tiles)
@@ -200,6 +279,15 @@ class Outputs:
         from ..io import BandWriter
         if self.output is None:
             return contextlib.nullcontext()
+        if self.cube is not None:
+            from ..io.cube import CubeWriter
+            return CubeWriter(self.output, dem, [s.time for s in self.suns],
+                              name=cube_name(self.product), dtype=self.dtype,
+                              nodata=self.nodata, attrs=cube_attrs(self.product),
+                              time_variables=sun_variables(self.suns),
+                              global_attrs=cube_globals(f"hillshade-rt: {self.what} series",
+                                                        self.base_tags, self.command),
+                              overwrite=self.overwrite)
         return BandWriter(self.output, dem, count, self.dtype, self.nodata, self.base_tags,
                           self.cog, self.resampling, overwrite=self.overwrite, fmt=self.fmt,
                           co=self.co)

@@ -184,7 +184,10 @@ def _outputs(cfg: ShadeConfig, ctx, plan: ShadePlan, lighting, src):
             note_if_apart(plan.scene, src, ro.say)
     # Dask's parts are put together by GDAL (no 16-bit encoding of soft shadows on the way)
     out.via_vrt = cfg.scheduler is not None
-    if plan.output is not None:   # the format can hold the product (before any work)
+    out.command = cfg.command
+    # a series into OUTPUT.nc / OUTPUT.zarr: one CF time cube (io.cube), not GDAL's bands
+    cube = out.use_cube(plan.req.from_time, cfg.cog, cfg.stac_item)
+    if plan.output is not None and not cube:   # the format can hold the product (before any work)
         check_output_format(plan.output, output_driver(plan.output, ro.fmt, cfg.cog), prod.dtype,
                             len(plan.req.times) if plan.req.from_time else 1,
                             out.continuous and not out.via_vrt, ro.creation_options,

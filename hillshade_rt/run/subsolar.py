@@ -42,8 +42,9 @@ def subsolar_shadow(cfg: SubsolarConfig) -> dict:
     if cfg.body is not None:
         body_from_option(cfg.body)              # a bad --body: exit 2 before anything is read
     prod = product("shadow", bool(cfg.soft))
-    check_output_format(output, output_driver(output, ro.fmt), prod.dtype, 1, prod.continuous,
-                        ro.creation_options)
+    if not (point is None and _is_cube(output, ro)):    # (a series' cube: io.cube checks)
+        check_output_format(output, output_driver(output, ro.fmt), prod.dtype, 1,
+                            prod.continuous, ro.creation_options)
     series = None
     if point is None:
         from ..model.ephemeris import read_subsolar
@@ -101,6 +102,44 @@ def subsolar_shadow(cfg: SubsolarConfig) -> dict:
                                         f"compute {timer.seconds['compute']:.2f} s")])
 
 
+def _is_cube(output: str, ro) -> bool:
+    """Whether a series goes into one CF time cube (``io.cube``): OUTPUT named ``*.nc`` or
+    ``*.zarr`` and no --format (GDAL's driver); --co refused with it (a usage error)."""
+    from ..io.cube import check_cube_support, cube_format
+    if ro.fmt is not None or cube_format(output) is None:
+        return False
+    if ro.creation_options:
+        raise UsageProblem(f"{output}: --co sets GDAL's creation options; a time cube (.nc, "
+                           ".zarr) is written compressed, a chunk per time, without them: drop "
+                           "--co, or write a GeoTIFF (.tif)")
+    check_cube_support(output)
+    return True
+
+
+def _series_writer(cfg: SubsolarConfig, output: str, d, series, dist, prod, tags: dict):
+    """The series' writer: a GeoTIFF's bands (``io.BandWriter``), or a time cube
+    (``io.cube.CubeWriter``: the subsolar points and the distance per time)."""
+    from ..io import BandWriter
+    ro = cfg.run
+    if not _is_cube(output, ro):
+        return BandWriter(output, d, len(series), prod.dtype, prod.nodata, tags=tags,
+                          overwrite=ro.overwrite, fmt=ro.fmt, co=ro.creation_options)
+    from ..io.cube import CubeWriter
+    from .outputs import cube_attrs, cube_globals, cube_name
+    return CubeWriter(
+        output, d, series.times(), name=cube_name(prod), dtype=prod.dtype, nodata=prod.nodata,
+        attrs=cube_attrs(prod),
+        time_variables={
+            "subsolar_lat": (series.lat, {"long_name": "latitude of the subsolar point",
+                                          "units": "degrees_north"}),
+            "subsolar_lon": (series.lon, {"long_name": "longitude of the subsolar point",
+                                          "units": "degrees_east"}),
+            "sun_distance": (dist, {"long_name": "distance to the sun", "units": "m"})},
+        global_attrs=cube_globals(f"hillshade-rt: {prod.what} of a subsolar series (every "
+                                  "cell its own sun)", tags, cfg.command),
+        overwrite=ro.overwrite)
+
+
 def _series(cfg: SubsolarConfig, ctx, d, output: str, series, body, default_distance: float,
             curvature: bool, prod) -> dict:
     """``shadow --subsolar-file F``: one band per position of the series (description: its UTC
@@ -111,7 +150,6 @@ def _series(cfg: SubsolarConfig, ctx, d, output: str, series, body, default_dist
     from ..engine.arrays import subsolar_mask
     from ..engine.cell_suns import CellFrames, sun_vector
     from ..errors import HillshadeError
-    from ..io import BandWriter
     from ..model.times import iso
     from .report import progress
 
@@ -136,8 +174,7 @@ def _series(cfg: SubsolarConfig, ctx, d, output: str, series, body, default_dist
             from ..algorithms.pyramid import MaxPyramid
             z = d.heights if d.heights.dtype == np.float32 else d.heights.astype(np.float32)
             pyramid = MaxPyramid(z)
-    with BandWriter(output, d, len(series), prod.dtype, prod.nodata, tags=tags,
-                    overwrite=ro.overwrite, fmt=ro.fmt, co=ro.creation_options) as w:
+    with _series_writer(cfg, output, d, series, dist, prod, tags) as w:
         for i in progress(range(len(series)), ro.quiet, "subsolar positions", "position",
                              mode=ro.progress):
             lat, lon = float(series.lat[i]), float(series.lon[i])

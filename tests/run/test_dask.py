@@ -441,3 +441,29 @@ def test_a_task_whose_workers_keep_dying_is_named_when_dask_gives_up(tmp_path):
         assert "\n" not in line
         assert client.status == "running"
     assert os.listdir(tmp_path) == []
+
+
+@pytest.mark.slow
+def test_a_series_on_dask_into_a_cube_equals_the_geotiff(tmp_path, runner):
+    """A time series on Dask into OUTPUT.nc: the parts written into the cube window by window,
+    the same values as the GeoTIFF the parts make, no part left."""
+    import numpy as np
+    import rasterio
+    xr = pytest.importorskip("xarray")
+    from hillshade_rt.cli import cli
+    from hillshade_rt.testing import data_path
+    dem = data_path("lidar_dem_1m_utm15n_400x400.tif")
+    series = ["--time", "2026-06-21T09:20-05:00", "--time", "2026-06-21T16:50-05:00",
+              "--window-size", "150", "-q"]
+    r = runner.invoke(cli, ["shadow", dem, str(tmp_path / "s.tif"), *series])
+    assert r.exit_code == 0, r.output
+    r = runner.invoke(cli, ["shadow", dem, str(tmp_path / "d.nc"), "--scheduler", "local:1",
+                            *series])
+    assert r.exit_code == 0, r.output
+    with rasterio.open(tmp_path / "s.tif") as ds:
+        bands = ds.read()
+    with xr.open_dataset(tmp_path / "d.nc", mask_and_scale=False) as ds:
+        np.testing.assert_array_equal(ds["shadow"].values, bands)
+        assert ds["time"].values.astype("datetime64[m]").astype(str).tolist() == [
+            "2026-06-21T14:20", "2026-06-21T21:50"]
+    assert sorted(os.listdir(tmp_path)) == ["d.nc", "s.tif"]

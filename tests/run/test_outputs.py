@@ -97,3 +97,120 @@ def test_a_failed_write_in_a_series_leaves_no_partial_file(tmp_path, monkeypatch
     with rasterio.open(out / "t_0.tif") as ds:   # the one before is whole
         m = ds.read(1)
         assert m.shape == (400, 400) and set(map(int, set(m.ravel()))) <= {0, 1, 255}
+
+
+# --------------------------------------------------------------------------------------------
+# a series into OUTPUT.nc / OUTPUT.zarr: one CF time cube (io.cube)
+
+SERIES = ["--start", "2026-06-21T08:10-05:00", "--end", "2026-06-21T17:40-05:00", "--step",
+          "190min"]
+
+
+def _zarr_here():
+    import importlib.util
+    return importlib.util.find_spec("zarr") is not None
+
+
+def _shade(runner, command, out, *extra):
+    import json
+    r = runner.invoke(cli, [command, LIDAR, str(out), *SERIES, "-q", "--report",
+                            f"{out}.json", *extra])
+    assert r.exit_code == 0, r.output
+    with open(f"{out}.json") as f:
+        return json.load(f)
+
+
+@pytest.mark.parametrize("command, name, extra", [
+    ("shadow", "s.nc", []),
+    pytest.param("shadow", "s.nc", ["--window-size", "160x130"], marks=pytest.mark.slow),
+    ("shadow", "s.nc", ["--soft"]),
+    pytest.param("hillshade", "s.nc", [], marks=pytest.mark.slow),
+    pytest.param("shadow", "s.zarr", ["--window-size", "160x130"], marks=[
+        pytest.mark.slow, pytest.mark.skipif(not _zarr_here(), reason="zarr not installed")]),
+])
+def test_a_series_into_a_cube_equals_the_geotiffs_bands(tmp_path, runner, command, name, extra):
+    import numpy as np
+    xr = pytest.importorskip("xarray")
+    pytest.importorskip("rioxarray")
+    rep_tif = _shade(runner, command, tmp_path / "s.tif", *extra)
+    rep = _shade(runner, command, tmp_path / name, *extra)
+    with rasterio.open(tmp_path / "s.tif") as ds:
+        bands = ds.read()
+        nodata = ds.nodata
+    with rasterio.open(LIDAR) as ds:
+        dem_crs = ds.crs
+    suns = rep["times"]
+    assert len(suns) == bands.shape[0] == 4
+    var = "visible_fraction" if "--soft" in extra else command
+    engine = "zarr" if name.endswith(".zarr") else None
+    with xr.open_dataset(tmp_path / name, engine=engine) as ds:
+        want = np.array([dt.datetime.fromisoformat(s["time"]).astimezone(UTC)
+                         .replace(tzinfo=None) for s in suns], "datetime64[ns]")
+        np.testing.assert_array_equal(ds["time"].values, want)
+        assert ds.rio.crs == dem_crs and ds[var].rio.crs == dem_crs
+        np.testing.assert_array_equal(ds["azimuth"].values, [s["azimuth"] for s in suns])
+        np.testing.assert_array_equal(ds["elevation"].values, [s["elevation"] for s in suns])
+        np.testing.assert_array_equal(ds["true_azimuth"].values,
+                                      [s["true_azimuth"] for s in suns])
+        assert ds.attrs["Conventions"] == "CF-1.8"
+        assert ds.attrs["source"].startswith("hillshade-rt ")
+        assert f"{command} " in ds.attrs["history"] and name in ds.attrs["history"]
+        assert ds[var].encoding["_FillValue"] == nodata
+    with xr.open_dataset(tmp_path / name, engine=engine, mask_and_scale=False) as ds:
+        assert ds[var].dtype == bands.dtype
+        np.testing.assert_array_equal(ds[var].values, bands)        # bit for bit
+    assert rep["product"]["bands"] == rep_tif["product"]["bands"] == 4
+    assert sorted(os.listdir(tmp_path)) == sorted(["s.tif", "s.tif.json", name, name + ".json"])
+
+
+@pytest.mark.parametrize("extra, said", [
+    (["--co", "COMPRESS=ZSTD"], "--co sets GDAL's creation options"),
+    (["--cog"], "--cog writes a GeoTIFF"),
+    (["--stac-item", "ITEM"], "--stac-item describes a GeoTIFF OUTPUT"),
+])
+def test_a_cube_refuses_what_it_cannot_take(tmp_path, runner, extra, said):
+    extra = [str(tmp_path / "i.json") if e == "ITEM" else e for e in extra]
+    if "--stac-item" in extra:
+        pytest.importorskip("pystac")
+    r = runner.invoke(cli, ["shadow", LIDAR, str(tmp_path / "c.nc"), *SERIES, "-q", *extra])
+    assert r.exit_code == 2, r.output
+    assert said in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    assert os.listdir(tmp_path) == []
+
+
+def test_a_cube_is_not_replaced_without_overwrite(tmp_path, runner):
+    out = tmp_path / "c.nc"
+    _shade(runner, "shadow", out)
+    before = out.read_bytes()
+    r = runner.invoke(cli, ["shadow", LIDAR, str(out), *SERIES, "-q"])
+    assert r.exit_code == 1 and "already exists (use --overwrite" in r.stderr
+    assert out.read_bytes() == before
+    r = runner.invoke(cli, ["shadow", LIDAR, str(out), *SERIES, "-q", "--overwrite", "--soft"])
+    assert r.exit_code == 0, r.output
+    assert sorted(os.listdir(tmp_path)) == ["c.nc", "c.nc.json"]
+
+
+@pytest.mark.parametrize("name", ["c.nc", pytest.param("c.zarr", marks=pytest.mark.skipif(
+    not _zarr_here(), reason="zarr not installed"))])
+def test_a_failed_series_leaves_no_cube(tmp_path, runner, monkeypatch, name):
+    from hillshade_rt.io import cube
+    real = cube.CubeWriter.write
+
+    def third_fails(self, band, data, *a, **k):
+        if band == 3:
+            raise HillshadeError(f"{self.path}: cannot write (input/output error)")
+        return real(self, band, data, *a, **k)
+    monkeypatch.setattr(cube.CubeWriter, "write", third_fails)
+    r = runner.invoke(cli, ["shadow", LIDAR, str(tmp_path / name), *SERIES, "-q"])
+    assert r.exit_code == 1 and "input/output error" in r.stderr
+    assert os.listdir(tmp_path) == []
+
+
+def test_a_single_given_sun_into_nc_stays_gdals(tmp_path, runner):
+    """No times, no series: GDAL's netCDF driver writes the band, as before."""
+    out = tmp_path / "one.nc"
+    r = runner.invoke(cli, ["shadow", LIDAR, str(out), "--azimuth", "203.7", "--elevation",
+                            "20", "-q"])
+    assert r.exit_code == 0, r.output
+    with rasterio.open(out) as ds:
+        assert ds.driver == "netCDF" and ds.count == 1

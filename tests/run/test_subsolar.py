@@ -151,3 +151,34 @@ def test_bad_subsolar_files_write_nothing(tmp_path, runner, dem, content, extra,
     assert words in r.output and "Traceback" not in r.output
     assert len(r.output.strip().splitlines()) == 1
     assert not out.exists()
+
+
+@pytest.mark.slow
+def test_subsolar_series_into_a_cube(tmp_path, runner, dem):
+    """``--subsolar-file`` into OUTPUT.nc: one CF time cube, its bands the GeoTIFF's, the
+    subsolar points and distances per time."""
+    xr = pytest.importorskip("xarray")
+    pytest.importorskip("rioxarray")
+    import rasterio
+    rows = [("2026-01-01T00:00:00Z", -20.5, 97.3, 2e11), ("2026-01-01T06:00:00Z", -15.0, 120.0,
+                                                          1.5e11),
+            ("2026-01-01T12:00:00Z", 3.25, 163.0, 1.0e11)]
+    csv = _series_csv(tmp_path, rows)
+    for name in ("s.tif", "s.nc"):
+        r = runner.invoke(cli, ["shadow", dem, str(tmp_path / name), "--subsolar-file", csv,
+                                "-q"])
+        assert r.exit_code == 0, r.output
+    with rasterio.open(tmp_path / "s.tif") as ds:
+        bands, crs = ds.read(), ds.crs
+    with xr.open_dataset(tmp_path / "s.nc", mask_and_scale=False) as ds:
+        np.testing.assert_array_equal(ds["shadow"].values, bands)
+        np.testing.assert_array_equal(
+            ds["time"].values, np.array([t[:19] for t, *_ in rows], "datetime64[ns]"))
+        np.testing.assert_array_equal(ds["subsolar_lat"].values, [r[1] for r in rows])
+        np.testing.assert_array_equal(ds["sun_distance"].values, [r[3] for r in rows])
+        assert ds.rio.crs == crs
+        assert ds["x"].attrs["units"] == "degrees_east"
+    r = runner.invoke(cli, ["shadow", dem, str(tmp_path / "t.nc"), "--subsolar-file", csv,
+                            "--co", "COMPRESS=ZSTD"])
+    assert r.exit_code == 2 and "--co" in r.stderr
+    assert not (tmp_path / "t.nc").exists()

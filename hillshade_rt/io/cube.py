@@ -1,0 +1,447 @@
+"""Time cubes: a (time, y, x) stack of rasters on one grid written as one CF-1.8 NetCDF4 file
+(``OUT.nc``, through Unidata's netCDF4) or one Zarr store (``OUT.zarr``, through xarray and
+zarr), whole or not at all.
+
+The layout is the one xarray, rioxarray, GDAL's netCDF driver and CF readers (Panoply, CDO,
+ncview) understand without being told:
+
+- dimensions ``time``, ``y``, ``x``; the coordinate variable ``time`` in whole seconds (or
+  microseconds) since 1970-01-01 00:00:00 UTC, calendar "standard"; ``x`` and ``y`` the cells'
+  centres in the CRS's units (``projection_x_coordinate`` / ``projection_y_coordinate``, or
+  ``longitude`` / ``latitude`` in degrees_east / degrees_north for a geographic CRS);
+- a grid-mapping variable ``spatial_ref`` (pyproj's CF attributes, ``crs_wkt``, GDAL's
+  ``spatial_ref`` and ``GeoTransform``) named by the data variable's ``grid_mapping`` (and its
+  ``coordinates``, where rioxarray looks);
+- the data variable (``name``: the product), its ``_FillValue`` the nodata value, chunked one
+  time step per chunk (at most :data:`CHUNK` cells a side), compressed (NetCDF: zlib with the
+  shuffle filter; Zarr: the zarr library's default codec);
+- per-time variables (the sun's azimuth and elevation of a lighting series, ...) on ``time``;
+- global attributes ``Conventions`` "CF-1.8", ``title``, ``history``, ``source``, ...
+
+The data may be written a time step at a time or a window of a time step at a time (the runs
+in windows of rasters larger than memory): :class:`CubeWriter` takes the calls
+:class:`.raster.BandWriter` takes. A NetCDF file goes through :func:`.write.atomic_path` (a
+temporary file beside it, synced, published by a rename that replaces nothing without
+``overwrite``); a Zarr store is a folder: written into a hidden temporary folder beside it,
+every file synced, then renamed into place (``renameat2(RENAME_NOREPLACE)`` where there is
+one; with ``overwrite`` an existing store is moved aside first and removed after). On any
+failure or interruption the temporary file or folder is removed.
+
+References
+----------
+Eaton, B. et al. (2020). NetCDF Climate and Forecast (CF) Metadata Conventions, version 1.8.
+https://cfconventions.org/Data/cf-conventions/cf-conventions-1.8/cf-conventions.html
+"""
+
+from __future__ import annotations
+
+import contextlib
+import datetime as _dt
+import os
+import sys
+import warnings
+
+import numpy as np
+
+from ..errors import HillshadeError
+from .write import (atomic_folder, atomic_path, check_output_path, disk_full, is_virtual,
+                    os_error)
+
+CUBE_SUFFIXES = {".nc": "netcdf", ".zarr": "zarr"}
+CHUNK = 1024          # a chunk's largest side, cells (one time step per chunk)
+ZLIB_LEVEL = 4        # NetCDF's zlib level (netCDF4's default, with the shuffle filter)
+GRID_MAPPING = "spatial_ref"
+_EPOCH = _dt.datetime(1970, 1, 1, tzinfo=_dt.timezone.utc)
+
+
+def cube_format(path) -> str | None:
+    """"netcdf" for ``*.nc``, "zarr" for ``*.zarr`` (any case, a trailing slash allowed), else
+    None."""
+    if path is None:
+        return None
+    p = os.fspath(path).rstrip("/\\")
+    return CUBE_SUFFIXES.get(os.path.splitext(p)[1].lower())
+
+
+def check_cube_support(path) -> str:
+    """The cube's format (:func:`cube_format`) once its libraries are known to be there and
+    the path is a local one: a one-line :class:`HillshadeError` naming what to install (or
+    that GDAL's virtual files are not for cubes) otherwise, before any work."""
+    import importlib.util
+    fmt = cube_format(path)
+    if fmt is not None and is_virtual(os.fspath(path)):
+        raise HillshadeError(f"{path}: a time cube is written to a local file or folder "
+                             "(netCDF4 and zarr, not GDAL's virtual files)")
+    if fmt == "netcdf" and importlib.util.find_spec("netCDF4") is None:
+        raise HillshadeError(f"{path}: a NetCDF time cube needs netCDF4: pip install netCDF4")
+    if fmt == "zarr" and any(importlib.util.find_spec(m) is None
+                             for m in ("xarray", "zarr", "dask")):
+        raise HillshadeError(f"{path}: a Zarr time cube needs xarray, zarr and dask: "
+                             "pip install 'hillshade-rt[xarray]'")
+    return fmt
+
+
+def time_values(times) -> tuple[np.ndarray, str]:
+    """``times`` (aware datetimes, naive ones taken as UTC, or numpy datetime64) as CF numbers:
+    (int64 values, units): whole seconds since 1970-01-01 00:00:00 UTC where every time is a
+    whole second, else microseconds."""
+    us = []
+    for t in times:
+        if isinstance(t, np.datetime64):
+            us.append(int(t.astype("datetime64[us]").astype(np.int64)))
+            continue
+        if t.tzinfo is None:
+            t = t.replace(tzinfo=_dt.timezone.utc)
+        us.append((t - _EPOCH) // _dt.timedelta(microseconds=1))
+    us = np.asarray(us, np.int64)
+    if (us % 1_000_000 == 0).all():
+        return us // 1_000_000, "seconds since 1970-01-01 00:00:00"
+    return us, "microseconds since 1970-01-01 00:00:00"
+
+
+def _geotransform(transform) -> str:
+    """GDAL's GeoTransform attribute: "c a b f d e" (origin x, pixel width, row rotation, origin
+    y, column rotation, pixel height)."""
+    t = tuple(transform)[:6]
+    a, b, c, d, e, f = t
+    return " ".join(f"{v:.17g}" for v in (c, a, b, f, d, e))
+
+
+def _crs_wkt(crs) -> str | None:
+    if crs is None:
+        return None
+    if isinstance(crs, str):
+        return crs
+    to_wkt = getattr(crs, "to_wkt", None)
+    return to_wkt() if to_wkt is not None else str(crs)
+
+
+def grid_variables(shape, transform, crs) -> tuple[dict, dict | None]:
+    """The coordinate variables of a grid: ({"y": (values, attrs), "x": (values, attrs)}, the
+    grid-mapping variable's attributes or None without a CRS). ``transform``: an
+    affine.Affine (north-up or not, no rotation) or None (the cells' indices + 0.5)."""
+    rows, cols = shape
+    j, i = np.arange(cols) + 0.5, np.arange(rows) + 0.5
+    if transform is None:
+        return ({"y": (i, {"long_name": "row (cell centres)", "units": "1"}),
+                 "x": (j, {"long_name": "column (cell centres)", "units": "1"})}, None)
+    a, b, c, d, e, f = tuple(transform)[:6]
+    if b or d:
+        raise HillshadeError("a rotated or sheared grid cannot be a CF time cube; write a "
+                             "GeoTIFF (.tif)")
+    x, y = c + j * a, f + i * e
+    wkt = _crs_wkt(crs)
+    geographic, cf, units = False, {}, None
+    if wkt:
+        from pyproj import CRS
+        pc = CRS.from_wkt(wkt)
+        geographic = pc.is_geographic
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")     # "you will likely lose important projection
+            cf = pc.to_cf()                     # information": the WKT below keeps it whole
+        if not geographic and pc.axis_info:
+            units = pc.axis_info[0].unit_name
+    if geographic:
+        xa = {"standard_name": "longitude", "long_name": "longitude", "units": "degrees_east",
+              "axis": "X"}
+        ya = {"standard_name": "latitude", "long_name": "latitude", "units": "degrees_north",
+              "axis": "Y"}
+    else:
+        xa = {"standard_name": "projection_x_coordinate",
+              "long_name": "x coordinate of projection", "axis": "X"}
+        ya = {"standard_name": "projection_y_coordinate",
+              "long_name": "y coordinate of projection", "axis": "Y"}
+        if units:
+            u = {"metre": "m", "meter": "m", "US survey foot": "US_survey_foot",
+                 "foot": "ft"}.get(units, units)
+            xa["units"] = ya["units"] = u
+    gm = None
+    if wkt:
+        gm = {k: v for k, v in cf.items() if k != "crs_wkt"}
+        gm.update(crs_wkt=wkt, spatial_ref=wkt, GeoTransform=_geotransform(transform))
+    return {"y": (y, ya), "x": (x, xa)}, gm
+
+
+class CubeWriter:
+    """A (time, y, x) cube georeferenced like ``dem`` (anything with ``shape``, ``transform``:
+    affine.Affine or None, ``crs``: rasterio's or pyproj's CRS, WKT, or None) written one time
+    step, or one window of one, at a time, published under ``path`` when complete; the calls
+    of :class:`.raster.BandWriter`::
+
+        with CubeWriter("out.nc", dem, times, name="shadow", dtype="uint8", nodata=255) as w:
+            w.write(1, mask)                           # time step 1 (1-based), whole
+            w.write(2, part, window=(r0, r1, c0, c1))  # or a window of it
+
+    Parameters
+    ----------
+    path : str
+        ``*.nc`` (NetCDF4, netCDF4) or ``*.zarr`` (a Zarr store, xarray and zarr).
+    dem : object
+        The grid: ``shape`` (rows, cols), ``transform``, ``crs``.
+    times : sequence of datetime.datetime or numpy.datetime64
+        One per time step (aware; naive ones are UTC), written as CF times in UTC.
+    name : str
+        The data variable's name (the product: "shadow", "hillshade", ...).
+    dtype : str
+        "uint8", "uint16", "int16", "float32", ... (numpy's name).
+    nodata : float or int or None
+        The ``_FillValue`` (None: none).
+    attrs : dict, optional
+        The data variable's attributes (``units``, ``long_name``, ``flag_values``, ...).
+    time_variables : dict, optional
+        ``{name: (values, attrs)}``: a value per time step each (the sun's ``azimuth`` and
+        ``elevation`` in degrees, ...), float64 unless the values say otherwise.
+    global_attrs : dict, optional
+        Global attributes (``title``, ``history``, ``source``, ...) after
+        ``Conventions = "CF-1.8"``.
+    overwrite : bool
+        Replace an existing file or Zarr store at ``path`` (else it is an error, also when
+        one appears while the cube is written).
+    chunk : int
+        A chunk's largest side in cells (one time step per chunk).
+    """
+
+    def __init__(self, path, dem, times, *, name: str, dtype: str, nodata=None,
+                 attrs: dict | None = None, time_variables: dict | None = None,
+                 global_attrs: dict | None = None, overwrite: bool = False, chunk: int = CHUNK):
+        self.path = os.fspath(path)
+        self.format = check_cube_support(self.path)
+        if self.format is None:
+            raise HillshadeError(f"{self.path}: a time cube is a .nc or .zarr path")
+        check_output_path(self.path, overwrite)     # (exists, no folder, ...: before any work)
+        self.shape = tuple(int(n) for n in dem.shape)
+        self.count = len(times)
+        self.time, self.time_units = time_values(times)
+        self.coords, self.grid_mapping = grid_variables(self.shape, dem.transform, dem.crs)
+        self.name, self.dtype = name, np.dtype(dtype)
+        self.nodata = None if nodata is None else self.dtype.type(nodata)
+        self.attrs = dict(attrs or {})
+        self.time_variables = {}
+        for k, (values, a) in (time_variables or {}).items():
+            v = np.asarray(values)
+            if v.shape != (self.count,):
+                raise ValueError(f"time variable {k}: {v.shape[0] if v.ndim else 0} values for "
+                                 f"{self.count} times")
+            if v.dtype.kind not in "iuf":
+                v = v.astype(np.float64)
+            self.time_variables[k] = (v, dict(a))
+        self.global_attrs = {"Conventions": "CF-1.8", **(global_attrs or {})}
+        self.overwrite = overwrite
+        rows, cols = self.shape
+        self.chunks = (1, max(1, min(rows, chunk)), max(1, min(cols, chunk)))
+        self._stack = contextlib.ExitStack()
+        self._nc = self._zarr = None
+        self._tmp = None
+        self._finished = False
+
+    # -- the layout, shared by both formats --------------------------------------------------
+
+    def _time_attrs(self) -> dict:
+        return {"standard_name": "time", "long_name": "time (UTC)", "axis": "T",
+                "units": self.time_units, "calendar": "standard"}
+
+    def _data_attrs(self) -> dict:
+        a = dict(self.attrs)
+        if self.grid_mapping is not None:
+            a["grid_mapping"] = GRID_MAPPING
+            a["coordinates"] = GRID_MAPPING     # (rioxarray finds the CRS through it)
+        return a
+
+    # -- opening -----------------------------------------------------------------------------
+
+    def __enter__(self):
+        try:
+            if self.format == "netcdf":
+                self._open_netcdf()
+            else:
+                self._open_zarr()
+        except BaseException:
+            if not self._stack.__exit__(*sys.exc_info()):
+                raise
+        return self
+
+    def _open_netcdf(self):
+        import netCDF4
+        self._tmp = self._stack.enter_context(atomic_path(self.path, ".nc",
+                                                          overwrite=self.overwrite))
+        self._stack.callback(self._close_quietly)   # (an error: closed, then removed)
+        with self._checked():
+            nc = self._nc = netCDF4.Dataset(self._tmp, "w", format="NETCDF4")
+            nc.set_auto_maskandscale(False)          # the values as given, bit for bit
+            nc.setncatts(self.global_attrs)
+            rows, cols = self.shape
+            nc.createDimension("time", self.count)
+            nc.createDimension("y", rows)
+            nc.createDimension("x", cols)
+            t = nc.createVariable("time", self.time.dtype, ("time",))
+            t.setncatts(self._time_attrs())
+            t[:] = self.time
+            for k in ("y", "x"):
+                values, a = self.coords[k]
+                v = nc.createVariable(k, "f8", (k,))
+                v.setncatts(a)
+                v[:] = values
+            if self.grid_mapping is not None:
+                g = nc.createVariable(GRID_MAPPING, "i4")
+                g.setncatts(self.grid_mapping)
+            for k, (values, a) in self.time_variables.items():
+                v = nc.createVariable(k, values.dtype, ("time",))
+                v.setncatts(a)
+                v[:] = values
+            d = nc.createVariable(self.name, self.dtype, ("time", "y", "x"), zlib=True,
+                                  complevel=ZLIB_LEVEL, shuffle=True, chunksizes=self.chunks,
+                                  fill_value=self.nodata if self.nodata is not None else False)
+            d.setncatts(self._data_attrs())
+            self._var = d
+
+    def _open_zarr(self):
+        import xarray as xr
+        import zarr
+
+        self._tmp = self._stack.enter_context(atomic_folder(self.path, ".zarr",
+                                                            self.overwrite))
+        coords = {"time": ("time", self.time, self._time_attrs())}
+        for k in ("y", "x"):
+            values, a = self.coords[k]
+            coords[k] = (k, values, a)
+        import dask.array as da
+        fill = self.nodata if self.nodata is not None else self.dtype.type(0)
+        # the data variable's metadata only (a lazy array never computed: compute=False), its
+        # chunks written by write()
+        blank = da.full((self.count,) + self.shape, fill, dtype=self.dtype, chunks=self.chunks)
+        attrs = self._data_attrs()
+        attrs.pop("coordinates", None)      # xarray writes it from the coordinates
+        variables = {self.name: (("time", "y", "x"), blank, attrs)}
+        for k, (values, a) in self.time_variables.items():
+            variables[k] = ("time", values, a)
+        if self.grid_mapping is not None:
+            coords[GRID_MAPPING] = ((), np.int32(0), self.grid_mapping)
+        ds = xr.Dataset(variables, coords=coords, attrs=self.global_attrs)
+        enc = {self.name: {"chunks": self.chunks,
+                           "_FillValue": self.nodata if self.nodata is not None else None},
+               "time": {"dtype": self.time.dtype, "_FillValue": None},
+               "x": {"_FillValue": None}, "y": {"_FillValue": None}}
+        with self._checked(), warnings.catch_warnings():
+            warnings.simplefilter("ignore")    # zarr v3's note on consolidated metadata
+            ds.to_zarr(self._tmp, mode="w", encoding=enc, compute=False)
+            self._zarr = zarr.open_group(self._tmp, mode="r+")[self.name]
+
+    # -- writing -----------------------------------------------------------------------------
+
+    @contextlib.contextmanager
+    def _checked(self):
+        """netCDF4's, HDF5's and zarr's failures as one line naming the cube (a full disk
+        says so)."""
+        try:
+            yield
+        except HillshadeError:
+            raise
+        except OSError as exc:
+            if disk_full(self.path):
+                raise HillshadeError(f"{self.path}: cannot write (no space left on device)"
+                                     ) from None
+            raise os_error(self.path, exc) from None
+        except (RuntimeError, ValueError, TypeError) as exc:
+            if disk_full(self.path):
+                raise HillshadeError(f"{self.path}: cannot write (no space left on device)"
+                                     ) from None
+            said = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            raise HillshadeError(f"{self.path}: cannot write ({said})") from None
+
+    def write(self, band: int, data: np.ndarray, description: str = "",
+              tags: dict | None = None, window: tuple[int, int, int, int] | None = None):
+        """Time step ``band`` (1-based), whole or its ``window`` (r0, r1, c0, c1). The step's
+        description and tags are the cube's time and per-time variables (ignored here)."""
+        r0, r1, c0, c1 = window if window is not None else (0, self.shape[0], 0, self.shape[1])
+        if data.shape != (r1 - r0, c1 - c0):
+            raise ValueError(f"{self.path}: data of shape {data.shape} for a window of "
+                             f"{(r1 - r0, c1 - c0)}")
+        data = np.asarray(data, self.dtype)
+        with self._checked():
+            target = self._var if self._nc is not None else self._zarr
+            target[band - 1, r0:r1, c0:c1] = data
+
+    def describe(self, band: int, description: str = "", tags: dict | None = None):
+        """(The time step's description and tags: the cube's time and per-time variables.)"""
+
+    def _close_quietly(self):
+        if self._nc is not None:
+            nc, self._nc = self._nc, None
+            with contextlib.suppress(Exception):
+                nc.close()
+
+    def finish(self) -> None:
+        """Close the cube and publish it now (not at the end of the ``with`` block)."""
+        self.__exit__(None, None, None)
+
+    def __exit__(self, *exc):
+        if self._finished:
+            return False
+        self._finished = True
+        if exc[0] is None:
+            try:
+                if self._nc is not None:
+                    nc, self._nc = self._nc, None
+                    with self._checked():
+                        nc.close()
+            except BaseException as err:
+                self._stack.__exit__(type(err), err, err.__traceback__)
+                raise
+        return self._stack.__exit__(*exc)
+
+
+def write_cube(path, data, dem, times, *, name: str, nodata=None, attrs: dict | None = None,
+               time_variables: dict | None = None, global_attrs: dict | None = None,
+               overwrite: bool = False) -> str:
+    """Write the stack ``data`` (time, rows, cols) on the grid of ``dem`` as a CF-1.8 time
+    cube at ``path`` (``*.nc``: NetCDF4; ``*.zarr``: Zarr), atomically.
+
+    Parameters
+    ----------
+    path : str
+        The cube: ``*.nc`` or ``*.zarr``.
+    data : numpy.ndarray
+        (time, rows, cols) values, any numeric type (uint8 masks, float32 fractions, W m-2, ...);
+        its type is the data variable's.
+    dem : object
+        The grid: ``shape`` (rows, cols), ``transform`` (affine.Affine, cell corners in the
+        CRS's units, or None), ``crs`` (rasterio's or pyproj's CRS, WKT, or None).
+    times : sequence of datetime.datetime or numpy.datetime64
+        One per time step; aware datetimes in any zone (naive ones are UTC); stored in UTC.
+    name : str
+        The data variable's name.
+    nodata : float or int, optional
+        Its ``_FillValue``.
+    attrs : dict, optional
+        Its attributes (``units``, ``long_name``, ``standard_name``, ...).
+    time_variables : dict, optional
+        ``{name: (values, attrs)}``: one value per time step each (e.g. ``"elevation":
+        (degrees, {"units": "degree"})``).
+    global_attrs : dict, optional
+        ``title``, ``history``, ``source``, ... (``Conventions`` is "CF-1.8").
+    overwrite : bool
+        Replace an existing file or store at ``path``.
+
+    Returns
+    -------
+    str
+        ``path``.
+
+    Raises
+    ------
+    HillshadeError
+        One line: the path cannot be written (exists without ``overwrite``, no space, ...),
+        the libraries are missing, the grid is rotated. Nothing is left at ``path`` then.
+    """
+    data = np.asarray(data)
+    if data.ndim != 3 or data.shape[1:] != tuple(dem.shape):
+        raise ValueError(f"data of shape {data.shape} for a grid of {tuple(dem.shape)}: give "
+                         "(time, rows, cols)")
+    if data.shape[0] != len(times):
+        raise ValueError(f"{data.shape[0]} time steps of data for {len(times)} times")
+    with CubeWriter(path, dem, times, name=name, dtype=data.dtype.name, nodata=nodata,
+                    attrs=attrs, time_variables=time_variables, global_attrs=global_attrs,
+                    overwrite=overwrite) as w:
+        for i in range(data.shape[0]):
+            w.write(i + 1, data[i])
+    return os.fspath(path)

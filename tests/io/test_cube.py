@@ -1,0 +1,310 @@
+"""Time cubes (io.cube): a (time, y, x) stack as a CF-1.8 NetCDF4 file or a Zarr store that
+xarray decodes (times as datetime64) and rioxarray georeferences, written whole or not at all."""
+
+import datetime as dt
+import os
+from types import SimpleNamespace
+from zoneinfo import ZoneInfo
+
+import numpy as np
+import pytest
+from affine import Affine
+from rasterio.crs import CRS
+
+from hillshade_rt.errors import HillshadeError
+from hillshade_rt.io import cube
+from hillshade_rt.io import write as writes
+
+xr = pytest.importorskip("xarray")
+pytest.importorskip("rioxarray")
+
+UTM = CRS.from_epsg(32615)
+ZONE = ZoneInfo("America/Chicago")
+TIMES = [dt.datetime(2026, 6, 21, h, m, tzinfo=ZONE) for h, m in ((9, 0), (10, 30), (16, 45))]
+AZ, EL = [163.0, 203.7, 290.0], [40.5, 61.25, 12.0]
+
+
+def _grid(rows=37, cols=53, crs=UTM, transform=Affine(2.0, 0, 500000.0, 0, -3.0, 4200000.0)):
+    return SimpleNamespace(shape=(rows, cols), crs=crs, transform=transform)
+
+
+def _stack(rows=37, cols=53, dtype=np.uint8):
+    rng = np.random.default_rng(7)
+    if dtype == np.uint8:
+        a = rng.integers(0, 2, (len(TIMES), rows, cols)).astype(np.uint8)
+        a[:, :3, :4] = 255
+        return a
+    a = rng.random((len(TIMES), rows, cols)).astype(np.float32)
+    a[:, -2:, -5:] = -9999.0
+    return a
+
+
+def _write(path, data, grid=None, **kw):
+    kw.setdefault("nodata", 255 if data.dtype == np.uint8 else -9999.0)
+    return cube.write_cube(
+        path, data, grid or _grid(*data.shape[1:]), TIMES, name="shadow",
+        attrs={"long_name": "cast shadow"},
+        time_variables={"azimuth": (AZ, {"units": "degree"}),
+                        "elevation": (EL, {"units": "degree"})},
+        global_attrs={"title": "a test", "history": "pytest", "source": "hillshade-rt"}, **kw)
+
+
+def _utc64(times):
+    return np.array([t.astimezone(dt.timezone.utc).replace(tzinfo=None) for t in times],
+                    "datetime64[ns]")
+
+
+def _open(path):
+    if str(path).endswith(".zarr"):
+        return xr.open_zarr(path)
+    return xr.open_dataset(path)
+
+
+def test_cube_format_by_name():
+    assert cube.cube_format("a/b.NC") == "netcdf" and cube.cube_format("s.zarr/") == "zarr"
+    assert cube.cube_format("x.tif") is None and cube.cube_format(None) is None
+
+
+FORMATS = ["out.nc", pytest.param("out.zarr", marks=pytest.mark.skipif(
+    __import__("importlib").util.find_spec("zarr") is None, reason="zarr not installed"))]
+
+
+@pytest.mark.parametrize("name", FORMATS)
+def test_cube_decodes_times_values_crs_and_suns(tmp_path, name):
+    data = _stack()
+    path = tmp_path / name
+    _write(path, data)
+    with _open(path) as ds:
+        assert ds.attrs["Conventions"] == "CF-1.8" and ds.attrs["title"] == "a test"
+        assert ds["shadow"].dims == ("time", "y", "x")
+        assert ds["time"].dtype.kind == "M"
+        np.testing.assert_array_equal(ds["time"].values, _utc64(TIMES))
+        # the values as written, nodata masked by _FillValue when decoded
+        raw = ds["shadow"].values
+        np.testing.assert_array_equal(np.isnan(raw), data == 255)
+        np.testing.assert_array_equal(raw[data != 255], data[data != 255])
+        assert ds["shadow"].encoding["_FillValue"] == 255
+        np.testing.assert_array_equal(ds["azimuth"].values, AZ)
+        np.testing.assert_array_equal(ds["elevation"].values, EL)
+        # cell centres; CF names; the CRS through the grid mapping, as rioxarray finds it
+        np.testing.assert_allclose(ds["x"].values, 500000.0 + 2.0 * (np.arange(53) + 0.5))
+        np.testing.assert_allclose(ds["y"].values, 4200000.0 - 3.0 * (np.arange(37) + 0.5))
+        assert ds["x"].attrs["standard_name"] == "projection_x_coordinate"
+        assert ds["y"].attrs["standard_name"] == "projection_y_coordinate"
+        assert ds["x"].attrs["units"] == "m"
+        assert ds["shadow"].encoding.get("grid_mapping", ds["shadow"].attrs.get(
+            "grid_mapping")) == "spatial_ref"
+        assert ds.rio.crs == UTM and ds["shadow"].rio.crs == UTM
+        gt = [float(v) for v in ds["spatial_ref"].attrs["GeoTransform"].split()]
+        assert gt == [500000.0, 2.0, 0.0, 4200000.0, 0.0, -3.0]
+        assert ds["spatial_ref"].attrs["grid_mapping_name"] == "transverse_mercator"
+        assert tuple(ds.rio.transform())[:6] == (2.0, 0.0, 500000.0, 0.0, -3.0, 4200000.0)
+    with xr.open_dataset(path, mask_and_scale=False, engine="zarr" if name.endswith(".zarr")
+                         else None) as ds:
+        assert ds["shadow"].dtype == np.uint8
+        np.testing.assert_array_equal(ds["shadow"].values, data)      # bit for bit
+
+
+def test_netcdf_chunks_a_time_step_each_and_compresses(tmp_path):
+    netCDF4 = pytest.importorskip("netCDF4")
+    path = tmp_path / "c.nc"
+    _write(path, _stack(300, 1500), _grid(300, 1500))
+    with netCDF4.Dataset(path) as nc:
+        v = nc["shadow"]
+        assert v.chunking() == [1, 300, 1024]
+        f = v.filters()
+        assert f["zlib"] and f["shuffle"] and f["complevel"] == cube.ZLIB_LEVEL
+        assert nc["time"].units == "seconds since 1970-01-01 00:00:00"
+        assert nc["time"].calendar == "standard"
+        assert nc.data_model == "NETCDF4"
+
+
+def test_windows_of_a_time_step(tmp_path):
+    data = _stack(dtype=np.float32)
+    grid = _grid()
+    path = tmp_path / "w.nc"
+    with cube.CubeWriter(path, grid, TIMES, name="f", dtype="float32", nodata=-9999.0) as w:
+        for i in range(len(TIMES)):
+            for r0, r1 in ((0, 20), (20, 37)):
+                for c0, c1 in ((0, 30), (30, 53)):
+                    w.write(i + 1, data[i, r0:r1, c0:c1], window=(r0, r1, c0, c1))
+    with xr.open_dataset(path, mask_and_scale=False) as ds:
+        np.testing.assert_array_equal(ds["f"].values, data)
+
+
+def test_geographic_grid_and_sub_second_times(tmp_path):
+    grid = _grid(10, 12, CRS.from_epsg(4326), Affine(0.001, 0, 7.5, 0, -0.001, 46.2))
+    times = [dt.datetime(2026, 3, 1, 12, 0, 0, 250000, tzinfo=dt.timezone.utc),
+             dt.datetime(2026, 3, 1, 12, 0, 1, tzinfo=dt.timezone.utc)]
+    path = tmp_path / "g.nc"
+    cube.write_cube(path, np.zeros((2, 10, 12), np.float32), grid, times, name="v")
+    with xr.open_dataset(path) as ds:
+        assert ds["x"].attrs["standard_name"] == "longitude"
+        assert ds["x"].attrs["units"] == "degrees_east"
+        assert ds["y"].attrs["units"] == "degrees_north"
+        assert ds.rio.crs == CRS.from_epsg(4326)
+        np.testing.assert_array_equal(ds["time"].values, _utc64(times))
+        assert ds["time"].encoding["units"].startswith("microseconds since 1970")
+
+
+def test_no_georeferencing_no_grid_mapping(tmp_path):
+    path = tmp_path / "n.nc"
+    cube.write_cube(path, np.ones((1, 3, 4), np.uint8), _grid(3, 4, None, None), TIMES[:1],
+                    name="v")
+    with xr.open_dataset(path) as ds:
+        assert "spatial_ref" not in ds.variables
+        np.testing.assert_array_equal(ds["x"].values, [0.5, 1.5, 2.5, 3.5])
+
+
+def test_rotated_grid_and_bad_shapes_refused(tmp_path):
+    with pytest.raises(HillshadeError, match="rotated"):
+        cube.write_cube(tmp_path / "r.nc", np.zeros((1, 3, 4), np.uint8),
+                        _grid(3, 4, UTM, Affine(1, 0.2, 0, 0, -1, 0)), TIMES[:1], name="v")
+    with pytest.raises(ValueError, match="time"):
+        cube.write_cube(tmp_path / "r.nc", np.zeros((2, 3, 4), np.uint8), _grid(3, 4),
+                        TIMES, name="v")
+    with pytest.raises(ValueError, match="azimuth"):
+        cube.write_cube(tmp_path / "r.nc", np.zeros((3, 3, 4), np.uint8), _grid(3, 4),
+                        TIMES, name="v", time_variables={"azimuth": ([1.0], {})})
+    with pytest.raises(HillshadeError, match="local file"):
+        cube.write_cube("/vsimem/c.nc", np.zeros((1, 3, 4), np.uint8), _grid(3, 4), TIMES[:1],
+                        name="v")
+    assert os.listdir(tmp_path) == []
+
+
+@pytest.mark.parametrize("name", FORMATS)
+def test_exists_refused_without_overwrite_replaced_with_it(tmp_path, name):
+    path = tmp_path / name
+    _write(path, _stack())
+    with pytest.raises(HillshadeError, match="already exists"):
+        _write(path, _stack())
+    data = _stack()
+    data[:] = 0
+    _write(path, data, overwrite=True)
+    with _open(path) as ds:
+        assert float(ds["shadow"].max()) == 0.0
+    assert os.listdir(tmp_path) == [name]       # no temporary left, no old store
+
+
+def test_a_folder_that_is_no_zarr_store_is_not_replaced(tmp_path):
+    pytest.importorskip("zarr")
+    path = tmp_path / "mine.zarr"
+    path.mkdir()
+    (path / "notes.txt").write_text("keep me")
+    with pytest.raises(HillshadeError, match="no Zarr store"):
+        _write(path, _stack(), overwrite=True)
+    assert (path / "notes.txt").read_text() == "keep me"
+
+
+@pytest.mark.parametrize("name", FORMATS)
+def test_a_failure_while_writing_leaves_nothing(tmp_path, name):
+    path = tmp_path / name
+    with pytest.raises(RuntimeError, match="stop"):
+        with cube.CubeWriter(path, _grid(), TIMES, name="v", dtype="uint8", nodata=255) as w:
+            w.write(1, _stack()[0])
+            raise RuntimeError("stop")
+    assert os.listdir(tmp_path) == []
+
+
+class _Failing:
+    def __setitem__(self, key, value):
+        raise RuntimeError("NetCDF: HDF error")
+
+
+@pytest.mark.parametrize("full", [True, False])
+def test_a_write_error_is_one_line_and_leaves_nothing(tmp_path, monkeypatch, full):
+    path = tmp_path / "e.nc"
+    said = r"no space left on device" if full else r"NetCDF: HDF error"
+    with pytest.raises(HillshadeError, match=rf"e\.nc: cannot write \({said}\)"):
+        with cube.CubeWriter(path, _grid(), TIMES, name="v", dtype="uint8", nodata=255) as w:
+            monkeypatch.setattr(cube, "disk_full", lambda p: full)
+            w._var = _Failing()
+            w.write(1, np.zeros((37, 53), np.uint8))
+    assert os.listdir(tmp_path) == []
+
+
+def test_an_interruption_at_publish_leaves_nothing(tmp_path, monkeypatch):
+    from hillshade_rt.errors import Interrupted
+
+    def interrupted(*a, **k):
+        raise Interrupted(2)
+    monkeypatch.setattr(writes, "publish", interrupted)
+    with pytest.raises(Interrupted):
+        _write(tmp_path / "i.nc", _stack())
+    assert os.listdir(tmp_path) == []
+
+
+def test_output_path_check_knows_zarr_stores(tmp_path):
+    pytest.importorskip("zarr")
+    path = tmp_path / "s.zarr"
+    _write(path, _stack())
+    with pytest.raises(HillshadeError, match="already exists"):
+        writes.check_output_path(str(path), False)
+    assert writes.check_output_path(str(path), True) == str(path)
+    (tmp_path / "f.zarr").mkdir()
+    with pytest.raises(HillshadeError, match="no Zarr store"):
+        writes.check_output_path(str(tmp_path / "f.zarr"), True)
+    (tmp_path / "d").mkdir()
+    with pytest.raises(HillshadeError, match="is a folder"):
+        writes.check_output_path(str(tmp_path / "d"), True)
+
+
+def test_the_zarr_folders_of_dead_runs_are_swept(tmp_path):
+    tag = writes.owner_tag()
+    pid, rest = tag.split("-", 1)
+    start = rest.split("-", 1)[0]
+    other = f"{pid}-{int(start) + 1}-{rest.split('-', 1)[1]}"       # the pid reused
+    reused = tmp_path / f".s.zarr.abcdefgh~{other}.part.zarr"
+    mine = tmp_path / f".t.zarr.abcdefgh~{tag}.part.zarr"
+    for f in (reused, mine):
+        f.mkdir()
+        (f / "zarr.json").write_text("{}")
+    writes.reset()
+    _write(tmp_path / "n.nc", _stack())
+    assert not reused.exists() and mine.exists()        # dead (pid reused); alive
+
+
+
+def test_zarr_without_its_libraries_names_the_extra(tmp_path, monkeypatch):
+    import importlib.util
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec",
+                        lambda name, *a: None if name == "zarr" else real(name, *a))
+    with pytest.raises(HillshadeError, match=r"pip install 'hillshade-rt\[xarray\]'"):
+        _write(tmp_path / "s.zarr", _stack())
+    assert cube.check_cube_support(tmp_path / "s.nc") == "netcdf"
+    assert os.listdir(tmp_path) == []
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", FORMATS)
+def test_a_signal_leaves_no_half_written_cube(tmp_path, name):
+    """SIGTERM while a long series is written into a cube: exit 143, one line, nothing left
+    (the temporary file or folder removed)."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    from hillshade_rt.testing import fractal_terrain, write_geotiff
+    dem = write_geotiff(tmp_path / "big.tif", fractal_terrain(900, 900, 7, relief=1500),
+                        Affine(10, 0, 400000, 0, -10, 3800000), CRS.from_epsg(32611))
+    out = tmp_path / "out"
+    out.mkdir()
+    p = subprocess.Popen([sys.executable, "-m", "hillshade_rt", "shadow", dem, str(out / name),
+                          "--algorithm", "brute", "--start", "2026-06-21T06:00-07:00", "--end",
+                          "2026-06-21T19:00-07:00", "--step", "10min", "-q", "--threads", "1"],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        t0 = time.time()
+        while not any(".part" in n for n in os.listdir(out)):      # writing has begun
+            assert time.time() - t0 < 120 and p.poll() is None, os.listdir(out)
+            time.sleep(0.02)
+        p.send_signal(signal.SIGTERM)
+        _, err = p.communicate(timeout=120)
+    finally:
+        if p.poll() is None:
+            p.kill()
+    assert p.returncode == 143, err
+    assert err.strip().count("\n") == 0 and "Traceback" not in err, err
+    assert os.listdir(out) == [], os.listdir(out)
