@@ -15,6 +15,8 @@
 ``raster``     ``BandWriter``, the one GeoTIFF profile, output formats, COGs, PNG pictures
 ``write``      every file written whole or not at all: ``atomic_path``, ``Claims``,
                ``gdal_checked``, signals, ``write_json``
+``vector``     shadow polygons: a mask's bands traced by GDAL, written by Fiona (GPKG,
+               GeoJSON, FlatGeobuf) whole or not at all: ``write_polygons``
 =============  ===============================================================================
 
 The names below are imported when first used (PEP 562): ``hillshade_rt.io.write`` (what the
