@@ -159,7 +159,8 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
           stac_item: str | None = None, context=None, each: bool = False,
           light_position=None, light_lonlat=None, falloff: str | None = None,
           bits: int | None = None, subsolar=None, subsolar_file=None,
-          sun_distance: float | None = None, body: str | None = None, **more) -> dict:
+          sun_distance: float | None = None, body: str | None = None, vector=None,
+          vector_connectivity: int = 4, **more) -> dict:
     """Shade DEM file(s) into ``output`` (one band per sun) or ``output_pattern`` files.
     A series of times into an ``output`` named ``*.nc`` or ``*.zarr`` is one CF-1.8 time cube
     (``io.cube``: dimensions time, y, x; the sun's azimuth and elevation per time).
@@ -200,6 +201,14 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
     ``progress``: False (nothing on stderr, as ``--quiet``), True or "bar" (the progress bar
     and the summary line), "json" (only ``{"progress": F}`` lines, as ``--progress json``).
 
+    ``vector``: also write the shadow as polygons to this file (GeoPackage ``.gpkg``, GeoJSON
+    ``.geojson``, FlatGeobuf ``.fgb``), in the DEM's CRS, one layer with every sun's polygons
+    (attributes ``azimuth``, ``elevation``; ``time`` and ``true_azimuth`` for suns from times;
+    ``index`` in a series; ``shadow_class`` with ``product="classes"``), as ``--vector``;
+    ``output`` may then be None (polygons only). ``vector_connectivity``: 4 (cells joined
+    through their edges) or 8 (also their corners). The report's ``vector`` gives their count
+    and area.
+
     ``each``: many unrelated DEMs (any grid, CRS, size) in one call, each shaded on its own
     into ``output_pattern`` with ``{stem}`` (the input's file name without its extension), as
     ``--each``: the report lists each input's status (``ok``, ``empty``: every cell nodata,
@@ -223,8 +232,8 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
         raise HillshadeError("no DEM given")
     if not each:
         check_pattern(output_pattern, False)     # {stem} without each
-    if output is None and output_pattern is None and not each:
-        raise HillshadeError("give output or output_pattern")
+    if output is None and output_pattern is None and not each and vector is None:
+        raise HillshadeError("give output or output_pattern (or vector)")
     if scale is not None and product != "hillshade":
         raise HillshadeError("scale applies to product='hillshade'")
     if any(v is not None for v in (subsolar, subsolar_file, sun_distance, body, light_position,
@@ -242,7 +251,8 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
                     output_pattern=output_pattern, cog=cog, stac_item=stac_item,
                     context=context, each=each, light_position=light_position,
                     light_lonlat=light_lonlat, falloff=falloff, bits=bits, subsolar=subsolar,
-                    subsolar_file=subsolar_file, sun_distance=sun_distance, body=body),
+                    subsolar_file=subsolar_file, sun_distance=sun_distance, body=body,
+                    vector=vector),
                 ReadOptions(**{k: more[k] for k in READ_KEYS if k in more}),
                 RunOptions(backend=backend, threads=more.get("threads"), report_path=report,
                            overwrite=overwrite, **_progress(progress), fmt=fmt,
@@ -276,7 +286,9 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
                       output_pattern=output_pattern, max_memory=max_memory,
                       window_size=window_size, cog=cog, scheduler=client,
                       height_above_ground=height_above_ground,
-                      stac_item=None if stac_item is None else os.fspath(stac_item))
+                      stac_item=None if stac_item is None else os.fspath(stac_item),
+                      vector=None if vector is None else os.fspath(vector),
+                      vector_connectivity=vector_connectivity)
     token = virtual_outputs.set(True)    # /vsimem/ outputs are fine from Python
     try:
         return shade_each(cfg) if each else run_shade(cfg)
@@ -304,7 +316,8 @@ def _other_light(files, output, product, kw, read, run) -> dict:
                "--context": kw["context"] is not None,
                "--scheduler": kw["client"] is not None,
                "--output-pattern": kw["output_pattern"] is not None, "--cog": kw["cog"],
-               "--stac-item": kw["stac_item"] is not None, "--each": kw["each"]}
+               "--stac-item": kw["stac_item"] is not None, "--each": kw["each"],
+               "--vector": kw["vector"] is not None}
     if subsolar:
         if hill:
             raise UsageProblem("--subsolar, --subsolar-file, --sun-distance and --body go with "

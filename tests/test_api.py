@@ -332,3 +332,27 @@ def test_shade_of_times_into_nc_is_a_time_cube(tmp_path):
         np.testing.assert_array_equal(ds["shadow"].values[1], read_band(tmp_path / "t.tif", 2))
         assert ds["azimuth"].values.tolist() == [s["azimuth"] for s in rep["times"]]
         assert "Python API" in ds.attrs["history"]
+
+
+def test_shade_writes_shadow_polygons_with_or_without_output(tmp_path):
+    """vector= is --vector: the polygons of the output's shadow cells, output optional; its
+    errors name the keywords."""
+    import fiona
+    dem = write_geotiff(tmp_path / "d.tif", fractal_terrain(60, 70, 9, relief=300.0),
+                        Affine(30, 0, 476000, 0, -30, 4400000), CRS.from_epsg(32613))
+    both = hr.shade(dem, tmp_path / "m.tif", azimuth=290, elevation=10,
+                    vector=tmp_path / "m.gpkg")
+    only = hr.shade(dem, azimuth=290, elevation=10, vector=str(tmp_path / "o.fgb"))
+    cells = (read_band(tmp_path / "m.tif") == 1).sum()
+    for rep, name in ((both, "m.gpkg"), (only, "o.fgb")):
+        assert rep["vector"]["area_m2"] == pytest.approx(cells * 900.0, rel=1e-9)
+        with fiona.open(tmp_path / name) as src:
+            assert len(src) == rep["vector"]["polygons"] > 0
+    assert only["output"] is None and sorted(os.listdir(tmp_path)) == [
+        "d.tif", "m.gpkg", "m.tif", "o.fgb"]
+    with pytest.raises(hr.HillshadeError) as e:
+        hr.shade(dem, azimuth=290, elevation=10, vector=tmp_path / "o.fgb",
+                 vector_connectivity=5)
+    assert "vector_connectivity must be 4 or 8" in str(e.value) and "--" not in str(e.value)
+    with pytest.raises(hr.HillshadeError, match="give output or output_pattern"):
+        hr.shade(dem, azimuth=290, elevation=10)

@@ -209,6 +209,19 @@ def test_hillshade_sun_hours_skyview_argv():
     assert "--max-distance" not in cmd.skyview_argv("hr", "d.tif", "o.tif", max_distance=0)
 
 
+def test_shadow_argv_vector():
+    """The optional shadow polygons: --vector after the mask's options; not with soft."""
+    argv = cmd.shadow_argv("hr", "dem.tif", "out.tif", azimuth=203.7, elevation=12,
+                           vector="/o/shadow.gpkg")
+    assert argv == ["hr", "shadow", "dem.tif", "out.tif", "--azimuth", "203.7", "--elevation",
+                    "12", "--vector", "/o/shadow.gpkg", "--algorithm", "auto", "--overwrite"]
+    p = parse(argv)
+    assert p["vector"] == "/o/shadow.gpkg" and p["vector_connectivity"] == "4"
+    assert "--vector" not in cmd.shadow_argv("hr", "d.tif", "o.tif", vector=None)
+    with pytest.raises(cmd.ProgramError, match="not with soft shadows"):
+        cmd.shadow_argv("hr", "d.tif", "o.tif", soft=True, vector="/o/s.gpkg")
+
+
 def test_argv_refusals():
     with pytest.raises(cmd.ProgramError, match="algorithm must be one of"):
         cmd.shadow_argv("hr", "d.tif", "o.tif", algorithm="fastest")
@@ -697,6 +710,24 @@ def points_files(folder):
                      for n, x, y in POINTS]}))
     cmd.write_points_csv(str(csv), POINTS)
     return geojson, csv
+
+
+@pytest.mark.slow
+@pytest.mark.qgis
+def test_qgis_shadow_polygons(qgis, tmp_path):
+    """The optional VECTOR output: the program's --vector polygons, the same as its own run's;
+    left out, no --vector."""
+    import fiona
+    out, vec = tmp_path / "m.tif", tmp_path / "m.gpkg"
+    report = qgis_run(qgis, "shadow", INPUT=qgis.dem, AZIMUTH=203.7, ELEVATION=12, OUTPUT=out,
+                      VECTOR=vec)
+    assert report["results"] == {"OUTPUT": str(out), "VECTOR": str(vec)}
+    program("shadow", qgis.dem, tmp_path / "ref.tif", "--azimuth", 203.7, "--elevation", 12,
+            "--vector", tmp_path / "ref.gpkg")
+    with fiona.open(vec) as a, fiona.open(tmp_path / "ref.gpkg") as b:
+        assert len(a) == len(b) > 0 and a.crs == b.crs
+    report = qgis_run(qgis, "shadow", INPUT=qgis.dem, OUTPUT=tmp_path / "n.tif")
+    assert "--vector" not in report["log"]["info"][0] and "VECTOR" not in report["results"]
 
 
 @pytest.mark.slow

@@ -13,6 +13,12 @@ from .options import (SectionedCommand, algorithm_flags, algorithm_option, comma
                       physics_options, run_options, stac_item_option, subsolar_options,
                       sun_options, to_read_options, to_run_options)
 
+VECTOR_HELP = ("Also write the shadow as polygons (GeoPackage, GeoJSON or FlatGeobuf by the "
+               "extension; with one DEM and no OUTPUT, only them) in the DEM's CRS: each "
+               "polygon's azimuth, elevation, time (a sun from --time) and index (a series: "
+               "every time's polygons in one layer). Lit cells and nodata make no polygon; "
+               "--classes: shadow_class 1 self, 2 cast.")
+
 LIFT_HELP = ("Each cell's ray toward the sun starts this many metres above the cell (a person, "
              "a panel above every cell); brute marches it (auto runs brute), --soft the horizon "
              "scan.")
@@ -55,6 +61,12 @@ def _shade(cfg, each):
               help="Also shadow cells whose surface faces away from the sun (Horn normals).")
 @click.option("--classes", is_flag=True,
               help="Write classes: 0 lit, 1 self-shadow, 2 cast shadow, 255 nodata.")
+@click.option("--vector", metavar="OUT.gpkg|.geojson|.fgb", default=None,
+              type=click.Path(dir_okay=False), help=VECTOR_HELP)
+@click.option("--vector-connectivity", type=click.Choice(["4", "8"]), default="4",
+              show_default=True,
+              help="--vector's cells joined into one polygon through their edges (4, GDAL's "
+                   "default) or also through their corners (8).")
 @height_above_ground_option(LIFT_HELP)
 @light_options
 @subsolar_options
@@ -70,7 +82,8 @@ def shadow(files, algorithm, curvature, refraction_k, soft, self_shadow, classes
     """Write the cast-shadow mask of DEM to OUTPUT (GeoTIFF: 1 shadow, 0 lit, 255 nodata).
 
     Several DEMs (tiles on one grid) are shaded as one mosaic, so that a mountain in one tile
-    shadows the next; OUTPUT is the last path, or give it with -o. Unrelated DEMs (any grid,
+    shadows the next; OUTPUT is the last path, or give it with -o (with --vector and one DEM,
+    OUTPUT may be left out: polygons only). Unrelated DEMs (any grid,
     CRS, size): --each with --output-pattern 'out/{stem}_shadow.tif', each on its own. The sun:
     --azimuth/--elevation, or --time (repeatable) or --start/--end/--step at the DEM's
     place (one band per time; OUTPUT.nc or OUTPUT.zarr: one CF time cube), or --subsolar
@@ -92,7 +105,9 @@ def shadow(files, algorithm, curvature, refraction_k, soft, self_shadow, classes
     each = kw.pop("each")
     _shade(_config(files, "classes" if classes else "shadow", algorithm, options, kw,
                    curvature=curvature, refraction_k=refraction_k, soft=soft,
-                   self_shadow=self_shadow or classes, height_above_ground=height_above_ground),
+                   self_shadow=self_shadow or classes, height_above_ground=height_above_ground,
+                   vector=kw.pop("vector"),
+                   vector_connectivity=int(kw.pop("vector_connectivity"))),
            each)
 
 
@@ -111,8 +126,10 @@ def _point_light(files, position, lonlat, lift, soft, self_shadow, classes, algo
                "--soft": soft, "--self-shadow": self_shadow, "--classes": classes,
                "--algorithm": given("algorithm"), "--earth-curvature": curvature is True,
                "--context": kw.get("context") is not None}
+    kw.pop("vector_connectivity")
     for k, flag in (("scheduler", "--scheduler"), ("output_pattern", "--output-pattern"),
-                    ("cog", "--cog"), ("stac_item", "--stac-item"), ("each", "--each")):
+                    ("cog", "--cog"), ("stac_item", "--stac-item"), ("each", "--each"),
+                    ("vector", "--vector")):
         refused[flag] = bool(kw.pop(k))
     window_size, max_memory = kw.pop("window_size"), kw.pop("max_memory")
     light_shadow(LightConfig(files=list(files), output=kw.pop("output"), position=position,
@@ -158,9 +175,11 @@ def _subsolar(files, subsolar, subsolar_file, distance, body, light_position, li
                or light_lonlat is not None,
                "--self-shadow": self_shadow, "--classes": classes,
                "--algorithm": given("algorithm"), "--context": kw.get("context") is not None}
+    kw.pop("vector_connectivity")
     for k, flag in (("window_size", "--window-size"), ("max_memory", "--max-memory"),
                     ("scheduler", "--scheduler"), ("output_pattern", "--output-pattern"),
-                    ("cog", "--cog"), ("stac_item", "--stac-item"), ("each", "--each")):
+                    ("cog", "--cog"), ("stac_item", "--stac-item"), ("each", "--each"),
+                    ("vector", "--vector")):
         refused[flag] = bool(kw.pop(k))
     subsolar_shadow(SubsolarConfig(files=list(files), output=kw.pop("output"),
                                    subsolar=subsolar, sun_distance=distance, body=body,

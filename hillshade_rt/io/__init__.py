@@ -17,6 +17,8 @@
                (``CubeWriter``, ``write_cube``)
 ``write``      every file written whole or not at all: ``atomic_path``, ``Claims``,
                ``gdal_checked``, signals, ``write_json``
+``vector``     shadow polygons: a mask's bands traced by GDAL, written by Fiona (GPKG,
+               GeoJSON, FlatGeobuf) whole or not at all: ``write_polygons``
 =============  ===============================================================================
 
 The names below are imported when first used (PEP 562): ``hillshade_rt.io.write`` (what the

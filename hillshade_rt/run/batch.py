@@ -371,7 +371,8 @@ def shade_each(cfg) -> dict:
                            "{stem}, not -o/--output")
     check_pattern(cfg.output_pattern, True, OutputPattern.FIELDS[:-1])
     refuse_with_each({"--stac-item": cfg.stac_item is not None,
-                      "--preview": cfg.run.preview is not None})
+                      "--preview": cfg.run.preview is not None,
+                      "--vector": cfg.vector is not None})
     # the options checked once, before any DEM (as the single run checks them first)
     cfg.check()
     sun, _ = sun_from_item(cfg.sun, True, cfg.run.say)

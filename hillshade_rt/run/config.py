@@ -184,6 +184,8 @@ class ShadeConfig:
     height_above_ground: float = 0.0    # metres: each cell's ray starts this far above it
     stac_item: str | None = None        # --stac-item: a STAC item describing OUTPUT
     command: str | None = None          # the command line, as the STAC item records it
+    vector: str | None = None           # --vector: the shadow polygons (GPKG, GeoJSON, FGB)
+    vector_connectivity: int = 4        # cells of a polygon joined by edges (4) or corners (8)
 
     def check(self) -> None:
         """The combinations no run can take (before the sun is looked at, as before). With a
@@ -194,12 +196,27 @@ class ShadeConfig:
         if self.kind not in PRODUCTS:
             raise HillshadeError(f"product must be one of {', '.join(PRODUCTS)}, got {self.kind!r}")
         product(self.kind, self.soft)     # classes are hard only
+        if self.vector is not None:
+            self.check_vector()
         self.algorithm = check_lift(self.height_above_ground, self.algorithm, self.soft)
         if self.scale is not None:
             if not (math.isfinite(self.scale) and self.scale > 0):
                 raise UsageProblem(f"--scale must be a positive number, got {self.scale}")
             if self.read.pixel_size is not None:
                 raise UsageProblem("--scale and --pixel-size do not go together")
+
+    def check_vector(self) -> None:
+        """--vector: a local file of a known format (usage errors), polygons of a mask (the
+        shadow or classes product, hard shadows); --vector-connectivity 4 or 8."""
+        from ..io.vector import check_connectivity, check_vector_path
+        self.vector = check_vector_path(self.vector)
+        self.vector_connectivity = check_connectivity(self.vector_connectivity)
+        if self.kind == "hillshade":
+            raise UsageProblem("--vector writes polygons of shadow: it goes with shadow, not "
+                               "hillshade")
+        if self.soft:
+            raise UsageProblem("--vector writes polygons of the shadow mask: not with --soft "
+                               "(fractions of the sun's disk)")
 
     def lighting(self, backend: str):
         """How the terrain is lit (``engine.lighting.Lighting``), on ``backend`` (chosen);
@@ -370,9 +387,10 @@ def series_azimuths(start: float, end: float, step: float) -> list[float]:
     return [normalize_azimuth(start + k * step) for k in range(n)]
 
 
-def inputs_and_output(files, output, pattern):
+def inputs_and_output(files, output, pattern, optional: bool = False):
     """rio-style paths: ``DEM... OUTPUT``, or every path a DEM with -o/--output or
-    --output-pattern."""
+    --output-pattern. ``optional`` (--vector, which may stand for the raster): one path alone
+    is the DEM, no OUTPUT (two or more: the last is OUTPUT, as without it)."""
     from ..io import is_gdal_name    # a DEM the local disk cannot tell about (/vsizip/, URLs)
     files = list(files)
     if output is not None or pattern is not None:
@@ -386,6 +404,8 @@ def inputs_and_output(files, output, pattern):
                                f"(with {given} every path is a DEM)")
         return files, output
     if len(files) < 2:
+        if optional and files:
+            return files, None
         raise UsageProblem("give OUTPUT or --output-pattern (one of them)")
     return files[:-1], files[-1]
 

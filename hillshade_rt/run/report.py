@@ -52,7 +52,7 @@ def build_report(*, dem, output: str, azimuth: float, elevation: float, algorith
     zmin, zmax = height_range
     return {
         "input": input_label(dem.path),
-        "output": os.path.abspath(output),
+        "output": None if output is None else os.path.abspath(output),
         "shape": [rows, cols],
         "spacing_m": [dx, dy],
         "spacing_method": dem.grid.method,
@@ -100,9 +100,32 @@ def shown_paths(paths: list[str]) -> str:
     return f"{paths[0]} .. {paths[-1]} ({len(paths)} files)"
 
 
-def summary_line(report: dict, shown: str | None = None) -> str:
+def area_text(m2: float) -> str:
+    """An area in square metres for people: whole m2 below a square kilometre, else km2 to 4
+    significant digits."""
+    if m2 < 1e6:
+        return f"{m2:.0f} m2"
+    return f"{m2 / 1e6:.4g} km2"
+
+
+def vector_text(vector: dict) -> str:
+    """The shadow polygons of a run (``run.shade``'s report ``vector``) for its summary line:
+    their count, their area (a series: the mean of its times), the file (``shown``: as the
+    user named it; None when the line names it already)."""
+    n, m2, times = vector["polygons"], vector.get("area_m2"), vector.get("times")
+    text = f"{n} shadow polygon{'' if n == 1 else 's'}"
+    if m2 is not None:
+        text += (f" ({area_text(m2 / len(times))} a time)" if times
+                 else f" ({area_text(m2)})")
+    if vector.get("shown"):
+        text += f" in {vector['shown']}"
+    return text
+
+
+def summary_line(report: dict, shown: str | None = None, vector: dict | None = None) -> str:
     """One line for stderr. ``shown``: what to name the output(s) as (the paths as the user gave
-    them; default the report's absolute output)."""
+    them; default the report's absolute output). ``vector``: the shadow polygons written
+    (:func:`vector_text`)."""
     rows, cols = report["shape"]
     frac = report["shadow_fraction"]
     mpx = report["mpix_per_s"]
@@ -129,6 +152,8 @@ def summary_line(report: dict, shown: str | None = None) -> str:
     share = ("" if frac is None else
              f"{percent(frac)} of valid cells in shadow" + (" (mean)" if len(times) > 1 else "")
              + "; ")
+    if vector is not None:
+        share += vector_text(vector) + "; "
     return (f"hillshade-rt: {report['output'] if shown is None else shown}: {cols}x{rows}, {what}, {where}: {share}"
             f"compute {report['seconds']['compute']:.3f} s"
             + (f" ({mpx * max(1, len(times)):.1f} Mpix/s)" if mpx else "")

@@ -9,8 +9,10 @@ the claims, the threads, the backend; the report written and the lines said): th
 paths checked (:func:`_plan`), the run started (:func:`_start`), the lighting settings built once
 (``ShadeConfig.lighting``, passed whole), the DEM opened and in memory vs windows decided
 (:func:`_opened`), the outputs planned (:func:`_outputs`), the terrain lit (:func:`_light`), the
-preview (:func:`_preview`), the report (:func:`_report`), the STAC item (:func:`_stac_item`),
-then ``RunContext.finish`` with the lines (:func:`_lines`).
+shadow polygons (:func:`_vector`, --vector: traced from the raster written, or from a scratch
+raster beside them when no OUTPUT is kept: :func:`_scratch`), the preview (:func:`_preview`),
+the report (:func:`_report`), the STAC item (:func:`_stac_item`), then ``RunContext.finish``
+with the lines (:func:`_lines`).
 """
 
 from __future__ import annotations
@@ -49,6 +51,11 @@ class ShadePlan:
         Lit in windows (else in memory).
     area : run.context.Area or None
         The tile of a ``--context`` run.
+    scratch : str or None
+        The raster written only to be polygonized (--vector without OUTPUT or a pattern): a
+        temporary file beside the polygons, removed at the end.
+    vector : dict or None
+        The polygons written (--vector): the report's ``vector`` (:func:`_vector`).
     """
 
     req: object
@@ -61,11 +68,13 @@ class ShadePlan:
     per_cell: int = 0
     windowed: bool = False
     area: object = None
+    scratch: str | None = None
+    vector: dict | None = None
 
     @property
-    def shown(self) -> str:
-        """The outputs as the user named them (OUTPUT, or the pattern)."""
-        return self.output or self.pattern.pattern
+    def shown(self) -> str | None:
+        """The outputs as the user named them (OUTPUT, or the pattern; None: polygons only)."""
+        return self.output or (self.pattern.pattern if self.pattern is not None else None)
 
 
 def shade(cfg: ShadeConfig) -> dict:
@@ -79,10 +88,11 @@ def shade(cfg: ShadeConfig) -> dict:
     lighting = cfg.lighting(ctx.backend)
     plan.per_cell = bytes_per_cell(lighting.algorithm, cfg.kind, lighting.soft,
                                    lighting.self_shadow)
-    with _opened(cfg, ctx, plan) as src:
+    with _opened(cfg, ctx, plan) as src, _scratch(cfg, plan):
         out = _outputs(cfg, ctx, plan, lighting, src)
         ctx.compile_note(lighting.algorithm, lighting.self_shadow or cfg.kind != "shadow")
         run, empty = _light(cfg, ctx, plan, lighting, src, out)
+        _vector(cfg, ctx, plan, run, out)
         _preview(ctx, run)
         rep = _report(cfg, ctx, plan, lighting, run)
         _stac_item(cfg, ctx, plan, run, rep)
@@ -106,7 +116,15 @@ def _plan(cfg: ShadeConfig) -> ShadePlan:
         raise
     except HillshadeError as exc:
         raise UsageProblem(str(exc)) from None
-    inputs, output = inputs_and_output(cfg.files, cfg.output, cfg.output_pattern)
+    inputs, output = inputs_and_output(cfg.files, cfg.output, cfg.output_pattern,
+                                       optional=cfg.vector is not None)
+    if output is None and cfg.output_pattern is None:     # --vector alone: no raster kept
+        for flag, on in (("-f/--format", ro.fmt is not None), ("--cog", cfg.cog),
+                         ("--co", bool(ro.creation_options)),
+                         ("--stac-item", cfg.stac_item is not None)):
+            if on:
+                raise UsageProblem(f"{flag} goes with a raster OUTPUT (--vector alone keeps "
+                                   "no raster): give OUTPUT too")
     reset()
     wshape = parse_window_size(cfg.window_size)
     try:
@@ -133,7 +151,8 @@ def _start(cfg: ShadeConfig, plan: ShadePlan):
     reads = plan.inputs + item_in + cfg.read.inputs()
     outputs = [(plan.output, "OUTPUT"),     # the STAC item's checks, then its claim
                lambda claims: check_item_output(cfg.stac_item, plan.output,
-                                                cfg.output_pattern, claims)]
+                                                cfg.output_pattern, claims),
+               (cfg.vector, "--vector")]
     ctx = RunContext.start(ro, inputs=reads, outputs=outputs, algorithm=cfg.algorithm,
                            options=cfg.options, note=False)
     if cfg.output_pattern is not None:
@@ -172,8 +191,13 @@ def _outputs(cfg: ShadeConfig, ctx, plan: ShadePlan, lighting, src):
 
     ro = cfg.run
     prod = product(cfg.kind, lighting.soft)
-    out = Outputs(prod, lighting.algorithm, plan.output, plan.pattern, ctx.claims, cfg.cog,
-                  ro.preview is not None, lighting.ambient, ro.fmt, ro.creation_options)
+    if plan.scratch is not None:     # a GeoTIFF of the tool's defaults, over the empty scratch
+        out = Outputs(prod, lighting.algorithm, plan.scratch, None, ctx.claims, False,
+                      ro.preview is not None, lighting.ambient)
+        out.overwrite = True
+    else:
+        out = Outputs(prod, lighting.algorithm, plan.output, plan.pattern, ctx.claims, cfg.cog,
+                      ro.preview is not None, lighting.ambient, ro.fmt, ro.creation_options)
     if lighting.lift:     # the observer's height, in every output's tags
         out.base_tags["HEIGHT_ABOVE_GROUND_M"] = f"{lighting.lift:g}"
     if plan.scene is not None:     # the sun of a STAC item: which item, in every output's tags
@@ -221,6 +245,90 @@ def _light(cfg: ShadeConfig, ctx, plan: ShadePlan, lighting, src, out):
     finally:
         out.cleanup()
     return run, empty
+
+
+@contextlib.contextmanager
+def _scratch(cfg: ShadeConfig, plan: ShadePlan):
+    """--vector without OUTPUT or --output-pattern: the raster the polygons are traced from, a
+    temporary GeoTIFF beside them (``plan.scratch``; GDAL reads it back block by block, so a
+    DEM larger than memory is polygonized too), removed when the run ends, whole or not."""
+    if cfg.vector is None or plan.output is not None or plan.pattern is not None:
+        yield
+        return
+    from ..io.write import completed, temp_beside
+    plan.scratch = temp_beside(cfg.vector, ".scratch.tif")
+    try:
+        yield
+    finally:
+        for p in (plan.scratch, plan.scratch + ".aux.xml", plan.scratch + ".ovr"):
+            with contextlib.suppress(OSError):
+                os.remove(p)
+        while plan.scratch in completed:        # not an output the run tells about
+            completed.remove(plan.scratch)
+
+
+def _rasters_of(plan: ShadePlan, out, i: int) -> list:
+    """(path, band) of sun ``i``'s product as written: a band of OUTPUT (or of the scratch
+    raster), its file of the pattern, or its files of the pattern's tiles."""
+    single = plan.output or plan.scratch
+    if single is not None:
+        return [(single, i + 1)]
+    if out.tile_paths is not None:
+        return [(p, 1) for p in out.tile_paths[i]]
+    return [(out.paths[i], 1)]
+
+
+def _vector(cfg: ShadeConfig, ctx, plan: ShadePlan, run, out) -> None:
+    """--vector: the polygons of every sun's shadow (the mask's 1; classes 1 and 2, each its
+    ``shadow_class``) traced from the rasters written (``io.vector.write_polygons``), one layer
+    in the DEM's CRS; each polygon's ``azimuth``, ``elevation`` (degrees; the grid azimuth of
+    the raster's SUN_AZIMUTH tag), with a sun from a time its ``time`` (ISO) and
+    ``true_azimuth``, in a series its ``index`` (0-based: band index + 1 of OUTPUT, the
+    report's ``times[index]``). The count and area go to ``plan.vector`` (the report's)."""
+    if cfg.vector is None:
+        return
+    from ..io.vector import PolygonSource, vector_driver, write_polygons
+    from ..model.times import iso
+
+    suns = run.suns
+    timed, series = plan.req.from_time, len(suns) > 1
+    fields = {"azimuth": "float", "elevation": "float"}
+    if timed:
+        fields.update(time="str", true_azimuth="float")
+    if series:
+        fields["index"] = "int"
+    if cfg.kind == "classes":
+        fields["shadow_class"] = "int"
+        values = {1: {"shadow_class": 1}, 2: {"shadow_class": 2}}
+    else:
+        values = {1: {}}
+    sources, owner = [], []
+    for i, sun in enumerate(suns):
+        attrs = {"azimuth": float(sun.azimuth), "elevation": float(sun.elevation)}
+        if timed:
+            attrs.update(time=iso(sun.time), true_azimuth=sun.true_azimuth)
+        if series:
+            attrs["index"] = i
+        for path, band in _rasters_of(plan, out, i):
+            sources.append(PolygonSource(path=path, band=band, attributes=attrs,
+                                         values=values))
+            owner.append(i)
+    layer = os.path.splitext(os.path.basename(cfg.vector))[0] or "shadow"
+    with ctx.timer("write"):
+        stats = write_polygons(cfg.vector, sources, fields, overwrite=cfg.run.overwrite,
+                               connectivity=cfg.vector_connectivity, layer=layer)
+    per_sun = []
+    for i in range(len(suns)):
+        mine = [k for k, o in enumerate(owner) if o == i]
+        m2 = [stats.area_m2[k] for k in mine]
+        per_sun.append({"index": i, "polygons": int(sum(stats.polygons[k] for k in mine)),
+                        "area": float(sum(stats.area[k] for k in mine)),
+                        "area_m2": None if any(a is None for a in m2) else float(sum(m2))})
+    plan.vector = {"path": os.path.abspath(cfg.vector), "shown": cfg.vector,
+                   "format": vector_driver(cfg.vector), "layer": layer,
+                   "connectivity": cfg.vector_connectivity, "fields": list(fields),
+                   "polygons": stats.total_polygons, "area": float(sum(stats.area)),
+                   "area_m2": stats.total_area_m2, "times": per_sun if series else None}
 
 
 def _preview(ctx, run) -> None:
@@ -273,6 +381,8 @@ def _report(cfg: ShadeConfig, ctx, plan: ShadePlan, lighting, run) -> dict:
     rep["processing"] = run.processing
     if ro.preview is not None:
         rep["preview"] = os.path.abspath(ro.preview)
+    if plan.vector is not None:
+        rep["vector"] = {k: v for k, v in plan.vector.items() if k != "shown"}
     return rep
 
 
@@ -300,9 +410,15 @@ def _lines(cfg: ShadeConfig, plan: ShadePlan, rep: dict, run, empty) -> list:
     lines = []
     if empty is not None:
         lines.append(("note", nodata_note(empty)))
-    lines.append(("summary", summary_line(rep, plan.output if plan.output is not None
-                                          else shown_paths(plan.pattern.planned)
-                                          or plan.pattern.pattern)))
+    if plan.output is not None:
+        shown = plan.output
+    elif plan.pattern is not None:
+        shown = shown_paths(plan.pattern.planned) or plan.pattern.pattern
+    else:                           # polygons only
+        shown = cfg.vector
+    vector = None if plan.vector is None else dict(
+        plan.vector, shown=None if shown == cfg.vector else cfg.vector)
+    lines.append(("summary", summary_line(rep, shown, vector)))
     lines.append(("note", note_to_show(run.algo_stats, cfg.algorithm, cfg.options,
                                        cfg.algorithm_explicit)))
     if rep["night_count"]:

@@ -16,7 +16,7 @@ from qgis.core import (QgsCoordinateTransform, QgsPalettedRasterRenderer, QgsPro
                        QgsProcessingParameterFileDestination, QgsProcessingParameterNumber,
                        QgsProcessingParameterRasterDestination,
                        QgsProcessingParameterRasterLayer, QgsProcessingParameterString,
-                       QgsProcessingUtils)
+                       QgsProcessingParameterVectorDestination, QgsProcessingUtils)
 from qgis.PyQt.QtCore import QCoreApplication
 from qgis.PyQt.QtGui import QColor
 
@@ -303,7 +303,9 @@ class ShadowAlgorithm(HillshadeRtAlgorithm):
             "brute, smap, horizon) give the same mask; sweep approximates. "
             "<b>Soft shadows</b>: the visible fraction of the sun's disk (float32, 1 fully lit, "
             "-9999 nodata) instead. <b>Self-shadow</b>: also shadow cells facing away from the "
-            "sun.</p>")
+            "sun. <b>Shadow polygons</b> (optional): the shadow as polygons in the DEM's CRS "
+            "(GeoPackage, GeoJSON or FlatGeobuf), each with the sun's azimuth and elevation "
+            "(and time); not with soft shadows.</p>")
 
     def initAlgorithm(self, config=None):  # noqa: N802
         self.add_dem()
@@ -313,6 +315,21 @@ class ShadowAlgorithm(HillshadeRtAlgorithm):
         self.addParameter(QgsProcessingParameterBoolean(
             "SELF_SHADOW", self.tr("Also shadow cells facing away from the sun"), False))
         self.add_tail()
+        vector = QgsProcessingParameterVectorDestination(
+            "VECTOR", self.tr("Shadow polygons"), QgsProcessing.TypeVectorPolygon,
+            optional=True, createByDefault=False)
+        # a file the program writes (not a memory layer), of a format it writes
+        vector.setSupportsNonFileBasedOutput(False)
+        self.addParameter(vector)
+
+    def vector(self, parameters, context):
+        if parameters.get("VECTOR") in (None, ""):
+            return None
+        return self.parameterAsOutputLayer(parameters, "VECTOR", context) or None
+
+    def more_outputs(self, parameters, context):
+        vector = self.vector(parameters, context)
+        return {"VECTOR": vector} if vector else {}
 
     def style_output(self, output, parameters, context):
         if (context.willLoadLayerOnCompletion(output)
@@ -327,7 +344,8 @@ class ShadowAlgorithm(HillshadeRtAlgorithm):
             program, **self.common(parameters, context), **self.sun(parameters, context),
             algorithm=self.algorithm(parameters, context),
             soft=self.parameterAsBoolean(parameters, "SOFT", context),
-            self_shadow=self.parameterAsBoolean(parameters, "SELF_SHADOW", context))
+            self_shadow=self.parameterAsBoolean(parameters, "SELF_SHADOW", context),
+            vector=self.vector(parameters, context))
 
 
 class HillshadeAlgorithm(HillshadeRtAlgorithm):

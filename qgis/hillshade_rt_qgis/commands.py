@@ -139,12 +139,16 @@ def shadow_argv(program: str, dem: str, output: str, *, band: int = 1, sun: str 
                 azimuth: Optional[float] = 315.0, elevation: Optional[float] = 45.0,
                 time_: Optional[str] = None, tz: Optional[str] = None,
                 algorithm: str = "auto", soft: bool = False, self_shadow: bool = False,
-                extra: Iterable[str] = ()) -> list:
+                vector: Optional[str] = None, extra: Iterable[str] = ()) -> list:
     """``hillshade-rt shadow``: the cast-shadow mask (1 shadow, 0 lit, 255 nodata) or, with
-    ``soft``, the visible fraction of the sun's disk."""
+    ``soft``, the visible fraction of the sun's disk; ``vector``: also the shadow's polygons
+    (a .gpkg, .geojson or .fgb file)."""
+    if vector and soft:
+        raise ProgramError("shadow polygons are made of the hard mask: not with soft shadows")
     return ([program, "shadow"] + dem_args(dem, output, band)
             + sun_args(sun, azimuth, elevation, time_, tz)
             + (["--self-shadow"] if self_shadow else [])
+            + (["--vector", vector] if vector else [])
             + common_tail(algorithm, soft, extra))
 
 

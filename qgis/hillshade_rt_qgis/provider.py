@@ -49,3 +49,10 @@ class HillshadeRtProvider(QgsProcessingProvider):
     def supportedOutputRasterLayerExtensions(self):  # noqa: N802
         # what the program writes through GDAL; GeoTIFF first (the default)
         return ["tif", "tiff"]
+
+    def supportedOutputVectorLayerExtensions(self):  # noqa: N802
+        # the shadow polygons (shadow --vector): the formats the program writes
+        return ["gpkg", "geojson", "fgb"]
+
+    def defaultVectorFileExtension(self, hasGeometry=True):  # noqa: N802
+        return "gpkg"
