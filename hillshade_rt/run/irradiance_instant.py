@@ -52,10 +52,16 @@ def irradiance_instant(cfg: IrradianceConfig) -> dict:
     """Write each instant's five bands (``engine.irradiance.INSTANT_BANDS``) of ``cfg.dem`` to
     ``cfg.output``; returns the report."""
     from ..engine import irradiance as ir
+    from ..io.cube import cube_format
     ro = cfg.run
     cfg.check()
+    if cube_format(cfg.output) is not None and ro.fmt is None:
+        raise UsageProblem(f"{cfg.output}: irradiance's instants (five quantities a time) are "
+                           "not written as a time cube yet: write a GeoTIFF, or give -f netCDF "
+                           "for GDAL's netCDF (one variable per band)")
     cfg.read.check_context(cfg.dem, **{"--time or --instant": True})
-    ctx = RunContext.start(ro, inputs=[cfg.dem, cfg.ghi, cfg.sky_view] + cfg.read.inputs(),
+    ctx = RunContext.start(ro, inputs=[cfg.dem, cfg.ghi, cfg.sky_view] + cfg.read.inputs()
+                           + cfg.sky_inputs(),
                            outputs=[(cfg.output, "OUTPUT"),
                                     (cfg.sky_view_out, "--sky-view-out")],
                            algorithm=cfg.algorithm, note=False)

@@ -222,6 +222,23 @@ def test_bad_instants_are_one_line_usage_errors(tmp_path, runner, args, words):
     assert not out.exists()
 
 
+@pytest.mark.parametrize("name, args, words", [
+    ("o.nc", [], "not written as a time cube yet"),
+    ("o.zarr", [], "not written as a time cube yet"),
+    ("o.tif", ["--monthly"], "are a period's sums"),
+    ("o.tif", ["--daily-mean"], "are a period's sums"),
+])
+def test_instants_refuse_cubes_and_period_options(tmp_path, runner, name, args, words):
+    """Instants are five quantities a time: no time cube yet (GDAL's netCDF with -f netCDF
+    only), and no months or daily means (a period's sums)."""
+    dem = write_geotiff(tmp_path / "f.tif", fractal_terrain(20, 20, 3, relief=50.0),
+                        Affine(30.0, 0, 400000.0, 0, -30.0, 3800000.0), UTM11)
+    out = tmp_path / name
+    r = _run(runner, [dem, out, "--time", "2026-06-21T19:00Z"] + args, code=2)
+    assert words in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert not out.exists()
+
+
 def test_instants_from_python(tmp_path, runner):
     """hillshade_rt.irradiance(times=...) and instant=True: the command line's files."""
     import hillshade_rt as hr
