@@ -444,7 +444,8 @@ def irradiance(dem, output=None, *, date=None, end_date=None, start=None, end=No
 
 
 @_keyword_errors
-def sun_hours(dem, output=None, *, date=None, end_date=None, step: str = "10min",
+def sun_hours(dem, output=None, *, date=None, end_date=None, monthly: bool = False,
+              step: str = "10min",
               algorithm: str = "auto", curvature: bool | None = None,
               refraction_k: float | None = None, soft: bool = False,
               self_shadow: bool | None = None, height_above_ground: float = 0.0,
@@ -485,7 +486,8 @@ def sun_hours(dem, output=None, *, date=None, end_date=None, step: str = "10min"
                          step=step, place=place, algorithm=algorithm, curvature=curvature,
                          refraction_k=refraction_k, soft=soft, self_shadow=self_shadow,
                          read=read, run=run, height_above_ground=height_above_ground,
-                         max_memory=max_memory, window_size=window_size, scheduler=client)
+                         max_memory=max_memory, window_size=window_size, scheduler=client,
+                         monthly=monthly)
     token = virtual_outputs.set(True)    # /vsimem/ outputs are fine from Python
     try:
         return sun_hours_each(cfg, dem, output_pattern) if each else run_sun_hours(cfg)

@@ -9,7 +9,8 @@ from .errors import errors_to_click, say
 from ..run.config import PLACE_KEYS
 from .options import (SectionedCommand, context_option, each_pattern_options,
                       algorithm_option, backend_option, dem_options, format_option,
-                      height_above_ground_option, max_memory_option, overwrite_option,
+                      height_above_ground_option, max_memory_option, monthly_option,
+                      overwrite_option,
                       physics_options, place_options, preview_option, quiet_option,
                       progress_option, report_option, scheduler_option, threads_option,
                       to_read_options, to_run_options, window_size_option)
@@ -54,10 +55,7 @@ from .options import (SectionedCommand, context_option, each_pattern_options,
 @click.option("--daily-mean", is_flag=True,
               help="Wh/m2 per day (the energy divided by the period's days; each month's by "
                    "its own) instead of Wh/m2.")
-@click.option("--monthly", is_flag=True,
-              help="Also the global energy of each month of the period: one band per month "
-                   "after the four (description YYYY-MM; months in --tz, else local mean solar "
-                   "time).")
+@monthly_option("the global energy")
 @click.option("--perez", is_flag=True,
               help="Perez (1990) anisotropic sky (circumsolar part shadowed with the beam) "
                    "instead of the isotropic one.")

@@ -407,6 +407,14 @@ def point_options(f):
     ])
 
 
+def monthly_option(what: str):
+    """--monthly: one band per month of the period after the totals (``what``: of what)."""
+    return click.option("--monthly", is_flag=True,
+                        help=f"Also {what} of each month of the period: one band per month "
+                             "after the total (description YYYY-MM; months in --tz, else "
+                             "local mean solar time).")
+
+
 def report_option(f):
     return click.option("--report", "report_path", type=click.Path(dir_okay=False),
                         default=None, help="Write a JSON report here.")(f)

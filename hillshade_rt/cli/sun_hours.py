@@ -8,7 +8,8 @@ from .errors import errors_to_click, say
 from ..run.config import PLACE_KEYS
 from .options import (SectionedCommand, context_option, algorithm_option, backend_option, dem_options,
                       each_pattern_options, format_option,
-                      height_above_ground_option, max_memory_option, overwrite_option,
+                      height_above_ground_option, max_memory_option, monthly_option,
+                      overwrite_option,
                       physics_options, place_options, preview_option, quiet_option,
                       progress_option, report_option, scheduler_option, threads_option,
                       to_read_options, to_run_options, window_size_option)
@@ -20,6 +21,7 @@ from .options import (SectionedCommand, context_option, algorithm_option, backen
 @click.option("--date", "date_", required=True, metavar="YYYY-MM-DD", help="The day (or first day).")
 @click.option("--end-date", default=None, metavar="YYYY-MM-DD",
               help="Last day of a range (included); the hours are the total over the range.")
+@monthly_option("the hours")
 @click.option("--step", default="10min", show_default=True, metavar="DURATION",
               help="Sampling interval; each sample stands for the interval around it.")
 @place_options("sun-hours")
@@ -46,7 +48,7 @@ from .options import (SectionedCommand, context_option, algorithm_option, backen
 @dem_options
 @context_option
 @errors_to_click
-def sun_hours(files, date_, end_date, step, tz, lat, lon, pressure, temperature,
+def sun_hours(files, date_, end_date, monthly, step, tz, lat, lon, pressure, temperature,
               no_refraction, sun_tolerance, algorithm, curvature, refraction_k, soft,
               height_above_ground, self_shadow, preview, backend, threads, report_path,
               max_memory, window_size, scheduler, overwrite, quiet, progress, fmt,
@@ -71,7 +73,7 @@ def sun_hours(files, date_, end_date, step, tz, lat, lon, pressure, temperature,
                          refraction_k=refraction_k, soft=soft, self_shadow=self_shadow,
                          read=to_read_options(kw), run=to_run_options(kw, say),
                          height_above_ground=height_above_ground, max_memory=max_memory,
-                         window_size=window_size, scheduler=scheduler)
+                         window_size=window_size, scheduler=scheduler, monthly=monthly)
     if each:
         sun_hours_each(cfg, dem, output_pattern)
     else:

@@ -249,6 +249,7 @@ class SunHoursConfig:
     max_memory: object = None         # windows (run.sun_hours_windows) when the DEM needs more
     window_size: object = None        # windows of this many output cells, whatever the size
     scheduler: object = None          # the windows as Dask tasks
+    monthly: bool = False             # and the hours of each month, a band each (in memory)
 
     def check(self) -> None:
         """The height above the ground (``check_lift``: ``algorithm`` becomes the one that

@@ -47,6 +47,7 @@ class _Samples:
     suns: list
     sun_info: dict | None
     work: list              # [(sun, hours)]
+    tz: object = None       # the days' zone (None: local mean solar time)
 
 
 @dataclass
@@ -60,6 +61,7 @@ class _Hours:
     values: dict | None = None   # min, mean, max of the hours written in windows
     algo_stats: dict | None = None   # the windows' algorithm figures
     preview: tuple | None = None     # in windows: (heights, grid, hours) of every n-th cell
+    months: list | None = None       # --monthly: ((year, month), hours) each, in memory
 
 
 def sun_hours(cfg: SunHoursConfig) -> dict:
@@ -134,7 +136,8 @@ def sun_hours(cfg: SunHoursConfig) -> dict:
                     if valid:
                         shader, hours = _prepare(d, lighting, days.req, samples)
                 if valid:
-                    lit = _light(shader, hours, lighting, samples, ctx, algo_stats)
+                    lit = _light(shader, hours, lighting, samples, ctx, algo_stats,
+                                 _months(days) if cfg.monthly else None)
     if tags is None:
         tags = _tags(cfg, days, samples)
     figures = _write(cfg, ctx, d, lit, tags)
@@ -186,7 +189,7 @@ def _samples(days: _Days, d, soft: bool) -> _Samples:
         top = max([r.elevation for r in s.tiles] if s.tiles else [s.elevation])
         return top + (SUN_RADIUS_DEG if soft else 0.0) <= 0.0
     return _Samples(site, suns, sun_info,
-                    [(s, w) for s, w in zip(suns, weights) if w > 0 and not dark(s)])
+                    [(s, w) for s, w in zip(suns, weights) if w > 0 and not dark(s)], req.tz)
 
 
 def _prepare(d, lighting, req, samples: _Samples):
@@ -204,25 +207,50 @@ def _prepare(d, lighting, req, samples: _Samples):
     return shader, np.where(np.isnan(d.heights), np.float32(np.nan), np.float32(0.0))
 
 
-def _light(shader, hours, lighting, samples: _Samples, ctx: RunContext, algo_stats) -> _Hours:
-    """Each lit sample's lit cells (product "sun") added to ``hours``, weighted by its hours."""
+def _light(shader, hours, lighting, samples: _Samples, ctx: RunContext, algo_stats,
+           months=None) -> _Hours:
+    """Each lit sample's lit cells (product "sun") added to ``hours``, weighted by its hours;
+    with ``months`` ((year, month) of every day of the period, in order; --monthly) also to
+    its month's own float32 sum (the total keeps its bits)."""
     import numpy as np
 
     from ..engine.shader import render
     from .report import progress
+    from .sky_inputs import month_keys
     ro = ctx.ro
+    per = None
+    if months is not None:
+        per = {k: hours.copy() for k in months}        # 0, NaN on nodata
+        keys = month_keys([s.time for s, _ in samples.work], samples.tz, samples.site.lon)
     with ctx.timer("compute"):
-        for s, w in progress(samples.work, ro.quiet, "hillshade-rt sun-hours", unit="sun",
-                             mode=ro.progress):
-            hours += np.float32(w) * render(shader, s, "sun", soft=lighting.soft,
-                                            self_shadow=lighting.self_shadow, stats=algo_stats)
-    return _Hours(hours, shader.report())
+        for i, (s, w) in enumerate(progress(samples.work, ro.quiet, "hillshade-rt sun-hours",
+                                            unit="sun", mode=ro.progress)):
+            lit = render(shader, s, "sun", soft=lighting.soft,
+                         self_shadow=lighting.self_shadow, stats=algo_stats)
+            hours += np.float32(w) * lit
+            if per is not None:
+                per[keys[i]] += np.float32(w) * lit
+    return _Hours(hours, shader.report(),
+                  months=None if per is None else list(per.items()))
+
+
+def _months(days: _Days) -> list:
+    """(year, month) of every month the period's days touch, in order."""
+    out, d = [], days.first
+    while d <= days.last:
+        if (d.year, d.month) not in out:
+            out.append((d.year, d.month))
+        d += _dt.timedelta(days=1)
+    return out
 
 
 def _in_windows(cfg: SunHoursConfig, ctx: RunContext, src, lighting, req, samples: _Samples,
                 tags: dict, limit: int, wshape, area=None) -> _Hours:
     """The hours in windows (``run.sun_hours_windows``: the same float32 sums as in memory),
     written to OUTPUT as they are made. ``area``: a ``--context`` tile of ``src``."""
+    if cfg.monthly:
+        raise UsageProblem("sun-hours --monthly runs in memory only: not in windows "
+                           "(--max-memory, --window-size, --scheduler, --context)")
     from .sun_hours_windows import hours_in_windows
     win = hours_in_windows(cfg, ctx, src, lighting, req, samples.work, tags, limit=limit,
                            window_shape=wshape, scheduler=cfg.scheduler, area=area)
@@ -265,9 +293,19 @@ def _write(cfg: SunHoursConfig, ctx: RunContext, d, lit: _Hours | None, tags: di
         return v
     hours = np.full(d.shape, np.nan, np.float32) if lit is None else lit.hours
     with ctx.timer("write"):
-        write_raster(cfg.output, np.where(np.isnan(hours), np.float32(-9999.0), hours), d,
-                     nodata=-9999.0, description=description(tags), tags=tags,
-                     overwrite=ro.overwrite, fmt=ro.fmt, co=ro.creation_options)
+        if cfg.monthly and lit is not None and lit.months is not None:
+            from ..io import BandWriter
+            with BandWriter(cfg.output, d, 1 + len(lit.months), "float32", -9999.0, tags,
+                            overwrite=ro.overwrite, fmt=ro.fmt, co=ro.creation_options) as w:
+                w.write(1, np.where(np.isnan(hours), np.float32(-9999.0), hours),
+                        description(tags))
+                for i, ((year, month), v) in enumerate(lit.months, 2):
+                    w.write(i, np.where(np.isnan(v), np.float32(-9999.0), v),
+                            f"{year}-{month:02d}", {"UNITS": "hours of direct sun"})
+        else:
+            write_raster(cfg.output, np.where(np.isnan(hours), np.float32(-9999.0), hours), d,
+                         nodata=-9999.0, description=description(tags), tags=tags,
+                         overwrite=ro.overwrite, fmt=ro.fmt, co=ro.creation_options)
         if ro.preview is not None and lit is not None:
             top = float(np.nanmax(hours)) if np.isfinite(hours).any() else 0.0
             write_png(ro.preview, relief_rgb(d.heights, d.grid,
@@ -297,6 +335,9 @@ def _report(cfg: SunHoursConfig, ctx: RunContext, d, days: _Days, samples: _Samp
            "soft": cfg.soft, "self_shadow": cfg.self_shadow,
            "height_above_ground_m": float(cfg.height_above_ground),
            "hours": figures,
+           **({"months": [{"month": f"{y}-{m:02d}", "hours": _stats(v)}
+                          for (y, m), v in lit.months]}
+              if lit is not None and lit.months is not None else {}),
            "curvature": None if lit is None else lit.curvature,
            "algorithm_stats": algo_stats, "processing": processing,
            "seconds": ctx.seconds(), "version": __version__}
@@ -304,3 +345,11 @@ def _report(cfg: SunHoursConfig, ctx: RunContext, d, days: _Days, samples: _Samp
     if area is not None:
         rep["context"] = area.report()
     return rep
+
+
+def _stats(v) -> dict:
+    """min, mean, max of the valid cells of ``v`` (the mean summed in float64)."""
+    from .horizon_windows import ValueStats
+    values = ValueStats()
+    values.add(v)
+    return values.as_dict()

@@ -346,3 +346,33 @@ def test_one_day_is_named_as_r_sun_names_it(tmp_path, window_size):
             assert ds.descriptions == (want,), out
             assert ds.tags()["NAME"] == "hours of direct sun"
             assert ds.tags()["RSUN_NAME"] == "insol_time"
+
+
+def test_monthly_bands_sum_to_the_total_and_equal_each_months_days(tmp_path):
+    """--monthly: band 1 the bits of the run without it, then one band per month (YYYY-MM),
+    each the hours of its own days' runs, together the total; refused in windows."""
+    import rasterio
+    dem = _dem(tmp_path, _pillar())
+
+    def run(out, first, last, monthly=False, **kw):
+        cfg = SunHoursConfig(dem=dem, output=str(tmp_path / out), date=first, end_date=last,
+                             step="1h", place={"tz": TZ}, monthly=monthly,
+                             run=RunOptions(overwrite=True, quiet=True,
+                                            report_path=str(tmp_path / "r.json")), **kw)
+        return sun_hours(cfg)
+    run("plain.tif", "2027-01-30", "2027-02-02")
+    rep = run("m.tif", "2027-01-30", "2027-02-02", monthly=True)
+    with rasterio.open(tmp_path / "m.tif") as ds:
+        bands, desc = ds.read(), ds.descriptions
+    assert desc[1:] == ("2027-01", "2027-02")
+    np.testing.assert_array_equal(bands[0], read_band(tmp_path / "plain.tif"))
+    np.testing.assert_allclose(bands[1] + bands[2], bands[0], rtol=1e-6)
+    run("jan.tif", "2027-01-30", "2027-01-31")
+    run("feb.tif", "2027-02-01", "2027-02-02")
+    np.testing.assert_array_equal(bands[1], read_band(tmp_path / "jan.tif"))
+    np.testing.assert_array_equal(bands[2], read_band(tmp_path / "feb.tif"))
+    assert [m["month"] for m in rep["months"]] == ["2027-01", "2027-02"]
+    assert bands[0][PILLAR].max() > 0 and bands[1].min() < bands[1].max()
+    with pytest.raises(UsageProblem, match="runs in memory only"):
+        run("w.tif", "2027-01-30", "2027-02-02", monthly=True, window_size="64")
+    assert not os.path.exists(tmp_path / "w.tif")
