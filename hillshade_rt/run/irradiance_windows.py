@@ -458,14 +458,7 @@ def _on_dask(cfg, scheduler, jobs: Jobs, regs, tags, band_meta, vd_tags, values,
                     values[k].merge(v)
                 vd_values.merge(res["vd"])
                 fig.add(res["figures"])
-                used |= res["curvature_used"]
-                for k, v in res["algorithm_stats"].items():
-                    algo_stats.setdefault(k, v)
-                tally.bytes_read += res["bytes_read"]
-                tally.bytes_carried += res["bytes_carried"]
-                if pv_global is not None and res["shade"] is not None:
-                    sub, (a, b) = res["shade"]
-                    pv_global[a:a + sub.shape[0], b:b + sub.shape[1]] = sub
+                tally.take(res, used, algo_stats, pv_global)
                 bar.update(1)
 
         def sources(name, band):

@@ -74,6 +74,20 @@ class Tally:
                     self.largest = (r1 - r0, c1 - c0)
             self.windows += rs.pieces
 
+    def take(self, res: dict, used: set, algo_stats: dict, preview) -> None:
+        """A Dask task's result ``res`` (a region's ``region_task``) counted: its bytes read
+        and carried, the curvature it applied (into ``used``), its algorithm figures (the
+        first of each kind, into ``algo_stats``), and its preview cells put into ``preview``
+        (the every-n-th-cell raster, or None)."""
+        used |= res["curvature_used"]
+        for k, v in res["algorithm_stats"].items():
+            algo_stats.setdefault(k, v)
+        self.bytes_read += res["bytes_read"]
+        self.bytes_carried += res["bytes_carried"]
+        if preview is not None and res["shade"] is not None:
+            sub, (a, b) = res["shade"]
+            preview[a:a + sub.shape[0], b:b + sub.shape[1]] = sub
+
     def processing(self, mode: str, cells: int, itemsize: int, memory, window_shape,
                    stats_bytes: int) -> dict:
         """The report's ``processing`` of a run of ``cells`` output cells (``itemsize`` bytes a
@@ -285,14 +299,7 @@ def _on_dask(cfg, scheduler, job, regs, weights, tags, values, algo_stats, used,
                 rs, path = paths[f.key]
                 parts.append((rs.region, path))
                 values.merge(res["values"])
-                used |= res["curvature_used"]
-                for k, v in res["algorithm_stats"].items():
-                    algo_stats.setdefault(k, v)
-                tally.bytes_read += res["bytes_read"]
-                tally.bytes_carried += res["bytes_carried"]
-                if pv_hours is not None and res["shade"] is not None:
-                    sub, (a, b) = res["shade"]
-                    pv_hours[a:a + sub.shape[0], b:b + sub.shape[1]] = sub
+                tally.take(res, used, algo_stats, pv_hours)
                 bar.update(1)
         out = VrtOutput(cfg.output, src.shape, src.transform, src.crs, [description(tags)],
                         tags,
