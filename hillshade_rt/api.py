@@ -102,12 +102,21 @@ def _progress(progress) -> dict:
     return dict(quiet=progress == "json", progress=progress)
 
 
-def _no_other_keywords(function: str, more: dict) -> None:
-    """TypeError, as Python's own, for a keyword in ``**more`` that is not one of FORWARDED."""
-    unknown = set(more) - set(FORWARDED)
+def _no_other_keywords(function: str, more: dict, allowed=FORWARDED) -> None:
+    """TypeError, as Python's own, for a keyword in ``**more`` that is not one of ``allowed``
+    (FORWARDED: the read options, the place's, ``threads``)."""
+    unknown = set(more) - set(allowed)
     if unknown:
         raise TypeError(f"{function}() got unexpected keyword argument(s) "
                         f"{', '.join(sorted(unknown))}")
+
+
+def _read_options(more: dict, context=None):
+    """The read options (``run.ReadOptions``) of ``**more`` (``READ_KEYS``) and ``context``
+    (--context's path, or None)."""
+    from .run import ReadOptions
+    return ReadOptions(**{k: more[k] for k in READ_KEYS if k in more},
+                       context=None if context is None else os.fspath(context))
 
 
 def _place(more: dict) -> dict:
@@ -217,7 +226,7 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
     others are written, its ``report`` attribute the report.
 
     Returns the report (what ``--report`` writes; also written to ``report`` when given)."""
-    from .run import ReadOptions, RunOptions, ShadeConfig
+    from .run import RunOptions, ShadeConfig
     from .run import shade as run_shade
     from .run.batch import check_pattern, shade_each
     from .algorithms import algorithm_for, options_for
@@ -253,7 +262,7 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
                     light_lonlat=light_lonlat, falloff=falloff, bits=bits, subsolar=subsolar,
                     subsolar_file=subsolar_file, sun_distance=sun_distance, body=body,
                     vector=vector),
-                ReadOptions(**{k: more[k] for k in READ_KEYS if k in more}),
+                _read_options(more),
                 RunOptions(backend=backend, threads=more.get("threads"), report_path=report,
                            overwrite=overwrite, **_progress(progress), fmt=fmt,
                            preview=preview, say=_stderr, creation_options=creation_options,
@@ -269,8 +278,7 @@ def shade(dems, output: str | None = None, *, product: str = "shadow",
                start=_iso(start), end=_iso(end), step=step,
                sun_from_stac=None if sun_from_stac is None else os.fspath(sun_from_stac),
                **_place(more))
-    read = ReadOptions(**{k: more[k] for k in READ_KEYS if k in more},
-                       context=None if context is None else os.fspath(context))
+    read = _read_options(more, context)
     run = RunOptions(backend=backend, threads=more.get("threads"), report_path=report,
                      overwrite=overwrite, **_progress(progress), fmt=fmt, preview=preview,
                      say=_stderr, creation_options=creation_options,
@@ -408,7 +416,7 @@ def irradiance(dem, output=None, *, date=None, end_date=None, start=None, end=No
     ``instant=True`` as ``--instant``: the same at the times ``start``..``end`` every
     ``step``, or at ``date``'s sample times. Returns the report. For heights in memory:
     :func:`hillshade_rt.engine.arrays.irradiance`."""
-    from .run import ReadOptions, RunOptions
+    from .run import RunOptions
     from .run.config import IrradianceConfig
     from .run.irradiance_instant import irradiance_or_instants as run_irradiance
     from .run.batch import irradiance_each, split_files
@@ -418,8 +426,7 @@ def irradiance(dem, output=None, *, date=None, end_date=None, start=None, end=No
     dem, output = split_files(dems + ([] if output is None else [output]), each,
                               output_pattern, "irradiance")
     place = _place(more)
-    read = ReadOptions(**{k: more[k] for k in READ_KEYS if k in more},
-                       context=None if context is None else os.fspath(context))
+    read = _read_options(more, context)
     run = RunOptions(backend=backend, threads=more.get("threads"), report_path=report,
                      overwrite=overwrite, **_progress(progress), fmt=fmt, preview=preview,
                      say=_stderr, creation_options=creation_options,
@@ -464,7 +471,7 @@ def sun_hours(dem, output=None, *, date=None, end_date=None, monthly: bool = Fal
     None: on with the observer on the ground, off above it; ``each``, ``output_pattern``,
     ``context``, ``fmt``, ``creation_options`` and ``progress`` as for :func:`irradiance`.
     Returns the report."""
-    from .run import ReadOptions, RunOptions
+    from .run import RunOptions
     from .run.config import SunHoursConfig
     from .run.sun_hours import sun_hours as run_sun_hours
     from .run.batch import split_files, sun_hours_each
@@ -476,8 +483,7 @@ def sun_hours(dem, output=None, *, date=None, end_date=None, monthly: bool = Fal
     dem, output = split_files(dems + ([] if output is None else [output]), each,
                               output_pattern, "sun-hours")
     place = _place(more)
-    read = ReadOptions(**{k: more[k] for k in READ_KEYS if k in more},
-                       context=None if context is None else os.fspath(context))
+    read = _read_options(more, context)
     run = RunOptions(backend=backend, threads=more.get("threads"), report_path=report,
                      overwrite=overwrite, **_progress(progress), fmt=fmt, preview=preview,
                      say=_stderr, creation_options=creation_options,
@@ -519,19 +525,15 @@ def horizon(dem, output=None, *, azimuth: float | None = None, directions: int |
     (``band``, ``nodata``, ``threads``, ...); ``each``, ``output_pattern``, ``context``,
     ``fmt``, ``creation_options`` and ``progress`` as for :func:`irradiance`. Returns the
     report. For heights in memory: :func:`hillshade_rt.engine.arrays.horizon_angles`."""
-    from .run import HorizonConfig, ReadOptions, RunOptions
+    from .run import HorizonConfig, RunOptions
     from .run.horizon import horizon as run_horizon
     from .run.batch import horizon_each, split_files
     from .io.write import virtual_outputs
-    unknown = set(more) - set(READ_KEYS + ("threads",))
-    if unknown:
-        raise TypeError(f"horizon() got unexpected keyword argument(s) "
-                        f"{', '.join(sorted(unknown))}")
+    _no_other_keywords("horizon", more, READ_KEYS + ("threads",))
     dems = [dem] if isinstance(dem, (str, os.PathLike)) else list(dem)
     dem, output = split_files(dems + ([] if output is None else [output]), each,
                               output_pattern, "horizon")
-    read = ReadOptions(**{k: more[k] for k in READ_KEYS if k in more},
-                       context=None if context is None else os.fspath(context))
+    read = _read_options(more, context)
     run = RunOptions(backend=backend, threads=more.get("threads"), report_path=report,
                      overwrite=overwrite, **_progress(progress), fmt=fmt, preview=preview,
                      say=_stderr, creation_options=creation_options,
@@ -562,12 +564,12 @@ def animate(dem, output, *, date=None, start=None, end=None, step: str | None = 
     strings), every ``step`` (default "30min"), as a GIF or an MP4 at ``output`` (its
     extension decides). Further keywords are the command line's options of the same name
     (``tz``, ``lat``, ``lon``, ``band``, ``nodata``, ``threads``, ...). Returns the report."""
-    from .run import ReadOptions, RunOptions
+    from .run import RunOptions
     from .run.config import AnimateConfig
     from .run.animate import animate as run_animate
     _no_other_keywords("animate", more)
     place = _place(more)
-    read = ReadOptions(**{k: more[k] for k in READ_KEYS if k in more})
+    read = _read_options(more)
     run = RunOptions(backend=backend, threads=more.get("threads"), report_path=report,
                      overwrite=overwrite, **_progress(progress), say=_stderr)
     return run_animate(AnimateConfig(dem=os.fspath(dem), output=os.fspath(output),
