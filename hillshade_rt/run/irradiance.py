@@ -359,7 +359,7 @@ def _light(cfg, ctx: RunContext, d, shader, lighting, body, sampled: _Samples, a
                               albedo, soft=lighting.soft, perez=cfg.perez, stats=algo_stats,
                               timer=ctx.timer, progress=bar, normals=nrm, groups=groups)
     return _Bands(bands, vd, shader.report(), vd_from="computed" if vd_tags is None else "read",
-                  vd_tags=vd_tags, months=_months(cfg, sampled, bands, keys))
+                  vd_tags=vd_tags, months=_months(cfg, sampled, bands, groups, keys))
 
 
 def _albedo_groups(cfg, sampled: _Samples, geom, valid):
@@ -386,19 +386,16 @@ def _albedo_groups(cfg, sampled: _Samples, geom, valid):
     return (None if a.by_month else on(1)), ir.Groups(index, per, bool(cfg.monthly)), order
 
 
-def _months(cfg, sampled: _Samples, bands: dict, keys) -> list | None:
-    """--monthly: ((year, month), the month's hours, its global band) each."""
+def _months(cfg, sampled: _Samples, bands: dict, groups, keys) -> list | None:
+    """--monthly: ((year, month), the month's hours, its global band) each (``groups``, ``keys``:
+    :func:`_albedo_groups`')."""
     import numpy as np
     if not cfg.monthly:
         bands.pop("groups", None)
         return None
-    from .sky_inputs import month_keys
-    got = month_keys(sampled.times, sampled.tz, sampled.site.lon)
-    w = np.asarray(sampled.weights, np.float64)
-    hours = {k: 0.0 for k in keys}
-    for k, h in zip(got, w.tolist()):
-        hours[k] += h
-    return [(k, hours[k], v) for k, v in zip(keys, bands.pop("groups"))]
+    hours = np.bincount(groups.index, weights=np.asarray(sampled.weights, np.float64),
+                        minlength=len(keys))
+    return [(k, float(h), v) for k, h, v in zip(keys, hours, bands.pop("groups"))]
 
 
 def _want(cfg, hs, area, heights) -> dict:
@@ -507,7 +504,7 @@ def _light_in_context(cfg, ctx: RunContext, area, lighting, body, sampled: _Samp
                   "sky_view": fig.as_dict()}
     return _Bands(bands, vd, curvature_report(job.curvature, used, job.body, job.k),
                   processing, "computed" if vd_tags is None else "read", vd_tags,
-                  _months(cfg, sampled, bands, keys))
+                  _months(cfg, sampled, bands, groups, keys))
 
 
 def _sky_model(cfg: IrradianceConfig) -> str:

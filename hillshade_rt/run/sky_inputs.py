@@ -183,16 +183,13 @@ def resample(path: str, transform, crs, shape) -> np.ndarray:
 
 
 def local_months(times, tz, lon: float) -> np.ndarray:
-    """Each sample time's month (1..12) where the DEM is: in ``tz`` (a zone), else in local mean
-    solar time at longitude ``lon`` (degrees east)."""
-    if tz is not None:
-        return np.array([t.astimezone(tz).month for t in times], np.int64)
-    shift = _dt.timedelta(hours=lon / 15.0)
-    return np.array([(t.astimezone(_dt.timezone.utc) + shift).month for t in times], np.int64)
+    """Each sample time's month (1..12) where the DEM is (:func:`month_keys`)."""
+    return np.array([m for _, m in month_keys(times, tz, lon)], np.int64)
 
 
 def month_keys(times, tz, lon: float) -> list:
-    """Each sample time's (year, month) where the DEM is (as :func:`local_months`)."""
+    """Each sample time's (year, month) where the DEM is: in ``tz`` (a zone), else in local
+    mean solar time at longitude ``lon`` (degrees east)."""
     if tz is not None:
         loc = [t.astimezone(tz) for t in times]
     else:
