@@ -896,8 +896,9 @@ def shadow_polygons(da, azimuth: float | None = None, elevation: float | None = 
             area, m2 = measure(geom)
             features.append({"type": "Feature", "geometry": geom,
                              "properties": {**props, "area": area, "area_m2": m2}})
-    try:
-        import geopandas
+    import importlib
+    try:        # (by name: geopandas is used where it is installed, never required)
+        geopandas = importlib.import_module("geopandas")
     except ImportError:
         return features
     return geopandas.GeoDataFrame.from_features(features, crs=crs)
