@@ -270,6 +270,7 @@ CUBES = ["c.nc", pytest.param("c.zarr", marks=pytest.mark.skipif(
     __import__("importlib").util.find_spec("zarr") is None, reason="zarr not installed"))]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", CUBES)
 def test_instants_as_a_time_cube_are_the_geotiffs_bands(tmp_path, runner, name):
     """The same command line to OUTPUT.tif and to OUTPUT.nc / OUTPUT.zarr: xarray decodes the
@@ -324,6 +325,7 @@ def test_instants_as_a_time_cube_are_the_geotiffs_bands(tmp_path, runner, name):
         ["c.json", "f.tif", "g.tif", name])                  # no temporary left
 
 
+@pytest.mark.slow
 def test_instants_cube_from_python_and_refused_without_overwrite(tmp_path, runner):
     """hillshade_rt.irradiance(times=..., output .nc): the cube (its history says the Python
     API); the same path again: refused, the cube untouched; overwrite=True replaces it."""

@@ -198,6 +198,7 @@ def _as_written(values):
     return np.where(np.isnan(values), np.float32(-9999.0), values)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("extra, kw, units", [
     ([], {}, "Wh m-2"), (["--daily-mean", "--perez"], {"daily_mean": True, "perez": True},
                          "Wh m-2 day-1")])
@@ -242,6 +243,7 @@ def test_irradiance_period_and_months_equal_the_command_line(tmp_path, extra, kw
     assert "2026-06-30" in ds.attrs["period"] and ds.attrs["samples"] == 24
 
 
+@pytest.mark.slow
 def test_irradiance_instants_equal_the_command_lines_bands_and_cube(tmp_path):
     """times=[...]: the five quantities on a time dimension (UTC), each the GeoTIFF's band
     of the same instants bit for bit, and the command line's time cube's variable."""
@@ -283,6 +285,7 @@ def test_irradiance_errors_name_the_keywords(tmp_path):
         da.hrt.irradiance(times=["2026-06-21T12:00Z"], monthly=True)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("chunked", [False, True])
 def test_sun_hours_monthly_equals_the_command_lines_month_bands(tmp_path, chunked):
     """monthly=True: a layer per month the days touch, on a time dimension of month starts,
@@ -295,7 +298,7 @@ def test_sun_hours_monthly_equals_the_command_lines_month_bands(tmp_path, chunke
     v, _ = _bands(out)
     da = rioxarray.open_rasterio(dem)
     if chunked:
-        da = da.chunk({"x": 16, "y": 16})
+        da = da.chunk({"x": 20, "y": 20})
     m = da.hrt.sun_hours("2026-05-31", end_date="2026-06-01", step="1h",
                          tz="America/Los_Angeles", monthly=True)
     assert m.dims == ("time", "y", "x") and v.shape[0] == 3
@@ -309,6 +312,7 @@ def test_sun_hours_monthly_equals_the_command_lines_month_bands(tmp_path, chunke
     np.testing.assert_allclose(values.sum(axis=0), total.values, rtol=1e-6)
 
 
+@pytest.mark.slow
 def test_horizon_start_end_step_and_radians_equal_the_command_line(tmp_path):
     """r.horizon's start/end/step (and --directions): the azimuths the command line's bands
     have, each band's angles, in radians with angle_unit="radians"."""
