@@ -406,3 +406,35 @@ def test_several_variables_bad_calls(tmp_path):
         with cube.CubeWriter(tmp_path / "a.nc", grid, TIMES, variables=VARIABLES) as w:
             w.write_variable("glob_rad", 1, np.zeros((3, 4), np.float32))
     assert os.listdir(tmp_path) == []
+
+
+@pytest.mark.parametrize("name", FORMATS)
+def test_one_variable_either_way_is_the_same_cube(tmp_path, name):
+    """name/dtype/nodata/attrs and variables=[CubeVariable(...)] of the same variable write
+    the same cube, file for file and byte for byte (the one-variable cubes of the series are
+    what they were)."""
+    data = _stack()
+    common = dict(time_variables={"azimuth": (AZ, {"units": "degree"})},
+                  global_attrs={"title": "a test", "history": "pytest"})
+    a, b = tmp_path / "a" / name, tmp_path / "b" / name
+    a.parent.mkdir()
+    b.parent.mkdir()
+    with cube.CubeWriter(a, _grid(), TIMES, name="shadow", dtype="uint8", nodata=255,
+                         attrs={"long_name": "cast shadow"}, **common) as w:
+        for i in range(len(TIMES)):
+            w.write(i + 1, data[i])
+    with cube.CubeWriter(b, _grid(), TIMES, variables=[cube.CubeVariable(
+            "shadow", "uint8", 255, {"long_name": "cast shadow"})], **common) as w:
+        for i in range(len(TIMES)):
+            w.write_variable("shadow", i + 1, data[i])
+
+    def files(root):
+        out = {}
+        for dirpath, _, names in os.walk(root):
+            for n in names:
+                p = os.path.join(dirpath, n)
+                with open(p, "rb") as f:
+                    out[os.path.relpath(p, root)] = f.read()
+        return out
+    fa, fb = files(a.parent), files(b.parent)
+    assert len(fa) >= 1 and fa == fb
