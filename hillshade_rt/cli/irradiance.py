@@ -7,7 +7,7 @@ import click
 
 from .errors import errors_to_click, say
 from ..run.config import PLACE_KEYS
-from .options import (SectionedCommand, context_option, each_pattern_options,
+from .options import (SectionedCommand, command_line, context_option, each_pattern_options,
                       algorithm_option, backend_option, dem_options, format_option,
                       height_above_ground_option, max_memory_option, monthly_option,
                       overwrite_option,
@@ -124,7 +124,7 @@ def irradiance(files, date_, end_date, start, end, step, time, instant, clear_sk
         read=to_read_options(kw), run=to_run_options(kw, say),
         height_above_ground=height_above_ground, sky_view=sky_view, sky_view_out=sky_view_out,
         max_memory=max_memory, window_size=window_size, scheduler=scheduler,
-        times=tuple(time), instant=instant)
+        times=tuple(time), instant=instant, command=command_line())
     if each:
         irradiance_each(cfg, dem, output_pattern)
     else:

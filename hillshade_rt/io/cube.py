@@ -12,9 +12,11 @@ ncview) understand without being told:
 - a grid-mapping variable ``spatial_ref`` (pyproj's CF attributes, ``crs_wkt``, GDAL's
   ``spatial_ref`` and ``GeoTransform``) named by the data variable's ``grid_mapping`` (and its
   ``coordinates``, where rioxarray looks);
-- the data variable (``name``: the product), its ``_FillValue`` the nodata value, chunked one
-  time step per chunk (at most :data:`CHUNK` cells a side), compressed (NetCDF: zlib with the
-  shuffle filter; Zarr: the zarr library's default codec);
+- the data variable (``name``: the product), or several on the same axes (``variables``: the
+  irradiance instants' ``beam_rad``, ``diff_rad``, ``refl_rad``, ``glob_rad``, ``incidout``),
+  each with its ``_FillValue`` (the nodata value), chunked one time step per chunk (at most
+  :data:`CHUNK` cells a side), compressed (NetCDF: zlib with the shuffle filter; Zarr: the zarr
+  library's default codec);
 - per-time variables (the sun's azimuth and elevation of a lighting series, ...) on ``time``;
 - global attributes ``Conventions`` "CF-1.8", ``title``, ``history``, ``source``, ...
 
@@ -40,6 +42,7 @@ import datetime as _dt
 import os
 import sys
 import warnings
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -162,6 +165,28 @@ def grid_variables(shape, transform, crs) -> tuple[dict, dict | None]:
     return {"y": (y, ya), "x": (x, xa)}, gm
 
 
+@dataclass(frozen=True)
+class CubeVariable:
+    """One data variable of a cube with several (:class:`CubeWriter`'s ``variables``).
+
+    Parameters
+    ----------
+    name : str
+        The variable's name ("glob_rad", ...).
+    dtype : str
+        numpy's name of its type ("float32", ...).
+    nodata : float or int or None
+        Its ``_FillValue`` (None: none).
+    attrs : dict
+        Its attributes (``units``, ``long_name``, ``standard_name``, ...).
+    """
+
+    name: str
+    dtype: str
+    nodata: object = None
+    attrs: dict = field(default_factory=dict)
+
+
 class CubeWriter:
     """A (time, y, x) cube georeferenced like ``dem`` (anything with ``shape``, ``transform``:
     affine.Affine or None, ``crs``: rasterio's or pyproj's CRS, WKT, or None) written one time
@@ -172,6 +197,17 @@ class CubeWriter:
             w.write(1, mask)                           # time step 1 (1-based), whole
             w.write(2, part, window=(r0, r1, c0, c1))  # or a window of it
 
+    With several data variables (``variables`` instead of ``name``, ``dtype``, ``nodata`` and
+    ``attrs``) the bands are taken in a multi-band GeoTIFF's order, time by time: band ``b``
+    (1-based) is variable ``(b - 1) % n`` at time step ``(b - 1) // n`` (``n`` variables), so
+    the writer stands in for :class:`.raster.BandWriter` of a run that writes ``n`` bands per
+    time; :meth:`write_variable` names the variable instead::
+
+        variables = [CubeVariable("beam_rad", "float32", -9999.0, {"units": "W m-2"}), ...]
+        with CubeWriter("out.nc", dem, times, variables=variables) as w:
+            w.write(1, beam_at_t0)                     # band 1: beam_rad, time step 1
+            w.write_variable("glob_rad", 2, glob_at_t1)
+
     Parameters
     ----------
     path : str
@@ -181,13 +217,17 @@ class CubeWriter:
     times : sequence of datetime.datetime or numpy.datetime64
         One per time step (aware; naive ones are UTC), written as CF times in UTC.
     name : str
-        The data variable's name (the product: "shadow", "hillshade", ...).
+        The data variable's name (the product: "shadow", "hillshade", ...); None with
+        ``variables``.
     dtype : str
         "uint8", "uint16", "int16", "float32", ... (numpy's name).
     nodata : float or int or None
         The ``_FillValue`` (None: none).
     attrs : dict, optional
         The data variable's attributes (``units``, ``long_name``, ``flag_values``, ...).
+    variables : sequence of CubeVariable, optional
+        Several data variables on the same (time, y, x) axes, in this order (instead of
+        ``name``, ``dtype``, ``nodata`` and ``attrs``).
     time_variables : dict, optional
         ``{name: (values, attrs)}``: a value per time step each (the sun's ``azimuth`` and
         ``elevation`` in degrees, ...), float64 unless the values say otherwise.
@@ -201,9 +241,25 @@ class CubeWriter:
         A chunk's largest side in cells (one time step per chunk).
     """
 
-    def __init__(self, path, dem, times, *, name: str, dtype: str, nodata=None,
-                 attrs: dict | None = None, time_variables: dict | None = None,
-                 global_attrs: dict | None = None, overwrite: bool = False, chunk: int = CHUNK):
+    def __init__(self, path, dem, times, *, name: str | None = None, dtype: str | None = None,
+                 nodata=None, attrs: dict | None = None, variables=None,
+                 time_variables: dict | None = None, global_attrs: dict | None = None,
+                 overwrite: bool = False, chunk: int = CHUNK):
+        if variables is None:
+            if name is None or dtype is None:
+                raise ValueError("a cube's data variable needs a name and a dtype")
+            variables = [CubeVariable(name, dtype, nodata, dict(attrs or {}))]
+        elif name is not None or dtype is not None or nodata is not None or attrs is not None:
+            raise ValueError("give the data variables one way: name, dtype, nodata and attrs, "
+                             "or variables")
+        variables = list(variables)
+        names = [v.name for v in variables]
+        if not names or len(set(names)) != len(names):
+            raise ValueError(f"a cube's data variables need distinct names, got {names}")
+        reserved = {"time", "x", "y", GRID_MAPPING} | set(time_variables or {})
+        if reserved & set(names):
+            raise ValueError(f"data variable {sorted(reserved & set(names))[0]!r}: the name of a "
+                             "coordinate or per-time variable")
         self.path = os.fspath(path)
         self.format = check_cube_support(self.path)
         if self.format is None:
@@ -213,9 +269,13 @@ class CubeWriter:
         self.count = len(times)
         self.time, self.time_units = time_values(times)
         self.coords, self.grid_mapping = grid_variables(self.shape, dem.transform, dem.crs)
-        self.name, self.dtype = name, np.dtype(dtype)
-        self.nodata = None if nodata is None else self.dtype.type(nodata)
-        self.attrs = dict(attrs or {})
+        # (name, numpy dtype, nodata of that type or None, attrs) of each data variable
+        self.variables = []
+        for v in variables:
+            dt = np.dtype(v.dtype)
+            self.variables.append((v.name, dt, None if v.nodata is None else dt.type(v.nodata),
+                                   dict(v.attrs or {})))
+        self.name, self.dtype, self.nodata, self.attrs = self.variables[0]    # (the first)
         self.time_variables = {}
         for k, (values, a) in (time_variables or {}).items():
             v = np.asarray(values)
@@ -231,6 +291,7 @@ class CubeWriter:
         self.chunks = (1, max(1, min(rows, chunk)), max(1, min(cols, chunk)))
         self._stack = contextlib.ExitStack()
         self._nc = self._zarr = None
+        self._vars: dict = {}     # each data variable's netCDF4 variable or zarr array
         self._tmp = None
         self._finished = False
 
@@ -240,8 +301,8 @@ class CubeWriter:
         return {"standard_name": "time", "long_name": "time (UTC)", "axis": "T",
                 "units": self.time_units, "calendar": "standard"}
 
-    def _data_attrs(self) -> dict:
-        a = dict(self.attrs)
+    def _data_attrs(self, attrs: dict) -> dict:
+        a = dict(attrs)
         if self.grid_mapping is not None:
             a["grid_mapping"] = GRID_MAPPING
             a["coordinates"] = GRID_MAPPING     # (rioxarray finds the CRS through it)
@@ -288,11 +349,12 @@ class CubeWriter:
                 v = nc.createVariable(k, values.dtype, ("time",))
                 v.setncatts(a)
                 v[:] = values
-            d = nc.createVariable(self.name, self.dtype, ("time", "y", "x"), zlib=True,
-                                  complevel=ZLIB_LEVEL, shuffle=True, chunksizes=self.chunks,
-                                  fill_value=self.nodata if self.nodata is not None else False)
-            d.setncatts(self._data_attrs())
-            self._var = d
+            for name, dtype, nodata, attrs in self.variables:
+                d = nc.createVariable(name, dtype, ("time", "y", "x"), zlib=True,
+                                      complevel=ZLIB_LEVEL, shuffle=True, chunksizes=self.chunks,
+                                      fill_value=nodata if nodata is not None else False)
+                d.setncatts(self._data_attrs(attrs))
+                self._vars[name] = d
 
     def _open_zarr(self):
         import xarray as xr
@@ -305,26 +367,28 @@ class CubeWriter:
             values, a = self.coords[k]
             coords[k] = (k, values, a)
         import dask.array as da
-        fill = self.nodata if self.nodata is not None else self.dtype.type(0)
-        # the data variable's metadata only (a lazy array never computed: compute=False), its
-        # chunks written by write()
-        blank = da.full((self.count,) + self.shape, fill, dtype=self.dtype, chunks=self.chunks)
-        attrs = self._data_attrs()
-        attrs.pop("coordinates", None)      # xarray writes it from the coordinates
-        variables = {self.name: (("time", "y", "x"), blank, attrs)}
+        variables, enc = {}, {}
+        for name, dtype, nodata, attrs in self.variables:
+            fill = nodata if nodata is not None else dtype.type(0)
+            # the data variable's metadata only (a lazy array never computed: compute=False),
+            # its chunks written by write()
+            blank = da.full((self.count,) + self.shape, fill, dtype=dtype, chunks=self.chunks)
+            attrs = self._data_attrs(attrs)
+            attrs.pop("coordinates", None)      # xarray writes it from the coordinates
+            variables[name] = (("time", "y", "x"), blank, attrs)
+            enc[name] = {"chunks": self.chunks, "_FillValue": nodata}
         for k, (values, a) in self.time_variables.items():
             variables[k] = ("time", values, a)
         if self.grid_mapping is not None:
             coords[GRID_MAPPING] = ((), np.int32(0), self.grid_mapping)
         ds = xr.Dataset(variables, coords=coords, attrs=self.global_attrs)
-        enc = {self.name: {"chunks": self.chunks,
-                           "_FillValue": self.nodata if self.nodata is not None else None},
-               "time": {"dtype": self.time.dtype, "_FillValue": None},
-               "x": {"_FillValue": None}, "y": {"_FillValue": None}}
+        enc.update({"time": {"dtype": self.time.dtype, "_FillValue": None},
+                    "x": {"_FillValue": None}, "y": {"_FillValue": None}})
         with self._checked(), warnings.catch_warnings():
             warnings.simplefilter("ignore")    # zarr v3's note on consolidated metadata
             ds.to_zarr(self._tmp, mode="w", encoding=enc, compute=False)
-            self._zarr = zarr.open_group(self._tmp, mode="r+")[self.name]
+            self._zarr = zarr.open_group(self._tmp, mode="r+")
+            self._vars = {name: self._zarr[name] for name, *_ in self.variables}
 
     # -- writing -----------------------------------------------------------------------------
 
@@ -350,16 +414,32 @@ class CubeWriter:
 
     def write(self, band: int, data: np.ndarray, description: str = "",
               tags: dict | None = None, window: tuple[int, int, int, int] | None = None):
-        """Time step ``band`` (1-based), whole or its ``window`` (r0, r1, c0, c1). The step's
-        description and tags are the cube's time and per-time variables (ignored here)."""
+        """Band ``band`` (1-based), whole or its ``window`` (r0, r1, c0, c1): the time step
+        ``band`` of the one data variable; with ``n`` variables, variable ``(band - 1) % n`` at
+        time step ``(band - 1) // n`` (a GeoTIFF's bands, time by time). The band's description
+        and tags are the cube's time and per-time variables (ignored here)."""
+        n = len(self.variables)
+        if not 1 <= band <= n * self.count:
+            raise ValueError(f"{self.path}: band {band} of {n * self.count}")
+        step, j = divmod(band - 1, n)
+        self.write_variable(self.variables[j][0], step + 1, data, window)
+
+    def write_variable(self, name: str, step: int, data: np.ndarray,
+                       window: tuple[int, int, int, int] | None = None):
+        """Time step ``step`` (1-based) of the data variable ``name``, whole or its ``window``
+        (r0, r1, c0, c1)."""
         r0, r1, c0, c1 = window if window is not None else (0, self.shape[0], 0, self.shape[1])
         if data.shape != (r1 - r0, c1 - c0):
             raise ValueError(f"{self.path}: data of shape {data.shape} for a window of "
                              f"{(r1 - r0, c1 - c0)}")
-        data = np.asarray(data, self.dtype)
+        if name not in self._vars:
+            raise ValueError(f"{self.path}: no data variable {name!r}")
+        if not 1 <= step <= self.count:
+            raise ValueError(f"{self.path}: time step {step} of {self.count}")
+        dtype = next(dt for k, dt, *_ in self.variables if k == name)
+        data = np.asarray(data, dtype)
         with self._checked():
-            target = self._var if self._nc is not None else self._zarr
-            target[band - 1, r0:r1, c0:c1] = data
+            self._vars[name][step - 1, r0:r1, c0:c1] = data
 
     def describe(self, band: int, description: str = "", tags: dict | None = None):
         """(The time step's description and tags: the cube's time and per-time variables.)"""

@@ -492,6 +492,7 @@ class IrradianceConfig:
                 for p in v.inputs()]
     times: tuple = ()                     # --time: instants (W/m² at each, run.irradiance_instant)
     instant: bool = False                 # --instant: the period's times as instants, not sums
+    command: str | None = None            # the command line (a time cube's history)
 
     def instants(self) -> bool:
         """Whether the run writes instants (``--time`` or ``--instant``: r.sun's mode 1) rather

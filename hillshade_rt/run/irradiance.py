@@ -186,6 +186,39 @@ def _run(cfg, ctx: RunContext, lighting, asked: _Asked, d, area, windows=None) -
                    f"{sv}, total {sec['total']:.2f} s{how}")])
 
 
+def in_memory(cfg: IrradianceConfig, d) -> dict:
+    """The period's sums of ``cfg`` on the DEM ``d`` (an ``io.Dem`` in memory) as
+    :func:`irradiance` makes them, nothing written (``xarray.accessor.irradiance``): "bands"
+    (``engine.irradiance.BANDS``: float32, NaN voids, in "units"), "months" (``monthly``:
+    ((year, month), hours, global band) each, else None), "period", "hours", "samples",
+    "samples_with_sun", "sky", "turbidity"."""
+    import numpy as np
+
+    from ..model.earth import dem_body
+    if cfg.instants():
+        raise UsageProblem("--time and --instant are run.irradiance_instant's run")
+    cfg.check()
+    ctx = RunContext.start(cfg.run, algorithm=cfg.algorithm, note=False)
+    asked = _asked(cfg)
+    lighting = cfg.lighting(ctx.backend)
+    sampled = _samples(cfg, asked, d)
+    body = dem_body(d, asked.req.lat)
+    shader = _prepare(d, lighting, body, sampled)
+    lit = _light(cfg, ctx, d, shader, lighting, body, sampled, {}, lambda it: it)
+    bands, months = lit.bands, lit.months
+    if cfg.mean or cfg.daily_mean:      # as _run's: ÷ hours, or ÷ days (24 h)
+        per = 1.0 if cfg.mean else 24.0
+        bands = {k: (v / np.float32(sampled.hours / per)).astype(np.float32)
+                 for k, v in bands.items()}
+        if months is not None:
+            months = [(key, hours, (v / np.float32(hours / per)).astype(np.float32))
+                      for key, hours, v in months]
+    return {"bands": bands, "months": months, "period": sampled.period,
+            "hours": sampled.hours, "samples": len(sampled.suns),
+            "samples_with_sun": len(sampled.work), "sky": sampled.sky.source,
+            "turbidity": sampled.sky.turbidity, "units": _unit(cfg)}
+
+
 def _check_format(cfg: IrradianceConfig) -> None:
     """The output's format holds four float32 bands (a picture or a one-grid format: no)."""
     from ..engine import irradiance as ir

@@ -1,7 +1,10 @@
 """``irradiance --time T`` / ``--instant``: the irradiance at instants (GRASS r.sun's mode 1)
 instead of a period's sums. For each time, five float32 bands: beam, diffuse, reflected and
 global irradiance in W/m², and the sun's elevation above each cell's surface in degrees (r.sun's
-incidout; ``engine.irradiance.surface_elevation``), -9999 nodata.
+incidout; ``engine.irradiance.surface_elevation``), -9999 nodata. An OUTPUT named ``*.nc`` or
+``*.zarr`` is one CF-1.8 time cube instead (``io.cube``): the five quantities as data variables
+on (time, y, x) under r.sun's names (beam_rad, diff_rad, refl_rad, glob_rad, incidout), the
+same float32 values, the sun and the open sky per time.
 
 The physics are the period run's (``engine.irradiance.instant``: one sample of
 ``accumulate``'s sums, alone, with weight 1: its contribution in W/m²), on the same Shader,
@@ -52,13 +55,9 @@ def irradiance_instant(cfg: IrradianceConfig) -> dict:
     """Write each instant's five bands (``engine.irradiance.INSTANT_BANDS``) of ``cfg.dem`` to
     ``cfg.output``; returns the report."""
     from ..engine import irradiance as ir
-    from ..io.cube import cube_format
     ro = cfg.run
     cfg.check()
-    if cube_format(cfg.output) is not None and ro.fmt is None:
-        raise UsageProblem(f"{cfg.output}: irradiance's instants (five quantities a time) are "
-                           "not written as a time cube yet: write a GeoTIFF, or give -f netCDF "
-                           "for GDAL's netCDF (one variable per band)")
+    cube = use_cube(cfg)
     cfg.read.check_context(cfg.dem, **{"--time or --instant": True})
     ctx = RunContext.start(ro, inputs=[cfg.dem, cfg.ghi, cfg.sky_view] + cfg.read.inputs()
                            + cfg.sky_inputs(),
@@ -66,12 +65,13 @@ def irradiance_instant(cfg: IrradianceConfig) -> dict:
                                     (cfg.sky_view_out, "--sky-view-out")],
                            algorithm=cfg.algorithm, note=False)
     asked = _asked(cfg)
-    _check_format(cfg, len(ir.INSTANT_BANDS) * max(1, len(asked.req.times)))
+    if not cube:
+        _check_format(cfg, len(ir.INSTANT_BANDS) * max(1, len(asked.req.times)))
     ctx.compile_note(cfg.algorithm, True)
     lighting = cfg.lighting(ctx.backend)
     with ctx.timer("read"):
         d = cfg.read.read(cfg.dem)      # (AllNodata: a DEM of nodata has no instant to write)
-    return _run(cfg, ctx, lighting, asked, d)
+    return _run(cfg, ctx, lighting, asked, d, cube)
 
 
 def _asked(cfg: IrradianceConfig) -> _Asked:
@@ -128,7 +128,8 @@ def _times(cfg: IrradianceConfig, asked: _Asked, site) -> list:
     return times
 
 
-def _run(cfg: IrradianceConfig, ctx: RunContext, lighting, asked: _Asked, d) -> dict:
+def _run(cfg: IrradianceConfig, ctx: RunContext, lighting, asked: _Asked, d,
+         cube: bool = False) -> dict:
     """The suns and the sky at each instant, the sky view, each instant's bands written as
     they are made, the report."""
     import numpy as np
@@ -163,13 +164,10 @@ def _run(cfg: IrradianceConfig, ctx: RunContext, lighting, asked: _Asked, d) -> 
     summaries = {k: None for k in ir.INSTANT_BANDS}
     per_time = []
     preview = None
-    from ..io import BandWriter
     n = len(ir.INSTANT_BANDS)
     loop = progress(range(len(times)), ro.quiet, "hillshade-rt irradiance", "instant",
                     mode=ro.progress)
-    with BandWriter(cfg.output, d, n * len(times), "float32", -9999.0, tags,
-                    overview_resampling="average", overwrite=ro.overwrite, fmt=ro.fmt,
-                    co=ro.creation_options) as w:
+    with _writer(cfg, d, times, suns, sky, tags, cube) as w:
         albedo_of = _albedo_of(cfg, d, times, req.tz, site.lon)
         for k in loop:
             with timer("compute"):
@@ -351,3 +349,124 @@ def _albedo_of(cfg, d, times, tz, lon):
             seen[m] = a.on_grid(m, d.transform, d.crs, d.shape, valid)
         return seen[m]
     return of
+
+
+# -- OUTPUT.nc / OUTPUT.zarr: the instants as one CF time cube (io.cube) -------------------------
+
+NODATA = -9999.0
+# each quantity's variable in a time cube (r.sun's names, ``engine.irradiance.RSUN_NAMES``):
+# (long name, CF units)
+CUBE_QUANTITIES = {
+    "beam": ("beam (direct) irradiance on the cell's surface, 0 in cast shadow", "W m-2"),
+    "diffuse": ("diffuse sky irradiance on the cell's surface", "W m-2"),
+    "reflected": ("irradiance reflected by the terrain onto the cell's surface", "W m-2"),
+    "global": ("global irradiance on the cell's surface (beam + diffuse + reflected)", "W m-2"),
+    "incidence": ("the sun's elevation above the cell's surface (90 - angle of incidence; "
+                  "negative behind the surface)", "degree"),
+}
+
+
+def use_cube(cfg: IrradianceConfig) -> bool:
+    """Whether OUTPUT is a time cube: named ``*.nc`` or ``*.zarr`` without --format (which
+    names GDAL's driver). --co (GDAL's creation options) is refused then (a usage error); a
+    missing library is named (``io.cube.check_cube_support``), before any work."""
+    from ..io.cube import check_cube_support, cube_format
+    ro = cfg.run
+    if ro.fmt is not None or cube_format(cfg.output) is None:
+        return False
+    if ro.creation_options:
+        raise UsageProblem(f"{cfg.output}: --co sets GDAL's creation options; a time cube "
+                           "(.nc, .zarr) is written compressed, a chunk per time, without them: "
+                           "drop --co, or write a GeoTIFF (.tif)")
+    check_cube_support(cfg.output)
+    return True
+
+
+def cube_variables() -> list:
+    """The cube's data variables (``io.cube.CubeVariable``), in ``INSTANT_BANDS``' order:
+    ``beam_rad``, ``diff_rad``, ``refl_rad``, ``glob_rad`` (W m-2) and ``incidout``
+    (degree), float32, -9999 the _FillValue of the voids."""
+    from ..engine import irradiance as ir
+    from ..io.cube import CubeVariable
+    out = []
+    for q in ir.INSTANT_BANDS:
+        what, units = CUBE_QUANTITIES[q]
+        out.append(CubeVariable(ir.RSUN_NAMES[q], "float32", NODATA,
+                                {"long_name": what, "units": units, "quantity": q}))
+    return out
+
+
+def sky_variables(sky, count: int) -> dict:
+    """The open sky at each instant, a cube's per-time variables (W m-2)."""
+    import numpy as np
+    return {f"open_sky_{k}": (np.asarray(getattr(sky, k)[:count], np.float64),
+                              {"long_name": f"{what} of the open sky at the instant",
+                               "units": "W m-2"})
+            for k, what in (("ghi", "global horizontal irradiance"),
+                            ("dni", "direct normal irradiance"),
+                            ("dhi", "diffuse horizontal irradiance"))}
+
+
+def _writer(cfg: IrradianceConfig, d, times, suns, sky, tags: dict, cube: bool):
+    """OUTPUT's writer, taking the bands in the GeoTIFF's order (5 per time): a GeoTIFF's (or
+    --format's) bands (``io.BandWriter``), or one CF time cube of five data variables
+    (``io.cube.CubeWriter``, each with its units) with the sun and the open sky per time, the
+    GeoTIFF's tags its global attributes but for its band order and units."""
+    ro = cfg.run
+    if not cube:
+        from ..io import BandWriter
+        from ..engine.irradiance import INSTANT_BANDS
+        return BandWriter(cfg.output, d, len(INSTANT_BANDS) * len(times), "float32", NODATA,
+                          tags, overview_resampling="average", overwrite=ro.overwrite,
+                          fmt=ro.fmt, co=ro.creation_options)
+    from ..io.cube import CubeWriter
+    from .outputs import cube_globals, sun_variables
+    return CubeWriter(cfg.output, d, times, variables=cube_variables(),
+                      time_variables={**sun_variables(suns), **sky_variables(sky, len(times))},
+                      global_attrs=cube_globals("hillshade-rt: irradiance at instants",
+                                                {k: v for k, v in tags.items()
+                                                 if k not in ("UNITS", "BAND_ORDER")},
+                                                cfg.command),
+                      overwrite=ro.overwrite)
+
+
+def in_memory(cfg: IrradianceConfig, d) -> dict:
+    """The instants of ``cfg`` on the DEM ``d`` (an ``io.Dem`` in memory) as
+    :func:`irradiance_instant` makes them, nothing written (``xarray.accessor.irradiance``):
+    "bands" ({quantity of ``engine.irradiance.INSTANT_BANDS``: a float32 array per time, NaN
+    voids}), "times", "suns" (``model.sun.SunOver``), "sky" (``engine.irradiance.Sky``)."""
+    from ..algorithms.irradiance import normals
+    from ..engine import irradiance as ir
+    from ..model.earth import dem_body
+    from .irradiance import open_sky, read_sky_view, write_sky_view
+    if not cfg.instants():
+        raise UsageProblem("a period's sums are run.irradiance's run")
+    cfg.check()
+    ctx = RunContext.start(cfg.run, algorithm=cfg.algorithm, note=False)
+    asked = _asked(cfg)
+    lighting = cfg.lighting(ctx.backend)
+    req = asked.req
+    site = req.site(d, "irradiance computes the Earth's sun only")
+    if req.auto_tz and cfg.ghi is not None:
+        asked.series = ir.read_series(cfg.ghi, req.tz)
+    times = _times(cfg, asked, site)
+    req.times = times
+    suns, _ = req.suns(d, site)
+    sky = open_sky(cfg, times, suns, site, asked.series, req.tz)
+    body = dem_body(d, req.lat)
+    shader = lighting.shader(d.heights, d.grid, body=body, zrange=d.height_range(),
+                             survey=d.survey())
+    work = [s for s in suns if not ir.is_dark(s, cfg.soft)]
+    if work:        # (as _run)
+        shader.warm_up(work[0].azimuth, max(work[0].elevation, 1.0), soft=lighting.soft,
+                       incidence=True, field=any(s.fieldwise for s in work))
+    nrm = normals(d.heights, d.grid)
+    vd, _ = _sky_view(cfg, ctx, d, shader, lighting, body, nrm, read_sky_view, write_sky_view)
+    albedo_of = _albedo_of(cfg, d, times, req.tz, site.lon)
+    out: dict = {q: [] for q in ir.INSTANT_BANDS}
+    for k in range(len(times)):
+        bands = ir.instant(shader, suns[k], sky, k, vd, albedo_of(k), soft=lighting.soft,
+                           perez=cfg.perez, stats={}, timer=ctx.timer, normals=nrm)
+        for q in ir.INSTANT_BANDS:
+            out[q].append(bands[q])
+    return {"bands": out, "times": list(times), "suns": list(suns), "sky": sky}

@@ -1,6 +1,7 @@
 """hillshade-rt on xarray DataArrays (rioxarray's CRS and transform): ``import hillshade_rt.xarray``
-registers the ``da.hrt`` accessor, with :func:`shadow`, :func:`horizon`, :func:`skyview` and
-:func:`sun_hours` as its methods (``da.hrt.shadow(azimuth=203.7, elevation=12)``).
+registers the ``da.hrt`` accessor, with :func:`shadow`, :func:`horizon`, :func:`skyview`,
+:func:`sun_hours`, :func:`irradiance` and :func:`shadow_polygons` as its methods
+(``da.hrt.shadow(azimuth=203.7, elevation=12)``).
 
 The input is a 2-D DataArray (or one with a ``band`` dimension of size 1) whose x/y coordinates
 are regularly spaced. Its CRS is ``crs=``, else rioxarray's ``da.rio.crs``, else
@@ -30,6 +31,8 @@ The package: ``accessor`` (the functions and ``da.hrt``), ``dataarray`` (a DataA
 out), ``lazy`` (the Dask graph of the windows).
 """
 
-from .accessor import HrtAccessor, horizon, shadow, skyview, sun_hours
+from .accessor import (HrtAccessor, horizon, irradiance, shadow, shadow_polygons, skyview,
+                       sun_hours)
 
-__all__ = ["HrtAccessor", "shadow", "horizon", "skyview", "sun_hours"]
+__all__ = ["HrtAccessor", "shadow", "horizon", "skyview", "sun_hours", "irradiance",
+           "shadow_polygons"]

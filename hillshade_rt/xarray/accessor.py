@@ -1,5 +1,7 @@
 """The ``da.hrt`` accessor and the functions it calls on a DataArray: :func:`shadow`,
-:func:`horizon`, :func:`skyview`, :func:`sun_hours` (the commands' runs on arrays: the same
+:func:`horizon`, :func:`skyview`, :func:`sun_hours`, :func:`irradiance` (the command's run on
+the heights in memory, ``run.irradiance_arrays``), :func:`shadow_polygons` (the commands' runs
+on arrays: the same
 ``engine.shader.Shader`` and ``render``, the sun through ``model.sun.SunRequest``), in memory
 or, for a Dask-backed input, lazily through ``lazy``'s windows."""
 
@@ -21,17 +23,23 @@ from .lazy import (LazySource, horizon_settings, horizon_window, lazy_job, lazy_
 # the command line's options named in the library's messages, and their keywords here
 _KEYWORDS = {"lat", "lon", "time", "tz", "pressure", "temperature", "sun-tolerance",
              "height-above-ground", "azimuth", "elevation", "date", "end-date", "step",
-             "max-distance", "directions", "algorithm", "self-shadow", "soft"}
+             "max-distance", "directions", "algorithm", "self-shadow", "soft", "start", "end",
+             "angle-unit", "instant", "mean", "daily-mean", "monthly", "perez", "albedo",
+             "linke-turbidity", "clear-sky", "ghi", "skyview-directions"}
+# options whose keyword here is another name
+_RENAMED = {"time": "times"}
 
 
-def _keywords(fn):
+def _keywords(fn, renamed=None):
     """``fn`` with the command line's options in its errors' messages named as its keywords
-    (``--lat`` -> ``lat=``)."""
+    (``--lat`` -> ``lat=``; ``renamed``: {option: keyword} where they differ)."""
     import functools
     import re
 
     def word(m):
         name = m.group(1)
+        if renamed and name in renamed:
+            return renamed[name] + "="
         return name.replace("-", "_") + "=" if name in _KEYWORDS else m.group(0)
 
     @functools.wraps(fn)
@@ -206,12 +214,15 @@ def _lighting(da, kind, azimuth, elevation, time, tz, lat, lon, crs, spacing, no
 
 
 @_keywords
-def horizon(da, azimuth, *, crs=None, spacing=None, nodata: float | None = None,
+def horizon(da, azimuth=None, *, directions: int | None = None, start: float | None = None,
+            end: float | None = None, step: float | None = None, angle_unit: str = "degrees",
+            crs=None, spacing=None, nodata: float | None = None,
             method: str = "scan", sample_spacing: int = 1, backend: str = "auto",
             curvature="auto", refraction_k: float | None = None,
             max_distance: float | None = None,
             height_above_ground: float = 0.0) -> xr.DataArray:
-    """Horizon angle of every cell toward ``azimuth``, as ``hillshade-rt horizon``.
+    """Horizon angle of every cell toward ``azimuth`` (or the azimuths of ``directions`` or
+    ``start``/``end``/``step``), as ``hillshade-rt horizon``.
 
     As :func:`hillshade_rt.engine.arrays.horizon_angles`. A Dask-backed input gives a lazy
     result, one task per chunk whose window holds every cell toward the azimuth (within ``max_distance``,
@@ -223,8 +234,24 @@ def horizon(da, azimuth, *, crs=None, spacing=None, nodata: float | None = None,
     da : xarray.DataArray
         Heights in metres (the accessor's own DataArray for ``da.hrt``): 2-D, or with a ``band``
         dimension of size 1, on regularly spaced x/y coordinates; NumPy- or Dask-backed.
-    azimuth : float or sequence of float
+    azimuth : float or sequence of float, optional
         Degrees clockwise from the raster's north; a sequence gives an ``azimuth`` dimension.
+        Or give ``directions``, or ``step`` (with ``start``, ``end``).
+    directions : int, optional
+        Instead of ``azimuth``: this many azimuths (8..360) equally spaced clockwise from
+        north, 0 first (the command's ``--directions``); an ``azimuth`` dimension.
+    start : float, optional
+        With ``step``: the first azimuth, degrees clockwise from north, in [0, 360) (default 0;
+        r.horizon's ``start`` counts counter-clockwise from east: ours is 90 - theirs).
+    end : float, optional
+        With ``step``: the azimuths come before this one, degrees (default ``start`` + 360; at
+        most one turn after ``start``).
+    step : float, optional
+        Degrees between azimuths clockwise from ``start``: floor((end - start) / step) of
+        them, as r.horizon's ``step`` (the command's ``--start/--end/--step``); an ``azimuth``
+        dimension.
+    angle_unit : {"degrees", "radians"}, default "degrees"
+        The unit of the angles returned (r.horizon's default is radians, its ``-d`` degrees).
     crs : optional
         The CRS (anything rasterio takes); else rioxarray's ``da.rio.crs``, else
         ``da.attrs["crs"]``.
@@ -251,21 +278,35 @@ def horizon(da, azimuth, *, crs=None, spacing=None, nodata: float | None = None,
     Returns
     -------
     xarray.DataArray
-        float32 degrees above the horizontal, NaN on voids, -90 where no terrain lies ahead, on
-        ``da``'s x/y coordinates (an ``azimuth`` dimension for a sequence of azimuths).
+        float32 degrees (``angle_unit="radians"``: radians) above the horizontal, NaN on voids,
+        -90 degrees (-pi/2) where no terrain lies ahead, on ``da``'s x/y coordinates (an
+        ``azimuth`` dimension, degrees clockwise from north, for a sequence of azimuths,
+        ``directions`` or ``step``).
 
     Raises
     ------
     HillshadeError
-        No azimuth, a non-finite one, no CRS and no ``spacing``, a negative height above the
-        ground.
+        No azimuth, a non-finite one, more than one of ``azimuth``, ``directions`` and
+        ``step``, ``start``/``end`` without ``step`` or out of range, an unknown
+        ``angle_unit``, no CRS and no ``spacing``, a negative height above the ground.
     """
     from ..engine.arrays import horizon_angles
     from ..model.geometry import normalize_azimuth
-    series = not np.isscalar(azimuth)
-    azimuths = [normalize_azimuth(float(a)) for a in np.atleast_1d(azimuth)]
-    if not azimuths:
-        raise HillshadeError("azimuth: no azimuths given")
+    from ..run.config import HorizonConfig
+    from ..run.horizon_windows import in_unit
+    if azimuth is not None and not np.isscalar(azimuth):    # a sequence of azimuths
+        if directions is not None or step is not None or start is not None or end is not None:
+            raise HillshadeError("give azimuth, directions or start/end/step, one of them")
+        series = True
+        azimuths = [normalize_azimuth(float(a)) for a in np.atleast_1d(azimuth)]
+        if not azimuths:
+            raise HillshadeError("azimuth: no azimuths given")
+        HorizonConfig(dem="", output="", azimuth=0.0, angle_unit=angle_unit).azimuths()
+    else:       # the command line's choice: --azimuth, --directions or --start/--end/--step
+        series = azimuth is None
+        azimuths = HorizonConfig(dem="", output="", azimuth=azimuth, directions=directions,
+                                 start=start, end=end, step=step,
+                                 angle_unit=angle_unit).azimuths()
     inp = as_input(da, crs, spacing, nodata)
 
     def compute(z):
@@ -285,8 +326,10 @@ def horizon(da, azimuth, *, crs=None, spacing=None, nodata: float | None = None,
             lift=height_above_ground)) for a in azimuths])
     else:
         arr = whole(compute, inp, (len(azimuths),) + inp.shape)
-    attrs = {"product": "horizon", "units": "degrees above the horizontal",
-             "no_terrain_ahead": -90.0, "method": method,
+    arr = in_unit(arr, angle_unit)
+    attrs = {"product": "horizon", "units": f"{angle_unit} above the horizontal",
+             "no_terrain_ahead": float(in_unit(np.float32(-90.0), angle_unit)),
+             "method": method,
              "max_distance_m": max_distance, "height_above_ground_m":
              float(height_above_ground) or None, "hillshade_rt_version": __version__}
     if series:
@@ -384,7 +427,8 @@ def sun_hours(da, date, *, end_date=None, step: str = "10min", tz: str | None = 
               curvature="auto", refraction_k: float | None = None, soft: bool = False,
               self_shadow: bool | None = None, height_above_ground: float = 0.0,
               pressure: float | None = None, temperature: float | None = None,
-              refraction: bool = True, sun_tolerance: float | None = None) -> xr.DataArray:
+              refraction: bool = True, sun_tolerance: float | None = None,
+              monthly: bool = False) -> xr.DataArray:
     """Hours of direct sun per cell over one day or several, as ``hillshade-rt sun-hours``.
 
     Each sample with the sun up counts for its interval. A Dask-backed input: each sample's
@@ -442,12 +486,17 @@ def sun_hours(da, date, *, end_date=None, step: str = "10min", tz: str | None = 
     sun_tolerance : float, optional
         Degrees: the sun is computed per tile where its direction varies by more than this
         across the raster (default 0.05).
+    monthly : bool, default False
+        The hours of each month the days touch instead of the period's total (the command's
+        ``--monthly`` bands after the total): one layer per month on a ``time`` dimension
+        (each month's first day, in the days' zone), each month's own float32 sum.
 
     Returns
     -------
     xarray.DataArray
         float32 hours of direct sun, NaN on voids, on ``da``'s x/y coordinates, with attributes
-        naming the days, the step and the samples.
+        naming the days, the step and the samples; with ``monthly`` a ``time`` dimension (the
+        months' first days, a ``month`` coordinate "YYYY-MM" along it).
 
     Raises
     ------
@@ -488,16 +537,20 @@ def sun_hours(da, date, *, end_date=None, step: str = "10min", tz: str | None = 
     def dark(s):
         top = max([r.elevation for r in s.tiles] if s.tiles else [s.elevation])
         return top + (SUN_RADIUS_DEG if soft else 0.0) <= 0.0
+    months = _months(first, last) if monthly else None
     if inp.lazy:
         src = LazySource(inp.heights, inp.grid, inp.transform, inp.crs, inp.path)
         site = req.site(src, other)
         req.times, weights = daylight_samples(first, last, step, req.tz, site, req.atmosphere)
         job, stats, suns, _ = lazy_job(inp, req, lighting, "sun")
         hours = inp.heights * np.float32(0.0)      # NaN on voids, 0 elsewhere
-        for s, w in zip(suns, weights):
+        per, keys = _month_sums(months, hours, suns, req.tz, site.lon)
+        for s, w, key in zip(suns, weights, keys):
             if w > 0 and not dark(s):
-                hours = hours + np.float32(w) * lazy_render(job, s, stats, inp.heights,
-                                                            np.float32)
+                lit = np.float32(w) * lazy_render(job, s, stats, inp.heights, np.float32)
+                hours = hours + lit
+                if per is not None:
+                    per[key] = per[key] + lit
     else:
         dem = as_dem(inp)
         site = req.site(dem, other)
@@ -506,10 +559,14 @@ def sun_hours(da, date, *, end_date=None, step: str = "10min", tz: str | None = 
         shader = lighting.shader(dem.heights, dem.grid, body=dem_body(dem, req.lat),
                                  zrange=dem.height_range(), survey=dem.survey())
         hours = np.where(np.isnan(dem.heights), np.float32(np.nan), np.float32(0.0))
-        for s, w in zip(suns, weights):
+        per, keys = _month_sums(months, hours, suns, req.tz, site.lon)
+        for s, w, key in zip(suns, weights, keys):
             if w > 0 and not dark(s):
-                hours += np.float32(w) * render(shader, s, "sun", soft=soft,
-                                                self_shadow=self_shadow)
+                lit = np.float32(w) * render(shader, s, "sun", soft=soft,
+                                             self_shadow=self_shadow)
+                hours += lit
+                if per is not None:
+                    per[key] += lit
     attrs = {"product": "sun_hours", "units": "hours of direct sun",
              "date_first": first.isoformat(), "date_last": last.isoformat(),
              "days": (last - first).days + 1, "step": step, "algorithm": algorithm,
@@ -518,7 +575,373 @@ def sun_hours(da, date, *, end_date=None, step: str = "10min", tz: str | None = 
              "day": (f"midnight to midnight, {req.tz.key}" if req.tz is not None
                      else f"local mean solar time at longitude {site.lon:.4f}"),
              "hillshade_rt_version": __version__}
-    return wrap(hours, inp, attrs, np.nan, "sun_hours")
+    if per is None:
+        return wrap(hours, inp, attrs, np.nan, "sun_hours")
+    if inp.lazy:
+        import dask.array as dka
+        stack = dka.stack
+    else:
+        stack = np.stack
+    return wrap(stack([per[k] for k in months]), inp, {**attrs, "monthly": "hours of each month"},
+                np.nan, "sun_hours", _month_dim(months))
+
+
+def _months(first: _dt.date, last: _dt.date) -> list:
+    """(year, month) of every month the days ``first`` .. ``last`` touch, in order (the
+    command's ``--monthly`` bands)."""
+    out, d = [], first
+    while d <= last:
+        if (d.year, d.month) not in out:
+            out.append((d.year, d.month))
+        d += _dt.timedelta(days=1)
+    return out
+
+
+def _month_sums(months, zero, suns, tz, lon):
+    """With ``months``: ({(year, month): ``zero``'s copy} to sum each month's samples into,
+    each sun's (year, month): its time's, in ``tz`` or local mean solar time at ``lon``, as the
+    command's ``run.sky_inputs.month_keys``); without: (None, a None per sun)."""
+    if months is None:
+        return None, [None] * len(suns)
+    from ..run.sky_inputs import month_keys
+    return ({k: zero.copy() for k in months},
+            month_keys([s.time for s in suns], tz, lon))
+
+
+def _month_dim(months, hours=None):
+    """The ``time`` dimension of monthly layers: each month's first day (datetime64, a label of
+    the month in the period's local time), its "YYYY-MM" as ``month`` (and the sampled
+    ``hours`` of each month)."""
+    coords = {"time": ("time", np.array([f"{y:04d}-{m:02d}-01" for y, m in months],
+                                        "datetime64[ns]")),
+              "month": ("time", np.array([f"{y:04d}-{m:02d}" for y, m in months], object))}
+    if hours is not None:
+        coords["hours"] = ("time", np.asarray(hours, np.float64))
+    return ("time", coords)
+
+
+# the period sums' variables (r.sun's names, engine.irradiance.RSUN_NAMES) and what they are
+_PERIOD_WHAT = {"beam": "beam (direct) irradiation on the cell's surface, 0 in cast shadow",
+                "diffuse": "diffuse sky irradiation on the cell's surface",
+                "reflected": "irradiation reflected by the terrain onto the cell's surface",
+                "global": "global irradiation on the cell's surface (beam + diffuse + "
+                          "reflected)"}
+_CF_UNITS = {"Wh/m2": "Wh m-2", "W/m2": "W m-2", "Wh/m2/day": "Wh m-2 day-1"}
+
+
+def _irradiance_keywords(fn):
+    return _keywords(fn, _RENAMED)
+
+
+@_irradiance_keywords
+def irradiance(da, date=None, *, end_date=None, start=None, end=None, step: str = "15min",
+               times=None, instant: bool = False, tz: str | None = None,
+               lat: float | None = None, lon: float | None = None, crs=None, spacing=None,
+               nodata: float | None = None, clear_sky: str | None = None,
+               linke_turbidity=None, albedo=0.2, ghi: str | None = None, mean: bool = False,
+               daily_mean: bool = False, monthly: bool = False, perez: bool = False,
+               soft: bool = False, skyview_directions: int = 32, algorithm: str = "auto",
+               backend: str = "auto", curvature="auto", refraction_k: float | None = None,
+               height_above_ground: float = 0.0, pressure: float | None = None,
+               temperature: float | None = None, refraction: bool = True,
+               sun_tolerance: float | None = None) -> xr.Dataset:
+    """Beam, diffuse, reflected and global irradiation over a period (or the irradiance at
+    instants) on every cell, as ``hillshade-rt irradiance``.
+
+    The command's run on the heights in memory (``run.irradiance_arrays``: the same samples,
+    open sky, cast shadows, Horn normals, Dozier sky view and
+    ``engine.irradiance.accumulate`` / ``instant``), so each variable equals the command's
+    band for the same inputs. A Dask-backed input is computed first (the whole DEM in memory).
+
+    Parameters
+    ----------
+    da : xarray.DataArray
+        Heights in metres (the accessor's own DataArray for ``da.hrt``): 2-D, or with a ``band``
+        dimension of size 1, on regularly spaced x/y coordinates.
+    date : str or datetime.date, optional
+        The day (or first day), midnight to midnight in ``tz`` (else local mean solar time).
+    end_date : str or datetime.date, optional
+        The last day of a range (included).
+    start, end : str or datetime.datetime, optional
+        Or the period from ``start`` to ``end`` (ISO 8601 with an offset, or aware datetimes).
+    step : str, default "15min"
+        Sampling interval; each sample, at its middle, stands for its interval.
+    times : str, datetime or sequence, optional
+        Instead of a period: the instants (r.sun's mode 1), as :func:`shadow`'s ``time``.
+    instant : bool, default False
+        The period's sample times (``date``) or ``start``, ``start + step``, ... ``end`` as
+        instants instead of the period's sums.
+    tz : str, optional
+        IANA time zone of the days and of naive times.
+    lat, lon : float, optional
+        The place of the sun, degrees (elsewhere than the DEM's centre, or without a CRS).
+    crs : optional
+        The CRS (anything rasterio takes); else rioxarray's ``da.rio.crs``, else
+        ``da.attrs["crs"]``.
+    spacing : float or (float, float), optional
+        Ground metres per cell, ``d`` or ``(dx, dy)``; required without a CRS.
+    nodata : float, optional
+        Nodata value (else ``da.rio.nodata`` or ``_FillValue``); NaN and infinities are voids.
+    clear_sky : {"ineichen", "haurwitz"}, optional
+        pvlib's clear-sky model (default ineichen).
+    linke_turbidity : float, str or sequence of 12 floats, optional
+        Linke turbidity (dimensionless) for ineichen: a number or 12 monthly numbers; default
+        pvlib's climatological monthly value at the place.
+    albedo : float, str or sequence of 12 floats, default 0.2
+        Ground reflectance (0..1): a number, 12 monthly numbers, a raster file, or a pattern
+        of 12 monthly rasters with ``{month}``.
+    ghi : str, optional
+        A measured sky instead: a CSV file with columns time, ghi (and dni, dhi), W/m².
+    mean : bool, default False
+        Mean W/m² over the period instead of Wh/m².
+    daily_mean : bool, default False
+        Wh/m² per day instead of Wh/m².
+    monthly : bool, default False
+        Also the global irradiation of each month (the command's ``--monthly`` bands): the
+        variable ``glob_rad_monthly`` on a ``time`` dimension (each month's first day).
+    perez : bool, default False
+        Perez (1990) anisotropic sky instead of the isotropic one.
+    soft : bool, default False
+        The visible fraction of the solar disk instead of lit/unlit.
+    skyview_directions : int, default 32
+        Azimuths of Dozier's sky view factor (4..360).
+    algorithm : str, default "auto"
+        As :func:`hillshade_rt.engine.arrays.shadow_mask`.
+    backend : {"auto", "cpu", "gpu"}, default "auto"
+        As :func:`hillshade_rt.engine.arrays.shadow_mask`.
+    curvature : bool or "auto", default "auto"
+        Earth curvature of the rays.
+    refraction_k : float, optional
+        Terrestrial refraction coefficient (dimensionless); default 0.13.
+    height_above_ground : float, default 0.0
+        Metres (>= 0): the receiving surface of every cell stands this high (a panel).
+    pressure : float, optional
+        Air pressure, hPa, for the refraction.
+    temperature : float, optional
+        Air temperature, °C, for the refraction (default 12).
+    refraction : bool, default True
+        Apparent sun elevation (the SPA's refraction).
+    sun_tolerance : float, optional
+        Degrees: the sun is computed per tile where its direction varies by more than this.
+
+    Returns
+    -------
+    xarray.Dataset
+        On ``da``'s x/y coordinates with its CRS, NaN on voids, float32. A period:
+        ``beam_rad``, ``diff_rad``, ``refl_rad``, ``glob_rad`` in Wh m-2 (``mean``: W m-2;
+        ``daily_mean``: Wh m-2 day-1), and with ``monthly`` ``glob_rad_monthly`` (time, y, x)
+        with the sampled ``hours`` of each month. Instants: the same four in W m-2 and
+        ``incidout`` (the sun's elevation above each cell's surface, degrees), each on
+        (time, y, x), ``time`` in UTC with the sun's ``sun_azimuth``, ``sun_elevation`` and
+        ``time_local`` along it, and the open sky's ``open_sky_ghi``, ``open_sky_dni``,
+        ``open_sky_dhi`` (W m-2) per time.
+
+        A Dataset rather than one DataArray with a ``band`` dimension: the four are different
+        quantities (each its own long name, and units that differ in the instants), as the
+        command's time cube and r.sun's separate maps have them; ``ds.glob_rad`` names what a
+        ``band`` index would not, and ``ds.to_array("band")`` stacks them when wanted.
+
+    Raises
+    ------
+    HillshadeError
+        The period given no way or two ways, a bad date, step, time or sky option (named by
+        its keyword), no CRS and no ``spacing``, a DEM of another body.
+    """
+    from ..engine import irradiance as ir
+    from ..model.sun import DEFAULT_TOLERANCE
+    from ..run import irradiance as period_run
+    from ..run import irradiance_instant as instant_run
+    from ..run.config import IrradianceConfig, RunOptions
+
+    def day(v):
+        return v.isoformat() if isinstance(v, _dt.date) else v
+    texts = ()
+    if times is not None:
+        texts = tuple(time_list(times, tz)[0])
+    cfg = IrradianceConfig(
+        dem="", output="", date=day(date), end_date=day(end_date), start=day(start),
+        end=day(end), step=step, clear_sky=clear_sky,
+        linke_turbidity=(",".join(str(v) for v in linke_turbidity)
+                         if isinstance(linke_turbidity, (list, tuple)) else linke_turbidity),
+        albedo=(",".join(str(v) for v in albedo) if isinstance(albedo, (list, tuple))
+                else albedo),
+        ghi=ghi, mean=mean, daily_mean=daily_mean, monthly=monthly, soft=soft, perez=perez,
+        skyview_directions=skyview_directions,
+        place=dict(tz=tz, lat=lat, lon=lon, pressure=pressure, temperature=temperature,
+                   no_refraction=not refraction,
+                   sun_tolerance=DEFAULT_TOLERANCE if sun_tolerance is None else sun_tolerance),
+        algorithm=algorithm, curvature=curvature, refraction_k=refraction_k,
+        run=RunOptions(backend=backend, quiet=True), height_above_ground=height_above_ground,
+        times=texts, instant=instant)
+    inp = as_input(da, crs, spacing, nodata)
+    if inp.lazy:
+        inp = with_heights(inp, inp.heights.compute())
+    dem = as_dem(inp)
+    common = {"hillshade_rt_version": __version__, "sky_model": "perez" if perez else
+              "isotropic", "skyview_directions": int(skyview_directions),
+              "height_above_ground_m": float(height_above_ground) or None}
+    if cfg.instants():
+        got = instant_run.in_memory(cfg, dem)
+        dim = series_dim(got["suns"])
+        out = {}
+        for q in ir.INSTANT_BANDS:
+            what, units = instant_run.CUBE_QUANTITIES[q]
+            out[ir.RSUN_NAMES[q]] = wrap(np.stack(got["bands"][q]), inp,
+                                         {"long_name": what, "units": units, "quantity": q},
+                                         np.nan, ir.RSUN_NAMES[q], dim)
+        ds = xr.Dataset(out)
+        n = len(got["times"])
+        for k, what in (("ghi", "global horizontal irradiance"),
+                        ("dni", "direct normal irradiance"),
+                        ("dhi", "diffuse horizontal irradiance")):
+            ds[f"open_sky_{k}"] = ("time", np.asarray(getattr(got["sky"], k)[:n], np.float64),
+                                   {"long_name": f"{what} of the open sky at the instant",
+                                    "units": "W m-2"})
+        ds.attrs.update({k: v for k, v in {**common, "mode": "instants (r.sun mode 1)",
+                                           "sky": got["sky"].source}.items() if v is not None})
+        return ds
+    got = period_run.in_memory(cfg, dem)
+    units = _CF_UNITS[got["units"]]
+    out = {ir.RSUN_NAMES[q]: wrap(got["bands"][q], inp, {"long_name": _PERIOD_WHAT[q],
+                                                      "units": units, "quantity": q},
+                                  np.nan, ir.RSUN_NAMES[q]) for q in ir.BANDS}
+    if got["months"] is not None:
+        keys = [k for k, _, _ in got["months"]]
+        out["glob_rad_monthly"] = wrap(
+            np.stack([v for _, _, v in got["months"]]), inp,
+            {"long_name": "global irradiation of each month", "units": units,
+             "quantity": "global"}, np.nan, "glob_rad_monthly",
+            _month_dim(keys, [h for _, h, _ in got["months"]]))
+    ds = xr.Dataset(out)
+    ds.attrs.update({**common, **{k: got[k] for k in ("period", "hours", "samples",
+                                                      "samples_with_sun", "sky",
+                                                      "turbidity")}})
+    ds.attrs = {k: v for k, v in ds.attrs.items() if v is not None}
+    return ds
+
+
+@_keywords
+def shadow_polygons(da, azimuth: float | None = None, elevation: float | None = None, *,
+                    time=None, connectivity: int = 4, **kwargs):
+    """The cast shadows of :func:`shadow` as polygons, as ``hillshade-rt shadow --vector``.
+
+    Each region of shadow cells (value 1 of the mask; lit cells and voids are not traced) is
+    one polygon with its holes, traced by GDAL (``rasterio.features.shapes``, as
+    ``io.vector.write_polygons`` traces the command's rasters), its cells joined through their
+    edges (``connectivity=4``) or also their corners (8).
+
+    Parameters
+    ----------
+    da : xarray.DataArray
+        Heights in metres, as :func:`shadow`'s.
+    azimuth, elevation : float, optional
+        The sun's direction, degrees, as :func:`shadow`'s.
+    time : str, datetime or sequence, optional
+        Instead: one time or a sequence of times, as :func:`shadow`'s.
+    connectivity : {4, 8}, default 4
+        Cells of a polygon touch through their edges (4) or also their corners (8).
+    **kwargs
+        The other keywords of :func:`shadow` (``tz``, ``lat``, ``lon``, ``crs``, ``spacing``,
+        ``nodata``, ``algorithm``, ``self_shadow``, ...; not ``soft``: a visible fraction has
+        no polygons).
+
+    Returns
+    -------
+    geopandas.GeoDataFrame or list of dict
+        A GeoDataFrame (in the DEM's CRS) where geopandas can be imported, else a list of
+        GeoJSON-like features (``{"type": "Feature", "geometry": {...}, "properties":
+        {...}}``, coordinates in the CRS's units). Each polygon's properties: the sun's
+        ``azimuth`` and ``elevation`` (degrees), with a time its ``time`` (ISO 8601 with its
+        offset), in a series its ``index`` (0-based), its ``area`` in the
+        CRS's units squared (cells without a CRS) and ``area_m2`` in square metres (None without
+        a CRS), as the command's layer and report have them.
+
+    Raises
+    ------
+    HillshadeError
+        A bad ``connectivity``, ``soft=True``, or what :func:`shadow` raises.
+    """
+    from rasterio.features import shapes
+
+    from ..io.vector import check_connectivity
+    try:
+        connectivity = check_connectivity(connectivity)
+    except HillshadeError as exc:
+        raise HillshadeError(str(exc).replace("--vector-connectivity", "connectivity")) from None
+    if kwargs.get("soft"):
+        raise HillshadeError("soft: a visible fraction has no polygons (shadow_polygons traces "
+                             "the hard mask)")
+    mask = shadow(da, azimuth, elevation, time=time, **kwargs)
+    series = "time" in mask.dims
+    layers = [mask.isel(time=i) for i in range(mask.sizes["time"])] if series else [mask]
+    crs = mask.rio.crs
+    transform = mask.rio.transform()
+    measure = _polygon_area(crs)
+    features = []
+    for i, layer in enumerate(layers):
+        m = np.asarray(layer.values, np.uint8)
+        props = {"azimuth": float(layer.attrs.get("sun_azimuth", layer.coords.get(
+                     "sun_azimuth", np.nan))),
+                 "elevation": float(layer.attrs.get("sun_elevation", layer.coords.get(
+                     "sun_elevation", np.nan)))}
+        t = _layer_time(layer)
+        if t is not None:
+            props["time"] = t
+        if series:
+            props["index"] = i
+        for geom, value in shapes(m, mask=m == 1, transform=transform,
+                                  connectivity=connectivity):
+            if int(value) != 1:
+                continue
+            area, m2 = measure(geom)
+            features.append({"type": "Feature", "geometry": geom,
+                             "properties": {**props, "area": area, "area_m2": m2}})
+    import importlib
+    try:        # (by name: geopandas is used where it is installed, never required)
+        geopandas = importlib.import_module("geopandas")
+    except ImportError:
+        return features
+    return geopandas.GeoDataFrame.from_features(features, crs=crs)
+
+
+def _polygon_area(crs):
+    """A polygon's (area in the CRS's units squared, in square metres or None without a CRS):
+    planar (shoelace) times the linear unit's metres squared for a projected CRS, on the
+    CRS's ellipsoid (pyproj's ``Geod.polygon_area_perimeter``) for a geographic one, as the
+    command's ``--vector`` layer measures them."""
+    geod = factor = None
+    if crs is not None and crs.is_geographic:
+        from pyproj import CRS as ProjCRS
+        geod = ProjCRS.from_wkt(crs.to_wkt()).get_geod()
+    elif crs is not None:
+        try:
+            factor = float(crs.linear_units_factor[1])
+        except Exception:       # a CRS without a linear unit: no metres
+            factor = None
+
+    def ring(r):
+        xy = np.asarray(r, np.float64)
+        xy = xy - xy[0]        # (from the first point: map coordinates of millions of units)
+        return 0.5 * abs(float(np.dot(xy[:-1, 0], xy[1:, 1]) - np.dot(xy[1:, 0], xy[:-1, 1])))
+
+    def geodesic(r):
+        xy = np.asarray(r, np.float64)
+        return abs(geod.polygon_area_perimeter(xy[:, 0], xy[:, 1])[0])
+
+    def area(geom):
+        rings = geom["coordinates"]
+        planar = ring(rings[0]) - sum(ring(r) for r in rings[1:])
+        if geod is not None:
+            return planar, geodesic(rings[0]) - sum(geodesic(r) for r in rings[1:])
+        return planar, (planar * factor ** 2 if factor is not None else None)
+    return area
+
+
+def _layer_time(layer) -> str | None:
+    """The time of one layer of :func:`shadow`'s result, ISO 8601 with its offset, or None."""
+    if "time_local" in layer.coords:
+        return str(layer.coords["time_local"].values)
+    return layer.attrs.get("time")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -526,8 +949,9 @@ def sun_hours(da, date, *, end_date=None, step: str = "10min", tz: str | None = 
 
 @xr.register_dataarray_accessor("hrt")
 class HrtAccessor:
-    """``da.hrt``: :func:`shadow`, :func:`horizon`, :func:`skyview`, :func:`sun_hours` of this
-    DataArray (registered by ``import hillshade_rt.xarray``)."""
+    """``da.hrt``: :func:`shadow`, :func:`horizon`, :func:`skyview`, :func:`sun_hours`,
+    :func:`irradiance`, :func:`shadow_polygons` of this DataArray (registered by
+    ``import hillshade_rt.xarray``)."""
 
     def __init__(self, da: xr.DataArray):
         self._da = da
@@ -544,6 +968,12 @@ class HrtAccessor:
     def sun_hours(self, *args, **kwargs) -> xr.DataArray:
         return sun_hours(self._da, *args, **kwargs)
 
+    def irradiance(self, *args, **kwargs) -> xr.Dataset:
+        return irradiance(self._da, *args, **kwargs)
 
-for _name in ("shadow", "horizon", "skyview", "sun_hours"):
+    def shadow_polygons(self, *args, **kwargs):
+        return shadow_polygons(self._da, *args, **kwargs)
+
+
+for _name in ("shadow", "horizon", "skyview", "sun_hours", "irradiance", "shadow_polygons"):
     getattr(HrtAccessor, _name).__doc__ = globals()[_name].__doc__

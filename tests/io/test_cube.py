@@ -218,7 +218,7 @@ def test_a_write_error_is_one_line_and_leaves_nothing(tmp_path, monkeypatch, ful
     with pytest.raises(HillshadeError, match=rf"e\.nc: cannot write \({said}\)"):
         with cube.CubeWriter(path, _grid(), TIMES, name="v", dtype="uint8", nodata=255) as w:
             monkeypatch.setattr(cube, "disk_full", lambda p: full)
-            w._var = _Failing()
+            w._vars["v"] = _Failing()
             w.write(1, np.zeros((37, 53), np.uint8))
     assert os.listdir(tmp_path) == []
 
@@ -308,3 +308,133 @@ def test_a_signal_leaves_no_half_written_cube(tmp_path, name):
     assert p.returncode == 143, err
     assert err.strip().count("\n") == 0 and "Traceback" not in err, err
     assert os.listdir(out) == [], os.listdir(out)
+
+
+# -- several data variables on the same axes (the irradiance instants) ----------------------
+
+VARIABLES = [cube.CubeVariable("beam_rad", "float32", -9999.0,
+                               {"units": "W m-2", "long_name": "beam irradiance"}),
+             cube.CubeVariable("incidout", "float32", -9999.0,
+                               {"units": "degree", "long_name": "incidence"}),
+             cube.CubeVariable("flags", "uint8", 255, {"long_name": "a mask"})]
+
+
+def _three(rows=37, cols=53):
+    """(beam, incidence, flags) stacks, each (time, rows, cols), different values, voids."""
+    rng = np.random.default_rng(11)
+    beam = (rng.random((len(TIMES), rows, cols)) * 900.0).astype(np.float32)
+    beam[:, -2:, -5:] = -9999.0
+    inc = (rng.random((len(TIMES), rows, cols)) * 180.0 - 90.0).astype(np.float32)
+    inc[1, 4, 7] = -9999.0
+    flags = rng.integers(0, 3, (len(TIMES), rows, cols)).astype(np.uint8)
+    flags[:, 0, :] = 255
+    return beam, inc, flags
+
+
+@pytest.mark.parametrize("name", FORMATS)
+def test_several_variables_each_with_its_type_fill_and_attrs(tmp_path, name):
+    """Three data variables written in a GeoTIFF's band order (band 3k + j + 1: variable j at
+    time k), windows included: each decodes on (time, y, x) with its own type, _FillValue,
+    units and grid mapping; the per-time variables and the times as with one variable."""
+    data = _three()
+    path = tmp_path / name
+    with cube.CubeWriter(path, _grid(), TIMES, variables=VARIABLES,
+                         time_variables={"azimuth": (AZ, {"units": "degree"})},
+                         global_attrs={"title": "instants"}) as w:
+        for k in range(len(TIMES)):
+            for j, stack in enumerate(data):
+                if j == 1:      # in two windows
+                    w.write(3 * k + j + 1, stack[k, :20], window=(0, 20, 0, 53))
+                    w.write(3 * k + j + 1, stack[k, 20:], window=(20, 37, 0, 53))
+                else:
+                    w.write(3 * k + j + 1, stack[k])
+    with _open(path) as ds:
+        assert set(ds.data_vars) >= {"beam_rad", "incidout", "flags", "azimuth"}
+        np.testing.assert_array_equal(ds["time"].values, _utc64(TIMES))
+        np.testing.assert_array_equal(ds["azimuth"].values, AZ)
+        for v, stack in zip(VARIABLES, data):
+            da = ds[v.name]
+            assert da.dims == ("time", "y", "x")
+            assert da.attrs["long_name"] == v.attrs["long_name"]
+            assert da.attrs.get("units") == v.attrs.get("units")
+            assert da.encoding["_FillValue"] == v.nodata
+            assert da.encoding.get("grid_mapping", da.attrs.get("grid_mapping")) == \
+                "spatial_ref"
+            assert da.rio.crs == UTM
+            void = stack == v.nodata
+            np.testing.assert_array_equal(np.isnan(da.values), void)
+            np.testing.assert_array_equal(da.values[~void], stack[~void])
+    with xr.open_dataset(path, mask_and_scale=False, engine="zarr" if name.endswith(".zarr")
+                         else None) as ds:
+        for v, stack in zip(VARIABLES, data):
+            assert ds[v.name].dtype == np.dtype(v.dtype)
+            np.testing.assert_array_equal(ds[v.name].values, stack)    # bit for bit
+
+
+def test_several_variables_by_name_and_chunked_a_time_step_each(tmp_path):
+    """write_variable names the variable and the time step (any order); NetCDF chunks each
+    variable one time step per chunk, compressed."""
+    netCDF4 = pytest.importorskip("netCDF4")
+    data = _three(40, 1100)
+    path = tmp_path / "n.nc"
+    with cube.CubeWriter(path, _grid(40, 1100), TIMES, variables=VARIABLES) as w:
+        for k in reversed(range(len(TIMES))):
+            for v, stack in zip(reversed(VARIABLES), reversed(data)):
+                w.write_variable(v.name, k + 1, stack[k])
+    with netCDF4.Dataset(path) as nc:
+        for v, stack in zip(VARIABLES, data):
+            assert nc[v.name].chunking() == [1, 40, 1024]
+            assert nc[v.name].filters()["zlib"]
+            nc[v.name].set_auto_mask(False)
+            np.testing.assert_array_equal(nc[v.name][:], stack)
+
+
+def test_several_variables_bad_calls(tmp_path):
+    grid = _grid(3, 4)
+    with pytest.raises(ValueError, match="distinct names"):
+        cube.CubeWriter(tmp_path / "a.nc", grid, TIMES, variables=VARIABLES[:1] * 2)
+    with pytest.raises(ValueError, match="one way"):
+        cube.CubeWriter(tmp_path / "a.nc", grid, TIMES, name="v", variables=VARIABLES)
+    with pytest.raises(ValueError, match="azimuth"):
+        cube.CubeWriter(tmp_path / "a.nc", grid, TIMES,
+                        variables=[cube.CubeVariable("azimuth", "float32")],
+                        time_variables={"azimuth": (AZ, {})})
+    with pytest.raises(ValueError, match="band 10 of 9"):
+        with cube.CubeWriter(tmp_path / "a.nc", grid, TIMES, variables=VARIABLES) as w:
+            w.write(10, np.zeros((3, 4), np.float32))
+    with pytest.raises(ValueError, match="no data variable 'glob_rad'"):
+        with cube.CubeWriter(tmp_path / "a.nc", grid, TIMES, variables=VARIABLES) as w:
+            w.write_variable("glob_rad", 1, np.zeros((3, 4), np.float32))
+    assert os.listdir(tmp_path) == []
+
+
+@pytest.mark.parametrize("name", FORMATS)
+def test_one_variable_either_way_is_the_same_cube(tmp_path, name):
+    """name/dtype/nodata/attrs and variables=[CubeVariable(...)] of the same variable write
+    the same cube, file for file and byte for byte (the one-variable cubes of the series are
+    what they were)."""
+    data = _stack()
+    common = dict(time_variables={"azimuth": (AZ, {"units": "degree"})},
+                  global_attrs={"title": "a test", "history": "pytest"})
+    a, b = tmp_path / "a" / name, tmp_path / "b" / name
+    a.parent.mkdir()
+    b.parent.mkdir()
+    with cube.CubeWriter(a, _grid(), TIMES, name="shadow", dtype="uint8", nodata=255,
+                         attrs={"long_name": "cast shadow"}, **common) as w:
+        for i in range(len(TIMES)):
+            w.write(i + 1, data[i])
+    with cube.CubeWriter(b, _grid(), TIMES, variables=[cube.CubeVariable(
+            "shadow", "uint8", 255, {"long_name": "cast shadow"})], **common) as w:
+        for i in range(len(TIMES)):
+            w.write_variable("shadow", i + 1, data[i])
+
+    def files(root):
+        out = {}
+        for dirpath, _, names in os.walk(root):
+            for n in names:
+                p = os.path.join(dirpath, n)
+                with open(p, "rb") as f:
+                    out[os.path.relpath(p, root)] = f.read()
+        return out
+    fa, fb = files(a.parent), files(b.parent)
+    assert len(fa) >= 1 and fa == fb

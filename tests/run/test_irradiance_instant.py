@@ -223,14 +223,15 @@ def test_bad_instants_are_one_line_usage_errors(tmp_path, runner, args, words):
 
 
 @pytest.mark.parametrize("name, args, words", [
-    ("o.nc", [], "not written as a time cube yet"),
-    ("o.zarr", [], "not written as a time cube yet"),
+    ("o.nc", ["--co", "COMPRESS=DEFLATE"], "drop --co"),
+    ("o.zarr", ["--co", "COMPRESS=DEFLATE"], "drop --co"),
     ("o.tif", ["--monthly"], "are a period's sums"),
     ("o.tif", ["--daily-mean"], "are a period's sums"),
 ])
-def test_instants_refuse_cubes_and_period_options(tmp_path, runner, name, args, words):
-    """Instants are five quantities a time: no time cube yet (GDAL's netCDF with -f netCDF
-    only), and no months or daily means (a period's sums)."""
+def test_instants_refuse_cube_creation_options_and_period_options(tmp_path, runner, name, args,
+                                                                   words):
+    """A time cube takes no GDAL creation options; instants have no months or daily means (a
+    period's sums)."""
     dem = write_geotiff(tmp_path / "f.tif", fractal_terrain(20, 20, 3, relief=50.0),
                         Affine(30.0, 0, 400000.0, 0, -30.0, 3800000.0), UTM11)
     out = tmp_path / name
@@ -263,3 +264,85 @@ def test_instants_from_python(tmp_path, runner):
     with pytest.raises(hr.HillshadeError) as e:
         hr.irradiance(dem, tmp_path / "x.tif", times=times, mean=True)
     assert "mean=True averages" in str(e.value) and "--" not in str(e.value)
+
+
+CUBES = ["c.nc", pytest.param("c.zarr", marks=pytest.mark.skipif(
+    __import__("importlib").util.find_spec("zarr") is None, reason="zarr not installed"))]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", CUBES)
+def test_instants_as_a_time_cube_are_the_geotiffs_bands(tmp_path, runner, name):
+    """The same command line to OUTPUT.tif and to OUTPUT.nc / OUTPUT.zarr: xarray decodes the
+    cube's times (the instants in UTC) and its five variables under r.sun's names, each at each
+    time the GeoTIFF's band bit for bit (voids: the _FillValue -9999, NaN decoded), with its
+    units, the grid mapping of the DEM's CRS, and the sun and open sky of the report per
+    time."""
+    xr = pytest.importorskip("xarray")
+    pytest.importorskip("rioxarray")
+    z = fractal_terrain(30, 36, 5, relief=250.0)
+    z[3:6, 20:24] = -32768.0                          # voids
+    dem = write_geotiff(tmp_path / "f.tif", z, Affine(30.0, 0, 400000.0, 0, -30.0, 3800000.0),
+                        UTM11, nodata=-32768.0)
+    times = ["2026-06-21T07:35-07:00", "2026-06-21T13:10-07:00", "2026-06-21T18:55-07:00"]
+    common = ["-q", "--skyview-directions", "8"] + [x for t in times for x in ("--time", t)]
+    tif, cube, rep = tmp_path / "g.tif", tmp_path / name, tmp_path / "c.json"
+    _run(runner, [dem, tif] + common)
+    _run(runner, [dem, cube, "--report", rep] + common)
+    v, _, _ = _bands(tif)
+    doc = json.loads(rep.read_text())
+    assert doc["output"] == str(cube) and v.shape == (3, 5, 30, 36)
+    names = ("beam_rad", "diff_rad", "refl_rad", "glob_rad", "incidout")
+    engine = "zarr" if name.endswith(".zarr") else None
+    with xr.open_dataset(cube, engine=engine) as ds:
+        assert ds["time"].dtype.kind == "M"
+        want = [pd.Timestamp(t).tz_convert("UTC").tz_localize(None) for t in times]
+        np.testing.assert_array_equal(ds["time"].values, np.array(want, "datetime64[ns]"))
+        assert ds.attrs["Conventions"] == "CF-1.8" and "--time" in ds.attrs["history"]
+        assert ds.rio.crs == UTM11
+        for j, n in enumerate(names):
+            da = ds[n]
+            assert da.dims == ("time", "y", "x")
+            assert da.attrs["units"] == ("degree" if n == "incidout" else "W m-2")
+            assert da.attrs["long_name"] and da.encoding["_FillValue"] == -9999.0
+            assert da.rio.crs == UTM11
+            for k in range(3):
+                band = v[k, j]
+                void = band == -9999.0
+                assert void.sum() == 12                   # the DEM's voids, no other
+                np.testing.assert_array_equal(np.isnan(da.values[k]), void)
+                np.testing.assert_array_equal(da.values[k][~void], band[~void])
+        for k in range(3):
+            assert ds["elevation"].values[k] == doc["times"][k]["sun"]["elevation"]
+            assert ds["azimuth"].values[k] == doc["times"][k]["sun"]["azimuth"]
+            assert ds["open_sky_ghi"].values[k] == doc["times"][k]["open_sky"]["ghi_w_m2"]
+        assert float(ds["glob_rad"].max()) > 500.0
+    with xr.open_dataset(cube, engine=engine, mask_and_scale=False) as ds:
+        raw = np.stack([ds[n].values for n in names], axis=1)
+        assert raw.dtype == np.float32
+        np.testing.assert_array_equal(raw, v)                 # bit for bit, voids included
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
+        ["c.json", "f.tif", "g.tif", name])                  # no temporary left
+
+
+@pytest.mark.slow
+def test_instants_cube_from_python_and_refused_without_overwrite(tmp_path, runner):
+    """hillshade_rt.irradiance(times=..., output .nc): the cube (its history says the Python
+    API); the same path again: refused, the cube untouched; overwrite=True replaces it."""
+    xr = pytest.importorskip("xarray")
+    import hillshade_rt as hr
+    dem = write_geotiff(tmp_path / "f.tif", fractal_terrain(20, 24, 3, relief=80.0),
+                        Affine(30.0, 0, 400000.0, 0, -30.0, 3800000.0), UTM11)
+    out = tmp_path / "a.nc"
+    rep = hr.irradiance(dem, out, times=["2026-06-21T09:20-07:00"], skyview_directions=8)
+    assert rep["instants"] == 1
+    before = out.read_bytes()
+    with xr.open_dataset(out) as ds:
+        assert ds["glob_rad"].shape == (1, 20, 24) and "Python API" in ds.attrs["history"]
+    with pytest.raises(hr.HillshadeError, match="exists"):
+        hr.irradiance(dem, out, times=["2026-06-21T11:20-07:00"], skyview_directions=8)
+    assert out.read_bytes() == before
+    hr.irradiance(dem, out, times=["2026-06-21T11:20-07:00"], skyview_directions=8,
+                  overwrite=True)
+    with xr.open_dataset(out) as ds:
+        assert str(ds["time"].values[0]).startswith("2026-06-21T18:20")
