@@ -120,8 +120,11 @@ def _ring_area(ring) -> float:
     return 0.5 * abs(float(np.dot(x[:-1], y[1:]) - np.dot(x[1:], y[:-1])))
 
 
-class _Measure:
-    """Polygon areas: planar (CRS units squared) and in square metres as the CRS allows."""
+class PolygonArea:
+    """A polygon's areas: planar (shoelace, CRS units squared) and in square metres as the CRS
+    allows (the linear unit's factor squared when projected; on the CRS's ellipsoid, pyproj's
+    ``Geod.polygon_area_perimeter``, when geographic; None without a CRS). Called with a
+    GeoJSON-like polygon: ``(area, area_m2)``."""
 
     def __init__(self, crs):
         self.factor = self.geod = None
@@ -179,7 +182,7 @@ def write_polygons(path, sources, fields: dict, *, overwrite: bool = False,
     if sources:
         with rasterio.open(sources[0].path) as ds:
             crs = ds.crs
-    measure = _Measure(crs)
+    measure = PolygonArea(crs)
     opts = {"crs_wkt": crs.to_wkt()} if crs is not None else {}
 
     def records(src, ds):

@@ -863,7 +863,7 @@ def shadow_polygons(da, azimuth: float | None = None, elevation: float | None = 
     """
     from rasterio.features import shapes
 
-    from ..io.vector import check_connectivity
+    from ..io.vector import PolygonArea, check_connectivity
     try:
         connectivity = check_connectivity(connectivity)
     except HillshadeError as exc:
@@ -876,7 +876,7 @@ def shadow_polygons(da, azimuth: float | None = None, elevation: float | None = 
     layers = [mask.isel(time=i) for i in range(mask.sizes["time"])] if series else [mask]
     crs = mask.rio.crs
     transform = mask.rio.transform()
-    measure = _polygon_area(crs)
+    measure = PolygonArea(crs)
     features = []
     for i, layer in enumerate(layers):
         m = np.asarray(layer.values, np.uint8)
@@ -902,39 +902,6 @@ def shadow_polygons(da, azimuth: float | None = None, elevation: float | None = 
     except ImportError:
         return features
     return geopandas.GeoDataFrame.from_features(features, crs=crs)
-
-
-def _polygon_area(crs):
-    """A polygon's (area in the CRS's units squared, in square metres or None without a CRS):
-    planar (shoelace) times the linear unit's metres squared for a projected CRS, on the
-    CRS's ellipsoid (pyproj's ``Geod.polygon_area_perimeter``) for a geographic one, as the
-    command's ``--vector`` layer measures them."""
-    geod = factor = None
-    if crs is not None and crs.is_geographic:
-        from pyproj import CRS as ProjCRS
-        geod = ProjCRS.from_wkt(crs.to_wkt()).get_geod()
-    elif crs is not None:
-        try:
-            factor = float(crs.linear_units_factor[1])
-        except Exception:       # a CRS without a linear unit: no metres
-            factor = None
-
-    def ring(r):
-        xy = np.asarray(r, np.float64)
-        xy = xy - xy[0]        # (from the first point: map coordinates of millions of units)
-        return 0.5 * abs(float(np.dot(xy[:-1, 0], xy[1:, 1]) - np.dot(xy[1:, 0], xy[:-1, 1])))
-
-    def geodesic(r):
-        xy = np.asarray(r, np.float64)
-        return abs(geod.polygon_area_perimeter(xy[:, 0], xy[:, 1])[0])
-
-    def area(geom):
-        rings = geom["coordinates"]
-        planar = ring(rings[0]) - sum(ring(r) for r in rings[1:])
-        if geod is not None:
-            return planar, geodesic(rings[0]) - sum(geodesic(r) for r in rings[1:])
-        return planar, (planar * factor ** 2 if factor is not None else None)
-    return area
 
 
 def _layer_time(layer) -> str | None:
