@@ -28,7 +28,8 @@ def test_the_group_holds_every_command_module():
     declared = {c.name: c for c in declared
                 if c is not group.cli and all(c is not s for s in subcommands)}
     assert {"shadow", "hillshade", "sun-hours", "horizon", "skyview", "irradiance", "info",
-            "query", "profile", "view", "illumination", "animate", "cache", "serve"} <= set(declared)
+            "query", "profile", "view", "illumination", "animate", "cache",
+            "serve"} <= set(declared)
     assert group.cli.commands == declared
 
 
