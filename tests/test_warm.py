@@ -89,27 +89,6 @@ def test_another_checkouts_kernels_are_not_this_installs(warmed, tmp_path):
     assert os.path.basename(digest_dir) == _jitcache.source_digest()
 
 
-def test_cached_ignores_index_files_of_another_folder(tmp_path):
-    """``cached`` reads numba's own index of this install's files: a file of the right name in
-    another checkout's subfolder (or an empty one) does not count. (A fresh process: the
-    kernels' cache folder is fixed when their modules are imported.)"""
-    code = ("import os, sys\n"
-            "from hillshade_rt import warm\n"
-            "from hillshade_rt.algorithms import _jitcache\n"
-            "sub = os.path.join(sys.argv[1], _jitcache.source_digest(), 'algorithms_0123')\n"
-            "os.makedirs(sub)\n"
-            "for k in warm.kernels():\n"
-            "    if k.py_func.__module__.endswith('.brute'):\n"
-            "        open(os.path.join(sub, 'brute.%s-1.py311.nbi' % k.py_func.__qualname__),"
-            " 'wb').close()\n"
-            "print(_jitcache.cached('brute'), len(os.listdir(sub)))\n")
-    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
-    r = _python(["-c", code, str(tmp_path)], env)
-    assert r.returncode == 0, r.stderr
-    found, files = r.stdout.split()
-    assert found == "False" and int(files) >= 3
-
-
 def test_groups_name_every_command_that_computes():
     """Every command that runs kernels has scenarios (a new command without them would compile
     at its first run)."""

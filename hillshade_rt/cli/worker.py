@@ -200,7 +200,8 @@ def _run(req: dict, conn: socket.socket, frames: client.Frames) -> tuple[str, in
         client.send_frame(conn, {"type": "status", "code": code})
     with contextlib.suppress(OSError):
         conn.shutdown(socket.SHUT_RDWR)
-    watcher.join(timeout=1.0)
+    if watcher.ident is not None:     # (not started when setting up the job failed)
+        watcher.join(timeout=1.0)
     return "done", code, fit
 
 

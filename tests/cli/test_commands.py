@@ -57,18 +57,6 @@ def test_overwrite(tmp_path, runner):
     assert runner.invoke(cli, args + ["--overwrite"]).exit_code == 0
 
 
-def test_info(runner):
-    r = runner.invoke(cli, ["info", data_path("jacksboro_fault_srtm3_mpl_403x344.tif"), "--json"])
-    assert r.exit_code == 0, r.output
-    doc = json.loads(r.stdout)
-    assert doc["shape"] == [344, 403] and doc["crs"] == "EPSG:4326"
-    dx, dy = doc["spacing_m"]["centre"]
-    assert 74 < dx < 75.5 and 92 < dy < 93  # 3" at 36.3 N, in metres
-    assert doc["height_range_m"] == [236.0, 1076.0]
-    r = runner.invoke(cli, ["info", data_path("everest_srtm3_voids_crop200.tif")])
-    assert r.exit_code == 0 and "nodata" in r.stdout and "-32768" in r.stdout
-
-
 def test_real_subprocess(tmp_path):
     out = tmp_path / "m.tif"
     exe = [sys.executable, "-m", "hillshade_rt"]

@@ -132,12 +132,3 @@ def test_global_lunar_grid_shadows_exact_in_border_rows():
             diff = np.argwhere(m != ref)
             assert diff.size == 0, (algo, az, el, diff[:5])
         assert ref[[0, -1]].any() and not ref[[0, -1]].all()  # border rows are not trivial
-
-
-def test_info_names_the_body_of_a_crs_without_a_name(tmp_path, runner):
-    dem = write_geotiff(tmp_path / "sps.tif", fractal_terrain(40, 40, 2, relief=2000),
-                        Affine(240, 0, -4800, 0, -240, 4800), MOON_SPS)
-    r = runner.invoke(cli, ["info", dem])
-    assert r.exit_code == 0, r.output
-    line = next(l for l in r.stdout.splitlines() if l.strip().startswith("crs"))
-    assert "Moon" in line and "Stereographic" in line and "unknown" not in line

@@ -263,21 +263,6 @@ def test_max_memory_too_small_says_what_would_do(tmp_path, runner):
     assert r.exit_code == 0, r.output
 
 
-@pytest.mark.parametrize("extra", [["--step", "abc"], ["--step", "0s"], ["--date", "21/06/2026"],
-                                   ["--date", "2026-06-21T12:00"], ["--tz", "Mars/Olympus_Mons"],
-                                   ["--end-date", "2026-06-20"]])
-def test_sun_hours_options_are_usage_errors_before_the_dem_is_read(tmp_path, runner, extra):
-    """Found by the fuzz test: sun-hours checked its step, date and zone after reading the DEM,
-    so a bad value was exit 1 (or hidden behind a damaged input's error)."""
-    bad = tmp_path / "damaged.tif"
-    bad.write_bytes(b"II*\x00" + bytes(12))
-    args = ["sun-hours", str(bad), str(tmp_path / "o.tif"), "--date", "2026-06-21"] + extra
-    r = runner.invoke(cli, args)
-    assert r.exit_code == 2, r.output
-    assert r.stderr.strip().count("\n") == 0 and "damaged" not in r.stderr
-    assert os.listdir(tmp_path) == ["damaged.tif"]
-
-
 # ---------------------------------------------------------------------------------------------
 # years outside the solar position algorithm's range; warnings as one line
 

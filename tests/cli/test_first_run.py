@@ -28,18 +28,3 @@ def test_cli_says_once_that_it_compiles_and_quiet_says_nothing(tmp_path, runner,
     r = runner.invoke(cli, ["hillshade", LIDAR, str(tmp_path / "c.tif"), "--algorithm", "brute"])
     assert r.exit_code == 0 and "compiling" not in r.stderr     # brute and relief are cached
     assert "relief" in seen
-
-
-def test_a_kernel_module_imported_alone_caches_in_this_versions_folder(tmp_path):
-    """Kernel modules take ``njit`` from ``_jitcache``: one imported straight (``io.py`` imports
-    ``counts`` alone, the registry imports none) still caches in this version's digest folder,
-    and numba's setting is the user's again afterwards."""
-    import subprocess
-    import sys
-    code = ("import numba, hillshade_rt.algorithms.counts as c, hillshade_rt.algorithms._jitcache "
-            "as j; print(c.valid_range._cache._cache_path.startswith(j.cache_dir() + '/'), "
-            "j.cache_dir().startswith(numba.config.CACHE_DIR), numba.config.CACHE_DIR)")
-    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path))
-    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
-    assert p.returncode == 0, p.stderr
-    assert p.stdout.split() == ["True", "True", str(tmp_path)]

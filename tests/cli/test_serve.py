@@ -4,7 +4,8 @@ exit status), several at once; signals cancel a job; any server that cannot be t
 reached means the command runs in-process, silently; the idle timeout; ``HILLSHADE_RT_SERVER``.
 
 Every server here lives in a temporary XDG_RUNTIME_DIR (short, under /tmp: a socket's path is
-at most 107 bytes) and is stopped, its processes checked gone, before the test ends.
+at most 107 bytes) and is stopped, its processes checked gone, before the test ends. (Each
+module alone, without a server: test_client.py, test_server.py, test_worker.py.)
 """
 
 import os
