@@ -222,13 +222,30 @@ def test_monthly_linke_turbidity_gives_each_sample_its_month(tmp_path, runner, d
 @pytest.mark.parametrize("extra, words", [
     (["--albedo", "{raster}"], "does not cover the DEM"),
     (["--albedo", "{bad}"], "values must be between 0 and 1"),
-    (["--linke-turbidity", "{raster}"], "not supported yet"),
+    (["--linke-turbidity", "{raster}"], "does not cover the DEM"),
+    (["--linke-turbidity", "{turbid}"], "values must be between 1 and 10, found 11"),
     (["--linke-turbidity", "3,3"], "12 monthly numbers"),
+    (["--beam-index", "{bad}"], "--beam-index {bad}: values must be between 0 and 1"),
+    (["--diffuse-index", "{raster}"], "does not cover the DEM"),
+    (["--beam-index", "1.2"], "--beam-index must be between 0 and 1, got 1.2"),
+    (["--diffuse-index", "0.5,0.5"], "one number or 12 monthly numbers"),
+    (["--beam-index", "0.5", "--ghi", "{csv}"], "--beam-index and --diffuse-index do not go"),
+    (["--linke-turbidity", "{two}", "--window-size", "64"], "in memory only for now"),
+    (["--diffuse-index", "{half}", "--window-size", "64"], "in memory only for now"),
 ])
 def test_bad_sky_inputs_are_one_line_usage_errors(tmp_path, runner, dem, extra, words):
     small = write_geotiff(tmp_path / "small.tif", np.full((5, 5), 0.2, np.float32), T0, UTM11)
     bad = write_geotiff(tmp_path / "bad.tif", np.full((36, 44), 1.5, np.float32), T0, UTM11)
-    extra = [e.format(raster=small, bad=bad) for e in extra]
+    turbid = write_geotiff(tmp_path / "turbid.tif", np.full((36, 44), 11.0), T0, UTM11)
+    two = np.full((36, 44), 0.5)
+    two[:, 22:] = 0.8
+    half = write_geotiff(tmp_path / "half.tif", two, T0, UTM11)
+    two = write_geotiff(tmp_path / "two.tif", two * 4.0, T0, UTM11)   # Linke 2 and 3.2
+    csv = tmp_path / "sky.csv"
+    csv.write_text("time,ghi\n2027-01-29T00:00Z,0\n2027-02-04T00:00Z,0\n")
+    values = dict(raster=small, bad=bad, turbid=turbid, two=two, half=half, csv=csv)
+    extra = [e.format(**values) for e in extra]
+    words = words.format(**values)
     out = tmp_path / "o.tif"
     r = runner.invoke(cli, ["irradiance", str(dem), str(out)] + extra + SPAN)
     assert r.exit_code == 2, r.output
