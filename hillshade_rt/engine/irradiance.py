@@ -29,6 +29,13 @@ split by Erbs). Perez's air mass is Kasten & Young's [7]_. The sun is the projec
 SPA, apparent elevation unless refraction is off), the same suns as ``sun-hours``: its zenith at
 the DEM's centre feeds the clear-sky model.
 
+GRASS r.sun's real sky [9]_ (its coeff_bh, coeff_dh: clear-sky indices kb, kd of 0..1) is the
+clear sky's DNI · kb and DHI · kd, its global horizontal kb · (GHI - DHI) + kd · DHI
+(:func:`real_sky`). Where the Linke turbidity or the indices are rasters the open sky differs
+from cell to cell (:class:`CellSky`): Ineichen's formula is evaluated per cell and sample (the
+parts that depend on the sun alone computed once per sample as pvlib computes them), and the
+diffuse and reflected light summed per cell as the beam is (``sums``' ``cells``).
+
 References
 ----------
 .. [1] J. Dozier, J. Frew, "Rapid calculation of terrain parameters for radiation modeling from

@@ -407,34 +407,29 @@ def open_sky_cells(cfg: IrradianceConfig, times, suns, site, tz, geom, valid):
     z, am_rel = ir.perez_terms(times, zen)
     held: dict = {}
 
-    def value(i, m, number):
+    def raster(i, m):
+        """Input i's raster of month m on the grid (a float where it is one value); None where
+        the input is a number (its samples' numbers serve)."""
         v = inputs[i]
-        if v is None:
-            return 1.0 if i else None
-        if not v.rasters:
-            return number
+        if v is None or not v.rasters:
+            return None
         key = (i, m if v.by_month else 1)
-        if not summary[key][1]:
-            return summary[key][0]
-        return v.resolved(key[1], *grid)
+        return v.resolved(key[1], *grid) if summary[key][1] else summary[key][0]
+
+    def number(per, k):
+        return 1.0 if per is None else float(per) if np.ndim(per) == 0 else float(per[k])
 
     def at(k):
         m = int(months[k])
-        if held.get("month") != m:
+        if held.get("month") != m:        # the month's rasters, the last month's let go
             held.clear()
-            tl = value(0, m, None)
-            tl_cells = tl if isinstance(tl, np.ndarray) else None
-            held.update(month=m, tl=tl_cells,
-                        corr=None if tl_cells is None else ir.ineichen_correction(tl_cells,
-                                                                                  consts),
-                        kb=value(1, m, None if kb is None else np.atleast_1d(kb)),
-                        kd=value(2, m, None if kd is None else np.atleast_1d(kd)))
+            tl = raster(0, m)
+            tl = tl if isinstance(tl, np.ndarray) else None
+            held.update(month=m, tl=tl, kb=raster(1, m), kd=raster(2, m),
+                        corr=None if tl is None else ir.ineichen_correction(tl, consts))
         kbk, kdk = held["kb"], held["kd"]
-        if kbk is None or (isinstance(kbk, np.ndarray) and kbk.ndim == 1):
-            kbk = 1.0 if kbk is None else float(kbk[k if kbk.size > 1 else 0])
-        if kdk is None or (isinstance(kdk, np.ndarray) and kdk.ndim == 1):
-            kdk = 1.0 if kdk is None else float(kdk[k if kdk.size > 1 else 0])
-        return held["tl"], held["corr"], kbk, kdk
+        return (held["tl"], held["corr"], number(kb, k) if kbk is None else kbk,
+                number(kd, k) if kdk is None else kdk)
     cells = ir.CellSky(at, raw.ghi, raw.dni, raw.dhi, am, extra, cosz, consts, z, am_rel)
     return sky, cells
 
