@@ -19,6 +19,11 @@ every sun's shadows and sums), or read with ``--sky-view`` from a file that ``sk
 --definition dozier`` or ``--sky-view-out`` wrote, checked against the DEM and the run's
 settings (``run.sky_view_file``): the same output bytes either way.
 
+The open sky is one per sample for the whole DEM, unless --linke-turbidity, --beam-index or
+--diffuse-index are rasters (r.sun's linke, coeff_bh, coeff_dh maps): then it is each cell's
+(:func:`open_sky_cells`, ``engine.irradiance.CellSky``), in memory, with --context and for
+instants; in windows they are refused for now.
+
 The run's steps, between the shared preamble and tail (``run.runner.RunContext``): what the
 command line asks (the period, the place, the ``--ghi`` series), the DEM read, the samples (the
 suns of the period at the DEM's place and the open sky at each), the light (the sky view and

@@ -410,3 +410,22 @@ def test_linke_and_index_rasters_with_context_and_instants(tmp_path, runner, dem
     _run(runner, [dem, hi, "--linke-turbidity", "4.7", "--beam-index", "0.8"] + inst)
     _zone_equal(_bands(r)[0], _bands(lo)[0], _bands(hi)[0])
     assert _bands(r)[2]["LINKE_TURBIDITY"].startswith("raster tl.tif")
+
+
+@pytest.mark.parametrize("option", ["--linke-turbidity", "--beam-index", "--diffuse-index"])
+def test_the_sky_rasters_are_inputs_of_the_run(tmp_path, runner, dem, option):
+    """An output may not overwrite a raster the run reads (--overwrite or not), for the sums and
+    the instants alike; a pattern's twelve files are each an input."""
+    value = "3" if option == "--linke-turbidity" else "0.5"
+    ras = write_geotiff(tmp_path / "in.tif", np.full((36, 44), float(value)), T0, UTM11)
+    for m in range(1, 13):
+        write_geotiff(tmp_path / f"p{m}.tif", np.full((36, 44), float(value)), T0, UTM11)
+    for out, val, when in ((ras, ras, SPAN), (tmp_path / "p7.tif", tmp_path / "p{month}.tif",
+                                              SPAN),
+                           (ras, ras, ["--time", "2027-01-30T20:00Z", "-q"])):
+        r = runner.invoke(cli, ["irradiance", str(dem), str(out), option, str(val),
+                                "--overwrite"] + when)
+        assert r.exit_code == 2 and "is also an input" in r.stderr, r.output
+        assert len(r.stderr.strip().splitlines()) == 1
+    with rasterio.open(ras) as ds:
+        assert ds.count == 1 and float(ds.read(1)[0, 0]) == float(value)
