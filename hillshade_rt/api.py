@@ -376,7 +376,8 @@ def _other_light(files, output, product, kw, read, run) -> dict:
 @_keyword_errors
 def irradiance(dem, output=None, *, date=None, end_date=None, start=None, end=None,
                step: str = "15min", clear_sky: str | None = None,
-               linke_turbidity=None, albedo=0.2, ghi=None,
+               linke_turbidity=None, albedo=0.2, ghi=None, beam_index=None,
+               diffuse_index=None,
                mean: bool = False, daily_mean: bool = False, monthly: bool = False,
                soft: bool = False, perez: bool = False,
                skyview_directions: int = 32, algorithm: str = "auto",
@@ -395,8 +396,10 @@ def irradiance(dem, output=None, *, date=None, end_date=None, start=None, end=No
     "YYYY-MM-DD") and ``end_date``, or ``start`` and ``end`` (datetimes or ISO strings). The
     sky: ``clear_sky`` ("ineichen", the default, with ``linke_turbidity``; "haurwitz") or
     ``ghi``, the path of a measured series (CSV: time, ghi[, dni, dhi]); ``linke_turbidity``
-    and ``albedo`` a number, 12 monthly numbers (a sequence or "a,b,..."), or for ``albedo``
-    a raster's path or a pattern with ``{month}``; ``daily_mean`` as ``--daily-mean`` (Wh/m²
+    and ``albedo`` a number, 12 monthly numbers (a sequence or "a,b,..."), a raster's path
+    or a pattern with ``{month}``; ``beam_index`` and ``diffuse_index`` (the same forms, 0..1)
+    as ``--beam-index``/``--diffuse-index``, GRASS r.sun's real-sky coeff_bh and coeff_dh;
+    ``daily_mean`` as ``--daily-mean`` (Wh/m²
     a day), ``monthly`` as ``--monthly`` (a global band per month after the four). Further keywords are
     the command line's options of the same name (``tz``, ``lat``, ``lon``, ``band``,
     ``nodata``, ``threads``, ...); ``fmt`` and ``creation_options`` as for :func:`shade`;
@@ -435,7 +438,8 @@ def irradiance(dem, output=None, *, date=None, end_date=None, start=None, end=No
                            end_date=_text(end_date), start=_text(start), end=_text(end),
                            step=step, clear_sky=clear_sky, linke_turbidity=linke_turbidity,
                            albedo=albedo, ghi=None if ghi is None else os.fspath(ghi),
-                           mean=mean, daily_mean=daily_mean, monthly=monthly, soft=soft,
+                           beam_index=beam_index, diffuse_index=diffuse_index, mean=mean,
+                           daily_mean=daily_mean, monthly=monthly, soft=soft,
                            perez=perez, skyview_directions=skyview_directions, place=place,
                            algorithm=algorithm, curvature=curvature, refraction_k=refraction_k,
                            read=read, run=run, height_above_ground=height_above_ground,

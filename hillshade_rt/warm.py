@@ -141,6 +141,9 @@ GROUPS: dict[str, list[list[str]]] = {
          "--skyview-directions", "8", "--perez", "--window-size", "64"],
         ["irradiance", "{utm}", "{out}/r.tif", "--time", "2026-06-21T19:00Z",
          "--skyview-directions", "8"],
+        ["irradiance", "{utm}", "{out}/r.tif", "--date", "2026-06-21", "--step", "3h",
+         "--skyview-directions", "8", "--perez", "--linke-turbidity", "{linke}",
+         "--beam-index", "{index}"],
         ["profile", "{utm}", "--at-xy", "{utm_xy}", "-o", "{out}/s.csv"],
         ["profile", "{geo}", "--at", "{geo_lonlat}", "-o", "{out}/s.csv"],
     ],
@@ -262,6 +265,11 @@ def _write_dems(folder: str) -> dict:
     names["big"] = write("big.tif", big, from_origin(-118.3, 34.4, deg, deg), "EPSG:4326", None)
     names["moon"] = write("moon.tif", (z - 1500.0).astype(np.float32),
                           from_origin(-720.0, 720.0, 30.0, 30.0), moon, None)
+    # a Linke turbidity raster and a clear-sky index raster on the projected DEM's grid
+    names["linke"] = write("linke.tif", 2.0 + np.add.outer(i, i) / (2.0 * _N), utm_t,
+                           "EPSG:32611", None)
+    names["index"] = write("index.tif", 0.4 + np.add.outer(i, i) / (4.0 * _N), utm_t,
+                           "EPSG:32611", None)
     names["subsolar"] = os.path.join(folder, "subsolar.csv")
     with open(names["subsolar"], "w") as fh:
         fh.write("time,lat,lon\n")

@@ -115,3 +115,109 @@ def add_sample(lit, cast, use_cast, ge, gn, length, row_tile, col_tile, suns, fr
                 if not (t >= 0.0 or math.isnan(t)):
                     t = 0.0
                 diffuse[r, c] += w * t
+
+
+@njit(cache=True)
+def _perez_bin(eps, bins):
+    i = 0
+    while i < bins.shape[0] and bins[i] <= eps:
+        i += 1
+    return i
+
+
+@njit(parallel=True, cache=True)
+def add_sample_cells(lit, cast, use_cast, ge, gn, length, row_tile, col_tile, suns,
+                     from_normals, has_lit, w, sky, tl_on, tl, corr, ine, kb_on, kb, kb0,
+                     kd_on, kd, kd0, perez, pz, table, bins, vd, sin_s, share, beam, diffuse,
+                     ghi_sum):
+    """Add one sample whose open sky differs from cell to cell into the sums ``beam``,
+    ``diffuse`` and ``ghi_sum`` (float64, in place).
+
+    The open sky of a cell: with ``tl_on`` Ineichen & Perez's clear sky for the cell's Linke
+    turbidity ``tl`` (pvlib's ``clearsky.ineichen``, its operations in its order: ``ine`` the
+    sample's absolute air mass, extraterrestrial irradiance, max(cos Z, 0), then the
+    altitude's fh1, fh2, cg1, cg2 and b = 0.664 + 0.163 / fh1; ``corr`` the cell's
+    1 - (0.1 - 0.2 exp(-TL)) / (0.1 + 0.882 / fh1)), else ``sky`` (GHI, DNI, DHI) of the sample.
+    Then the clear-sky indices (r.sun's coeff_bh, coeff_dh): the cell's ``kb``/``kd`` (with
+    ``kb_on``/``kd_on``) or the numbers ``kb0``/``kd0``: DNI · kb, DHI · kd, and the global
+    horizontal kb · GHI where kb = kd, else kb · (GHI - DHI) + kd · DHI.
+    beam += w · (float32(DNI) · max(cos i, 0) · lit) (``lit`` and the cell's cos i as
+    ``add_sample``'s, with ``has_lit``); ghi_sum += w · GHI; isotropic (not ``perez``):
+    diffuse += w · DHI; ``perez``: the cell's F1, F2 from its DNI and DHI as
+    ``engine.irradiance.with_perez`` computes them (``pz``: the zenith (radians), 1.041 Z³, the
+    relative air mass, the extraterrestrial irradiance, max(cos Z, cos 85°), 1 where the air
+    mass is defined; ``table`` and ``bins`` Perez's coefficients and clearness bins), and
+    diffuse += w · max(DHI · ((1 - F1) vd + F2 sin_s share + F1 / b · max(cos i, 0) lit), 0)
+    (the circumsolar term where lit and F1 > 0)."""
+    n_r, n_c = beam.shape
+    zero = np.float32(0.0)
+    one = np.float32(1.0)
+    am, extra, cosz, fh1, fh2, cg1, cg2, bb = (ine[0], ine[1], ine[2], ine[3], ine[4], ine[5],
+                                               ine[6], ine[7])
+    for r in prange(n_r):
+        tr = row_tile[r]
+        for c in range(n_c):
+            if tl_on:
+                t = tl[r, c]
+                g = math.exp(-cg2 * am * (fh1 + fh2 * (t - 1.0)))
+                if not g >= 0.0:
+                    g = 0.0
+                ghi = cg1 * extra * cosz * t / t * g
+                bn = bb * math.exp(-0.09 * am * (t - 1.0))
+                if not bn >= 0.0:
+                    bn = 0.0
+                bn = extra * bn
+                b2 = corr[r, c] / cosz
+                if not b2 >= 0.0:
+                    b2 = 0.0
+                if b2 > 1e20:
+                    b2 = 1e20
+                b2 = ghi * b2
+                dni = bn if bn < b2 else b2
+                dhi = ghi - dni * cosz
+            else:
+                ghi, dni, dhi = sky[0], sky[1], sky[2]
+            kbv = kb[r, c] if kb_on else kb0
+            kdv = kd[r, c] if kd_on else kd0
+            if kbv == kdv:
+                ghi = kbv * ghi
+            else:
+                ghi = kbv * (ghi - dhi) + kdv * dhi
+            dni = kbv * dni
+            dhi = kdv * dhi
+            d = zero
+            if has_lit:
+                if from_normals:
+                    s = suns[tr, col_tile[c]]
+                    cosi = np.float32((s[2] - ge[r, c] * s[0] - gn[r, c] * s[1])
+                                      / length[r, c])
+                    if not (cosi >= zero or math.isnan(cosi)):
+                        cosi = zero
+                    if use_cast:
+                        d = cosi * (one if cast[r, c] == 0 else zero)
+                    else:
+                        d = cosi * lit[r, c]
+                else:
+                    d = lit[r, c]
+                b = np.float32(dni) * d
+                beam[r, c] += w * np.float64(b)
+            ghi_sum[r, c] += w * ghi
+            if not perez:
+                diffuse[r, c] += w * dhi
+            elif pz[5] > 0.0 and dhi > 0.0:
+                z = pz[0]
+                kz3 = pz[1]
+                delta = dhi * pz[2] / pz[3]
+                eps = ((dhi + dni) / dhi + kz3) / (1.0 + kz3)
+                i = _perez_bin(eps, bins)
+                f1 = table[i, 0] + table[i, 1] * delta + table[i, 2] * z
+                if not (f1 >= 0.0 or math.isnan(f1)):
+                    f1 = 0.0
+                f2 = table[i, 3] + table[i, 4] * delta + table[i, 5] * z
+                t = (1.0 - f1) * vd[r, c] + f2 * sin_s[r, c] * share[r, c]
+                if has_lit and f1 > 0.0:
+                    t += (f1 / pz[4]) * np.float64(d)
+                t = dhi * t
+                if not (t >= 0.0 or math.isnan(t)):
+                    t = 0.0
+                diffuse[r, c] += w * t

@@ -8,7 +8,8 @@ import click
 from .errors import errors_to_click, say
 from ..run.config import PLACE_KEYS
 from .options import (SectionedCommand, command_line, context_option, each_pattern_options,
-                      algorithm_option, backend_option, dem_options, format_option,
+                      algorithm_option, backend_option, clear_sky_index_options,
+                      dem_options, format_option,
                       height_above_ground_option, max_memory_option, monthly_option,
                       overwrite_option,
                       physics_options, place_options, preview_option, quiet_option,
@@ -38,16 +39,18 @@ from .options import (SectionedCommand, command_line, context_option, each_patte
 @click.option("--clear-sky", type=click.Choice(["ineichen", "haurwitz"]), default=None,
               help="pvlib's clear-sky model (default ineichen; haurwitz gives GHI only, split "
                    "into DNI and DHI by Erbs).")
-@click.option("--linke-turbidity", default=None, metavar="T|T1,...,T12",
-              help="Linke turbidity for ineichen: a number, or 12 monthly numbers (January "
-                   "first; each sample its month's); default: pvlib's climatological monthly "
-                   "value at the place.")
+@click.option("--linke-turbidity", default=None, metavar="T|T1,...,T12|FILE|PATTERN",
+              help="Linke turbidity for ineichen (1..10): a number, 12 monthly numbers "
+                   "(January first; each sample its month's), a raster (each cell's clear sky "
+                   "with its own value) or 12 monthly rasters, as --albedo; default: pvlib's "
+                   "climatological monthly value at the place.")
 @click.option("--albedo", default="0.2", show_default=True,
               metavar="A|A1,...,A12|FILE|PATTERN",
               help="Ground reflectance (0..1) of the terrain the cell sees: a number, 12 "
                    "monthly numbers, a raster (bilinear to the DEM's grid; it must cover the "
                    "DEM), or 12 monthly rasters named by a pattern with {month} (1..12) or "
                    "{month:02d} (01..12).")
+@clear_sky_index_options
 @click.option("--ghi", "ghi", type=click.Path(dir_okay=False), default=None, metavar="FILE.csv",
               help="A measured sky instead: CSV with columns time, ghi (and dni, dhi; else "
                    "split by Erbs), W/m2, interpolated in time.")
@@ -91,7 +94,8 @@ from .options import (SectionedCommand, command_line, context_option, each_patte
 @context_option
 @errors_to_click
 def irradiance(files, date_, end_date, start, end, step, time, instant, clear_sky,
-               linke_turbidity, albedo, ghi, mean, daily_mean, monthly, perez,
+               linke_turbidity, albedo, beam_index, diffuse_index, ghi, mean, daily_mean,
+               monthly, perez,
                skyview_directions, sky_view, sky_view_out, tz, lat, lon, pressure, temperature,
                no_refraction, sun_tolerance, algorithm, curvature, refraction_k, soft,
                height_above_ground, preview,
@@ -118,6 +122,7 @@ def irradiance(files, date_, end_date, start, end, step, time, instant, clear_sk
     cfg = IrradianceConfig(
         dem=dem, output=output, date=date_, end_date=end_date, start=start, end=end, step=step,
         clear_sky=clear_sky, linke_turbidity=linke_turbidity, albedo=albedo, ghi=ghi,
+        beam_index=beam_index, diffuse_index=diffuse_index,
         mean=mean, daily_mean=daily_mean, monthly=monthly, soft=soft, perez=perez,
         skyview_directions=skyview_directions, place=place,
         algorithm=algorithm, curvature=curvature, refraction_k=refraction_k,

@@ -415,6 +415,20 @@ def monthly_option(what: str):
                              "local mean solar time).")
 
 
+def clear_sky_index_options(f):
+    """--beam-index, --diffuse-index: GRASS r.sun's real sky (its coeff_bh, coeff_dh), the
+    clear sky's beam and diffuse times these (0..1): a number, 12 monthly numbers, a raster or
+    12 monthly rasters (``run.sky_inputs``)."""
+    for name, what, rsun in (("--diffuse-index", "diffuse", "coeff_dh"),
+                             ("--beam-index", "beam", "coeff_bh")):
+        f = click.option(
+            name, default=None, metavar="K|K1,...,K12|FILE|PATTERN",
+            help=f"Clear-sky index of the {what} (0..1, r.sun's {rsun}): the real sky's "
+                 f"{what} is the clear sky's times it; a number, 12 monthly numbers, a raster "
+                 "or 12 monthly rasters, as --albedo. Not with --ghi.")(f)
+    return f
+
+
 def report_option(f):
     return click.option("--report", "report_path", type=click.Path(dir_okay=False),
                         default=None, help="Write a JSON report here.")(f)

@@ -29,6 +29,13 @@ split by Erbs). Perez's air mass is Kasten & Young's [7]_. The sun is the projec
 SPA, apparent elevation unless refraction is off), the same suns as ``sun-hours``: its zenith at
 the DEM's centre feeds the clear-sky model.
 
+GRASS r.sun's real sky [9]_ (its coeff_bh, coeff_dh: clear-sky indices kb, kd of 0..1) is the
+clear sky's DNI · kb and DHI · kd, its global horizontal kb · (GHI - DHI) + kd · DHI
+(:func:`real_sky`). Where the Linke turbidity or the indices are rasters the open sky differs
+from cell to cell (:class:`CellSky`): Ineichen's formula is evaluated per cell and sample (the
+parts that depend on the sun alone computed once per sample as pvlib computes them), and the
+diffuse and reflected light summed per cell as the beam is (``sums``' ``cells``).
+
 References
 ----------
 .. [1] J. Dozier, J. Frew, "Rapid calculation of terrain parameters for radiation modeling from
@@ -53,6 +60,9 @@ References
 .. [8] W. F. Holmgren, C. W. Hansen, M. A. Mikofski, "pvlib python: a python package for modeling
        solar energy systems," Journal of Open Source Software, vol. 3, no. 29, p. 884, 2018.
        :doi:`10.21105/joss.00884`
+.. [9] M. Šúri, J. Hofierka, "A new GIS-based solar radiation model and its application to
+       photovoltaic assessments," Transactions in GIS, vol. 8, no. 2, pp. 175-190, 2004.
+       :doi:`10.1111/j.1467-9671.2004.00174.x`
 """
 
 from __future__ import annotations
@@ -343,6 +353,96 @@ def with_perez(sky: Sky, times, zenith) -> Sky:
     return sky
 
 
+def real_sky(sky: Sky, beam_index, diffuse_index) -> Sky:
+    """The real sky of GRASS r.sun's clear-sky indices (its coeff_bh, coeff_dh [9]_): DNI times
+    ``beam_index``, DHI times ``diffuse_index`` (numbers, or one per sample), and the global
+    horizontal their sum, kb · (GHI - DHI) + kd · DHI (kb · GHI where kb = kd: index 1 leaves
+    the sky's bits). None: 1."""
+    from dataclasses import replace
+    n = len(sky.dni)
+    kb = np.broadcast_to(np.asarray(1.0 if beam_index is None else beam_index, np.float64),
+                         (n,))
+    kd = np.broadcast_to(np.asarray(1.0 if diffuse_index is None else diffuse_index,
+                                    np.float64), (n,))
+    ghi = np.where(kb == kd, kb * sky.ghi, kb * (sky.ghi - sky.dhi) + kd * sky.dhi)
+    return replace(sky, dni=kb * sky.dni, dhi=kd * sky.dhi, ghi=ghi)
+
+
+@dataclass
+class CellSky:
+    """The open sky where it differs from cell to cell: a Linke turbidity raster (Ineichen's
+    clear sky per cell) or clear-sky index rasters (r.sun's coeff_bh, coeff_dh), for
+    :func:`sums` (``algorithms.irradiance.add_sample_cells``). ``at(k)``: sample k's
+    (Linke turbidity, the cells' Ineichen correction (:func:`ineichen_correction`), beam
+    index, diffuse index) on the cells, each a float64 raster of the cells or, for the
+    indices, a number; the turbidity and its correction None where the sky's own values
+    serve (``ghi``, ``dni``, ``dhi``: the clear sky per sample before the indices). Per
+    sample too: pvlib's absolute air mass ``am`` (NaN: the sun down), the extraterrestrial
+    irradiance ``extra``, max(cos Z, 0) ``cosz``, and the altitude's terms ``consts`` (fh1,
+    fh2, cg1, cg2, b); for Perez the zenith ``z`` (radians), ``am_rel`` (Kasten & Young)."""
+
+    at: object
+    ghi: np.ndarray
+    dni: np.ndarray
+    dhi: np.ndarray
+    am: np.ndarray
+    extra: np.ndarray
+    cosz: np.ndarray
+    consts: tuple
+    z: np.ndarray
+    am_rel: np.ndarray
+
+    def sample(self, k: int) -> "CellSky":
+        """Sample ``k`` alone (an instant)."""
+        from dataclasses import replace
+
+        def one(v):
+            return v[k:k + 1]
+        at = self.at
+        return replace(self, at=lambda _j: at(k), ghi=one(self.ghi), dni=one(self.dni),
+                       dhi=one(self.dhi), am=one(self.am), extra=one(self.extra),
+                       cosz=one(self.cosz), z=one(self.z), am_rel=one(self.am_rel))
+
+
+def ineichen_terms(times, zenith, lat: float, lon: float, altitude: float):
+    """(absolute air mass, extraterrestrial irradiance, max(cos Z, 0), (fh1, fh2, cg1, cg2, b)):
+    the parts of pvlib's Ineichen clear sky (``Location.get_clearsky``) that do not depend on
+    the Linke turbidity, at ``times`` for the sun's ``zenith`` (degrees), computed as pvlib
+    computes them."""
+    import pandas as pd
+    from pvlib import tools
+    from pvlib.irradiance import get_extra_radiation
+    from pvlib.location import Location
+    zenith = np.asarray(zenith, np.float64)
+    idx = _index(times)
+    pos = pd.DataFrame({"apparent_zenith": zenith, "zenith": zenith,
+                        "apparent_elevation": 90.0 - zenith}, index=idx)
+    loc = Location(lat, lon, altitude=altitude)
+    am = np.asarray(loc.get_airmass(idx, solar_position=pos)["airmass_absolute"], np.float64)
+    extra = np.asarray(get_extra_radiation(idx), np.float64)
+    cosz = np.asarray(np.maximum(tools.cosd(zenith), 0), np.float64)
+    alt = loc.altitude
+    fh1 = np.exp(-alt / 8000.)
+    fh2 = np.exp(-alt / 1250.)
+    cg1 = 5.09e-05 * alt + 0.868
+    cg2 = 3.92e-05 * alt + 0.0387
+    return am, extra, cosz, tuple(float(v) for v in (fh1, fh2, cg1, cg2, 0.664 + 0.163 / fh1))
+
+
+def ineichen_correction(tl: np.ndarray, consts: tuple) -> np.ndarray:
+    """1 - (0.1 - 0.2 exp(-TL)) / (0.1 + 0.882 / fh1) of each cell's Linke turbidity: the part
+    of Ineichen's beam correction that does not change with the sun (pvlib's expression)."""
+    return 1 - (0.1 - 0.2 * np.exp(-tl)) / (0.1 + 0.882 / consts[0])
+
+
+def perez_terms(times, zenith):
+    """(zenith in radians, Kasten & Young's relative air mass) per sample, as
+    :func:`with_perez` has them."""
+    from pvlib.atmosphere import get_relative_airmass
+    zenith = np.asarray(zenith, np.float64)
+    return np.radians(zenith), np.asarray(get_relative_airmass(zenith), np.float64)
+
+
 # --------------------------------------------------------------------------------------------
 # the terrain: what does not change with the sun
 
@@ -422,7 +522,7 @@ def casts(sky: Sky, k: int, sun, soft: bool = False, perez: bool = False) -> boo
 def accumulate(shader, suns, weights, sky: Sky, vd: np.ndarray, albedo: float, *,
                soft: bool = False, perez: bool = False, per_time: bool = False,
                stats: dict | None = None, timer=None, progress=None, normals=None,
-               groups: "Groups | None" = None) -> dict:
+               groups: "Groups | None" = None, cells: "CellSky | None" = None) -> dict:
     """The four bands (``BANDS``, float32, NaN voids) over ``shader``'s DEM: with ``per_time``
     each a (times, rows, cols) stack of W/m² at each sun, else the sums of W/m² times
     ``weights`` (hours): Wh/m². ``suns``: ``sun.SunOver`` per sample (the shadows' and the
@@ -432,7 +532,7 @@ def accumulate(shader, suns, weights, sky: Sky, vd: np.ndarray, albedo: float, *
     "irradiance"; ``progress`` wraps the loop (a progress bar). The sums take Horn's normals once
     (``algorithms.irradiance.normals``) and add each sample in place; the stacks go as before,
     sun by sun through numpy. ``normals``: those normals when the caller has them (the sky
-    view's). ``groups``: as ``sums``' (not with ``per_time``)."""
+    view's). ``groups``, ``cells``: as ``sums``' (not with ``per_time``)."""
     from .shader import render
     if per_time:
         def direct(s, timed):
@@ -460,7 +560,7 @@ def accumulate(shader, suns, weights, sky: Sky, vd: np.ndarray, albedo: float, *
         return cos_s, np.sqrt(np.maximum(1.0 - cos_s * cos_s, 0.0))
     return sums(lit_of, np.isnan(shader.z), slopes, suns, weights, sky, vd, albedo, soft=soft,
                 perez=perez, stats=stats, timer=timer, progress=progress, normals=nrm,
-                groups=groups)
+                groups=groups, cells=cells)
 
 
 def _nothing():
@@ -507,7 +607,7 @@ class Groups:
 def sums(direct, void: np.ndarray, slopes, suns, weights, sky: Sky, vd: np.ndarray,
          albedo, *, soft: bool = False, perez: bool = False, per_time: bool = False,
          stats: dict | None = None, timer=None, progress=None, normals=None,
-         groups: Groups | None = None) -> dict:
+         groups: Groups | None = None, cells: CellSky | None = None) -> dict:
     """``accumulate``'s bands over any cells: ``direct(sun, timed)`` gives max(cos i, 0) · lit
     of the cells (float32, NaN voids) for a sun with light to cast (``timed(stage)``: the
     timer's context), or with ``normals`` (``algorithms.irradiance.normals`` of the cells) lit
@@ -522,7 +622,11 @@ def sums(direct, void: np.ndarray, slopes, suns, weights, sky: Sky, vd: np.ndarr
     group's global band too (its beam and Perez diffuse the difference of the float64 running
     sums at its ends; its isotropic diffuse and reflected light from its own samples' sky), and
     with ``groups.albedo`` the reflected light of each group with its own albedo, the total
-    their sum; the total bands are otherwise the bits of a run without groups."""
+    their sum; the total bands are otherwise the bits of a run without groups. ``cells``
+    (:class:`CellSky`): the open sky per cell (a Linke turbidity raster, clear-sky index
+    rasters), every sample with light added cell by cell (``algorithms.irradiance.
+    add_sample_cells``), the diffuse and reflected light too (float64 sums of each cell's DHI
+    and GHI); ``sky`` then only says which samples cast shadows (not with ``per_time``)."""
     import contextlib
     w = np.asarray(weights, np.float64)
     n = len(suns)
@@ -541,6 +645,8 @@ def sums(direct, void: np.ndarray, slopes, suns, weights, sky: Sky, vd: np.ndarr
         horizon_share = np.minimum(vd64 / ((1.0 + cos_s) / 2.0), 1.0)
     counted = {"samples": n, "samples_with_shadows": 0}
     loop = progress(range(n)) if progress is not None else range(n)
+    if per_time and cells is not None:
+        raise HillshadeError("an open sky per cell is summed, not stacked (per_time)")
     if per_time:
         stacks = _stacks(direct, void, loop, suns, sky, vd, vd64, albedo, soft, perez,
                          sin_s if perez else None, horizon_share if perez else None, counted,
@@ -548,6 +654,10 @@ def sums(direct, void: np.ndarray, slopes, suns, weights, sky: Sky, vd: np.ndarr
         if stats is not None:
             stats.update(counted)
         return stacks
+    if cells is not None:
+        return _sums_cells(direct, void, loop, suns, w, sky, vd64, albedo, cells, soft, perez,
+                           sin_s if perez else None, horizon_share if perez else None, counted,
+                           stats, timed, normals, groups)
     from ..algorithms.irradiance import add_sample
     beam = np.zeros(shape, np.float64)
     diffuse = np.zeros(shape, np.float64)
@@ -621,6 +731,114 @@ def sums(direct, void: np.ndarray, slopes, suns, weights, sky: Sky, vd: np.ndarr
         out = {k: v.astype(np.float32) for k, v in bands.items()}
         if groups is not None and groups.bands:
             out["groups"] = per_group[0]
+        return out
+
+
+def _sums_cells(direct, void, loop, suns, w, sky, vd64, albedo, cells: CellSky, soft, perez,
+                sin_s, horizon_share, counted, stats, timed, normals, groups) -> dict:
+    """``sums`` with the open sky per cell (``cells``): each sample with light added cell by
+    cell, its beam, its diffuse (isotropic: each cell's DHI, times Vd at the end; Perez: the
+    cell's own coefficients) and each cell's GHI (the reflected light's, times albedo · (1 -
+    Vd) at the end)."""
+    from ..algorithms.irradiance import add_sample_cells
+    shape = void.shape
+    n = len(suns)
+    beam = np.zeros(shape, np.float64)
+    diffuse = np.zeros(shape, np.float64)
+    ghi_sum = np.zeros(shape, np.float64)
+    none2 = np.empty((1, 1), np.float64)
+    none1 = np.zeros(1, np.int64)
+    none3 = np.zeros((1, 1, 3), np.float64)
+    no_lit = np.empty((1, 1), np.float32)
+    no_cast = np.empty((1, 1), np.uint8)
+    rows0 = np.zeros(shape[0], np.int64)
+    if not perez:
+        sin_s = horizon_share = none2
+    kz3 = PEREZ_KAPPA * cells.z ** 3
+    bfac = np.maximum(np.cos(cells.z), COS_85)
+    table = np.ascontiguousarray(PEREZ_1990, np.float64)
+    bins = np.array(PEREZ_EPSILON_BINS, np.float64)
+    gi = None if groups is None else np.asarray(groups.index, np.int64)
+    if gi is not None and (len(gi) != n or (n and (gi[0] != 0 or np.any(np.diff(gi) < 0)))):
+        raise HillshadeError("one group per sun, numbered from 0 in the suns' order")
+    if len(cells.am) != n:
+        raise HillshadeError("one open sky per cell per sun")
+    ends = []
+    prev = [beam.copy(), diffuse.copy(), ghi_sum.copy()] if gi is not None else None
+
+    def close(g):
+        ends.append((g, beam - prev[0], diffuse - prev[1], ghi_sum - prev[2]))
+        prev[0], prev[1], prev[2] = beam.copy(), diffuse.copy(), ghi_sum.copy()
+    for k in loop:
+        if gi is not None and k > 0 and gi[k] != gi[k - 1]:
+            close(int(gi[k - 1]))
+        tl, corr, kb, kd = cells.at(k)
+        tl_on = tl is not None
+        if tl_on:
+            up = bool(np.isfinite(cells.am[k]) and cells.cosz[k] > 0)
+            beam_up = up
+        else:
+            up = bool(cells.ghi[k] > 0 or cells.dni[k] > 0 or cells.dhi[k] > 0)
+            beam_up = bool(cells.dni[k] > 0)
+        if not up:
+            continue
+        s = suns[k]
+        lit = None
+        if (beam_up or perez) and not is_dark(s, soft):
+            lit = np.ascontiguousarray(direct(s, timed))
+            if lit.shape != shape or not (lit.dtype == np.float32 or (
+                    lit.dtype == np.uint8 and normals is not None)):
+                raise HillshadeError(f"the light of a sun is {lit.dtype} {lit.shape}, not "
+                                     f"float32 {shape}")
+            counted["samples_with_shadows"] += 1
+        with timed("irradiance"):
+            if lit is not None and normals is not None:
+                row_tile, col_tile, vec = tile_suns(s, shape)
+                ge, gn, length = normals
+            else:
+                row_tile, col_tile, vec, ge, gn, length = rows0, none1, none3, none2, none2, none2
+            mask = lit is not None and lit.dtype == np.uint8
+            kb_on, kd_on = isinstance(kb, np.ndarray), isinstance(kd, np.ndarray)
+            add_sample_cells(
+                no_lit if lit is None or mask else lit, lit if mask else no_cast, mask,
+                ge, gn, length, row_tile, col_tile, vec, lit is not None and normals is not None,
+                lit is not None, float(w[k]),
+                np.array([cells.ghi[k], cells.dni[k], cells.dhi[k]], np.float64),
+                tl_on, tl if tl_on else none2, corr if tl_on else none2,
+                np.array([cells.am[k], cells.extra[k], cells.cosz[k], *cells.consts],
+                         np.float64),
+                kb_on, kb if kb_on else none2, 1.0 if kb_on else float(kb),
+                kd_on, kd if kd_on else none2, 1.0 if kd_on else float(kd),
+                perez, np.array([cells.z[k], kz3[k], cells.am_rel[k], cells.extra[k], bfac[k],
+                                 1.0 if np.isfinite(cells.am_rel[k]) else 0.0], np.float64),
+                table, bins, vd64, sin_s, horizon_share, beam, diffuse, ghi_sum)
+    if gi is not None and n:
+        close(int(gi[-1]))
+    if stats is not None:
+        stats.update(counted)
+    with timed("irradiance"):
+        per_group, refl_total = [], None
+        for g, b, d, gh in ends:
+            ag = albedo if groups.albedo is None else groups.albedo[g]
+            refl = gh * ag * (1.0 - vd64)
+            if groups.albedo is not None:
+                refl_total = refl if refl_total is None else refl_total + refl
+            if groups.bands:
+                glob = (b + (d if perez else d * vd64) + refl).astype(np.float32)
+                glob[void] = np.nan
+                per_group.append(glob)
+        if not perez:
+            diffuse = diffuse * vd64
+        reflected = (refl_total if groups is not None and groups.albedo is not None
+                     else ghi_sum * albedo * (1.0 - vd64))
+        beam[void] = np.nan
+        diffuse[void] = np.nan
+        reflected = np.where(void, np.nan, reflected)
+        bands = {"beam": beam, "diffuse": diffuse, "reflected": reflected,
+                 "global": beam + diffuse + reflected}
+        out = {k: v.astype(np.float32) for k, v in bands.items()}
+        if groups is not None and groups.bands:
+            out["groups"] = per_group
         return out
 
 
@@ -712,17 +930,19 @@ def surface_elevation(cos_i: np.ndarray) -> np.ndarray:
 
 def instant(shader, sun, sky: Sky, k: int, vd: np.ndarray, albedo: float, *,
             soft: bool = False, perez: bool = False, stats: dict | None = None, timer=None,
-            normals=None) -> dict:
+            normals=None, cells: CellSky | None = None) -> dict:
     """The irradiance at one instant (r.sun's mode 1): sample ``k`` of ``sky`` under ``sun``
     (a ``sun.SunOver``) as ``accumulate`` adds it, alone and with weight 1, so each band is
     that sample's contribution in W/m² (the same formulas and arithmetic as the period's sums,
     which add w_k times these in float64), float32, NaN voids; "incidence" (``INSTANT_BANDS``)
     is :func:`surface_elevation` of the sun on every cell, tile by tile where the sun is per
     tile (the incidence the beam uses). ``stats``: "samples_with_shadows" counts the instants
-    whose cast shadows were computed."""
+    whose cast shadows were computed. ``cells``: the open sky per cell of every sample
+    (:class:`CellSky`), sample ``k``'s taken."""
     one: dict = {}
     bands = accumulate(shader, [sun], [1.0], sky_at(sky, k), vd, albedo, soft=soft, perez=perez,
-                       stats=one, timer=timer, normals=normals)
+                       stats=one, timer=timer, normals=normals,
+                       cells=None if cells is None else cells.sample(k))
     if stats is not None:
         stats["samples_with_shadows"] = (stats.get("samples_with_shadows", 0)
                                          + one.get("samples_with_shadows", 0))

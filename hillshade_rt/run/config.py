@@ -463,6 +463,10 @@ class IrradianceConfig:
     # {month} (run.sky_inputs); linke_turbidity None: pvlib's climatological lookup
     linke_turbidity: float | str | None = None
     albedo: float | str = 0.2
+    # r.sun's real sky (coeff_bh, coeff_dh): the clear sky's beam and diffuse times these
+    # (0..1), the same forms; None: 1 (the clear sky)
+    beam_index: float | str | None = None
+    diffuse_index: float | str | None = None
     ghi: str | None = None                # a CSV: time, ghi[, dni, dhi]
     mean: bool = False                    # mean W/m² over the period instead of Wh/m²
     daily_mean: bool = False              # Wh/m² per day: the energy over the period's days
@@ -485,11 +489,20 @@ class IrradianceConfig:
     # (check() parses linke_turbidity and albedo into run.sky_inputs.SkyValue)
     linke_input: object = field(default=None, init=False, repr=False, compare=False)
     albedo_input: object = field(default=None, init=False, repr=False, compare=False)
+    beam_input: object = field(default=None, init=False, repr=False, compare=False)
+    diffuse_input: object = field(default=None, init=False, repr=False, compare=False)
 
     def sky_inputs(self) -> list:
-        """The files of --albedo and --linke-turbidity (after :meth:`check`)."""
-        return [p for v in (self.albedo_input, self.linke_input) if v is not None
-                for p in v.inputs()]
+        """The files of --albedo, --linke-turbidity, --beam-index and --diffuse-index (after
+        :meth:`check`)."""
+        return [p for v in (self.albedo_input, self.linke_input, self.beam_input,
+                            self.diffuse_input) if v is not None for p in v.inputs()]
+
+    def sky_per_cell(self) -> bool:
+        """Whether the open sky differs from cell to cell: --linke-turbidity, --beam-index or
+        --diffuse-index as rasters (after :meth:`check`)."""
+        return any(v is not None and v.rasters
+                   for v in (self.linke_input, self.beam_input, self.diffuse_input))
     times: tuple = ()                     # --time: instants (W/m² at each, run.irradiance_instant)
     instant: bool = False                 # --instant: the period's times as instants, not sums
     command: str | None = None            # the command line (a time cube's history)
@@ -506,9 +519,8 @@ class IrradianceConfig:
         self.albedo_input = SkyValue.parse("--albedo", self.albedo, 0.0, 1.0)
         self.linke_input = SkyValue.parse("--linke-turbidity", self.linke_turbidity, 1.0, 10.0,
                                           " (clean, dry air ~2, hazy ~5)")
-        if self.linke_input is not None and self.linke_input.rasters:
-            raise UsageProblem("--linke-turbidity takes a number or 12 monthly numbers; as a "
-                               "raster it is not supported yet")
+        self.beam_input = SkyValue.parse("--beam-index", self.beam_index, 0.0, 1.0)
+        self.diffuse_input = SkyValue.parse("--diffuse-index", self.diffuse_index, 0.0, 1.0)
         if self.mean and self.daily_mean:
             raise UsageProblem("--mean (W/m2) and --daily-mean (Wh/m2 per day): give one")
         if self.sky_view is not None and self.sky_view_out is not None:
@@ -539,6 +551,10 @@ class IrradianceConfig:
                                      or self.linke_input is not None):
             raise UsageProblem("--ghi gives the sky measured: --clear-sky and "
                                "--linke-turbidity do not go with it")
+        if self.ghi is not None and (self.beam_input is not None
+                                     or self.diffuse_input is not None):
+            raise UsageProblem("--ghi gives the sky measured: the clear-sky indices "
+                               "--beam-index and --diffuse-index do not go with it")
         if self.linke_input is not None and self.clear_sky == "haurwitz":
             raise UsageProblem("--linke-turbidity is Ineichen's: Haurwitz takes none")
         self.algorithm = check_lift(self.height_above_ground, self.algorithm, self.soft)

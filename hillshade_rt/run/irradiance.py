@@ -19,6 +19,11 @@ every sun's shadows and sums), or read with ``--sky-view`` from a file that ``sk
 --definition dozier`` or ``--sky-view-out`` wrote, checked against the DEM and the run's
 settings (``run.sky_view_file``): the same output bytes either way.
 
+The open sky is one per sample for the whole DEM, unless --linke-turbidity, --beam-index or
+--diffuse-index are rasters (r.sun's linke, coeff_bh, coeff_dh maps): then it is each cell's
+(:func:`open_sky_cells`, ``engine.irradiance.CellSky``), in memory, with --context and for
+instants; in windows they are refused for now.
+
 The run's steps, between the shared preamble and tail (``run.runner.RunContext``): what the
 command line asks (the period, the place, the ``--ghi`` series), the DEM read, the samples (the
 suns of the period at the DEM's place and the open sky at each), the light (the sky view and
@@ -73,8 +78,10 @@ class _Samples:
     suns: list
     sun_info: dict | None
     work: list
-    sky: object             # engine.irradiance.Sky
+    sky: object             # engine.irradiance.Sky (None until the grid is known, where the
+    #                         sky differs from cell to cell: cells)
     tz: object = None       # the zone of the samples' local time (None: local mean solar)
+    cells: object = None    # engine.irradiance.CellSky: the open sky per cell (open_sky_cells)
 
 
 @dataclass
@@ -141,8 +148,16 @@ def _run(cfg, ctx: RunContext, lighting, asked: _Asked, d, area, windows=None) -
     from .report import progress
     from .sun_hours_windows import windows_phrase
     ro = ctx.ro
+    if windows is not None and cfg.sky_per_cell():
+        raise UsageProblem("--linke-turbidity, --beam-index and --diffuse-index as rasters run "
+                           "in memory only for now: not in windows (--max-memory, "
+                           "--window-size, --scheduler)")
     with ctx.timer("prepare"):
         sampled = _samples(cfg, asked, d)
+        if sampled.sky is None:     # the open sky per cell, on the grid of the output
+            geom, valid = _grid_of(d, area)
+            sampled.sky, sampled.cells = open_sky_cells(
+                cfg, sampled.times, sampled.suns, sampled.site, sampled.tz, geom, valid)
         body = dem_body(d, asked.req.lat)
         if area is None and windows is None:
             shader = _prepare(d, lighting, body, sampled)
@@ -320,34 +335,153 @@ def _samples(cfg: IrradianceConfig, asked: _Asked, d) -> _Samples:
     suns, sun_info = req.suns(d, site)
     return _Samples(site, period, float(np.sum(weights)), times, weights, suns, sun_info,
                     [s for s in suns if not ir.is_dark(s, cfg.soft)],
-                    open_sky(cfg, times, suns, site, series, req.tz), req.tz)
+                    None if cfg.sky_per_cell() else open_sky(cfg, times, suns, site, series,
+                                                             req.tz), req.tz)
 
 
-def open_sky(cfg: IrradianceConfig, times, suns, site, series, tz=None):
+def open_sky(cfg: IrradianceConfig, times, suns, site, series, tz=None, *, linke=None,
+             indices=None):
     """The open sky at each sample: the clear-sky model's, or the ``--ghi`` series
-    interpolated in time; with ``--perez`` its Perez coefficients."""
+    interpolated in time; times the clear-sky indices (--beam-index, --diffuse-index: r.sun's
+    real sky, ``engine.irradiance.real_sky``); with ``--perez`` its Perez coefficients.
+    ``linke``, ``indices``: the samples' Linke turbidity and (beam, diffuse) indices instead of
+    the options' numbers (where they are rasters: :func:`open_sky_cells`)."""
+    from ..engine import irradiance as ir
+    sky = _clear_sky(cfg, times, suns, site, series, tz, linke)
+    if indices is None:
+        indices = (_per_sample(cfg.beam_input, times, tz, site),
+                   _per_sample(cfg.diffuse_input, times, tz, site))
+    if indices[0] is not None or indices[1] is not None:
+        sky = ir.real_sky(sky, *indices)
+    if cfg.perez:
+        import numpy as np
+        ir.with_perez(sky, times, np.array([s.zenith for s in suns], np.float64))
+    return sky
+
+
+def _per_sample(v, times, tz, site):
+    """A number or twelve monthly numbers (``run.sky_inputs.SkyValue``) per sample: the number
+    itself, or each sample's month's (None: not given)."""
+    import numpy as np
+    if v is None:
+        return None
+    if v.monthly is None:
+        return v.number
+    from .sky_inputs import local_months
+    return np.array(v.monthly, np.float64)[local_months(times, tz, site.lon) - 1]
+
+
+def _clear_sky(cfg, times, suns, site, series, tz, linke=None):
+    """The clear sky (or the measured one) at each sample, before the indices."""
     import numpy as np
 
     from ..engine import irradiance as ir
     zen = np.array([s.zenith for s in suns], np.float64)
     if series is None:
-        lt = cfg.linke_input
-        if lt is not None and lt.monthly is not None:     # each sample its month's value
-            from .sky_inputs import local_months
-            lt = np.array(lt.monthly, np.float64)[local_months(times, tz, site.lon) - 1]
-        elif lt is not None:
-            lt = lt.number
-        sky = ir.clear_sky(times, zen, site.lat, site.lon, site.height,
-                           cfg.clear_sky or "ineichen", lt)
-    else:
-        unix, *cols = series
-        ghi, dni, dhi = ir.series_at(times, unix, *cols, path=cfg.ghi)
-        sky = ir.measured_sky(times, zen, ghi, dni, dhi,
-                              f"measured: {os.path.basename(cfg.ghi)} (interpolated in "
-                              "time)")
+        lt = linke if linke is not None else _per_sample(cfg.linke_input, times, tz, site)
+        return ir.clear_sky(times, zen, site.lat, site.lon, site.height,
+                            cfg.clear_sky or "ineichen", lt)
+    unix, *cols = series
+    ghi, dni, dhi = ir.series_at(times, unix, *cols, path=cfg.ghi)
+    return ir.measured_sky(times, zen, ghi, dni, dhi,
+                           f"measured: {os.path.basename(cfg.ghi)} (interpolated in time)")
+
+
+def open_sky_cells(cfg: IrradianceConfig, times, suns, site, tz, geom, valid):
+    """(the open sky, ``engine.irradiance.CellSky`` or None): with --linke-turbidity,
+    --beam-index or --diffuse-index as rasters, each month's raster on the grid of ``geom``
+    (its cells ``valid``; a raster of one value there is that number, the number's bits); where
+    some vary over the cells, the open sky per cell of each sample (its month's rasters, read
+    again as the samples reach each month: one month's held at a time), and the open sky of
+    the report, the tags and the shadows' choice at each month's mean over the DEM. Else
+    (None) :func:`open_sky`'s."""
+    import numpy as np
+
+    from ..engine import irradiance as ir
+    from .sky_inputs import local_months
+    if not cfg.sky_per_cell():
+        return open_sky(cfg, times, suns, site, None, tz), None
+    months = local_months(times, tz, site.lon) if len(times) else np.zeros(0, np.int64)
+    grid = (geom.transform, geom.crs, tuple(geom.shape), valid)
+    inputs = (cfg.linke_input, cfg.beam_input, cfg.diffuse_input)
+    summary = {}               # (input, month): (the value or the raster's mean, varies, lo, hi)
+    for i, v in enumerate(inputs):
+        if v is None or not v.rasters:
+            continue
+        for m in sorted(set(int(x) for x in months)) if v.by_month else [1]:
+            r = v.resolved(m, *grid)
+            if isinstance(r, np.ndarray):
+                inside = r if valid is None else r[valid]
+                summary[i, m] = (float(np.mean(inside)), True, float(np.min(inside)),
+                                 float(np.max(inside)))
+            else:
+                summary[i, m] = (r, False, r, r)
+            del r
+
+    def per_sample(i):
+        v = inputs[i]
+        if v is None or not v.rasters:
+            return _per_sample(v, times, tz, site)
+        vals = np.array([summary[i, int(m) if v.by_month else 1][0] for m in months],
+                        np.float64)
+        return float(vals[0]) if vals.size and np.all(vals == vals[0]) else vals
+    per_cell = any(x[1] for x in summary.values())
+    lt, kb, kd = per_sample(0), per_sample(1), per_sample(2)
+    if not per_cell:
+        return open_sky(cfg, times, suns, site, None, tz, linke=lt, indices=(kb, kd)), None
+    raw = _clear_sky(cfg, times, suns, site, None, tz, lt)
+    sky = ir.real_sky(raw, kb, kd) if kb is not None or kd is not None else raw
+    zen = np.array([s.zenith for s in suns], np.float64)
     if cfg.perez:
         ir.with_perez(sky, times, zen)
-    return sky
+    lv = cfg.linke_input
+    if lv is not None and lv.rasters and any(x[1] for (i, _), x in summary.items() if i == 0):
+        lo = min(x[2] for (i, _), x in summary.items() if i == 0)
+        hi = max(x[3] for (i, _), x in summary.items() if i == 0)
+        sky.turbidity = (f"{lv.describe()}: each cell its own, {lo:.2f}..{hi:.2f} over the "
+                         f"DEM (the open sky of the report at the DEM's mean"
+                         + (f", {float(np.mean(lt)):.2f})" if np.size(lt) else ")"))
+    am, extra, cosz, consts = ir.ineichen_terms(times, zen, site.lat, site.lon, site.height)
+    z, am_rel = ir.perez_terms(times, zen)
+    held: dict = {}
+
+    def raster(i, m):
+        """Input i's raster of month m on the grid (a float where it is one value); None where
+        the input is a number (its samples' numbers serve)."""
+        v = inputs[i]
+        if v is None or not v.rasters:
+            return None
+        key = (i, m if v.by_month else 1)
+        return v.resolved(key[1], *grid) if summary[key][1] else summary[key][0]
+
+    def number(per, k):
+        return 1.0 if per is None else float(per) if np.ndim(per) == 0 else float(per[k])
+
+    def at(k):
+        m = int(months[k])
+        if held.get("month") != m:        # the month's rasters, the last month's let go
+            held.clear()
+            tl = raster(0, m)
+            tl = tl if isinstance(tl, np.ndarray) else None
+            held.update(month=m, tl=tl, kb=raster(1, m), kd=raster(2, m),
+                        corr=None if tl is None else ir.ineichen_correction(tl, consts))
+        kbk, kdk = held["kb"], held["kd"]
+        return (held["tl"], held["corr"], number(kb, k) if kbk is None else kbk,
+                number(kd, k) if kdk is None else kdk)
+    cells = ir.CellSky(at, raw.ghi, raw.dni, raw.dhi, am, extra, cosz, consts, z, am_rel)
+    return sky, cells
+
+
+def _grid_of(d, area):
+    """(the grid of the output, its valid cells): the DEM in memory, or the --context tile (its
+    heights read from the context)."""
+    import numpy as np
+    if area is None:
+        return d, ~np.isnan(d.heights)
+    z = np.empty(area.shape, np.float32)
+    with area.source.reader() as rd:
+        rd.read(area.bounds, z)
+    return area.tile, ~np.isnan(z)
 
 
 def _prepare(d, lighting, body, sampled: _Samples):
@@ -390,7 +524,8 @@ def _light(cfg, ctx: RunContext, d, shader, lighting, body, sampled: _Samples, a
     with ctx.timer("compute"):
         bands = ir.accumulate(shader, sampled.suns, sampled.weights, sampled.sky, vd,
                               albedo, soft=lighting.soft, perez=cfg.perez, stats=algo_stats,
-                              timer=ctx.timer, progress=bar, normals=nrm, groups=groups)
+                              timer=ctx.timer, progress=bar, normals=nrm, groups=groups,
+                              cells=sampled.cells)
     return _Bands(bands, vd, shader.report(), vd_from="computed" if vd_tags is None else "read",
                   vd_tags=vd_tags, months=_months(cfg, sampled, bands, groups, keys))
 
@@ -531,7 +666,7 @@ def _light_in_context(cfg, ctx: RunContext, area, lighting, body, sampled: _Samp
                 bands = ir.sums(direct, void, slopes, sampled.suns, sampled.weights,
                                 sampled.sky, vd, albedo, soft=lighting.soft,
                                 perez=cfg.perez, stats=algo_stats, timer=timer, progress=bar,
-                                groups=groups)
+                                groups=groups, cells=sampled.cells)
     processing = {"mode": "windows", "cells": area.shape[0] * area.shape[1],
                   "shadow_windows": read["windows"], "shadow_window_cells": read["cells"],
                   "sky_view": fig.as_dict()}
@@ -560,6 +695,7 @@ def _tags(cfg: IrradianceConfig, lighting, req, sampled: _Samples, area) -> dict
             "PERIOD_HOURS": f"{sampled.hours:g}", "STEP": cfg.step,
             "SAMPLES": len(sampled.suns), "SKY": sky.source, "SKY_MODEL": sky_model,
             "ALBEDO": cfg.albedo_input.describe(),
+            **sky_input_tags(cfg),
             "SKYVIEW_DIRECTIONS": cfg.skyview_directions,
             "SOFT": cfg.soft, "ALGORITHM": cfg.algorithm,
             "HEIGHT_ABOVE_GROUND_M": lighting.lift,
@@ -584,6 +720,29 @@ def _tags(cfg: IrradianceConfig, lighting, req, sampled: _Samples, area) -> dict
                           + (f"{sampled.tz.key}" if sampled.tz is not None
                              else "local mean solar time") + "), in the bands' units")
     return tags
+
+
+def sky_input_tags(cfg: IrradianceConfig) -> dict:
+    """The tags of --linke-turbidity, --beam-index and --diffuse-index where given (as the
+    ALBEDO tag: ``run.sky_inputs.SkyValue.describe``)."""
+    tags = {}
+    for key, v, what in (("LINKE_TURBIDITY", cfg.linke_input, ""),
+                         ("BEAM_INDEX", cfg.beam_input,
+                          " (r.sun's coeff_bh: the real sky's beam is the clear sky's times it)"),
+                         ("DIFFUSE_INDEX", cfg.diffuse_input,
+                          " (r.sun's coeff_dh: the real sky's diffuse is the clear sky's times "
+                          "it)")):
+        if v is not None:
+            tags[key] = v.describe() + what
+    return tags
+
+
+def sky_input_report(cfg: IrradianceConfig) -> dict:
+    """The report's entries of the clear-sky indices: ``beam_index``, ``diffuse_index`` (a
+    number, or its description; None: not given, the clear sky)."""
+    def of(v):
+        return None if v is None else v.number if v.number is not None else v.describe()
+    return {"beam_index": of(cfg.beam_input), "diffuse_index": of(cfg.diffuse_input)}
 
 
 def one_day(cfg: IrradianceConfig) -> bool:
@@ -677,6 +836,7 @@ def _report(cfg: IrradianceConfig, ctx: RunContext, geom, sampled: _Samples, lit
            "split": sky.split,
            "albedo": (cfg.albedo_input.number if cfg.albedo_input.number is not None
                       else cfg.albedo_input.describe()),
+           **sky_input_report(cfg),
            "skyview_directions": cfg.skyview_directions, "soft": cfg.soft,
            "height_above_ground_m": float(cfg.height_above_ground),
            "sky_view": (_summary(lit.vd) if lit.figures is None

@@ -137,7 +137,7 @@ def _run(cfg: IrradianceConfig, ctx: RunContext, lighting, asked: _Asked, d,
     from ..algorithms.irradiance import normals
     from ..engine import irradiance as ir
     from ..model.earth import dem_body
-    from .irradiance import open_sky, read_sky_view, write_sky_view
+    from .irradiance import open_sky, open_sky_cells, read_sky_view, write_sky_view
     from .report import progress
     ro, req, timer = ctx.ro, asked.req, ctx.timer
     with timer("prepare"):
@@ -147,7 +147,11 @@ def _run(cfg: IrradianceConfig, ctx: RunContext, lighting, asked: _Asked, d,
         times = _times(cfg, asked, site)
         req.times = times
         suns, sun_info = req.suns(d, site)
-        sky = open_sky(cfg, times, suns, site, asked.series, req.tz)
+        cells = None
+        if cfg.sky_per_cell():       # the open sky per cell (rasters): on the DEM's grid
+            sky, cells = open_sky_cells(cfg, times, suns, site, req.tz, d, ~np.isnan(d.heights))
+        else:
+            sky = open_sky(cfg, times, suns, site, asked.series, req.tz)
         body = dem_body(d, req.lat)
         shader = lighting.shader(d.heights, d.grid, body=body, zrange=d.height_range(),
                                  survey=d.survey())
@@ -172,7 +176,8 @@ def _run(cfg: IrradianceConfig, ctx: RunContext, lighting, asked: _Asked, d,
         for k in loop:
             with timer("compute"):
                 bands = ir.instant(shader, suns[k], sky, k, vd, albedo_of(k), soft=lighting.soft,
-                                   perez=cfg.perez, stats=stats, timer=timer, normals=nrm)
+                                   perez=cfg.perez, stats=stats, timer=timer, normals=nrm,
+                                   cells=cells)
             per_time.append(_instant_report(times[k], suns[k], sky, k, bands["global"]))
             for q, v in bands.items():
                 summaries[q] = _merge(summaries[q], v)
@@ -245,6 +250,7 @@ def _tags(cfg: IrradianceConfig, lighting, req, times, sky) -> dict:
     """The output's metadata."""
     from ..engine import irradiance as ir
     from ..model.times import iso
+    from .irradiance import sky_input_tags
     sky_model = "perez" if cfg.perez else "isotropic"
     tags = {"HILLSHADE_RT_VERSION": __version__,
             "UNITS": "W/m2 at each instant (beam, diffuse, reflected, global); incidence: "
@@ -255,6 +261,7 @@ def _tags(cfg: IrradianceConfig, lighting, req, times, sky) -> dict:
             "BAND_ORDER": f"band 5 k + j + 1: time k (0-based), quantity j of "
                           f"{','.join(ir.INSTANT_BANDS)}",
             "SKY": sky.source, "SKY_MODEL": sky_model, "ALBEDO": cfg.albedo_input.describe(),
+            **sky_input_tags(cfg),
             "SKYVIEW_DIRECTIONS": cfg.skyview_directions, "SOFT": cfg.soft,
             "ALGORITHM": cfg.algorithm, "HEIGHT_ABOVE_GROUND_M": lighting.lift,
             "DEFINITIONS": ir.definitions(sky_model, cfg.skyview_directions, cfg.soft)
@@ -306,6 +313,7 @@ def _report(cfg, ctx, d, times, work, sky, vd, vd_tags, stats, summaries, per_ti
             sun_info) -> dict:
     """The run's report (``--report``)."""
     from ..io import input_label
+    from .irradiance import sky_input_report
     rep = {"input": input_label(d.path), "output": os.path.abspath(cfg.output),
            "shape": list(d.shape), "algorithm": cfg.algorithm, "backend": ctx.backend,
            "mode": "instants", "units": "W/m2", "incidence_units": "degrees",
@@ -314,6 +322,7 @@ def _report(cfg, ctx, d, times, work, sky, vd, vd_tags, stats, summaries, per_ti
            "sky": sky.source, "sky_model": "perez" if cfg.perez else "isotropic",
            "turbidity": sky.turbidity, "split": sky.split, "albedo": (cfg.albedo_input.number if cfg.albedo_input.number is not None
                       else cfg.albedo_input.describe()),
+           **sky_input_report(cfg),
            "skyview_directions": cfg.skyview_directions, "soft": cfg.soft,
            "height_above_ground_m": float(cfg.height_above_ground),
            "sky_view": _as_summary(_merge(None, vd)),

@@ -10,9 +10,11 @@ not cover every valid cell of the DEM is refused (one line, exit 2), as is a val
 option's range. A sample's month is its local month (the DEM's zone with ``--tz``, else local
 mean solar time at the DEM's longitude).
 
-``--linke-turbidity`` takes a number or twelve monthly numbers (each sample's clear sky with its
-month's value, as r.sun users loop over days with monthly Linke values). A constant raster is
-the number: the same bits.
+``--linke-turbidity`` takes the same four forms (each sample's clear sky with its month's value,
+as r.sun users loop over days with monthly Linke values; a raster: each cell's clear sky with
+its own value, as r.sun's ``linke`` map), and so do r.sun's real-sky clear-sky indices
+``--beam-index`` and ``--diffuse-index`` (its ``coeff_bh``, ``coeff_dh``: 0..1). A raster of
+one value over the DEM is that number: the same bits.
 
 References
 ----------
@@ -148,6 +150,25 @@ class SkyValue:
             raise UsageProblem(f"{self.option} {path}: values must be between {self.low:g} and "
                                f"{self.high:g}, found {seen.min():g}..{seen.max():g}")
         return out
+
+
+    def resolved(self, month: int, transform, crs, shape, valid: np.ndarray | None):
+        """The value of ``month`` on the grid as :meth:`on_grid` has it, a raster of one value
+        over the cells of ``valid`` being that value (a float: the number's path, its bits);
+        a raster's cells outside ``valid`` take the mean of those inside (they are voids)."""
+        v = self.on_grid(month, transform, crs, shape, valid)
+        if not isinstance(v, np.ndarray):
+            return v
+        inside = v if valid is None else v[valid]
+        inside = inside[~np.isnan(inside)]
+        if not inside.size:
+            return float(np.nanmean(v)) if np.isfinite(v).any() else self.low
+        lo, hi = float(inside.min()), float(inside.max())
+        if lo == hi:
+            return lo
+        if valid is not None:
+            v = np.where(valid, v, float(inside.mean()))
+        return np.ascontiguousarray(v, np.float64)
 
 
 def _exists(path: str) -> bool:

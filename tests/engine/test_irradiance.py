@@ -334,3 +334,100 @@ def test_an_instant_is_one_sample_of_the_sums(perez):
     for q in irr.BANDS:
         np.testing.assert_allclose(total[q], period[q], rtol=1e-6, atol=1e-3)
     assert irr.RSUN_NAMES["global"] == "glob_rad" and irr.RSUN_NAMES["incidence"] == "incidout"
+
+
+def test_real_sky_is_r_suns_indices():
+    """r.sun's coeff_bh, coeff_dh: DNI times kb, DHI times kd, the global horizontal
+    kb (GHI - DHI) + kd DHI; indices of 1 (or kb = kd) keep the sky's bits up to the factor."""
+    c = _plane_case()
+    sky = c["sky"]
+    real = irr.real_sky(sky, 0.4, 0.7)
+    np.testing.assert_array_equal(real.dni, 0.4 * sky.dni)
+    np.testing.assert_array_equal(real.dhi, 0.7 * sky.dhi)
+    np.testing.assert_allclose(real.ghi, 0.4 * (sky.ghi - sky.dhi) + 0.7 * sky.dhi, rtol=1e-15)
+    one = irr.real_sky(sky, 1.0, None)
+    for k in ("dni", "dhi", "ghi"):
+        np.testing.assert_array_equal(getattr(one, k), getattr(sky, k))
+    np.testing.assert_array_equal(irr.real_sky(sky, 0.5, 0.5).ghi, 0.5 * sky.ghi)
+    months = np.array([0.2, 0.9, 0.9, 0.3, 0.3, 0.3])        # one per sample
+    np.testing.assert_array_equal(irr.real_sky(sky, months, None).dni, months * sky.dni)
+
+
+def _cells_case(perez):
+    """Four cells on the open plane of ``_plane_case`` with Linke turbidities 1.5, 2.8, 4.4,
+    7.1 and beam indices 1, 0.3, 0.75, 0.5 (diffuse index 0.6): the ``CellSky`` of the suns of
+    its times at 34°N 118°W, 900 m."""
+    c = _plane_case()
+    times, zen = c["times"], c["zen"]
+    tl = np.array([[1.5, 2.8, 4.4, 7.1]])
+    kb = np.array([[1.0, 0.3, 0.75, 0.5]])
+    am, extra, cosz, consts = irr.ineichen_terms(times, zen, 34.0, -118.0, 900.0)
+    z, am_rel = irr.perez_terms(times, zen)
+    corr = irr.ineichen_correction(tl, consts)
+    raw = irr.clear_sky(times, zen, 34.0, -118.0, 900.0, "ineichen", 3.0)
+    cells = irr.CellSky(lambda k: (tl, corr, kb, 0.6), raw.ghi, raw.dni, raw.dhi, am, extra,
+                        cosz, consts, z, am_rel)
+    sky = irr.real_sky(raw, 0.6, 0.6)
+    if perez:
+        irr.with_perez(sky, times, zen)
+    suns = c["suns"]
+
+    def direct(s, timed):
+        k = [x.elevation for x in suns].index(s.elevation)
+        return np.full((1, 4), max(c["cos_i"][k], 0.0), np.float32)
+    vd = np.full((1, 4), c["vd"][0, 0], np.float32)
+    slopes = (np.full((1, 4), c["slopes"][0][0, 0]), np.full((1, 4), c["slopes"][1][0, 0]))
+    return c, tl, kb, cells, sky, direct, vd, slopes
+
+
+@pytest.mark.parametrize("perez", [False, True])
+def test_an_open_sky_per_cell_is_each_cells_numbers_sky(perez):
+    """``sums`` with a ``CellSky`` (each cell's Linke turbidity, beam index): each cell's
+    bands are those of the sums under pvlib's Ineichen sky with its numbers (``clear_sky``,
+    ``real_sky``, ``with_perez``), up to float rounding (the per-cell clear sky is pvlib's
+    formula evaluated in numba: within an ulp of pvlib's)."""
+    c, tl, kb, cells, sky, direct, vd, slopes = _cells_case(perez)
+    w = np.array([0.5, 1.0, 1.0, 2.0, 1.5, 1.0])
+    void = np.zeros((1, 4), bool)
+    stats = {}
+    got = irr.sums(direct, void, lambda: slopes, c["suns"], w, sky, vd, 0.25, perez=perez,
+                   cells=cells, stats=stats)
+    assert stats["samples_with_shadows"] == 5      # the sun down in the last: no sky at all
+    for j in range(4):
+        one = irr.real_sky(irr.clear_sky(c["times"], c["zen"], 34.0, -118.0, 900.0,
+                                         "ineichen", float(tl[0, j])), float(kb[0, j]), 0.6)
+        if perez:
+            irr.with_perez(one, c["times"], c["zen"])
+        want = irr.sums(direct, void, lambda: slopes, c["suns"], w, one, vd, 0.25,
+                        perez=perez)
+        for k in irr.BANDS:
+            np.testing.assert_allclose(got[k][0, j], want[k][0, j], rtol=1e-6, err_msg=k)
+    # the turbidities tell: the clearest cell's beam (per unit index) is the largest
+    per_index = got["beam"][0] / kb[0]
+    assert np.all(np.diff(per_index) < 0)
+    with pytest.raises(HillshadeError, match="summed, not stacked"):
+        irr.sums(direct, void, lambda: slopes, c["suns"], w, sky, vd, 0.25, per_time=True,
+                 cells=cells)
+
+
+def test_the_per_cell_clear_sky_is_pvlibs_ineichen():
+    """The kernel's clear sky of each cell against ``pvlib.clearsky.ineichen`` at its Linke
+    turbidity: GHI (the reflected light's sum with albedo 1 and 1 - Vd = 1), DHI (the
+    isotropic diffuse with Vd = 1) and DNI (the beam with a direct term of 1, float32)."""
+    from pvlib.clearsky import ineichen
+    c, tl, kb, cells, sky, direct, vd, slopes = _cells_case(False)
+    for k in range(5):                                  # the samples with the sun up
+        one = cells.sample(k)
+        one.at = (lambda t: lambda _k: (t, irr.ineichen_correction(t, cells.consts), 1.0,
+                                        1.0))(tl)
+        def run(v):
+            return irr.sums(lambda s, timed: np.ones((1, 4), np.float32),
+                            np.zeros((1, 4), bool), None, [c["suns"][k]], [1.0],
+                            irr.sky_at(sky, k), np.full((1, 4), v, np.float32), 1.0, cells=one)
+        dark, bright = run(0.0), run(1.0)
+        ref = ineichen(c["zen"][k], cells.am[k], tl[0], 900.0, cells.extra[k])
+        np.testing.assert_allclose(dark["reflected"][0], ref["ghi"], rtol=1e-7)
+        np.testing.assert_allclose(bright["diffuse"][0], ref["dhi"], rtol=1e-7)
+        np.testing.assert_allclose(dark["beam"][0], ref["dni"], rtol=1e-7)
+        assert np.all(dark["diffuse"][0] == 0.0) and np.all(bright["reflected"][0] == 0.0)
+        assert ref["ghi"][0] > ref["ghi"][-1] > 0.0

@@ -564,3 +564,33 @@ def test_no_output_may_be_the_ghi_series(tmp_path, runner):
                                                              "--ghi", str(csv), "--overwrite"])
         _one_line(r, 2, "is also an input")
         assert csv.read_bytes() == before
+
+
+@pytest.mark.slow
+def test_clear_sky_indices_scale_the_beam_and_the_diffuse(tmp_path, runner):
+    """r.sun's real sky (--beam-index kb, --diffuse-index kd: its coeff_bh, coeff_dh) on an
+    open plane of 25° facing 163°: the beam is kb times the clear sky's, the diffuse kd times,
+    the reflected light the real sky's global horizontal kb (GHI - DHI) + kd DHI times the
+    same albedo and view factor; index 0 leaves no beam and computes no shadow."""
+    dem = _dem(tmp_path, _plane(25.0, 163.0, n=30), d=10.0)
+    common = ["--date", "2026-06-21", "--tz", "America/Los_Angeles", "--step", "30min", "-q",
+              "--skyview-directions", "16"]
+    p, k, z = tmp_path / "p.tif", tmp_path / "k.tif", tmp_path / "z.tif"
+    _run(runner, [dem, p, "--report", tmp_path / "p.json"] + common)
+    _run(runner, [dem, k, "--beam-index", "0.37", "--diffuse-index", "0.71", "--report",
+                  tmp_path / "k.json"] + common)
+    _run(runner, [dem, z, "--beam-index", "0", "--report", tmp_path / "z.json"] + common)
+    pb = [read_band(p, b).astype(np.float64) for b in range(1, 5)]
+    kb = [read_band(k, b).astype(np.float64) for b in range(1, 5)]
+    sky = json.loads((tmp_path / "p.json").read_text())["open_sky"]
+    g, d = sky["ghi_wh_m2"], sky["dhi_wh_m2"]
+    assert pb[0].min() > 1000.0 and pb[2].min() > 10.0          # sunlit, reflecting
+    np.testing.assert_allclose(kb[0], 0.37 * pb[0], rtol=1e-6)
+    np.testing.assert_allclose(kb[1], 0.71 * pb[1], rtol=1e-6)
+    np.testing.assert_allclose(kb[2], pb[2] * (0.37 * (g - d) + 0.71 * d) / g, rtol=1e-6)
+    rep = json.loads((tmp_path / "k.json").read_text())
+    assert rep["beam_index"] == 0.37 and rep["diffuse_index"] == 0.71
+    assert rep["open_sky"]["dhi_wh_m2"] == pytest.approx(0.71 * d, rel=1e-12)
+    assert np.all(read_band(z, 1) == 0.0)
+    np.testing.assert_array_equal(read_band(z, 2), read_band(p, 2))
+    assert json.loads((tmp_path / "z.json").read_text())["samples_with_shadows"] == 0

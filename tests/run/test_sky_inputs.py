@@ -222,15 +222,210 @@ def test_monthly_linke_turbidity_gives_each_sample_its_month(tmp_path, runner, d
 @pytest.mark.parametrize("extra, words", [
     (["--albedo", "{raster}"], "does not cover the DEM"),
     (["--albedo", "{bad}"], "values must be between 0 and 1"),
-    (["--linke-turbidity", "{raster}"], "not supported yet"),
+    (["--linke-turbidity", "{raster}"], "does not cover the DEM"),
+    (["--linke-turbidity", "{turbid}"], "values must be between 1 and 10, found 11"),
     (["--linke-turbidity", "3,3"], "12 monthly numbers"),
+    (["--beam-index", "{bad}"], "--beam-index {bad}: values must be between 0 and 1"),
+    (["--diffuse-index", "{raster}"], "does not cover the DEM"),
+    (["--beam-index", "1.2"], "--beam-index must be between 0 and 1, got 1.2"),
+    (["--diffuse-index", "0.5,0.5"], "one number or 12 monthly numbers"),
+    (["--beam-index", "0.5", "--ghi", "{csv}"], "--beam-index and --diffuse-index do not go"),
+    (["--linke-turbidity", "{two}", "--window-size", "64"], "in memory only for now"),
+    (["--diffuse-index", "{half}", "--window-size", "64"], "in memory only for now"),
 ])
 def test_bad_sky_inputs_are_one_line_usage_errors(tmp_path, runner, dem, extra, words):
     small = write_geotiff(tmp_path / "small.tif", np.full((5, 5), 0.2, np.float32), T0, UTM11)
     bad = write_geotiff(tmp_path / "bad.tif", np.full((36, 44), 1.5, np.float32), T0, UTM11)
-    extra = [e.format(raster=small, bad=bad) for e in extra]
+    turbid = write_geotiff(tmp_path / "turbid.tif", np.full((36, 44), 11.0), T0, UTM11)
+    two = np.full((36, 44), 0.5)
+    two[:, 22:] = 0.8
+    half = write_geotiff(tmp_path / "half.tif", two, T0, UTM11)
+    two = write_geotiff(tmp_path / "two.tif", two * 4.0, T0, UTM11)   # Linke 2 and 3.2
+    csv = tmp_path / "sky.csv"
+    csv.write_text("time,ghi\n2027-01-29T00:00Z,0\n2027-02-04T00:00Z,0\n")
+    values = dict(raster=small, bad=bad, turbid=turbid, two=two, half=half, csv=csv)
+    extra = [e.format(**values) for e in extra]
+    words = words.format(**values)
     out = tmp_path / "o.tif"
     r = runner.invoke(cli, ["irradiance", str(dem), str(out)] + extra + SPAN)
     assert r.exit_code == 2, r.output
     assert words in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr
     assert not out.exists()
+
+
+# ---------------------------------------------------------------------------------------------
+# a Linke turbidity raster and r.sun's clear-sky indices (coeff_bh, coeff_dh): the sky per cell
+
+def _zones(tmp_path, name, west, east, cols=44):
+    """A raster on the DEM's grid of ``west`` on columns 0..21 and ``east`` on 22.. (float64:
+    the numbers' values); bilinear resampling changes the two columns at the seam only."""
+    a = np.full((36, cols), float(west))
+    a[:, 22:] = float(east)
+    return write_geotiff(tmp_path / name, a, T0, UTM11)
+
+
+# the bands of a zone of a raster and of the number's run differ by float rounding only: the
+# per-cell clear sky is pvlib's Ineichen formula in numba (exp within an ulp of numpy's), the
+# per-cell sums add each sample in order where the number's run sums the open sky with numpy
+ROUNDING = dict(rtol=1e-6, atol=1e-3)
+
+
+def _zone_equal(got, west, east):
+    np.testing.assert_allclose(got[..., :21], west[..., :21], **ROUNDING)
+    np.testing.assert_allclose(got[..., 23:], east[..., 23:], **ROUNDING)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("extra", [[], ["--perez", "--soft"]])
+def test_a_linke_raster_gives_each_cell_its_own_clear_sky(tmp_path, runner, dem, extra):
+    """A Linke turbidity raster of 2.3 west and 4.7 east: each zone's four bands are those of
+    the run with that number (isotropic, and Perez with each cell's own coefficients)."""
+    ras = _zones(tmp_path, "tl.tif", 2.3, 4.7)
+    outs = {}
+    for name, val in (("r", ras), ("lo", "2.3"), ("hi", "4.7")):
+        outs[name] = tmp_path / f"{name}.tif"
+        _run(runner, [dem, outs[name], "--linke-turbidity", val, "--report",
+                      tmp_path / f"{name}.json"] + extra + SPAN)
+    r, lo, hi = (_bands(outs[k])[0] for k in ("r", "lo", "hi"))
+    _zone_equal(r, lo, hi)
+    # the two turbidities differ enough to tell: the clearer sky's beam is larger
+    assert np.nanmean(lo[0]) > 1.05 * np.nanmean(hi[0])
+    seam = r[3, :, 21:23]
+    assert np.all((seam >= np.minimum(lo[3], hi[3])[:, 21:23] - 1e-3)
+                  & (seam <= np.maximum(lo[3], hi[3])[:, 21:23] + 1e-3))
+    rep = json.loads((tmp_path / "r.json").read_text())
+    assert "each cell its own, 2.30..4.70" in rep["turbidity"]
+    tags = _bands(outs["r"])[2]
+    assert tags["LINKE_TURBIDITY"].startswith("raster tl.tif")
+
+
+@pytest.mark.slow
+def test_a_constant_linke_raster_is_the_number(tmp_path, runner, dem):
+    """A raster of one value (on the DEM's grid, or a coarser geographic one resampled) gives
+    the bits of that number; twelve of them (a pattern) the bits of the twelve numbers."""
+    num, same, other = (tmp_path / f"{n}.tif" for n in ("num", "same", "other"))
+    _run(runner, [dem, num, "--linke-turbidity", "3.7"] + SPAN)
+    _run(runner, [dem, same, "--linke-turbidity",
+                  write_geotiff(tmp_path / "t.tif", np.full((36, 44), 3.7), T0, UTM11)] + SPAN)
+    with rasterio.open(dem) as ds:
+        from rasterio.warp import transform_bounds
+        w, s, e, n = transform_bounds(ds.crs, "EPSG:4326", *ds.bounds)
+    geo = write_geotiff(tmp_path / "g.tif", np.full((20, 20), 3.7),
+                        Affine((e - w + 0.02) / 20, 0, w - 0.01, 0, -(n - s + 0.02) / 20,
+                               n + 0.01), CRS.from_epsg(4326))
+    _run(runner, [dem, other, "--linke-turbidity", geo] + SPAN)
+    ref = _bands(num)[0]
+    np.testing.assert_array_equal(_bands(same)[0], ref)
+    np.testing.assert_array_equal(_bands(other)[0], ref)
+    lt = ["2.5", "4.5"] + ["3"] * 10
+    for m in range(1, 13):
+        write_geotiff(tmp_path / f"lt{m}.tif", np.full((36, 44), float(lt[m - 1])), T0, UTM11)
+    nums, pat = tmp_path / "nums.tif", tmp_path / "pat.tif"
+    _run(runner, [dem, nums, "--linke-turbidity", ",".join(lt)] + SPAN)
+    _run(runner, [dem, pat, "--linke-turbidity", tmp_path / "lt{month}.tif"] + SPAN)
+    np.testing.assert_array_equal(_bands(pat)[0], _bands(nums)[0])
+
+
+@pytest.mark.slow
+def test_monthly_linke_rasters_give_each_sample_its_months_raster(tmp_path, runner, dem):
+    """12 Linke rasters by a pattern: January's of two zones (2 | 5), February's of one value
+    (3.5): the run over January and February is the January days' runs with each zone's
+    number plus the February days' run with 3.5 (and --monthly's bands those parts)."""
+    for m in range(1, 13):
+        if m == 1:
+            _zones(tmp_path, "lt1.tif", 2.0, 5.0)
+        else:
+            write_geotiff(tmp_path / f"lt{m}.tif", np.full((36, 44), 3.5), T0, UTM11)
+    both = tmp_path / "b.tif"
+    _run(runner, [dem, both, "--linke-turbidity", tmp_path / "lt{month}.tif", "--monthly"]
+         + SPAN)
+    jan = {}
+    for v in ("2", "5"):
+        jan[v] = tmp_path / f"j{v}.tif"
+        _run(runner, [dem, jan[v], "--date", "2027-01-30", "--end-date", "2027-01-31",
+                      "--linke-turbidity", v] + SPAN[4:])
+    feb = tmp_path / "f.tif"
+    _run(runner, [dem, feb, "--date", "2027-02-01", "--end-date", "2027-02-02",
+                  "--linke-turbidity", "3.5"] + SPAN[4:])
+    b = _bands(both)[0]
+    f = _bands(feb)[0].astype(np.float64)
+    lo, hi = (_bands(jan[v])[0].astype(np.float64) for v in ("2", "5"))
+    _zone_equal(b[:4], lo + f, hi + f)
+    _zone_equal(b[4], lo[3], hi[3])                 # January's global band
+    np.testing.assert_allclose(b[5], f[3], **ROUNDING)   # February's
+
+
+@pytest.mark.slow
+def test_clear_sky_indices_of_one_are_the_clear_sky(tmp_path, runner, dem):
+    """--beam-index and --diffuse-index 1 (numbers, or rasters of 1) leave the bits of the run
+    without them."""
+    plain, ones, ras = tmp_path / "p.tif", tmp_path / "o.tif", tmp_path / "r.tif"
+    one = write_geotiff(tmp_path / "one.tif", np.ones((36, 44)), T0, UTM11)
+    _run(runner, [dem, plain] + SPAN)
+    _run(runner, [dem, ones, "--beam-index", "1", "--diffuse-index", "1"] + SPAN)
+    _run(runner, [dem, ras, "--beam-index", one, "--diffuse-index", one] + SPAN)
+    np.testing.assert_array_equal(_bands(ones)[0], _bands(plain)[0])
+    np.testing.assert_array_equal(_bands(ras)[0], _bands(plain)[0])
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("extra", [[], ["--perez"]])
+def test_clear_sky_index_rasters_weight_each_cell(tmp_path, runner, dem, extra):
+    """A beam index raster of 0.35 west and 0.8 east, a diffuse index raster of 0.9 west and
+    0.55 east, with a Linke raster (2.3 | 4.7): each zone's bands are those of the run with the
+    zone's three numbers (Perez: each cell's coefficients from its own real sky)."""
+    kb, kd = _zones(tmp_path, "kb.tif", 0.35, 0.8), _zones(tmp_path, "kd.tif", 0.9, 0.55)
+    tl = _zones(tmp_path, "tl.tif", 2.3, 4.7)
+    r, lo, hi = (tmp_path / f"{n}.tif" for n in ("r", "lo", "hi"))
+    _run(runner, [dem, r, "--beam-index", kb, "--diffuse-index", kd, "--linke-turbidity", tl]
+         + extra + SPAN)
+    _run(runner, [dem, lo, "--beam-index", "0.35", "--diffuse-index", "0.9",
+                  "--linke-turbidity", "2.3"] + extra + SPAN)
+    _run(runner, [dem, hi, "--beam-index", "0.8", "--diffuse-index", "0.55",
+                  "--linke-turbidity", "4.7"] + extra + SPAN)
+    _zone_equal(_bands(r)[0], _bands(lo)[0], _bands(hi)[0])
+    tags = _bands(r)[2]
+    assert "coeff_bh" in tags["BEAM_INDEX"] and tags["DIFFUSE_INDEX"].startswith("raster kd")
+
+
+@pytest.mark.slow
+def test_linke_and_index_rasters_with_context_and_instants(tmp_path, runner, dem):
+    """--context: a tile's bands are the bits of the whole DEM's run on its cells; --time: each
+    instant's bands per zone those of the numbers' instants."""
+    tl, kb = _zones(tmp_path, "tl.tif", 2.3, 4.7), _zones(tmp_path, "kb.tif", 0.35, 0.8)
+    with rasterio.open(dem) as ds:
+        z = ds.read(1)
+    tile = write_geotiff(tmp_path / "tile.tif", z[10:30, 15:40].copy(),
+                         T0 @ Affine.translation(15, 10), UTM11)
+    args = ["--linke-turbidity", tl, "--beam-index", kb, "--perez"] + SPAN
+    whole, part = tmp_path / "w.tif", tmp_path / "t.tif"
+    _run(runner, [dem, whole] + args)
+    _run(runner, [tile, part, "--context", dem] + args)
+    np.testing.assert_array_equal(_bands(part)[0], _bands(whole)[0][:, 10:30, 15:40])
+    inst = ["--time", "2027-01-30T20:00Z", "--time", "2027-02-01T22:30Z",
+            "--skyview-directions", "8", "-q"]
+    r, lo, hi = (tmp_path / f"i{n}.tif" for n in ("r", "lo", "hi"))
+    _run(runner, [dem, r, "--linke-turbidity", tl, "--beam-index", kb] + inst)
+    _run(runner, [dem, lo, "--linke-turbidity", "2.3", "--beam-index", "0.35"] + inst)
+    _run(runner, [dem, hi, "--linke-turbidity", "4.7", "--beam-index", "0.8"] + inst)
+    _zone_equal(_bands(r)[0], _bands(lo)[0], _bands(hi)[0])
+    assert _bands(r)[2]["LINKE_TURBIDITY"].startswith("raster tl.tif")
+
+
+@pytest.mark.parametrize("option", ["--linke-turbidity", "--beam-index", "--diffuse-index"])
+def test_the_sky_rasters_are_inputs_of_the_run(tmp_path, runner, dem, option):
+    """An output may not overwrite a raster the run reads (--overwrite or not), for the sums and
+    the instants alike; a pattern's twelve files are each an input."""
+    value = "3" if option == "--linke-turbidity" else "0.5"
+    ras = write_geotiff(tmp_path / "in.tif", np.full((36, 44), float(value)), T0, UTM11)
+    for m in range(1, 13):
+        write_geotiff(tmp_path / f"p{m}.tif", np.full((36, 44), float(value)), T0, UTM11)
+    for out, val, when in ((ras, ras, SPAN), (tmp_path / "p7.tif", tmp_path / "p{month}.tif",
+                                              SPAN),
+                           (ras, ras, ["--time", "2027-01-30T20:00Z", "-q"])):
+        r = runner.invoke(cli, ["irradiance", str(dem), str(out), option, str(val),
+                                "--overwrite"] + when)
+        assert r.exit_code == 2 and "is also an input" in r.stderr, r.output
+        assert len(r.stderr.strip().splitlines()) == 1
+    with rasterio.open(ras) as ds:
+        assert ds.count == 1 and float(ds.read(1)[0, 0]) == float(value)
