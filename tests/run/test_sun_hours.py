@@ -138,7 +138,8 @@ def test_one_day_is_named_as_r_sun_names_it(tmp_path, window_size):
 
 def test_monthly_bands_sum_to_the_total_and_equal_each_months_days(tmp_path):
     """--monthly: band 1 the bits of the run without it, then one band per month (YYYY-MM),
-    each the hours of its own days' runs, together the total (in windows: test_sun_hours_windows)."""
+    each the hours of its own days' runs, together the total (in windows:
+    test_sun_hours_windows)."""
     import rasterio
     dem = _dem(tmp_path, _pillar())
 
