@@ -405,7 +405,7 @@ def region_bands(jobs: Jobs, rd, rs, stats: dict, used: set, timer=None,
             bands = {k: (v / np.float32(jobs.hours)).astype(np.float32)
                      for k, v in bands.items()}
             months = [(v / np.float32(h)).astype(np.float32)
-                      for v, h in zip(months, jobs.month_hours)]
+                      for v, h in zip(months, jobs.month_hours or [])]
     return RegionMade(bands, vd, fig, cache.carried_bytes, months)
 
 
