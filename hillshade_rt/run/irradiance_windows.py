@@ -193,7 +193,24 @@ def resample_into(path: str, out: np.ndarray, transform, crs) -> None:
             raise read_error(path, exc) from None
 
 
-ROWS_AT_ONCE = 1 << 20         # cells of a grid checked at once
+CELLS_AT_ONCE = 1 << 20         # cells of a grid checked at once
+
+
+def _allocate(path: str, nbytes: int) -> None:
+    """The disk's blocks of the file ``path`` taken now (where the system can): a disk too
+    full for the albedo's grid is one line here, not a crash (SIGBUS) when a mapped page is
+    written."""
+    import errno
+    if not hasattr(os, "posix_fallocate"):
+        return
+    try:
+        with open(path, "r+b") as fh:
+            os.posix_fallocate(fh.fileno(), 0, os.path.getsize(path))
+    except OSError as exc:
+        if exc.errno in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG):
+            raise HillshadeError(f"{os.path.dirname(path)}: no room for an albedo raster on "
+                                 f"the DEM's grid ({nbytes:,} bytes): "
+                                 f"{exc.strerror or exc}") from None
 
 
 class AlbedoGrids:
@@ -219,6 +236,7 @@ class AlbedoGrids:
         rows, cols = geom.shape
         out = np.lib.format.open_memmap(dest, mode="w+", dtype=np.float64, shape=(rows, cols))
         try:
+            _allocate(dest, rows * cols * 8)
             resample_into(path, out, geom.transform, geom.crs)
             out.flush()
             self._check(value, path, out, src, origin)
@@ -231,7 +249,7 @@ class AlbedoGrids:
     def _check(value, path, out, src, origin) -> None:
         from ..errors import UsageProblem
         rows, cols = out.shape
-        step = max(1, ROWS_AT_ONCE // max(cols, 1))
+        step = max(1, CELLS_AT_ONCE // max(cols, 1))
         lacking, lo, hi = 0, math.inf, -math.inf
         with contextlib.ExitStack() as stack:
             rd = None

@@ -61,7 +61,8 @@ class _Hours:
     values: dict | None = None   # min, mean, max of the hours written in windows
     algo_stats: dict | None = None   # the windows' algorithm figures
     preview: tuple | None = None     # in windows: (heights, grid, hours) of every n-th cell
-    months: list | None = None       # --monthly: ((year, month), hours) each, in memory
+    months: list | None = None       # --monthly: ((year, month), hours) each (in windows:
+    #                                  the hours' min, mean, max, written already)
 
 
 def sun_hours(cfg: SunHoursConfig) -> dict:

@@ -2,6 +2,8 @@
 each region written into OUTPUT as it is made, or each region a Dask task (``--scheduler``) that
 writes its part, put together through a VRT at the end (as ``run.dask`` does for shadows). Every
 cell gets the bits a run in memory gives it (the same float32 additions, in the same order).
+With ``--monthly`` each region adds every sample's term to its month's float32 sum too
+(``engine.sun_sums.region_sums``), written as bands 2 on, as in memory.
 
 Used by ``run.sun_hours`` for a DEM larger than ``--max-memory``, with ``--window-size`` or
 ``--scheduler``, and for a ``--context`` tile (its regions cut to the tile, their windows read

@@ -406,3 +406,23 @@ def test_monthly_and_albedo_rasters_on_dask_give_the_bits_of_the_run_in_memory(
     assert p["mode"] == "dask" and p["tasks"] == p["regions"] == 2 * 2
     assert [m["month"] for m in got[1]["months"]] == ["2026-01", "2026-02"]
     assert sorted(os.listdir(tmp_path)) == ["dask.tif", "whole.tif"]
+
+
+def test_no_room_for_the_albedo_grid_is_one_line(tmp_path, dems, albedos, monkeypatch):
+    """A disk too full for the albedo raster on the DEM's grid (``posix_fallocate`` says
+    ENOSPC): one line, exit status 1, no output and no albedo files left."""
+    import errno
+
+    from hillshade_rt.run import irradiance_windows as iw
+
+    def full(fd, offset, length):
+        raise OSError(errno.ENOSPC, "No space left on device")
+    monkeypatch.setattr(iw.os, "posix_fallocate", full, raising=False)
+    out = tmp_path / "o.tif"
+    r = CliRunner().invoke(cli, ["irradiance", dems["real"], str(out), "--date",
+                                 MONTHS["date"], "--step", "3h", "--albedo",
+                                 albedos["raster"], "--window-size", "64", "-q"])
+    assert r.exit_code == 1, r.output
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and "no room for an albedo raster" in lines[0], lines
+    assert os.listdir(tmp_path) == []
