@@ -270,20 +270,34 @@ def region_sum(get, rs: RegionSuns, term, on_piece=None) -> np.ndarray:
     ``get(window)`` reads a window's heights (``windows.WindowCache.get``: what consecutive
     windows share is copied, not read again); ``on_piece(piece)`` after each piece (figures,
     progress)."""
+    return region_sums(get, rs, term, on_piece)[0]
+
+
+def region_sums(get, rs: RegionSuns, term, on_piece=None, group_of=None,
+                groups: int = 0) -> tuple[np.ndarray, list]:
+    """(:func:`region_sum`'s sum, and with ``group_of`` (each sun's group, 0..``groups`` - 1:
+    e.g. its month) each group's own sum of the same terms, float32, NaN on voids, in the
+    suns' order): every term added to the total and to its group's sum, as a run in memory
+    adds each sun's term to both (``sun-hours --monthly``)."""
     r0, r1, c0, c1 = rs.region
-    acc = None
+    acc, per = None, []
     for g in rs.groups:
         w0, _, v0, _ = g.window
         zg = get(g.window)
         if acc is None:
             acc = np.where(np.isnan(zg[r0 - w0:r1 - w0, c0 - v0:c1 - v0]), np.float32(np.nan),
                            np.float32(0.0))
+            per = [acc.copy() for _ in range(groups if group_of is not None else 0)]
         for i, p in g.pieces:
             a0, a1, b0, b1 = p.window
             z = np.ascontiguousarray(zg[a0 - w0:a1 - w0, b0 - v0:b1 - v0])
             g0, g1, h0, h1 = p.region
-            acc[g0 - r0:g1 - r0, h0 - c0:h1 - c0] += term(i, p, z)
-            del z
+            t = term(i, p, z)
+            at = (slice(g0 - r0, g1 - r0), slice(h0 - c0, h1 - c0))
+            acc[at] += t
+            if per:
+                per[group_of[i]][at] += t
+            del z, t
             if on_piece is not None:
                 on_piece(p)
-    return acc
+    return acc, per

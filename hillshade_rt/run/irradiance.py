@@ -807,6 +807,7 @@ def _in_windows(cfg: IrradianceConfig, ctx: RunContext, src, lighting, body,
                            lambda hs: _want(cfg, hs, area, None), limit=limit,
                            window_shape=wshape, scheduler=cfg.scheduler, area=area)
     return _Bands(None, None, win.curvature, win.processing, win.vd_from, win.vd_tags,
+                  months=win.months,      # (in windows: each month's figures, not its band)
                   figures={"bands": win.values, "sky_view": win.vd_values,
                            "algorithm_stats": win.algo_stats})
 
@@ -853,7 +854,8 @@ def _report(cfg: IrradianceConfig, ctx: RunContext, geom, sampled: _Samples, lit
            "seconds": ctx.seconds(), "version": __version__}
     rep.update(sampled.sun_info or {})
     if lit.months is not None:
-        rep["months"] = [{"month": f"{y}-{m:02d}", "hours": h, "global": _summary(v)}
+        rep["months"] = [{"month": f"{y}-{m:02d}", "hours": h,
+                          "global": v if isinstance(v, dict) else _summary(v)}
                          for (y, m), h, v in lit.months]
     if lit.vd_tags is not None:      # the version that made the file read
         rep["sky_view_made_by"] = lit.vd_tags.get("HILLSHADE_RT_VERSION")

@@ -20,6 +20,17 @@ those whose direct term the sums ask for. The regions' shape and the groups are 
 (``run.sun_hours_windows.plan_sums``); a window cell's bytes count the region's share too
 (the sums' float64 arrays, or the horizon march before them), the region lying inside its
 windows. The same helpers make a ``--context`` tile's bands in memory (``run.irradiance``).
+
+With --monthly, or --albedo by month, the samples are grouped by their local month as in memory
+(``engine.irradiance.Groups``): each region's sums give each month's global band too (bands 5
+on), each month's reflected light with its albedo. An albedo raster (or a month's, of a
+``{month}`` pattern) is resampled once to the whole output grid, by the very call a run in
+memory makes (``rasterio.warp.reproject`` of the raster to the grid, bilinear) into a float64
+file beside OUTPUT mapped in memory (``AlbedoGrids``: the pages the system's to drop, the
+disk holding 8 bytes a cell a month), and each region reads its cells from it. Resampling
+each region's window on its own would not do: GDAL's warper computes each cell's position
+in the raster from the window's origin (and interpolates positions along its chunks' rows),
+which changes the last bits of the bilinear weights, so of the albedo and of the bands.
 """
 
 from __future__ import annotations
@@ -28,7 +39,7 @@ import contextlib
 import math
 import os
 import threading
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -51,15 +62,19 @@ def memory_per_cell(lighting) -> int:
             + SUMS_BYTES_PER_CELL)
 
 
-def window_bytes_per_cell(lighting) -> int:
+def window_bytes_per_cell(lighting, months: int = 0, albedo_rasters: int = 0) -> int:
     """Bytes per cell of a group's window: lighting it, the group's heights
     (``engine.sun_sums.BYTES_PER_GROUP_CELL``) and the region's share (the region lies inside
-    its windows): its sums, or the horizon march of its sky view before them, the larger."""
+    its windows): its sums, or the horizon march of its sky view before them, the larger; with
+    ``months`` groups of samples (--monthly, --albedo by month) the float64 running sums kept
+    at each group's start and each month's float32 band, and the ``albedo_rasters`` (float64)
+    a region reads."""
     from ..engine.sun_sums import BYTES_PER_GROUP_CELL
     from ..engine.windows import bytes_per_cell
     from .horizon_windows import BYTES_PER_REGION_CELL
+    groups = (16 + 4 * months) if months else 0
     return (bytes_per_cell(lighting.algorithm, "sun", lighting.soft) + BYTES_PER_GROUP_CELL
-            + max(SUMS_BYTES_PER_CELL, BYTES_PER_REGION_CELL))
+            + max(SUMS_BYTES_PER_CELL + groups + 8 * albedo_rasters, BYTES_PER_REGION_CELL))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -126,6 +141,185 @@ def add_direct(job, out: np.ndarray, origin, piece, z, stats, used, carry=None) 
 
 
 # ---------------------------------------------------------------------------------------------
+# the albedo's rasters on the output's grid, and the samples' months
+
+@dataclass(frozen=True)
+class AlbedoGrid:
+    """One albedo raster resampled to the output's whole grid: a float64 ``.npy`` file
+    (``path``) of that grid, whose first cell is the raster's ``origin`` (row, col) (picklable:
+    a Dask task reads its regions' cells from it)."""
+
+    path: str
+    origin: tuple = (0, 0)
+
+    def cut(self, region) -> np.ndarray:
+        """The albedo of ``region`` (r0, r1, c0, c1), float64 (a copy)."""
+        r0, r1, c0, c1 = region
+        o0, o1 = self.origin
+        return np.array(np.load(self.path, mmap_mode="r")[r0 - o0:r1 - o0, c0 - o1:c1 - o1])
+
+
+def albedo_of(a, region):
+    """The albedo of ``region``: a number as it is, an :class:`AlbedoGrid` its cells."""
+    return a.cut(region) if isinstance(a, AlbedoGrid) else a
+
+
+def resample_into(path: str, out: np.ndarray, transform, crs) -> None:
+    """Band 1 of the raster ``path`` put on ``out``'s grid (``transform``, ``crs``) bilinearly,
+    by ``run.sky_inputs.resample``'s own call (the same source, options and destination: a
+    float64 array of the whole grid, here one mapped from a file), so that every cell gets the
+    bits a run in memory gives it; NaN where the raster has no value."""
+    import contextlib
+
+    import rasterio
+    from rasterio.warp import Resampling, reproject
+
+    from ..errors import UsageProblem
+    from ..io.gdal import open_raster, read_error
+    out[...] = np.nan
+    with contextlib.ExitStack() as stack:
+        try:
+            src = open_raster(path, stack)
+        except HillshadeError as exc:
+            raise UsageProblem(str(exc)) from None
+        if src.crs is None or src.transform.is_identity:
+            raise UsageProblem(f"{path}: the raster has no georeferencing (a CRS and a "
+                               "geotransform): it cannot be put on the DEM's grid")
+        try:
+            reproject(rasterio.band(src, 1), out, src_nodata=src.nodata,
+                      dst_transform=transform, dst_crs=crs if crs is not None else src.crs,
+                      dst_nodata=np.nan, resampling=Resampling.bilinear)
+        except Exception as exc:      # noqa: BLE001 -- GDAL's read errors, one line
+            raise read_error(path, exc) from None
+
+
+CELLS_AT_ONCE = 1 << 20         # cells of a grid checked at once
+
+
+def _allocate(path: str, nbytes: int) -> None:
+    """The disk's blocks of the file ``path`` taken now (where the system can): a disk too
+    full for the albedo's grid is one line here, not a crash (SIGBUS) when a mapped page is
+    written."""
+    import errno
+    if not hasattr(os, "posix_fallocate"):
+        return
+    try:
+        with open(path, "r+b") as fh:
+            os.posix_fallocate(fh.fileno(), 0, os.path.getsize(path))
+    except OSError as exc:
+        if exc.errno in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG):
+            raise HillshadeError(f"{os.path.dirname(path)}: no room for an albedo raster on "
+                                 f"the DEM's grid ({nbytes:,} bytes): "
+                                 f"{exc.strerror or exc}") from None
+
+
+class AlbedoGrids:
+    """The albedo rasters of a run in windows on the output's grid (``geom``'s: the DEM's, or
+    the --context tile's, whose first cell is the source's ``origin``): each month's of a
+    pattern, or the one raster's, resampled once (:func:`resample_into`) into a folder beside
+    OUTPUT, removed on :meth:`close`. Checked as ``sky_inputs.SkyValue.on_grid`` checks them
+    in memory, with its words: every valid cell of the DEM covered (its heights read band by
+    band of rows), every value within the option's range."""
+
+    def __init__(self, output: str):
+        import tempfile
+        self.folder = tempfile.mkdtemp(dir=os.path.dirname(os.path.abspath(output)),
+                                       prefix="." + os.path.basename(output) + ".albedo-")
+        self.grids: dict = {}
+
+    def grid(self, value, month: int, geom, src, origin) -> AlbedoGrid:
+        """The :class:`AlbedoGrid` of ``value`` (a ``SkyValue`` of rasters) for ``month``."""
+        path = value.path if value.path is not None else value.pattern.format(month=month)
+        if path in self.grids:
+            return self.grids[path]
+        dest = os.path.join(self.folder, f"albedo_{len(self.grids)}.npy")
+        rows, cols = geom.shape
+        out = np.lib.format.open_memmap(dest, mode="w+", dtype=np.float64, shape=(rows, cols))
+        try:
+            _allocate(dest, rows * cols * 8)
+            resample_into(path, out, geom.transform, geom.crs)
+            out.flush()
+            self._check(value, path, out, src, origin)
+        finally:
+            del out
+        self.grids[path] = AlbedoGrid(dest, tuple(origin))
+        return self.grids[path]
+
+    @staticmethod
+    def _check(value, path, out, src, origin) -> None:
+        from ..errors import UsageProblem
+        rows, cols = out.shape
+        step = max(1, CELLS_AT_ONCE // max(cols, 1))
+        lacking, lo, hi = 0, math.inf, -math.inf
+        with contextlib.ExitStack() as stack:
+            rd = None
+            for r0 in range(0, rows, step):
+                r1 = min(rows, r0 + step)
+                a = np.asarray(out[r0:r1])
+                gap = np.isnan(a)
+                if gap.any():
+                    if rd is None:
+                        rd = stack.enter_context(src.reader())
+                    z = np.empty(a.shape, np.float32)
+                    rd.read((origin[0] + r0, origin[0] + r1, origin[1], origin[1] + cols), z)
+                    lacking += int((gap & ~np.isnan(z)).sum())
+                seen = a[~gap]
+                if seen.size:
+                    lo, hi = min(lo, float(seen.min())), max(hi, float(seen.max()))
+        if lacking:
+            raise UsageProblem(f"{value.option} {path}: the raster does not cover the DEM "
+                               f"({lacking} of its cells lie outside or on its nodata)")
+        if lo < value.low or hi > value.high:
+            raise UsageProblem(f"{value.option} {path}: values must be between "
+                               f"{value.low:g} and {value.high:g}, found {lo:g}..{hi:g}")
+
+    def close(self) -> None:
+        import shutil
+        shutil.rmtree(self.folder, ignore_errors=True)
+
+
+@dataclass
+class MonthGroups:
+    """The samples' groups as a run in memory makes them (``run.irradiance._albedo_groups``):
+    ``index`` each sample's month (0, 1, ...), ``keys`` the months' (year, month), ``hours``
+    each month's hours, and whether each month's global band is asked (``bands``, --monthly)."""
+
+    index: np.ndarray
+    keys: list
+    hours: list
+    bands: bool
+
+
+def month_groups(cfg, sampled) -> MonthGroups | None:
+    """The samples' months where --monthly or a monthly albedo asks for them, else None."""
+    from .sky_inputs import month_keys
+    a = cfg.albedo_input
+    if not (cfg.monthly or a.by_month):
+        return None
+    keys = month_keys(sampled.times, sampled.tz, sampled.site.lon)
+    order = list(dict.fromkeys(keys))
+    index = (np.array([order.index(k) for k in keys], np.int64) if keys
+             else np.zeros(0, np.int64))
+    hours = np.bincount(index, weights=np.asarray(sampled.weights, np.float64),
+                        minlength=len(order))
+    return MonthGroups(index, order, [float(h) for h in hours], bool(cfg.monthly))
+
+
+def albedo_inputs(cfg, groups: MonthGroups | None, grids, geom, src, origin) -> tuple:
+    """(the albedo of the whole period, each group's albedo or None) as a run in memory has
+    them (numbers, or :class:`AlbedoGrid` where it has rasters; ``grids`` the run's
+    :class:`AlbedoGrids`)."""
+    a = cfg.albedo_input
+
+    def on(month):
+        return a.value_of_month(month) if not a.rasters else grids.grid(a, month, geom, src,
+                                                                         origin)
+    if groups is None or not a.by_month:
+        return on(1), None
+    return None, [on(m) for _, m in groups.keys]
+
+
+# ---------------------------------------------------------------------------------------------
 # a region's bands
 
 @dataclass
@@ -134,8 +328,11 @@ class Jobs:
     ``WindowLighting`` of the beam, ``horizons`` the ``HorizonJob`` of Dozier's Vd (None: read
     from ``vd_file``, a ``sky_view_file.VdFile`` whose first cell is the raster's
     ``vd_origin``), the samples (``suns``, their ``weights`` in hours, the open ``sky`` at
-    each), ``albedo``, ``soft``, ``perez``, and ``hours``: with --mean the period's hours (the
-    bands divided by them), else None."""
+    each), ``albedo`` (a number or an :class:`AlbedoGrid`), ``soft``, ``perez``, ``hours``:
+    with --mean the period's hours (the bands divided by them), else None; ``groups`` the
+    samples' months (:class:`MonthGroups`, or None), ``group_albedo`` each month's albedo (or
+    None: ``albedo``), ``month_hours`` with --mean each month's hours (its band divided by
+    them)."""
 
     light: object
     horizons: object
@@ -148,6 +345,9 @@ class Jobs:
     perez: bool = False
     hours: float | None = None
     vd_origin: tuple = (0, 0)
+    groups: MonthGroups | None = None
+    group_albedo: list | None = None
+    month_hours: list | None = None
 
     def casting(self) -> list[int]:
         """The samples whose direct term the sums ask for, in order."""
@@ -159,12 +359,14 @@ class Jobs:
 @dataclass
 class RegionMade:
     """A region's bands (``engine.irradiance.BANDS``: float32, NaN voids), its Vd, the horizon
-    march's figures and the bytes its window cache copied instead of reading."""
+    march's figures, the bytes its window cache copied instead of reading, and with --monthly
+    each month's global band (float32, NaN voids)."""
 
     bands: dict
     vd: np.ndarray
     figures: object
     bytes_carried: int = 0
+    months: list = field(default_factory=list)
 
 
 def region_bands(jobs: Jobs, rd, rs, stats: dict, used: set, timer=None,
@@ -209,13 +411,20 @@ def region_bands(jobs: Jobs, rd, rs, stats: dict, used: set, timer=None,
                     if on_piece is not None:
                         on_piece(p)
             return out
+        mg, groups = jobs.groups, None
+        if mg is not None:
+            groups = ir.Groups(mg.index, None if jobs.group_albedo is None else
+                               [albedo_of(a, region) for a in jobs.group_albedo], mg.bands)
         bands = ir.sums(direct, void, slopes, jobs.suns, jobs.weights, jobs.sky, vd,
-                        jobs.albedo, soft=jobs.soft, perez=jobs.perez, stats=stats,
-                        timer=timer)
+                        albedo_of(jobs.albedo, region), soft=jobs.soft, perez=jobs.perez,
+                        stats=stats, timer=timer, groups=groups)
+        months = bands.pop("groups", [])
         if jobs.hours is not None:        # --mean (÷ hours), --daily-mean (÷ days)
             bands = {k: (v / np.float32(jobs.hours)).astype(np.float32)
                      for k, v in bands.items()}
-    return RegionMade(bands, vd, fig, cache.carried_bytes)
+            months = [(v / np.float32(h)).astype(np.float32)
+                      for v, h in zip(months, jobs.month_hours or [])]
+    return RegionMade(bands, vd, fig, cache.carried_bytes, months)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -226,7 +435,8 @@ class WindowedBands:
     """What a windowed irradiance run made (its bands written already): each band's and the
     Vd's (min, mean, max) (``horizon_windows.ValueStats.as_dict``), the curvature as applied,
     the algorithm's figures, how it ran (the report's ``processing``), where the Vd came from
-    and the tags of a --sky-view file read."""
+    and the tags of a --sky-view file read; with --monthly each month's ((year, month), hours,
+    its global band's (min, mean, max)), in order."""
 
     values: dict
     vd_values: dict
@@ -235,6 +445,7 @@ class WindowedBands:
     processing: dict
     vd_from: str = "computed"
     vd_tags: dict | None = None
+    months: list | None = None
 
 
 def bands_in_windows(cfg, ctx, src, lighting, body, sampled, tags: dict, band_meta: list,
@@ -246,21 +457,34 @@ def bands_in_windows(cfg, ctx, src, lighting, body, sampled, tags: dict, band_me
     (``suns``, ``weights``, ``sky``, ``work``, ``hours``); ``tags`` the output's,
     ``band_meta`` each band's (description, tags); ``want(hs)`` the Vd file's tags for the
     horizon Shader ``hs`` (``sky_view_file.dozier_tags``). ``limit``: --max-memory in bytes,
-    ``window_shape``: --window-size. Raises ``AllNodata`` (before anything is written) for a
-    DEM of voids only, ``HillshadeError`` for a memory limit too small for one window."""
-    from ..errors import UsageProblem
+    ``window_shape``: --window-size. With --monthly each month's global band after the four
+    (``band_meta``'s units); an albedo by month, or rasters, as in memory (the rasters
+    resampled to the output's grid once, :class:`AlbedoGrids`, removed at the end). Raises
+    ``AllNodata`` (before anything is written) for a DEM of voids only, ``HillshadeError`` for
+    a memory limit too small for one window."""
     from .local import bounded_gdal_cache
-    a = cfg.albedo_input
-    if cfg.monthly or (a is not None and (a.by_month or a.rasters)):
-        raise UsageProblem("--monthly, and --albedo by month or as a raster, run in memory "
-                           "only: not in windows (--max-memory, --window-size, --scheduler)")
-    with bounded_gdal_cache():
-        return _bands_in_windows(cfg, ctx, src, lighting, body, sampled, tags, band_meta, want,
-                                 limit, window_shape, scheduler, area)
+    grids = AlbedoGrids(cfg.output) if cfg.albedo_input.rasters else None
+    try:
+        with bounded_gdal_cache():
+            return _bands_in_windows(cfg, ctx, src, lighting, body, sampled, tags, band_meta,
+                                     want, limit, window_shape, scheduler, area, grids)
+    finally:
+        if grids is not None:
+            grids.close()
+
+
+def month_meta(band_meta: list, groups: MonthGroups | None) -> list:
+    """The months' bands' (description, tags) after the four (--monthly), as the run in memory
+    writes them: YYYY-MM, the bands' units, NAME global, the month's HOURS."""
+    if groups is None or not groups.bands:
+        return []
+    unit = band_meta[0][1]["UNITS"]
+    return [(f"{y}-{m:02d}", {"UNITS": unit, "NAME": "global", "HOURS": f"{h:g}"})
+            for (y, m), h in zip(groups.keys, groups.hours)]
 
 
 def _bands_in_windows(cfg, ctx, src, lighting, body, sampled, tags, band_meta, want, limit,
-                      window_shape, scheduler, area) -> WindowedBands:
+                      window_shape, scheduler, area, grids) -> WindowedBands:
     from ..engine.windows import block_stats
     from ..engine import irradiance as ir
     from ..io import BandWriter
@@ -286,21 +510,30 @@ def _bands_in_windows(cfg, ctx, src, lighting, body, sampled, tags, band_meta, w
         vd_file = None
         if cfg.sky_view is not None:
             vd_file = open_vd(cfg.sky_view, geom, want(hs))
+        origin = (0, 0) if area is None else (area.bounds[0], area.bounds[2])
+        groups = month_groups(cfg, sampled)
+        albedo, group_albedo = albedo_inputs(cfg, groups, grids, geom, src, origin)
+        per = 1.0 if cfg.mean else 24.0
+        mean = cfg.mean or cfg.daily_mean
         jobs = Jobs(job, None if vd_file is not None else hjob, vd_file, sampled.suns,
-                    np.asarray(sampled.weights, np.float64), sampled.sky,
-                    cfg.albedo_input.number, lighting.soft, cfg.perez,
-                    (float(sampled.hours) / (1.0 if cfg.mean else 24.0)
-                     if cfg.mean or cfg.daily_mean else None),
-                    (0, 0) if area is None else (area.bounds[0], area.bounds[2]))
+                    np.asarray(sampled.weights, np.float64), sampled.sky, albedo,
+                    lighting.soft, cfg.perez, float(sampled.hours) / per if mean else None,
+                    origin, groups, group_albedo,
+                    [h / per for h in groups.hours] if mean and groups is not None else None)
+        mmeta = month_meta(band_meta, groups)
         casting = [sampled.suns[k] for k in jobs.casting()]
         whole = (memory_per_cell(lighting) if window_shape is None and scheduler is None
                  and area is None else None)
-        regs, mem = plan_sums(job, casting, bstats, limit, window_bytes_per_cell(lighting),
+        rasters = (1 if isinstance(albedo, AlbedoGrid) else 0) + sum(
+            isinstance(a, AlbedoGrid) for a in group_albedo or [])
+        regs, mem = plan_sums(job, casting, bstats, limit,
+                              window_bytes_per_cell(lighting, len(mmeta), rasters),
                               window_shape, area, whole)
         tally.plan(regs)
         if sampled.work:
             job.warm_up(sampled.work[0])
     values = {k: ValueStats() for k in ir.BANDS}
+    month_values = [ValueStats() for _ in mmeta]
     vd_values, fig, algo_stats, used = ValueStats(), Figures(), {}, set()
     pv = bstats.preview if area is None else None
     n = bstats.stride
@@ -308,14 +541,14 @@ def _bands_in_windows(cfg, ctx, src, lighting, body, sampled, tags, band_meta, w
     vd_tags = want(hs) if cfg.sky_view_out is not None else None
     if scheduler is not None:
         with timer("compute"):
-            _on_dask(cfg, scheduler, jobs, regs, tags, band_meta, vd_tags, values, vd_values,
-                     fig, algo_stats, used, tally, pv_global, n)
+            _on_dask(cfg, scheduler, jobs, regs, tags, band_meta + mmeta, vd_tags, values,
+                     vd_values, fig, algo_stats, used, tally, pv_global, n, month_values)
         mode = "dask"
     else:
         from ..pictures.preview import every_nth
         bar = progress_total(tally.windows, ro.quiet, "hillshade-rt irradiance", "window",
                              ro.progress)
-        w = BandWriter(cfg.output, geom, len(ir.BANDS), "float32", -9999.0, tags,
+        w = BandWriter(cfg.output, geom, len(ir.BANDS) + len(mmeta), "float32", -9999.0, tags,
                        overview_resampling="average", overwrite=ro.overwrite, fmt=ro.fmt,
                        co=ro.creation_options)
         vw = vd_writer(cfg.sky_view_out, geom, vd_tags, ro) if vd_tags is not None else None
@@ -337,6 +570,10 @@ def _bands_in_windows(cfg, ctx, src, lighting, body, sampled, tags, band_meta, w
                         values[k].add(v)
                         v[np.isnan(v)] = -9999.0
                         w.write(i + 1, v, *band_meta[i], window=at)
+                    for i, v in enumerate(made.months):
+                        month_values[i].add(v)
+                        v[np.isnan(v)] = -9999.0
+                        w.write(len(ir.BANDS) + i + 1, v, *mmeta[i], window=at)
                     if vw is not None:
                         write_vd_window(vw, made.vd, at)
                 del made
@@ -356,7 +593,9 @@ def _bands_in_windows(cfg, ctx, src, lighting, body, sampled, tags, band_meta, w
     return WindowedBands({k: v.as_dict() for k, v in values.items()}, vd_values.as_dict(),
                          curvature_report(job.curvature, used, job.body, job.k), algo_stats,
                          processing, "computed" if vd_file is None else "read",
-                         None if vd_file is None else vd_file.tags)
+                         None if vd_file is None else vd_file.tags,
+                         [(k, h, v.as_dict()) for k, h, v in
+                          zip(groups.keys, groups.hours, month_values)] if mmeta else None)
 
 
 def _preview(ro, src, bstats, pv_global) -> None:
@@ -376,9 +615,10 @@ def _preview(ro, src, bstats, pv_global) -> None:
 
 def region_task(jobs: Jobs, rs, paths: dict, stride: int | None = None) -> dict:
     """The Dask task: the bands of region ``rs`` (:func:`region_bands`, its windows read
-    here), written to ``paths["bands"]`` (a GeoTIFF of the region, four bands, -9999 nodata)
-    and its Vd to ``paths["vd"]`` when there is one. Returns its figures: (min, sum, count,
-    max) of each band and of Vd, the horizon march's, the algorithm's, the curvature used,
+    here), written to ``paths["bands"]`` (a GeoTIFF of the region, four bands and with
+    --monthly each month's, -9999 nodata) and its Vd to ``paths["vd"]`` when there is one.
+    Returns its figures: (min, sum, count, max) of each band (the months' in "months") and of
+    Vd, the horizon march's, the algorithm's, the curvature used,
     bytes read and carried, and the every-``stride``-th cells of the global band for a
     preview."""
     import rasterio
@@ -407,23 +647,26 @@ def region_task(jobs: Jobs, rs, paths: dict, stride: int | None = None) -> dict:
         sub, at = every_nth(made.bands["global"], r0, c0, stride)
         shade = (sub.copy(), at)
     src = jobs.light.source
-    write_part(paths["bands"], np.stack([np.where(np.isnan(made.bands[k]), np.float32(-9999.0),
-                                                  made.bands[k]) for k in ir.BANDS]),
+    months = [figures(v) for v in made.months]
+    write_part(paths["bands"], np.stack([np.where(np.isnan(v), np.float32(-9999.0), v)
+                                         for v in [made.bands[k] for k in ir.BANDS]
+                                         + made.months]),
                src, r0, c0, -9999.0, predictor=3)
     if "vd" in paths:
         write_part(paths["vd"], np.where(np.isnan(made.vd), np.float32(-9999.0), made.vd),
                    src, r0, c0, -9999.0, predictor=3)
-    return {"values": values, "vd": figures(made.vd), "figures": made.figures,
+    return {"values": values, "months": months, "vd": figures(made.vd),
+            "figures": made.figures,
             "algorithm_stats": stats, "curvature_used": used, "bytes_read": nread,
             "bytes_carried": made.bytes_carried, "shade": shade}
 
 
 def _on_dask(cfg, scheduler, jobs: Jobs, regs, tags, band_meta, vd_tags, values, vd_values,
-             fig, algo_stats, used, tally, pv_global, stride) -> None:
+             fig, algo_stats, used, tally, pv_global, stride, month_values=()) -> None:
     """Every region a task (:func:`region_task`); their parts put together through VRTs into
-    ``cfg.output`` (as the in-memory run's file: four float32 bands, -9999 nodata, the same
-    tags and descriptions) and, with ``vd_tags``, into --sky-view-out."""
-    from ..engine import irradiance as ir
+    ``cfg.output`` (as the in-memory run's file: four float32 bands, and a band per month of
+    ``band_meta`` after them, -9999 nodata, the same tags and descriptions) and, with
+    ``vd_tags``, into --sky-view-out."""
     from ..io.vrt import VrtSource
     from .dask import DaskSession
     from .horizon_windows import VrtOutput
@@ -456,6 +699,8 @@ def _on_dask(cfg, scheduler, jobs: Jobs, regs, tags, band_meta, vd_tags, values,
                 done.append(parts[f.key])
                 for k, v in res["values"].items():
                     values[k].merge(v)
+                for vs, v in zip(month_values, res["months"]):
+                    vs.merge(v)
                 vd_values.merge(res["vd"])
                 fig.add(res["figures"])
                 tally.take(res, used, algo_stats, pv_global)
@@ -472,7 +717,7 @@ def _on_dask(cfg, scheduler, jobs: Jobs, regs, tags, band_meta, vd_tags, values,
                         [d for d, _ in band_meta], tags, band_tags=[t for _, t in band_meta],
                         resampling="average", overwrite=ro.overwrite, fmt=ro.fmt,
                         co=ro.creation_options)
-        out.write([sources("bands", i + 1) for i in range(len(ir.BANDS))])
+        out.write([sources("bands", i + 1) for i in range(len(band_meta))])
         tally.extra = session.info(workers)
 
 

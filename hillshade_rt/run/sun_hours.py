@@ -61,7 +61,8 @@ class _Hours:
     values: dict | None = None   # min, mean, max of the hours written in windows
     algo_stats: dict | None = None   # the windows' algorithm figures
     preview: tuple | None = None     # in windows: (heights, grid, hours) of every n-th cell
-    months: list | None = None       # --monthly: ((year, month), hours) each, in memory
+    months: list | None = None       # --monthly: ((year, month), hours) each (in windows:
+    #                                  the hours' min, mean, max, written already)
 
 
 def sun_hours(cfg: SunHoursConfig) -> dict:
@@ -106,14 +107,15 @@ def sun_hours(cfg: SunHoursConfig) -> dict:
             tags = _tags(cfg, days, samples)
             if valid:
                 with bounded_gdal_cache():
-                    lit = _in_windows(cfg, ctx, area.source, lighting, days.req, samples,
+                    lit = _in_windows(cfg, ctx, area.source, lighting, days, samples,
                                       tags, limit, wshape, area)
     else:
         forced = wshape is not None or cfg.scheduler is not None
         with ctx.timer("read"):     # opened (not read) once, for its size and then its values
             src = cfg.read.open(cfg.dem, windows=forced)
         with src:
-            windowed = forced or needs_windows(src, limit, memory_per_cell(lighting))
+            windowed = forced or needs_windows(
+                src, limit, memory_per_cell(lighting, len(_months(days)) if cfg.monthly else 0))
             d = src
             if windowed:
                 with ctx.timer("prepare"):
@@ -121,7 +123,7 @@ def sun_hours(cfg: SunHoursConfig) -> dict:
                 tags = _tags(cfg, days, samples)
                 try:
                     with bounded_gdal_cache():
-                        lit = _in_windows(cfg, ctx, src, lighting, days.req, samples, tags,
+                        lit = _in_windows(cfg, ctx, src, lighting, days, samples, tags,
                                           limit, wshape)
                 except AllNodata:   # (raised before the output is opened)
                     lit = None
@@ -244,18 +246,27 @@ def _months(days: _Days) -> list:
     return out
 
 
-def _in_windows(cfg: SunHoursConfig, ctx: RunContext, src, lighting, req, samples: _Samples,
-                tags: dict, limit: int, wshape, area=None) -> _Hours:
-    """The hours in windows (``run.sun_hours_windows``: the same float32 sums as in memory),
-    written to OUTPUT as they are made. ``area``: a ``--context`` tile of ``src``."""
-    if cfg.monthly:
-        raise UsageProblem("sun-hours --monthly runs in memory only: not in windows "
-                           "(--max-memory, --window-size, --scheduler, --context)")
+def _in_windows(cfg: SunHoursConfig, ctx: RunContext, src, lighting, days: _Days,
+                samples: _Samples, tags: dict, limit: int, wshape, area=None) -> _Hours:
+    """The hours in windows (``run.sun_hours_windows``: the same float32 sums as in memory,
+    with --monthly each month's too), written to OUTPUT as they are made. ``area``: a
+    ``--context`` tile of ``src``."""
     from .sun_hours_windows import hours_in_windows
-    win = hours_in_windows(cfg, ctx, src, lighting, req, samples.work, tags, limit=limit,
-                           window_shape=wshape, scheduler=cfg.scheduler, area=area)
+    months = None
+    if cfg.monthly:       # the months' keys, each lit sample's month (as _light adds them)
+        import numpy as np
+
+        from .sky_inputs import month_keys
+        keys = _months(days)
+        of = month_keys([s.time for s, _ in samples.work], samples.tz, samples.site.lon)
+        months = (keys, np.array([keys.index(k) for k in of], np.int64))
+    win = hours_in_windows(cfg, ctx, src, lighting, days.req, samples.work, tags, limit=limit,
+                           window_shape=wshape, scheduler=cfg.scheduler, area=area,
+                           months=months)
     return _Hours(None, win.curvature, processing=win.processing, values=win.values.as_dict(),
-                  algo_stats=win.algo_stats, preview=win.preview)
+                  algo_stats=win.algo_stats, preview=win.preview,
+                  months=None if win.months is None else
+                  [(k, v.as_dict()) for k, v in win.months])
 
 
 def _tags(cfg: SunHoursConfig, days: _Days, samples: _Samples) -> dict:
@@ -335,7 +346,8 @@ def _report(cfg: SunHoursConfig, ctx: RunContext, d, days: _Days, samples: _Samp
            "soft": cfg.soft, "self_shadow": cfg.self_shadow,
            "height_above_ground_m": float(cfg.height_above_ground),
            "hours": figures,
-           **({"months": [{"month": f"{y}-{m:02d}", "hours": _stats(v)}
+           **({"months": [{"month": f"{y}-{m:02d}",
+                           "hours": v if isinstance(v, dict) else _stats(v)}
                           for (y, m), v in lit.months]}
               if lit is not None and lit.months is not None else {}),
            "curvature": None if lit is None else lit.curvature,

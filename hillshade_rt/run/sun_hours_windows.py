@@ -2,6 +2,8 @@
 each region written into OUTPUT as it is made, or each region a Dask task (``--scheduler``) that
 writes its part, put together through a VRT at the end (as ``run.dask`` does for shadows). Every
 cell gets the bits a run in memory gives it (the same float32 additions, in the same order).
+With ``--monthly`` each region adds every sample's term to its month's float32 sum too
+(``engine.sun_sums.region_sums``), written as bands 2 on, as in memory.
 
 Used by ``run.sun_hours`` for a DEM larger than ``--max-memory``, with ``--window-size`` or
 ``--scheduler``, and for a ``--context`` tile (its regions cut to the tile, their windows read
@@ -30,24 +32,28 @@ def description(tags: dict) -> str:
 _TASK_LOCK = threading.Lock()     # one numba computation at a time per Dask worker process
 
 
-def memory_per_cell(lighting) -> int:
+def memory_per_cell(lighting, months: int = 0) -> int:
     """Bytes per cell of a run in memory: what lighting the DEM whole needs
-    (``engine.windows.bytes_per_cell``, product "sun"), the hours and one sun's weighted term."""
+    (``engine.windows.bytes_per_cell``, product "sun"), the hours and one sun's weighted term,
+    and with --monthly each of the ``months``' float32 sums."""
     from ..engine.windows import bytes_per_cell
-    return bytes_per_cell(lighting.algorithm, "sun", lighting.soft, lighting.self_shadow) + 8
+    return (bytes_per_cell(lighting.algorithm, "sun", lighting.soft, lighting.self_shadow) + 8
+            + 4 * months)
 
 
 @dataclass
 class WindowedHours:
     """What a windowed sun-hours run made: the hours' figures (``horizon_windows.ValueStats``),
     the curvature as applied, the algorithm's figures, how it ran (the report's
-    ``processing``) and, for ``--preview``, (heights, grid, hours) on every n-th cell."""
+    ``processing``), for ``--preview`` (heights, grid, hours) on every n-th cell, and with
+    --monthly each month's ((year, month), ``ValueStats``)."""
 
     values: object
     curvature: dict | None
     algo_stats: dict
     processing: dict
     preview: tuple | None = None
+    months: list | None = None
 
 
 @dataclass
@@ -103,14 +109,17 @@ class Tally:
 
 
 def hours_in_windows(cfg, ctx, src, lighting, req, work, tags, *, limit, window_shape,
-                     scheduler=None, area=None) -> WindowedHours:
+                     scheduler=None, area=None, months=None) -> WindowedHours:
     """Write the sun hours of ``src`` (``io.DemSource`` opened for windows; with ``area``, a
     ``run.context.Area``: its tile only) to ``cfg.output``: ``work`` the lit samples
     ``[(sun, hours)]`` in order, ``tags`` the output's. ``limit``: --max-memory in bytes;
-    ``window_shape``: --window-size; ``scheduler``: --scheduler. Raises ``AllNodata`` (before
-    anything is written) for a DEM of voids only, ``HillshadeError`` for a memory limit too
-    small for one window (naming the smallest that would do)."""
-    from ..engine.sun_sums import BYTES_PER_GROUP_CELL, region_sum, weighted_light
+    ``window_shape``: --window-size; ``scheduler``: --scheduler. ``months`` (--monthly): (the
+    months' (year, month) in order, each sample of ``work``'s month index): a band per month
+    after the total, each month's own float32 sum of its samples' terms, as in memory
+    (``engine.sun_sums.region_sums``). Raises ``AllNodata`` (before anything is written) for a
+    DEM of voids only, ``HillshadeError`` for a memory limit too small for one window (naming
+    the smallest that would do)."""
+    from ..engine.sun_sums import BYTES_PER_GROUP_CELL, region_sums, weighted_light
     from ..engine.windows import WindowCache, WindowLighting, block_stats, bytes_per_cell
     from ..io import BandWriter
     from ..model.earth import curvature_report, dem_body
@@ -121,8 +130,9 @@ def hours_in_windows(cfg, ctx, src, lighting, req, work, tags, *, limit, window_
     ro, timer = cfg.run, ctx.timer
     rows, cols = src.shape
     suns, weights = [s for s, _ in work], [w for _, w in work]
-    per_cell = bytes_per_cell(lighting.algorithm, "sun", lighting.soft,
-                              lighting.self_shadow) + BYTES_PER_GROUP_CELL
+    keys, group_of = months if months is not None else ([], None)
+    per_cell = (bytes_per_cell(lighting.algorithm, "sun", lighting.soft, lighting.self_shadow)
+                + BYTES_PER_GROUP_CELL + 4 * len(keys))
     tally = Tally()
     with timer("prepare"):   # one pass for the height ranges; the plan; compilation
         if area is None:
@@ -134,8 +144,8 @@ def hours_in_windows(cfg, ctx, src, lighting, req, work, tags, *, limit, window_
         dx, dy = src.grid.centre_spacing()
         job = WindowLighting(src, lighting, dem_body(src, req.lat), (bstats.zmin, bstats.zmax),
                              math.hypot(cols * dx, rows * dy), "sun")
-        whole = (memory_per_cell(lighting) if window_shape is None and scheduler is None
-                 and area is None else None)
+        whole = (memory_per_cell(lighting, len(keys)) if window_shape is None
+                 and scheduler is None and area is None else None)
         regs, mem = plan_sums(job, suns, bstats, limit, per_cell, window_shape, area, whole)
         tally.plan(regs)
         if suns:
@@ -145,31 +155,37 @@ def hours_in_windows(cfg, ctx, src, lighting, req, work, tags, *, limit, window_
     pv = bstats.preview if area is None else None
     pv_hours = np.full(pv.shape, np.nan, np.float32) if pv is not None else None
     values, algo_stats, used = ValueStats(), {}, set()
+    month_values = [ValueStats() for _ in keys]
     if scheduler is not None:
         with timer("compute"):
             _on_dask(cfg, scheduler, job, regs, weights, tags, values, algo_stats, used,
-                     tally, pv_hours, n)
+                     tally, pv_hours, n, keys, group_of, month_values)
         mode = "dask"
     else:
         bar = progress_total(tally.windows, ro.quiet, "hillshade-rt sun-hours", "window",
                              ro.progress)
-        w = BandWriter(cfg.output, geom, 1, "float32", -9999.0, tags, overwrite=ro.overwrite,
-                       fmt=ro.fmt, co=ro.creation_options)
+        w = BandWriter(cfg.output, geom, 1 + len(keys), "float32", -9999.0, tags,
+                       overwrite=ro.overwrite, fmt=ro.fmt, co=ro.creation_options)
         with w, src.reader() as rd, bar:
             cache = WindowCache(rd)
             term = weighted_light(job, weights, algo_stats, used)
             for rs in regs:
                 with timer("compute"):
-                    acc = region_sum(cache.get, rs, term, lambda p: bar.update(1))
+                    acc, per = region_sums(cache.get, rs, term, lambda p: bar.update(1),
+                                           group_of, len(keys))
                     values.add(acc)
+                    for vs, v in zip(month_values, per):
+                        vs.add(v)
                 if pv_hours is not None:
                     sub, (a, b) = every_nth(acc, rs.region[0], rs.region[2], n)
                     pv_hours[a:a + sub.shape[0], b:b + sub.shape[1]] = sub
-                acc[np.isnan(acc)] = -9999.0
+                at = rs.region if area is None else area.local(rs.region)
                 with timer("write"):
-                    w.write(1, acc, description=description(tags),
-                            window=rs.region if area is None else area.local(rs.region))
-                del acc
+                    for i, (v, (text, btags)) in enumerate(
+                            zip([acc] + per, band_texts(tags, keys)), 1):
+                        v[np.isnan(v)] = -9999.0
+                        w.write(i, v, text, btags, window=at)
+                del acc, per
             tally.bytes_read, tally.bytes_carried = rd.bytes_read, cache.carried_bytes
             with timer("write"):     # the close compresses the last blocks
                 w.finish()
@@ -185,7 +201,18 @@ def hours_in_windows(cfg, ctx, src, lighting, req, work, tags, *, limit, window_
                  src.grid.col_sign, src.grid.row_sign, src.grid.method)
         preview = (pv, g, pv_hours)
     return WindowedHours(values, curvature_report(job.curvature, used, job.body, job.k),
-                         algo_stats, processing, preview)
+                         algo_stats, processing, preview,
+                         list(zip(keys, month_values)) if months is not None else None)
+
+
+MONTH_TAGS = {"UNITS": "hours of direct sun"}
+
+
+def band_texts(tags: dict, months=()) -> list:
+    """Each band's (description, tags): the hours (:func:`description`, no tags of its own),
+    then with --monthly each month's (``YYYY-MM``, ``MONTH_TAGS``), as the run in memory
+    writes them."""
+    return [(description(tags), None)] + [(f"{y}-{m:02d}", MONTH_TAGS) for y, m in months]
 
 
 def plan_sums(job, suns, bstats, limit: int, per_cell: int, window_shape, area=None,
@@ -235,14 +262,17 @@ def windows_phrase(processing: dict) -> str:
 # ---------------------------------------------------------------------------------------------
 # regions as Dask tasks (--scheduler)
 
-def region_task(job, rs, weights, path: str, stride: int | None = None) -> dict:
-    """The Dask task: the sums of region ``rs`` (``engine.sun_sums.region_sum``, its windows
-    read here), written to ``path`` (a GeoTIFF of the region, -9999 nodata). Returns its
-    figures: (min, sum, count, max) of the hours, the algorithm's figures, the curvature used,
-    bytes read and carried, and the every-``stride``-th hours for a preview."""
+def region_task(job, rs, weights, path: str, stride: int | None = None, group_of=None,
+                groups: int = 0) -> dict:
+    """The Dask task: the sums of region ``rs`` (``engine.sun_sums.region_sums``, its windows
+    read here; with ``group_of``, each sample's month, the ``groups`` months' sums too, bands
+    2 on), written to ``path`` (a GeoTIFF of the region, -9999 nodata). Returns its figures:
+    (min, sum, count, max) of the hours (and of each month's, "months"), the algorithm's
+    figures, the curvature used, bytes read and carried, and the every-``stride``-th hours for
+    a preview."""
     import rasterio
 
-    from ..engine.sun_sums import region_sum, weighted_light
+    from ..engine.sun_sums import region_sums, weighted_light
     from ..engine.windows import GDAL_CACHE_MB, WindowCache
     from ..pictures.preview import every_nth
     from .dask import write_part
@@ -252,28 +282,35 @@ def region_task(job, rs, weights, path: str, stride: int | None = None) -> dict:
     used: set = set()
     with rasterio.Env(GDAL_CACHEMAX=GDAL_CACHE_MB), job.source.reader() as rd, _TASK_LOCK:
         cache = WindowCache(rd)
-        acc = region_sum(cache.get, rs, weighted_light(job, weights, stats, used))
+        acc, per = region_sums(cache.get, rs, weighted_light(job, weights, stats, used), None,
+                               group_of, groups)
         nread, carried = rd.bytes_read, cache.carried_bytes
-    vals = ValueStats()
-    vals.add(acc)
+
+    def figures(v):
+        vals = ValueStats()
+        vals.add(v)
+        return vals.lo, vals.total, vals.count, vals.hi
     r0, r1, c0, c1 = rs.region
     shade = None
     if stride:
         sub, at = every_nth(acc, r0, c0, stride)
         shade = (sub.copy(), at)
-    acc[np.isnan(acc)] = -9999.0
-    write_part(path, acc.astype(np.float32, copy=False), job.source, r0, c0, -9999.0,
+    values, months = figures(acc), [figures(v) for v in per]
+    out = np.stack([acc] + per) if per else acc
+    out[np.isnan(out)] = -9999.0
+    write_part(path, out.astype(np.float32, copy=False), job.source, r0, c0, -9999.0,
                predictor=3)
-    return {"values": (vals.lo, vals.total, vals.count, vals.hi), "algorithm_stats": stats,
+    return {"values": values, "months": months, "algorithm_stats": stats,
             "curvature_used": used, "bytes_read": nread, "bytes_carried": carried,
             "shade": shade}
 
 
 def _on_dask(cfg, scheduler, job, regs, weights, tags, values, algo_stats, used, tally,
-             pv_hours, stride) -> None:
+             pv_hours, stride, months=(), group_of=None, month_values=()) -> None:
     """Every region a task (:func:`region_task`); their parts put together through a VRT into
     ``cfg.output`` (``horizon_windows.VrtOutput``, as the in-memory run's file: one float32
-    band, -9999 nodata, the same tags and description)."""
+    band, with --monthly one per month of ``months`` after it, -9999 nodata, the same tags and
+    descriptions)."""
     from ..io.vrt import VrtSource
     from .dask import DaskSession
     from .horizon_windows import VrtOutput
@@ -288,7 +325,8 @@ def _on_dask(cfg, scheduler, job, regs, weights, tags, values, algo_stats, used,
         for rs in regs:
             path = os.path.join(folder, f"hours_r{rs.region[0]}_c{rs.region[2]}.tif")
             f = client.submit(region_task, job, rs, weights, path,
-                              stride if pv_hours is not None else None, pure=False)
+                              stride if pv_hours is not None else None, group_of,
+                              len(months), pure=False)
             paths[f.key] = (rs, path)
             session.futures.append(f)
         parts = []
@@ -299,11 +337,14 @@ def _on_dask(cfg, scheduler, job, regs, weights, tags, values, algo_stats, used,
                 rs, path = paths[f.key]
                 parts.append((rs.region, path))
                 values.merge(res["values"])
+                for vs, v in zip(month_values, res["months"]):
+                    vs.merge(v)
                 tally.take(res, used, algo_stats, pv_hours)
                 bar.update(1)
-        out = VrtOutput(cfg.output, src.shape, src.transform, src.crs, [description(tags)],
-                        tags,
+        texts = band_texts(tags, months)
+        out = VrtOutput(cfg.output, src.shape, src.transform, src.crs, [d for d, _ in texts],
+                        tags, band_tags=[t or {} for _, t in texts] if months else None,
                         overwrite=ro.overwrite, fmt=ro.fmt, co=ro.creation_options)
-        out.write([[VrtSource(path, 1, (r[0], r[2]), (r[1] - r[0], r[3] - r[2]))
-                    for r, path in parts]])
+        out.write([[VrtSource(path, b, (r[0], r[2]), (r[1] - r[0], r[3] - r[2]))
+                    for r, path in parts] for b in range(1, len(texts) + 1)])
         tally.extra = session.info(workers)

@@ -11,7 +11,7 @@ from affine import Affine
 from hillshade_rt.engine.lighting import Lighting
 from hillshade_rt.engine.shader import render
 from hillshade_rt.engine.sun_sums import (SunGroup, plan_regions, region_shape, region_sum,
-                                          weighted_light)
+                                          region_sums, weighted_light)
 from hillshade_rt.engine.windows import (MemoryTooSmall, WindowCache, WindowLighting,
                                          block_stats)
 from hillshade_rt.io import open_dem
@@ -54,6 +54,40 @@ def _in_windows(src, lighting, budget, shape=None, sun_list=SUNS):
             r0, r1, c0, c1 = rs.region
             out[r0:r1, c0:c1] = region_sum(cache.get, rs, weighted_light(job, WEIGHTS))
     return out, regs
+
+
+@pytest.mark.parametrize("budget", [10 ** 6, 1])
+def test_each_groups_sum_is_the_bits_of_its_suns_in_memory(dem, budget):
+    """``region_sums`` with the suns in groups (0, 1, 0, 1: not contiguous, as the months'
+    are not among the lit suns of one region's reads): the total the bits of ``region_sum``'s,
+    each group's the bits of its own suns' sum over the whole raster in memory (the same
+    float32 terms added in the suns' order), voids NaN."""
+    z, path = dem
+    lighting = Lighting(algorithm="brute", curvature=False, self_shadow=True)
+    group_of = np.array([0, 1, 0, 1])
+    with open_dem(path, windows=True) as src:
+        sh = lighting.shader(z, src.grid, body=dem_body(src))
+        want = [np.where(np.isnan(z), np.float32(np.nan), np.float32(0.0)) for _ in range(2)]
+        for k, ((az, el), w) in enumerate(zip(SUNS, WEIGHTS)):
+            want[group_of[k]] += np.float32(w) * render(sh, SunOver(None, az, el), "sun",
+                                                        self_shadow=True)
+        total, regs = _in_windows(src, lighting, budget, (30, 40))
+        st = block_stats(src)
+        job = WindowLighting(src, lighting, dem_body(src), (st.zmin, st.zmax),
+                             math.hypot(110 * 10, 90 * 10), "sun")
+        got = np.full((3,) + src.shape, -1.0, np.float32)
+        with src.reader() as rd:
+            cache = WindowCache(rd)
+            for rs in regs:
+                r0, r1, c0, c1 = rs.region
+                acc, per = region_sums(cache.get, rs, weighted_light(job, WEIGHTS), None,
+                                       group_of, 2)
+                got[:, r0:r1, c0:c1] = [acc] + per
+    np.testing.assert_array_equal(got[0], total)
+    np.testing.assert_array_equal(got[1], want[0])
+    np.testing.assert_array_equal(got[2], want[1])
+    assert np.isnan(got[1][40:44, 20:60]).all() and (got[1] != got[2]).any()
+    assert np.nanmax(got[1]) > 0 and np.nanmax(got[2]) > 0
 
 
 @pytest.mark.parametrize("budget", [10 ** 6, 3500, 1])

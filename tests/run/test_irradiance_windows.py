@@ -230,3 +230,199 @@ def test_dask_gives_the_bits_of_the_run_in_memory(tmp_path, dems, any_window):
         np.testing.assert_array_equal(b.read(), a.read())
         assert b.descriptions == a.descriptions
     assert sorted(os.listdir(tmp_path)) == ["dask.tif", "vd_d.tif", "vd_m.tif", "whole.tif"]
+
+
+# ---------------------------------------------------------------------------------------------
+# --monthly and the albedo by month or as rasters, in windows and on Dask
+
+# two months, few samples: 2026-01-31 and 2026-02-01 every 3 hours
+MONTHS = dict(date="2026-01-31", end_date="2026-02-01", step="3h", skyview_directions=8)
+ALBEDO_12 = "0.13,0.31,0.22,0.2,0.2,0.2,0.2,0.2,0.2,0.2,0.2,0.17"
+
+
+def _gradient(rows, cols, month=1):
+    """An albedo that varies across a raster (rows and columns unevenly), by month: 0.1..0.6."""
+    y, x = np.mgrid[0:rows, 0:cols]
+    v = 0.1 + 0.35 * (x / cols) ** 1.3 + 0.1 * (y / rows) + 0.04 * np.sin(0.7 * x + 0.3 * y)
+    return (v + 0.011 * month).astype(np.float32)
+
+
+def _coarse_over(dem, ratio, margin=2.37, crs=None):
+    """(transform, rows, cols) of a raster ``ratio`` times coarser than ``dem``'s cells (in
+    ``crs``, default the DEM's), its origin off the DEM's grid, covering it with a margin."""
+    from rasterio.warp import transform_bounds
+    with rasterio.open(dem) as ds:
+        b = ds.bounds if crs is None else transform_bounds(ds.crs, crs, *ds.bounds)
+        dx = abs(ds.transform.a) * ratio
+        dy = abs(ds.transform.e) * ratio
+        if crs is not None:      # degrees over metres: about the DEM's cell times ratio
+            dx, dy = (b[2] - b[0]) / ds.width * ratio, (b[3] - b[1]) / ds.height * ratio
+    x0, y1 = b[0] - margin * dx, b[3] + 0.61 * margin * dy
+    cols = int(np.ceil((b[2] - x0) / dx + margin))
+    rows = int(np.ceil((y1 - b[1]) / dy + margin))
+    return Affine(dx, 0, x0, 0, -dy, y1), rows, cols
+
+
+@pytest.fixture(scope="module")
+def albedos(tmp_path_factory, dems):
+    """A gradient albedo raster 3.7 times coarser than the real DEM's cells (geographic, its
+    origin off the DEM's grid); twelve monthly gradients over the fractal in geographic
+    coordinates (the fractal is UTM: a reprojection), named albedo_MM.tif; a raster covering
+    only the real DEM's western half."""
+    d = tmp_path_factory.mktemp("albedo")
+    tr, rows, cols = _coarse_over(dems["real"], 3.7)
+    with rasterio.open(dems["real"]) as ds:
+        crs = ds.crs
+    one = write_geotiff(d / "albedo.tif", _gradient(rows, cols), tr, crs, -1.0)
+    half = _gradient(rows, cols)
+    half[:, cols // 2:] = -1.0
+    west = write_geotiff(d / "west.tif", half, tr, crs, -1.0)
+    tr, rows, cols = _coarse_over(dems["frac"], 2.9, crs=CRS.from_epsg(4326))
+    for m in range(1, 13):
+        write_geotiff(d / f"albedo_{m:02d}.tif", _gradient(rows, cols, m)[::-1], tr,
+                      CRS.from_epsg(4326), -1.0)
+    return {"raster": one, "pattern": str(d / "albedo_{month:02d}.tif"), "west": west}
+
+
+def _albedo(kw, albedos):
+    return {**kw, "albedo": albedos[kw["albedo"]]} if kw.get("albedo") in albedos else kw
+
+
+@pytest.mark.parametrize("which,size,extra", [
+    ("real", "24x40", dict(monthly=True)),
+    ("frac", "30x37", dict(monthly=True, albedo=ALBEDO_12, perez=True, mean=True)),
+    ("real", "24x40", dict(albedo="raster")),
+    pytest.param("real", "35x45", dict(albedo="raster", monthly=True, daily_mean=True,
+                                       perez=True), marks=pytest.mark.slow),
+    ("frac", "30x37", dict(albedo="pattern", monthly=True)),
+    pytest.param("frac", "40x45", dict(albedo="pattern"), marks=pytest.mark.slow),
+])
+def test_monthly_and_albedo_in_windows_give_the_bits_of_the_run_in_memory(
+        tmp_path, dems, albedos, any_window, which, size, extra):
+    """Two months every 3 hours: --monthly (a global band per month after the four), the
+    albedo as twelve numbers, a gradient raster coarser than the DEM, a {month} pattern of
+    rasters in another CRS: every band, its description and tags the run in memory's; the
+    report's months; no albedo files left beside OUTPUT."""
+    kw = {**MONTHS, **_albedo(extra, albedos)}
+    whole = _run(tmp_path / "whole.tif", dems[which], **kw)
+    got = _run(tmp_path / "win.tif", dems[which], window_size=size, **kw)
+    _same(got, whole)
+    assert got[1]["processing"]["mode"] == "windows" and got[1]["processing"]["regions"] >= 4
+    assert sorted(os.listdir(tmp_path)) == ["whole.tif", "win.tif"]
+    bands = np.where(whole[0] == -9999.0, np.nan, whole[0])
+    if extra.get("monthly"):
+        assert whole[3][4:] == ("2026-01", "2026-02") and bands.shape[0] == 6
+        assert [m["month"] for m in got[1]["months"]] == ["2026-01", "2026-02"]
+        for g, w in zip(got[1]["months"], whole[1]["months"]):
+            assert g["hours"] == w["hours"] and g["global"]["max"] == w["global"]["max"]
+            assert g["global"]["mean"] == pytest.approx(w["global"]["mean"], rel=1e-6)
+        assert np.nanmax(np.abs(bands[4] - bands[5])) > 0
+        if not (extra.get("mean") or extra.get("daily_mean")):
+            np.testing.assert_allclose(bands[4] + bands[5], bands[3], rtol=1e-5)
+    else:
+        assert bands.shape[0] == 4 and "months" not in got[1]
+    if extra.get("albedo") in ("raster", "pattern"):     # the reflected light varies with it
+        refl = bands[2]
+        assert np.nanstd(refl) > 0.05 * np.nanmean(refl) > 0
+
+
+def test_an_albedo_raster_on_the_grid_is_the_run_in_memorys(tmp_path, dems, albedos):
+    """The albedo grids of a run in windows (``AlbedoGrids``: the raster resampled once to
+    the whole grid into a file) cut to any window are, to the bit, the same cells of
+    ``SkyValue.on_grid`` on the whole grid (the run in memory's): a geographic DEM off the
+    raster's grid, and a UTM grid from rasters in geographic coordinates."""
+    from hillshade_rt.run import ReadOptions
+    from hillshade_rt.run.irradiance_windows import AlbedoGrids
+    from hillshade_rt.run.sky_inputs import SkyValue
+    for which, name in (("real", "raster"), ("frac", "pattern")):
+        value = SkyValue.parse("--albedo", albedos[name], 0.0, 1.0)
+        src = ReadOptions().open(dems[which], windows=True)
+        with src:
+            grids = AlbedoGrids(str(tmp_path / "out.tif"))
+            try:
+                for month in (1, 2, 7):
+                    g = grids.grid(value, month, src, src, (0, 0))
+                    want = value.on_grid(month, src.transform, src.crs, src.shape, None)
+                    for w in ((0, 7, 0, 90), (13, 51, 29, 83), (69, src.shape[0], 0, 1)):
+                        np.testing.assert_array_equal(g.cut(w), want[w[0]:w[1], w[2]:w[3]])
+                    assert np.isfinite(want).all() and want.std() > 0.02
+            finally:
+                grids.close()
+            assert not os.path.exists(grids.folder)
+
+
+def test_an_albedo_raster_short_of_the_dem_is_the_same_line_in_windows(tmp_path, dems,
+                                                                        albedos):
+    """An albedo raster that misses part of the DEM: the one line of the run in memory
+    (exit status 2, the same count of cells), in windows too; no output, no albedo files."""
+    lines = []
+    for extra in ([], ["--window-size", "64"]):
+        out = tmp_path / "o.tif"
+        r = CliRunner().invoke(cli, ["irradiance", dems["real"], str(out), "--date",
+                                     MONTHS["date"], "--step", "3h", "--albedo",
+                                     albedos["west"], "-q", *extra])
+        assert r.exit_code == 2, r.output
+        lines.append(r.stderr.strip().splitlines())
+        assert not out.exists() and os.listdir(tmp_path) == []
+    assert len(lines[0]) == 1 and lines[1] == lines[0]
+    assert "does not cover the DEM" in lines[0][0] and "west.tif" in lines[0][0]
+
+
+@pytest.mark.slow       # three runs
+def test_monthly_and_a_pattern_in_a_context_tile_in_windows(tmp_path, dems, albedos,
+                                                            any_window):
+    """--context with --window-size, --monthly and an albedo pattern: the tile's six bands the
+    bits of the tile's run in memory (its albedo resampled to the tile's grid, as there);
+    the beam and diffuse bands the same cells of the whole DEM's run."""
+    dem = dems["frac"]
+    kw = dict(MONTHS, monthly=True, albedo=albedos["pattern"])
+    whole = _run(tmp_path / "whole.tif", dem, **kw)
+    with rasterio.open(dem) as ds:
+        w = ((20, 60), (35, 80))
+        tile = write_geotiff(tmp_path / "tile.tif", ds.read(1, window=w),
+                             ds.window_transform(w), ds.crs)
+    got = _run(tmp_path / "t.tif", tile, context=dem, window_size="16x20", **kw)
+    mem = _run(tmp_path / "tm.tif", tile, context=dem, **kw)
+    _same(got, mem)
+    assert got[1]["processing"]["regions"] == 3 * 3 and mem[1]["processing"]["mode"] == \
+        "windows" and "regions" not in mem[1]["processing"]
+    np.testing.assert_array_equal(got[0][:2], whole[0][:2, 20:60, 35:80])
+    assert got[3] == whole[3] and got[4] == whole[4]
+
+
+@pytest.mark.slow       # a local cluster of two worker processes
+def test_monthly_and_albedo_rasters_on_dask_give_the_bits_of_the_run_in_memory(
+        tmp_path, dems, albedos, any_window):
+    """--monthly with a {month} pattern of albedo rasters, each region a task on two worker
+    processes: the six bands, their descriptions and tags the run in memory's; nothing left
+    beside OUTPUT."""
+    pytest.importorskip("distributed")
+    kw = dict(MONTHS, monthly=True, albedo=albedos["pattern"], perez=True)
+    whole = _run(tmp_path / "whole.tif", dems["frac"], **kw)
+    got = _run(tmp_path / "dask.tif", dems["frac"], window_size="36x45", client="local:2",
+               **kw)
+    _same(got, whole)
+    p = got[1]["processing"]
+    assert p["mode"] == "dask" and p["tasks"] == p["regions"] == 2 * 2
+    assert [m["month"] for m in got[1]["months"]] == ["2026-01", "2026-02"]
+    assert sorted(os.listdir(tmp_path)) == ["dask.tif", "whole.tif"]
+
+
+def test_no_room_for_the_albedo_grid_is_one_line(tmp_path, dems, albedos, monkeypatch):
+    """A disk too full for the albedo raster on the DEM's grid (``posix_fallocate`` says
+    ENOSPC): one line, exit status 1, no output and no albedo files left."""
+    import errno
+
+    from hillshade_rt.run import irradiance_windows as iw
+
+    def full(fd, offset, length):
+        raise OSError(errno.ENOSPC, "No space left on device")
+    monkeypatch.setattr(iw.os, "posix_fallocate", full, raising=False)
+    out = tmp_path / "o.tif"
+    r = CliRunner().invoke(cli, ["irradiance", dems["real"], str(out), "--date",
+                                 MONTHS["date"], "--step", "3h", "--albedo",
+                                 albedos["raster"], "--window-size", "64", "-q"])
+    assert r.exit_code == 1, r.output
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and "no room for an albedo raster" in lines[0], lines
+    assert os.listdir(tmp_path) == []

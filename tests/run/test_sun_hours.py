@@ -9,7 +9,6 @@ from __future__ import annotations
 import datetime as dt
 import json
 import math
-import os
 
 import numpy as np
 import pytest
@@ -117,217 +116,6 @@ def test_end_date_before_date_is_a_usage_error(tmp_path):
     assert not (tmp_path / "o.tif").exists()
 
 
-# ---------------------------------------------------------------------------------------------
-# in windows and on Dask (run.sun_hours_windows): the bits of the run in memory
-
-def _hours(tmp_path, dem, out, report=None, step="40min", **kw):
-    """The hours (the band read back, -9999 nodata) and the report of ``dem`` on the solstice
-    at Zurich's clock, every ``step``."""
-    cfg = SunHoursConfig(dem=dem, output=str(tmp_path / out), date="2026-12-21", step=step,
-                         place={"tz": TZ}, run=RunOptions(overwrite=True, quiet=True,
-                                                          report_path=report), **kw)
-    rep = sun_hours(cfg)
-    return read_band(tmp_path / out), rep
-
-
-@pytest.fixture
-def any_window(monkeypatch):
-    """--window-size down to one cell a side (the command line asks for 64 at least)."""
-    from hillshade_rt.run import config
-    monkeypatch.setattr(config, "MIN_WINDOW_SIDE", 1)
-
-
-def _voids():
-    """The pillar on a rough slope with a void across the pillar's shadow."""
-    rng = np.random.default_rng(163)
-    z = _pillar() + rng.normal(0.0, 3.0, (SIDE, SIDE)).astype(np.float32)
-    z += np.linspace(0.0, 60.0, SIDE, dtype=np.float32)[:, None]
-    z[20:24, 45:70] = np.nan
-    z[60:, :3] = np.nan
-    return z
-
-
-@pytest.mark.parametrize("size", [pytest.param("1x80", marks=pytest.mark.slow),
-                                  pytest.param("80x1", marks=pytest.mark.slow),
-                                  pytest.param("7x50", marks=pytest.mark.slow), "64", "30x45"])
-def test_windows_give_the_bits_of_the_run_in_memory(tmp_path, any_window, size):
-    """Windows of one row, of one column, and windows far shorter than the pillar's shadow
-    (about 65 cells at noon): every cell equal to the run in memory, voids included."""
-    dem = _dem(tmp_path, _voids())
-    whole, rep = _hours(tmp_path, dem, "whole.tif")
-    got, wrep = _hours(tmp_path, dem, "win.tif", window_size=size)
-    np.testing.assert_array_equal(got, whole)
-    assert (whole == -9999.0).sum() == 4 * 25 + 20 * 3
-    assert rep["processing"] == {"mode": "in memory", "cells": SIDE * SIDE}
-    p = wrep["processing"]
-    rows, cols = (int(v) for v in (size.split("x") * 2)[:2])
-    assert p["mode"] == "tiled" and p["regions"] == -(-SIDE // rows) * -(-SIDE // cols)
-    assert p["windows"] >= p["regions"] * wrep["samples_with_sun"]
-    assert p["window_shape_requested"] == [rows, cols]
-    assert wrep["hours"]["min"] == rep["hours"]["min"]
-    assert wrep["hours"]["max"] == rep["hours"]["max"]
-    assert wrep["hours"]["mean"] == pytest.approx(rep["hours"]["mean"], rel=1e-12)
-    for k in ("shape", "samples", "samples_with_sun", "curvature", "dates", "day_definition"):
-        assert wrep[k] == rep[k], k
-
-
-@pytest.mark.slow       # 770,000 cells, twice
-def test_the_bundled_example_in_windows(tmp_path):
-    """The bundled SRTM example (1197 x 643, UTM): in windows shorter than the low suns'
-    shadows (--window-size 160x400), the bits of the run in memory."""
-    from hillshade_rt.testing import repo_root
-    dem = os.path.join(repo_root(), "examples", "bigtujunga_srtm30m_utm11n_1197x643.tif")
-
-    def run(out, **more):
-        cfg = SunHoursConfig(dem=dem, output=str(tmp_path / out), date="2026-12-21",
-                             step="2h", place={"tz": "America/Los_Angeles"},
-                             run=RunOptions(overwrite=True, quiet=True), **more)
-        rep = sun_hours(cfg)
-        return read_band(tmp_path / out), rep
-    whole, rep = run("whole.tif")
-    assert 3.0 < rep["hours"]["mean"] < 10.0 and rep["hours"]["min"] < 1.0
-    got, wrep = run("win.tif", window_size="160x400")
-    np.testing.assert_array_equal(got, whole)
-    assert wrep["processing"]["regions"] == 5 * 3
-
-
-@pytest.mark.slow       # suns per tile on a geographic DEM: some seconds
-@pytest.mark.parametrize("size", ["1x120", "24x40"])
-def test_a_geographic_dem_with_voids_in_windows(tmp_path, any_window, size):
-    """Everest's SRTM crop (geographic, the spacing per row; its 64 x 120 corner has two
-    fifths voids): in windows of one row and of 24 x 40, every cell as in memory."""
-    import rasterio
-    from hillshade_rt.testing import data_path
-    with rasterio.open(data_path("everest_srtm3_voids_crop200.tif")) as ds:
-        z = ds.read(1, window=((0, 64), (0, 120))).astype(np.float32)
-        dem = write_geotiff(str(tmp_path / "everest.tif"), z, ds.transform, ds.crs, ds.nodata)
-
-    def run(out, **more):
-        cfg = SunHoursConfig(dem=dem, output=str(tmp_path / out), date="2026-03-02",
-                             step="1h", place={"tz": "Asia/Kathmandu"},
-                             run=RunOptions(overwrite=True, quiet=True), **more)
-        rep = sun_hours(cfg)
-        return read_band(tmp_path / out), rep
-    whole, rep = run("whole.tif")
-    assert (whole == -9999.0).mean() > 0.3 and rep["processing"]["mode"] == "in memory"
-    got, wrep = run("win.tif", window_size=size)
-    np.testing.assert_array_equal(got, whole)
-    assert wrep["processing"]["mode"] == "tiled"
-
-
-@pytest.mark.parametrize("extra", [dict(soft=True), dict(height_above_ground=30.0),
-                                   dict(self_shadow=False, algorithm="smap")])
-def test_soft_lifted_and_smap_hours_in_windows(tmp_path, extra):
-    """The disk's visible fraction, an observer 30 m up, SMap without self-shadow: in windows
-    of 64 x 64 the bits of the run in memory."""
-    dem = _dem(tmp_path, _voids())
-    whole, _ = _hours(tmp_path, dem, "whole.tif", step="90min", **extra)
-    got, _ = _hours(tmp_path, dem, "win.tif", window_size=64, step="90min", **extra)
-    np.testing.assert_array_equal(got, whole)
-
-
-def test_max_memory_decides_and_the_day_is_read_about_once(tmp_path, monkeypatch):
-    """A --max-memory the DEM does not fit runs in windows (the DEM read about once: every
-    sun's window of a region read together); a large one runs in memory."""
-    from hillshade_rt.engine import windows
-    # rough open ground, 3 m of relief: the low suns' shadows some 20 cells long
-    rng = np.random.default_rng(203)
-    dem = _dem(tmp_path, 500.0 + rng.uniform(0.0, 3.0, (200, 200)))
-    whole, rep = _hours(tmp_path, dem, "whole.tif", max_memory="64GB")
-    assert rep["processing"]["mode"] == "in memory"
-    # the process as large as 200 MB whatever it holds: room for 1 MB beyond it, about
-    # 29,000 cells of window (22 + 12 bytes each); the DEM in memory would need 1.2 MB
-    monkeypatch.setattr(windows, "process_rss", lambda: 200_000_000)
-    limit = 200_000_000 + (windows.GDAL_CACHE_MB << 20) + (32 << 20) + 1_000_000
-    got, wrep = _hours(tmp_path, dem, "win.tif", max_memory=str(limit))
-    np.testing.assert_array_equal(got, whole)
-    p = wrep["processing"]
-    assert p["mode"] == "tiled" and p["regions"] > 1
-    assert p["windows_read"] == p["regions"] and 1.0 <= p["dem_reads"] < 3.0
-
-
-def test_the_command_line_in_windows_with_a_preview(tmp_path):
-    """--window-size, --report, --preview on the command line: the report says how it ran,
-    the summary names the windows, the preview is the DEM's size (every cell: a small DEM)."""
-    from click.testing import CliRunner
-
-    from hillshade_rt.cli import cli
-    dem = _dem(tmp_path, _voids())
-    whole, _ = _hours(tmp_path, dem, "whole.tif", step="2h")
-    r = CliRunner().invoke(cli, ["sun-hours", dem, str(tmp_path / "w.tif"), "--date",
-                                 "2026-12-21", "--step", "2h", "--tz", TZ, "--window-size",
-                                 "64x80", "--report", str(tmp_path / "w.json"), "--preview",
-                                 str(tmp_path / "w.png")])
-    assert r.exit_code == 0, r.output
-    assert ", 2 windows" in r.stderr.strip().splitlines()[-1]
-    np.testing.assert_array_equal(read_band(tmp_path / "w.tif"), whole)
-    doc = json.loads((tmp_path / "w.json").read_text())
-    assert doc["processing"]["mode"] == "tiled" and doc["processing"]["regions"] == 2
-    assert read_band(tmp_path / "w.png").shape == (SIDE, SIDE)
-
-
-def test_a_memory_limit_too_small_for_one_window_is_one_line(tmp_path):
-    """As shadow says it: exit status 1, one line naming the smallest --max-memory, no
-    output."""
-    from click.testing import CliRunner
-
-    from hillshade_rt.cli import cli
-    dem = _dem(tmp_path, _voids())
-    out = tmp_path / "o.tif"
-    r = CliRunner().invoke(cli, ["sun-hours", dem, str(out), "--date", "2026-12-21",
-                                 "--tz", TZ, "--max-memory", "10MB", "-q"])
-    assert r.exit_code == 1, r.output
-    lines = r.stderr.strip().splitlines()
-    assert len(lines) == 1 and "--max-memory" in lines[0] and "give at least" in lines[0]
-    assert not out.exists()
-
-
-def test_an_interrupt_in_windows_leaves_no_output(tmp_path, monkeypatch):
-    """Ctrl-C while the third window is lit: exit status 130, nothing under OUTPUT's name nor
-    beside it."""
-    from click.testing import CliRunner
-
-    from hillshade_rt.cli import cli
-    from hillshade_rt.engine import windows
-    (tmp_path / "in").mkdir()
-    (tmp_path / "out").mkdir()
-    dem = _dem(tmp_path / "in", _voids())
-    calls = []
-    real = windows.WindowLighting.light
-
-    def light(self, *a, **k):
-        calls.append(1)
-        if len(calls) == 3:
-            raise KeyboardInterrupt
-        return real(self, *a, **k)
-    monkeypatch.setattr(windows.WindowLighting, "light", light)
-    r = CliRunner().invoke(cli, ["sun-hours", dem, str(tmp_path / "out" / "o.tif"), "--date",
-                                 "2026-12-21", "--tz", TZ, "--window-size", "64"])
-    assert r.exit_code == 130 and "no output written" in r.stderr
-    assert len(calls) == 3 and os.listdir(tmp_path / "out") == []
-
-
-@pytest.mark.slow       # a local cluster of two worker processes
-def test_dask_gives_the_bits_of_the_run_in_memory(tmp_path):
-    """Each region a task on two worker processes: the same bits, tags and description as in
-    memory; the parts' folder gone."""
-    pytest.importorskip("distributed")
-    import rasterio
-    dem = _dem(tmp_path, _voids())
-    whole, rep = _hours(tmp_path, dem, "whole.tif")
-    got, drep = _hours(tmp_path, dem, "dask.tif", window_size="64", scheduler="local:2")
-    np.testing.assert_array_equal(got, whole)
-    p = drep["processing"]
-    assert p["mode"] == "dask" and p["workers"] == 2 and p["tasks"] == p["regions"] == 2 * 2
-    assert drep["hours"]["min"] == rep["hours"]["min"]
-    assert drep["hours"]["max"] == rep["hours"]["max"]
-    with rasterio.open(tmp_path / "whole.tif") as a, rasterio.open(tmp_path / "dask.tif") as b:
-        assert b.descriptions == a.descriptions and b.nodata == a.nodata
-        assert {k: v for k, v in b.tags().items() if k != "AREA_OR_POINT"} == \
-            {k: v for k, v in a.tags().items() if k != "AREA_OR_POINT"}
-    assert sorted(os.listdir(tmp_path)) == ["dask.tif", "dem.tif", "whole.tif"]
-
-
 @pytest.mark.parametrize("window_size", [None, "64"])
 def test_one_day_is_named_as_r_sun_names_it(tmp_path, window_size):
     """One day's hours are r.sun's insol_time: that is the band's description (in memory and
@@ -350,7 +138,8 @@ def test_one_day_is_named_as_r_sun_names_it(tmp_path, window_size):
 
 def test_monthly_bands_sum_to_the_total_and_equal_each_months_days(tmp_path):
     """--monthly: band 1 the bits of the run without it, then one band per month (YYYY-MM),
-    each the hours of its own days' runs, together the total; refused in windows."""
+    each the hours of its own days' runs, together the total (in windows:
+    test_sun_hours_windows)."""
     import rasterio
     dem = _dem(tmp_path, _pillar())
 
@@ -373,6 +162,3 @@ def test_monthly_bands_sum_to_the_total_and_equal_each_months_days(tmp_path):
     np.testing.assert_array_equal(bands[2], read_band(tmp_path / "feb.tif"))
     assert [m["month"] for m in rep["months"]] == ["2027-01", "2027-02"]
     assert bands[0][PILLAR].max() > 0 and bands[1].min() < bands[1].max()
-    with pytest.raises(UsageProblem, match="runs in memory only"):
-        run("w.tif", "2027-01-30", "2027-02-02", monthly=True, window_size="64")
-    assert not os.path.exists(tmp_path / "w.tif")
