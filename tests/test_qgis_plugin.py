@@ -293,25 +293,28 @@ def test_horizon_profile_query_argv(tmp_path):
 def test_irradiance_animate_illumination_argv():
     argv = cmd.irradiance_argv("hr", "dem.tif", "irr.tif", date="2026-06-21",
                                end_date="2026-06-22", step_minutes=30, tz="Europe/Zurich",
-                               clear_sky="haurwitz", linke_turbidity=3.5, albedo=0.3,
-                               ghi="/m/ghi.csv", mean=True, perez=True, skyview_directions=16,
+                               clear_sky="ineichen", linke_turbidity=3.5, albedo=0.3,
+                               mean=True, perez=True, skyview_directions=16,
                                height_above_ground=1, algorithm="brute", soft=True)
     assert argv == ["hr", "irradiance", "dem.tif", "irr.tif", "--date", "2026-06-21",
                     "--end-date", "2026-06-22", "--step", "30min", "--tz", "Europe/Zurich",
-                    "--clear-sky", "haurwitz", "--linke-turbidity", "3.5", "--albedo", "0.3",
-                    "--ghi", "/m/ghi.csv", "--mean", "--perez", "--skyview-directions", "16",
+                    "--clear-sky", "ineichen", "--linke-turbidity", "3.5", "--albedo", "0.3",
+                    "--mean", "--perez", "--skyview-directions", "16",
                     "--height-above-ground", "1", "--algorithm", "brute", "--soft",
                     "--overwrite"]
     p = parse(argv)
-    assert (p["clear_sky"], p["linke_turbidity"], p["albedo"], p["ghi"], p["mean"],
-            p["perez"], p["skyview_directions"]) == ("haurwitz", "3.5", "0.3", "/m/ghi.csv",
-                                                     True, True, 16)
+    assert (p["clear_sky"], p["linke_turbidity"], p["albedo"], p["mean"], p["perez"],
+            p["skyview_directions"]) == ("ineichen", "3.5", "0.3", True, True, 16)
     argv = cmd.irradiance_argv("hr", "dem.tif", "irr.tif", date="2026-06-21")
     assert argv == ["hr", "irradiance", "dem.tif", "irr.tif", "--date", "2026-06-21",
                     "--step", "15min", "--clear-sky", "ineichen", "--albedo", "0.2",
                     "--skyview-directions", "32", "--algorithm", "auto", "--overwrite"]
     parse(argv)
-
+    # a measured sky: no clear-sky model (the program refuses --clear-sky with --ghi)
+    argv = cmd.irradiance_argv("hr", "dem.tif", "irr.tif", date="2026-06-21",
+                               clear_sky="haurwitz", ghi="/m/ghi.csv")
+    assert "--clear-sky" not in argv and argv[argv.index("--ghi") + 1] == "/m/ghi.csv"
+    assert parse(argv)["clear_sky"] is None
     argv = cmd.animate_argv("hr", "dem.tif", "a.gif", date="2026-06-21", step_minutes=60,
                             tz="America/Chicago", fps=4, size=128, label=False)
     assert argv == ["hr", "animate", "dem.tif", "a.gif", "--date", "2026-06-21", "--step",
@@ -351,6 +354,83 @@ def test_new_argv_refusals():
         cmd.illumination_argv("hr", "d.tif", "o.tif", subsolar_file="")
     with pytest.raises(cmd.ProgramError, match="clear sky must be one of"):
         cmd.irradiance_argv("hr", "d.tif", "o.tif", date="2026-06-21", clear_sky="perez")
+
+
+def test_irradiance_sky_inputs_monthly_instants_argv():
+    """The albedo as a raster or 12 monthly numbers, the Linke turbidity by month, --monthly
+    and --daily-mean, and instants (repeated --time) as the program parses them."""
+    linke = cmd.sky_value("linke", 0 or None, "2.1, 2.4 2.9;3.3,3.5,3.6,3.7,3.6,3.2,2.8,2.4,2.1")
+    assert linke == "2.1,2.4,2.9,3.3,3.5,3.6,3.7,3.6,3.2,2.8,2.4,2.1"
+    albedo = cmd.sky_value("albedo", 0.25, "0.6 " * 12, "/r/albedo.tif")
+    assert albedo == "/r/albedo.tif"                    # the raster overrides the numbers
+    assert cmd.sky_value("albedo", 0.25, " ", None) == "0.25"
+    assert cmd.sky_value("albedo", 0.25, "0.15", None) == "0.15"
+    assert cmd.sky_value("linke", None, "") is None
+    argv = cmd.irradiance_argv("hr", "dem.tif", "year.tif", date="2027-01-01",
+                               end_date="2027-12-31", step_minutes=120, tz="Europe/Vienna",
+                               linke_turbidity=linke, albedo=albedo, daily_mean=True,
+                               monthly=True)
+    assert argv == ["hr", "irradiance", "dem.tif", "year.tif", "--date", "2027-01-01",
+                    "--end-date", "2027-12-31", "--step", "120min", "--tz", "Europe/Vienna",
+                    "--clear-sky", "ineichen", "--linke-turbidity", linke,
+                    "--albedo", "/r/albedo.tif", "--daily-mean", "--monthly",
+                    "--skyview-directions", "32", "--algorithm", "auto", "--overwrite"]
+    p = parse(argv)
+    assert (p["linke_turbidity"], p["albedo"], p["daily_mean"], p["monthly"],
+            p["mean"]) == (linke, "/r/albedo.tif", True, True, False)
+
+    times = cmd.instants("2026-06-21T09:30, 15:05;\n 7:00:30 ,2026-06-22T12:00+02:00,",
+                         "2026-06-21")
+    assert times == ["2026-06-21T09:30", "2026-06-21T15:05", "2026-06-21T07:00:30",
+                     "2026-06-22T12:00+02:00"]
+    argv = cmd.irradiance_argv("hr", "dem.tif", "now.tif", date="2026-06-21",
+                               end_date="2026-06-30", step_minutes=10, times=times,
+                               tz="Europe/Zurich", albedo=0.3)
+    # instants instead of the period: no --date, --end-date or --step
+    assert argv[:12] == ["hr", "irradiance", "dem.tif", "now.tif", "--time", times[0],
+                         "--time", times[1], "--time", times[2], "--time", times[3]]
+    assert not {"--date", "--end-date", "--step"} & set(argv)
+    p = parse(argv)
+    assert p["time"] == tuple(times) and p["date_"] is None and p["tz"] == "Europe/Zurich"
+    # instants alone (no date) are enough
+    parse(cmd.irradiance_argv("hr", "dem.tif", "o.tif", times=["2026-03-20T12:00:00Z"]))
+
+    with pytest.raises(cmd.ProgramError, match="12 monthly numbers .January first., not 3"):
+        cmd.sky_value("the albedo by month", 0.2, "0.1,0.2,0.3")
+    with pytest.raises(cmd.ProgramError, match="the Linke turbidity by month: a number or 12"):
+        cmd.sky_value("the Linke turbidity by month", None, "3,x")
+    with pytest.raises(cmd.ProgramError, match="'12:00' has no date"):
+        cmd.instants("12:00", None)
+    with pytest.raises(cmd.ProgramError, match="needs a date .or instants."):
+        cmd.irradiance_argv("hr", "d.tif", "o.tif", date=None, times=[])
+
+
+def test_sun_hours_monthly_and_horizon_range_argv():
+    argv = cmd.sun_hours_argv("hr", "dem.tif", "h.tif", date="2027-01-01",
+                              end_date="2027-12-31", step_minutes=20, monthly=True)
+    assert argv == ["hr", "sun-hours", "dem.tif", "h.tif", "--date", "2027-01-01",
+                    "--end-date", "2027-12-31", "--step", "20min", "--monthly", "--algorithm",
+                    "auto", "--overwrite"]
+    assert parse(argv)["monthly"] is True
+    assert "--monthly" not in cmd.sun_hours_argv("hr", "d.tif", "o.tif", date="2027-01-01")
+
+    argv = cmd.horizon_argv("hr", "dem.tif", "hz.tif", mode="range", start=92.5, end=272.5,
+                            step=22.5, angle_unit="radians", max_distance=150)
+    assert argv == ["hr", "horizon", "dem.tif", "hz.tif", "--start", "92.5", "--end",
+                    "272.5", "--step", "22.5", "--angle-unit", "radians", "--method", "scan",
+                    "--max-distance", "150", "--overwrite"]
+    p = parse(argv)
+    assert (p["start"], p["end"], p["step"], p["angle_unit"], p["azimuth"],
+            p["directions"]) == (92.5, 272.5, 22.5, "radians", None, None)
+    # no end: a whole turn from the start; degrees are the default, not written
+    argv = cmd.horizon_argv("hr", "dem.tif", "hz.tif", mode="range", start=10, step=45)
+    assert argv[4:8] == ["--start", "10", "--step", "45"]
+    assert "--end" not in argv and "--angle-unit" not in argv
+    assert parse(argv)["end"] is None
+    with pytest.raises(cmd.ProgramError, match="step between azimuths"):
+        cmd.horizon_argv("hr", "d.tif", "o.tif", mode="range", step=0)
+    with pytest.raises(cmd.ProgramError, match="angle unit must be one of"):
+        cmd.horizon_argv("hr", "d.tif", "o.tif", angle_unit="gon")
 
 
 def test_progress_commands_are_the_clis():
@@ -790,6 +870,103 @@ def test_qgis_irradiance_equals_program(qgis, tmp_path):
             "120min", "--tz", "America/Chicago", "--albedo", 0.3, "--skyview-directions", 8,
             "--mean")
     assert_same_raster(out, tmp_path / "ref.tif")
+
+
+LINKE_MONTHLY = "2.1,2.4,2.9,3.3,3.5,3.6,3.7,3.6,3.2,2.8,2.4,2.1"
+
+
+def albedo_raster(path, dem):
+    """An albedo raster covering ``dem`` on a coarser grid of its own (20 m cells, a margin
+    around it), float64, varying from 0.1 to 0.6 across it: the program resamples it."""
+    import rasterio
+    from affine import Affine
+    with rasterio.open(dem) as src:
+        b, crs = src.bounds, src.crs
+    n = int((b.right - b.left + 40) // 20) + 1
+    y, x = np.mgrid[0:n, 0:n]
+    with rasterio.open(path, "w", driver="GTiff", width=n, height=n, count=1, dtype="float64",
+                       crs=crs, transform=Affine(20, 0, b.left - 20, 0, -20, b.top + 20)) as d:
+        d.write(0.1 + 0.5 * (x + 2 * y) / (3 * (n - 1)), 1)
+    return path
+
+
+@pytest.mark.slow
+@pytest.mark.qgis
+def test_qgis_irradiance_monthly_albedo_raster_equals_program(qgis, tmp_path):
+    """MONTHLY, DAILY_MEAN, an albedo raster layer (over the number) and the Linke turbidity
+    by month: the program's --monthly --daily-mean --albedo FILE --linke-turbidity T1,...,T12,
+    band for band; a month band per month of the period."""
+    albedo = albedo_raster(tmp_path / "albedo.tif", qgis.dem)
+    out = tmp_path / "irr.tif"
+    report = qgis_run(qgis, "irradiance", INPUT=qgis.dem, DATE="2026-01-30",
+                      END_DATE="2026-03-02", STEP=180, TIMEZONE="America/Chicago",
+                      ALBEDO=0.9, ALBEDO_RASTER=albedo, LINKE_MONTHLY=LINKE_MONTHLY,
+                      SKYVIEW_DIRECTIONS=8, MONTHLY=True, DAILY_MEAN=True, OUTPUT=out)
+    assert f"--albedo {albedo}" in report["log"]["info"][0]
+    program("irradiance", qgis.dem, tmp_path / "ref.tif", "--date", "2026-01-30",
+            "--end-date", "2026-03-02", "--step", "180min", "--tz", "America/Chicago",
+            "--albedo", albedo, "--linke-turbidity", LINKE_MONTHLY, "--skyview-directions", 8,
+            "--monthly", "--daily-mean")
+    assert_same_raster(out, tmp_path / "ref.tif")
+    import rasterio
+    with rasterio.open(out) as ds:
+        assert ds.descriptions == ("beam", "diffuse", "reflected", "global", "2026-01",
+                                   "2026-02", "2026-03")
+        assert ds.tags()["ALBEDO"].startswith("raster albedo.tif")
+        assert ds.tags()["UNITS"].startswith("Wh/m2 per day")
+        glob = ds.read(4)
+        assert np.isfinite(glob).all() and glob.min() > 0
+
+
+@pytest.mark.slow
+@pytest.mark.qgis
+def test_qgis_irradiance_instants_equals_program(qgis, tmp_path):
+    """TIMES: a time of day on DATE and a full date and time, each an instant of 5 bands (the
+    program's repeated --time), with the albedo by month."""
+    out = tmp_path / "now.tif"
+    monthly_albedo = "0.05 0.1 0.15 0.2 0.25 0.3 0.35 0.4 0.45 0.5 0.55 0.6"
+    report = qgis_run(qgis, "irradiance", INPUT=qgis.dem, DATE="2026-06-21",
+                      TIMES="9:30, 2026-07-02T15:05", TIMEZONE="America/Chicago",
+                      ALBEDO_MONTHLY=monthly_albedo, SKYVIEW_DIRECTIONS=8, OUTPUT=out)
+    assert "--date" not in report["log"]["info"][0]
+    program("irradiance", qgis.dem, tmp_path / "ref.tif", "--time", "2026-06-21T09:30",
+            "--time", "2026-07-02T15:05", "--tz", "America/Chicago", "--albedo",
+            monthly_albedo.replace(" ", ","), "--skyview-directions", 8)
+    assert_same_raster(out, tmp_path / "ref.tif")
+    bands, (descriptions, *_) = read_bands(out)
+    assert bands.shape[0] == 10
+    assert descriptions[4] == "incidout 2026-06-21T09:30-05:00"
+    assert descriptions[8] == "glob_rad 2026-07-02T15:05-05:00"
+
+
+@pytest.mark.slow
+@pytest.mark.qgis
+def test_qgis_sun_hours_monthly_and_horizon_range_equal_program(qgis, tmp_path):
+    """Sun hours' MONTHLY (a band per month after the total) and the horizon's r.horizon
+    range (MODE=2: START, END, STEP degrees; ANGLE_UNIT radians)."""
+    out = tmp_path / "hours.tif"
+    qgis_run(qgis, "sunhours", INPUT=qgis.dem, DATE="2026-01-31", END_DATE="2026-03-01",
+             STEP=120, TIMEZONE="America/Chicago", MONTHLY=True, OUTPUT=out)
+    program("sun-hours", qgis.dem, tmp_path / "ref_hours.tif", "--date", "2026-01-31",
+            "--end-date", "2026-03-01", "--step", "120min", "--tz", "America/Chicago",
+            "--monthly")
+    assert_same_raster(out, tmp_path / "ref_hours.tif")
+    bands, (descriptions, *_) = read_bands(out)
+    assert descriptions[1:] == ("2026-01", "2026-02", "2026-03")
+    valid = bands[0] >= 0
+    np.testing.assert_allclose(bands[1:].sum(axis=0)[valid], bands[0][valid], atol=1e-3)
+
+    out = tmp_path / "hz.tif"
+    qgis_run(qgis, "horizon", INPUT=qgis.dem, MODE=2, START=92.5, END=272.5, STEP=22.5,
+             ANGLE_UNIT="radians", MAX_DISTANCE=150, OUTPUT=out)
+    program("horizon", qgis.dem, tmp_path / "ref_hz.tif", "--start", 92.5, "--end", 272.5,
+            "--step", 22.5, "--angle-unit", "radians", "--max-distance", 150)
+    assert_same_raster(out, tmp_path / "ref_hz.tif")
+    bands, (descriptions, *_) = read_bands(out)
+    assert bands.shape[0] == 8          # floor((272.5 - 92.5) / 22.5)
+    assert descriptions[1] == "horizon angle toward azimuth 115"
+    valid = bands[0] != -9999
+    assert np.abs(bands[:, valid]).max() <= np.pi / 2
 
 
 @pytest.mark.slow

@@ -142,6 +142,29 @@ class HillshadeRtAlgorithm(QgsProcessingAlgorithm):
             "ALGORITHM", self.tr("Algorithm"), list(commands.ALGORITHMS), defaultValue="auto",
             usesStaticStrings=True))
 
+    def add_monthly(self, text):
+        self.addParameter(QgsProcessingParameterBoolean("MONTHLY", self.tr(text), False))
+
+    def optional_number(self, parameters, context, name):
+        """An optional number parameter: None when not set."""
+        if parameters.get(name) in (None, ""):
+            return None
+        return self.parameterAsDouble(parameters, name, context)
+
+    def raster_file(self, parameters, context, name, what):
+        """An optional raster layer parameter as the program reads it (a GDAL file name);
+        None when not set."""
+        if parameters.get(name) in (None, ""):
+            return None
+        layer = self.parameterAsRasterLayer(parameters, name, context)
+        if layer is None:
+            raise QgsProcessingException(self.tr("{} could not be opened").format(what))
+        if layer.providerType() != "gdal":
+            raise QgsProcessingException(self.tr(
+                "{} must be a raster read through GDAL (a file), not a {} "
+                "layer").format(what, layer.providerType()))
+        return layer.source()
+
     def add_soft(self, text):
         self.addParameter(QgsProcessingParameterBoolean("SOFT", self.tr(text), False))
 
@@ -383,13 +406,15 @@ class SunHoursAlgorithm(HillshadeRtAlgorithm):
             "date (<code>hillshade-rt sun-hours</code>; float32 hours, -9999 nodata). The sun "
             "every <i>step</i> minutes, each lit sample counting for its interval. Days run "
             "midnight to midnight in the time zone (empty: local mean solar time at the DEM's "
-            "longitude).</p>")
+            "longitude). <b>Monthly</b>: also the hours of each month of the period, one band "
+            "per month after the total (its description YYYY-MM).</p>")
 
     def initAlgorithm(self, config=None):  # noqa: N802
         self.add_dem()
         self.add_dates()
         self.add_step(10.0)
         self.add_zone("")
+        self.add_monthly("Also one band per month (the hours of each month)")
         self.add_algorithm()
         self.add_soft("Soft shadows (count the visible fraction of the sun's disk)")
         self.add_tail()
@@ -401,6 +426,7 @@ class SunHoursAlgorithm(HillshadeRtAlgorithm):
             end_date=self.day(parameters, context, "END_DATE"),
             step_minutes=self.parameterAsDouble(parameters, "STEP", context),
             tz=self.parameterAsString(parameters, "TIMEZONE", context),
+            monthly=self.flag(parameters, context, "MONTHLY"),
             algorithm=self.algorithm(parameters, context),
             soft=self.parameterAsBoolean(parameters, "SOFT", context))
 
@@ -444,8 +470,12 @@ class HorizonAlgorithm(HillshadeRtAlgorithm):
     HELP = ("<p>The horizon angle of every cell (<code>hillshade-rt horizon</code>; float32 "
             "degrees above the horizontal, -9999 nodata; -90: no terrain ahead) toward one "
             "azimuth (one band), or toward each of N equally spaced azimuths, north first "
-            "(one band each, its description the azimuth). A cell is lit by a sun at that "
-            "azimuth iff its angle is at most the sun's elevation. <b>Distance</b>: also the "
+            "(one band each, its description the azimuth), or, as GRASS r.horizon, every "
+            "<i>step</i> degrees from the <i>start</i> azimuth up to (not including) the "
+            "<i>end</i> (empty: a whole turn), one band each; azimuths clockwise from north "
+            "(r.horizon's start counts counter-clockwise from east: ours is 90 - its). A cell is "
+            "lit by a sun at that azimuth iff its angle is at most the sun's elevation. Angles "
+            "in degrees, or radians as r.horizon writes them. <b>Distance</b>: also the "
             "ground distance in metres to each horizon point (the same bands). scan is exact; "
             "hull approximates, faster.</p>")
 
@@ -453,13 +483,28 @@ class HorizonAlgorithm(HillshadeRtAlgorithm):
         self.add_dem()
         self.addParameter(QgsProcessingParameterEnum(
             "MODE", self.tr("Horizon toward"),
-            [self.tr("One azimuth"), self.tr("N directions (one band each)")], defaultValue=0))
+            [self.tr("One azimuth"), self.tr("N directions (one band each)"),
+             self.tr("Start to end every step (r.horizon; one band each)")], defaultValue=0))
         self.addParameter(QgsProcessingParameterNumber(
             "AZIMUTH", self.tr("Azimuth (degrees clockwise from north)"),
             QgsProcessingParameterNumber.Double, 180.0, minValue=-360.0, maxValue=720.0))
         self.addParameter(QgsProcessingParameterNumber(
             "DIRECTIONS", self.tr("Directions"), QgsProcessingParameterNumber.Integer, 32,
             minValue=8, maxValue=360))
+        self.addParameter(QgsProcessingParameterNumber(
+            "START", self.tr("Start to end: first azimuth (degrees clockwise from north)"),
+            QgsProcessingParameterNumber.Double, 0.0, minValue=-360.0, maxValue=720.0))
+        self.addParameter(QgsProcessingParameterNumber(
+            "END", self.tr("Start to end: azimuths before this one (degrees; empty: the start "
+                           "+ 360)"),
+            QgsProcessingParameterNumber.Double, None, optional=True, minValue=-360.0,
+            maxValue=1080.0))
+        self.addParameter(QgsProcessingParameterNumber(
+            "STEP", self.tr("Start to end: step (degrees)"),
+            QgsProcessingParameterNumber.Double, 15.0, minValue=0.01, maxValue=360.0))
+        self.addParameter(QgsProcessingParameterEnum(
+            "ANGLE_UNIT", self.tr("Unit of the angles written"), list(commands.ANGLE_UNITS),
+            defaultValue="degrees", usesStaticStrings=True))
         self.addParameter(QgsProcessingParameterEnum(
             "METHOD", self.tr("Method"), list(commands.HORIZON_METHODS), defaultValue="scan",
             usesStaticStrings=True))
@@ -487,6 +532,11 @@ class HorizonAlgorithm(HillshadeRtAlgorithm):
             mode=commands.HORIZON_MODES[self.parameterAsEnum(parameters, "MODE", context)],
             azimuth=self.number(parameters, context, "AZIMUTH"),
             directions=self.parameterAsInt(parameters, "DIRECTIONS", context),
+            start=self.number(parameters, context, "START"),
+            end=self.optional_number(parameters, context, "END"),
+            step=self.number(parameters, context, "STEP"),
+            angle_unit=self.parameterAsEnumString(parameters, "ANGLE_UNIT", context)
+            or "degrees",
             distance=self.distance(parameters, context),
             method=self.parameterAsEnumString(parameters, "METHOD", context) or "scan",
             max_distance=self.number(parameters, context, "MAX_DISTANCE"),
@@ -562,27 +612,52 @@ class IrradianceAlgorithm(HillshadeRtAlgorithm):
             "(W/m2 with <i>mean</i>), -9999 nodata. Beam: DNI on the tilted surface, 0 in cast "
             "shadow; diffuse: DHI x the sky view factor (isotropic, or Perez); reflected: GHI x "
             "albedo x the terrain's view factor. A clear sky (pvlib's Ineichen or Haurwitz), "
-            "or a measured one: a CSV of time, ghi (and dni, dhi) in W/m2.</p>")
+            "or a measured one: a CSV of time, ghi (and dni, dhi) in W/m2. The Linke turbidity "
+            "and the albedo: a number, or 12 monthly numbers (January first; each sample takes "
+            "its month's); the albedo also a raster (resampled to the DEM's grid; it must "
+            "cover the DEM), which overrides the numbers. <b>Monthly</b>: also the global "
+            "energy of each month, one band per month after the four (description YYYY-MM). "
+            "<b>Daily mean</b>: Wh/m2 per day instead of the period's Wh/m2. <b>Instants</b> "
+            "(comma-separated, e.g. 2026-06-21T09:00, 2026-06-21T15:30, or times of day such "
+            "as 09:00, 12:00 on the date; local times in the time zone): instead of the "
+            "period, the four in W/m2 and the sun's angle above each cell's surface at each "
+            "instant, 5 bands per instant (GRASS r.sun's mode 1).</p>")
 
     def initAlgorithm(self, config=None):  # noqa: N802
         self.add_dem()
         self.add_dates()
         self.add_step(15.0)
         self.add_zone("")
+        self.addParameter(QgsProcessingParameterString(
+            "TIMES", self.tr("Instants instead of the period: date-times or times of day on "
+                             "the date, comma-separated (5 bands each)"), "", optional=True))
         self.addParameter(QgsProcessingParameterEnum(
             "CLEAR_SKY", self.tr("Clear sky"), list(commands.CLEAR_SKIES),
             defaultValue="ineichen", usesStaticStrings=True))
         self.addParameter(QgsProcessingParameterNumber(
             "LINKE_TURBIDITY", self.tr("Linke turbidity (0: pvlib's monthly climatology)"),
             QgsProcessingParameterNumber.Double, 0.0, minValue=0.0))
+        self.addParameter(QgsProcessingParameterString(
+            "LINKE_MONTHLY", self.tr("Linke turbidity by month: 12 numbers, January first "
+                                     "(overrides the number)"), "", optional=True))
         self.addParameter(QgsProcessingParameterNumber(
             "ALBEDO", self.tr("Albedo (ground reflectance, 0..1)"),
             QgsProcessingParameterNumber.Double, 0.2, minValue=0.0, maxValue=1.0))
+        self.addParameter(QgsProcessingParameterString(
+            "ALBEDO_MONTHLY", self.tr("Albedo by month: 12 numbers, January first (overrides "
+                                      "the number)"), "", optional=True))
+        self.addParameter(QgsProcessingParameterRasterLayer(
+            "ALBEDO_RASTER", self.tr("Albedo raster (0..1, covering the DEM; overrides the "
+                                     "numbers)"), optional=True))
         self.addParameter(QgsProcessingParameterFile(
             "GHI", self.tr("Measured sky: CSV of time, ghi [, dni, dhi] (W/m2)"),
             extension="csv", optional=True))
         self.addParameter(QgsProcessingParameterBoolean(
             "MEAN", self.tr("Mean W/m2 over the period instead of Wh/m2"), False))
+        self.addParameter(QgsProcessingParameterBoolean(
+            "DAILY_MEAN", self.tr("Wh/m2 per day (the energy divided by the days) instead of "
+                                  "Wh/m2"), False))
+        self.add_monthly("Also one band per month (the global energy of each month)")
         self.addParameter(QgsProcessingParameterBoolean(
             "PEREZ", self.tr("Perez anisotropic sky"), False))
         self.addParameter(QgsProcessingParameterNumber(
@@ -594,18 +669,29 @@ class IrradianceAlgorithm(HillshadeRtAlgorithm):
         self.add_tail()
 
     def command(self, program, parameters, context):
+        date = self.day(parameters, context, "DATE")
         return commands.irradiance_argv(
             program, **self.common(parameters, context),
-            date=self.day(parameters, context, "DATE"),
+            date=date,
             end_date=self.day(parameters, context, "END_DATE"),
             step_minutes=self.number(parameters, context, "STEP"),
             tz=self.parameterAsString(parameters, "TIMEZONE", context),
+            times=commands.instants(self.parameterAsString(parameters, "TIMES", context),
+                                    date),
             clear_sky=self.parameterAsEnumString(parameters, "CLEAR_SKY", context)
             or "ineichen",
-            linke_turbidity=self.number(parameters, context, "LINKE_TURBIDITY"),
-            albedo=self.number(parameters, context, "ALBEDO"),
+            linke_turbidity=commands.sky_value(
+                "the Linke turbidity by month",
+                self.number(parameters, context, "LINKE_TURBIDITY") or None,
+                self.parameterAsString(parameters, "LINKE_MONTHLY", context)),
+            albedo=commands.sky_value(
+                "the albedo by month", self.number(parameters, context, "ALBEDO"),
+                self.parameterAsString(parameters, "ALBEDO_MONTHLY", context),
+                self.raster_file(parameters, context, "ALBEDO_RASTER", "the albedo raster")),
             ghi=self.parameterAsFile(parameters, "GHI", context) or None,
             mean=self.flag(parameters, context, "MEAN"),
+            daily_mean=self.flag(parameters, context, "DAILY_MEAN"),
+            monthly=self.flag(parameters, context, "MONTHLY"),
             perez=self.flag(parameters, context, "PEREZ"),
             skyview_directions=self.parameterAsInt(parameters, "SKYVIEW_DIRECTIONS", context),
             height_above_ground=self.number(parameters, context, "HEIGHT_ABOVE_GROUND"),

@@ -18,7 +18,7 @@ import sys
 import threading
 import time
 from dataclasses import dataclass, field
-from typing import Callable, Iterable, Optional, Sequence
+from typing import Callable, Iterable, Optional, Sequence, Union
 
 PROGRAM = "hillshade-rt"
 # the provider's setting (Processing > Providers > hillshade-rt): the program's path
@@ -167,18 +167,19 @@ def hillshade_argv(program: str, dem: str, output: str, *, band: int = 1,
 
 def sun_hours_argv(program: str, dem: str, output: str, *, date: str,
                    end_date: Optional[str] = None, step_minutes: float = 10.0,
-                   tz: Optional[str] = None, band: int = 1, algorithm: str = "auto",
-                   soft: bool = False, extra: Iterable[str] = ()) -> list:
+                   tz: Optional[str] = None, band: int = 1, monthly: bool = False,
+                   algorithm: str = "auto", soft: bool = False,
+                   extra: Iterable[str] = ()) -> list:
     """``hillshade-rt sun-hours``: hours of direct sun per cell over a day (or days up to
     ``end_date``), the sun every ``step_minutes``; days run midnight to midnight in ``tz``
-    (empty: local mean solar time)."""
+    (empty: local mean solar time); ``monthly``: also one band per month after the total."""
     if not date:
         raise ProgramError("sun hours need a date")
     step = _minutes("step", step_minutes)
     args = [program, "sun-hours"] + dem_args(dem, output, band) + ["--date", date]
     if end_date:
         args += ["--end-date", end_date]
-    args += ["--step", step]
+    args += ["--step", step] + (["--monthly"] if monthly else [])
     return args + _zone(tz) + common_tail(algorithm, soft, extra)
 
 
@@ -196,7 +197,9 @@ def skyview_argv(program: str, dem: str, output: str, *, band: int = 1, directio
     return args + common_tail(None, False, extra)
 
 
-HORIZON_MODES = ("azimuth", "directions")     # one azimuth (one band), or N directions
+# one azimuth (one band), N directions, or r.horizon's --start [--end] --step (degrees)
+HORIZON_MODES = ("azimuth", "directions", "range")
+ANGLE_UNITS = ("degrees", "radians")
 HORIZON_METHODS = ("scan", "hull")
 CLEAR_SKIES = ("ineichen", "haurwitz")
 QUERY_SUN_MODES = SUN_MODES + ("series",)     # also --start/--end/--step
@@ -249,15 +252,28 @@ def write_points_csv(path: str, points: Iterable) -> int:
 
 def horizon_argv(program: str, dem: str, output: str, *, band: int = 1,
                  mode: str = "azimuth", azimuth: float = 180.0, directions: int = 32,
-                 distance: Optional[str] = None, method: str = "scan",
-                 max_distance: Optional[float] = None, height_above_ground: float = 0.0,
-                 extra: Iterable[str] = ()) -> list:
-    """``hillshade-rt horizon``: the horizon angle toward one azimuth (one band) or toward each
-    of ``directions`` azimuths (one band each); ``distance``: also the distance raster."""
+                 start: float = 0.0, end: Optional[float] = None, step: float = 15.0,
+                 angle_unit: str = "degrees", distance: Optional[str] = None,
+                 method: str = "scan", max_distance: Optional[float] = None,
+                 height_above_ground: float = 0.0, extra: Iterable[str] = ()) -> list:
+    """``hillshade-rt horizon``: the horizon angle toward one azimuth (one band), toward each
+    of ``directions`` azimuths, or (mode 'range', r.horizon's) every ``step`` degrees from
+    ``start`` before ``end`` (None: a whole turn), one band each; in ``angle_unit``;
+    ``distance``: also the distance raster."""
     _check_choice("the horizon", mode, HORIZON_MODES)
     args = [program, "horizon"] + dem_args(dem, output, band)
-    args += (["--azimuth", _number(azimuth)] if mode == "azimuth"
-             else ["--directions", str(int(directions))])
+    if mode == "azimuth":
+        args += ["--azimuth", _number(azimuth)]
+    elif mode == "directions":
+        args += ["--directions", str(int(directions))]
+    else:
+        if not step or float(step) <= 0:
+            raise ProgramError("the step between azimuths must be more than 0 degrees")
+        args += ["--start", _number(start or 0.0)]
+        args += ["--end", _number(end)] if end is not None else []
+        args += ["--step", _number(step)]
+    if _check_choice("the angle unit", angle_unit, ANGLE_UNITS) != "degrees":
+        args += ["--angle-unit", angle_unit]
     if distance:
         args += ["--distance", distance]
     args += ["--method", _check_choice("the method", method, HORIZON_METHODS)]
@@ -315,29 +331,97 @@ def query_argv(program: str, dem: str, output: str, *, points: str, band: int = 
     return args + common_tail(None, False, extra)
 
 
-def irradiance_argv(program: str, dem: str, output: str, *, date: str,
+def monthly_numbers(name: str, text: Optional[str]) -> Optional[str]:
+    """A number or 12 monthly numbers (January first) as the command line takes them
+    (``2.1,2.4,...``): ``text`` separated by commas, semicolons or spaces; None when empty.
+    The program checks their range."""
+    import re
+    parts = [p for p in re.split(r"[,;\s]+", (text or "").strip()) if p]
+    if not parts:
+        return None
+    try:
+        values = [float(p) for p in parts]
+    except ValueError:
+        raise ProgramError(f"{name}: a number or 12 monthly numbers, not {text.strip()!r}") \
+            from None
+    if len(values) not in (1, 12):
+        raise ProgramError(f"{name}: a number or 12 monthly numbers (January first), not "
+                           f"{len(values)}")
+    return ",".join(_number(v) for v in values)
+
+
+def sky_value(name: str, number: Optional[float], monthly: Optional[str] = None,
+              raster: Optional[str] = None) -> Optional[str]:
+    """An albedo's or a turbidity's command-line value: the raster when given, else the
+    monthly numbers when given, else the number (None: the number is None)."""
+    if raster:
+        return raster
+    by_month = monthly_numbers(name, monthly)
+    if by_month is not None:
+        return by_month
+    return None if number is None else _number(number)
+
+
+def instants(text: Optional[str], date: Optional[str] = None) -> list:
+    """The instants of a comma-separated list (semicolons and new lines too): each an ISO 8601
+    date and time (``2026-06-21T12:00``, with or without a UTC offset), or a time of day
+    (``12:00``, ``9:30:15``) on ``date``."""
+    import re
+    out = []
+    for item in re.split(r"[,;\n]+", text or ""):
+        item = item.strip()
+        if not item:
+            continue
+        if re.fullmatch(r"\d{1,2}:\d{2}(:\d{2}(\.\d+)?)?", item):
+            if not date:
+                raise ProgramError(f"the time {item!r} has no date: give the date, or a date "
+                                   "and time (2026-06-21T12:00)")
+            hour, rest = item.split(":", 1)
+            item = f"{date}T{int(hour):02d}:{rest}"
+        out.append(item)
+    return out
+
+
+def irradiance_argv(program: str, dem: str, output: str, *, date: Optional[str] = None,
                     end_date: Optional[str] = None, step_minutes: float = 15.0,
                     tz: Optional[str] = None, band: int = 1, clear_sky: str = "ineichen",
-                    linke_turbidity: Optional[float] = None, albedo: float = 0.2,
-                    ghi: Optional[str] = None, mean: bool = False, perez: bool = False,
+                    linke_turbidity: Union[float, str, None] = None,
+                    albedo: Union[float, str] = 0.2,
+                    ghi: Optional[str] = None, mean: bool = False, daily_mean: bool = False,
+                    monthly: bool = False, times: Sequence[str] = (), perez: bool = False,
                     skyview_directions: int = 32, height_above_ground: float = 0.0,
                     algorithm: str = "auto", soft: bool = False,
                     extra: Iterable[str] = ()) -> list:
     """``hillshade-rt irradiance``: beam, diffuse, reflected and global irradiance (4 bands,
-    Wh/m2, W/m2 with ``mean``) over a day or days up to ``end_date``."""
-    if not date:
-        raise ProgramError("irradiance needs a date")
-    args = [program, "irradiance"] + dem_args(dem, output, band) + ["--date", date]
-    if end_date:
-        args += ["--end-date", end_date]
-    args += ["--step", _minutes("step", step_minutes)] + _zone(tz)
-    args += ["--clear-sky", _check_choice("the clear sky", clear_sky, CLEAR_SKIES)]
-    if linke_turbidity:
-        args += ["--linke-turbidity", _number(linke_turbidity)]
-    args += ["--albedo", _number(albedo)]
+    Wh/m2, W/m2 with ``mean``, Wh/m2 per day with ``daily_mean``; ``monthly``: one global
+    band per month after them) over a day or days up to ``end_date``; or, with ``times``
+    (instants, :func:`instants`), the four in W/m2 and the incidence angle at each (5 bands a
+    time; the date and step are not used). ``linke_turbidity`` and ``albedo``: a number or the
+    command line's text (:func:`sky_value`: 12 monthly numbers, a raster); a turbidity of None
+    or 0 is pvlib's climatology. With ``ghi`` (a measured sky) no clear-sky model is given."""
+    times = list(times or ())
+    if not date and not times:
+        raise ProgramError("irradiance needs a date (or instants)")
+    args = [program, "irradiance"] + dem_args(dem, output, band)
+    if times:
+        for t in times:
+            args += ["--time", t]
+    else:
+        args += ["--date", date]
+        if end_date:
+            args += ["--end-date", end_date]
+        args += ["--step", _minutes("step", step_minutes)]
+    args += _zone(tz)
+    if not ghi:
+        args += ["--clear-sky", _check_choice("the clear sky", clear_sky, CLEAR_SKIES)]
+    if isinstance(linke_turbidity, str) or linke_turbidity:
+        args += ["--linke-turbidity", linke_turbidity if isinstance(linke_turbidity, str)
+                 else _number(linke_turbidity)]
+    args += ["--albedo", albedo if isinstance(albedo, str) else _number(albedo)]
     if ghi:
         args += ["--ghi", ghi]
-    args += (["--mean"] if mean else []) + (["--perez"] if perez else [])
+    args += (["--mean"] if mean else []) + (["--daily-mean"] if daily_mean else [])
+    args += (["--monthly"] if monthly else []) + (["--perez"] if perez else [])
     args += ["--skyview-directions", str(int(skyview_directions))] + _lift(height_above_ground)
     return args + common_tail(algorithm, soft, extra)
 
