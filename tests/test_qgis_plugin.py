@@ -32,6 +32,7 @@ from hillshade_rt.testing import data_path, read_band, repo_root
 
 PLUGIN = os.path.join(repo_root(), "qgis", "hillshade_rt_qgis")
 DEM = data_path("lidar_dem_1m_utm15n_400x400.tif")
+LINKE_MONTHLY = "2.1,2.4,2.9,3.3,3.5,3.6,3.7,3.6,3.2,2.8,2.4,2.1"
 
 
 def this_checkouts_program() -> str:
@@ -378,6 +379,35 @@ def test_irradiance_sky_inputs_monthly_instants_argv():
     p = parse(argv)
     assert (p["linke_turbidity"], p["albedo"], p["daily_mean"], p["monthly"],
             p["mean"]) == (linke, "/r/albedo.tif", True, True, False)
+    assert p["beam_index"] is None and p["diffuse_index"] is None   # none given: not passed
+
+    # a Linke raster over its numbers; r.sun's clear-sky indices: a raster over the number,
+    # the number alone (0 is an index, not "none"), none at all
+    linke = cmd.sky_value("the Linke turbidity by month", 3.3, LINKE_MONTHLY, "/r/linke.tif")
+    assert linke == "/r/linke.tif"
+    beam = cmd.sky_value("the beam index", 0.55, None, "/r/kb.tif")
+    diffuse = cmd.sky_value("the diffuse index", 0.0, None, None)
+    assert (beam, diffuse) == ("/r/kb.tif", "0")
+    argv = cmd.irradiance_argv("hr", "dem.tif", "real.tif", date="2027-03-01", tz="Europe/Vienna",
+                               linke_turbidity=linke, albedo=0.3, beam_index=beam,
+                               diffuse_index=diffuse)
+    assert argv == ["hr", "irradiance", "dem.tif", "real.tif", "--date", "2027-03-01",
+                    "--step", "15min", "--tz", "Europe/Vienna", "--clear-sky", "ineichen",
+                    "--linke-turbidity", "/r/linke.tif", "--albedo", "0.3",
+                    "--beam-index", "/r/kb.tif", "--diffuse-index", "0",
+                    "--skyview-directions", "32", "--algorithm", "auto", "--overwrite"]
+    p = parse(argv)
+    assert (p["linke_turbidity"], p["beam_index"], p["diffuse_index"]) == (
+        "/r/linke.tif", "/r/kb.tif", "0")
+    argv = cmd.irradiance_argv("hr", "dem.tif", "o.tif", date="2027-03-01",
+                               beam_index=0.625, diffuse_index="/r/kd.tif")
+    assert argv[argv.index("--beam-index"):argv.index("--beam-index") + 4] == [
+        "--beam-index", "0.625", "--diffuse-index", "/r/kd.tif"]
+    assert parse(argv)["beam_index"] == "0.625"
+    none = cmd.irradiance_argv("hr", "dem.tif", "o.tif", date="2027-03-01",
+                               beam_index=cmd.sky_value("kb", None, None, None),
+                               diffuse_index="")
+    assert not {"--beam-index", "--diffuse-index"} & set(none)
 
     times = cmd.instants("2026-06-21T09:30, 15:05;\n 7:00:30 ,2026-06-22T12:00+02:00,",
                          "2026-06-21")
@@ -403,6 +433,27 @@ def test_irradiance_sky_inputs_monthly_instants_argv():
         cmd.instants("12:00", None)
     with pytest.raises(cmd.ProgramError, match="needs a date .or instants."):
         cmd.irradiance_argv("hr", "d.tif", "o.tif", date=None, times=[])
+
+
+def test_irradiance_index_with_measured_sky_is_the_programs_error(tmp_path):
+    """An index with a measured sky (GHI): passed on as a Linke turbidity with GHI is, and the
+    program's one-line refusal (exit 2, nothing written) is the run's error line, as the
+    algorithm raises it."""
+    ghi = tmp_path / "ghi.csv"
+    ghi.write_text("time,ghi\n2026-06-21T00:00Z,0\n2026-06-22T00:00Z,0\n")
+    out = tmp_path / "never.tif"
+    argv = cmd.irradiance_argv(PROGRAM, DEM, str(out), date="2026-06-21", ghi=str(ghi),
+                               clear_sky="ineichen", beam_index=0.5,
+                               diffuse_index=cmd.sky_value("kd", 0.4, None, None))
+    assert "--clear-sky" not in argv
+    assert argv[argv.index("--beam-index") + 1] == "0.5"
+    assert argv[argv.index("--diffuse-index") + 1] == "0.4"
+    result = cmd.run(argv)
+    assert result.returncode == 2 and not result.canceled
+    error = result.error_line()
+    assert cmd.is_error_line(error), result.lines
+    assert "--ghi" in error and "--beam-index" in error and "--diffuse-index" in error
+    assert not out.exists() and os.listdir(tmp_path) == ["ghi.csv"]
 
 
 def test_sun_hours_monthly_and_horizon_range_argv():
@@ -872,12 +923,10 @@ def test_qgis_irradiance_equals_program(qgis, tmp_path):
     assert_same_raster(out, tmp_path / "ref.tif")
 
 
-LINKE_MONTHLY = "2.1,2.4,2.9,3.3,3.5,3.6,3.7,3.6,3.2,2.8,2.4,2.1"
-
-
-def albedo_raster(path, dem):
-    """An albedo raster covering ``dem`` on a coarser grid of its own (20 m cells, a margin
-    around it), float64, varying from 0.1 to 0.6 across it: the program resamples it."""
+def albedo_raster(path, dem, low=0.1, high=0.6):
+    """An albedo raster (or any sky input's) covering ``dem`` on a coarser grid of its own (20 m
+    cells, a margin around it), float64, varying from ``low`` to ``high`` across it: the
+    program resamples it."""
     import rasterio
     from affine import Affine
     with rasterio.open(dem) as src:
@@ -886,7 +935,7 @@ def albedo_raster(path, dem):
     y, x = np.mgrid[0:n, 0:n]
     with rasterio.open(path, "w", driver="GTiff", width=n, height=n, count=1, dtype="float64",
                        crs=crs, transform=Affine(20, 0, b.left - 20, 0, -20, b.top + 20)) as d:
-        d.write(0.1 + 0.5 * (x + 2 * y) / (3 * (n - 1)), 1)
+        d.write(low + (high - low) * (x + 2 * y) / (3 * (n - 1)), 1)
     return path
 
 
@@ -916,6 +965,37 @@ def test_qgis_irradiance_monthly_albedo_raster_equals_program(qgis, tmp_path):
         assert ds.tags()["UNITS"].startswith("Wh/m2 per day")
         glob = ds.read(4)
         assert np.isfinite(glob).all() and glob.min() > 0
+
+
+@pytest.mark.slow
+@pytest.mark.qgis
+def test_qgis_irradiance_linke_and_index_rasters_equal_program(qgis, tmp_path):
+    """LINKE_RASTER over the Linke numbers, BEAM_INDEX_RASTER over the beam index's number,
+    DIFFUSE_INDEX_RASTER: the program's --linke-turbidity FILE --beam-index FILE
+    --diffuse-index FILE, pixel for pixel."""
+    linke = albedo_raster(tmp_path / "linke.tif", qgis.dem, 2.2, 5.3)
+    kb = albedo_raster(tmp_path / "kb.tif", qgis.dem, 0.35, 0.9)
+    kd = albedo_raster(tmp_path / "kd.tif", qgis.dem, 0.95, 0.45)
+    out = tmp_path / "irr.tif"
+    report = qgis_run(qgis, "irradiance", INPUT=qgis.dem, DATE="2026-05-14", STEP=120,
+                      TIMEZONE="America/Chicago", LINKE_TURBIDITY=7.5,
+                      LINKE_MONTHLY=LINKE_MONTHLY, LINKE_RASTER=linke, BEAM_INDEX=0.1,
+                      BEAM_INDEX_RASTER=kb, DIFFUSE_INDEX_RASTER=kd, SKYVIEW_DIRECTIONS=8,
+                      OUTPUT=out)
+    command = report["log"]["info"][0]
+    assert (f"--linke-turbidity {linke}" in command and f"--beam-index {kb}" in command
+            and f"--diffuse-index {kd}" in command), command
+    program("irradiance", qgis.dem, tmp_path / "ref.tif", "--date", "2026-05-14", "--step",
+            "120min", "--tz", "America/Chicago", "--linke-turbidity", linke, "--beam-index",
+            kb, "--diffuse-index", kd, "--skyview-directions", 8)
+    assert_same_raster(out, tmp_path / "ref.tif")
+    import rasterio
+    with rasterio.open(out) as ds:
+        tags = ds.tags()
+        assert tags["LINKE_TURBIDITY"].startswith("raster linke.tif"), tags
+        assert tags["BEAM_INDEX"].startswith("raster kb.tif"), tags
+        assert tags["DIFFUSE_INDEX"].startswith("raster kd.tif"), tags
+        assert np.isfinite(ds.read(4)).all()
 
 
 @pytest.mark.slow

@@ -614,8 +614,12 @@ class IrradianceAlgorithm(HillshadeRtAlgorithm):
             "albedo x the terrain's view factor. A clear sky (pvlib's Ineichen or Haurwitz), "
             "or a measured one: a CSV of time, ghi (and dni, dhi) in W/m2. The Linke turbidity "
             "and the albedo: a number, or 12 monthly numbers (January first; each sample takes "
-            "its month's); the albedo also a raster (resampled to the DEM's grid; it must "
-            "cover the DEM), which overrides the numbers. <b>Monthly</b>: also the global "
+            "its month's); either also a raster (resampled to the DEM's grid; it must "
+            "cover the DEM), which overrides the numbers: a Linke raster gives each cell its "
+            "own clear sky. <b>Clear-sky indices</b> of the beam and the diffuse (0..1, "
+            "GRASS r.sun's coeff_bh and coeff_dh; a number or a raster; not with a measured "
+            "sky): the real sky's beam and diffuse are the clear sky's times them. "
+            "<b>Monthly</b>: also the global "
             "energy of each month, one band per month after the four (description YYYY-MM). "
             "<b>Daily mean</b>: Wh/m2 per day instead of the period's Wh/m2. <b>Instants</b> "
             "(comma-separated, e.g. 2026-06-21T09:00, 2026-06-21T15:30, or times of day such "
@@ -640,6 +644,9 @@ class IrradianceAlgorithm(HillshadeRtAlgorithm):
         self.addParameter(QgsProcessingParameterString(
             "LINKE_MONTHLY", self.tr("Linke turbidity by month: 12 numbers, January first "
                                      "(overrides the number)"), "", optional=True))
+        self.addParameter(QgsProcessingParameterRasterLayer(
+            "LINKE_RASTER", self.tr("Linke turbidity raster (1..10, covering the DEM; each "
+                                    "cell's clear sky; overrides the numbers)"), optional=True))
         self.addParameter(QgsProcessingParameterNumber(
             "ALBEDO", self.tr("Albedo (ground reflectance, 0..1)"),
             QgsProcessingParameterNumber.Double, 0.2, minValue=0.0, maxValue=1.0))
@@ -649,6 +656,17 @@ class IrradianceAlgorithm(HillshadeRtAlgorithm):
         self.addParameter(QgsProcessingParameterRasterLayer(
             "ALBEDO_RASTER", self.tr("Albedo raster (0..1, covering the DEM; overrides the "
                                      "numbers)"), optional=True))
+        for name, text in (("BEAM", "beam"), ("DIFFUSE", "diffuse")):
+            self.addParameter(QgsProcessingParameterNumber(
+                f"{name}_INDEX", self.tr(f"Clear-sky index of the {text} (0..1, r.sun's "
+                                         f"coeff_{text[0]}h; empty: none; not with a measured "
+                                         "sky)"),
+                QgsProcessingParameterNumber.Double, None, optional=True, minValue=0.0,
+                maxValue=1.0))
+            self.addParameter(QgsProcessingParameterRasterLayer(
+                f"{name}_INDEX_RASTER", self.tr(f"Clear-sky index raster of the {text} (0..1, "
+                                                "covering the DEM; overrides the number)"),
+                optional=True))
         self.addParameter(QgsProcessingParameterFile(
             "GHI", self.tr("Measured sky: CSV of time, ghi [, dni, dhi] (W/m2)"),
             extension="csv", optional=True))
@@ -683,11 +701,21 @@ class IrradianceAlgorithm(HillshadeRtAlgorithm):
             linke_turbidity=commands.sky_value(
                 "the Linke turbidity by month",
                 self.number(parameters, context, "LINKE_TURBIDITY") or None,
-                self.parameterAsString(parameters, "LINKE_MONTHLY", context)),
+                self.parameterAsString(parameters, "LINKE_MONTHLY", context),
+                self.raster_file(parameters, context, "LINKE_RASTER",
+                                 "the Linke turbidity raster")),
             albedo=commands.sky_value(
                 "the albedo by month", self.number(parameters, context, "ALBEDO"),
                 self.parameterAsString(parameters, "ALBEDO_MONTHLY", context),
                 self.raster_file(parameters, context, "ALBEDO_RASTER", "the albedo raster")),
+            beam_index=commands.sky_value(
+                "the beam index", self.optional_number(parameters, context, "BEAM_INDEX"),
+                None, self.raster_file(parameters, context, "BEAM_INDEX_RASTER",
+                                       "the beam index raster")),
+            diffuse_index=commands.sky_value(
+                "the diffuse index", self.optional_number(parameters, context, "DIFFUSE_INDEX"),
+                None, self.raster_file(parameters, context, "DIFFUSE_INDEX_RASTER",
+                                       "the diffuse index raster")),
             ghi=self.parameterAsFile(parameters, "GHI", context) or None,
             mean=self.flag(parameters, context, "MEAN"),
             daily_mean=self.flag(parameters, context, "DAILY_MEAN"),

@@ -352,8 +352,8 @@ def monthly_numbers(name: str, text: Optional[str]) -> Optional[str]:
 
 def sky_value(name: str, number: Optional[float], monthly: Optional[str] = None,
               raster: Optional[str] = None) -> Optional[str]:
-    """An albedo's or a turbidity's command-line value: the raster when given, else the
-    monthly numbers when given, else the number (None: the number is None)."""
+    """An albedo's, a turbidity's or a clear-sky index's command-line value: the raster when
+    given, else the monthly numbers when given, else the number (None: the number is None)."""
     if raster:
         return raster
     by_month = monthly_numbers(name, monthly)
@@ -387,6 +387,8 @@ def irradiance_argv(program: str, dem: str, output: str, *, date: Optional[str] 
                     tz: Optional[str] = None, band: int = 1, clear_sky: str = "ineichen",
                     linke_turbidity: Union[float, str, None] = None,
                     albedo: Union[float, str] = 0.2,
+                    beam_index: Union[float, str, None] = None,
+                    diffuse_index: Union[float, str, None] = None,
                     ghi: Optional[str] = None, mean: bool = False, daily_mean: bool = False,
                     monthly: bool = False, times: Sequence[str] = (), perez: bool = False,
                     skyview_directions: int = 32, height_above_ground: float = 0.0,
@@ -396,9 +398,12 @@ def irradiance_argv(program: str, dem: str, output: str, *, date: Optional[str] 
     Wh/m2, W/m2 with ``mean``, Wh/m2 per day with ``daily_mean``; ``monthly``: one global
     band per month after them) over a day or days up to ``end_date``; or, with ``times``
     (instants, :func:`instants`), the four in W/m2 and the incidence angle at each (5 bands a
-    time; the date and step are not used). ``linke_turbidity`` and ``albedo``: a number or the
-    command line's text (:func:`sky_value`: 12 monthly numbers, a raster); a turbidity of None
-    or 0 is pvlib's climatology. With ``ghi`` (a measured sky) no clear-sky model is given."""
+    time; the date and step are not used). ``linke_turbidity``, ``albedo``, ``beam_index`` and
+    ``diffuse_index``: a number or the command line's text (:func:`sky_value`: 12 monthly
+    numbers, a raster); a turbidity of None or 0 is pvlib's climatology; an index of None is
+    not given (r.sun's coeff_bh, coeff_dh: the clear sky's beam and diffuse times it). With
+    ``ghi`` (a measured sky) no clear-sky model is given; what the program refuses with it (a
+    turbidity, an index) is passed on, for its one-line error."""
     times = list(times or ())
     if not date and not times:
         raise ProgramError("irradiance needs a date (or instants)")
@@ -418,6 +423,9 @@ def irradiance_argv(program: str, dem: str, output: str, *, date: Optional[str] 
         args += ["--linke-turbidity", linke_turbidity if isinstance(linke_turbidity, str)
                  else _number(linke_turbidity)]
     args += ["--albedo", albedo if isinstance(albedo, str) else _number(albedo)]
+    for option, index in (("--beam-index", beam_index), ("--diffuse-index", diffuse_index)):
+        if index is not None and index != "":
+            args += [option, index if isinstance(index, str) else _number(index)]
     if ghi:
         args += ["--ghi", ghi]
     args += (["--mean"] if mean else []) + (["--daily-mean"] if daily_mean else [])

@@ -941,6 +941,7 @@ def _collect(case, r, stderr, bad, in_dir, *outcome) -> None:
     """With HILLSHADE_FUZZ_COLLECT: the case's violations and outcome written down."""
     if bad:
         _record(case, r, stderr, bad, in_dir)
+    os.makedirs(_COLLECT, exist_ok=True)
     with open(os.path.join(_COLLECT, "outcomes.jsonl"), "a", encoding="utf-8") as fh:
         fh.write(json.dumps([case.command, r.exit_code, *outcome,
                              (stderr.strip().splitlines() or [""])[-1][:200]]) + "\n")
@@ -1084,6 +1085,61 @@ _POINTS = {
     "bad.geojson": b'{"type":"FeatureCollection","features":[{"geometry":null}]}',
     "broken.geojson": b"{not json",
 }
+# irradiance's sky inputs as rasters (IN + "sky_<kind>.tif", or a pattern with {month} naming
+# 12 of them): on the DEM's grid, values from low to high across it (out of range for another
+# kind's option); a damaged DEM's on a UTM grid of its own
+_SKY_RASTERS = {"albedo": (0.1, 0.6), "linke": (2.2, 5.3), "kb": (0.35, 0.9),
+                "kd": (0.95, 0.45), "svf": (0.5, 1.0)}
+_MONTHLY12 = {"linke": "2.1,2.4,2.9,3.3,3.5,3.6,3.7,3.6,3.2,2.8,2.4,2.1",
+              "albedo": "0.2,0.2,0.18,0.15,0.15,0.15,0.15,0.15,0.15,0.15,0.18,0.6",
+              "index": "0.5,0.55,0.6,0.65,0.7,0.75,0.8,0.75,0.7,0.6,0.5,0.45"}
+
+
+def _sky_file(kind: str, month=None):
+    """IN + a sky raster's name (``month``: a pattern's format, ``{month}`` or
+    ``{month:02d}``)."""
+    return IN + f"sky_{kind}" + (f"_{month}" if month else "") + ".tif"
+
+
+@functools.lru_cache(maxsize=64)
+def sky_raster_bytes(dem: bytes, kind: str, month: int = 0) -> bytes:
+    """A float64 sky raster of ``kind`` (``_SKY_RASTERS``) on ``dem``'s grid (or, when that does
+    not open, on a 40 x 40 UTM grid), a month's shifted a little."""
+    import rasterio
+    from affine import Affine
+    from rasterio.io import MemoryFile
+    low, high = _SKY_RASTERS[kind]
+    prof = dict(driver="GTiff", width=40, height=40, crs="EPSG:32611",
+                transform=Affine(*_GEO["utm"][0]))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        try:
+            with MemoryFile(dem) as mf, mf.open() as src:
+                prof = dict(driver="GTiff", width=src.width, height=src.height, crs=src.crs,
+                            transform=src.transform)
+        except Exception:  # noqa: BLE001 -- a damaged DEM: a grid of its own
+            pass
+        y, x = np.mgrid[0:prof["height"], 0:prof["width"]]
+        t = (x + 2 * y) / max(1, prof["width"] + 2 * prof["height"] - 3)
+        z = low + (high - low) * t * (1 - 0.02 * month)
+        with MemoryFile() as mf:
+            with mf.open(count=1, dtype="float64", **prof) as dst:
+                dst.write(z, 1)
+            return bytes(mf.read())
+
+
+def _sky_files(name: str, dem: bytes) -> dict[str, bytes]:
+    """The file(s) a sky option's value ``name`` (in IN) stands for: one raster, or the 12 of
+    a {month} pattern."""
+    m = re.fullmatch(r"sky_([a-z]+)(?:_(\{month(?::02d)?\}))?\.tif", name)
+    if m is None or m.group(1) not in _SKY_RASTERS:
+        return {}
+    if m.group(2) is None:
+        return {name: sky_raster_bytes(dem, m.group(1))}
+    return {name.replace(m.group(2), m.group(2).format(month=k)):
+            sky_raster_bytes(dem, m.group(1), k) for k in range(1, 13)}
+
+
 _TIME_VALUES = _TIMES + _LOCAL_TIMES + _BAD_TIMES
 _DATES = ["2026-06-21", "2026-12-21", "2026-03-29", "21/06/2026", "", "2026-02-30", "0001-01-01",
           "9999-12-31", "2026-06-21T12:00"]
@@ -1154,6 +1210,9 @@ _COMMANDS = {
         (["--body"], _v(["moon", "mars", "earth", "1000"], ["-1", "pluto"]), 14),
         (["--output-pattern"], _v([OUT + "o_{index}.tif"], [OUT + "o_{nope}.tif"]), 12),
         (["--cog"], None, 12),
+        (["--vector"], _v([OUT + "s.gpkg", OUT + "s.geojson", OUT + "s.fgb"],
+                          [OUT + "s.shp", OUT + "s.txt"]), 8),
+        (["--vector-connectivity"], _v(["4", "8"], ["6"]), 10),
     ]),
     "hillshade": (["DEM", "OUT"], [[], ["--azimuth", "315", "--elevation", "45"],
                                    ["--time", "2026-06-21T18:00Z"]],
@@ -1172,8 +1231,10 @@ _COMMANDS = {
         (["--soft"], None, 6), (["--no-self-shadow"], None, 6),
         (["--height-above-ground"], _v(["0", "2"], ["-1"]), 8),
         (["--window-size"], _v(["64", "64x80"], ["0", "8"]), 8),
+        (["--monthly"], None, 6),
     ]),
-    "horizon": (["DEM", "OUT"], [["--azimuth", "163"], ["--directions", "8"]],
+    "horizon": (["DEM", "OUT"], [["--azimuth", "163"], ["--directions", "8"],
+                                 ["--step", "45"]],
                 _READ_TABLE + _OUT_TABLE[:1] + _OUT_TABLE[2:4] + _PHYS_TABLE + [
         (["--azimuth"], _v(["-720", "1e300"], ["nan", "north"]), 8),
         (["--distance"], _v([OUT + "d.tif"]), 6),
@@ -1181,6 +1242,10 @@ _COMMANDS = {
         (["--method"], _v(["scan", "hull"]), 4), (["--sample-spacing"], _v(["1", "3"], ["0"]), 6),
         (["--height-above-ground"], _v(["0", "2"], ["-1"]), 8),
         (["--window-size"], _v(["64", "64x80"], ["0", "8"]), 8),
+        (["--start"], _v(["10", "-30", "350.5"], ["nan", "east"]), 6),
+        (["--end"], _v(["200", "370"], ["nan", "1e9"]), 6),
+        (["--step"], _v(["30", "90"], ["0", "-5", "nan"]), 8),
+        (["--angle-unit"], _v(["degrees", "radians"], ["grads"]), 6),
     ]),
     "skyview": (["DEM", "OUT"], [["--directions", "8"], ["--directions", "4"]],
                 _READ_TABLE + _OUT_TABLE[:1] + _OUT_TABLE[2:4] + _PHYS_TABLE + [
@@ -1202,10 +1267,26 @@ _COMMANDS = {
         (["--end-date"], _v(["2026-06-22"], ["2026-06-20", "abc"]), 8),
         (["--step"], _v(["4h"], ["0s", "abc", "-5min"]), 8),
         (["--clear-sky"], _v(["ineichen", "haurwitz"]), 6),
-        (["--linke-turbidity"], _v(["3"], ["0", "-1", "nan", "1e9"]), 8),
-        (["--albedo"], _v(["0.2", "0", "1"], ["-0.5", "2", "nan"]), 6),
+        (["--linke-turbidity"], _v(["3", _MONTHLY12["linke"], _sky_file("linke"),
+                                    _sky_file("linke", "{month:02d}")],
+                                   ["0", "-1", "nan", "1e9", "3,4", _sky_file("albedo"),
+                                    _sky_file("kb", "{moon}"), IN + "missing.tif"]), 6),
+        (["--albedo"], _v(["0.2", "0", "1", _MONTHLY12["albedo"], _sky_file("albedo"),
+                           _sky_file("albedo", "{month}")],
+                          ["-0.5", "2", "nan", "0.1,0.2", _sky_file("linke")]), 6),
+        (["--beam-index"], _v(["0.7", "0", "1", _MONTHLY12["index"], _sky_file("kb"),
+                               _sky_file("kb", "{month:02d}")],
+                              ["-0.1", "1.5", "nan", _sky_file("linke")]), 6),
+        (["--diffuse-index"], _v(["0.4", "1", _MONTHLY12["index"], _sky_file("kd"),
+                                  _sky_file("kd", "{month}")],
+                                 ["2", "nan", "0.5,0.5", _sky_file("linke")]), 6),
         (["--ghi"], _v([IN + "ghi_" + n + ".csv" for n in _GHI_CSV], [IN + "missing.csv"]), 5),
         (["--mean"], None, 6), (["--perez"], None, 6), (["--soft"], None, 8),
+        (["--daily-mean"], None, 7), (["--monthly"], None, 6),
+        (["--time"], _v(_TIMES[:3], _BAD_TIMES[:3] + _LOCAL_TIMES[:1]), 10),
+        (["--instant"], None, 10),
+        (["--sky-view"], _v([_sky_file("svf")], [IN + "missing.tif", _sky_file("linke")]), 10),
+        (["--sky-view-out"], _v([OUT + "svf.tif"], [OUT + "o.tif"]), 10),
         (["--skyview-directions"], _v(["8"], ["3", "0"]), 8),
         (["--algorithm"], _v(["auto", "smap", "brute"]), 8),
         (["--window-size"], _v(["64", "64x80"], ["0", "8"]), 8),
@@ -1304,8 +1385,11 @@ def command_case(draw, command):
     if wild and rng.random() < 0.15:     # an unknown option, now and then
         argv.append(rng.choice(["--frobnicate", "-Z", "--elevation="]))
     argv = [a.replace("@CENTRE", centre) for a in argv]
+    dem = next(iter(files.values()), b"")
     for a in argv:
         name = a[len(IN):] if a.startswith(IN) else None
+        if name and name.startswith("sky_"):
+            files.update(_sky_files(name, dem))
         if name in _POINTS:
             files[name] = _POINTS[name]
         elif name and name.startswith("sun_") and name[4:-4] in _SUBSOLAR_CSV:
@@ -1387,6 +1471,47 @@ def test_fuzz_found_a_nodata_outside_the_heights_type():
         warnings.simplefilter("error")
         heights_into(z, 1e40, out)
     assert np.array_equal(out, z.astype(np.float32))
+
+
+def test_fuzz_irradiance_sky_inputs_plain():
+    """irradiance's sky inputs as the table draws them, kept as plain cases (the derandomized
+    draws seldom reach them whole): Linke, index and albedo rasters and patterns with --monthly
+    and --sky-view-out succeed with every output; an index with --ghi (a measured sky), index
+    rasters in windows and a Linke raster out of range are refused, exit 2, one line, nothing
+    written; each judged by the generic property too."""
+    import rasterio
+    dem = raster_bytes("GTiff", 16, 21, "float32", "utm", -9999.0, 2, 0.05, 1, None)
+    base = ["irradiance", IN + "dem.tif", OUT + "o.tif", "--date", "2026-06-21", "--step", "3h",
+            "--skyview-directions", "4", "-q"]
+    sky = ["--linke-turbidity", _sky_file("linke", "{month:02d}"), "--beam-index",
+           _sky_file("kb"), "--diffuse-index", _MONTHLY12["index"], "--albedo",
+           _sky_file("albedo", "{month}")]
+
+    def case(*extra):
+        argv = base + list(extra)
+        files = {"dem.tif": dem, "ghi_good.csv": _GHI_CSV["good"]}
+        for a in argv:
+            if a.startswith(IN + "sky_"):
+                files.update(_sky_files(a[len(IN):], dem))
+        return Case("irradiance", argv, files, ["float32 16x21 utm, 5% voids"])
+
+    good = case(*sky, "--monthly", "--sky-view-out", OUT + "svf.tif")
+    assert len(good.files) == 2 + 12 + 1 + 12
+    with _invoked(good, before=_cache_folders(good)) as (r, stderr, _, out_dir, new_out,
+                                                          new_in, _t):
+        assert r.exit_code == 0 and not stderr.strip(), stderr
+        assert not _violations_of_any_run(r, stderr, new_in)
+        assert new_out == ["o.tif", "svf.tif"]
+        with rasterio.open(os.path.join(out_dir, "o.tif")) as ds:
+            assert ds.count == 5 and ds.descriptions[4] == "2026-06"
+            assert ds.tags()["BEAM_INDEX"].startswith("raster sky_kb.tif")
+    refused = {"--ghi": case(*sky, "--ghi", IN + "ghi_good.csv"),
+               "in memory only": case(*sky, "--window-size", "64"),
+               "--linke-turbidity": case("--linke-turbidity", _sky_file("albedo"))}
+    for words, c in refused.items():
+        bad, r, stderr = run_generic(c)
+        assert not bad and r.exit_code == 2, (c, bad, stderr)
+        assert words in stderr, stderr
 
 
 # ---------------------------------------------------------------------------------------------
