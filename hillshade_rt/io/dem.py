@@ -71,7 +71,7 @@ def to_heights(data: np.ndarray, nodata: float | None) -> tuple[np.ndarray, tupl
     ``data`` is an array the caller has just read and owns: a float32 one is converted in place,
     any other type is cast once.
     """
-    z = data.astype(np.float32, copy=False)
+    z = data if data.dtype == np.float32 else np.empty(data.shape, np.float32)
     return z, heights_into(data, nodata, z)
 
 
@@ -99,7 +99,8 @@ def heights_into(data: np.ndarray, nodata: float | None, out: np.ndarray,
             np.equal(data, nd, out=mask)
             bad = True
     if out is not data:
-        out[...] = data
+        with np.errstate(over="ignore"):     # beyond float32 (a damaged file): inf, then void
+            out[...] = data
     nan = np.float32(np.nan)
     if bad:
         np.copyto(out, nan, where=mask)

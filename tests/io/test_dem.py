@@ -91,3 +91,16 @@ def test_grid_of():
     with pytest.raises(HillshadeError, match="^r.raw: has no georeferencing; give the ground "
                                              "spacing with --pixel-size"):
         demmod.grid_of("r.raw", None, None, (3, 3))
+
+
+def test_to_heights_float64_beyond_float32_is_void_without_a_warning():
+    """A float64 value beyond float32's range (a damaged file) becomes a void, silently: numpy's
+    overflow warning would be a second line on stderr."""
+    import warnings
+    data = np.array([[1.5, 1e300], [-1e300, 2.0]], np.float64)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        z, _ = demmod.to_heights(data, None)
+    assert z.dtype == np.float32
+    assert z[0, 0] == np.float32(1.5) and z[1, 1] == np.float32(2.0)
+    assert np.isnan(z[0, 1]) and np.isnan(z[1, 0])
