@@ -314,8 +314,9 @@ def sweep_dead(folder: str) -> list[str]:
             if os.path.isfile(p) and not os.path.islink(p):
                 os.remove(p)
                 removed.append(p)
-            elif name.endswith(".zarr") and os.path.isdir(p) and not os.path.islink(p):
-                shutil.rmtree(p)    # a time cube's Zarr store in the making (io.cube)
+            elif (name.endswith(".zarr") or name.endswith(SCRATCH_DIR)) and \
+                    os.path.isdir(p) and not os.path.islink(p):
+                shutil.rmtree(p)    # a Zarr store in the making (io.cube), a scratch folder
                 removed.append(p)
     return removed
 
@@ -532,6 +533,26 @@ def _publish_folder(tmp: str, final: str, overwrite: bool, shown: str) -> None:
     if os.path.lexists(final):
         raise _appeared(shown)
     os.rename(tmp, final)
+
+
+SCRATCH_DIR = ".scratch.dir"       # the end of a run's scratch folder's name (scratch_folder)
+
+
+def scratch_folder(path: str, kind: str) -> str:
+    """A new hidden folder beside ``path`` for a run's scratch files (never published: the run
+    removes it), named after ``path``, ``kind`` and the process (:func:`owner_tag`):
+    ``.NAME.KIND.<random>~<owner>.scratch.dir``, so that a later run into that folder removes
+    it (:func:`sweep_dead`) where this one was killed. The temporaries of dead runs there are
+    removed first."""
+    real = target_of(os.path.abspath(path))
+    folder = os.path.dirname(real)
+    sweep_dead(folder)
+    suffix = "~" + owner_tag() + SCRATCH_DIR
+    name = os.path.basename(real)[:120] + "." + kind + "."
+    try:
+        return tempfile.mkdtemp(dir=folder, prefix="." + name, suffix=suffix)
+    except OSError as exc:
+        raise os_error(path, exc) from None
 
 
 @contextlib.contextmanager

@@ -327,18 +327,18 @@ def test_monthly_and_albedo_in_windows_give_the_bits_of_the_run_in_memory(
 
 
 def test_an_albedo_raster_on_the_grid_is_the_run_in_memorys(tmp_path, dems, albedos):
-    """The albedo grids of a run in windows (``AlbedoGrids``: the raster resampled once to
+    """The albedo grids of a run in windows (``SkyGrids``: the raster resampled once to
     the whole grid into a file) cut to any window are, to the bit, the same cells of
     ``SkyValue.on_grid`` on the whole grid (the run in memory's): a geographic DEM off the
     raster's grid, and a UTM grid from rasters in geographic coordinates."""
     from hillshade_rt.run import ReadOptions
-    from hillshade_rt.run.irradiance_windows import AlbedoGrids
+    from hillshade_rt.run.irradiance_windows import SkyGrids
     from hillshade_rt.run.sky_inputs import SkyValue
     for which, name in (("real", "raster"), ("frac", "pattern")):
         value = SkyValue.parse("--albedo", albedos[name], 0.0, 1.0)
         src = ReadOptions().open(dems[which], windows=True)
         with src:
-            grids = AlbedoGrids(str(tmp_path / "out.tif"))
+            grids = SkyGrids(str(tmp_path / "out.tif"))
             try:
                 for month in (1, 2, 7):
                     g = grids.grid(value, month, src, src, (0, 0))
@@ -424,5 +424,83 @@ def test_no_room_for_the_albedo_grid_is_one_line(tmp_path, dems, albedos, monkey
                                  albedos["raster"], "--window-size", "64", "-q"])
     assert r.exit_code == 1, r.output
     lines = r.stderr.strip().splitlines()
-    assert len(lines) == 1 and "no room for an albedo raster" in lines[0], lines
+    assert len(lines) == 1 and "no room for the --albedo raster" in lines[0], lines
     assert os.listdir(tmp_path) == []
+
+
+# ---------------------------------------------------------------------------------------------
+# Linke turbidity and clear-sky index rasters (the open sky per cell) in windows and on Dask
+
+def _wave(rows, cols, low, high, month=1):
+    """Values from about ``low`` to ``high`` varying unevenly across a raster, by month."""
+    y, x = np.mgrid[0:rows, 0:cols]
+    v = (x / cols) ** 1.2 * 0.6 + 0.25 * (y / rows) + 0.1 * np.sin(0.9 * x + 0.4 * y + month)
+    return (low + (high - low) * (v + 0.1) / 1.05).astype(np.float32)
+
+
+@pytest.fixture(scope="module")
+def skies(tmp_path_factory, dems):
+    """Over the real DEM (its CRS, 3.1 times coarser, off its grid): a Linke turbidity raster
+    (about 2..6) and a diffuse index raster (0.5..0.95); over the fractal, in geographic
+    coordinates: twelve monthly Linke rasters ``linke_MM.tif`` (January's one value, 3.4:
+    the number's path, February's varying) and a beam index raster (0.4..0.9)."""
+    d = tmp_path_factory.mktemp("skies")
+    tr, rows, cols = _coarse_over(dems["real"], 3.1)
+    with rasterio.open(dems["real"]) as ds:
+        crs = ds.crs
+    linke = write_geotiff(d / "linke.tif", _wave(rows, cols, 2.0, 6.0), tr, crs, -1.0)
+    kd = write_geotiff(d / "kd.tif", _wave(rows, cols, 0.5, 0.95, 5)[::-1], tr, crs, -1.0)
+    geo = CRS.from_epsg(4326)
+    tr, rows, cols = _coarse_over(dems["frac"], 2.6, crs=geo)
+    for m in range(1, 13):
+        v = (np.full((rows, cols), 3.4, np.float32) if m == 1
+             else _wave(rows, cols, 2.5, 5.5, m)[:, ::-1])
+        write_geotiff(d / f"linke_{m:02d}.tif", v, tr, geo, -1.0)
+    kb = write_geotiff(d / "kb.tif", _wave(rows, cols, 0.4, 0.9, 3), tr, geo, -1.0)
+    return {"linke": linke, "kd": kd, "pattern": str(d / "linke_{month:02d}.tif"), "kb": kb}
+
+
+def _sky(kw, skies, albedos):
+    out = dict(kw)
+    for k in ("linke_turbidity", "beam_index", "diffuse_index"):
+        if out.get(k) in skies:
+            out[k] = skies[out[k]]
+    return _albedo(out, albedos)
+
+
+@pytest.mark.parametrize("which,size,extra", [
+    pytest.param("real", "24x40", dict(linke_turbidity="linke"), marks=pytest.mark.slow),
+    ("frac", "30x37", dict(linke_turbidity="pattern", beam_index="kb", monthly=True,
+                           perez=True)),
+    pytest.param("real", "35x45", dict(diffuse_index="kd", beam_index="0.8", albedo="raster",
+                                       mean=True), marks=pytest.mark.slow),
+    pytest.param("frac", "40x45", dict(beam_index="kb", soft=True, albedo="pattern"),
+                 marks=pytest.mark.slow),
+    pytest.param("real", "24x40", dict(linke_turbidity="linke", diffuse_index="kd",
+                                       monthly=True, perez=True), marks=pytest.mark.slow),
+])
+def test_linke_and_index_rasters_in_windows_give_the_bits_of_the_run_in_memory(
+        tmp_path, dems, skies, albedos, any_window, which, size, extra):
+    """The open sky per cell in windows: a Linke turbidity raster coarser than the DEM, a
+    {month} pattern of Linke rasters in another CRS (one month's of one value, the number's
+    path) with a beam index raster, a diffuse index raster with an albedo raster: every band,
+    its description and tags the run in memory's, the report's turbidity too; the sky per
+    cell shows (the bands vary as the rasters do); no grids left beside OUTPUT."""
+    kw = {**MONTHS, **_sky(extra, skies, albedos)}
+    whole = _run(tmp_path / "whole.tif", dems[which], **kw)
+    got = _run(tmp_path / "win.tif", dems[which], window_size=size, **kw)
+    _same(got, whole)
+    assert got[1]["processing"]["mode"] == "windows" and got[1]["processing"]["regions"] >= 4
+    assert sorted(os.listdir(tmp_path)) == ["whole.tif", "win.tif"]
+    assert got[1]["turbidity"] == whole[1]["turbidity"]
+    for k in ("beam_index", "diffuse_index"):
+        assert got[1][k] == whole[1][k]
+    # against the numbers' run: a per-cell sky moves the bands away from the open sky's
+    plain = {k: v for k, v in kw.items()
+             if k not in ("linke_turbidity", "beam_index", "diffuse_index")}
+    ref = _run(tmp_path / "plain.tif", dems[which], window_size=size, **plain)
+    b, r = (np.where(a == -9999.0, np.nan, a) for a in (got[0], ref[0]))
+    ratio = b[3] / r[3]
+    assert np.nanstd(ratio) > 0.01 and np.isfinite(b[3]).sum() == np.isfinite(r[3]).sum()
+    if extra.get("linke_turbidity"):
+        assert "each cell its own" in got[1]["turbidity"]

@@ -230,8 +230,12 @@ def test_monthly_linke_turbidity_gives_each_sample_its_month(tmp_path, runner, d
     (["--beam-index", "1.2"], "--beam-index must be between 0 and 1, got 1.2"),
     (["--diffuse-index", "0.5,0.5"], "one number or 12 monthly numbers"),
     (["--beam-index", "0.5", "--ghi", "{csv}"], "--beam-index and --diffuse-index do not go"),
-    (["--linke-turbidity", "{two}", "--window-size", "64"], "in memory only for now"),
-    (["--diffuse-index", "{half}", "--window-size", "64"], "in memory only for now"),
+    # in windows (the rasters resampled to the grid once): the same lines
+    (["--linke-turbidity", "{raster}", "--window-size", "64"], "does not cover the DEM"),
+    (["--linke-turbidity", "{turbid}", "--window-size", "64"],
+     "values must be between 1 and 10, found 11"),
+    (["--diffuse-index", "{bad}", "--window-size", "64"],
+     "--diffuse-index {bad}: values must be between 0 and 1"),
 ])
 def test_bad_sky_inputs_are_one_line_usage_errors(tmp_path, runner, dem, extra, words):
     small = write_geotiff(tmp_path / "small.tif", np.full((5, 5), 0.2, np.float32), T0, UTM11)
