@@ -210,7 +210,9 @@ def temp_beside(path: str, suffix: str) -> str:
 # letters, digits and '-' as '_'). A run writing into a folder removes the temporaries whose
 # writer is provably dead: the same host and pid namespace, and another boot, or no process
 # with that id, or one that started at another time (the id reused). Those of another host or
-# namespace, of a live process, or without a tag (older versions) are kept.
+# namespace, of a live process, or without a tag (older versions) are kept. Folders are removed
+# only where they are a Zarr store in the making (``.zarr``) or a run's scratch folder
+# (``.scratch.dir``: :func:`scratch_folder`).
 
 _TAGGED = re.compile(r"^\..+\.[A-Za-z0-9_]+~(?P<pid>\d+)-(?P<start>\d+)-(?P<boot>[0-9a-f]*)-"
                      r"(?P<ns>\d+)@(?P<host>[A-Za-z0-9_-]+)\.(?:part|scratch)(?:\..*)?$")
