@@ -153,7 +153,8 @@ def _run(cfg, ctx: RunContext, lighting, asked: _Asked, d, area, windows=None) -
         sampled = _samples(cfg, asked, d)
         if sampled.sky is None and windows is not None:   # the rasters on the grid once,
             from .irradiance_windows import open_sky_grids  # beside OUTPUT (removed at its end)
-            sampled.sky, sampled.cells = open_sky_grids(cfg, sampled, d, area)
+            sampled.sky, sampled.cells = open_sky_grids(cfg, sampled, d, area,
+                                                        open_sky_inputs)
         elif sampled.sky is None:     # the open sky per cell, on the grid of the output
             geom, valid = _grid_of(d, area)
             sampled.sky, sampled.cells = open_sky_cells(

@@ -341,14 +341,14 @@ class GridSky:
         return (2 if 0 in held else 0) + (1 in held) + (2 in held) + 2
 
 
-def open_sky_grids(cfg, sampled, src, area=None):
+def open_sky_grids(cfg, sampled, src, area, open_sky_inputs):
     """(the open sky, a :class:`GridSky` or None) of a run in windows (``src``: the DEM opened
     for windows; with ``area``, a ``run.context.Area``: its tile) whose --linke-turbidity,
-    --beam-index or --diffuse-index are rasters: ``run.irradiance.open_sky_inputs`` with each
-    raster resampled to the output's grid once (:class:`SkyGrids`), the same values, checks
-    and sky as the run in memory's. The grids' folder is the :class:`GridSky`'s ``store``
-    (``bands_in_windows`` removes it at its end; at once where no raster varies)."""
-    from .irradiance import open_sky_inputs
+    --beam-index or --diffuse-index are rasters: ``open_sky_inputs`` (the run's,
+    ``run.irradiance.open_sky_inputs``) with each raster resampled to the output's grid once
+    (:class:`SkyGrids`), the same values, checks and sky as the run in memory's. The grids'
+    folder is the :class:`GridSky`'s ``store`` (``bands_in_windows`` removes it at its end; at
+    once where no raster varies)."""
     geom = src if area is None else area.tile
     origin = (0, 0) if area is None else (area.bounds[0], area.bounds[2])
     given = (cfg.linke_input, cfg.beam_input, cfg.diffuse_input)

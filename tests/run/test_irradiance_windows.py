@@ -443,7 +443,8 @@ def skies(tmp_path_factory, dems):
     """Over the real DEM (its CRS, 3.1 times coarser, off its grid): a Linke turbidity raster
     (about 2..6) and a diffuse index raster (0.5..0.95); over the fractal, in geographic
     coordinates: twelve monthly Linke rasters ``linke_MM.tif`` (January's one value, 3.4,
-    on the fractal's grid: the number's path; February's varying) and a beam index raster (0.4..0.9)."""
+    on the fractal's grid: the number's path; February's varying) and a beam index raster
+    (0.4..0.9)."""
     d = tmp_path_factory.mktemp("skies")
     tr, rows, cols = _coarse_over(dems["real"], 3.1)
     with rasterio.open(dems["real"]) as ds:
@@ -612,3 +613,23 @@ def test_linke_and_index_rasters_on_dask_give_the_bits_of_the_run_in_memory(
     assert p["mode"] == "dask" and p["tasks"] == p["regions"] == 2 * 2
     assert "each cell its own" in got[1]["turbidity"]
     assert sorted(os.listdir(tmp_path)) == ["dask.tif", "whole.tif"]
+
+
+@pytest.mark.slow       # two runs
+def test_linke_and_index_rasters_in_a_context_tile_in_windows(tmp_path, dems, skies,
+                                                              any_window):
+    """--context with --window-size and a {month} pattern of Linke rasters and a beam index
+    raster: the tile's bands the bits of the tile's run in memory (the rasters resampled to
+    the tile's grid, their figures over the tile's cells, as there)."""
+    dem = dems["frac"]
+    kw = dict(MONTHS, linke_turbidity=skies["pattern"], beam_index=skies["kb"])
+    with rasterio.open(dem) as ds:
+        w = ((20, 60), (35, 80))
+        tile = write_geotiff(tmp_path / "tile.tif", ds.read(1, window=w),
+                             ds.window_transform(w), ds.crs)
+    got = _run(tmp_path / "t.tif", tile, context=dem, window_size="16x20", **kw)
+    mem = _run(tmp_path / "tm.tif", tile, context=dem, **kw)
+    _same(got, mem)
+    assert got[1]["processing"]["regions"] == 3 * 3 and got[1]["turbidity"] == \
+        mem[1]["turbidity"] and "each cell its own" in mem[1]["turbidity"]
+    assert sorted(os.listdir(tmp_path)) == ["t.tif", "tile.tif", "tm.tif"]
