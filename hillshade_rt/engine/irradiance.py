@@ -734,6 +734,27 @@ def sums(direct, void: np.ndarray, slopes, suns, weights, sky: Sky, vd: np.ndarr
         return out
 
 
+def cell_light(cells, k: int, tl_on: bool) -> tuple[bool, bool]:
+    """(any open sky, a beam) at sample ``k`` of the open sky per cell ``cells`` (a
+    :class:`CellSky`, or anything with its per-sample ``am``, ``cosz``, ``ghi``, ``dni``,
+    ``dhi``): with each cell's Linke turbidity (``tl_on``) the sun up (an air mass and cos Z >
+    0), else the sample's clear sky before the indices."""
+    if tl_on:
+        up = bool(np.isfinite(cells.am[k]) and cells.cosz[k] > 0)
+        return up, up
+    return (bool(cells.ghi[k] > 0 or cells.dni[k] > 0 or cells.dhi[k] > 0),
+            bool(cells.dni[k] > 0))
+
+
+def cell_casts(cells, k: int, tl_on: bool, sun, soft: bool = False,
+               perez: bool = False) -> bool:
+    """Whether ``sums`` with the open sky per cell (``cells``, :func:`cell_light`) asks for the
+    direct term of sample ``k`` (``sun``): a beam, or Perez's circumsolar part, and the sun
+    (its disk, ``soft``) up somewhere; :func:`casts` where the sky is one for all cells."""
+    up, beam_up = cell_light(cells, k, tl_on)
+    return bool(up and (beam_up or perez) and not is_dark(sun, soft))
+
+
 def _sums_cells(direct, void, loop, suns, w, sky, vd64, albedo, cells: CellSky, soft, perez,
                 sin_s, horizon_share, counted, stats, timed, normals, groups) -> dict:
     """``sums`` with the open sky per cell (``cells``): each sample with light added cell by
@@ -774,17 +795,12 @@ def _sums_cells(direct, void, loop, suns, w, sky, vd64, albedo, cells: CellSky, 
             close(int(gi[k - 1]))
         tl, corr, kb, kd = cells.at(k)
         tl_on = tl is not None
-        if tl_on:
-            up = bool(np.isfinite(cells.am[k]) and cells.cosz[k] > 0)
-            beam_up = up
-        else:
-            up = bool(cells.ghi[k] > 0 or cells.dni[k] > 0 or cells.dhi[k] > 0)
-            beam_up = bool(cells.dni[k] > 0)
+        up, beam_up = cell_light(cells, k, tl_on)
         if not up:
             continue
         s = suns[k]
         lit = None
-        if (beam_up or perez) and not is_dark(s, soft):
+        if cell_casts(cells, k, tl_on, s, soft, perez):
             lit = np.ascontiguousarray(direct(s, timed))
             if lit.shape != shape or not (lit.dtype == np.float32 or (
                     lit.dtype == np.uint8 and normals is not None)):

@@ -210,7 +210,9 @@ def temp_beside(path: str, suffix: str) -> str:
 # letters, digits and '-' as '_'). A run writing into a folder removes the temporaries whose
 # writer is provably dead: the same host and pid namespace, and another boot, or no process
 # with that id, or one that started at another time (the id reused). Those of another host or
-# namespace, of a live process, or without a tag (older versions) are kept.
+# namespace, of a live process, or without a tag (older versions) are kept. Folders are removed
+# only where they are a Zarr store in the making (``.zarr``) or a run's scratch folder
+# (``.scratch.dir``: :func:`scratch_folder`).
 
 _TAGGED = re.compile(r"^\..+\.[A-Za-z0-9_]+~(?P<pid>\d+)-(?P<start>\d+)-(?P<boot>[0-9a-f]*)-"
                      r"(?P<ns>\d+)@(?P<host>[A-Za-z0-9_-]+)\.(?:part|scratch)(?:\..*)?$")
@@ -314,8 +316,9 @@ def sweep_dead(folder: str) -> list[str]:
             if os.path.isfile(p) and not os.path.islink(p):
                 os.remove(p)
                 removed.append(p)
-            elif name.endswith(".zarr") and os.path.isdir(p) and not os.path.islink(p):
-                shutil.rmtree(p)    # a time cube's Zarr store in the making (io.cube)
+            elif (name.endswith(".zarr") or name.endswith(SCRATCH_DIR)) and \
+                    os.path.isdir(p) and not os.path.islink(p):
+                shutil.rmtree(p)    # a Zarr store in the making (io.cube), a scratch folder
                 removed.append(p)
     return removed
 
@@ -532,6 +535,26 @@ def _publish_folder(tmp: str, final: str, overwrite: bool, shown: str) -> None:
     if os.path.lexists(final):
         raise _appeared(shown)
     os.rename(tmp, final)
+
+
+SCRATCH_DIR = ".scratch.dir"       # the end of a run's scratch folder's name (scratch_folder)
+
+
+def scratch_folder(path: str, kind: str) -> str:
+    """A new hidden folder beside ``path`` for a run's scratch files (never published: the run
+    removes it), named after ``path``, ``kind`` and the process (:func:`owner_tag`):
+    ``.NAME.KIND.<random>~<owner>.scratch.dir``, so that a later run into that folder removes
+    it (:func:`sweep_dead`) where this one was killed. The temporaries of dead runs there are
+    removed first."""
+    real = target_of(os.path.abspath(path))
+    folder = os.path.dirname(real)
+    sweep_dead(folder)
+    suffix = "~" + owner_tag() + SCRATCH_DIR
+    name = os.path.basename(real)[:120] + "." + kind + "."
+    try:
+        return tempfile.mkdtemp(dir=folder, prefix="." + name, suffix=suffix)
+    except OSError as exc:
+        raise os_error(path, exc) from None
 
 
 @contextlib.contextmanager

@@ -21,8 +21,9 @@ settings (``run.sky_view_file``): the same output bytes either way.
 
 The open sky is one per sample for the whole DEM, unless --linke-turbidity, --beam-index or
 --diffuse-index are rasters (r.sun's linke, coeff_bh, coeff_dh maps): then it is each cell's
-(:func:`open_sky_cells`, ``engine.irradiance.CellSky``), in memory, with --context and for
-instants; in windows they are refused for now.
+(:func:`open_sky_cells`, ``engine.irradiance.CellSky``), in memory, with --context, for
+instants, and in windows and on Dask (``run.irradiance_windows.open_sky_grids``: the rasters
+resampled to the grid once, each region cutting its cells).
 
 The run's steps, between the shared preamble and tail (``run.runner.RunContext``): what the
 command line asks (the period, the place, the ``--ghi`` series), the DEM read, the samples (the
@@ -148,13 +149,13 @@ def _run(cfg, ctx: RunContext, lighting, asked: _Asked, d, area, windows=None) -
     from .report import progress
     from .sun_hours_windows import windows_phrase
     ro = ctx.ro
-    if windows is not None and cfg.sky_per_cell():
-        raise UsageProblem("--linke-turbidity, --beam-index and --diffuse-index as rasters run "
-                           "in memory only for now: not in windows (--max-memory, "
-                           "--window-size, --scheduler)")
     with ctx.timer("prepare"):
         sampled = _samples(cfg, asked, d)
-        if sampled.sky is None:     # the open sky per cell, on the grid of the output
+        if sampled.sky is None and windows is not None:   # the rasters on the grid once,
+            from .irradiance_windows import open_sky_grids  # beside OUTPUT (removed at its end)
+            sampled.sky, sampled.cells = open_sky_grids(cfg, sampled, d, area,
+                                                        open_sky_inputs)
+        elif sampled.sky is None:     # the open sky per cell, on the grid of the output
             geom, valid = _grid_of(d, area)
             sampled.sky, sampled.cells = open_sky_cells(
                 cfg, sampled.times, sampled.suns, sampled.site, sampled.tz, geom, valid)
@@ -394,29 +395,43 @@ def open_sky_cells(cfg: IrradianceConfig, times, suns, site, tz, geom, valid):
     some vary over the cells, the open sky per cell of each sample (its month's rasters, read
     again as the samples reach each month: one month's held at a time), and the open sky of
     the report, the tags and the shadows' choice at each month's mean over the DEM. Else
-    (None) :func:`open_sky`'s."""
+    (None) :func:`open_sky`'s. (:func:`open_sky_inputs` with the rasters on the grid.)"""
+    import numpy as np
+    grid = (geom.transform, geom.crs, tuple(geom.shape), valid)
+
+    def summarize(v, m):
+        r = v.resolved(m, *grid)
+        if isinstance(r, np.ndarray):
+            inside = r if valid is None else r[valid]
+            return (float(np.mean(inside)), True, float(np.min(inside)),
+                    float(np.max(inside)))
+        return r, False, r, r
+    sky, inputs = open_sky_inputs(cfg, times, suns, site, tz, summarize)
+    if inputs is None:
+        return sky, None
+    given = (cfg.linke_input, cfg.beam_input, cfg.diffuse_input)
+    return sky, inputs.cells(lambda i, m: given[i].resolved(m, *grid))
+
+
+def open_sky_inputs(cfg: IrradianceConfig, times, suns, site, tz, summarize):
+    """(the open sky, ``run.sky_inputs.CellInputs`` or None) of :func:`open_sky_cells`,
+    ``summarize(v, month)`` giving each raster's (its value or its mean over the DEM's valid
+    cells, whether it varies there, min, max) (a run in windows: from the rasters resampled to
+    its grid once, ``run.irradiance_windows.SkyGrids``)."""
     import numpy as np
 
     from ..engine import irradiance as ir
-    from .sky_inputs import local_months
+    from .sky_inputs import CellInputs, local_months
     if not cfg.sky_per_cell():
         return open_sky(cfg, times, suns, site, None, tz), None
     months = local_months(times, tz, site.lon) if len(times) else np.zeros(0, np.int64)
-    grid = (geom.transform, geom.crs, tuple(geom.shape), valid)
     inputs = (cfg.linke_input, cfg.beam_input, cfg.diffuse_input)
     summary = {}               # (input, month): (the value or the raster's mean, varies, lo, hi)
     for i, v in enumerate(inputs):
         if v is None or not v.rasters:
             continue
         for m in sorted(set(int(x) for x in months)) if v.by_month else [1]:
-            r = v.resolved(m, *grid)
-            if isinstance(r, np.ndarray):
-                inside = r if valid is None else r[valid]
-                summary[i, m] = (float(np.mean(inside)), True, float(np.min(inside)),
-                                 float(np.max(inside)))
-            else:
-                summary[i, m] = (r, False, r, r)
-            del r
+            summary[i, m] = summarize(v, m)
 
     def per_sample(i):
         v = inputs[i]
@@ -443,33 +458,9 @@ def open_sky_cells(cfg: IrradianceConfig, times, suns, site, tz, geom, valid):
                          + (f", {float(np.mean(lt)):.2f})" if np.size(lt) else ")"))
     am, extra, cosz, consts = ir.ineichen_terms(times, zen, site.lat, site.lon, site.height)
     z, am_rel = ir.perez_terms(times, zen)
-    held: dict = {}
-
-    def raster(i, m):
-        """Input i's raster of month m on the grid (a float where it is one value); None where
-        the input is a number (its samples' numbers serve)."""
-        v = inputs[i]
-        if v is None or not v.rasters:
-            return None
-        key = (i, m if v.by_month else 1)
-        return v.resolved(key[1], *grid) if summary[key][1] else summary[key][0]
-
-    def number(per, k):
-        return 1.0 if per is None else float(per) if np.ndim(per) == 0 else float(per[k])
-
-    def at(k):
-        m = int(months[k])
-        if held.get("month") != m:        # the month's rasters, the last month's let go
-            held.clear()
-            tl = raster(0, m)
-            tl = tl if isinstance(tl, np.ndarray) else None
-            held.update(month=m, tl=tl, kb=raster(1, m), kd=raster(2, m),
-                        corr=None if tl is None else ir.ineichen_correction(tl, consts))
-        kbk, kdk = held["kb"], held["kd"]
-        return (held["tl"], held["corr"], number(kb, k) if kbk is None else kbk,
-                number(kd, k) if kdk is None else kdk)
-    cells = ir.CellSky(at, raw.ghi, raw.dni, raw.dhi, am, extra, cosz, consts, z, am_rel)
-    return sky, cells
+    return sky, CellInputs(months, tuple(bool(v is not None and v.by_month) for v in inputs),
+                           frozenset(k for k, x in summary.items() if x[1]), (lt, kb, kd),
+                           raw.ghi, raw.dni, raw.dhi, am, extra, cosz, consts, z, am_rel)
 
 
 def _grid_of(d, area):

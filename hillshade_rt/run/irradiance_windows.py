@@ -23,14 +23,22 @@ windows. The same helpers make a ``--context`` tile's bands in memory (``run.irr
 
 With --monthly, or --albedo by month, the samples are grouped by their local month as in memory
 (``engine.irradiance.Groups``): each region's sums give each month's global band too (bands 5
-on), each month's reflected light with its albedo. An albedo raster (or a month's, of a
-``{month}`` pattern) is resampled once to the whole output grid, by the very call a run in
-memory makes (``rasterio.warp.reproject`` of the raster to the grid, bilinear) into a float64
-file beside OUTPUT mapped in memory (``AlbedoGrids``: the pages the system's to drop, the
-disk holding 8 bytes a cell a month), and each region reads its cells from it. Resampling
-each region's window on its own would not do: GDAL's warper computes each cell's position
-in the raster from the window's origin (and interpolates positions along its chunks' rows),
-which changes the last bits of the bilinear weights, so of the albedo and of the bands.
+on), each month's reflected light with its albedo. A raster of the sky's inputs (an albedo,
+Linke turbidity or clear-sky index raster, or a month's of a ``{month}`` pattern) is
+resampled once to the whole output grid, by the very call a run in memory makes
+(``run.sky_inputs.resample``: ``rasterio.warp.reproject`` of the raster to the grid,
+bilinear) into a float64 file beside OUTPUT mapped in memory (``SkyGrids``: the pages the
+system's to drop, the disk holding 8 bytes a cell a raster), and each region reads its cells
+from it. Resampling each region's window on its own would not do: GDAL's warper computes each
+cell's position in the raster from the window's origin (and interpolates positions along its
+chunks' rows), which changes the last bits of the bilinear weights, so of the bands.
+
+With Linke turbidity or index rasters that vary over the DEM the open sky is each cell's
+(``engine.irradiance.CellSky``): the run's ``run.irradiance.open_sky_inputs`` with each
+raster's figures over the DEM's valid cells from its grid (``open_sky_grids``), and each
+region's ``CellSky`` built from its cut cells as the run in memory builds the whole grid's
+(``sky_inputs.CellInputs``: the month's rasters held while the samples are in that month,
+its voids the DEM's mean), so every cell gets the bits of the run in memory.
 """
 
 from __future__ import annotations
@@ -62,19 +70,20 @@ def memory_per_cell(lighting) -> int:
             + SUMS_BYTES_PER_CELL)
 
 
-def window_bytes_per_cell(lighting, months: int = 0, albedo_rasters: int = 0) -> int:
+def window_bytes_per_cell(lighting, months: int = 0, rasters: int = 0) -> int:
     """Bytes per cell of a group's window: lighting it, the group's heights
     (``engine.sun_sums.BYTES_PER_GROUP_CELL``) and the region's share (the region lies inside
     its windows): its sums, or the horizon march of its sky view before them, the larger; with
     ``months`` groups of samples (--monthly, --albedo by month) the float64 running sums kept
-    at each group's start and each month's float32 band, and the ``albedo_rasters`` (float64)
-    a region reads."""
+    at each group's start and each month's float32 band, and the ``rasters`` (float64) a
+    region holds of the sky's inputs (albedo, a month's Linke turbidity and clear-sky
+    indices)."""
     from ..engine.sun_sums import BYTES_PER_GROUP_CELL
     from ..engine.windows import bytes_per_cell
     from .horizon_windows import BYTES_PER_REGION_CELL
     groups = (16 + 4 * months) if months else 0
     return (bytes_per_cell(lighting.algorithm, "sun", lighting.soft) + BYTES_PER_GROUP_CELL
-            + max(SUMS_BYTES_PER_CELL + groups + 8 * albedo_rasters, BYTES_PER_REGION_CELL))
+            + max(SUMS_BYTES_PER_CELL + groups + 8 * rasters, BYTES_PER_REGION_CELL))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -141,65 +150,37 @@ def add_direct(job, out: np.ndarray, origin, piece, z, stats, used, carry=None) 
 
 
 # ---------------------------------------------------------------------------------------------
-# the albedo's rasters on the output's grid, and the samples' months
+# the sky's rasters on the output's grid (albedo, Linke turbidity, clear-sky indices), and the
+# samples' months
 
 @dataclass(frozen=True)
-class AlbedoGrid:
-    """One albedo raster resampled to the output's whole grid: a float64 ``.npy`` file
-    (``path``) of that grid, whose first cell is the raster's ``origin`` (row, col) (picklable:
-    a Dask task reads its regions' cells from it)."""
+class SkyGrid:
+    """One raster of the sky's inputs resampled to the output's whole grid: a float64 ``.npy``
+    file (``path``) of that grid, whose first cell is the raster's ``origin`` (row, col)
+    (picklable: a Dask task reads its regions' cells from it)."""
 
     path: str
     origin: tuple = (0, 0)
 
     def cut(self, region) -> np.ndarray:
-        """The albedo of ``region`` (r0, r1, c0, c1), float64 (a copy)."""
+        """The values of ``region`` (r0, r1, c0, c1), float64 (a copy)."""
         r0, r1, c0, c1 = region
         o0, o1 = self.origin
         return np.array(np.load(self.path, mmap_mode="r")[r0 - o0:r1 - o0, c0 - o1:c1 - o1])
 
 
 def albedo_of(a, region):
-    """The albedo of ``region``: a number as it is, an :class:`AlbedoGrid` its cells."""
-    return a.cut(region) if isinstance(a, AlbedoGrid) else a
-
-
-def resample_into(path: str, out: np.ndarray, transform, crs) -> None:
-    """Band 1 of the raster ``path`` put on ``out``'s grid (``transform``, ``crs``) bilinearly,
-    by ``run.sky_inputs.resample``'s own call (the same source, options and destination: a
-    float64 array of the whole grid, here one mapped from a file), so that every cell gets the
-    bits a run in memory gives it; NaN where the raster has no value."""
-    import contextlib
-
-    import rasterio
-    from rasterio.warp import Resampling, reproject
-
-    from ..errors import UsageProblem
-    from ..io.gdal import open_raster, read_error
-    out[...] = np.nan
-    with contextlib.ExitStack() as stack:
-        try:
-            src = open_raster(path, stack)
-        except HillshadeError as exc:
-            raise UsageProblem(str(exc)) from None
-        if src.crs is None or src.transform.is_identity:
-            raise UsageProblem(f"{path}: the raster has no georeferencing (a CRS and a "
-                               "geotransform): it cannot be put on the DEM's grid")
-        try:
-            reproject(rasterio.band(src, 1), out, src_nodata=src.nodata,
-                      dst_transform=transform, dst_crs=crs if crs is not None else src.crs,
-                      dst_nodata=np.nan, resampling=Resampling.bilinear)
-        except Exception as exc:      # noqa: BLE001 -- GDAL's read errors, one line
-            raise read_error(path, exc) from None
+    """The albedo of ``region``: a number as it is, a :class:`SkyGrid` its cells."""
+    return a.cut(region) if isinstance(a, SkyGrid) else a
 
 
 CELLS_AT_ONCE = 1 << 20         # cells of a grid checked at once
 
 
-def _allocate(path: str, nbytes: int) -> None:
+def _allocate(path: str, nbytes: int, option: str) -> None:
     """The disk's blocks of the file ``path`` taken now (where the system can): a disk too
-    full for the albedo's grid is one line here, not a crash (SIGBUS) when a mapped page is
-    written."""
+    full for a raster on the DEM's grid is one line here, not a crash (SIGBUS) when a mapped
+    page is written."""
     import errno
     if not hasattr(os, "posix_fallocate"):
         return
@@ -208,74 +189,187 @@ def _allocate(path: str, nbytes: int) -> None:
             os.posix_fallocate(fh.fileno(), 0, os.path.getsize(path))
     except OSError as exc:
         if exc.errno in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG):
-            raise HillshadeError(f"{os.path.dirname(path)}: no room for an albedo raster on "
-                                 f"the DEM's grid ({nbytes:,} bytes): "
+            raise HillshadeError(f"{os.path.dirname(os.path.dirname(path))}: no room for the "
+                                 f"{option} raster on the DEM's grid ({nbytes:,} bytes): "
                                  f"{exc.strerror or exc}") from None
 
 
-class AlbedoGrids:
-    """The albedo rasters of a run in windows on the output's grid (``geom``'s: the DEM's, or
-    the --context tile's, whose first cell is the source's ``origin``): each month's of a
-    pattern, or the one raster's, resampled once (:func:`resample_into`) into a folder beside
-    OUTPUT, removed on :meth:`close`. Checked as ``sky_inputs.SkyValue.on_grid`` checks them
-    in memory, with its words: every valid cell of the DEM covered (its heights read band by
-    band of rows), every value within the option's range."""
+@dataclass(frozen=True)
+class GridFigures:
+    """A raster on the grid over the DEM's valid cells: their ``count``, ``total`` (float64
+    sums of row bands in order: :func:`numpy.mean`'s bits where the grid is one band), ``lo``,
+    ``hi``; over all the cells it has a value on, ``seen`` of them summing ``seen_total``."""
+
+    count: int
+    total: float
+    lo: float
+    hi: float
+    seen: int
+    seen_total: float
+
+
+class SkyGrids:
+    """The rasters of the sky's inputs of a run in windows (--albedo, --linke-turbidity,
+    --beam-index, --diffuse-index: ``sky_inputs.SkyValue``) on the output's grid (``geom``'s:
+    the DEM's, or the --context tile's, whose first cell is the source's ``origin``): each
+    month's of a pattern, or the one raster's, resampled once (``sky_inputs.resample`` into a
+    file mapped in memory) into a folder beside OUTPUT, removed on :meth:`close` (its name the
+    run's, ``io.write.scratch_folder``: a later run into that folder removes it where this
+    one was killed). Checked as ``sky_inputs.SkyValue.on_grid`` checks them in memory, with
+    its words: every valid cell of the DEM covered (its heights read band by band of rows),
+    every value within the option's range."""
 
     def __init__(self, output: str):
-        import tempfile
-        self.folder = tempfile.mkdtemp(dir=os.path.dirname(os.path.abspath(output)),
-                                       prefix="." + os.path.basename(output) + ".albedo-")
+        from ..io.write import scratch_folder
+        self.folder = scratch_folder(output, "grids")
         self.grids: dict = {}
+        self.figures: dict = {}
 
-    def grid(self, value, month: int, geom, src, origin) -> AlbedoGrid:
-        """The :class:`AlbedoGrid` of ``value`` (a ``SkyValue`` of rasters) for ``month``."""
+    def grid(self, value, month: int, geom, src, origin, figures: bool = False) -> SkyGrid:
+        """The :class:`SkyGrid` of ``value`` (a ``SkyValue`` of rasters) for ``month``; with
+        ``figures`` its :class:`GridFigures` in ``self.figures`` too (the DEM read whole for
+        them; else only the row bands the raster lacks cells in)."""
         path = value.path if value.path is not None else value.pattern.format(month=month)
         if path in self.grids:
+            if figures and path not in self.figures:
+                out = np.load(self.grids[path].path, mmap_mode="r")
+                self.figures[path] = self._check(value, path, out, src, origin, True)
+                del out
             return self.grids[path]
-        dest = os.path.join(self.folder, f"albedo_{len(self.grids)}.npy")
+        from .sky_inputs import resample
+        dest = os.path.join(self.folder, f"grid_{len(self.grids)}.npy")
         rows, cols = geom.shape
         out = np.lib.format.open_memmap(dest, mode="w+", dtype=np.float64, shape=(rows, cols))
         try:
-            _allocate(dest, rows * cols * 8)
-            resample_into(path, out, geom.transform, geom.crs)
+            _allocate(dest, rows * cols * 8, value.option)
+            resample(path, geom.transform, geom.crs, (rows, cols), out=out)
             out.flush()
-            self._check(value, path, out, src, origin)
+            f = self._check(value, path, out, src, origin, figures)
+            if f is not None:
+                self.figures[path] = f
         finally:
             del out
-        self.grids[path] = AlbedoGrid(dest, tuple(origin))
+        self.grids[path] = SkyGrid(dest, tuple(origin))
         return self.grids[path]
 
+    def resolved(self, value, month: int, geom, src, origin) -> tuple:
+        """(the :class:`SkyGrid` of ``value`` for ``month``; (its value or its mean over the
+        DEM's valid cells, whether it varies there, min, max) as ``SkyValue.resolved`` has
+        them in memory (a raster of one value there is that value: the number's bits); the
+        value its voids take (the mean))."""
+        g = self.grid(value, month, geom, src, origin, figures=True)
+        path = value.path if value.path is not None else value.pattern.format(month=month)
+        f = self.figures[path]
+        if not f.count:
+            v = f.seen_total / f.seen if f.seen else value.low
+            return g, (v, False, v, v), v
+        if f.lo == f.hi:
+            return g, (f.lo, False, f.lo, f.lo), f.lo
+        mean = f.total / f.count
+        return g, (mean, True, f.lo, f.hi), mean
+
     @staticmethod
-    def _check(value, path, out, src, origin) -> None:
+    def _check(value, path, out, src, origin, figures: bool) -> GridFigures | None:
         from ..errors import UsageProblem
         rows, cols = out.shape
         step = max(1, CELLS_AT_ONCE // max(cols, 1))
-        lacking, lo, hi = 0, math.inf, -math.inf
+        lacking, lo, hi, seen, seen_total = 0, math.inf, -math.inf, 0, 0.0
+        count, total, vlo, vhi = 0, 0.0, math.inf, -math.inf
         with contextlib.ExitStack() as stack:
             rd = None
             for r0 in range(0, rows, step):
                 r1 = min(rows, r0 + step)
                 a = np.asarray(out[r0:r1])
                 gap = np.isnan(a)
-                if gap.any():
-                    if rd is None:
-                        rd = stack.enter_context(src.reader())
-                    z = np.empty(a.shape, np.float32)
-                    rd.read((origin[0] + r0, origin[0] + r1, origin[1], origin[1] + cols), z)
-                    lacking += int((gap & ~np.isnan(z)).sum())
-                seen = a[~gap]
-                if seen.size:
-                    lo, hi = min(lo, float(seen.min())), max(hi, float(seen.max()))
+                seen_v = a[~gap]
+                if seen_v.size:
+                    lo, hi = min(lo, float(seen_v.min())), max(hi, float(seen_v.max()))
+                    seen += seen_v.size
+                    seen_total += float(np.sum(seen_v))
+                if not (figures or gap.any()):
+                    continue
+                if rd is None:
+                    rd = stack.enter_context(src.reader())
+                z = np.empty(a.shape, np.float32)
+                rd.read((origin[0] + r0, origin[0] + r1, origin[1], origin[1] + cols), z)
+                valid = ~np.isnan(z)
+                lacking += int((gap & valid).sum())
+                if not figures:
+                    continue
+                inside = a[valid & ~gap]
+                if inside.size:
+                    count += inside.size
+                    total += float(np.sum(inside))
+                    vlo, vhi = min(vlo, float(inside.min())), max(vhi, float(inside.max()))
         if lacking:
             raise UsageProblem(f"{value.option} {path}: the raster does not cover the DEM "
                                f"({lacking} of its cells lie outside or on its nodata)")
         if lo < value.low or hi > value.high:
             raise UsageProblem(f"{value.option} {path}: values must be between "
                                f"{value.low:g} and {value.high:g}, found {lo:g}..{hi:g}")
+        return GridFigures(count, total, vlo, vhi, seen, seen_total) if figures else None
 
     def close(self) -> None:
         import shutil
         shutil.rmtree(self.folder, ignore_errors=True)
+
+
+@dataclass
+class GridSky:
+    """The open sky per cell of a run in windows: ``inputs`` (``sky_inputs.CellInputs``: what
+    the sky per cell takes, the run in memory's), ``grids`` {(i, month): (:class:`SkyGrid`, the
+    value its voids take)} of the rasters that vary over the DEM, and the run's
+    :class:`SkyGrids` (``store``: not sent to Dask's tasks)."""
+
+    inputs: object
+    grids: dict
+    store: object = None
+
+    def cells(self, region, void: np.ndarray):
+        """The ``engine.irradiance.CellSky`` of ``region`` (r0, r1, c0, c1), whose voids are
+        ``void``: each raster's cells cut from its grid, its voids the mean of the DEM's valid
+        cells, as ``SkyValue.resolved`` makes the whole grid's in memory."""
+        def raster(i, m):
+            g, fill = self.grids[i, m]
+            return np.ascontiguousarray(np.where(void, fill, g.cut(region)), np.float64)
+        return self.inputs.cells(raster)
+
+    def rasters(self) -> int:
+        """How many float64 rasters of a region its sums hold at once: the month's Linke
+        turbidity and its correction, the indices, each cell's GHI sum, a cut."""
+        held = {i for i, _ in self.grids}
+        return (2 if 0 in held else 0) + (1 in held) + (2 in held) + 2
+
+
+def open_sky_grids(cfg, sampled, src, area, open_sky_inputs):
+    """(the open sky, a :class:`GridSky` or None) of a run in windows (``src``: the DEM opened
+    for windows; with ``area``, a ``run.context.Area``: its tile) whose --linke-turbidity,
+    --beam-index or --diffuse-index are rasters: ``open_sky_inputs`` (the run's,
+    ``run.irradiance.open_sky_inputs``) with each raster resampled to the output's grid once
+    (:class:`SkyGrids`), the same values, checks and sky as the run in memory's. The grids'
+    folder is the :class:`GridSky`'s ``store`` (``bands_in_windows`` removes it at its end; at
+    once where no raster varies)."""
+    geom = src if area is None else area.tile
+    origin = (0, 0) if area is None else (area.bounds[0], area.bounds[2])
+    given = (cfg.linke_input, cfg.beam_input, cfg.diffuse_input)
+    store = SkyGrids(cfg.output)
+    grids = {}
+    try:
+        def summarize(v, m):
+            i = next(j for j, x in enumerate(given) if x is v)
+            g, figures, fill = store.resolved(v, m, geom, src, origin)
+            if figures[1]:
+                grids[i, m] = (g, fill)
+            return figures
+        sky, inputs = open_sky_inputs(cfg, sampled.times, sampled.suns, sampled.site,
+                                      sampled.tz, summarize)
+    except BaseException:
+        store.close()
+        raise
+    if inputs is None:
+        store.close()
+        return sky, None
+    return sky, GridSky(inputs, grids, store)
 
 
 @dataclass
@@ -307,8 +401,8 @@ def month_groups(cfg, sampled) -> MonthGroups | None:
 
 def albedo_inputs(cfg, groups: MonthGroups | None, grids, geom, src, origin) -> tuple:
     """(the albedo of the whole period, each group's albedo or None) as a run in memory has
-    them (numbers, or :class:`AlbedoGrid` where it has rasters; ``grids`` the run's
-    :class:`AlbedoGrids`)."""
+    them (numbers, or :class:`SkyGrid` where it has rasters; ``grids`` the run's
+    :class:`SkyGrids`)."""
     a = cfg.albedo_input
 
     def on(month):
@@ -328,11 +422,12 @@ class Jobs:
     ``WindowLighting`` of the beam, ``horizons`` the ``HorizonJob`` of Dozier's Vd (None: read
     from ``vd_file``, a ``sky_view_file.VdFile`` whose first cell is the raster's
     ``vd_origin``), the samples (``suns``, their ``weights`` in hours, the open ``sky`` at
-    each), ``albedo`` (a number or an :class:`AlbedoGrid`), ``soft``, ``perez``, ``hours``:
+    each), ``albedo`` (a number or a :class:`SkyGrid`), ``soft``, ``perez``, ``hours``:
     with --mean the period's hours (the bands divided by them), else None; ``groups`` the
     samples' months (:class:`MonthGroups`, or None), ``group_albedo`` each month's albedo (or
     None: ``albedo``), ``month_hours`` with --mean each month's hours (its band divided by
-    them)."""
+    them), ``cells`` the open sky per cell (a :class:`GridSky` without its store, or None:
+    ``sky`` for every cell)."""
 
     light: object
     horizons: object
@@ -348,10 +443,15 @@ class Jobs:
     groups: MonthGroups | None = None
     group_albedo: list | None = None
     month_hours: list | None = None
+    cells: GridSky | None = None
 
     def casting(self) -> list[int]:
         """The samples whose direct term the sums ask for, in order."""
-        from ..engine.irradiance import casts
+        from ..engine.irradiance import casts, cell_casts
+        if self.cells is not None:
+            ci = self.cells.inputs
+            return [k for k, s in enumerate(self.suns)
+                    if cell_casts(ci, k, ci.tl_on(k), s, self.soft, self.perez)]
         return [k for k, s in enumerate(self.suns)
                 if casts(self.sky, k, s, self.soft, self.perez)]
 
@@ -417,7 +517,8 @@ def region_bands(jobs: Jobs, rd, rs, stats: dict, used: set, timer=None,
                                [albedo_of(a, region) for a in jobs.group_albedo], mg.bands)
         bands = ir.sums(direct, void, slopes, jobs.suns, jobs.weights, jobs.sky, vd,
                         albedo_of(jobs.albedo, region), soft=jobs.soft, perez=jobs.perez,
-                        stats=stats, timer=timer, groups=groups)
+                        stats=stats, timer=timer, groups=groups,
+                        cells=None if jobs.cells is None else jobs.cells.cells(region, void))
         months = bands.pop("groups", [])
         if jobs.hours is not None:        # --mean (÷ hours), --daily-mean (÷ days)
             bands = {k: (v / np.float32(jobs.hours)).astype(np.float32)
@@ -459,15 +560,20 @@ def bands_in_windows(cfg, ctx, src, lighting, body, sampled, tags: dict, band_me
     horizon Shader ``hs`` (``sky_view_file.dozier_tags``). ``limit``: --max-memory in bytes,
     ``window_shape``: --window-size. With --monthly each month's global band after the four
     (``band_meta``'s units); an albedo by month, or rasters, as in memory (the rasters
-    resampled to the output's grid once, :class:`AlbedoGrids`, removed at the end). Raises
+    resampled to the output's grid once, :class:`SkyGrids`, removed at the end); the open sky
+    per cell of ``sampled.cells`` (a :class:`GridSky` of :func:`open_sky_grids`: its grids'
+    folder removed at the end too). Raises
     ``AllNodata`` (before anything is written) for a DEM of voids only, ``HillshadeError`` for
     a memory limit too small for one window."""
     from .local import bounded_gdal_cache
-    grids = AlbedoGrids(cfg.output) if cfg.albedo_input.rasters else None
+    gs = sampled.cells if isinstance(sampled.cells, GridSky) else None
+    grids = gs.store if gs is not None else None
+    if grids is None and cfg.albedo_input.rasters:
+        grids = SkyGrids(cfg.output)
     try:
         with bounded_gdal_cache():
             return _bands_in_windows(cfg, ctx, src, lighting, body, sampled, tags, band_meta,
-                                     want, limit, window_shape, scheduler, area, grids)
+                                     want, limit, window_shape, scheduler, area, grids, gs)
     finally:
         if grids is not None:
             grids.close()
@@ -484,7 +590,7 @@ def month_meta(band_meta: list, groups: MonthGroups | None) -> list:
 
 
 def _bands_in_windows(cfg, ctx, src, lighting, body, sampled, tags, band_meta, want, limit,
-                      window_shape, scheduler, area, grids) -> WindowedBands:
+                      window_shape, scheduler, area, grids, gs) -> WindowedBands:
     from ..engine.windows import block_stats
     from ..engine import irradiance as ir
     from ..io import BandWriter
@@ -519,13 +625,15 @@ def _bands_in_windows(cfg, ctx, src, lighting, body, sampled, tags, band_meta, w
                     np.asarray(sampled.weights, np.float64), sampled.sky, albedo,
                     lighting.soft, cfg.perez, float(sampled.hours) / per if mean else None,
                     origin, groups, group_albedo,
-                    [h / per for h in groups.hours] if mean and groups is not None else None)
+                    [h / per for h in groups.hours] if mean and groups is not None else None,
+                    None if gs is None else replace(gs, store=None))
         mmeta = month_meta(band_meta, groups)
         casting = [sampled.suns[k] for k in jobs.casting()]
         whole = (memory_per_cell(lighting) if window_shape is None and scheduler is None
                  and area is None else None)
-        rasters = (1 if isinstance(albedo, AlbedoGrid) else 0) + sum(
-            isinstance(a, AlbedoGrid) for a in group_albedo or [])
+        rasters = (1 if isinstance(albedo, SkyGrid) else 0) + sum(
+            isinstance(a, SkyGrid) for a in group_albedo or []) + (
+            jobs.cells.rasters() if jobs.cells is not None else 0)
         regs, mem = plan_sums(job, casting, bstats, limit,
                               window_bytes_per_cell(lighting, len(mmeta), rasters),
                               window_shape, area, whole)

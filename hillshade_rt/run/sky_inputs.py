@@ -171,13 +171,81 @@ class SkyValue:
         return np.ascontiguousarray(v, np.float64)
 
 
+@dataclass
+class CellInputs:
+    """What the open sky per cell takes (``engine.irradiance.CellSky``), whatever the cells
+    (the whole grid in memory, or a region of it in windows); picklable (a Dask task gets
+    it). ``months``: each sample's month (1..12); ``by_month``: whether --linke-turbidity,
+    --beam-index, --diffuse-index (in this order, ``i`` 0, 1, 2) go by month; ``varies``:
+    the (i, month) whose raster varies over the DEM's valid cells (those of one value are
+    that number: ``numbers`` has them); ``numbers``: the samples' (Linke turbidity, beam
+    index, diffuse index), each None (not given), a number or one per sample; the rest
+    per sample as ``CellSky`` has them (``ghi``, ``dni``, ``dhi``: the clear sky before the
+    indices)."""
+
+    months: np.ndarray
+    by_month: tuple
+    varies: frozenset
+    numbers: tuple
+    ghi: np.ndarray
+    dni: np.ndarray
+    dhi: np.ndarray
+    am: np.ndarray
+    extra: np.ndarray
+    cosz: np.ndarray
+    consts: tuple
+    z: np.ndarray
+    am_rel: np.ndarray
+
+    def key(self, i: int, k: int) -> tuple:
+        """(i, the month whose raster input ``i`` takes at sample ``k``: 1 when not by
+        month)."""
+        return i, (int(self.months[k]) if self.by_month[i] else 1)
+
+    def tl_on(self, k: int) -> bool:
+        """Whether sample ``k`` takes the Linke turbidity of each cell (``CellSky.at``'s
+        turbidity not None)."""
+        return self.key(0, k) in self.varies
+
+    def cells(self, raster):
+        """The ``engine.irradiance.CellSky`` of the cells that ``raster(i, month)`` gives the
+        rasters of (float64, the cells' shape): each sample's month's rasters, read as the
+        samples reach the month (one month's held at a time, the last month's let go)."""
+        from ..engine import irradiance as ir
+        held: dict = {}
+
+        def number(per, k):
+            return 1.0 if per is None else float(per) if np.ndim(per) == 0 else float(per[k])
+
+        def get(i, k):
+            key = self.key(i, k)
+            return raster(*key) if key in self.varies else None
+
+        def at(k):
+            m = int(self.months[k])
+            if held.get("month") != m:
+                held.clear()
+                tl = get(0, k)
+                held.update(month=m, tl=tl, kb=get(1, k), kd=get(2, k),
+                            corr=None if tl is None else ir.ineichen_correction(tl,
+                                                                              self.consts))
+            kbk, kdk = held["kb"], held["kd"]
+            return (held["tl"], held["corr"],
+                    number(self.numbers[1], k) if kbk is None else kbk,
+                    number(self.numbers[2], k) if kdk is None else kdk)
+        return ir.CellSky(at, self.ghi, self.dni, self.dhi, self.am, self.extra, self.cosz,
+                          self.consts, self.z, self.am_rel)
+
+
 def _exists(path: str) -> bool:
     return path.startswith("/vsi") or os.path.exists(path)
 
 
-def resample(path: str, transform, crs, shape) -> np.ndarray:
+def resample(path: str, transform, crs, shape, out: np.ndarray | None = None) -> np.ndarray:
     """Band 1 of the raster ``path`` on the grid (``transform``, ``crs``, ``shape``), bilinear
-    (``rasterio.warp.reproject``), float64, NaN where it has no value (outside, nodata)."""
+    (``rasterio.warp.reproject``), float64, NaN where it has no value (outside, nodata).
+    ``out``: the float64 array of ``shape`` to write into (a run in windows passes one mapped
+    from a file: ``run.irradiance_windows.SkyGrids``), the same call, the same bits; returned."""
     import contextlib
 
     import rasterio
@@ -185,7 +253,13 @@ def resample(path: str, transform, crs, shape) -> np.ndarray:
 
     from ..errors import HillshadeError
     from ..io.gdal import open_raster, read_error
-    out = np.full(shape, np.nan, np.float64)
+    if out is None:
+        out = np.full(shape, np.nan, np.float64)
+    else:
+        if out.dtype != np.float64 or tuple(out.shape) != tuple(shape):
+            raise HillshadeError(f"resample: out is {out.dtype} {out.shape}, not float64 "
+                                 f"{tuple(shape)} (a bug)")
+        out[...] = np.nan
     with contextlib.ExitStack() as stack:
         try:
             src = open_raster(path, stack)

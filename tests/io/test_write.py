@@ -726,3 +726,30 @@ def test_temporary_names_say_their_writer(tmp_path):
     assert not writes.writer_dead(name)
     long = writes.temp_beside(str(tmp_path / ("y" * 250)), ".part.tif")
     assert len(os.path.basename(long)) <= 255 and os.path.basename(long).startswith(".yyy")
+
+
+def test_scratch_folders_say_their_writer_and_dead_ones_are_swept(tmp_path):
+    """``scratch_folder``: a hidden folder beside the output named after it, its kind and
+    this process (not dead); the sweep removes a scratch folder of a dead process (files in
+    it), keeps one of this process and a plain folder with a dead tag but no scratch ending."""
+    import subprocess
+    import sys
+    child = subprocess.Popen([sys.executable, "-c", "pass"])
+    child.wait(30)
+    rest = writes.owner_tag().split("-", 1)[1]
+    dead = tmp_path / f".x.tif.grids.abcdefgh~{child.pid}-{rest}.scratch.dir"
+    other = tmp_path / f".x.tif.other.abcdefgh~{child.pid}-{rest}.scratch"   # not ours to rm
+    for d in (dead, other):
+        d.mkdir()
+        (d / "a.npy").write_bytes(b"x")
+    writes.reset()
+    mine = writes.scratch_folder(str(tmp_path / "x.tif"), "grids")
+    name = os.path.basename(mine)
+    assert os.path.isdir(mine) and os.path.dirname(mine) == str(tmp_path)
+    assert name.startswith(".x.tif.grids.") and name.endswith(".scratch.dir")
+    assert f"~{os.getpid()}-" in name and not writes.writer_dead(name)
+    assert writes.writer_dead(dead.name)
+    assert not dead.exists() and other.exists()
+    writes.reset()
+    assert writes.sweep_dead(str(tmp_path)) == []       # its own: kept
+    assert os.path.isdir(mine)

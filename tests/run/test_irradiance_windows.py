@@ -327,18 +327,18 @@ def test_monthly_and_albedo_in_windows_give_the_bits_of_the_run_in_memory(
 
 
 def test_an_albedo_raster_on_the_grid_is_the_run_in_memorys(tmp_path, dems, albedos):
-    """The albedo grids of a run in windows (``AlbedoGrids``: the raster resampled once to
+    """The albedo grids of a run in windows (``SkyGrids``: the raster resampled once to
     the whole grid into a file) cut to any window are, to the bit, the same cells of
     ``SkyValue.on_grid`` on the whole grid (the run in memory's): a geographic DEM off the
     raster's grid, and a UTM grid from rasters in geographic coordinates."""
     from hillshade_rt.run import ReadOptions
-    from hillshade_rt.run.irradiance_windows import AlbedoGrids
+    from hillshade_rt.run.irradiance_windows import SkyGrids
     from hillshade_rt.run.sky_inputs import SkyValue
     for which, name in (("real", "raster"), ("frac", "pattern")):
         value = SkyValue.parse("--albedo", albedos[name], 0.0, 1.0)
         src = ReadOptions().open(dems[which], windows=True)
         with src:
-            grids = AlbedoGrids(str(tmp_path / "out.tif"))
+            grids = SkyGrids(str(tmp_path / "out.tif"))
             try:
                 for month in (1, 2, 7):
                     g = grids.grid(value, month, src, src, (0, 0))
@@ -424,5 +424,212 @@ def test_no_room_for_the_albedo_grid_is_one_line(tmp_path, dems, albedos, monkey
                                  albedos["raster"], "--window-size", "64", "-q"])
     assert r.exit_code == 1, r.output
     lines = r.stderr.strip().splitlines()
-    assert len(lines) == 1 and "no room for an albedo raster" in lines[0], lines
+    assert len(lines) == 1 and "no room for the --albedo raster" in lines[0], lines
     assert os.listdir(tmp_path) == []
+
+
+# ---------------------------------------------------------------------------------------------
+# Linke turbidity and clear-sky index rasters (the open sky per cell) in windows and on Dask
+
+def _wave(rows, cols, low, high, month=1):
+    """Values from about ``low`` to ``high`` varying unevenly across a raster, by month."""
+    y, x = np.mgrid[0:rows, 0:cols]
+    v = (x / cols) ** 1.2 * 0.6 + 0.25 * (y / rows) + 0.1 * np.sin(0.9 * x + 0.4 * y + month)
+    return (low + (high - low) * (v + 0.1) / 1.05).astype(np.float32)
+
+
+@pytest.fixture(scope="module")
+def skies(tmp_path_factory, dems):
+    """Over the real DEM (its CRS, 3.1 times coarser, off its grid): a Linke turbidity raster
+    (about 2..6) and a diffuse index raster (0.5..0.95); over the fractal, in geographic
+    coordinates: twelve monthly Linke rasters ``linke_MM.tif`` (January's one value, 3.4,
+    on the fractal's grid: the number's path; February's varying) and a beam index raster
+    (0.4..0.9)."""
+    d = tmp_path_factory.mktemp("skies")
+    tr, rows, cols = _coarse_over(dems["real"], 3.1)
+    with rasterio.open(dems["real"]) as ds:
+        crs = ds.crs
+    linke = write_geotiff(d / "linke.tif", _wave(rows, cols, 2.0, 6.0), tr, crs, -1.0)
+    kd = write_geotiff(d / "kd.tif", _wave(rows, cols, 0.5, 0.95, 5)[::-1], tr, crs, -1.0)
+    geo = CRS.from_epsg(4326)
+    tr, rows, cols = _coarse_over(dems["frac"], 2.6, crs=geo)
+    with rasterio.open(dems["frac"]) as ds:      # January's on the fractal's own grid
+        write_geotiff(d / "linke_01.tif", np.full(ds.shape, 3.4, np.float32), ds.transform,
+                      ds.crs, -1.0)
+    for m in range(2, 13):
+        write_geotiff(d / f"linke_{m:02d}.tif", _wave(rows, cols, 2.5, 5.5, m)[:, ::-1], tr,
+                      geo, -1.0)
+    kb = write_geotiff(d / "kb.tif", _wave(rows, cols, 0.4, 0.9, 3), tr, geo, -1.0)
+    return {"linke": linke, "kd": kd, "pattern": str(d / "linke_{month:02d}.tif"), "kb": kb}
+
+
+def _sky(kw, skies, albedos):
+    out = dict(kw)
+    for k in ("linke_turbidity", "beam_index", "diffuse_index"):
+        if out.get(k) in skies:
+            out[k] = skies[out[k]]
+    return _albedo(out, albedos)
+
+
+@pytest.mark.parametrize("which,size,extra", [
+    pytest.param("real", "24x40", dict(linke_turbidity="linke"), marks=pytest.mark.slow),
+    ("frac", "30x37", dict(linke_turbidity="pattern", beam_index="kb", monthly=True,
+                           perez=True)),
+    pytest.param("real", "35x45", dict(diffuse_index="kd", beam_index="0.8", albedo="raster",
+                                       mean=True), marks=pytest.mark.slow),
+    pytest.param("frac", "40x45", dict(beam_index="kb", soft=True, albedo="pattern"),
+                 marks=pytest.mark.slow),
+    pytest.param("real", "24x40", dict(linke_turbidity="linke", diffuse_index="kd",
+                                       monthly=True, perez=True), marks=pytest.mark.slow),
+])
+def test_linke_and_index_rasters_in_windows_give_the_bits_of_the_run_in_memory(
+        tmp_path, dems, skies, albedos, any_window, which, size, extra):
+    """The open sky per cell in windows: a Linke turbidity raster coarser than the DEM, a
+    {month} pattern of Linke rasters in another CRS (one month's of one value, the number's
+    path) with a beam index raster, a diffuse index raster with an albedo raster: every band,
+    its description and tags the run in memory's, the report's turbidity too; the sky per
+    cell shows (the bands vary as the rasters do); no grids left beside OUTPUT."""
+    kw = {**MONTHS, **_sky(extra, skies, albedos)}
+    whole = _run(tmp_path / "whole.tif", dems[which], **kw)
+    got = _run(tmp_path / "win.tif", dems[which], window_size=size, **kw)
+    _same(got, whole)
+    assert got[1]["processing"]["mode"] == "windows" and got[1]["processing"]["regions"] >= 4
+    assert sorted(os.listdir(tmp_path)) == ["whole.tif", "win.tif"]
+    assert got[1]["turbidity"] == whole[1]["turbidity"]
+    for k in ("beam_index", "diffuse_index"):
+        assert got[1][k] == whole[1][k]
+    # against the numbers' run: a per-cell sky moves the bands away from the open sky's
+    plain = {k: v for k, v in kw.items()
+             if k not in ("linke_turbidity", "beam_index", "diffuse_index")}
+    ref = _run(tmp_path / "plain.tif", dems[which], window_size=size, **plain)
+    b, r = (np.where(a == -9999.0, np.nan, a) for a in (got[0], ref[0]))
+    ratio = b[3] / r[3]
+    assert np.nanstd(ratio) > 0.01 and np.isfinite(b[3]).sum() == np.isfinite(r[3]).sum()
+    if extra.get("linke_turbidity"):
+        assert "each cell its own" in got[1]["turbidity"]
+
+
+def test_sky_grids_resolve_as_the_run_in_memory(tmp_path, dems, skies):
+    """``SkyGrids.resolved`` (the figures of a raster from its grid, row band by row band) is
+    ``SkyValue.resolved`` on the whole grid: the mean over the DEM's valid cells to the bit,
+    min and max, a raster of one value that value (January's Linke); a region's cells of the
+    ``GridSky`` the same cells of the whole grid's raster, its voids the mean."""
+    from hillshade_rt.run import ReadOptions
+    from hillshade_rt.run.irradiance_windows import GridSky, SkyGrids
+    from hillshade_rt.run.sky_inputs import CellInputs, SkyValue
+    cases = (("real", "--linke-turbidity", skies["linke"], 1.0, 10.0, (1,)),
+             ("real", "--diffuse-index", skies["kd"], 0.0, 1.0, (1,)),
+             ("frac", "--linke-turbidity", skies["pattern"], 1.0, 10.0, (1, 2, 9)))
+    for which, option, value, low, high, months in cases:
+        v = SkyValue.parse(option, value, low, high)
+        src = ReadOptions().open(dems[which], windows=True)
+        with src, rasterio.open(dems[which]) as ds:
+            z = ds.read(1, masked=True)
+            valid = ~np.ma.getmaskarray(z)
+            grids = SkyGrids(str(tmp_path / "out.tif"))
+            try:
+                for m in months:
+                    g, fig, fill = grids.resolved(v, m, src, src, (0, 0))
+                    want = v.resolved(m, src.transform, src.crs, src.shape, valid)
+                    if m == 1 and which == "frac":          # January: 3.4 everywhere
+                        t = float(np.float32(3.4))            # (a float32 raster)
+                        assert fig == (t, False, t, t) and want == t
+                        continue
+                    inside = want[valid]
+                    assert fig == (float(np.mean(inside)), True, float(inside.min()),
+                                   float(inside.max()))
+                    assert fill == float(np.mean(inside))
+                    ci = CellInputs(np.array([m]), (v.by_month, False, False),
+                                    frozenset({(0, m if v.by_month else 1)}), (None, None, None),
+                                    *(np.ones(1),) * 6, (1.0,) * 5, np.ones(1), np.ones(1))
+                    key = m if v.by_month else 1
+                    sky = GridSky(ci, {(0, key): (g, fill)})
+                    for w in ((0, 7, 0, 90), (25, 40, 29, 83), (69, src.shape[0], 0, 1)):
+                        void = ~valid[w[0]:w[1], w[2]:w[3]]
+                        tl = sky.cells(w, void).at(0)[0]
+                        np.testing.assert_array_equal(tl, want[w[0]:w[1], w[2]:w[3]])
+                    assert (~valid).any() or which == "frac"
+            finally:
+                grids.close()
+            assert not os.path.exists(grids.folder)
+
+
+@pytest.mark.slow       # a run
+def test_the_grids_folder_of_a_killed_run_is_removed_by_the_next(tmp_path, dems, skies,
+                                                                  monkeypatch):
+    """The grids' folder beside OUTPUT is named after the run (``io.write.scratch_folder``):
+    one left by a dead process (SIGKILL: no clean-up of its own) is removed by the next run
+    writing into that folder; one of a live process, and one of another host, are kept."""
+    import subprocess
+    import sys
+
+    from hillshade_rt.io import write as writes
+    out = tmp_path / "out"
+    out.mkdir()
+    child = subprocess.Popen([sys.executable, "-c", "pass"])
+    child.wait(30)
+    tag = writes.owner_tag()
+    rest = tag.split("-", 1)[1]
+    dead = out / f".o.tif.grids.abcd1234~{child.pid}-{rest}.scratch.dir"
+    live = out / f".o.tif.grids.efgh5678~{tag}.scratch.dir"
+    other = out / f".o.tif.grids.ijkl9012~{child.pid}-{rest.split('@')[0]}@elsewhere.scratch.dir"
+    for d in (dead, live, other):
+        d.mkdir()
+        (d / "grid_0.npy").write_bytes(b"x" * 64)
+    assert writes.writer_dead(dead.name) and not writes.writer_dead(live.name)
+    folders = []
+    real = writes.scratch_folder
+    writes.reset()
+
+    def seen(path, kind):
+        folders.append(real(path, kind))
+        return folders[-1]
+    monkeypatch.setattr(writes, "scratch_folder", seen)
+    r = CliRunner().invoke(cli, ["irradiance", dems["real"], str(out / "o.tif"), "--date",
+                                 MONTHS["date"], "--step", "3h", "--linke-turbidity",
+                                 skies["linke"], "--window-size", "64", "-q"])
+    assert r.exit_code == 0, r.output
+    left = sorted(os.listdir(out))
+    assert left == sorted(["o.tif", live.name, other.name]), left
+    name = os.path.basename(folders[0])         # the run's own, removed at its end
+    assert name.startswith(".o.tif.grids.") and name.endswith(f"~{tag}.scratch.dir")
+    assert writes.writer_dead(name) is False
+
+
+@pytest.mark.slow       # a local cluster of two worker processes
+def test_linke_and_index_rasters_on_dask_give_the_bits_of_the_run_in_memory(
+        tmp_path, dems, skies, any_window):
+    """A {month} pattern of Linke rasters (January's of one value, February's varying) and a
+    beam index raster, --monthly and Perez, each region a task on two worker processes: the
+    six bands, their descriptions and tags the run in memory's; nothing left beside OUTPUT."""
+    pytest.importorskip("distributed")
+    kw = dict(MONTHS, monthly=True, perez=True, linke_turbidity=skies["pattern"],
+              beam_index=skies["kb"])
+    whole = _run(tmp_path / "whole.tif", dems["frac"], **kw)
+    got = _run(tmp_path / "dask.tif", dems["frac"], window_size="36x45", client="local:2",
+               **kw)
+    _same(got, whole)
+    p = got[1]["processing"]
+    assert p["mode"] == "dask" and p["tasks"] == p["regions"] == 2 * 2
+    assert "each cell its own" in got[1]["turbidity"]
+    assert sorted(os.listdir(tmp_path)) == ["dask.tif", "whole.tif"]
+
+
+@pytest.mark.slow       # two runs
+def test_linke_and_index_rasters_in_a_context_tile_in_windows(tmp_path, dems, skies,
+                                                              any_window):
+    """--context with --window-size and a {month} pattern of Linke rasters and a beam index
+    raster: the tile's bands the bits of the tile's run in memory (the rasters resampled to
+    the tile's grid, their figures over the tile's cells, as there)."""
+    dem = dems["frac"]
+    kw = dict(MONTHS, linke_turbidity=skies["pattern"], beam_index=skies["kb"])
+    with rasterio.open(dem) as ds:
+        w = ((20, 60), (35, 80))
+        tile = write_geotiff(tmp_path / "tile.tif", ds.read(1, window=w),
+                             ds.window_transform(w), ds.crs)
+    got = _run(tmp_path / "t.tif", tile, context=dem, window_size="16x20", **kw)
+    mem = _run(tmp_path / "tm.tif", tile, context=dem, **kw)
+    _same(got, mem)
+    assert got[1]["processing"]["regions"] == 3 * 3 and got[1]["turbidity"] == \
+        mem[1]["turbidity"] and "each cell its own" in mem[1]["turbidity"]
+    assert sorted(os.listdir(tmp_path)) == ["t.tif", "tile.tif", "tm.tif"]

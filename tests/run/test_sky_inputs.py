@@ -136,6 +136,34 @@ def test_daily_mean_divides_by_the_days_and_each_month_by_its_own(tmp_path, runn
     assert r.exit_code == 2 and "--daily-mean" in r.stderr
 
 
+def test_resample_writes_into_a_given_array_with_the_same_bits(tmp_path, dem):
+    """``resample(..., out=)`` (a run in windows passes a float64 array mapped from a file)
+    writes what it returns without ``out``, to the bit, NaN outside the raster; an ``out`` of
+    another shape or type is refused."""
+    from rasterio.warp import transform_bounds
+
+    from hillshade_rt.errors import HillshadeError
+    from hillshade_rt.run.sky_inputs import resample
+    with rasterio.open(dem) as ds:
+        w, s, e, n = transform_bounds(ds.crs, "EPSG:4326", *ds.bounds)
+        tr, crs, shape = ds.transform, ds.crs, ds.shape
+    y, x = np.mgrid[0:13, 0:11]
+    geo = write_geotiff(tmp_path / "g.tif", (0.2 + 0.03 * x + 0.011 * y * y).astype(np.float32),
+                        Affine((e - w) / 11 * 0.8, 0, w + 0.002, 0, -(n - s) / 13 * 1.1,
+                               n + 0.003), CRS.from_epsg(4326))
+    want = resample(geo, tr, crs, shape)
+    out = np.lib.format.open_memmap(tmp_path / "g.npy", mode="w+", dtype=np.float64,
+                                    shape=shape)
+    out[...] = 7.0
+    got = resample(geo, tr, crs, shape, out=out)
+    assert got is out
+    np.testing.assert_array_equal(np.asarray(out), want)
+    assert np.isnan(want).any() and np.isfinite(want).sum() > 0.5 * want.size
+    assert np.nanstd(want) > 0.05
+    with pytest.raises(HillshadeError, match="not float64"):
+        resample(geo, tr, crs, shape, out=np.zeros(shape, np.float32))
+
+
 @pytest.mark.slow
 def test_a_constant_albedo_raster_is_the_number(tmp_path, runner, dem):
     """A raster of one value gives the bits of that number, on the DEM's grid or on another
@@ -230,8 +258,12 @@ def test_monthly_linke_turbidity_gives_each_sample_its_month(tmp_path, runner, d
     (["--beam-index", "1.2"], "--beam-index must be between 0 and 1, got 1.2"),
     (["--diffuse-index", "0.5,0.5"], "one number or 12 monthly numbers"),
     (["--beam-index", "0.5", "--ghi", "{csv}"], "--beam-index and --diffuse-index do not go"),
-    (["--linke-turbidity", "{two}", "--window-size", "64"], "in memory only for now"),
-    (["--diffuse-index", "{half}", "--window-size", "64"], "in memory only for now"),
+    # in windows (the rasters resampled to the grid once): the same lines
+    (["--linke-turbidity", "{raster}", "--window-size", "64"], "does not cover the DEM"),
+    (["--linke-turbidity", "{turbid}", "--window-size", "64"],
+     "values must be between 1 and 10, found 11"),
+    (["--diffuse-index", "{bad}", "--window-size", "64"],
+     "--diffuse-index {bad}: values must be between 0 and 1"),
 ])
 def test_bad_sky_inputs_are_one_line_usage_errors(tmp_path, runner, dem, extra, words):
     small = write_geotiff(tmp_path / "small.tif", np.full((5, 5), 0.2, np.float32), T0, UTM11)
@@ -251,6 +283,7 @@ def test_bad_sky_inputs_are_one_line_usage_errors(tmp_path, runner, dem, extra, 
     assert r.exit_code == 2, r.output
     assert words in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr
     assert not out.exists()
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]   # no grids left
 
 
 # ---------------------------------------------------------------------------------------------
