@@ -7,7 +7,7 @@ import click
 from .errors import errors_to_click, say
 from ..run.config import PLACE_KEYS
 from .options import (SectionedCommand, context_option, algorithm_option, backend_option, dem_options,
-                      each_pattern_options, format_option,
+                      command_line, each_pattern_options, format_option,
                       height_above_ground_option, max_memory_option, monthly_option,
                       overwrite_option,
                       physics_options, place_options, preview_option, quiet_option,
@@ -73,7 +73,8 @@ def sun_hours(files, date_, end_date, monthly, step, tz, lat, lon, pressure, tem
                          refraction_k=refraction_k, soft=soft, self_shadow=self_shadow,
                          read=to_read_options(kw), run=to_run_options(kw, say),
                          height_above_ground=height_above_ground, max_memory=max_memory,
-                         window_size=window_size, scheduler=scheduler, monthly=monthly)
+                         window_size=window_size, scheduler=scheduler, monthly=monthly,
+                         command=command_line())
     if each:
         sun_hours_each(cfg, dem, output_pattern)
     else:

@@ -18,6 +18,11 @@ ncview) understand without being told:
   :data:`CHUNK` cells a side), compressed (NetCDF: zlib with the shuffle filter; Zarr: the zarr
   library's default codec);
 - per-time variables (the sun's azimuth and elevation of a lighting series, ...) on ``time``;
+- optionally the time steps' cell bounds ``time_bnds`` (``time``, ``nv``: CF's ``bounds`` of
+  ``time``: a month of a period's sums, clipped to the period), auxiliary coordinates on
+  ``time`` (``month`` labels "YYYY-MM", ...), and data variables on (``y``, ``x``) only beside
+  the (``time``, ``y``, ``x``) ones (a period's totals beside its months; a cube of such
+  variables only has no ``time`` at all);
 - global attributes ``Conventions`` "CF-1.8", ``title``, ``history``, ``source``, ...
 
 The data may be written a time step at a time or a window of a time step at a time (the runs
@@ -179,12 +184,16 @@ class CubeVariable:
         Its ``_FillValue`` (None: none).
     attrs : dict
         Its attributes (``units``, ``long_name``, ``standard_name``, ...).
+    timed : bool
+        On (``time``, ``y``, ``x``), one layer per time step (the default); False: on (``y``,
+        ``x``), one layer (a period's total beside its months).
     """
 
     name: str
     dtype: str
     nodata: object = None
     attrs: dict = field(default_factory=dict)
+    timed: bool = True
 
 
 class CubeWriter:
@@ -198,15 +207,25 @@ class CubeWriter:
             w.write(2, part, window=(r0, r1, c0, c1))  # or a window of it
 
     With several data variables (``variables`` instead of ``name``, ``dtype``, ``nodata`` and
-    ``attrs``) the bands are taken in a multi-band GeoTIFF's order, time by time: band ``b``
-    (1-based) is variable ``(b - 1) % n`` at time step ``(b - 1) // n`` (``n`` variables), so
-    the writer stands in for :class:`.raster.BandWriter` of a run that writes ``n`` bands per
-    time; :meth:`write_variable` names the variable instead::
+    ``attrs``) the bands are taken in a multi-band GeoTIFF's order: first one band per
+    variable on (``y``, ``x``) only (``timed`` False), in order, then the (``time``, ``y``,
+    ``x``) ones time by time: with ``u`` of the first kind and ``n`` of the second, band ``b``
+    (1-based) past ``u`` is timed variable ``(b - u - 1) % n`` at time step
+    ``(b - u - 1) // n``, so the writer stands in for :class:`.raster.BandWriter` of a run that
+    writes ``n`` bands per time (or a period's totals, then a band per month); ``bands`` gives
+    another order, :meth:`write_variable` names the variable instead::
 
         variables = [CubeVariable("beam_rad", "float32", -9999.0, {"units": "W m-2"}), ...]
         with CubeWriter("out.nc", dem, times, variables=variables) as w:
             w.write(1, beam_at_t0)                     # band 1: beam_rad, time step 1
             w.write_variable("glob_rad", 2, glob_at_t1)
+
+        total = CubeVariable("glob_rad", "float32", -9999.0, {"units": "Wh m-2"}, timed=False)
+        months = CubeVariable("glob_rad_monthly", "float32", -9999.0, {"units": "Wh m-2"})
+        with CubeWriter("out.nc", dem, month_starts, variables=[total, months],
+                        time_bounds=[(start, end), ...]) as w:
+            w.write(1, period_total)                   # band 1: glob_rad (y, x)
+            w.write(2, first_month)                    # band 2: glob_rad_monthly, time step 1
 
     Parameters
     ----------
@@ -215,7 +234,8 @@ class CubeWriter:
     dem : object
         The grid: ``shape`` (rows, cols), ``transform``, ``crs``.
     times : sequence of datetime.datetime or numpy.datetime64
-        One per time step (aware; naive ones are UTC), written as CF times in UTC.
+        One per time step (aware; naive ones are UTC), written as CF times in UTC; none when
+        every data variable is on (``y``, ``x``) only (then the cube has no ``time``).
     name : str
         The data variable's name (the product: "shadow", "hillshade", ...); None with
         ``variables``.
@@ -231,6 +251,19 @@ class CubeWriter:
     time_variables : dict, optional
         ``{name: (values, attrs)}``: a value per time step each (the sun's ``azimuth`` and
         ``elevation`` in degrees, ...), float64 unless the values say otherwise.
+    time_coords : dict, optional
+        ``{name: (values, attrs)}``: a value per time step each, auxiliary coordinates of the
+        timed data variables (named by their ``coordinates``, so xarray makes them coordinates):
+        numbers, or strings ("YYYY-MM" month labels).
+    time_bounds : sequence of (start, end), optional
+        Each time step's cell bounds (as ``times``: aware, or naive read as UTC): the variable
+        ``time_bnds`` (``time``, ``nv``) in ``time``'s units, named by its ``bounds``.
+    time_attrs : dict, optional
+        Attributes of ``time`` replacing or added to the defaults (``long_name`` "time (UTC)",
+        ...): a ``comment`` on the clock of times that are local labels, ...
+    bands : sequence of (name, step), optional
+        Each band's data variable and time step (1-based; None for a variable on (``y``,
+        ``x``) only), band 1 first, instead of the default order above.
     global_attrs : dict, optional
         Global attributes (``title``, ``history``, ``source``, ...) after
         ``Conventions = "CF-1.8"``.
@@ -244,7 +277,8 @@ class CubeWriter:
     def __init__(self, path, dem, times, *, name: str | None = None, dtype: str | None = None,
                  nodata=None, attrs: dict | None = None, variables=None,
                  time_variables: dict | None = None, global_attrs: dict | None = None,
-                 overwrite: bool = False, chunk: int = CHUNK):
+                 overwrite: bool = False, chunk: int = CHUNK, time_coords: dict | None = None,
+                 time_bounds=None, time_attrs: dict | None = None, bands=None):
         if variables is None:
             if name is None or dtype is None:
                 raise ValueError("a cube's data variable needs a name and a dtype")
@@ -256,10 +290,21 @@ class CubeWriter:
         names = [v.name for v in variables]
         if not names or len(set(names)) != len(names):
             raise ValueError(f"a cube's data variables need distinct names, got {names}")
-        reserved = {"time", "x", "y", GRID_MAPPING} | set(time_variables or {})
-        if reserved & set(names):
-            raise ValueError(f"data variable {sorted(reserved & set(names))[0]!r}: the name of a "
+        per_time = set(time_variables or {}) | set(time_coords or {})
+        if set(time_variables or {}) & set(time_coords or {}):
+            raise ValueError("a per-time variable and a time coordinate of the same name")
+        reserved = {"time", "time_bnds", "nv", "x", "y", GRID_MAPPING} | per_time
+        if reserved & set(names) or per_time & {"time", "time_bnds", "nv", "x", "y",
+                                                GRID_MAPPING}:
+            raise ValueError(f"{sorted(reserved & (set(names) | per_time))[0]!r}: the name of a "
                              "coordinate or per-time variable")
+        self.timed = any(v.timed for v in variables)
+        self._timed = {v.name: bool(v.timed) for v in variables}
+        if not self.timed and (len(times) or per_time or time_bounds is not None):
+            raise ValueError("a cube whose data variables are all on (y, x) has no time axis: "
+                             "give no times, per-time variables or bounds")
+        if self.timed and not len(times):
+            raise ValueError("a cube's time axis needs a time at least")
         self.path = os.fspath(path)
         self.format = check_cube_support(self.path)
         if self.format is None:
@@ -267,7 +312,19 @@ class CubeWriter:
         check_output_path(self.path, overwrite)     # (exists, no folder, ...: before any work)
         self.shape = tuple(int(n) for n in dem.shape)
         self.count = len(times)
-        self.time, self.time_units = time_values(times)
+        self.bounds = None
+        if time_bounds is not None:
+            time_bounds = [tuple(b) for b in time_bounds]
+            if len(time_bounds) != self.count or any(len(b) != 2 for b in time_bounds):
+                raise ValueError(f"time bounds: {len(time_bounds)} pairs for {self.count} times")
+            # (one set of units for the times and their bounds)
+            both, self.time_units = time_values(list(times) + [t for b in time_bounds
+                                                               for t in b])
+            self.time = both[:self.count]
+            self.bounds = both[self.count:].reshape(self.count, 2)
+        else:
+            self.time, self.time_units = time_values(times)
+        self.time_attrs = dict(time_attrs or {})
         self.coords, self.grid_mapping = grid_variables(self.shape, dem.transform, dem.crs)
         # (name, numpy dtype, nodata of that type or None, attrs) of each data variable
         self.variables = []
@@ -285,6 +342,18 @@ class CubeWriter:
             if v.dtype.kind not in "iuf":
                 v = v.astype(np.float64)
             self.time_variables[k] = (v, dict(a))
+        self.time_coords = {}
+        for k, (values, a) in (time_coords or {}).items():
+            v = np.asarray(values)
+            if v.shape != (self.count,):
+                raise ValueError(f"time coordinate {k}: {v.shape[0] if v.ndim else 0} values "
+                                 f"for {self.count} times")
+            if v.dtype.kind in "US":
+                v = v.astype(object)        # (variable-length strings)
+            elif v.dtype.kind not in "iufO":
+                v = v.astype(np.float64)
+            self.time_coords[k] = (v, dict(a))
+        self.layout = self._layout(bands)
         self.global_attrs = {"Conventions": "CF-1.8", **(global_attrs or {})}
         self.overwrite = overwrite
         rows, cols = self.shape
@@ -295,17 +364,49 @@ class CubeWriter:
         self._tmp = None
         self._finished = False
 
+    def _layout(self, bands) -> list:
+        """Each band's (data variable, time step or None), band 1 first."""
+        timed = self._timed
+        if bands is None:
+            flat = [n for n, *_ in self.variables if not timed[n]]
+            steps = [n for n, *_ in self.variables if timed[n]]
+            return [(n, None) for n in flat] + [(n, k + 1) for k in range(self.count)
+                                                for n in steps]
+        out = []
+        for n, step in bands:
+            if n not in timed:
+                raise ValueError(f"{self.path}: bands: no data variable {n!r}")
+            if (step is None) == timed[n] or (step is not None
+                                              and not 1 <= step <= self.count):
+                raise ValueError(f"{self.path}: bands: {n!r} at time step {step}")
+            out.append((n, step))
+        return out
+
     # -- the layout, shared by both formats --------------------------------------------------
 
-    def _time_attrs(self) -> dict:
-        return {"standard_name": "time", "long_name": "time (UTC)", "axis": "T",
-                "units": self.time_units, "calendar": "standard"}
+    def _dims(self, name: str) -> tuple:
+        return ("time", "y", "x") if self._timed[name] else ("y", "x")
 
-    def _data_attrs(self, attrs: dict) -> dict:
+    def _chunks(self, name: str) -> tuple:
+        return self.chunks if self._timed[name] else self.chunks[1:]
+
+    def _time_attrs(self) -> dict:
+        a = {"standard_name": "time", "long_name": "time (UTC)", "axis": "T",
+             "units": self.time_units, "calendar": "standard"}
+        if self.bounds is not None:
+            a["bounds"] = "time_bnds"
+        a.update(self.time_attrs)
+        return a
+
+    def _data_attrs(self, attrs: dict, timed: bool = True) -> dict:
         a = dict(attrs)
+        coords = [GRID_MAPPING] if self.grid_mapping is not None else []
+        if timed:
+            coords += list(self.time_coords)
         if self.grid_mapping is not None:
             a["grid_mapping"] = GRID_MAPPING
-            a["coordinates"] = GRID_MAPPING     # (rioxarray finds the CRS through it)
+        if coords:      # (rioxarray finds the CRS through it; xarray the time coordinates)
+            a["coordinates"] = " ".join(coords)
         return a
 
     # -- opening -----------------------------------------------------------------------------
@@ -331,12 +432,19 @@ class CubeWriter:
             nc.set_auto_maskandscale(False)          # the values as given, bit for bit
             nc.setncatts(self.global_attrs)
             rows, cols = self.shape
-            nc.createDimension("time", self.count)
+            if self.timed:
+                nc.createDimension("time", self.count)
             nc.createDimension("y", rows)
             nc.createDimension("x", cols)
-            t = nc.createVariable("time", self.time.dtype, ("time",))
-            t.setncatts(self._time_attrs())
-            t[:] = self.time
+            if self.bounds is not None:
+                nc.createDimension("nv", 2)
+            if self.timed:
+                t = nc.createVariable("time", self.time.dtype, ("time",))
+                t.setncatts(self._time_attrs())
+                t[:] = self.time
+            if self.bounds is not None:     # (CF: a bounds variable takes its time's units)
+                b = nc.createVariable("time_bnds", self.bounds.dtype, ("time", "nv"))
+                b[:] = self.bounds
             for k in ("y", "x"):
                 values, a = self.coords[k]
                 v = nc.createVariable(k, "f8", (k,))
@@ -349,11 +457,21 @@ class CubeWriter:
                 v = nc.createVariable(k, values.dtype, ("time",))
                 v.setncatts(a)
                 v[:] = values
+            for k, (values, a) in self.time_coords.items():
+                v = nc.createVariable(k, str if values.dtype == object else values.dtype,
+                                      ("time",))
+                v.setncatts(a)
+                if values.dtype == object:
+                    for i, text in enumerate(values):
+                        v[i] = str(text)
+                else:
+                    v[:] = values
             for name, dtype, nodata, attrs in self.variables:
-                d = nc.createVariable(name, dtype, ("time", "y", "x"), zlib=True,
-                                      complevel=ZLIB_LEVEL, shuffle=True, chunksizes=self.chunks,
+                d = nc.createVariable(name, dtype, self._dims(name), zlib=True,
+                                      complevel=ZLIB_LEVEL, shuffle=True,
+                                      chunksizes=self._chunks(name),
                                       fill_value=nodata if nodata is not None else False)
-                d.setncatts(self._data_attrs(attrs))
+                d.setncatts(self._data_attrs(attrs, self._timed[name]))
                 self._vars[name] = d
 
     def _open_zarr(self):
@@ -362,7 +480,7 @@ class CubeWriter:
 
         self._tmp = self._stack.enter_context(atomic_folder(self.path, ".zarr",
                                                             self.overwrite))
-        coords = {"time": ("time", self.time, self._time_attrs())}
+        coords = {"time": ("time", self.time, self._time_attrs())} if self.timed else {}
         for k in ("y", "x"):
             values, a = self.coords[k]
             coords[k] = (k, values, a)
@@ -372,18 +490,28 @@ class CubeWriter:
             fill = nodata if nodata is not None else dtype.type(0)
             # the data variable's metadata only (a lazy array never computed: compute=False),
             # its chunks written by write()
-            blank = da.full((self.count,) + self.shape, fill, dtype=dtype, chunks=self.chunks)
-            attrs = self._data_attrs(attrs)
+            timed = self._timed[name]
+            blank = da.full(((self.count,) if timed else ()) + self.shape, fill, dtype=dtype,
+                            chunks=self._chunks(name))
+            attrs = self._data_attrs(attrs, timed)
             attrs.pop("coordinates", None)      # xarray writes it from the coordinates
-            variables[name] = (("time", "y", "x"), blank, attrs)
-            enc[name] = {"chunks": self.chunks, "_FillValue": nodata}
+            variables[name] = (self._dims(name), blank, attrs)
+            enc[name] = {"chunks": self._chunks(name), "_FillValue": nodata}
         for k, (values, a) in self.time_variables.items():
             variables[k] = ("time", values, a)
+        for k, (values, a) in self.time_coords.items():
+            coords[k] = ("time", values, a)
+            if values.dtype != object:
+                enc[k] = {"_FillValue": None}
+        if self.bounds is not None:
+            variables["time_bnds"] = (("time", "nv"), self.bounds, {})
+            enc["time_bnds"] = {"dtype": self.bounds.dtype, "_FillValue": None}
         if self.grid_mapping is not None:
             coords[GRID_MAPPING] = ((), np.int32(0), self.grid_mapping)
         ds = xr.Dataset(variables, coords=coords, attrs=self.global_attrs)
-        enc.update({"time": {"dtype": self.time.dtype, "_FillValue": None},
-                    "x": {"_FillValue": None}, "y": {"_FillValue": None}})
+        enc.update({"x": {"_FillValue": None}, "y": {"_FillValue": None}})
+        if self.timed:
+            enc["time"] = {"dtype": self.time.dtype, "_FillValue": None}
         with self._checked(), warnings.catch_warnings():
             warnings.simplefilter("ignore")    # zarr v3's note on consolidated metadata
             ds.to_zarr(self._tmp, mode="w", encoding=enc, compute=False)
@@ -414,32 +542,38 @@ class CubeWriter:
 
     def write(self, band: int, data: np.ndarray, description: str = "",
               tags: dict | None = None, window: tuple[int, int, int, int] | None = None):
-        """Band ``band`` (1-based), whole or its ``window`` (r0, r1, c0, c1): the time step
-        ``band`` of the one data variable; with ``n`` variables, variable ``(band - 1) % n`` at
-        time step ``(band - 1) // n`` (a GeoTIFF's bands, time by time). The band's description
-        and tags are the cube's time and per-time variables (ignored here)."""
-        n = len(self.variables)
-        if not 1 <= band <= n * self.count:
-            raise ValueError(f"{self.path}: band {band} of {n * self.count}")
-        step, j = divmod(band - 1, n)
-        self.write_variable(self.variables[j][0], step + 1, data, window)
+        """Band ``band`` (1-based), whole or its ``window`` (r0, r1, c0, c1): the data variable
+        and time step of the layout (``layout[band - 1]``: with one data variable its time step
+        ``band``; with several, those on (``y``, ``x``) first, then the others time by time, a
+        GeoTIFF's bands). The band's description and tags are the cube's time, per-time
+        variables and attributes (ignored here)."""
+        if not 1 <= band <= len(self.layout):
+            raise ValueError(f"{self.path}: band {band} of {len(self.layout)}")
+        name, step = self.layout[band - 1]
+        self.write_variable(name, step, data, window)
 
-    def write_variable(self, name: str, step: int, data: np.ndarray,
+    def write_variable(self, name: str, step: int | None, data: np.ndarray,
                        window: tuple[int, int, int, int] | None = None):
-        """Time step ``step`` (1-based) of the data variable ``name``, whole or its ``window``
-        (r0, r1, c0, c1)."""
+        """Time step ``step`` (1-based; None for a data variable on (``y``, ``x``) only) of
+        the data variable ``name``, whole or its ``window`` (r0, r1, c0, c1)."""
         r0, r1, c0, c1 = window if window is not None else (0, self.shape[0], 0, self.shape[1])
         if data.shape != (r1 - r0, c1 - c0):
             raise ValueError(f"{self.path}: data of shape {data.shape} for a window of "
                              f"{(r1 - r0, c1 - c0)}")
         if name not in self._vars:
             raise ValueError(f"{self.path}: no data variable {name!r}")
-        if not 1 <= step <= self.count:
+        if not self._timed[name]:
+            if step is not None:
+                raise ValueError(f"{self.path}: {name!r} has no time axis (step {step})")
+            key = (slice(r0, r1), slice(c0, c1))
+        elif step is None or not 1 <= step <= self.count:
             raise ValueError(f"{self.path}: time step {step} of {self.count}")
+        else:
+            key = (step - 1, slice(r0, r1), slice(c0, c1))
         dtype = next(dt for k, dt, *_ in self.variables if k == name)
         data = np.asarray(data, dtype)
         with self._checked():
-            self._vars[name][step - 1, r0:r1, c0:c1] = data
+            self._vars[name][key] = data
 
     def describe(self, band: int, description: str = "", tags: dict | None = None):
         """(The time step's description and tags: the cube's time and per-time variables.)"""

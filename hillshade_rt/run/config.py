@@ -250,6 +250,7 @@ class SunHoursConfig:
     window_size: object = None        # windows of this many output cells, whatever the size
     scheduler: object = None          # the windows as Dask tasks
     monthly: bool = False             # and the hours of each month, a band each (in memory)
+    command: str | None = None        # the command line (a CF dataset's history)
 
     def check(self) -> None:
         """The height above the ground (``check_lift``: ``algorithm`` becomes the one that

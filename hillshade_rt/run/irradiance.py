@@ -110,6 +110,7 @@ def irradiance(cfg: IrradianceConfig) -> dict:
     if cfg.instants():
         raise UsageProblem("--time and --instant are run.irradiance_instant's run")
     from .irradiance_windows import asked_windows
+    from .period_cube import use_period_cube
     ro = cfg.run
     cfg.check()
     cfg.read.check_context(cfg.dem, **{"--preview": ro.preview is not None,
@@ -122,7 +123,8 @@ def irradiance(cfg: IrradianceConfig) -> dict:
                                     (cfg.sky_view_out, "--sky-view-out")],
                            algorithm=cfg.algorithm,
                            note=False)     # the note once the command line is checked
-    _check_format(cfg)
+    if not use_period_cube(cfg):     # (OUTPUT.nc, OUTPUT.zarr: a CF dataset, run.period_cube)
+        _check_format(cfg)
     asked = _asked(cfg)
     ctx.compile_note(cfg.algorithm, True)
     lighting = cfg.lighting(ctx.backend)
@@ -761,14 +763,14 @@ def _write(cfg: IrradianceConfig, ctx: RunContext, geom, d, lit: _Bands, tags: d
     import numpy as np
 
     from ..engine import irradiance as ir
-    from ..io import BandWriter, write_png
+    from ..io import write_png
     from ..pictures.preview import relief_rgb, scaled
+    from .period_cube import period_writer
     ro = ctx.ro
     with ctx.timer("write"):
         months = lit.months or []
-        with BandWriter(cfg.output, geom, len(ir.BANDS) + len(months), "float32", -9999.0,
-                        tags, overview_resampling="average", overwrite=ro.overwrite,
-                        fmt=ro.fmt, co=ro.creation_options) as w:
+        with period_writer(cfg, geom, tags, [(k, h) for k, h, _ in months], dem=d,
+                           resampling="average") as w:
             for i, (k, (text, btags)) in enumerate(zip(ir.BANDS, _band_meta(cfg)), 1):
                 v = lit.bands[k]
                 w.write(i, np.where(np.isnan(v), np.float32(-9999.0), v), text, btags)
@@ -862,17 +864,14 @@ def _all_nodata(cfg: IrradianceConfig, ctx: RunContext) -> dict:
     import numpy as np
 
     from ..engine import irradiance as ir
-    from ..io import BandWriter, input_label
+    from ..io import input_label
     from .context import nodata_note
-    ro = cfg.run
+    from .period_cube import period_writer
     src = cfg.read.open(cfg.dem)
     src.close()
     tags = {"HILLSHADE_RT_VERSION": __version__, "NODATA": "-9999 (every cell of the DEM is "
             "nodata)"}
-    with ctx.timer("write"), BandWriter(cfg.output, src, len(ir.BANDS), "float32", -9999.0,
-                                        tags, overview_resampling="average",
-                                        overwrite=ro.overwrite, fmt=ro.fmt,
-                                        co=ro.creation_options) as w:
+    with ctx.timer("write"), period_writer(cfg, src, tags, resampling="average") as w:
         arr = np.full(src.shape, -9999.0, np.float32)
         for i, (text, btags) in enumerate(band_texts(cfg), 1):
             w.write(i, arr, text, btags)

@@ -593,8 +593,8 @@ def _bands_in_windows(cfg, ctx, src, lighting, body, sampled, tags, band_meta, w
                       window_shape, scheduler, area, grids, gs) -> WindowedBands:
     from ..engine.windows import block_stats
     from ..engine import irradiance as ir
-    from ..io import BandWriter
     from ..model.earth import curvature_report
+    from .period_cube import period_writer
     from .horizon_windows import Figures, ValueStats
     from .report import progress_total
     from .sky_view_file import open_vd, vd_writer, write_vd_window
@@ -656,9 +656,8 @@ def _bands_in_windows(cfg, ctx, src, lighting, body, sampled, tags, band_meta, w
         from ..pictures.preview import every_nth
         bar = progress_total(tally.windows, ro.quiet, "hillshade-rt irradiance", "window",
                              ro.progress)
-        w = BandWriter(cfg.output, geom, len(ir.BANDS) + len(mmeta), "float32", -9999.0, tags,
-                       overview_resampling="average", overwrite=ro.overwrite, fmt=ro.fmt,
-                       co=ro.creation_options)
+        w = period_writer(cfg, geom, tags, list(zip(groups.keys, groups.hours)) if mmeta
+                          else [], dem=src, resampling="average")
         vw = vd_writer(cfg.sky_view_out, geom, vd_tags, ro) if vd_tags is not None else None
         with w, (vw if vw is not None else contextlib.nullcontext()), src.reader() as rd, bar:
             for rs in regs:
@@ -778,6 +777,7 @@ def _on_dask(cfg, scheduler, jobs: Jobs, regs, tags, band_meta, vd_tags, values,
     from ..io.vrt import VrtSource
     from .dask import DaskSession
     from .horizon_windows import VrtOutput
+    from .period_cube import period_parts
     from .report import progress_total
     from .sky_view_file import DOZIER_PRODUCT
 
@@ -821,10 +821,10 @@ def _on_dask(cfg, scheduler, jobs: Jobs, regs, tags, band_meta, vd_tags, values,
             VrtOutput(cfg.sky_view_out, src.shape, src.transform, src.crs, [DOZIER_PRODUCT],
                       vd_tags, resampling="average",
                       overwrite=ro.overwrite).write([sources("vd", 1)])
-        out = VrtOutput(cfg.output, src.shape, src.transform, src.crs,
-                        [d for d, _ in band_meta], tags, band_tags=[t for _, t in band_meta],
-                        resampling="average", overwrite=ro.overwrite, fmt=ro.fmt,
-                        co=ro.creation_options)
+        g = jobs.groups
+        out = period_parts(cfg, src, [d for d, _ in band_meta], tags,
+                           [t for _, t in band_meta], list(zip(g.keys, g.hours))
+                           if g is not None and g.bands else [], dem=src, resampling="average")
         out.write([sources("bands", i + 1) for i in range(len(band_meta))])
         tally.extra = session.info(workers)
 

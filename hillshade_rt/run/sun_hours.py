@@ -74,6 +74,7 @@ def sun_hours(cfg: SunHoursConfig) -> dict:
     from .context import nodata_note
     from .horizon import memory_limit
     from .local import bounded_gdal_cache, needs_windows
+    from .period_cube import use_period_cube
     from .sun_hours_windows import memory_per_cell, windows_phrase
 
     cfg.check()
@@ -83,8 +84,9 @@ def sun_hours(cfg: SunHoursConfig) -> dict:
     ctx = RunContext.start(ro, inputs=[cfg.dem] + cfg.read.inputs(),
                            outputs=[(cfg.output, "OUTPUT")], algorithm=cfg.algorithm,
                            note=False)     # the note once the command line is checked
-    check_output_format(cfg.output, output_driver(cfg.output, ro.fmt), "float32", 1, False,
-                        ro.creation_options)
+    if not use_period_cube(cfg):     # (OUTPUT.nc, OUTPUT.zarr: a CF dataset, run.period_cube)
+        check_output_format(cfg.output, output_driver(cfg.output, ro.fmt), "float32", 1, False,
+                            ro.creation_options)
     days = _days(cfg)
     ctx.compile_note(cfg.algorithm, cfg.self_shadow)
     cfg.read.check_context(cfg.dem, **{"--scheduler": cfg.scheduler is not None,
@@ -291,6 +293,7 @@ def _write(cfg: SunHoursConfig, ctx: RunContext, d, lit: _Hours | None, tags: di
 
     from ..io import write_png, write_raster
     from ..pictures.preview import relief_rgb
+    from .period_cube import use_period_cube
     from .sun_hours_windows import description
     ro = ctx.ro
     if lit is not None and lit.hours is None:       # written in windows
@@ -304,13 +307,13 @@ def _write(cfg: SunHoursConfig, ctx: RunContext, d, lit: _Hours | None, tags: di
         return v
     hours = np.full(d.shape, np.nan, np.float32) if lit is None else lit.hours
     with ctx.timer("write"):
-        if cfg.monthly and lit is not None and lit.months is not None:
-            from ..io import BandWriter
-            with BandWriter(cfg.output, d, 1 + len(lit.months), "float32", -9999.0, tags,
-                            overwrite=ro.overwrite, fmt=ro.fmt, co=ro.creation_options) as w:
+        months = lit.months if cfg.monthly and lit is not None else None
+        if months is not None or use_period_cube(cfg):
+            from .period_cube import period_writer
+            with period_writer(cfg, d, tags, [k for k, _ in months or []]) as w:
                 w.write(1, np.where(np.isnan(hours), np.float32(-9999.0), hours),
                         description(tags))
-                for i, ((year, month), v) in enumerate(lit.months, 2):
+                for i, ((year, month), v) in enumerate(months or [], 2):
                     w.write(i, np.where(np.isnan(v), np.float32(-9999.0), v),
                             f"{year}-{month:02d}", {"UNITS": "hours of direct sun"})
         else:

@@ -121,10 +121,10 @@ def hours_in_windows(cfg, ctx, src, lighting, req, work, tags, *, limit, window_
     the smallest that would do)."""
     from ..engine.sun_sums import BYTES_PER_GROUP_CELL, region_sums, weighted_light
     from ..engine.windows import WindowCache, WindowLighting, block_stats, bytes_per_cell
-    from ..io import BandWriter
     from ..model.earth import curvature_report, dem_body
     from ..pictures.preview import every_nth
     from .horizon_windows import ValueStats
+    from .period_cube import period_writer
     from .report import progress_total
 
     ro, timer = cfg.run, ctx.timer
@@ -164,8 +164,7 @@ def hours_in_windows(cfg, ctx, src, lighting, req, work, tags, *, limit, window_
     else:
         bar = progress_total(tally.windows, ro.quiet, "hillshade-rt sun-hours", "window",
                              ro.progress)
-        w = BandWriter(cfg.output, geom, 1 + len(keys), "float32", -9999.0, tags,
-                       overwrite=ro.overwrite, fmt=ro.fmt, co=ro.creation_options)
+        w = period_writer(cfg, geom, tags, keys)
         with w, src.reader() as rd, bar:
             cache = WindowCache(rd)
             term = weighted_light(job, weights, algo_stats, used)
@@ -313,7 +312,7 @@ def _on_dask(cfg, scheduler, job, regs, weights, tags, values, algo_stats, used,
     descriptions)."""
     from ..io.vrt import VrtSource
     from .dask import DaskSession
-    from .horizon_windows import VrtOutput
+    from .period_cube import period_parts
     from .report import progress_total
 
     ro = cfg.run
@@ -342,9 +341,8 @@ def _on_dask(cfg, scheduler, job, regs, weights, tags, values, algo_stats, used,
                 tally.take(res, used, algo_stats, pv_hours)
                 bar.update(1)
         texts = band_texts(tags, months)
-        out = VrtOutput(cfg.output, src.shape, src.transform, src.crs, [d for d, _ in texts],
-                        tags, band_tags=[t or {} for _, t in texts] if months else None,
-                        overwrite=ro.overwrite, fmt=ro.fmt, co=ro.creation_options)
+        out = period_parts(cfg, src, [d for d, _ in texts], tags,
+                           [t or {} for _, t in texts] if months else None, months)
         out.write([[VrtSource(path, b, (r[0], r[2]), (r[1] - r[0], r[3] - r[2]))
                     for r, path in parts] for b in range(1, len(texts) + 1)])
         tally.extra = session.info(workers)

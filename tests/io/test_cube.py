@@ -438,3 +438,170 @@ def test_one_variable_either_way_is_the_same_cube(tmp_path, name):
         return out
     fa, fb = files(a.parent), files(b.parent)
     assert len(fa) >= 1 and fa == fb
+
+
+# -- totals on (y, x) beside months on (time, y, x): a period's sums --------------------------
+
+MONTHS = [dt.datetime(2026, 1, 1), dt.datetime(2026, 2, 1), dt.datetime(2026, 3, 1)]
+BOUNDS = [(dt.datetime(2026, 1, 30, 0, 0), dt.datetime(2026, 2, 1)),
+          (dt.datetime(2026, 2, 1), dt.datetime(2026, 3, 1)),
+          (dt.datetime(2026, 3, 1), dt.datetime(2026, 3, 2, 6, 30))]
+PERIOD = [cube.CubeVariable("beam_rad", "float32", -9999.0,
+                            {"units": "Wh m-2", "long_name": "beam"}, timed=False),
+          cube.CubeVariable("glob_rad", "float32", -9999.0,
+                            {"units": "Wh m-2", "long_name": "global"}, timed=False),
+          cube.CubeVariable("glob_rad_monthly", "float32", -9999.0,
+                            {"units": "Wh m-2", "long_name": "global of each month"})]
+
+
+def _period(rows=37, cols=53):
+    """(beam, global) totals (rows, cols) and the months (3, rows, cols): distinct values, a
+    void in each."""
+    rng = np.random.default_rng(29)
+    beam = (rng.random((rows, cols)) * 3000.0).astype(np.float32)
+    glob = beam + np.float32(1234.5)
+    months = (rng.random((len(MONTHS), rows, cols)) * 2000.0).astype(np.float32)
+    for a in (beam, glob, *months):
+        a[5:7, 9:12] = -9999.0
+    return beam, glob, months
+
+
+@pytest.mark.parametrize("name", FORMATS)
+def test_totals_and_months_in_a_geotiffs_band_order(tmp_path, name):
+    """Two variables on (y, x) and one on (time, y, x) written through write(band, ...) in a
+    GeoTIFF's order (the totals, then a band per month; windows for one month): xarray gives the
+    totals without time, the months on time with the bounds decoded (time_bnds named by
+    time's bounds, in its units), the month labels and hours as coordinates of the monthly
+    variable only, the comment on time's clock; every value bit for bit."""
+    beam, glob, months = _period()
+    path = tmp_path / name
+    labels = ["2026-01", "2026-02", "2026-03"]
+    with cube.CubeWriter(path, _grid(), MONTHS, variables=PERIOD, time_bounds=BOUNDS,
+                         time_coords={"month": (labels, {"long_name": "month"}),
+                                      "hours": ([48.0, 672.0, 30.5], {"units": "h"})},
+                         time_attrs={"comment": "local time"},
+                         global_attrs={"period_start": "2026-01-30"}) as w:
+        assert w.layout == [("beam_rad", None), ("glob_rad", None), ("glob_rad_monthly", 1),
+                            ("glob_rad_monthly", 2), ("glob_rad_monthly", 3)]
+        w.write(1, beam, "beam_rad", {"UNITS": "Wh/m2"})
+        w.write(2, glob[:20], window=(0, 20, 0, 53))
+        w.write(2, glob[20:], window=(20, 37, 0, 53))
+        for k in range(3):
+            w.write(3 + k, months[k], f"2026-0{k + 1}")
+    with _open(path) as ds:
+        assert ds.attrs["period_start"] == "2026-01-30"
+        assert ds["beam_rad"].dims == ds["glob_rad"].dims == ("y", "x")
+        assert "time" not in ds["glob_rad"].coords and "month" not in ds["glob_rad"].coords
+        mo = ds["glob_rad_monthly"]
+        assert mo.dims == ("time", "y", "x")
+        np.testing.assert_array_equal(ds["time"].values, np.array(MONTHS, "datetime64[ns]"))
+        np.testing.assert_array_equal(ds["time_bnds"].values,
+                                      np.array(BOUNDS, "datetime64[ns]"))
+        assert ds["time"].attrs["comment"] == "local time"
+        assert ds["time"].attrs.get("bounds", ds["time"].encoding.get("bounds")) == "time_bnds"
+        assert list(mo.coords["month"].values) == labels
+        np.testing.assert_array_equal(mo.coords["hours"].values, [48.0, 672.0, 30.5])
+        for v in ("beam_rad", "glob_rad", "glob_rad_monthly"):
+            assert ds[v].rio.crs == UTM and ds[v].attrs["units"] == "Wh m-2"
+            assert ds[v].encoding["_FillValue"] == -9999.0
+        assert np.isnan(ds["glob_rad"].values[5, 9]) and ds["glob_rad"].values[0, 0] == glob[0, 0]
+    with xr.open_dataset(path, mask_and_scale=False, engine="zarr" if name.endswith(".zarr")
+                         else None) as ds:
+        np.testing.assert_array_equal(ds["beam_rad"].values, beam)       # bit for bit
+        np.testing.assert_array_equal(ds["glob_rad"].values, glob)
+        np.testing.assert_array_equal(ds["glob_rad_monthly"].values, months)
+
+
+def test_period_cube_chunks_and_units_in_netcdf(tmp_path):
+    """NetCDF: the totals chunked (rows, cols) as one layer, the months one time step per chunk;
+    time and time_bnds in whole seconds of one set of units; half a second in a bound: both in
+    microseconds."""
+    netCDF4 = pytest.importorskip("netCDF4")
+    beam, glob, months = _period(40, 1100)
+    path = tmp_path / "p.nc"
+    with cube.CubeWriter(path, _grid(40, 1100), MONTHS, variables=PERIOD,
+                         time_bounds=BOUNDS) as w:
+        for b, a in enumerate([beam, glob, *months], 1):
+            w.write(b, a)
+    with netCDF4.Dataset(path) as nc:
+        assert nc["glob_rad"].chunking() == [40, 1024] and nc["glob_rad"].dimensions == ("y", "x")
+        assert nc["glob_rad_monthly"].chunking() == [1, 40, 1024]
+        assert nc["time"].units == "seconds since 1970-01-01 00:00:00"
+        assert nc["time"].bounds == "time_bnds" and nc["time_bnds"].dimensions == ("time", "nv")
+        assert nc["time_bnds"][2, 1] - nc["time"][2] == 30 * 3600 + 1800
+    half = [b for b in BOUNDS[:2]] + [(BOUNDS[2][0], BOUNDS[2][1] + dt.timedelta(seconds=0.5))]
+    with cube.CubeWriter(tmp_path / "h.nc", _grid(40, 1100), MONTHS, variables=PERIOD,
+                         time_bounds=half) as w:
+        pass
+    with xr.open_dataset(tmp_path / "h.nc") as ds:
+        assert ds["time"].encoding["units"].startswith("microseconds since 1970")
+        assert ds["time_bnds"].values[2, 1] == np.datetime64("2026-03-02T06:30:00.5")
+        assert ds["time"].values[1] == np.datetime64("2026-02-01")
+
+
+@pytest.mark.parametrize("name", FORMATS)
+def test_totals_only_have_no_time(tmp_path, name):
+    """Variables on (y, x) only (a period's totals without --monthly): no time dimension,
+    coordinate or bounds at all; write(band) takes them in order; write_variable with None."""
+    beam, glob, _ = _period()
+    path = tmp_path / name
+    with cube.CubeWriter(path, _grid(), [], variables=PERIOD[:2]) as w:
+        w.write(2, glob)
+        w.write_variable("beam_rad", None, beam)
+    with _open(path) as ds:
+        assert "time" not in ds.dims and "time" not in ds.variables
+        assert "time_bnds" not in ds.variables
+        assert ds["beam_rad"].dims == ("y", "x") and ds.rio.crs == UTM
+    with xr.open_dataset(path, mask_and_scale=False, engine="zarr" if name.endswith(".zarr")
+                         else None) as ds:
+        np.testing.assert_array_equal(ds["beam_rad"].values, beam)
+        np.testing.assert_array_equal(ds["glob_rad"].values, glob)
+
+
+def test_an_explicit_band_layout(tmp_path):
+    """bands=[(name, step), ...]: band 1 the last month, band 2 a total, ...: each where it is
+    named."""
+    beam, glob, months = _period()
+    path = tmp_path / "o.nc"
+    bands = [("glob_rad_monthly", 3), ("beam_rad", None), ("glob_rad_monthly", 1),
+             ("glob_rad", None), ("glob_rad_monthly", 2)]
+    with cube.CubeWriter(path, _grid(), MONTHS, variables=PERIOD, bands=bands) as w:
+        for b, a in enumerate([months[2], beam, months[0], glob, months[1]], 1):
+            w.write(b, a)
+    with xr.open_dataset(path, mask_and_scale=False) as ds:
+        np.testing.assert_array_equal(ds["glob_rad_monthly"].values, months)
+        np.testing.assert_array_equal(ds["beam_rad"].values, beam)
+        np.testing.assert_array_equal(ds["glob_rad"].values, glob)
+
+
+def test_period_layout_bad_calls(tmp_path):
+    grid = _grid(3, 4)
+    with pytest.raises(ValueError, match="no time axis"):
+        cube.CubeWriter(tmp_path / "a.nc", grid, MONTHS, variables=PERIOD[:2])
+    with pytest.raises(ValueError, match="a time at least"):
+        cube.CubeWriter(tmp_path / "a.nc", grid, [], variables=PERIOD)
+    with pytest.raises(ValueError, match="2 pairs for 3 times"):
+        cube.CubeWriter(tmp_path / "a.nc", grid, MONTHS, variables=PERIOD,
+                        time_bounds=BOUNDS[:2])
+    with pytest.raises(ValueError, match="time coordinate month: 2 values"):
+        cube.CubeWriter(tmp_path / "a.nc", grid, MONTHS, variables=PERIOD,
+                        time_coords={"month": (["a", "b"], {})})
+    with pytest.raises(ValueError, match="'time_bnds'"):
+        cube.CubeWriter(tmp_path / "a.nc", grid, MONTHS,
+                        variables=[cube.CubeVariable("time_bnds", "float32")])
+    with pytest.raises(ValueError, match=r"bands: 'beam_rad' at time step 1"):
+        cube.CubeWriter(tmp_path / "a.nc", grid, MONTHS, variables=PERIOD,
+                        bands=[("beam_rad", 1)])
+    with pytest.raises(ValueError, match=r"bands: 'glob_rad_monthly' at time step 4"):
+        cube.CubeWriter(tmp_path / "a.nc", grid, MONTHS, variables=PERIOD,
+                        bands=[("glob_rad_monthly", 4)])
+    with pytest.raises(ValueError, match="no time axis"):
+        with cube.CubeWriter(tmp_path / "a.nc", grid, MONTHS, variables=PERIOD) as w:
+            w.write_variable("beam_rad", 1, np.zeros((3, 4), np.float32))
+    with pytest.raises(ValueError, match="time step None of 3"):
+        with cube.CubeWriter(tmp_path / "a.nc", grid, MONTHS, variables=PERIOD) as w:
+            w.write_variable("glob_rad_monthly", None, np.zeros((3, 4), np.float32))
+    with pytest.raises(ValueError, match="band 6 of 5"):
+        with cube.CubeWriter(tmp_path / "a.nc", grid, MONTHS, variables=PERIOD) as w:
+            w.write(6, np.zeros((3, 4), np.float32))
+    assert os.listdir(tmp_path) == []
