@@ -105,8 +105,10 @@ class DaskSession:
         self.worker_timeout = float(worker_timeout or DEFAULT_WORKER_TIMEOUT)
         # one question to the scheduler: never beyond the bound either
         self.probe = min(PROBE_SECONDS, self.worker_timeout)
-        self.folder = tempfile.mkdtemp(dir=os.path.dirname(os.path.abspath(dest)),
-                                       prefix="." + os.path.basename(dest) + ".parts-")
+        # tagged with this process (io.write.scratch_folder): a later run into the folder
+        # removes it where this run was killed
+        from ..io.write import scratch_folder
+        self.folder = scratch_folder(dest, "parts")
         try:
             self.client, self.cluster = client_for(scheduler)
         except BaseException:

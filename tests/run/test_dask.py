@@ -123,7 +123,7 @@ def shadow_run(tmp_path, address: str, *extra, side: int = SIDE):
     write_geotiff(dem, fractal_terrain(side, side, 7, relief=300.0),
                   Affine(5, 0, 400000, 0, -5, 3800000), CRS.from_epsg(32611))
     out = tmp_path / "out"
-    out.mkdir()
+    out.mkdir(exist_ok=True)
     p = subprocess.Popen([sys.executable, "-m", "hillshade_rt", "shadow", str(dem),
                           str(out / "shadow.tif"), "--azimuth", "200", "--elevation", "20",
                           "--window-size", "64", "--scheduler", address, "-q", *extra],
@@ -140,7 +140,7 @@ def shadow_run(tmp_path, address: str, *extra, side: int = SIDE):
 def _first_part(out, p) -> None:
     """Wait until the run has written a part (it is under way)."""
     def written():
-        return any(name.startswith(".shadow.tif.parts-") and os.listdir(out / name)
+        return any(name.startswith(".shadow.tif.parts.") and os.listdir(out / name)
                    for name in os.listdir(out))
     _wait_for("the first part", written, procs=[p])
 
@@ -187,6 +187,24 @@ def test_every_worker_lost_fails_within_the_bound(tmp_path):
         assert "internal error" not in line
         assert BOUND <= took < BOUND + 20, took
         assert os.listdir(out) == []        # no output, no parts, no temporary file
+
+
+@pytest.mark.slow
+def test_a_killed_runs_parts_are_removed_by_the_next_run(tmp_path):
+    """The run's process SIGKILLed mid-run (no chance to clean up) leaves its parts' folder; the
+    next run into that folder removes it (the folder carries the dead process's tag), and
+    writes its output."""
+    with cluster(tmp_path) as c:
+        with shadow_run(tmp_path, c.address) as (p, out):
+            _first_part(out, p)
+            os.killpg(p.pid, signal.SIGKILL)
+            p.wait(timeout=30)
+        left = [n for n in os.listdir(out) if n.startswith(".shadow.tif.parts.")]
+        assert left, os.listdir(out)
+        with shadow_run(tmp_path, c.address) as (q, _):
+            status, err = _finished(q, 120)
+        assert status == 0, err
+        assert os.listdir(out) == ["shadow.tif"], os.listdir(out)
 
 
 @pytest.mark.slow
