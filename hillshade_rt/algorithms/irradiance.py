@@ -70,6 +70,23 @@ def incidence_of(nrm: tuple, lx: float, ly: float, lz: float) -> np.ndarray:
     return out
 
 
+@njit(cache=True, inline="always")
+def _lit_cos(lit, cast, use_cast, ge, gn, length, suns, from_normals, tr, tc, r, c):
+    """The direct beam's factor at cell (r, c) (float32): max(cos i, 0) (the incidence from the
+    Horn normals and the tile's sun ``suns[tr, tc]``) times lit (``cast`` 0: lit, else the soft
+    fraction ``lit``), or ``lit`` alone without normals."""
+    zero = np.float32(0.0)
+    if not from_normals:
+        return lit[r, c]
+    s = suns[tr, tc]
+    cosi = np.float32((s[2] - ge[r, c] * s[0] - gn[r, c] * s[1]) / length[r, c])
+    if not (cosi >= zero or math.isnan(cosi)):
+        cosi = zero
+    if use_cast:
+        return cosi * (np.float32(1.0) if cast[r, c] == 0 else zero)
+    return cosi * lit[r, c]
+
+
 @njit(parallel=True, cache=True)
 def add_sample(lit, cast, use_cast, ge, gn, length, row_tile, col_tile, suns, from_normals,
                beam_on, dni, w, beam, diffuse_on, circ_on, f1, circ, f2, dhi, vd, sin_s, share,
@@ -86,24 +103,13 @@ def add_sample(lit, cast, use_cast, ge, gn, length, row_tile, col_tile, suns, fr
     max(cos i, 0) · lit with ``circ_on`` (circ = f1 / b); diffuse += w · max(dhi · d, 0)."""
     n_r, n_c = beam.shape
     zero = np.float32(0.0)
-    one = np.float32(1.0)
     for r in prange(n_r):
         tr = row_tile[r]
         for c in range(n_c):
             d = zero
             if beam_on or circ_on:
-                if from_normals:
-                    s = suns[tr, col_tile[c]]
-                    cosi = np.float32((s[2] - ge[r, c] * s[0] - gn[r, c] * s[1])
-                                      / length[r, c])
-                    if not (cosi >= zero or math.isnan(cosi)):
-                        cosi = zero
-                    if use_cast:
-                        d = cosi * (one if cast[r, c] == 0 else zero)
-                    else:
-                        d = cosi * lit[r, c]
-                else:
-                    d = lit[r, c]
+                d = _lit_cos(lit, cast, use_cast, ge, gn, length, suns, from_normals,
+                             tr, col_tile[c], r, c)
             if beam_on:
                 b = dni * d
                 beam[r, c] += w * np.float64(b)
@@ -151,7 +157,6 @@ def add_sample_cells(lit, cast, use_cast, ge, gn, length, row_tile, col_tile, su
     (the circumsolar term where lit and F1 > 0)."""
     n_r, n_c = beam.shape
     zero = np.float32(0.0)
-    one = np.float32(1.0)
     am, extra, cosz, fh1, fh2, cg1, cg2, bb = (ine[0], ine[1], ine[2], ine[3], ine[4], ine[5],
                                                ine[6], ine[7])
     for r in prange(n_r):
@@ -187,18 +192,8 @@ def add_sample_cells(lit, cast, use_cast, ge, gn, length, row_tile, col_tile, su
             dhi = kdv * dhi
             d = zero
             if has_lit:
-                if from_normals:
-                    s = suns[tr, col_tile[c]]
-                    cosi = np.float32((s[2] - ge[r, c] * s[0] - gn[r, c] * s[1])
-                                      / length[r, c])
-                    if not (cosi >= zero or math.isnan(cosi)):
-                        cosi = zero
-                    if use_cast:
-                        d = cosi * (one if cast[r, c] == 0 else zero)
-                    else:
-                        d = cosi * lit[r, c]
-                else:
-                    d = lit[r, c]
+                d = _lit_cos(lit, cast, use_cast, ge, gn, length, suns, from_normals,
+                             tr, col_tile[c], r, c)
                 b = np.float32(dni) * d
                 beam[r, c] += w * np.float64(b)
             ghi_sum[r, c] += w * ghi
