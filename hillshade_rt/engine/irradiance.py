@@ -661,17 +661,10 @@ def sums(direct, void: np.ndarray, slopes, suns, weights, sky: Sky, vd: np.ndarr
     from ..algorithms.irradiance import add_sample
     beam = np.zeros(shape, np.float64)
     diffuse = np.zeros(shape, np.float64)
-    none2 = np.empty((1, 1), np.float64)         # (arrays a call does not read)
-    none1 = np.zeros(1, np.int64)
-    none3 = np.zeros((1, 1, 3), np.float64)
-    no_lit = np.empty((1, 1), np.float32)
-    no_cast = np.empty((1, 1), np.uint8)
-    rows0 = np.zeros(shape[0], np.int64)
+    none2, none1, none3, no_lit, no_cast, rows0 = _stand_ins(shape)
     if not perez:
         sin_s = horizon_share = none2
-    gi = None if groups is None else np.asarray(groups.index, np.int64)
-    if gi is not None and (len(gi) != n or (n and (gi[0] != 0 or np.any(np.diff(gi) < 0)))):
-        raise HillshadeError("one group per sun, numbered from 0 in the suns' order")
+    gi = _group_index(groups, n)
     ends = []                    # (group, its beam sum, its diffuse sum)
     prev = [beam.copy(), diffuse.copy() if perez else None] if gi is not None else None
 
@@ -755,6 +748,25 @@ def cell_casts(cells, k: int, tl_on: bool, sun, soft: bool = False,
     return bool(up and (beam_up or perez) and not is_dark(sun, soft))
 
 
+def _stand_ins(shape) -> tuple:
+    """The arrays a kernel call does not read (its options off) and the rows' tile 0: (float64
+    2-D, int64 1-D, float64 (1, 1, 3), float32 lit, uint8 cast, the rows of ``shape``)."""
+    return (np.empty((1, 1), np.float64), np.zeros(1, np.int64), np.zeros((1, 1, 3), np.float64),
+            np.empty((1, 1), np.float32), np.empty((1, 1), np.uint8),
+            np.zeros(shape[0], np.int64))
+
+
+def _group_index(groups, n: int):
+    """Each of the ``n`` suns' group (int64; None without groups), checked: numbered from 0 in
+    the suns' order, never decreasing."""
+    if groups is None:
+        return None
+    gi = np.asarray(groups.index, np.int64)
+    if len(gi) != n or (n and (gi[0] != 0 or np.any(np.diff(gi) < 0))):
+        raise HillshadeError("one group per sun, numbered from 0 in the suns' order")
+    return gi
+
+
 def _sums_cells(direct, void, loop, suns, w, sky, vd64, albedo, cells: CellSky, soft, perez,
                 sin_s, horizon_share, counted, stats, timed, normals, groups) -> dict:
     """``sums`` with the open sky per cell (``cells``): each sample with light added cell by
@@ -767,21 +779,14 @@ def _sums_cells(direct, void, loop, suns, w, sky, vd64, albedo, cells: CellSky, 
     beam = np.zeros(shape, np.float64)
     diffuse = np.zeros(shape, np.float64)
     ghi_sum = np.zeros(shape, np.float64)
-    none2 = np.empty((1, 1), np.float64)
-    none1 = np.zeros(1, np.int64)
-    none3 = np.zeros((1, 1, 3), np.float64)
-    no_lit = np.empty((1, 1), np.float32)
-    no_cast = np.empty((1, 1), np.uint8)
-    rows0 = np.zeros(shape[0], np.int64)
+    none2, none1, none3, no_lit, no_cast, rows0 = _stand_ins(shape)
     if not perez:
         sin_s = horizon_share = none2
     kz3 = PEREZ_KAPPA * cells.z ** 3
     bfac = np.maximum(np.cos(cells.z), COS_85)
     table = np.ascontiguousarray(PEREZ_1990, np.float64)
     bins = np.array(PEREZ_EPSILON_BINS, np.float64)
-    gi = None if groups is None else np.asarray(groups.index, np.int64)
-    if gi is not None and (len(gi) != n or (n and (gi[0] != 0 or np.any(np.diff(gi) < 0)))):
-        raise HillshadeError("one group per sun, numbered from 0 in the suns' order")
+    gi = _group_index(groups, n)
     if len(cells.am) != n:
         raise HillshadeError("one open sky per cell per sun")
     ends = []
