@@ -533,7 +533,7 @@ def accumulate(shader, suns, weights, sky: Sky, vd: np.ndarray, albedo: float, *
     (``algorithms.irradiance.normals``) and add each sample in place; the stacks go as before,
     sun by sun through numpy. ``normals``: those normals when the caller has them (the sky
     view's). ``groups``, ``cells``: as ``sums``' (not with ``per_time``)."""
-    from .shader import render
+    from .shader import render, threads_for
     if per_time:
         def direct(s, timed):
             with timed("shadows"):
@@ -558,9 +558,10 @@ def accumulate(shader, suns, weights, sky: Sky, vd: np.ndarray, albedo: float, *
         from ..algorithms.irradiance import incidence_of
         cos_s = incidence_of(nrm, *sun_vector(0.0, 90.0)).astype(np.float64)
         return cos_s, np.sqrt(np.maximum(1.0 - cos_s * cos_s, 0.0))
-    return sums(lit_of, np.isnan(shader.z), slopes, suns, weights, sky, vd, albedo, soft=soft,
-                perez=perez, stats=stats, timer=timer, progress=progress, normals=nrm,
-                groups=groups, cells=cells)
+    with threads_for(shader.z.size):   # each sample's sum, as its shadows (render)
+        return sums(lit_of, np.isnan(shader.z), slopes, suns, weights, sky, vd, albedo,
+                    soft=soft, perez=perez, stats=stats, timer=timer, progress=progress,
+                    normals=nrm, groups=groups, cells=cells)
 
 
 def _nothing():

@@ -52,3 +52,46 @@ def test_halo_margin_and_an_endless_reach():
     assert halo_bounds((40, 50, 40, 50), (100, 100), g, 90.0, 100.0) == (38, 52, 40, 62)
     assert halo_bounds((40, 50, 40, 50), (100, 100), g, 90.0, 100.0, margin=3) == (35, 55, 37, 65)
     assert halo_bounds((40, 50, 40, 50), (100, 100), g, 203.7, math.inf)[1] == 100
+
+
+def test_threads_for_caps_the_threads_by_cells_and_restores_them():
+    import numba
+
+    from hillshade_rt.engine.shader import CELLS_PER_THREAD, threads_for
+    n = numba.get_num_threads()
+    with threads_for(CELLS_PER_THREAD - 1) as k:
+        assert k == numba.get_num_threads() == 1
+    assert numba.get_num_threads() == n
+    with threads_for(10**9) as k:           # never more than were set
+        assert k == numba.get_num_threads() == n
+    with pytest.raises(ZeroDivisionError), threads_for(5):
+        1 / 0
+    assert numba.get_num_threads() == n
+    if n >= 2:
+        with threads_for(2 * CELLS_PER_THREAD + 7) as k:
+            assert k == numba.get_num_threads() == 2
+
+
+def test_a_small_dems_sun_runs_on_one_thread_with_the_same_mask(monkeypatch):
+    """render caps the threads of its kernels by the DEM's cells (a parallel region's wait
+    cost a small DEM more than its cells): the mask is brute's all the same, and the caller's
+    thread count is back afterwards."""
+    import numba
+
+    from hillshade_rt.engine.shader import Shader, render
+    from hillshade_rt.model.sun import SunOver
+    z = fractal_terrain(60, 70, seed=4, relief=500.0)
+    g = Grid.uniform(*z.shape, 30.0, 30.0)
+    seen = []
+    real = Shader.cast
+
+    def spy(self, region, stats=None):
+        seen.append(numba.get_num_threads())
+        return real(self, region, stats)
+
+    monkeypatch.setattr(Shader, "cast", spy)
+    n = numba.get_num_threads()
+    for az, el in [(163.0, 7.0), (290.0, 23.0)]:
+        mask = render(Shader(z, g, "bounds", curvature=False), SunOver(None, az, el), "shadow")
+        assert np.array_equal(mask, brute.shadow_mask(z, sun_rays(g, az, el)))
+    assert seen == [1, 1] and numba.get_num_threads() == n
