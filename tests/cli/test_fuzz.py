@@ -1476,8 +1476,8 @@ def test_fuzz_found_a_nodata_outside_the_heights_type():
 def test_fuzz_irradiance_sky_inputs_plain():
     """irradiance's sky inputs as the table draws them, kept as plain cases (the derandomized
     draws seldom reach them whole): Linke, index and albedo rasters and patterns with --monthly
-    and --sky-view-out succeed with every output; an index with --ghi (a measured sky), index
-    rasters in windows and a Linke raster out of range are refused, exit 2, one line, nothing
+    and --sky-view-out succeed with every output, in memory and in windows with the same bits;
+    an index with --ghi (a measured sky) and a Linke raster out of range are refused, exit 2, one line, nothing
     written; each judged by the generic property too."""
     import rasterio
     dem = raster_bytes("GTiff", 16, 21, "float32", "utm", -9999.0, 2, 0.05, 1, None)
@@ -1495,18 +1495,21 @@ def test_fuzz_irradiance_sky_inputs_plain():
                 files.update(_sky_files(a[len(IN):], dem))
         return Case("irradiance", argv, files, ["float32 16x21 utm, 5% voids"])
 
-    good = case(*sky, "--monthly", "--sky-view-out", OUT + "svf.tif")
-    assert len(good.files) == 2 + 12 + 1 + 12
-    with _invoked(good, before=_cache_folders(good)) as (r, stderr, _, out_dir, new_out,
-                                                          new_in, _t):
-        assert r.exit_code == 0 and not stderr.strip(), stderr
-        assert not _violations_of_any_run(r, stderr, new_in)
-        assert new_out == ["o.tif", "svf.tif"]
-        with rasterio.open(os.path.join(out_dir, "o.tif")) as ds:
-            assert ds.count == 5 and ds.descriptions[4] == "2026-06"
-            assert ds.tags()["BEAM_INDEX"].startswith("raster sky_kb.tif")
+    bands = []
+    for windows in ([], ["--window-size", "64"]):      # in memory, then in windows
+        good = case(*sky, "--monthly", "--sky-view-out", OUT + "svf.tif", *windows)
+        assert len(good.files) == 2 + 12 + 1 + 12
+        with _invoked(good, before=_cache_folders(good)) as (r, stderr, _, out_dir, new_out,
+                                                              new_in, _t):
+            assert r.exit_code == 0 and not stderr.strip(), stderr
+            assert not _violations_of_any_run(r, stderr, new_in)
+            assert new_out == ["o.tif", "svf.tif"]
+            with rasterio.open(os.path.join(out_dir, "o.tif")) as ds:
+                assert ds.count == 5 and ds.descriptions[4] == "2026-06"
+                assert ds.tags()["BEAM_INDEX"].startswith("raster sky_kb.tif")
+                bands.append(ds.read())
+    assert bands[0].tobytes() == bands[1].tobytes()       # windows: the bits of memory
     refused = {"--ghi": case(*sky, "--ghi", IN + "ghi_good.csv"),
-               "in memory only": case(*sky, "--window-size", "64"),
                "--linke-turbidity": case("--linke-turbidity", _sky_file("albedo"))}
     for words, c in refused.items():
         bad, r, stderr = run_generic(c)
