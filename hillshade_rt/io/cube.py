@@ -89,6 +89,25 @@ def check_cube_support(path) -> str:
     return fmt
 
 
+def cube_output(output, fmt, creation_options, refused=()) -> str | None:
+    """The cube's format (:func:`check_cube_support`) where OUTPUT is a CF time cube: named
+    ``*.nc`` or ``*.zarr`` and no --format (which names GDAL's driver, ``-f netCDF`` its bands);
+    None otherwise. --co (GDAL's creation options) is refused with a cube (a usage error), then
+    each given option of ``refused`` (its message; None: not given), then a missing library is
+    named: before any work when a run asks first."""
+    if output is None or fmt is not None or cube_format(output) is None:
+        return None
+    from ..errors import UsageProblem
+    if creation_options:
+        raise UsageProblem(f"{output}: --co sets GDAL's creation options; a time cube (.nc, "
+                           ".zarr) is written compressed, chunked, without them: drop --co, "
+                           "or write a GeoTIFF (.tif)")
+    for why in refused:
+        if why:
+            raise UsageProblem(why)
+    return check_cube_support(output)
+
+
 def time_values(times) -> tuple[np.ndarray, str]:
     """``times`` (aware datetimes, naive ones taken as UTC, or numpy datetime64) as CF numbers:
     (int64 values, units): whole seconds since 1970-01-01 00:00:00 UTC where every time is a

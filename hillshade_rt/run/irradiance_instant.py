@@ -376,19 +376,10 @@ CUBE_QUANTITIES = {
 
 
 def use_cube(cfg: IrradianceConfig) -> bool:
-    """Whether OUTPUT is a time cube: named ``*.nc`` or ``*.zarr`` without --format (which
-    names GDAL's driver). --co (GDAL's creation options) is refused then (a usage error); a
-    missing library is named (``io.cube.check_cube_support``), before any work."""
-    from ..io.cube import check_cube_support, cube_format
-    ro = cfg.run
-    if ro.fmt is not None or cube_format(cfg.output) is None:
-        return False
-    if ro.creation_options:
-        raise UsageProblem(f"{cfg.output}: --co sets GDAL's creation options; a time cube "
-                           "(.nc, .zarr) is written compressed, a chunk per time, without them: "
-                           "drop --co, or write a GeoTIFF (.tif)")
-    check_cube_support(cfg.output)
-    return True
+    """Whether OUTPUT is a time cube (``io.cube.cube_output``: ``*.nc`` or ``*.zarr`` without
+    --format; --co refused then, a missing library named, before any work)."""
+    from ..io.cube import cube_output
+    return cube_output(cfg.output, cfg.run.fmt, cfg.run.creation_options) is not None
 
 
 def cube_variables() -> list:

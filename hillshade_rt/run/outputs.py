@@ -10,7 +10,7 @@ import os
 import string
 
 from .. import __version__
-from ..errors import HillshadeError, UsageProblem
+from ..errors import HillshadeError
 from ..model.sun import SunOver
 from ..model.times import iso
 
@@ -185,21 +185,14 @@ class Outputs:
         no --format (which names GDAL's driver). The options a cube cannot take are refused
         then (usage errors, before any work): --co (GDAL's creation options), --cog,
         --stac-item; a missing library is named (``io.cube.check_cube_support``)."""
-        from ..io.cube import check_cube_support, cube_format
+        from ..io.cube import cube_format, cube_output
         if (self.output is None or self.fmt is not None or not from_time
                 or cube_format(self.output) is None):
             return False
-        if self.co:
-            raise UsageProblem(f"{self.output}: --co sets GDAL's creation options; a time cube "
-                               "(.nc, .zarr) is written compressed, a chunk per time, without "
-                               "them: drop --co, or write a GeoTIFF (.tif)")
-        if cog:
-            raise UsageProblem(f"{self.output}: --cog writes a GeoTIFF, not a time cube (.nc, "
-                               ".zarr)")
-        if stac_item is not None:
-            raise UsageProblem(f"--stac-item describes a GeoTIFF OUTPUT, not the time cube "
-                               f"{self.output}")
-        self.cube = check_cube_support(self.output)
+        self.cube = cube_output(self.output, self.fmt, self.co, refused=(
+            cog and f"{self.output}: --cog writes a GeoTIFF, not a time cube (.nc, .zarr)",
+            stac_item is not None and f"--stac-item describes a GeoTIFF OUTPUT, not the time "
+            f"cube {self.output}"))
         return True
 
     def plan(self, suns, inputs, tiles=None):

@@ -36,7 +36,6 @@ from __future__ import annotations
 
 import datetime as _dt
 
-from ..errors import UsageProblem
 
 NODATA = -9999.0
 # the period's quantities (engine.irradiance.BANDS, r.sun's names) and what they are
@@ -52,20 +51,11 @@ _BAND_TAGS = ("UNITS", "MONTHS", "NAME", "RSUN_NAME")
 
 
 def use_period_cube(cfg) -> bool:
-    """Whether OUTPUT is a CF dataset: named ``*.nc`` or ``*.zarr`` without --format (which
-    names GDAL's driver, ``-f netCDF`` its bands). --co (GDAL's creation options) is refused
-    then (a usage error); a missing library is named (``io.cube.check_cube_support``): both
-    before any work when the run calls it first."""
-    from ..io.cube import check_cube_support, cube_format
-    ro = cfg.run
-    if ro.fmt is not None or cube_format(cfg.output) is None:
-        return False
-    if ro.creation_options:
-        raise UsageProblem(f"{cfg.output}: --co sets GDAL's creation options; a CF dataset "
-                           "(.nc, .zarr) is written compressed, chunked, without them: drop "
-                           "--co, or write a GeoTIFF (.tif)")
-    check_cube_support(cfg.output)
-    return True
+    """Whether OUTPUT is a CF dataset (``io.cube.cube_output``: ``*.nc`` or ``*.zarr`` without
+    --format; --co refused then, a missing library named: before any work when the run calls
+    it first)."""
+    from ..io.cube import cube_output
+    return cube_output(cfg.output, cfg.run.fmt, cfg.run.creation_options) is not None
 
 
 def period_writer(cfg, geom, tags: dict, months=(), *, dem=None, resampling=None):

@@ -103,17 +103,9 @@ def subsolar_shadow(cfg: SubsolarConfig) -> dict:
 
 
 def _is_cube(output: str, ro) -> bool:
-    """Whether a series goes into one CF time cube (``io.cube``): OUTPUT named ``*.nc`` or
-    ``*.zarr`` and no --format (GDAL's driver); --co refused with it (a usage error)."""
-    from ..io.cube import check_cube_support, cube_format
-    if ro.fmt is not None or cube_format(output) is None:
-        return False
-    if ro.creation_options:
-        raise UsageProblem(f"{output}: --co sets GDAL's creation options; a time cube (.nc, "
-                           ".zarr) is written compressed, a chunk per time, without them: drop "
-                           "--co, or write a GeoTIFF (.tif)")
-    check_cube_support(output)
-    return True
+    """Whether a series goes into one CF time cube (``io.cube.cube_output``)."""
+    from ..io.cube import cube_output
+    return cube_output(output, ro.fmt, ro.creation_options) is not None
 
 
 def _series_writer(cfg: SubsolarConfig, output: str, d, series, dist, prod, tags: dict):
