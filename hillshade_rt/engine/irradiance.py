@@ -369,19 +369,13 @@ def real_sky(sky: Sky, beam_index, diffuse_index) -> Sky:
 
 
 @dataclass
-class CellSky:
-    """The open sky where it differs from cell to cell: a Linke turbidity raster (Ineichen's
-    clear sky per cell) or clear-sky index rasters (r.sun's coeff_bh, coeff_dh), for
-    :func:`sums` (``algorithms.irradiance.add_sample_cells``). ``at(k)``: sample k's
-    (Linke turbidity, the cells' Ineichen correction (:func:`ineichen_correction`), beam
-    index, diffuse index) on the cells, each a float64 raster of the cells or, for the
-    indices, a number; the turbidity and its correction None where the sky's own values
-    serve (``ghi``, ``dni``, ``dhi``: the clear sky per sample before the indices). Per
-    sample too: pvlib's absolute air mass ``am`` (NaN: the sun down), the extraterrestrial
-    irradiance ``extra``, max(cos Z, 0) ``cosz``, and the altitude's terms ``consts`` (fh1,
-    fh2, cg1, cg2, b); for Perez the zenith ``z`` (radians), ``am_rel`` (Kasten & Young)."""
+class SampleSky:
+    """The per-sample terms of an open sky that differs from cell to cell: the clear sky before
+    the indices (``ghi``, ``dni``, ``dhi``), pvlib's absolute air mass ``am`` (NaN: the sun
+    down), the extraterrestrial irradiance ``extra``, max(cos Z, 0) ``cosz``, the altitude's
+    terms ``consts`` (fh1, fh2, cg1, cg2, b), and for Perez the zenith ``z`` (radians) and
+    ``am_rel`` (Kasten & Young)."""
 
-    at: object
     ghi: np.ndarray
     dni: np.ndarray
     dhi: np.ndarray
@@ -392,16 +386,33 @@ class CellSky:
     z: np.ndarray
     am_rel: np.ndarray
 
-    def sample(self, k: int) -> "CellSky":
+    def sample(self, k: int) -> "SampleSky":
         """Sample ``k`` alone (an instant)."""
-        from dataclasses import replace
-
         def one(v):
             return v[k:k + 1]
+        return SampleSky(one(self.ghi), one(self.dni), one(self.dhi), one(self.am),
+                         one(self.extra), one(self.cosz), self.consts, one(self.z),
+                         one(self.am_rel))
+
+
+@dataclass
+class CellSky:
+    """The open sky where it differs from cell to cell: a Linke turbidity raster (Ineichen's
+    clear sky per cell) or clear-sky index rasters (r.sun's coeff_bh, coeff_dh), for
+    :func:`sums` (``algorithms.irradiance.add_sample_cells``). ``at(k)``: sample k's
+    (Linke turbidity, the cells' Ineichen correction (:func:`ineichen_correction`), beam
+    index, diffuse index) on the cells, each a float64 raster of the cells or, for the
+    indices, a number; the turbidity and its correction None where the sky's own values
+    serve (``terms``' ``ghi``, ``dni``, ``dhi``). ``terms``: the per-sample terms
+    (:class:`SampleSky`)."""
+
+    at: object
+    terms: SampleSky
+
+    def sample(self, k: int) -> "CellSky":
+        """Sample ``k`` alone (an instant)."""
         at = self.at
-        return replace(self, at=lambda _j: at(k), ghi=one(self.ghi), dni=one(self.dni),
-                       dhi=one(self.dhi), am=one(self.am), extra=one(self.extra),
-                       cosz=one(self.cosz), z=one(self.z), am_rel=one(self.am_rel))
+        return CellSky(lambda _j: at(k), self.terms.sample(k))
 
 
 def ineichen_terms(times, zenith, lat: float, lon: float, altitude: float):
@@ -679,11 +690,7 @@ def sums(direct, void: np.ndarray, slopes, suns, weights, sky: Sky, vd: np.ndarr
         dni, dhi = float(sky.dni[k]), float(sky.dhi[k])
         lit = None
         if casts(sky, k, s, soft, perez):
-            lit = np.ascontiguousarray(direct(s, timed))
-            if lit.shape != shape or not (lit.dtype == np.float32 or (
-                    lit.dtype == np.uint8 and normals is not None)):
-                raise HillshadeError(f"the light of a sun is {lit.dtype} {lit.shape}, not "
-                                     f"float32 {shape}")
+            lit = _light_of(direct, s, timed, shape, normals)
             counted["samples_with_shadows"] += 1
         diffuse_on = bool(perez and dhi > 0 and sky.perez_on[k])
         if lit is None and not diffuse_on:
@@ -729,9 +736,8 @@ def sums(direct, void: np.ndarray, slopes, suns, weights, sky: Sky, vd: np.ndarr
 
 
 def cell_light(cells, k: int, tl_on: bool) -> tuple[bool, bool]:
-    """(any open sky, a beam) at sample ``k`` of the open sky per cell ``cells`` (a
-    :class:`CellSky`, or anything with its per-sample ``am``, ``cosz``, ``ghi``, ``dni``,
-    ``dhi``): with each cell's Linke turbidity (``tl_on``) the sun up (an air mass and cos Z >
+    """(any open sky, a beam) at sample ``k`` of the open sky per cell, whose per-sample terms
+    are ``cells`` (:class:`SampleSky`): with each cell's Linke turbidity (``tl_on``) the sun up (an air mass and cos Z >
     0), else the sample's clear sky before the indices."""
     if tl_on:
         up = bool(np.isfinite(cells.am[k]) and cells.cosz[k] > 0)
@@ -747,6 +753,18 @@ def cell_casts(cells, k: int, tl_on: bool, sun, soft: bool = False,
     (its disk, ``soft``) up somewhere; :func:`casts` where the sky is one for all cells."""
     up, beam_up = cell_light(cells, k, tl_on)
     return bool(up and (beam_up or perez) and not is_dark(sun, soft))
+
+
+def _light_of(direct, s, timed, shape, normals) -> np.ndarray:
+    """Sun ``s``'s light from ``direct`` (contiguous), checked: float32 of ``shape`` (the lit
+    fraction, or max(cos i, 0) · lit), or the uint8 cast mask where the kernel takes the
+    incidence from the ``normals``."""
+    lit = np.ascontiguousarray(direct(s, timed))
+    if lit.shape != shape or not (lit.dtype == np.float32 or (
+            lit.dtype == np.uint8 and normals is not None)):
+        raise HillshadeError(f"the light of a sun is {lit.dtype} {lit.shape}, not float32 "
+                             f"{shape}")
+    return lit
 
 
 def _stand_ins(shape) -> tuple:
@@ -783,12 +801,13 @@ def _sums_cells(direct, void, loop, suns, w, sky, vd64, albedo, cells: CellSky, 
     none2, none1, none3, no_lit, no_cast, rows0 = _stand_ins(shape)
     if not perez:
         sin_s = horizon_share = none2
-    kz3 = PEREZ_KAPPA * cells.z ** 3
-    bfac = np.maximum(np.cos(cells.z), COS_85)
+    t = cells.terms
+    kz3 = PEREZ_KAPPA * t.z ** 3
+    bfac = np.maximum(np.cos(t.z), COS_85)
     table = np.ascontiguousarray(PEREZ_1990, np.float64)
     bins = np.array(PEREZ_EPSILON_BINS, np.float64)
     gi = _group_index(groups, n)
-    if len(cells.am) != n:
+    if len(t.am) != n:
         raise HillshadeError("one open sky per cell per sun")
     ends = []
     prev = [beam.copy(), diffuse.copy(), ghi_sum.copy()] if gi is not None else None
@@ -801,17 +820,13 @@ def _sums_cells(direct, void, loop, suns, w, sky, vd64, albedo, cells: CellSky, 
             close(int(gi[k - 1]))
         tl, corr, kb, kd = cells.at(k)
         tl_on = tl is not None
-        up, beam_up = cell_light(cells, k, tl_on)
+        up, beam_up = cell_light(t, k, tl_on)
         if not up:
             continue
         s = suns[k]
         lit = None
-        if cell_casts(cells, k, tl_on, s, soft, perez):
-            lit = np.ascontiguousarray(direct(s, timed))
-            if lit.shape != shape or not (lit.dtype == np.float32 or (
-                    lit.dtype == np.uint8 and normals is not None)):
-                raise HillshadeError(f"the light of a sun is {lit.dtype} {lit.shape}, not "
-                                     f"float32 {shape}")
+        if cell_casts(t, k, tl_on, s, soft, perez):
+            lit = _light_of(direct, s, timed, shape, normals)
             counted["samples_with_shadows"] += 1
         with timed("irradiance"):
             if lit is not None and normals is not None:
@@ -825,14 +840,14 @@ def _sums_cells(direct, void, loop, suns, w, sky, vd64, albedo, cells: CellSky, 
                 no_lit if lit is None or mask else lit, lit if mask else no_cast, mask,
                 ge, gn, length, row_tile, col_tile, vec, lit is not None and normals is not None,
                 lit is not None, float(w[k]),
-                np.array([cells.ghi[k], cells.dni[k], cells.dhi[k]], np.float64),
+                np.array([t.ghi[k], t.dni[k], t.dhi[k]], np.float64),
                 tl_on, tl if tl_on else none2, corr if tl_on else none2,
-                np.array([cells.am[k], cells.extra[k], cells.cosz[k], *cells.consts],
+                np.array([t.am[k], t.extra[k], t.cosz[k], *t.consts],
                          np.float64),
                 kb_on, kb if kb_on else none2, 1.0 if kb_on else float(kb),
                 kd_on, kd if kd_on else none2, 1.0 if kd_on else float(kd),
-                perez, np.array([cells.z[k], kz3[k], cells.am_rel[k], cells.extra[k], bfac[k],
-                                 1.0 if np.isfinite(cells.am_rel[k]) else 0.0], np.float64),
+                perez, np.array([t.z[k], kz3[k], t.am_rel[k], t.extra[k], bfac[k],
+                                 1.0 if np.isfinite(t.am_rel[k]) else 0.0], np.float64),
                 table, bins, vd64, sin_s, horizon_share, beam, diffuse, ghi_sum)
     if gi is not None and n:
         close(int(gi[-1]))

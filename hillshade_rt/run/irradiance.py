@@ -462,7 +462,8 @@ def open_sky_inputs(cfg: IrradianceConfig, times, suns, site, tz, summarize):
     z, am_rel = ir.perez_terms(times, zen)
     return sky, CellInputs(months, tuple(bool(v is not None and v.by_month) for v in inputs),
                            frozenset(k for k, x in summary.items() if x[1]), (lt, kb, kd),
-                           raw.ghi, raw.dni, raw.dhi, am, extra, cosz, consts, z, am_rel)
+                           ir.SampleSky(raw.ghi, raw.dni, raw.dhi, am, extra, cosz, consts, z,
+                                        am_rel))
 
 
 def _grid_of(d, area):

@@ -451,7 +451,7 @@ class Jobs:
         if self.cells is not None:
             ci = self.cells.inputs
             return [k for k, s in enumerate(self.suns)
-                    if cell_casts(ci, k, ci.tl_on(k), s, self.soft, self.perez)]
+                    if cell_casts(ci.terms, k, ci.tl_on(k), s, self.soft, self.perez)]
         return [k for k, s in enumerate(self.suns)
                 if casts(self.sky, k, s, self.soft, self.perez)]
 

@@ -179,23 +179,14 @@ class CellInputs:
     --beam-index, --diffuse-index (in this order, ``i`` 0, 1, 2) go by month; ``varies``:
     the (i, month) whose raster varies over the DEM's valid cells (those of one value are
     that number: ``numbers`` has them); ``numbers``: the samples' (Linke turbidity, beam
-    index, diffuse index), each None (not given), a number or one per sample; the rest
-    per sample as ``CellSky`` has them (``ghi``, ``dni``, ``dhi``: the clear sky before the
-    indices)."""
+    index, diffuse index), each None (not given), a number or one per sample; ``terms`` the
+    samples' terms (``engine.irradiance.SampleSky``: the clear sky before the indices, ...)."""
 
     months: np.ndarray
     by_month: tuple
     varies: frozenset
     numbers: tuple
-    ghi: np.ndarray
-    dni: np.ndarray
-    dhi: np.ndarray
-    am: np.ndarray
-    extra: np.ndarray
-    cosz: np.ndarray
-    consts: tuple
-    z: np.ndarray
-    am_rel: np.ndarray
+    terms: object           # engine.irradiance.SampleSky: the samples' terms
 
     def key(self, i: int, k: int) -> tuple:
         """(i, the month whose raster input ``i`` takes at sample ``k``: 1 when not by
@@ -227,14 +218,13 @@ class CellInputs:
                 held.clear()
                 tl = get(0, k)
                 held.update(month=m, tl=tl, kb=get(1, k), kd=get(2, k),
-                            corr=None if tl is None else ir.ineichen_correction(tl,
-                                                                              self.consts))
+                            corr=None if tl is None else ir.ineichen_correction(
+                                tl, self.terms.consts))
             kbk, kdk = held["kb"], held["kd"]
             return (held["tl"], held["corr"],
                     number(self.numbers[1], k) if kbk is None else kbk,
                     number(self.numbers[2], k) if kdk is None else kdk)
-        return ir.CellSky(at, self.ghi, self.dni, self.dhi, self.am, self.extra, self.cosz,
-                          self.consts, self.z, self.am_rel)
+        return ir.CellSky(at, self.terms)
 
 
 def _exists(path: str) -> bool:

@@ -365,8 +365,9 @@ def _cells_case(perez):
     z, am_rel = irr.perez_terms(times, zen)
     corr = irr.ineichen_correction(tl, consts)
     raw = irr.clear_sky(times, zen, 34.0, -118.0, 900.0, "ineichen", 3.0)
-    cells = irr.CellSky(lambda k: (tl, corr, kb, 0.6), raw.ghi, raw.dni, raw.dhi, am, extra,
-                        cosz, consts, z, am_rel)
+    cells = irr.CellSky(lambda k: (tl, corr, kb, 0.6),
+                        irr.SampleSky(raw.ghi, raw.dni, raw.dhi, am, extra, cosz, consts, z,
+                                      am_rel))
     sky = irr.real_sky(raw, 0.6, 0.6)
     if perez:
         irr.with_perez(sky, times, zen)
@@ -418,14 +419,14 @@ def test_the_per_cell_clear_sky_is_pvlibs_ineichen():
     c, tl, kb, cells, sky, direct, vd, slopes = _cells_case(False)
     for k in range(5):                                  # the samples with the sun up
         one = cells.sample(k)
-        one.at = (lambda t: lambda _k: (t, irr.ineichen_correction(t, cells.consts), 1.0,
+        one.at = (lambda t: lambda _k: (t, irr.ineichen_correction(t, cells.terms.consts), 1.0,
                                         1.0))(tl)
         def run(v):
             return irr.sums(lambda s, timed: np.ones((1, 4), np.float32),
                             np.zeros((1, 4), bool), None, [c["suns"][k]], [1.0],
                             irr.sky_at(sky, k), np.full((1, 4), v, np.float32), 1.0, cells=one)
         dark, bright = run(0.0), run(1.0)
-        ref = ineichen(c["zen"][k], cells.am[k], tl[0], 900.0, cells.extra[k])
+        ref = ineichen(c["zen"][k], cells.terms.am[k], tl[0], 900.0, cells.terms.extra[k])
         np.testing.assert_allclose(dark["reflected"][0], ref["ghi"], rtol=1e-7)
         np.testing.assert_allclose(bright["diffuse"][0], ref["dhi"], rtol=1e-7)
         np.testing.assert_allclose(dark["beam"][0], ref["dni"], rtol=1e-7)

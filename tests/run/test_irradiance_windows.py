@@ -516,6 +516,7 @@ def test_sky_grids_resolve_as_the_run_in_memory(tmp_path, dems, skies):
     ``GridSky`` the same cells of the whole grid's raster, its voids the mean."""
     from hillshade_rt.run import ReadOptions
     from hillshade_rt.run.irradiance_windows import GridSky, SkyGrids
+    from hillshade_rt.engine.irradiance import SampleSky
     from hillshade_rt.run.sky_inputs import CellInputs, SkyValue
     cases = (("real", "--linke-turbidity", skies["linke"], 1.0, 10.0, (1,)),
              ("real", "--diffuse-index", skies["kd"], 0.0, 1.0, (1,)),
@@ -541,7 +542,8 @@ def test_sky_grids_resolve_as_the_run_in_memory(tmp_path, dems, skies):
                     assert fill == float(np.mean(inside))
                     ci = CellInputs(np.array([m]), (v.by_month, False, False),
                                     frozenset({(0, m if v.by_month else 1)}), (None, None, None),
-                                    *(np.ones(1),) * 6, (1.0,) * 5, np.ones(1), np.ones(1))
+                                    SampleSky(*(np.ones(1),) * 6, (1.0,) * 5, np.ones(1),
+                                              np.ones(1)))
                     key = m if v.by_month else 1
                     sky = GridSky(ci, {(0, key): (g, fill)})
                     for w in ((0, 7, 0, 90), (25, 40, 29, 83), (69, src.shape[0], 0, 1)):
