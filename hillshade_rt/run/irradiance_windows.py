@@ -224,11 +224,12 @@ class SkyGrids:
         self.folder = scratch_folder(output, "grids")
         self.grids: dict = {}
         self.figures: dict = {}
+        self.valid = None       # the DEM's valid cells on the output grid (one pass, mapped)
 
     def grid(self, value, month: int, geom, src, origin, figures: bool = False) -> SkyGrid:
         """The :class:`SkyGrid` of ``value`` (a ``SkyValue`` of rasters) for ``month``; with
-        ``figures`` its :class:`GridFigures` in ``self.figures`` too (the DEM read whole for
-        them; else only the row bands the raster lacks cells in)."""
+        ``figures`` its :class:`GridFigures` in ``self.figures`` too (the DEM's valid cells,
+        :meth:`_valid`, read for them, or where the raster lacks cells)."""
         path = value.path if value.path is not None else value.pattern.format(month=month)
         if path in self.grids:
             if figures and path not in self.figures:
@@ -268,39 +269,53 @@ class SkyGrids:
         mean = f.total / f.count
         return g, (mean, True, f.lo, f.hi), mean
 
-    @staticmethod
-    def _check(value, path, out, src, origin, figures: bool) -> GridFigures | None:
+    def _valid(self, src, origin, shape, option: str) -> np.ndarray:
+        """The DEM's valid cells on the output grid (``shape`` from ``origin``), a bool array
+        mapped from a file of the folder: the DEM read once, in row bands, for every raster's
+        checks."""
+        if self.valid is None:
+            rows, cols = shape
+            dest = os.path.join(self.folder, "valid.npy")
+            valid = np.lib.format.open_memmap(dest, mode="w+", dtype=np.bool_, shape=shape)
+            _allocate(dest, rows * cols, option)
+            step = max(1, CELLS_AT_ONCE // max(cols, 1))
+            with src.reader() as rd:
+                for r0 in range(0, rows, step):
+                    r1 = min(rows, r0 + step)
+                    z = np.empty((r1 - r0, cols), np.float32)
+                    rd.read((origin[0] + r0, origin[0] + r1, origin[1], origin[1] + cols), z)
+                    np.logical_not(np.isnan(z), out=valid[r0:r1])
+            valid.flush()
+            del valid
+            self.valid = np.load(dest, mmap_mode="r")
+        return self.valid
+
+    def _check(self, value, path, out, src, origin, figures: bool) -> GridFigures | None:
         from ..errors import UsageProblem
         rows, cols = out.shape
         step = max(1, CELLS_AT_ONCE // max(cols, 1))
         lacking, lo, hi, seen, seen_total = 0, math.inf, -math.inf, 0, 0.0
         count, total, vlo, vhi = 0, 0.0, math.inf, -math.inf
-        with contextlib.ExitStack() as stack:
-            rd = None
-            for r0 in range(0, rows, step):
-                r1 = min(rows, r0 + step)
-                a = np.asarray(out[r0:r1])
-                gap = np.isnan(a)
-                seen_v = a[~gap]
-                if seen_v.size:
-                    lo, hi = min(lo, float(seen_v.min())), max(hi, float(seen_v.max()))
-                    seen += seen_v.size
-                    seen_total += float(np.sum(seen_v))
-                if not (figures or gap.any()):
-                    continue
-                if rd is None:
-                    rd = stack.enter_context(src.reader())
-                z = np.empty(a.shape, np.float32)
-                rd.read((origin[0] + r0, origin[0] + r1, origin[1], origin[1] + cols), z)
-                valid = ~np.isnan(z)
-                lacking += int((gap & valid).sum())
-                if not figures:
-                    continue
-                inside = a[valid & ~gap]
-                if inside.size:
-                    count += inside.size
-                    total += float(np.sum(inside))
-                    vlo, vhi = min(vlo, float(inside.min())), max(vhi, float(inside.max()))
+        for r0 in range(0, rows, step):
+            r1 = min(rows, r0 + step)
+            a = np.asarray(out[r0:r1])
+            gap = np.isnan(a)
+            seen_v = a[~gap]
+            if seen_v.size:
+                lo, hi = min(lo, float(seen_v.min())), max(hi, float(seen_v.max()))
+                seen += seen_v.size
+                seen_total += float(np.sum(seen_v))
+            if not (figures or gap.any()):
+                continue
+            valid = np.asarray(self._valid(src, origin, out.shape, value.option)[r0:r1])
+            lacking += int((gap & valid).sum())
+            if not figures:
+                continue
+            inside = a[valid & ~gap]
+            if inside.size:
+                count += inside.size
+                total += float(np.sum(inside))
+                vlo, vhi = min(vlo, float(inside.min())), max(vhi, float(inside.max()))
         if lacking:
             raise UsageProblem(f"{value.option} {path}: the raster does not cover the DEM "
                                f"({lacking} of its cells lie outside or on its nodata)")
@@ -311,6 +326,7 @@ class SkyGrids:
 
     def close(self) -> None:
         import shutil
+        self.valid = None
         shutil.rmtree(self.folder, ignore_errors=True)
 
 
